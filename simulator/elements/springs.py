@@ -1,0 +1,103 @@
+"""Four-node rotational spring (method digest 4; Liu & Paulino 2017).
+
+Nodes (i, j, k, l), axis j-k. The fold angle theta lies in [0, 2 pi) with pi =
+flat; with the mesher's polarity convention theta > pi means folded towards +z.
+Energy ``k (theta - theta0)^2 / 2`` (linear law; the reference's locking
+penalty is inactive for compliant creases).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._vec import cross, dot as _dot, outer as _outer
+
+__all__ = ["fold_angle", "fold_angle_derivatives", "spring_kernel"]
+
+
+def fold_angle(x: np.ndarray) -> np.ndarray:
+    """Fold angle theta in [0, 2 pi) of springs with coordinates x (n, 4, 3)."""
+    r_ij, r_kj, r_kl = x[:, 0] - x[:, 1], x[:, 2] - x[:, 1], x[:, 2] - x[:, 3]
+    m, n = cross(r_ij, r_kj), cross(r_kj, r_kl)
+    return _angle(m, n, r_kl, r_kj)
+
+
+def _angle(m, n, r_kl, r_kj):
+    """theta = mod(eta arccos(m.n / |m||n|), 2 pi) with eta = sign(m . r_kl), computed with atan2.
+
+    Since m x n = r_kj (m . r_kl), the sine of the angle is |r_kj| (m . r_kl) / (|m||n|); atan2
+    keeps full precision near flat (theta = pi), where arccos loses half the digits.
+    """
+    y = np.sqrt(_dot(r_kj, r_kj)) * _dot(m, r_kl)
+    return np.mod(np.arctan2(y, _dot(m, n)), 2 * np.pi)
+
+
+def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
+    """Fold angle, its gradient (n, 12) and Hessian (n, 12, 12) [rad/m, rad/m^2].
+
+    Gradient and Hessian are the closed forms of Liu & Paulino (digest 4.3-4.4).
+    """
+    r_ij, r_kj, r_kl = x[:, 0] - x[:, 1], x[:, 2] - x[:, 1], x[:, 2] - x[:, 3]
+    m, n = cross(r_ij, r_kj), cross(r_kj, r_kl)
+    theta = _angle(m, n, r_kl, r_kj)
+    mm, nn, rr = _dot(m, m), _dot(n, n), _dot(r_kj, r_kj)
+    r = np.sqrt(rr)
+    g_i = (r / mm)[:, None] * m
+    g_l = -(r / nn)[:, None] * n
+    A = _dot(r_ij, r_kj) / rr
+    B = _dot(r_kl, r_kj) / rr
+    g_j = (A - 1)[:, None] * g_i - B[:, None] * g_l
+    g_k = (B - 1)[:, None] * g_l - A[:, None] * g_i
+    grad = np.concatenate([g_i, g_j, g_k, g_l], axis=1)
+    if not hessian:
+        return theta, grad, None
+
+    def sym(a, b):
+        return _outer(a, b) + _outer(b, a)
+
+    s_m = (r / mm**2)[:, None, None]
+    s_n = (r / nn**2)[:, None, None]
+    mr = _outer(m, r_kj) / (mm * r)[:, None, None]
+    nr = _outer(n, r_kj) / (nn * r)[:, None, None]
+    H_ii = -s_m * sym(m, cross(r_kj, m))
+    H_ll = s_n * sym(n, cross(r_kj, n))
+    H_ik = mr + s_m * sym(m, cross(r_ij, m))
+    H_lj = nr - s_n * sym(n, cross(r_kl, n))
+    H_ij = -mr + s_m * sym(m, cross(r_kj - r_ij, m))
+    H_lk = -nr - s_n * sym(n, cross(r_kj - r_kl, n))
+    dA_j = ((2 * A - 1)[:, None] * r_kj - r_ij) / rr[:, None]
+    dB_j = ((2 * B)[:, None] * r_kj - r_kl) / rr[:, None]
+    dA_k = (-(2 * A)[:, None] * r_kj + r_ij) / rr[:, None]
+    dB_k = ((1 - 2 * B)[:, None] * r_kj + r_kl) / rr[:, None]
+    A3, B3 = A[:, None, None], B[:, None, None]
+    H_jj = _outer(g_i, dA_j) + (A3 - 1) * H_ij - (_outer(g_l, dB_j) + B3 * H_lj)
+    H_jk = _outer(g_i, dA_k) + (A3 - 1) * H_ik - (_outer(g_l, dB_k) + B3 * H_lk)
+    H_kk = _outer(g_l, dB_k) + (B3 - 1) * H_lk - (_outer(g_i, dA_k) + A3 * H_ik)
+    hess = np.zeros((len(x), 12, 12))
+    blocks = {(0, 0): H_ii, (0, 1): H_ij, (0, 2): H_ik, (1, 1): H_jj, (1, 2): H_jk, (2, 2): H_kk,
+              (3, 1): H_lj,
+              (3, 2): H_lk, (3, 3): H_ll}
+    for (p, q), blk in blocks.items():
+        hess[:, 3 * p:3 * p + 3, 3 * q:3 * q + 3] = blk
+        if p != q:
+            hess[:, 3 * q:3 * q + 3, 3 * p:3 * p + 3] = np.swapaxes(blk, 1, 2)
+    return theta, grad, hess
+
+
+def spring_kernel(x: np.ndarray, k: np.ndarray, theta0: np.ndarray, hessian: bool = True):
+    """Energy [J], gradient [N] (n, 12) and Hessian [N/m] (n, 12, 12) of all springs.
+
+    Parameters
+    ----------
+    x : (n, 4, 3) node coordinates (i, j, k, l) [m]
+    k : (n,) rotational stiffness [N m / rad]
+    theta0 : (n,) rest angle [rad]
+    """
+    theta, g, H = fold_angle_derivatives(x, hessian)
+    moment = k * (theta - theta0)
+    energy = 0.5 * moment * (theta - theta0)
+    grad = moment[:, None] * g
+    if not hessian:
+        return energy, grad, None
+    hess = k[:, None, None] * _outer(g, g) + moment[:, None, None] * H
+    return energy, grad, hess

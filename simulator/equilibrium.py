@@ -1,0 +1,118 @@
+"""Total potential of a model: bars + rotational springs + contact + elastic supports.
+
+:class:`EquilibriumSystem` caches everything that depends only on the model
+(element DOFs, the CSR pattern of the free-DOF stiffness, contact candidates)
+and evaluates energies, internal forces and the tangent stiffness at a given
+displacement and set of spring rest angles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
+from .contact_search import ContactSearch
+from .elements.bars import bar_kernel
+from .elements.contact import contact_kernel
+from .elements.springs import spring_kernel
+from .mesh import BarType, SpringKind
+from .model import Model, _AXES
+
+__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS"]
+
+#: Energy components reported by every evaluation [J].
+ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_stretching",
+                "contact", "elastic_support")
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """Internal energy, force and stiffness at one configuration.
+
+    Attributes
+    ----------
+    f_int : (n_dof,) internal force = gradient of the internal energy [N]
+    K : (n_free, n_free) CSR tangent stiffness on the free DOFs [N/m], or None
+    energies : dict of the components in :data:`ENERGY_KINDS` [J]
+    n_contacts : number of active contact pairs (d <= d0)
+    """
+
+    f_int: np.ndarray
+    K: sp.csr_matrix | None
+    energies: dict
+    n_contacts: int = 0
+
+
+class EquilibriumSystem:
+    """Cached assembly data for one :class:`Model`."""
+
+    def __init__(self, model: Model):
+        mesh = model.mesh
+        self.model = model
+        self.n_dof = mesh.n_dof
+        self.free_index = model.free_index
+        self.free = np.flatnonzero(self.free_index >= 0)
+        X = mesh.nodes
+        self.bar_dofs = element_dofs(mesh.bars)
+        self.spr_dofs = element_dofs(mesh.springs)
+        self.bar_dX = X[mesh.bars[:, 1]] - X[mesh.bars[:, 0]]
+        self.bar_L0 = mesh.bar_length
+        self.bar_EA = model.properties.bar_axial_stiffness
+        self.spr_k = model.properties.spring_stiffness
+        self.bar_is_panel = np.isin(mesh.bar_type, (BarType.PANEL_EDGE, BarType.SPOKE))
+        self.spr_is_panel = mesh.spring_kind == SpringKind.PANEL
+        el = model.supports.elastic
+        self.elastic_dofs = np.array([3 * n + _AXES[d] for n, d, _ in el], dtype=int)
+        self.elastic_k = np.array([k for _, _, k in el], dtype=float)
+        self.pattern = StiffnessPattern([self.bar_dofs, self.spr_dofs], self.free_index,
+                                        diagonal=self.elastic_dofs)
+        self.contact = None if model.contact is None else ContactSearch(mesh, model.contact)
+        self.max_step = None if model.contact is None else model.contact.max_step
+
+    @property
+    def n_free(self) -> int:
+        return self.pattern.n_free
+
+    def evaluate(self, u: np.ndarray, spring_rest: np.ndarray, hessian: bool = True) -> Evaluation:
+        """Energies, internal force and (optionally) free-DOF stiffness.
+
+        Parameters
+        ----------
+        u : (n_nodes, 3) displacements from the mesh nodes [m]
+        spring_rest : (n_springs,) spring rest angles [rad]
+        """
+        mesh = self.model.mesh
+        x = mesh.nodes + u
+        du = u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
+        eb, gb, hb = bar_kernel(self.bar_dX, du, self.bar_L0, self.bar_EA, hessian)
+        es, gs, hs = spring_kernel(x[mesh.springs], self.spr_k, spring_rest, hessian)
+        f = assemble_vector(self.n_dof, self.bar_dofs, gb) \
+            + assemble_vector(self.n_dof, self.spr_dofs, gs)
+        u_el = u.ravel()[self.elastic_dofs]
+        f[self.elastic_dofs] += self.elastic_k * u_el
+        energies = {
+            "crease_bending": float(es[~self.spr_is_panel].sum()),
+            "panel_bending": float(es[self.spr_is_panel].sum()),
+            "panel_stretching": float(eb[self.bar_is_panel].sum()),
+            "crease_stretching": float(eb[~self.bar_is_panel].sum()),
+            "contact": 0.0,
+            "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2)),
+        }
+        K = self.pattern.matrix([hb, hs, self.elastic_k]) if hessian else None
+        n_contacts = 0
+        if self.contact is not None:
+            conn, d0 = self.contact.candidates(x)
+            if len(conn):
+                ec, gc, hc = contact_kernel(x[conn], d0, self.model.contact.stiffness)
+                active = ec > 0
+                n_contacts = int(active.sum())
+                if n_contacts:
+                    dofs = element_dofs(conn[active])
+                    f += assemble_vector(self.n_dof, dofs, gc[active])
+                    energies["contact"] = float(ec[active].sum())
+                    if hessian:
+                        K = K + assemble_matrix(dofs, hc[active], self.free_index, self.n_free)
+        return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)

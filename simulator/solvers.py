@@ -1,0 +1,247 @@
+"""Newton-Raphson equilibrium and path following with step cutting.
+
+:func:`newton` solves ``f_int(u) = f_ext`` on the free DOFs for fixed rest angles.
+:func:`follow_path` drives a linear path in (external load, spring rest angles)
+from a start to an end over a number of increments, halving an increment that
+fails and growing back after successes. Failures are returned as data
+(``converged``, ``status``, ``message``); :class:`~simulator.errors.ConvergenceError`
+is raised only when ``NewtonOptions.raise_on_failure`` is set.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from .equilibrium import EquilibriumSystem, Evaluation
+from .errors import ParameterError
+
+__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
+
+logger = logging.getLogger(__name__)
+
+#: Below this many free DOFs the tangent system is solved densely (faster for tiny meshes).
+DENSE_LIMIT = 400
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Newton-Raphson settings.
+
+    Parameters
+    ----------
+    criterion : {"residual", "displacement"}
+        "residual": stop when the 2-norm of the free-DOF force residual [N] is at most
+        ``max(atol, rtol * |r_0|)`` (the reference's self-fold / thermal meaning);
+        "displacement": stop when the 2-norm of the Newton correction [m] is at most
+        ``max(atol, rtol * |du_0|)`` (the reference's NR loading meaning).
+    atol : float
+        Absolute tolerance in N or m (reference examples: 1e-6 to 5e-7, loose for micro-scale
+        devices whose self-weight is ~1e-8 N; the default 1e-13 N is near the round-off floor).
+    rtol : float
+        Tolerance relative to the first residual / correction of the increment.
+    max_iter : int
+        Newton iterations per increment before it counts as failed.
+    max_cuts : int
+        How many times one increment may be halved before the path gives up.
+    raise_on_failure : bool
+        Raise :class:`~simulator.errors.ConvergenceError` instead of returning a failed result.
+
+    Whatever the criterion, an iteration whose correction is at round-off level
+    (below 1e-13 of the model size) also counts as converged.
+    """
+
+    criterion: str = "residual"
+    atol: float = 1e-13
+    rtol: float = 1e-10
+    max_iter: int = 30
+    max_cuts: int = 10
+    raise_on_failure: bool = False
+
+    def __post_init__(self):
+        if self.criterion not in ("residual", "displacement"):
+            raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
+                                 "'displacement'.")
+        for name in ("atol", "rtol"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be finite and >= 0.")
+        if self.atol == 0 and self.rtol == 0:
+            raise ParameterError("NewtonOptions: atol and rtol cannot both be 0.")
+        for name in ("max_iter", "max_cuts"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and v >= (1 if name == "max_iter" else 0)):
+                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be a non-negative integer "
+                                     "(max_iter >= 1).")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True, eq=False)
+class NewtonResult:
+    """Outcome of one Newton solve."""
+
+    u: np.ndarray
+    converged: bool
+    iterations: int
+    residual_norms: np.ndarray
+    correction_norms: np.ndarray
+    message: str
+    evaluation: Evaluation | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class PathResult:
+    """Outcome of a path-following solve.
+
+    Attributes
+    ----------
+    converged : bool
+        True if the path reached its end.
+    status : str
+        "converged" or "failed".
+    message : str
+    u : (n_nodes, 3) final displacements (the last converged ones on failure)
+    t : float
+        Path parameter reached, in [0, 1].
+    iterations : int
+        Total Newton iterations.
+    cuts : int
+        Number of increment halvings.
+    history : list of (t, u, iterations) per accepted increment
+    residual_norms : list of arrays, residual history of each accepted increment
+    evaluation : Evaluation at the final state
+    """
+
+    converged: bool
+    status: str
+    message: str
+    u: np.ndarray
+    t: float
+    iterations: int
+    cuts: int
+    history: list = field(default_factory=list)
+    residual_norms: list = field(default_factory=list)
+    evaluation: Evaluation | None = None
+
+
+def _solve_linear(K, r):
+    """Solve K du = r; returns None if K is singular or the result is not finite."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            if K.shape[0] <= DENSE_LIMIT:
+                du = scipy.linalg.solve(K.toarray(), r, check_finite=False)
+            else:
+                du = spla.splu(K.tocsc()).solve(r)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
+            return None
+    return du if np.all(np.isfinite(du)) else None
+
+
+def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,
+           options: NewtonOptions = NewtonOptions()) -> NewtonResult:
+    """Solve ``f_int(u) = f_ext`` on the free DOFs from the start ``u0`` (n_nodes, 3).
+
+    Fixed DOFs keep their values from ``u0``. ``f_ext`` is the (n_dof,) external load [N].
+    """
+    free = system.free
+    u = u0.copy().ravel()
+    size = float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    res_norms, cor_norms = [], []
+    ref = None
+    for it in range(options.max_iter + 1):
+        ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+        r = (f_ext - ev.f_int)[free]
+        rn = float(np.linalg.norm(r))
+        res_norms.append(rn)
+        if not math.isfinite(rn):
+            return _newton_result(u0, False, it, res_norms, cor_norms, "residual is not finite")
+        if options.criterion == "residual":
+            ref = rn if ref is None else ref
+            if rn <= max(options.atol, options.rtol * ref):
+                return _newton_result(u, True, it, res_norms, cor_norms, "converged", ev)
+        if it == options.max_iter:
+            break
+        du = _solve_linear(ev.K, r)
+        if du is None:
+            return _newton_result(u0, False, it, res_norms, cor_norms,
+                                  "tangent stiffness is singular (mechanism or unsupported body?)")
+        if system.max_step is not None:
+            step = np.max(np.abs(du))
+            if step > system.max_step:
+                du *= system.max_step / step
+        dn = float(np.linalg.norm(du))
+        cor_norms.append(dn)
+        u[free] += du
+        if options.criterion == "displacement":
+            ref = dn if ref is None else ref
+            if dn <= max(options.atol, options.rtol * ref):
+                ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+                return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
+        if np.max(np.abs(du)) <= 1e-13 * size:
+            ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+            return _newton_result(u, True, it + 1, res_norms, cor_norms,
+                                  "converged (correction at round-off level)", ev)
+    return _newton_result(u0, False, options.max_iter, res_norms, cor_norms,
+                          f"no convergence in {options.max_iter} iterations "
+                          f"(last residual {res_norms[-1]:.3g} N)")
+
+
+def _newton_result(u, converged, iterations, res, cor, message, ev=None):
+    return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), converged=converged,
+                        iterations=iterations, residual_norms=np.array(res),
+                        correction_norms=np.array(cor), message=message, evaluation=ev)
+
+
+def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, f_end: np.ndarray,
+                rest_start: np.ndarray, rest_end: np.ndarray, increments: int,
+                options: NewtonOptions = NewtonOptions(), callback=None) -> PathResult:
+    """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
+
+    The path is split into ``increments`` equal increments. A failed increment is halved
+    (up to ``options.max_cuts`` times in a row); after a success the increment doubles
+    again up to its nominal size. ``callback(t, u)``, if given, is called after every
+    accepted increment and may return True to stop early (status "stopped").
+    """
+    if not (isinstance(increments, (int, np.integer)) and increments >= 1):
+        raise ParameterError(f"increments = {increments!r} must be a positive integer.")
+    nominal = 1.0 / increments
+    t, dt, u = 0.0, nominal, u0.copy()
+    cuts_in_row, total_cuts, total_iter = 0, 0, 0
+    history, residuals, last_ev = [], [], None
+    while t < 1.0 - 1e-12:
+        t_try = min(1.0, t + dt)
+        res = newton(system, u, f_start + t_try * (f_end - f_start),
+                     rest_start + t_try * (rest_end - rest_start), options)
+        total_iter += res.iterations
+        if not res.converged:
+            if cuts_in_row >= options.max_cuts:
+                msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts "
+                       f"(increment {dt:.3g}): {res.message}")
+                logger.warning(msg)
+                return PathResult(False, "failed", msg, u, t, total_iter, total_cuts, history,
+                                  residuals, last_ev)
+            dt /= 2
+            cuts_in_row += 1
+            total_cuts += 1
+            logger.debug("increment to t = %.6g failed (%s); halving to %.3g", t_try, res.message, dt)
+            continue
+        t, u, last_ev = t_try, res.u, res.evaluation
+        history.append((t, u, res.iterations))
+        residuals.append(res.residual_norms)
+        if cuts_in_row == 0:
+            dt = min(nominal, 2 * dt)
+        cuts_in_row = 0
+        if callback is not None and callback(t, u):
+            return PathResult(False, "stopped", f"stopped by callback at t = {t:.6g}", u, t,
+                              total_iter, total_cuts, history, residuals, last_ev)
+    return PathResult(True, "converged", "converged", u, 1.0, total_iter, total_cuts, history,
+                      residuals, last_ev)

@@ -1,0 +1,89 @@
+"""Bar and rotational-spring kernels: finite differences, rigid-body checks, analytic values."""
+
+import numpy as np
+import pytest
+from fd_harness import check_kernel
+
+from simulator.elements.bars import bar_kernel
+from simulator.elements.springs import fold_angle, fold_angle_derivatives, spring_kernel
+
+RNG = np.random.default_rng(42)
+
+
+def _bars(n=40, scale=1e-3):
+    X = RNG.normal(size=(n, 2, 3)) * scale
+    L0 = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    x = X + RNG.normal(size=X.shape) * 0.1 * scale
+    return x, L0, RNG.uniform(1e-3, 1e2, n)
+
+
+def _bar_of_positions(dX, L0, EA):
+    """The bar kernel as a function of current end positions (for the FD harness)."""
+    return lambda y: bar_kernel(dX, (y[:, 1] - y[:, 0]) - dX, L0, EA)
+
+
+def test_bar_finite_differences():
+    x, L0, EA = _bars()
+    dX = x[:, 1] - x[:, 0] + RNG.normal(size=(len(L0), 3)) * 1e-4
+    check_kernel(_bar_of_positions(dX, np.linalg.norm(dX, axis=1), EA), x)
+
+
+def test_bar_finite_differences_with_edited_reference():
+    """Stored length differs from the node distance (gripper node edits): still consistent."""
+    x, L0, EA = _bars()
+    dX = x[:, 1] - x[:, 0] + RNG.normal(size=(len(L0), 3)) * 1e-4
+    check_kernel(_bar_of_positions(dX, L0, EA), x)
+
+
+def test_bar_axial_stiffness_is_EA_over_L():
+    L, EA = 2e-3, 5.0
+    dX = np.array([[L, 0, 0]])
+    _, g, H = bar_kernel(dX, np.zeros((1, 3)), np.array([L]), np.array([EA]))
+    assert np.allclose(g, 0)
+    assert H[0, 3, 3] == pytest.approx(EA / L, rel=1e-14)
+    assert H[0, 4, 4] == pytest.approx(0, abs=1e-14)      # no initial-stress term at zero strain
+    # small stretch: force = EA * strain
+    d = 1e-9
+    _, g, _ = bar_kernel(dX, np.array([[d, 0, 0]]), np.array([L]), np.array([EA]))
+    assert g[0, 3] == pytest.approx(EA * d / L, rel=1e-6)
+
+
+def _springs(n=60, scale=1e-3):
+    x = RNG.normal(size=(n, 4, 3)) * scale
+    return x, RNG.uniform(1e-10, 1e-6, n), RNG.uniform(0.5, 2 * np.pi - 0.5, n)
+
+
+def test_fold_angle_derivatives_finite_differences():
+    x, _, _ = _springs()
+    theta = fold_angle(x)
+    ok = (theta > 0.2) & (theta < 2 * np.pi - 0.2)           # away from the 0 / 2 pi wrap
+    check_kernel(lambda y: fold_angle_derivatives(y), x[ok])
+
+
+def test_spring_finite_differences():
+    x, k, t0 = _springs()
+    theta = fold_angle(x)
+    ok = (theta > 0.2) & (theta < 2 * np.pi - 0.2)
+    check_kernel(lambda y: spring_kernel(y, k[ok], t0[ok]), x[ok])
+
+
+def test_spring_near_flat_finite_differences():
+    """Near theta = pi the angle is computed with atan2 and stays exact."""
+    base = np.array([[0, 1, 0], [0, 0, 0], [1, 0, 0], [0.5, -1, 0]], float) * 1e-3
+    x = base + RNG.normal(size=(30, 4, 3)) * 1e-6
+    check_kernel(lambda y: spring_kernel(y, np.full(30, 1e-8), np.full(30, np.pi)), x)
+
+
+@pytest.mark.parametrize("phi", [-2.5, -1.0, -0.3, 0.0, 0.3, 1.0, 2.5])
+def test_fold_angle_convention(phi):
+    """Axis j-k along x, i at -y (so z((x_j - x_i) x (x_k - x_j)) <= 0); wing l rotated by phi
+    about x towards +z gives theta = pi + phi: up-folding increases theta."""
+    x = np.array([[[0.3, -1, 0], [0, 0, 0], [1, 0, 0], [0.6, np.cos(phi), np.sin(phi)]]])
+    z = np.cross(x[0, 1] - x[0, 0], x[0, 2] - x[0, 1])[2]
+    assert z <= 0
+    assert fold_angle(x)[0] == pytest.approx(np.pi + phi, abs=1e-13)
+
+
+def test_flat_angle_is_exactly_pi():
+    x = np.array([[[0.3e-3, -1e-3, 0], [0, 0, 0], [1e-3, 0, 0], [0.6e-3, 1e-3, 0]]])
+    assert fold_angle(x)[0] == np.pi
