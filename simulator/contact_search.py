@@ -66,13 +66,16 @@ class ContactSearch:
         -------
         conn : (m, 4) int array of nodes (point, T1, T2, T3)
         d0 : (m,) activation distance of each pair [m]
+        index : (m,) position of each pair in :attr:`static_conn`, or None (k-d tree mode)
         """
         xt = x[self.tri]
         centre = xt.mean(axis=1)
         radius = np.linalg.norm(xt - centre[:, None], axis=2).max(axis=1)
         xp = x[self.points]
+        index = None
         if self.static is not None:
             p, t = self.static
+            index = np.arange(len(p))
         else:
             tree_p, tree_t = cKDTree(xp), cKDTree(centre)
             found = tree_p.sparse_distance_matrix(tree_t, radius.max() + self.d0_max,
@@ -84,4 +87,12 @@ class ContactSearch:
         near = dist <= radius[t] + self.point_d0[p]
         p, t = p[near], t[near]
         conn = np.column_stack([self.points[p], self.tri[t]])
-        return conn, self.point_d0[p]
+        return conn, self.point_d0[p], None if index is None else index[near]
+
+    @property
+    def static_conn(self) -> np.ndarray | None:
+        """(m, 4) nodes of all admissible pairs in static mode (small meshes), else None."""
+        if self.static is None:
+            return None
+        p, t = self.static
+        return np.column_stack([self.points[p], self.tri[t]])

