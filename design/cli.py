@@ -3,7 +3,9 @@
 The CLI sits on top of both layers (simulator and design), so it lives here;
 ``simulator/`` never imports it. Subcommands:
 
-* ``etorigami demo``: the main demo (single crease: residual fold, gravity, substrate contact).
+* ``etorigami demo``: the main demo (single crease: residual fold, gravity, substrate contact);
+* ``etorigami cases``: the paper's cases with their parameters, defaults and units;
+* ``etorigami run CASE [--set name=value ...] --out DIR``: run a case and write its results.
 """
 
 from __future__ import annotations
@@ -40,6 +42,97 @@ def _demo(args) -> int:
     return 0 if all(r["status"] == "converged" for r in report["steps"]) else 1
 
 
+def _parse_value(text: str):
+    low = text.strip().lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _overrides(pairs, case_name):
+    import inspect
+
+    from simulator.cases import CASES, get_case
+
+    fn = CASES.get(case_name.replace("-", "_"))
+    if fn is None:
+        get_case(case_name)                     # raises the unknown-case error
+    params = inspect.signature(fn).parameters
+    out = {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise EtorigamiCLIError(f"--set expects name=value, got {pair!r}")
+        name, text = pair.split("=", 1)
+        name = name.strip().replace("-", "_")
+        if name not in params:
+            raise EtorigamiCLIError(f"case {case_name!r} has no parameter {name!r}; "
+                                    f"parameters: {', '.join(params)}")
+        value, default = _parse_value(text), params[name].default
+        if isinstance(default, bool) and not isinstance(value, bool):
+            raise EtorigamiCLIError(f"{name} expects true or false, got {text!r}")
+        if isinstance(default, int) and not isinstance(default, bool) and not isinstance(value, int):
+            raise EtorigamiCLIError(f"{name} expects an integer, got {text!r}")
+        if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if isinstance(default, (int, float)) and not isinstance(value, (int, float)):
+            raise EtorigamiCLIError(f"{name} expects a number, got {text!r}")
+        out[name] = value
+    return out
+
+
+class EtorigamiCLIError(Exception):
+    """A command-line usage error (reported in one line)."""
+
+
+def _cases(args) -> int:
+    from simulator.cases import describe_cases
+
+    for name, doc, params in describe_cases():
+        print(f"{name.replace('_', '-')}: {doc}")
+        for pname, default, unit in params:
+            unit = f" [{unit}]" if unit and unit != "-" else ""
+            print(f"    {pname} = {default!r}{unit}")
+    return 0
+
+
+def _run(args) -> int:
+    from tqdm import tqdm
+
+    from simulator.cases import get_case
+
+    overrides = _overrides(args.set, args.case)
+    case = get_case(args.case, **overrides)
+    bar = None
+
+    def progress(done, total):
+        nonlocal bar
+        if bar is None or bar.total != total:
+            if bar is not None:
+                bar.close()
+            bar = tqdm(total=total, desc=case.name, unit="inc", disable=args.quiet)
+        bar.update(done - bar.n)
+
+    t0 = time.perf_counter()
+    result = case.run(progress=progress)
+    if bar is not None:
+        bar.close()
+    out = result.save(args.out)
+    frame = result.to_frame()
+    last = frame[frame["step"] == frame["step"].max()]
+    print(f"{case.name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
+          f"results in {out}")
+    print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
+                "temperature_max [degC]"]].to_string(index=False))
+    return 0 if result.converged else 1
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="etorigami",
@@ -53,6 +146,15 @@ def _parser() -> argparse.ArgumentParser:
                       help="residual fold angle of the crease in degrees (default -10)")
     demo.add_argument("--no-gravity", action="store_true", help="switch gravity off")
     demo.set_defaults(func=_demo)
+    cases = sub.add_parser("cases", help="list the paper's cases with parameters and defaults")
+    cases.set_defaults(func=_cases)
+    run = sub.add_parser("run", help="run a case and write creases.csv, nodes.npz, meta.json")
+    run.add_argument("case", help="case name, e.g. single-fold (see 'etorigami cases')")
+    run.add_argument("--set", action="append", metavar="NAME=VALUE",
+                     help="override a case parameter (repeatable), e.g. --set gravity=true")
+    run.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=_run)
     return parser
 
 
@@ -67,7 +169,7 @@ def main(argv=None) -> int:
         return 0
     try:
         return args.func(args)
-    except EtorigamiError as exc:
+    except (EtorigamiError, EtorigamiCLIError) as exc:
         print(f"etorigami: error: {exc}", file=sys.stderr)
         return 2
 

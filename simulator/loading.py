@@ -22,10 +22,11 @@ from .equilibrium import EquilibriumSystem
 from .errors import ConvergenceError, ParameterError
 from .model import STANDARD_GRAVITY, Model, gravity_loads
 from .properties import spring_rest_angles
+from .results import SimulationResult, StepResult
 from .solvers import NewtonOptions, PathResult, follow_path
 
 __all__ = ["SimulationState", "initial_state", "SelfFold", "Load", "Gravity", "StepResult",
-           "SimulationResult", "simulate", "equilibrium_system", "ROOM_TEMPERATURE"]
+           "SimulationResult", "StepRun", "simulate", "equilibrium_system", "ROOM_TEMPERATURE"]
 
 logger = logging.getLogger(__name__)
 
@@ -44,6 +45,9 @@ class SimulationState:
     crease_rest : (C,) crease rest angles [rad], pi = flat (crease-row order)
     spring_rest : (n_springs,) spring rest angles [rad]
     temperature : (n_nodes,) node temperatures [deg C]
+    crease_power : (C,) heating power applied to each crease [W]
+    room_temperature : float
+        Ambient (room) temperature of the thermal boundary conditions [deg C].
     """
 
     u: np.ndarray
@@ -51,6 +55,8 @@ class SimulationState:
     crease_rest: np.ndarray
     spring_rest: np.ndarray
     temperature: np.ndarray
+    crease_power: np.ndarray
+    room_temperature: float = ROOM_TEMPERATURE
 
     @property
     def rest_fold(self) -> np.ndarray:
@@ -58,15 +64,20 @@ class SimulationState:
         return self.crease_rest - np.pi
 
 
-def initial_state(model: Model, room_temperature: float = ROOM_TEMPERATURE) -> SimulationState:
+def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
     """Unloaded state: zero displacement, flat crease rest angles, spring rest angles equal to
-    the spring angles of the initial geometry (digest 7.1), uniform room temperature."""
+    the spring angles of the initial geometry (digest 7.1), uniform room temperature (from the
+    model's thermal parameters, else 21 deg C), no heating."""
     mesh = model.mesh
+    if room_temperature is None:
+        room_temperature = ROOM_TEMPERATURE if model.thermal is None \
+            else model.thermal.room_temperature
     return SimulationState(
         u=np.zeros((mesh.n_nodes, 3)), applied_load=np.zeros((mesh.n_nodes, 3)),
         crease_rest=np.full(mesh.n_creases, np.pi),
         spring_rest=fold_angle(mesh.nodes[mesh.springs]),
-        temperature=np.full(mesh.n_nodes, float(room_temperature)))
+        temperature=np.full(mesh.n_nodes, float(room_temperature)),
+        crease_power=np.zeros(mesh.n_creases), room_temperature=float(room_temperature))
 
 
 _SYSTEMS: "weakref.WeakKeyDictionary[Model, EquilibriumSystem]" = weakref.WeakKeyDictionary()
@@ -80,69 +91,38 @@ def equilibrium_system(model: Model) -> EquilibriumSystem:
     return sys
 
 
-@dataclass(frozen=True, eq=False)
-class StepResult:
-    """Result of one loading step.
+@dataclass
+class StepRun:
+    """What a loading step returns to :func:`simulate` (internal)."""
 
-    Attributes
-    ----------
-    name : str
-    converged : bool
-    status : str
-        "converged", "failed" or "stopped".
-    message : str
-    state : SimulationState
-        State at the end of the step (the last converged one if it failed).
-    iterations, cuts : int
-        Total Newton iterations and increment halvings.
-    load_factor : (m,) path parameter of every accepted increment, in (0, 1]
-    u_history : (m, n_nodes, 3) displacements after every accepted increment [m]
-    residual_norms : list of (k,) arrays, Newton residual norms of each accepted increment [N]
-    reactions : (n_nodes, 3) support reactions on the structure at the end [N]
-    energies : dict of energy components at the end [J]
-    wall_time : float [s]
-    """
-
-    name: str
     converged: bool
     status: str
     message: str
     state: SimulationState
-    iterations: int
-    cuts: int
-    load_factor: np.ndarray
-    u_history: np.ndarray
-    residual_norms: list
-    reactions: np.ndarray
-    energies: dict
-    wall_time: float
+    f_ext: np.ndarray
+    iterations: int = 0
+    cuts: int = 0
+    load_factor: list = field(default_factory=list)
+    u: list = field(default_factory=list)
+    temperature: list = field(default_factory=list)
+    power: list = field(default_factory=list)
+    increment_iterations: list = field(default_factory=list)
+    residual_norms: list = field(default_factory=list)
+    evaluation: object = None
+    settings: dict = field(default_factory=dict)
 
-    @property
-    def increments(self) -> int:
-        return len(self.load_factor)
 
-
-@dataclass(frozen=True, eq=False)
-class SimulationResult:
-    """Results of all steps of :func:`simulate` and the final state."""
-
-    steps: list
-    state: SimulationState
-    model: Model = field(repr=False, default=None)
-
-    @property
-    def converged(self) -> bool:
-        return all(s.converged for s in self.steps)
-
-    @property
-    def status(self) -> str:
-        bad = [s for s in self.steps if not s.converged]
-        return "converged" if not bad else bad[0].status
-
-    @property
-    def message(self) -> str:
-        bad = [s for s in self.steps if not s.converged]
-        return "all steps converged" if not bad else f"step {bad[0].name!r}: {bad[0].message}"
+def run_from_path(path: PathResult, state: SimulationState, f_ext: np.ndarray,
+                  settings: dict) -> StepRun:
+    """A :class:`StepRun` of a purely mechanical step (temperatures and powers unchanged)."""
+    return StepRun(
+        converged=path.converged, status=path.status, message=path.message, state=state,
+        f_ext=f_ext, iterations=path.iterations, cuts=path.cuts,
+        load_factor=[h[0] for h in path.history], u=[h[1] for h in path.history],
+        temperature=[state.temperature] * len(path.history),
+        power=[state.crease_power] * len(path.history),
+        increment_iterations=[h[2] for h in path.history], residual_norms=path.residual_norms,
+        evaluation=path.evaluation, settings=settings)
 
 
 # ---------------------------------------------------------------------------- steps
@@ -188,7 +168,9 @@ class SelfFold:
         t = path.t
         new = replace(state, u=path.u, crease_rest=state.crease_rest + t * (target - state.crease_rest),
                       spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
-        return path, new, f
+        return run_from_path(path, new, f, {"folds [rad]": {str(k): float(v) for k, v in
+                                                          dict(self.folds).items()},
+                                            "increments": self.increments})
 
 
 @dataclass(frozen=True)
@@ -232,7 +214,9 @@ class Load:
         path = follow_path(system, state.u, f0, f0 + dF.ravel(), state.spring_rest,
                            state.spring_rest, self.increments, options)
         new = replace(state, u=path.u, applied_load=state.applied_load + path.t * dF)
-        return path, new, new.applied_load.ravel()
+        return run_from_path(path, new, new.applied_load.ravel(),
+                             {"total_load [N]": dF.sum(axis=0).tolist(),
+                              "increments": self.increments})
 
 
 @dataclass(frozen=True)
@@ -264,50 +248,64 @@ class Gravity:
     def run(self, model, system, state, options):
         load = Load(self.scale * gravity_loads(model.mesh, self.g, panels=self.panels),
                     self.increments)
-        return load.run(model, system, state, options)
+        run = load.run(model, system, state, options)
+        run.settings = {"g [m/s^2]": self.g, "scale": self.scale, "increments": self.increments,
+                        "panels": None if self.panels is None else list(self.panels)}
+        return run
 
 
 # ---------------------------------------------------------------------------- facade
 def simulate(model: Model, steps, state: SimulationState | None = None,
-             options: NewtonOptions = NewtonOptions()) -> SimulationResult:
+             options: NewtonOptions = NewtonOptions(), progress=None) -> SimulationResult:
     """Run loading steps in order, each starting from the state the previous one left.
 
     Stops after the first step that fails (its result says why); raises
     :class:`~simulator.errors.ConvergenceError` then only if ``options.raise_on_failure``.
+    ``progress(done, total)``, if given, is called after every increment of steps that
+    report progress (heating).
     """
     if not isinstance(model, Model):
         raise ParameterError(f"simulate expects a Model, got {type(model).__name__}.")
     steps = list(steps)
     for s in steps:
         if not hasattr(s, "run"):
-            raise ParameterError(f"{s!r} is not a loading step (SelfFold, Load, Gravity, ...).")
+            raise ParameterError(f"{s!r} is not a loading step (SelfFold, Load, Gravity, Heat, "
+                                 "...).")
     system = equilibrium_system(model)
-    state = initial_state(model) if state is None else state
+    start = initial_state(model) if state is None else state
+    state = start
     results = []
+    t_start = time.perf_counter()
     for step in steps:
         t0 = time.perf_counter()
-        path, new_state, f_ext = step.run(model, system, state, options)
-        results.append(_step_result(step, path, new_state, f_ext, system, time.perf_counter() - t0))
-        state = new_state
+        run = step.run(model, system, state, options, progress) if getattr(
+            step, "reports_progress", False) else step.run(model, system, state, options)
+        results.append(_step_result(step, run, system, time.perf_counter() - t0))
+        state = run.state
         logger.info("step %s: %s, %d increments, %d Newton iterations, %d cuts",
-                    step.name, path.status, len(path.history), path.iterations, path.cuts)
-        if not path.converged:
-            result = SimulationResult(results, state, model)
-            if options.raise_on_failure:
-                raise ConvergenceError(result.message, result)
-            return result
-    return SimulationResult(results, state, model)
+                    step.name, run.status, len(run.u), run.iterations, run.cuts)
+        if not run.converged:
+            break
+    result = SimulationResult(results, state, model, start, options.to_dict(),
+                              time.perf_counter() - t_start)
+    if not result.converged and options.raise_on_failure:
+        raise ConvergenceError(result.message, result)
+    return result
 
 
-def _step_result(step, path: PathResult, state, f_ext, system, wall) -> StepResult:
-    ev = path.evaluation or system.evaluate(state.u, state.spring_rest, hessian=False)
+def _step_result(step, run: StepRun, system, wall) -> StepResult:
+    state = run.state
+    ev = run.evaluation or system.evaluate(state.u, state.spring_rest, hessian=False)
     fixed = system.free_index < 0
-    reactions = np.where(fixed, ev.f_int - f_ext, 0.0).reshape(-1, 3)
-    n = state.u.shape
+    reactions = np.where(fixed, ev.f_int - run.f_ext, 0.0).reshape(-1, 3)
+    n, C = state.u.shape, state.crease_power.shape
     return StepResult(
-        name=step.name, converged=path.converged, status=path.status, message=path.message,
-        state=state, iterations=path.iterations, cuts=path.cuts,
-        load_factor=np.array([h[0] for h in path.history]),
-        u_history=np.array([h[1] for h in path.history]).reshape(-1, *n),
-        residual_norms=path.residual_norms, reactions=reactions, energies=ev.energies,
-        wall_time=wall)
+        name=step.name, converged=run.converged, status=run.status, message=run.message,
+        state=state, iterations=run.iterations, cuts=run.cuts,
+        load_factor=np.array(run.load_factor),
+        u_history=np.array(run.u).reshape(-1, *n),
+        temperature_history=np.array(run.temperature).reshape(-1, n[0]),
+        power_history=np.array(run.power).reshape(-1, *C),
+        increment_iterations=np.array(run.increment_iterations, dtype=int),
+        residual_norms=run.residual_norms, reactions=reactions, energies=ev.energies,
+        wall_time=wall, settings=run.settings)

@@ -144,6 +144,10 @@ class Model:
     params : BarHingeParameters
     supports : Supports
     contact : ContactParameters or None (contact off)
+    thermal : ThermalParameters or None
+        Heat-transfer parameters (needed by heating steps).
+    actuators : Actuators or None
+        Bimorph layers and signed expansion mismatch of the actuated creases.
     """
 
     mesh: BarHingeMesh
@@ -151,6 +155,8 @@ class Model:
     params: BarHingeParameters
     supports: Supports
     contact: ContactParameters | None = None
+    thermal: object = None
+    actuators: object = None
 
     def __post_init__(self):
         self.supports.fixed_mask(self.mesh.n_nodes)   # validates node ids
@@ -172,16 +178,21 @@ class Model:
         return {"pattern": self.mesh.pattern.to_dict(), "bar_hinge": self.params.to_dict(),
                 "supports": self.supports.to_dict(),
                 "contact": None if self.contact is None else self.contact.to_dict(),
+                "thermal": None if self.thermal is None else self.thermal.to_dict(),
+                "actuators": None if self.actuators is None else self.actuators.to_dict(),
                 "n_nodes": self.mesh.n_nodes, "n_bars": len(self.mesh.bars),
                 "n_springs": len(self.mesh.springs)}
 
 
 def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Mapping = None,
                params: BarHingeParameters | None = None,
-               contact: ContactParameters | bool | None = None) -> Model:
+               contact: ContactParameters | bool | None = None, thermal=None,
+               actuators=None) -> Model:
     """Build a :class:`Model`: mesh (if given a pattern), element properties, supports.
 
-    ``contact=True`` switches contact on with default :class:`ContactParameters`.
+    ``contact=True`` switches contact on with default :class:`ContactParameters`;
+    ``thermal`` (:class:`~simulator.thermal.ThermalParameters`) and ``actuators``
+    (:class:`~simulator.bimorph.Actuators`) are needed for heating steps.
     """
     mesh = pattern_or_mesh if isinstance(pattern_or_mesh, BarHingeMesh) \
         else build_mesh(pattern_or_mesh)
@@ -195,7 +206,10 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
     elif contact is False:
         contact = None
     props: MechanicalProperties = mechanical_properties(mesh, params)
-    return Model(mesh=mesh, properties=props, params=params, supports=supports, contact=contact)
+    if actuators is not None:
+        actuators.delta_alpha_array(mesh)          # validates the crease ids
+    return Model(mesh=mesh, properties=props, params=params, supports=supports, contact=contact,
+                 thermal=thermal, actuators=actuators)
 
 
 def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,

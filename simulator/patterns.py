@@ -90,19 +90,23 @@ def double_fold_pattern(L: float = 450e-6, W: float = 200e-6, undercut: float = 
                                    substrate_material], crease_material=panel_material)
 
 
-def miura_vertices(a: float, b: float, gamma: float, m: int, n: int):
-    """Vertices and panels of the reference ``GenerateMiuraSheet(a, b, gamma, m, n, Ext=1)``.
+def miura_vertices(a: float, b: float, gamma: float, m: int, n: int, ext: float = 1.0):
+    """Vertices and panels of the reference ``GenerateMiuraSheet(a, b, gamma, m, n, Ext)``.
 
-    Reproduces the reference's complex-arccos round-off (a ~1e-11 m out-of-plane wiggle of
-    every other row) so that meshes match it to the last digit.
+    ``ext`` in (0, 1] is the extension (1 = flat). Reproduces the reference's complex-arccos
+    round-off (a ~1e-11 m out-of-plane wiggle of every other row at ext = 1) so that meshes
+    match it to the last digit.
     """
     if not (isinstance(m, (int, np.integer)) and isinstance(n, (int, np.integer)) and m >= 1
             and n >= 1):
         raise ParameterError(f"Miura cells m = {m!r}, n = {n!r} must be positive integers.")
-    _positive(a=a, b=b, gamma=gamma)
-    theta = math.asin(math.sin(gamma))
+    _positive(a=a, b=b, gamma=gamma, ext=ext)
+    if not (ext <= 1 and gamma < math.pi / 2):
+        raise ParameterError(f"Miura: need 0 < ext <= 1 and 0 < gamma < pi/2; got ext = {ext}, "
+                             f"gamma = {gamma}.")
+    theta = math.asin(ext * math.sin(gamma))
     ell2 = (a + b * math.cos(gamma)) ** 2 + (b * math.sin(gamma)) ** 2
-    h = b * math.sin(gamma)
+    h = b * math.sin(gamma) * ext
     temp = (ell2 - h**2 - a**2 - (b * math.cos(theta)) ** 2) / (2 * a * b * math.cos(theta))
     beta = abs(cmath.acos(temp))
     dz, dx, dy0, dy1 = a * math.sin(beta), b * math.sin(theta), b * math.cos(theta), a * math.cos(beta)
@@ -169,3 +173,46 @@ def crane_pattern(a: float = 1e-3, W: float = 100e-6, crease_thickness: float = 
     panels = [tuple(int(i) - 1 for i in p) for p in panels]
     return Pattern(v, panels, crease_width=W, crease_thickness=crease_thickness,
                    panel_thickness=panel_thickness, panel_material=material, crease_material=material)
+
+
+def with_substrate(pattern: Pattern, undercut: float, margin: float,
+                   thickness: float = 500e-6, material: Material = SUBSTRATE) -> Pattern:
+    """Add a rectangular substrate panel ``undercut`` below the pattern's lowest vertex.
+
+    The substrate extends ``margin`` beyond the pattern's x-y bounding box. It becomes the
+    last panel; its edges get the last edge ids, so existing crease ids are unchanged.
+    """
+    _positive(undercut=undercut, margin=margin, thickness=thickness)
+    v = pattern.vertices
+    lo, hi = v[:, :2].min(axis=0) - margin, v[:, :2].max(axis=0) + margin
+    z = v[:, 2].min() - undercut
+    n = len(v)
+    corners = np.array([[lo[0], lo[1], z], [hi[0], lo[1], z], [hi[0], hi[1], z], [lo[0], hi[1], z]])
+    creases = pattern.creases
+    return Pattern(np.vstack([v, corners]), pattern.panels + ((n, n + 1, n + 2, n + 3),),
+                   crease_width={int(c): pattern.crease_width[c] for c in creases},
+                   crease_thickness={int(c): pattern.crease_thickness[c] for c in creases},
+                   panel_thickness=np.r_[pattern.panel_thickness, thickness],
+                   panel_material=pattern.panel_material + (material,),
+                   crease_material=pattern.crease_material)
+
+
+def fold_directions(vertices, panels) -> dict:
+    """Sign (+1 towards +z, -1 towards -z) of every interior crease of a folded pattern.
+
+    Computed from the signed dihedral angle of the two panels with normals oriented to +z:
+    used to give actuators the fold directions of a target shape (e.g. a partly folded Miura).
+    """
+    verts = np.asarray(vertices, float)
+    geo = Pattern(verts, panels, crease_width=1.0, crease_thickness=1.0, panel_thickness=1.0)
+    sizes = geo.corner_sizes
+    starts = np.cumsum(sizes) - sizes
+    c, a, b, panel = geo._fan_triangles()
+    normal = np.add.reduceat(np.cross(a - c, b - c), starts)
+    normal *= np.where(normal[:, 2] < 0, -1.0, 1.0)[:, None]
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    centroid = np.add.reduceat(verts[geo.corner_vertices], starts) / sizes[:, None]
+    p1, p2 = geo.edge_panels[geo.creases].T
+    axis = np.cross(centroid[p2] - centroid[p1], normal[p1])
+    s = np.einsum("ij,ij->i", np.cross(normal[p1], normal[p2]), axis)
+    return {int(k): (1 if v > 0 else -1) for k, v in zip(geo.creases, s)}

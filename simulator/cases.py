@@ -1,0 +1,308 @@
+"""Ready-made cases of the paper (Zhu & Filipov 2021), defaults from the method digest 8.
+
+Every case is a function returning a :class:`Case` (model + loading steps) and accepts
+keyword overrides; units are in the parameter names or listed in ``CASES[name].units``.
+Node and crease ids below are 0-based (reference id - 1).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bimorph import Actuators, Bimorph
+from .errors import ParameterError
+from .heating import Heat
+from .loading import Gravity, SelfFold, simulate
+from .materials import SU8, SUBSTRATE, Material
+from .model import ContactParameters, Model, Supports, make_model
+from .patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
+                       miura_vertices, single_fold_pattern, strip_pattern, with_substrate)
+from .properties import BarHingeParameters
+from .solvers import NewtonOptions
+from .thermal import REFERENCE_BETA, ThermalParameters
+
+__all__ = ["Case", "CASES", "get_case", "describe_cases"]
+
+#: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
+DELTA_ALPHA_AU_SU8 = 38e-6
+#: Gravity used by the reference scripts [m/s^2].
+G_REFERENCE = 9.8
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """A model with its loading sequence and the parameters that made it."""
+
+    name: str
+    model: Model
+    steps: tuple
+    parameters: dict = field(default_factory=dict)
+    description: str = ""
+
+    def run(self, options: NewtonOptions = NewtonOptions(), progress=None):
+        """Simulate all steps; returns a :class:`~simulator.results.SimulationResult`."""
+        return simulate(self.model, self.steps, options=options, progress=progress)
+
+
+CASES: dict = {}
+
+
+def _case(**units):
+    def register(fn):
+        fn.units = units
+        CASES[fn.__name__] = fn
+        return fn
+    return register
+
+
+def get_case(name: str, **overrides) -> Case:
+    """Build a case by name (``single_fold`` or ``single-fold``) with keyword overrides."""
+    key = name.replace("-", "_")
+    if key not in CASES:
+        raise ParameterError(f"Unknown case {name!r}; available: "
+                             f"{', '.join(n.replace('_', '-') for n in CASES)}.")
+    fn = CASES[key]
+    params = inspect.signature(fn).parameters
+    unknown = [k for k in overrides if k not in params]
+    if unknown:
+        raise ParameterError(f"Case {name!r} has no parameter {unknown[0]!r}; parameters: "
+                             f"{', '.join(params)}.")
+    return fn(**overrides)
+
+
+def describe_cases() -> list:
+    """[(name, summary, [(parameter, default, unit), ...]), ...] for every case."""
+    out = []
+    for name, fn in CASES.items():
+        doc = (fn.__doc__ or "").strip().splitlines()[0]
+        params = [(p.name, p.default, fn.units.get(p.name, ""))
+                  for p in inspect.signature(fn).parameters.values()]
+        out.append((name, doc, params))
+    return out
+
+
+def _check(**kw):
+    for k, v in kw.items():
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0):
+            raise ParameterError(f"{k} = {v!r} must be a positive number.")
+
+
+def _steps_int(name, value):
+    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+        raise ParameterError(f"{name} = {value!r} must be a positive integer.")
+    return value
+
+
+# ------------------------------------------------------------------------------ strip
+@_case(W="-", L="-", L1="-", L2="-", tc="-", tp="-", beta_deg="deg", t_env="-")
+def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1: float = 1.0,
+                       L2: float = 1.0, tc: float = 0.001, tp: float = 0.01,
+                       beta_deg: float = 20.0, t_env: float = 3.0, layers: int = 10) -> Case:
+    """Verification strip (digest 8.8): heat Q = 10 W L tc on one crease, non-dimensional.
+
+    ``variant="within"``: conduction only (k = 1, no environment); ``"loss"``: k = 0.3 with
+    heat loss to an environment (k_env = 0.026, beta converted with 3.14 as the reference).
+    """
+    if variant not in ("within", "loss"):
+        raise ParameterError(f"variant = {variant!r}; use 'within' or 'loss'.")
+    _check(W=W, L=L, L1=L1, L2=L2, tc=tc, tp=tp, t_env=t_env)
+    k = 1.0 if variant == "within" else 0.3
+    mat = Material("strip", youngs_modulus=2e9, poisson_ratio=0.3, thermal_conductivity=k)
+    pattern = strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=tc, panel_thickness=tp,
+                            material=mat)
+    if variant == "within":
+        thermal = ThermalParameters(env_thickness=1.0, env_conductivity=0.0, layers=1,
+                                    room_temperature=0.0, room_temperature_nodes=(0, 3, 5, 6))
+    else:
+        thermal = ThermalParameters(env_thickness=t_env, env_conductivity=0.026,
+                                    layers=_steps_int("layers", layers),
+                                    dissipation_angle=beta_deg / 180 * 3.14,
+                                    room_temperature=0.0, room_temperature_nodes=(0, 3, 5, 6))
+    model = make_model(pattern, Supports.nodes([0, 1, 2, 3, 8, 9, 10, 11]), thermal=thermal)
+    return Case("verification_strip", model, (Heat({2: 10 * W * L * tc}, increments=1),),
+                dict(variant=variant, W=W, L=L, L1=L1, L2=L2, tc=tc, tp=tp, beta_deg=beta_deg,
+                     t_env=t_env, layers=layers), verification_strip.__doc__)
+
+
+# ------------------------------------------------------------------------------ single fold
+SINGLE_FOLD_SUPPORTS = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz", 8: "xyz", 9: "xyz",
+                                 10: "xyz", 11: "xyz"})
+
+
+def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_mW,
+                      env_conductivity, crease_width, env_thickness, coupling, t_gold, t_su8,
+                      panel_thickness, L, undercut, E_gold, delta_alpha, self_fold_steps):
+    _check(crease_width=crease_width, env_thickness=env_thickness, t_gold=t_gold, t_su8=t_su8)
+    if not (isinstance(env_conductivity, (int, float)) and env_conductivity >= 0):
+        raise ParameterError(f"env_conductivity = {env_conductivity!r} must be >= 0 W/(m K).")
+    pattern = single_fold_pattern(L=L, W=crease_width, undercut=undercut,
+                                  panel_thickness=panel_thickness,
+                                  crease_thickness=t_gold + t_su8)
+    thermal = ThermalParameters(env_thickness=env_thickness, env_conductivity=env_conductivity,
+                                dissipation_angle=REFERENCE_BETA, boundary_panels=(2,),
+                                room_temperature_nodes=(0, 3))
+    actuators = Actuators(Bimorph(E1=E_gold, t1=t_gold, E2=2e9, t2=t_su8), {2: delta_alpha})
+    model = make_model(pattern, SINGLE_FOLD_SUPPORTS, BarHingeParameters(diagonal_rate=1000),
+                       contact=ContactParameters(1e-4, 40e-6, 40e-6), thermal=thermal,
+                       actuators=actuators)
+    steps = [SelfFold({2: math.radians(residual_fold_deg)}, increments=self_fold_steps)]
+    if gravity:
+        steps.append(Gravity(g=G_REFERENCE, panels=[1], increments=50))
+    steps.append(Heat({2: power_mW * 1e-3}, increments=_steps_int("thermal_steps", thermal_steps),
+                      coupling=coupling))
+    return Case(name, model, tuple(steps))
+
+
+@_case(residual_fold_deg="deg", thermal_steps="-", power_mW="mW", env_conductivity="W/(m K)",
+       crease_width="m", env_thickness="m")
+def single_fold(residual_fold_deg: float = 0.0, gravity: bool = False, thermal_steps: int = 500,
+                power_mW: float = 100.0, env_conductivity: float = 0.6,
+                crease_width: float = 200e-6, env_thickness: float = 750e-6,
+                coupling: str = "staggered") -> Case:
+    """Single crease over a substrate heated to power_mW (reference Example01, digest 8.1).
+
+    Defaults are exactly the reference's: residual fold 0, gravity off, k_env = 0.6 (water-like),
+    500 increments to 100 mW. The paper's threshold study uses gravity=True and a negative
+    residual fold.
+    """
+    params = {k: v for k, v in locals().items()}
+    case = _single_fold_case(
+        "single_fold", residual_fold_deg=residual_fold_deg, gravity=gravity,
+        thermal_steps=thermal_steps, power_mW=power_mW, env_conductivity=env_conductivity,
+        crease_width=crease_width, env_thickness=env_thickness, coupling=coupling,
+        t_gold=0.1e-6, t_su8=0.4e-6, panel_thickness=21e-6, L=0.5e-3, undercut=150e-6,
+        E_gold=39.5e9, delta_alpha=DELTA_ALPHA_AU_SU8, self_fold_steps=80)
+    return Case(case.name, case.model, case.steps, params, single_fold.__doc__)
+
+
+@_case(residual_fold_deg="deg", thermal_steps="-", power_mW="mW", env_conductivity="W/(m K)",
+       crease_width="m", env_thickness="m")
+def single_fold_prefolded(residual_fold_deg: float = 55.0, gravity: bool = False,
+                          thermal_steps: int = 500, power_mW: float = 10.0,
+                          env_conductivity: float = 0.026, crease_width: float = 300e-6,
+                          env_thickness: float = 750e-6, coupling: str = "staggered") -> Case:
+    """Pre-folded single crease that unfolds when heated (reference Example08, digest 8.6)."""
+    params = {k: v for k, v in locals().items()}
+    case = _single_fold_case(
+        "single_fold_prefolded", residual_fold_deg=residual_fold_deg, gravity=gravity,
+        thermal_steps=thermal_steps, power_mW=power_mW, env_conductivity=env_conductivity,
+        crease_width=crease_width, env_thickness=env_thickness, coupling=coupling,
+        t_gold=0.2e-6, t_su8=0.86e-6, panel_thickness=6e-6, L=0.5e-3, undercut=50e-6,
+        E_gold=39.5e9, delta_alpha=-DELTA_ALPHA_AU_SU8, self_fold_steps=80)
+    return Case(case.name, case.model, case.steps, params, single_fold_prefolded.__doc__)
+
+
+# ------------------------------------------------------------------------------ double fold
+@_case(residual_fold_deg="deg", thermal_steps="-", power_mW="mW per crease",
+       env_conductivity="W/(m K)", gravity_scale="-")
+def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_scale: float = 0.9,
+                thermal_steps: int = 250, power_mW: float = 10.0,
+                env_conductivity: float = 0.026, coupling: str = "staggered") -> Case:
+    """Anchor and two folding panels over a substrate, both creases heated (Example02, 8.2).
+
+    Fold 2 (crease 5, farther from the substrate) gets hotter and folds more than fold 1.
+    """
+    params = {k: v for k, v in locals().items()}
+    pattern = double_fold_pattern()
+    thermal = ThermalParameters(env_thickness=600e-6, env_conductivity=env_conductivity,
+                                dissipation_angle=REFERENCE_BETA, boundary_panels=(3,),
+                                room_temperature_nodes=(0, 3))
+    actuators = Actuators(Bimorph(E1=0.7 * 79e9, t1=0.2e-6, E2=2e9, t2=0.9e-6),
+                          {2: DELTA_ALPHA_AU_SU8, 5: DELTA_ALPHA_AU_SU8})
+    supports = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz", 12: "xyz", 13: "xyz", 14: "xyz",
+                         15: "xyz"})
+    model = make_model(pattern, supports, BarHingeParameters(diagonal_rate=1000),
+                       contact=ContactParameters(1e-4, 20e-6, 20e-6), thermal=thermal,
+                       actuators=actuators)
+    rf = math.radians(residual_fold_deg)
+    steps = [SelfFold({2: rf, 5: rf}, increments=50)]
+    if gravity:
+        steps.append(Gravity(g=G_REFERENCE, scale=gravity_scale, panels=[1, 2], increments=80))
+    steps.append(Heat({(2, 5): power_mW * 1e-3}, increments=_steps_int("thermal_steps",
+                                                                         thermal_steps),
+                      coupling=coupling))
+    return Case("double_fold", model, tuple(steps), params, double_fold.__doc__)
+
+
+# ------------------------------------------------------------------------------ Miura lifter
+def miura_fold_signs(a, b, gamma, m, n) -> dict:
+    """Fold direction (+1 / -1) of every crease of a Miura sheet, from a partly folded shape."""
+    v, p = miura_vertices(a, b, gamma, m, n, ext=0.8)
+    return fold_directions(v, p)
+
+
+@_case(a="m", b="m", gamma_deg="deg", crease_width="m", power_mW="mW per crease",
+       thermal_steps="-", undercut="m")
+def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float = 1e-3,
+                 gamma_deg: float = 60.0, crease_width: float = 200e-6, power_mW: float = 9.0,
+                 thermal_steps: int = 250, substrate: bool = False, undercut: float = 100e-6,
+                 coupling: str = "staggered") -> Case:
+    """Miura-ori lifter (paper 6.2): left end (x = 0) anchored, right end lifts when all
+    creases are heated; optionally over a substrate that cools the creases near it.
+
+    Geometry and actuators of Example03 (digest 8.3): 10 um panels, 1 um creases, gold 0.2 um
+    on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions.
+    """
+    params = {k: v for k, v in locals().items()}
+    _check(a=a, b=b, gamma_deg=gamma_deg, crease_width=crease_width, undercut=undercut)
+    m, n = _steps_int("cells_x", cells_x), _steps_int("cells_y", cells_y)
+    gamma = math.radians(gamma_deg)
+    pattern = miura_sheet_pattern(a, b, gamma, m, n, W=crease_width, crease_thickness=1e-6,
+                                  panel_thickness=10e-6)
+    boundary = ()
+    if substrate:
+        pattern = with_substrate(pattern, undercut=undercut, margin=0.5 * max(a, b))
+        boundary = (pattern.n_panels - 1,)
+    signs = miura_fold_signs(a, b, gamma, m, n)
+    actuators = Actuators(Bimorph(E1=50e9, t1=0.2e-6, E2=2e9, t2=0.8e-6),
+                          {c: -50e-6 * s for c, s in signs.items()})
+    thermal = ThermalParameters(env_thickness=(a + b) / 2, env_conductivity=0.026,
+                                dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
+    probe = make_model(pattern)
+    mesh = probe.mesh
+    anchored = np.flatnonzero((mesh.node_vertex >= 0) & (np.abs(mesh.nodes[:, 0]) < 1e-12)
+                              & (mesh.node_panel < m * n))
+    fixed = {int(i): "xyz" for i in anchored}
+    if substrate:
+        fixed.update({int(i): "xyz" for i in mesh.panel_nodes(pattern.n_panels - 1)})
+    model = make_model(mesh, Supports(fixed), BarHingeParameters(),
+                       contact=ContactParameters() if substrate else None, thermal=thermal,
+                       actuators=actuators)
+    steps = (Heat({tuple(signs): power_mW * 1e-3},
+                  increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
+    return Case("miura_lifter", model, steps, params, miura_lifter.__doc__)
+
+
+# ------------------------------------------------------------------------------ crane
+_CRANE_SIGN = {1: -1, 7: -1, 8: -1, 10: -1, 12: -1, 17: -1, 18: -1, 19: -1,
+               3: 1, 5: 1, 6: 1, 9: 1, 11: 1, 13: 1, 14: 1, 15: 1, 21: 1}     # reference ids
+
+
+@_case(power_mW="mW", thermal_steps="-")
+def crane(deactivated: bool = False, power_mW: float = 4.0, thermal_steps: int = 500,
+          coupling: str = "staggered") -> Case:
+    """Origami crane (paper 6.1, Example04): 17 active creases, or creases 8 and 17
+    (reference ids) left unheated with half power on 9 and 11 (``deactivated=True``)."""
+    params = {k: v for k, v in locals().items()}
+    q = power_mW * 1e-3
+    heat = {6: q, 13: q, 21: q, 9: q, 11: q, 1: 4 * q, 18: 4 * q, 3: 1.5 * q, 5: 1.5 * q,
+            14: 1.5 * q, 15: 1.5 * q, 7: 2 * q, 8: 2 * q, 10: 2 * q, 12: 2 * q, 17: q / 2,
+            19: q / 2}
+    if deactivated:
+        del heat[8], heat[17]
+        heat[9] = heat[11] = q / 2
+    pattern = crane_pattern()
+    thermal = ThermalParameters(env_thickness=1e-3, env_conductivity=0.026,
+                                dissipation_angle=REFERENCE_BETA)
+    actuators = Actuators(Bimorph(E1=50e9, t1=0.2e-6, E2=2e9, t2=0.8e-6),
+                          {c - 1: 200e-6 * s for c, s in _CRANE_SIGN.items()})
+    model = make_model(pattern, Supports({12: "xyz", 13: "yz", 15: "z", 17: "z"}),
+                       BarHingeParameters(), thermal=thermal, actuators=actuators)
+    steps = (Heat({c - 1: v for c, v in heat.items()},
+                  increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
+    return Case("crane", model, steps, params, crane.__doc__)

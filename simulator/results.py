@@ -1,0 +1,207 @@
+"""Simulation results: per-step outcomes, per-increment history, tables and files.
+
+Every accepted increment of every loading step is a record: displacements,
+node temperatures and crease powers. Crease fold angles and crease temperatures
+are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
+table (one row per record and crease, unit-bearing column names) and
+:meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import subprocess
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ._version import __version__
+from .bimorph import crease_temperature_weights
+from .geometry import fold_angles
+
+__all__ = ["StepResult", "SimulationResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class StepResult:
+    """Result of one loading step.
+
+    Attributes
+    ----------
+    name : str
+    converged : bool
+    status : str
+        "converged", "failed" or "stopped".
+    message : str
+    state : SimulationState
+        State at the end of the step (the last converged one if it failed).
+    iterations, cuts : int
+        Total Newton iterations and increment halvings.
+    load_factor : (m,) path parameter of every accepted increment, in (0, 1]
+    u_history : (m, n_nodes, 3) displacements after every accepted increment [m]
+    temperature_history : (m, n_nodes) node temperatures [deg C]
+    power_history : (m, C) crease powers [W]
+    increment_iterations : (m,) Newton iterations of each accepted increment
+    residual_norms : list of (k,) arrays, Newton residual norms of each accepted increment [N]
+    reactions : (n_nodes, 3) support reactions on the structure at the end [N]
+    energies : dict of energy components at the end [J]
+    wall_time : float [s]
+    """
+
+    name: str
+    converged: bool
+    status: str
+    message: str
+    state: object
+    iterations: int
+    cuts: int
+    load_factor: np.ndarray
+    u_history: np.ndarray
+    temperature_history: np.ndarray
+    power_history: np.ndarray
+    increment_iterations: np.ndarray
+    residual_norms: list
+    reactions: np.ndarray
+    energies: dict
+    wall_time: float
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def increments(self) -> int:
+        return len(self.load_factor)
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """Results of all steps of :func:`~simulator.loading.simulate` and the final state.
+
+    ``initial_state`` is the state before the first step (record 0 of the history).
+    """
+
+    steps: list
+    state: object
+    model: object = field(repr=False, default=None)
+    initial_state: object = field(repr=False, default=None)
+    options: dict = field(default_factory=dict)
+    wall_time: float = 0.0
+
+    @property
+    def converged(self) -> bool:
+        return all(s.converged for s in self.steps)
+
+    @property
+    def status(self) -> str:
+        bad = [s for s in self.steps if not s.converged]
+        return "converged" if not bad else bad[0].status
+
+    @property
+    def message(self) -> str:
+        bad = [s for s in self.steps if not s.converged]
+        return "all steps converged" if not bad else f"step {bad[0].name!r}: {bad[0].message}"
+
+    # ------------------------------------------------------------------ history
+    @cached_property
+    def history(self) -> dict:
+        """Per-record arrays (record 0 = initial state, then every accepted increment).
+
+        Keys: ``stage`` (step index, -1 for the initial record), ``stage_name``, ``increment``,
+        ``u`` (m, n, 3) [m], ``temperature`` (m, n) [deg C], ``power`` (m, C) [W],
+        ``iterations`` (m,).
+        """
+        s0 = self.initial_state
+        stage, names, inc = [-1], ["initial"], [0]
+        u, temp, power, its = [s0.u], [s0.temperature], [s0.crease_power], [0]
+        for k, step in enumerate(self.steps):
+            m = step.increments
+            stage += [k] * m
+            names += [step.name] * m
+            inc += list(range(1, m + 1))
+            u += list(step.u_history)
+            temp += list(step.temperature_history)
+            power += list(step.power_history)
+            its += list(step.increment_iterations)
+        return {"stage": np.array(stage), "stage_name": np.array(names), "increment": np.array(inc),
+                "u": np.array(u), "temperature": np.array(temp), "power": np.array(power),
+                "iterations": np.array(its)}
+
+    @cached_property
+    def fold_angle(self) -> np.ndarray:
+        """(m, C) crease fold angles [rad] of every record (0 flat, > 0 towards +z)."""
+        mesh = self.model.mesh
+        return np.array([fold_angles(mesh, mesh.nodes + u) for u in self.history["u"]])
+
+    @cached_property
+    def crease_temperature(self) -> np.ndarray:
+        """(m, C) crease temperature used for actuation [deg C] (7-node weighted mean)."""
+        t = self.history["temperature"][:, self.model.mesh.crease_nodes]
+        return t @ crease_temperature_weights()
+
+    @cached_property
+    def crease_temperature_max(self) -> np.ndarray:
+        """(m, C) hottest of the 7 crease nodes [deg C]."""
+        return self.history["temperature"][:, self.model.mesh.crease_nodes].max(axis=2)
+
+    def to_frame(self):
+        """Long table: one row per record and crease.
+
+        Columns: ``step`` (record index, 0 = initial state), ``stage``, ``increment``,
+        ``crease`` (edge id), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
+        ``temperature_max [degC]``, ``iterations``.
+        """
+        import pandas as pd
+
+        h = self.history
+        creases = self.model.mesh.crease_ids
+        m, C = len(h["stage"]), len(creases)
+        rep = lambda a: np.repeat(a, C)  # noqa: E731
+        return pd.DataFrame({
+            "step": rep(np.arange(m)), "stage": rep(h["stage_name"]),
+            "increment": rep(h["increment"]), "crease": np.tile(creases, m),
+            "power [mW]": h["power"].ravel() * 1e3,
+            "fold_angle [deg]": np.degrees(self.fold_angle).ravel(),
+            "temperature [degC]": self.crease_temperature.ravel(),
+            "temperature_max [degC]": self.crease_temperature_max.ravel(),
+            "iterations": rep(h["iterations"]),
+        })
+
+    def save(self, directory) -> pathlib.Path:
+        """Write ``creases.csv``, ``nodes.npz`` and ``meta.json`` into ``directory``."""
+        out = pathlib.Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        self.to_frame().to_csv(out / "creases.csv", index=False)
+        h = self.history
+        mesh = self.model.mesh
+        np.savez_compressed(out / "nodes.npz", reference_positions=mesh.nodes,
+                            displacements=h["u"], positions=mesh.nodes + h["u"],
+                            temperature=h["temperature"], power=h["power"],
+                            crease_ids=mesh.crease_ids, triangles=mesh.triangles)
+        meta = {"etorigami_version": __version__, "git": _git_hash(),
+                "status": self.status, "message": self.message,
+                "wall_time [s]": self.wall_time, "model": self.model.to_dict(),
+                "options": self.options,
+                "steps": [{"name": s.name, "status": s.status, "message": s.message,
+                           "increments": s.increments, "iterations": s.iterations,
+                           "cuts": s.cuts, "wall_time [s]": s.wall_time, **s.settings}
+                          for s in self.steps]}
+        (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
+        return out
+
+
+def _jsonable(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.integer, np.floating)):
+        return obj.item()
+    return str(obj)
+
+
+def _git_hash() -> str | None:
+    try:
+        here = pathlib.Path(__file__).resolve().parent
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
+                             text=True, timeout=5)
+        return out.stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        return None
