@@ -123,7 +123,7 @@ def _run(args) -> int:
     result = case.run(progress=progress)
     if bar is not None:
         bar.close()
-    out = result.save(args.out)
+    out = result.save(args.out, {"case": case.name, "parameters": case.parameters})
     frame = result.to_frame()
     last = frame[frame["step"] == frame["step"].max()]
     print(f"{case.name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "

@@ -242,8 +242,8 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
                  gamma_deg: float = 60.0, crease_width: float = 200e-6, power_mW: float = 9.0,
                  thermal_steps: int = 250, substrate: bool = False, undercut: float = 100e-6,
                  coupling: str = "staggered") -> Case:
-    """Miura-ori lifter (paper 6.2): left end (x = 0) anchored, right end lifts when all
-    creases are heated; optionally over a substrate that cools the creases near it.
+    """Miura-ori lifter (paper 6.2): left end clamped (first column of panels), right end lifts
+    when all creases are heated; optionally over a substrate that cools the creases near it.
 
     Geometry and actuators of Example03 (digest 8.3): 10 um panels, 1 um creases, gold 0.2 um
     on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions.
@@ -263,11 +263,9 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
                           {c: -50e-6 * s for c, s in signs.items()})
     thermal = ThermalParameters(env_thickness=(a + b) / 2, env_conductivity=0.026,
                                 dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
-    probe = make_model(pattern)
-    mesh = probe.mesh
-    anchored = np.flatnonzero((mesh.node_vertex >= 0) & (np.abs(mesh.nodes[:, 0]) < 1e-12)
-                              & (mesh.node_panel < m * n))
-    fixed = {int(i): "xyz" for i in anchored}
+    mesh = make_model(pattern).mesh
+    # clamp the left end: every node of the first column of panels (x = 0 side)
+    fixed = {int(i): "xyz" for p in range(n) for i in mesh.panel_nodes(p)}
     if substrate:
         fixed.update({int(i): "xyz" for i in mesh.panel_nodes(pattern.n_panels - 1)})
     model = make_model(mesh, Supports(fixed), BarHingeParameters(),

@@ -166,8 +166,11 @@ class SimulationResult:
             "iterations": rep(h["iterations"]),
         })
 
-    def save(self, directory) -> pathlib.Path:
-        """Write ``creases.csv``, ``nodes.npz`` and ``meta.json`` into ``directory``."""
+    def save(self, directory, metadata: dict | None = None) -> pathlib.Path:
+        """Write ``creases.csv``, ``nodes.npz`` and ``meta.json`` into ``directory``.
+
+        ``metadata`` (e.g. the case name and its parameters) is added to ``meta.json``.
+        """
         out = pathlib.Path(directory)
         out.mkdir(parents=True, exist_ok=True)
         self.to_frame().to_csv(out / "creases.csv", index=False)
@@ -184,7 +187,8 @@ class SimulationResult:
                 "steps": [{"name": s.name, "status": s.status, "message": s.message,
                            "increments": s.increments, "iterations": s.iterations,
                            "cuts": s.cuts, "wall_time [s]": s.wall_time, **s.settings}
-                          for s in self.steps]}
+                          for s in self.steps],
+                **(metadata or {})}
         (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
         return out
 
