@@ -27,7 +27,7 @@ __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path
 logger = logging.getLogger(__name__)
 
 #: Below this many free DOFs the tangent system is solved densely (faster for tiny meshes).
-DENSE_LIMIT = 400
+DENSE_LIMIT = 150
 
 
 @dataclass(frozen=True)
