@@ -1,0 +1,169 @@
+"""Origami crane: folding with all creases active and with two creases deactivated (paper 6.1).
+
+Question
+--------
+The crane pattern (14 panels, 17 electro-thermal creases of gold on SU-8, no gravity or
+substrate) folds when all creases are heated at once. Real fabrication may leave some creases
+passive: with creases 8 and 17 (reference numbering) unheated and half power on creases 9 and
+11, does the crane still fold, thanks to its one-degree-of-freedom centre pattern, and by how
+much less?
+
+Method
+------
+``get_case("crane", deactivated=d)`` for d = False / True (reference Example04, digest 8.4):
+every crease gets a multiple of the base power q (q, 1.5 q, 2 q, 4 q or q / 2 depending on
+the crease) ramped to q = 4 mW in 500 staggered thermo-mechanical increments. The base power
+``base_power [mW]`` of a record is the power of reference crease 6 (which gets q in both
+variants). ``--quick`` uses 30 increments.
+
+Crease ids: ``crease`` is our edge id (0-based), ``crease_ref`` = edge id + 1 is the
+reference (and paper) numbering. Fold angles are signed (0 flat, positive = valley towards
++z, negative = mountain).
+
+Outputs (``results/crane/``)
+----------------------------
+``crane.csv``: one long table, the ``table`` column tells the row kind, ``variant`` is
+``all active`` or ``8 and 17 deactivated``:
+
+* ``crease`` - the 17 creases at the end of heating: ``crease``, ``crease_ref``, ``heated``
+  (final power > 0), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
+  ``temperature_max [degC]``.
+* ``sweep`` - every crease, every record (every 5th in the full run, plus the last):
+  ``crease``, ``crease_ref``, ``step``, ``base_power [mW]``, ``power [mW]``,
+  ``fold_angle [deg]``, ``temperature [degC]``.
+* ``nodes`` - final node positions ``x [um]``, ``y [um]``, ``z [um]`` and
+  ``temperature [degC]`` (``step``, ``stage``, ``increment``, ``node``).
+
+Figures: ``crane.png`` (fold angle and temperature vs base power for representative creases:
+1 (4 q), 6 (q), 9 (q, or q / 2 when deactivated), and the deactivated 8 and 17),
+``crane_creases.png`` (final fold and temperature of every crease, both variants) and
+``crane_shapes.png`` (the two final 3-D shapes side by side, coloured by temperature).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from simulator.cases import get_case
+from studies._common import study_main
+from studies.single_fold import node_frame, run_case, shape_from_frame
+
+NAME = "crane"
+THERMAL_STEPS_QUICK = 30
+VARIANTS = {"all active": False, "8 and 17 deactivated": True}
+REPRESENTATIVE = (1, 6, 9, 8, 17)       # reference ids
+BASE_CREASE_REF = 6                     # gets exactly q in both variants
+SWEEP_EVERY = 5                         # full run: keep every 5th record in the sweep rows
+POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
+                               "temperature_max [degC]")
+
+
+def _params(deactivated: bool, quick: bool = False) -> dict:
+    return dict(deactivated=deactivated, **({"thermal_steps": THERMAL_STEPS_QUICK} if quick
+                                            else {}))
+
+
+def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
+    """Fold the crane with all creases and with two creases deactivated."""
+    parts = []
+    for variant, deactivated in VARIANTS.items():
+        case, res = run_case(NAME, _params(deactivated, quick), progress, variant)
+        h, mesh = res.history, case.model.mesh
+        ids = mesh.crease_ids
+        C = len(ids)
+        power = h["power"] * 1e3
+        parts.append(pd.DataFrame({
+            "table": "crease", "variant": variant, "crease": ids, "crease_ref": ids + 1,
+            "heated": power[-1] > 0, POWER: power[-1],
+            FOLD: np.degrees(res.fold_angle[-1]), TEMP: res.crease_temperature[-1],
+            TEMP_MAX: res.crease_temperature_max[-1]}))
+        m = len(power)
+        recs = np.arange(0, m, 1 if quick else SWEEP_EVERY)
+        if recs[-1] != m - 1:
+            recs = np.r_[recs, m - 1]
+        base = power[recs, mesh.crease_row_of(BASE_CREASE_REF - 1)]
+        parts.append(pd.DataFrame({
+            "table": "sweep", "variant": variant,
+            "crease": np.tile(ids, len(recs)), "crease_ref": np.tile(ids + 1, len(recs)),
+            "step": np.repeat(recs, C), "base_power [mW]": np.repeat(base, C),
+            POWER: power[recs].ravel(), FOLD: np.degrees(res.fold_angle[recs]).ravel(),
+            TEMP: res.crease_temperature[recs].ravel()}))
+        parts.append(node_frame(res, -1, variant=variant))
+    return pd.concat(parts, ignore_index=True)
+
+
+def plot(df: pd.DataFrame) -> dict:
+    """Curves, per-crease bars and the two final shapes (``crane``, ``crane_creases``,
+    ``crane_shapes``)."""
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import MaxNLocator
+
+    from studies.plotting import plot_shape
+
+    variants = list(VARIANTS)
+    dashes = {variants[0]: "-", variants[1]: "--"}
+    sweep = df[df["table"] == "sweep"].sort_values("step", kind="stable")
+    fig = Figure(figsize=(11.5, 4.8), layout="constrained")
+    ax_f, ax_t = fig.subplots(1, 2)
+    for k, ref in enumerate(REPRESENTATIVE):
+        for variant in variants:
+            d = sweep[(sweep["crease_ref"] == ref) & (sweep["variant"] == variant)]
+            for ax, col in ((ax_f, FOLD), (ax_t, TEMP)):
+                ax.plot(d["base_power [mW]"], d[col], dashes[variant], color=f"C{k}")
+    handles = [Line2D([], [], color=f"C{k}", label=f"crease {ref}")
+               for k, ref in enumerate(REPRESENTATIVE)]
+    handles += [Line2D([], [], color="0.3", ls=dashes[v], label=v) for v in variants]
+    ax_f.legend(handles=handles, fontsize="small", ncols=2)
+    ax_f.set_ylabel("fold angle [deg] (+ valley, - mountain)")
+    ax_f.set_title("(a) fold angles (reference crease numbers)")
+    ax_t.set_ylabel("crease temperature [°C]")
+    ax_t.set_title("(b) crease temperatures")
+    for ax in (ax_f, ax_t):
+        ax.set_xlabel("base power q [mW] (crease power = 0.5 q ... 4 q)")
+        ax.grid(True, alpha=0.3)
+
+    creases = df[df["table"] == "crease"]
+    bars = Figure(figsize=(11.5, 6.0), layout="constrained")
+    ax_b, ax_bt = bars.subplots(2, 1, sharex=True)
+    refs = np.sort(creases["crease_ref"].unique())
+    pos = np.arange(len(refs))
+    for k, variant in enumerate(variants):
+        d = creases[creases["variant"] == variant].set_index("crease_ref").loc[refs]
+        heated = d["heated"].astype(bool).to_numpy()
+        for ax, col in ((ax_b, FOLD), (ax_bt, TEMP)):
+            b = ax.bar(pos + (k - 0.5) * 0.4, d[col], width=0.4, color=f"C{k}", label=variant)
+            for patch, h in zip(b, heated):
+                if not h:
+                    patch.set_hatch("//")
+                    patch.set_edgecolor("k")
+    ax_b.set_ylabel("final fold angle [deg]")
+    ax_b.axhline(0, color="k", lw=0.8)
+    ax_b.legend(fontsize="small", title="hatched: unheated crease", title_fontsize="small")
+    ax_bt.set_ylabel("final crease temperature [°C]")
+    ax_bt.set_xlabel("crease (reference numbering)")
+    ax_bt.set_xticks(pos, [str(int(r)) for r in refs])
+    for ax in (ax_b, ax_bt):
+        ax.grid(True, axis="y", alpha=0.3)
+
+    nodes = df[df["table"] == "nodes"]
+    q = sweep["base_power [mW]"].max()
+    shapes = Figure(figsize=(12.5, 5.2), layout="constrained")
+    for k, variant in enumerate(variants):
+        ax = shapes.add_subplot(1, 2, k + 1, projection="3d")
+        mesh = get_case(NAME, **_params(VARIANTS[variant])).model.mesh
+        plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax)
+        ax.set_title(f"{variant} (q = {q:.1f} mW)")
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.set_major_locator(MaxNLocator(5))
+        ax.view_init(elev=30, azim=-60)
+    return {NAME: fig, f"{NAME}_creases": bars, f"{NAME}_shapes": shapes}
+
+
+def main(argv=None):
+    return study_main(NAME, __doc__, run, plot, argv)
+
+
+if __name__ == "__main__":
+    main()

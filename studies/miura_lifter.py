@@ -1,0 +1,169 @@
+"""Miura-ori lifter: how a substrate's thermal boundary reduces the lift (paper section 6.2).
+
+Question
+--------
+A Miura-ori beam (4 x 2 cells of 1 mm panels, gold/SU-8 creases) is anchored at its left
+end; heating all creases folds the pattern and lifts the free right end. On a substrate the
+creases near the anchored end lose heat to it, run cooler and fold less. How much lower is
+the lift, and how is the crease temperature distributed along the beam?
+
+Method
+------
+``get_case("miura_lifter", cells_x=4, cells_y=2, substrate=s)`` for s = False / True: the
+first column of panels is clamped (and the substrate panel, 100 um below the sheet, is fixed
+and is a room-temperature thermal boundary); every crease ramps to 9 mW in 250 staggered
+thermo-mechanical increments. The lift is measured as in ``tests/test_cases.py``: the mean z
+of the sheet's corner nodes at the largest x (the free right edge) minus its initial value.
+The normalised power is the crease power over its final value (9 mW), as in the paper's
+figure. ``--quick`` uses 30 increments.
+
+Outputs (``results/miura_lifter/``)
+-----------------------------------
+``miura_lifter.csv``: one long table, the ``table`` column tells the row kind, ``variant``
+is ``free`` (no substrate) or ``on substrate``:
+
+* ``sweep`` - one row per record (the initial state, then every heating increment):
+  ``step``, ``power [mW]`` (per crease), ``power_normalised [-]``, ``lift [um]``.
+* ``crease`` - the creases at the final power: ``crease`` (edge id), ``x [um]`` and
+  ``y [um]`` (the crease's centre node in the flat sheet), ``clamped`` (both panels in the
+  clamped first column), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
+  ``temperature_max [degC]``.
+* ``nodes`` - final node positions ``x [um]``, ``y [um]``, ``z [um]`` and
+  ``temperature [degC]`` (``step``, ``stage``, ``increment``, ``node``).
+
+Figures: ``miura_lifter.png`` (lift vs power, normalised power on the top axis, and crease
+temperature vs the crease's x position at the final power), ``miura_lifter_shapes.png``
+(final 3-D shapes of both variants, coloured by temperature).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from simulator.cases import get_case
+from studies._common import study_main
+from studies.single_fold import node_frame, run_case, shape_from_frame
+
+NAME = "miura_lifter"
+CELLS = dict(cells_x=4, cells_y=2)
+THERMAL_STEPS_QUICK = 30
+VARIANTS = {"free": False, "on substrate": True}
+Z_STRETCH = 0.3          # 3-D shapes: z box at least 0.3 x the in-plane size
+POWER, TEMP, TEMP_MAX, LIFT = ("power [mW]", "temperature [degC]", "temperature_max [degC]",
+                               "lift [um]")
+
+
+def _params(substrate: bool, quick: bool = False) -> dict:
+    p = dict(CELLS, substrate=substrate)
+    if quick:
+        p["thermal_steps"] = THERMAL_STEPS_QUICK
+    return p
+
+
+def right_edge_nodes(case) -> np.ndarray:
+    """Corner nodes of the sheet (not the substrate) at its largest x (the free end)."""
+    mesh = case.model.mesh
+    n_sheet = case.parameters["cells_x"] * case.parameters["cells_y"]
+    sheet = (mesh.node_vertex >= 0) & (mesh.node_panel < n_sheet)
+    return np.flatnonzero(sheet & np.isclose(mesh.nodes[:, 0], mesh.nodes[sheet, 0].max()))
+
+
+def lift_um(case, result) -> np.ndarray:
+    """(m,) lift of the free end [um] of every record: mean z of the right edge - initial."""
+    right = right_edge_nodes(case)
+    z = case.model.mesh.nodes[right, 2] + result.history["u"][:, right, 2]
+    return 1e6 * (z.mean(axis=1) - z[0].mean())
+
+
+def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
+    """Heat the lifter with and without substrate; see the module docstring."""
+    parts = []
+    for variant, substrate in VARIANTS.items():
+        case, res = run_case(NAME, _params(substrate, quick), progress, variant)
+        h, mesh = res.history, case.model.mesh
+        power = h["power"].max(axis=1) * 1e3                 # all heated creases share it
+        parts.append(pd.DataFrame({"table": "sweep", "variant": variant,
+                                   "step": np.arange(len(power)), "stage": h["stage_name"],
+                                   POWER: power, "power_normalised [-]": power / power[-1],
+                                   LIFT: lift_um(case, res)}))
+        centre = mesh.nodes[mesh.crease_nodes[:, 6]] * 1e6
+        parts.append(pd.DataFrame({
+            "table": "crease", "variant": variant, "crease": mesh.crease_ids,
+            "x [um]": centre[:, 0], "y [um]": centre[:, 1],
+            "clamped": _clamped_creases(mesh, range(CELLS["cells_y"])),
+            POWER: h["power"][-1] * 1e3, "fold_angle [deg]": np.degrees(res.fold_angle[-1]),
+            TEMP: res.crease_temperature[-1], TEMP_MAX: res.crease_temperature_max[-1]}))
+        parts.append(node_frame(res, -1, variant=variant))
+    return pd.concat(parts, ignore_index=True)
+
+
+def _clamped_creases(mesh, clamped_panels) -> np.ndarray:
+    """True for creases whose two panels are both clamped (the case clamps the first column,
+    panels 0 .. cells_y - 1)."""
+    # the four corner slots of a crease (N11, N12, N21, N22) belong to its two panels
+    corner_panels = mesh.node_panel[mesh.crease_nodes[:, :4]]
+    return np.all(np.isin(corner_panels, list(clamped_panels)), axis=1)
+
+
+def plot(df: pd.DataFrame) -> dict:
+    """``{"miura_lifter": lift and crease temperatures, "miura_lifter_shapes": 3-D shapes}``."""
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
+
+    from studies.plotting import plot_shape
+
+    sweep = df[df["table"] == "sweep"]
+    creases = df[df["table"] == "crease"]
+    fig = Figure(figsize=(11.5, 4.6), layout="constrained")
+    ax_l, ax_t = fig.subplots(1, 2)
+    styles = {"free": dict(color="k"), "on substrate": dict(color="0.55")}
+    p_max = sweep[POWER].max()
+    for variant, d in sweep.groupby("variant", sort=False):
+        d = d.sort_values("step")
+        ax_l.plot(d[POWER], d[LIFT], lw=2, label=f"{variant} (final {d[LIFT].iloc[-1]:.0f} um)",
+                  **styles.get(variant, {}))
+    ax_l.set_xlabel("power per crease [mW]")
+    ax_l.set_ylabel("lift of the free end [um]")
+    top = ax_l.secondary_xaxis("top", functions=(lambda p: p / p_max, lambda s: s * p_max))
+    top.set_xlabel("normalised power [-]")
+    ax_l.set_title("(a) lift vs heating power")
+    ax_l.legend(fontsize="small")
+
+    for variant, d in creases.groupby("variant", sort=False):
+        clamped = d["clamped"].astype(bool)
+        style = styles.get(variant, {})
+        ax_t.plot(d.loc[~clamped, "x [um]"] / 1e3, d.loc[~clamped, TEMP], "o", ms=7,
+                  label=f"{variant}", **style)
+        ax_t.plot(d.loc[clamped, "x [um]"] / 1e3, d.loc[clamped, TEMP], "x", ms=8,
+                  label=f"{variant}, crease inside the clamped column", **style)
+    ax_t.set_xlabel("crease position x [mm] (anchored end at x = 0)")
+    ax_t.set_ylabel("crease temperature [°C]")
+    ax_t.set_title(f"(b) crease temperatures at {p_max:.1f} mW per crease")
+    ax_t.legend(fontsize="small")
+    for ax in (ax_l, ax_t):
+        ax.grid(True, alpha=0.3)
+
+    nodes = df[df["table"] == "nodes"]
+    shapes = Figure(figsize=(12.5, 5.0), layout="constrained")
+    for k, variant in enumerate(VARIANTS):
+        ax = shapes.add_subplot(1, 2, k + 1, projection="3d")
+        mesh = get_case(NAME, **_params(VARIANTS[variant])).model.mesh
+        plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax)
+        ax.collections[0].set_zsort("max")     # keeps the large substrate triangles behind
+        spans = [abs(hi - lo) for lo, hi in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
+        ax.set_box_aspect((*spans[:2], max(spans[2], Z_STRETCH * max(spans[:2]))))
+        lift = sweep[sweep["variant"] == variant][LIFT].iloc[-1]
+        ax.set_title(f"{variant}: lift {lift:.0f} um at {p_max:.1f} mW per crease\n"
+                     "(z axis stretched)")
+        ax.zaxis.set_major_locator(MaxNLocator(4))
+        ax.view_init(elev=25, azim=-60)
+    return {NAME: fig, f"{NAME}_shapes": shapes}
+
+
+def main(argv=None):
+    return study_main(NAME, __doc__, run, plot, argv)
+
+
+if __name__ == "__main__":
+    main()

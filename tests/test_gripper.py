@@ -1,0 +1,107 @@
+"""Gripper evaluation against the reference implementation (digest 8.7, reference data G2)."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from design.gripper import GripperDesign, evaluate_gripper, gripper_model
+from simulator.errors import ParameterError
+
+DATA = __import__("pathlib").Path(__file__).parent / "data"
+G2 = GripperDesign(W=300e-6, La=1500e-6, L1=500e-6, L2=500e-6)
+
+
+@pytest.fixture(scope="module")
+def g2_staircase():
+    trace = []
+    return evaluate_gripper(G2, mode="staircase", callback=trace.append), trace
+
+
+def test_g2_staircase_reproduces_reference_powers_and_temperatures(g2_staircase):
+    res, _ = g2_staircase
+    assert res.feasible
+    assert res.assembly.power_per_crease == pytest.approx(9.1e-3)
+    assert res.grip.power_per_crease == pytest.approx(0.8e-3)
+    assert (res.assembly.simulations, res.grip.simulations) == (91, 8)
+    assert res.assembly.temperature == pytest.approx(153.28, abs=0.05)
+    assert res.grip.temperature == pytest.approx(39.31, abs=0.05)
+
+
+def test_g2_staircase_follows_the_reference_call_by_call(g2_staircase):
+    """Per-call base fold and temperatures against the reference's G2 trace.
+
+    Measured: identical (< 1e-4 rad) for the first calls and from call 60 to the stop; in
+    between our fold runs up to 0.011 rad (0.6 deg) ahead of the reference and the crease
+    temperature up to 0.09 degC higher. The cause is not identified yet (contact is inactive
+    there; the reference's loose 5e-7 N tolerance is a candidate); the bounds below pin the
+    measured deviation so that any change to it is noticed.
+    """
+    _, trace = g2_staircase
+    frame = pd.DataFrame(trace)
+    base = pd.read_csv(DATA / "gripper_G2_base.csv")
+    grip = pd.read_csv(DATA / "gripper_G2_grip.csv")
+    ours = frame[frame.stage == "assembly"]
+    np.testing.assert_allclose(ours["power_per_crease [W]"] * 1e3, base.power_per_crease_mW)
+    dev = np.abs(ours["measure"].to_numpy() - base.base_fold_rad.to_numpy())
+    assert dev.max() < 0.012
+    assert dev[59:].max() < 1e-4
+    ref_t = np.maximum(base["T_ave_nodes25-27_C"], base["T_ave_nodes31-33_C"]).to_numpy()
+    dev_t = np.abs(ours["temperature [degC]"].to_numpy() - ref_t)
+    assert dev_t.max() < 0.1 and dev_t[59:].max() < 1e-3
+    # grip stage: temperatures agree to 1e-3 degC; the reference's tip distance closes by
+    # irregular amounts per call (67-86 um) while ours closes smoothly (70-76 um), a sign of
+    # incompletely converged reference equilibria: ours stays within 15 um of it.
+    ours = frame[frame.stage == "grip"]
+    tip = ours["measure"].to_numpy() * 1e6
+    np.testing.assert_allclose(tip, grip.tip_distance_um, atol=15.0)
+    steps = -np.diff(tip)
+    assert np.all(steps > 65) and steps.max() - steps.min() < 10
+    ref_t = np.maximum(grip["T_ave_nodes34-36_C"], grip["T_ave_nodes28-30_C"])
+    np.testing.assert_allclose(ours["temperature [degC]"], ref_t, atol=2e-3)
+    np.testing.assert_allclose(ours["max_crease_temperature [degC]"], grip.T_node_max_C,
+                               atol=2e-3)
+
+
+def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):
+    stair, _ = g2_staircase
+    bis = evaluate_gripper(G2, mode="bisect")
+    assert bis.feasible
+    for a, b in ((stair.assembly, bis.assembly), (stair.grip, bis.grip)):
+        assert 0 <= a.power_per_crease - b.power_per_crease < 0.1e-3 + 1e-12
+        assert b.simulations < a.simulations or a.simulations < 12
+    assert bis.assembly.simulations + bis.grip.simulations < \
+        stair.assembly.simulations + stair.grip.simulations
+
+
+def test_power_cap_gives_infeasible_result_with_reason():
+    res = evaluate_gripper(G2, mode="bisect", power_cap=2e-3)
+    assert not res.feasible
+    assert math.isinf(res.total_power)
+    assert "power cap" in res.message and res.assembly.power_per_crease == 0
+    assert "not attempted" in res.grip.message
+    d = res.to_dict()
+    assert d["feasible"] is False and "power cap" in d["message"]
+
+
+def test_model_matches_reference_setup():
+    model, pre = gripper_model(GripperDesign())
+    mesh = model.mesh
+    assert (mesh.n_nodes, len(mesh.bars)) == (42, 88)
+    # node edits move geometry but keep the meshed bar lengths (digest pitfall 3)
+    assert not np.allclose(mesh.nodes[13], mesh.pattern.vertices[9] * 0)  # edited nodes exist
+    assert sum(abs(p.forces[:, 2].sum()) for p in pre if hasattr(p, "forces")) > 0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"W": -1e-6}, "W"), ({"L1": float("nan")}, "L1"), ({"W": 2e-3}, "crease width"),
+])
+def test_bad_design(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        GripperDesign(**kwargs)
+
+
+def test_bad_mode():
+    with pytest.raises(ParameterError, match="mode"):
+        evaluate_gripper(G2, mode="golden")
