@@ -11,13 +11,12 @@ import inspect
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
 
 from .bimorph import Actuators, Bimorph
 from .errors import ParameterError
 from .heating import Heat
 from .loading import Gravity, SelfFold, simulate
-from .materials import SU8, SUBSTRATE, Material
+from .materials import Material
 from .model import ContactParameters, Model, Supports, make_model
 from .patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, single_fold_pattern, strip_pattern, with_substrate)

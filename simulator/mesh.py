@@ -183,7 +183,6 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     """Mesh a pattern with compliant creases (digest 1.3, ``mesh2D3D = 2``)."""
     if not isinstance(pattern, Pattern):
         raise PatternError(f"build_mesh expects a Pattern, got {type(pattern).__name__}.")
-    X = pattern.vertices
     sizes = pattern.corner_sizes
     S, P = int(sizes.sum()), pattern.n_panels
     start = np.repeat(np.cumsum(sizes) - sizes, sizes)

@@ -12,13 +12,22 @@ import json
 import logging
 import pathlib
 import time
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
 
 from simulator import __version__
+from simulator.cases import get_case
 
-__all__ = ["RESULTS", "study_main", "progress_bar", "write_outputs"]
+__all__ = ["RESULTS", "study_main", "progress_bar", "write_outputs", "node_frame",
+           "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP"]
 
 #: Default output root: ``results/`` at the top of the repository.
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "results"
+#: Column names of node tables (positions in um, temperatures in deg C).
+XYZ = ["x [um]", "y [um]", "z [um]"]
+TEMP = "temperature [degC]"
 
 
 def progress_bar(iterable, enabled: bool = True, **kwargs):
@@ -65,3 +74,66 @@ def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
                   time.perf_counter() - t0)
     print(f"{name}: {len(frame)} rows written to {args.out} in {time.perf_counter() - t0:.1f} s")
     return args.out
+
+
+# ----------------------------------------------------------------------------- records
+def node_frame(result, records, **labels) -> pd.DataFrame:
+    """Rows ``table = "nodes"``: positions [um] and temperatures [degC] of some records.
+
+    ``labels`` become constant columns (e.g. ``variant="free"``).
+    """
+    h, mesh = result.history, result.model.mesh
+    recs = np.array([range(len(h["u"]))[int(r)] for r in np.atleast_1d(records)])
+    n = mesh.n_nodes
+    x = (mesh.nodes[None] + h["u"][recs]) * 1e6
+    frame = pd.DataFrame({"table": "nodes", **labels,
+                          "step": np.repeat(recs, n), "stage": np.repeat(h["stage_name"][recs], n),
+                          "increment": np.repeat(h["increment"][recs], n),
+                          "node": np.tile(np.arange(n), len(recs))})
+    for k, col in enumerate(XYZ):
+        frame[col] = x[:, :, k].ravel()
+    frame[TEMP] = h["temperature"][recs].ravel()
+    return frame
+
+
+def shape_from_frame(nodes: pd.DataFrame, mesh) -> SimpleNamespace:
+    """A stand-in for a SimulationResult, built from ``nodes`` rows and the case's mesh.
+
+    It has the ``history`` (``u`` [m], ``temperature``, ``stage_name``, ``increment``, one
+    record per distinct ``step``) and ``model.mesh`` that ``plot_shape`` and ``animate`` use.
+    """
+    nodes = nodes.sort_values(["step", "node"], kind="stable")
+    steps = nodes["step"].unique()
+    n = mesh.n_nodes
+    if len(nodes) != len(steps) * n:
+        raise ValueError(f"node rows do not cover the {n} nodes of the mesh for every step.")
+    x = nodes[XYZ].to_numpy(float).reshape(len(steps), n, 3) * 1e-6
+    first = nodes.groupby("step", sort=True).first()
+    history = {"u": x - mesh.nodes[None],
+               "temperature": nodes[TEMP].to_numpy(float).reshape(len(steps), n),
+               "stage_name": first["stage"].to_numpy(str),
+               "increment": first["increment"].to_numpy(int)}
+    return SimpleNamespace(history=history, model=SimpleNamespace(mesh=mesh))
+
+
+def heating_records(result) -> np.ndarray:
+    """Record indices from the last pre-heating record through the end of the heat step."""
+    heat = np.flatnonzero(result.history["stage_name"] == "heat")
+    return np.r_[heat[0] - 1, heat]
+
+
+def run_case(name: str, params: dict, progress: bool, desc: str):
+    """Build and run a case with a tqdm bar over its heating increments; must converge."""
+    case = get_case(name, **params)
+    bar = progress_bar(None, enabled=progress, desc=desc, unit="inc", leave=False)
+
+    def callback(done, total):
+        bar.total = total
+        bar.update(done - bar.n)
+
+    res = case.run(progress=callback if progress else None)
+    if progress:
+        bar.close()
+    if not res.converged:
+        raise RuntimeError(f"{name} ({desc}): {res.message}")
+    return case, res

@@ -46,8 +46,7 @@ import numpy as np
 import pandas as pd
 
 from simulator.cases import get_case
-from studies._common import study_main
-from studies.single_fold import node_frame, run_case, shape_from_frame
+from studies._common import node_frame, run_case, shape_from_frame, study_main
 
 NAME = "crane"
 THERMAL_STEPS_QUICK = 30

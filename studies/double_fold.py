@@ -41,8 +41,7 @@ import numpy as np
 import pandas as pd
 
 from simulator.cases import get_case
-from studies._common import study_main
-from studies.single_fold import heating_records, node_frame, run_case, shape_from_frame
+from studies._common import heating_records, node_frame, run_case, shape_from_frame, study_main
 
 NAME = "double_fold"
 THERMAL_STEPS_QUICK = 30

@@ -50,13 +50,13 @@ accept) are shared by the other device studies.
 from __future__ import annotations
 
 import pathlib
-from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 
 from simulator.cases import get_case
-from studies._common import progress_bar, study_main
+from studies._common import (TEMP, heating_records, node_frame, run_case,
+                             shape_from_frame, study_main)
 
 NAME = "single_fold"
 REFERENCE = pathlib.Path(__file__).resolve().parent / "reference" / "single_fold_res0.csv"
@@ -71,58 +71,11 @@ THRESHOLD_RISE = 1.0                     # deg above the pre-heating fold
 ANIMATION_FRAMES = 50                    # node records kept of the -10 deg run (about)
 EXAMPLE01, EXAMPLE01_REF = "Example01 (ours)", "Example01 reference"
 
-POWER, FOLD, TEMP = "power [mW]", "fold_angle [deg]", "temperature [degC]"
-XYZ = ["x [um]", "y [um]", "z [um]"]
+POWER, FOLD = "power [mW]", "fold_angle [deg]"
 
 
 def gravity_variant(residual_deg: float) -> str:
     return f"gravity, residual {residual_deg:g} deg"
-
-
-# ----------------------------------------------------------------------------- node tables
-def node_frame(result, records, **labels) -> pd.DataFrame:
-    """Rows ``table = "nodes"``: positions [um] and temperatures [degC] of some records.
-
-    ``labels`` become constant columns (e.g. ``variant="free"``).
-    """
-    h, mesh = result.history, result.model.mesh
-    recs = np.array([range(len(h["u"]))[int(r)] for r in np.atleast_1d(records)])
-    n = mesh.n_nodes
-    x = (mesh.nodes[None] + h["u"][recs]) * 1e6
-    frame = pd.DataFrame({"table": "nodes", **labels,
-                          "step": np.repeat(recs, n), "stage": np.repeat(h["stage_name"][recs], n),
-                          "increment": np.repeat(h["increment"][recs], n),
-                          "node": np.tile(np.arange(n), len(recs))})
-    for k, col in enumerate(XYZ):
-        frame[col] = x[:, :, k].ravel()
-    frame[TEMP] = h["temperature"][recs].ravel()
-    return frame
-
-
-def shape_from_frame(nodes: pd.DataFrame, mesh) -> SimpleNamespace:
-    """A stand-in for a SimulationResult, built from ``nodes`` rows and the case's mesh.
-
-    It has the ``history`` (``u`` [m], ``temperature``, ``stage_name``, ``increment``, one
-    record per distinct ``step``) and ``model.mesh`` that ``plot_shape`` and ``animate`` use.
-    """
-    nodes = nodes.sort_values(["step", "node"], kind="stable")
-    steps = nodes["step"].unique()
-    n = mesh.n_nodes
-    if len(nodes) != len(steps) * n:
-        raise ValueError(f"node rows do not cover the {n} nodes of the mesh for every step.")
-    x = nodes[XYZ].to_numpy(float).reshape(len(steps), n, 3) * 1e-6
-    first = nodes.groupby("step", sort=True).first()
-    history = {"u": x - mesh.nodes[None],
-               "temperature": nodes[TEMP].to_numpy(float).reshape(len(steps), n),
-               "stage_name": first["stage"].to_numpy(str),
-               "increment": first["increment"].to_numpy(int)}
-    return SimpleNamespace(history=history, model=SimpleNamespace(mesh=mesh))
-
-
-def heating_records(result) -> np.ndarray:
-    """Record indices from the last pre-heating record through the end of the heat step."""
-    heat = np.flatnonzero(result.history["stage_name"] == "heat")
-    return np.r_[heat[0] - 1, heat]
 
 
 def _subsample(records, every):
@@ -159,23 +112,6 @@ def _threshold_row(sweep: pd.DataFrame) -> dict:
             "threshold_power [mW]": threshold_power(sweep[POWER], sweep[FOLD]),
             "fold_start [deg]": sweep[FOLD].iloc[0], "fold_final [deg]": sweep[FOLD].iloc[-1],
             "temperature_final [degC]": sweep[TEMP].iloc[-1]}
-
-
-def run_case(name: str, params: dict, progress: bool, desc: str):
-    """Build and run a case with a tqdm bar over its heating increments; must converge."""
-    case = get_case(name, **params)
-    bar = progress_bar(None, enabled=progress, desc=desc, unit="inc", leave=False)
-
-    def callback(done, total):
-        bar.total = total
-        bar.update(done - bar.n)
-
-    res = case.run(progress=callback if progress else None)
-    if progress:
-        bar.close()
-    if not res.converged:
-        raise RuntimeError(f"{name} ({desc}): {res.message}")
-    return case, res
 
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
