@@ -5,7 +5,9 @@ import pytest
 from fd_harness import check_kernel
 
 from simulator.elements.bars import bar_kernel
-from simulator.elements.springs import fold_angle, fold_angle_derivatives, spring_kernel
+from simulator.elements import _springs_jit
+from simulator.elements.springs import (fold_angle, fold_angle_derivatives, spring_kernel,
+                                        spring_kernel_numpy)
 
 RNG = np.random.default_rng(42)
 
@@ -87,3 +89,19 @@ def test_fold_angle_convention(phi):
 def test_flat_angle_is_exactly_pi():
     x = np.array([[[0.3e-3, -1e-3, 0], [0, 0, 0], [1e-3, 0, 0], [0.6e-3, 1e-3, 0]]])
     assert fold_angle(x)[0] == np.pi
+
+
+def test_numpy_spring_kernel_finite_differences():
+    x, k, t0 = _springs()
+    theta = fold_angle(x)
+    ok = (theta > 0.2) & (theta < 2 * np.pi - 0.2)
+    check_kernel(lambda y: spring_kernel_numpy(y, k[ok], t0[ok]), x[ok])
+
+
+@pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+def test_compiled_spring_kernel_equals_numpy_kernel():
+    x, k, t0 = _springs(200)
+    for a, b in zip(_springs_jit.spring_kernel_jit(x, k, t0), spring_kernel_numpy(x, k, t0)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+    e, g, h = _springs_jit.spring_kernel_jit(x, k, t0, hessian=False)
+    assert h is None and np.allclose(g, spring_kernel_numpy(x, k, t0)[1])
