@@ -84,6 +84,13 @@ def describe_cases() -> list:
     return out
 
 
+def _power(power_mW):
+    if not (isinstance(power_mW, (int, float)) and not isinstance(power_mW, bool)
+            and math.isfinite(power_mW) and power_mW >= 0):
+        raise ParameterError(f"power_mW = {power_mW!r} must be a non-negative number of mW.")
+    return power_mW * 1e-3
+
+
 def _check(**kw):
     for k, v in kw.items():
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
@@ -152,7 +159,7 @@ def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_
     steps = [SelfFold({2: math.radians(residual_fold_deg)}, increments=self_fold_steps)]
     if gravity:
         steps.append(Gravity(g=G_REFERENCE, panels=[1], increments=50))
-    steps.append(Heat({2: power_mW * 1e-3}, increments=_steps_int("thermal_steps", thermal_steps),
+    steps.append(Heat({2: _power(power_mW)}, increments=_steps_int("thermal_steps", thermal_steps),
                       coupling=coupling))
     return Case(name, model, tuple(steps))
 
@@ -222,7 +229,7 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
     steps = [SelfFold({2: rf, 5: rf}, increments=50)]
     if gravity:
         steps.append(Gravity(g=G_REFERENCE, scale=gravity_scale, panels=[1, 2], increments=80))
-    steps.append(Heat({(2, 5): power_mW * 1e-3}, increments=_steps_int("thermal_steps",
+    steps.append(Heat({(2, 5): _power(power_mW)}, increments=_steps_int("thermal_steps",
                                                                          thermal_steps),
                       coupling=coupling))
     return Case("double_fold", model, tuple(steps), params, double_fold.__doc__)
@@ -270,7 +277,7 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     model = make_model(mesh, Supports(fixed), BarHingeParameters(),
                        contact=ContactParameters() if substrate else None, thermal=thermal,
                        actuators=actuators)
-    steps = (Heat({tuple(signs): power_mW * 1e-3},
+    steps = (Heat({tuple(signs): _power(power_mW)},
                   increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
     return Case("miura_lifter", model, steps, params, miura_lifter.__doc__)
 
@@ -286,7 +293,7 @@ def crane(deactivated: bool = False, power_mW: float = 4.0, thermal_steps: int =
     """Origami crane (paper 6.1, Example04): 17 active creases, or creases 8 and 17
     (reference ids) left unheated with half power on 9 and 11 (``deactivated=True``)."""
     params = {k: v for k, v in locals().items()}
-    q = power_mW * 1e-3
+    q = _power(power_mW)
     heat = {6: q, 13: q, 21: q, 9: q, 11: q, 1: 4 * q, 18: 4 * q, 3: 1.5 * q, 5: 1.5 * q,
             14: 1.5 * q, 15: 1.5 * q, 7: 2 * q, 8: 2 * q, 10: 2 * q, 12: 2 * q, 17: q / 2,
             19: q / 2}

@@ -161,6 +161,13 @@ class Heat(_ThermoMechanicalStep):
 
     def run(self, model, system, state, options, progress=None):
         dP = self.power_array(model.mesh)
+        end = state.crease_power + dP
+        if np.any(end < 0):
+            row = int(np.argmin(end))
+            raise ParameterError(
+                f"Heat: crease {int(model.mesh.crease_ids[row])} would end at "
+                f"{1e3 * end[row]:.4g} mW; a step may lower the power (negative values) but not "
+                "below zero.")
         s = np.arange(1, self.increments + 1)[:, None] / self.increments
         powers = state.crease_power + s * dP
         ambient = np.full(self.increments, state.room_temperature)

@@ -172,3 +172,37 @@ def test_iterated_coupling_agrees_with_staggered_for_many_increments():
     # iterated removes the one-increment lag: close to staggered, slightly different
     diff = np.abs(np.degrees(a.fold_angle[-1, 0] - b.fold_angle[-1, 0]))
     assert 0 < diff < 0.5
+
+
+@pytest.mark.parametrize("name, kwargs, match", [
+    ("single_fold", {"power_mW": -5.0}, "power_mW"),
+    ("double_fold", {"power_mW": float("nan")}, "power_mW"),
+    ("miura_lifter", {"crease_width": -1e-6}, "crease_width"),
+    ("crane", {"power_mW": -1.0}, "power_mW"),
+    ("single_fold", {"env_conductivity": -0.1}, "env_conductivity"),
+    ("single_fold", {"coupling": "loose"}, "coupling"),
+])
+def test_bad_case_parameters(name, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        get_case(name, **kwargs)
+
+
+def test_heating_a_non_crease_and_unknown_boundary_panel():
+    from simulator.heating import Heat
+    from simulator.loading import simulate
+    from simulator.model import make_model
+    from simulator.thermal import ThermalParameters
+    from simulator.errors import PatternError
+    case = get_case("single_fold", thermal_steps=2)
+    with pytest.raises(PatternError, match="boundary edge"):
+        simulate(case.model, [Heat({0: 1e-3}, increments=1)])
+    with pytest.raises(PatternError, match="Unknown crease"):
+        simulate(case.model, [Heat({99: 1e-3}, increments=1)])
+    with pytest.raises(ParameterError, match="below zero"):
+        simulate(case.model, [Heat({2: -1e-3}, increments=1)])
+    bad = make_model(case.model.mesh, case.model.supports,
+                     thermal=ThermalParameters(env_thickness=1e-3, boundary_panels=(7,)))
+    with pytest.raises(ParameterError, match="panel 7"):
+        simulate(bad, [Heat({2: 1e-3}, increments=1)])
+    with pytest.raises(ParameterError, match="no thermal parameters"):
+        simulate(make_model(case.model.mesh), [Heat({2: 1e-3}, increments=1)])
