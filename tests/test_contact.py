@@ -250,3 +250,58 @@ def test_degenerate_input_is_finite():
         assert np.all(np.isfinite(arr))
     assert np.all(kern[0][d < D0] > 0)
     assert np.all(zone[[-4, -3, -2, -1]] == 1)            # zero-length edges act as vertices
+
+
+# 7. batched evaluation (pre-filter, zone grouping, scatter) -------------------------------
+
+def _mixed_batch(rng, n=6):
+    """Pairs of every zone at 0.05 - 2 d0 (active and inactive), some in the triangle's plane."""
+    x = np.concatenate([_pairs(rng, z, f, rng.uniform(0.05, 2.0, n) * D0, n=n) for z, f in CASES])
+    flat = _pairs(rng, 2, 1, rng.uniform(0.5, 1.5, n) * D0, n=n)     # edge zone, coplanar
+    tri = flat[:, 1:]
+    e = tri[:, 2] - tri[:, 1]
+    nrm = _unit(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+    out = -_unit(np.cross(e, nrm))
+    out *= -np.sign(np.einsum("ni,ni->n", out, tri[:, 0] - tri[:, 1]))[:, None]
+    flat[:, 0] = tri[:, 1] + 0.5 * e + rng.uniform(0.5, 1.5, (n, 1)) * D0 * out
+    x = np.concatenate([x, flat])
+    return x[rng.permutation(len(x))]
+
+
+def test_batch_matches_single_pairs():
+    rng = np.random.default_rng(11)
+    x = _mixed_batch(rng)
+    d0 = rng.uniform(0.8, 1.2, len(x)) * D0
+    ke = rng.uniform(0.5, 2.0, len(x)) * KE
+    energy, grad, hess = contact_kernel(x, d0, ke)
+    d, zone, _ = point_triangle_distance(x[:, 0], x[:, 1:])
+    active = d <= d0
+    assert 0 < active.sum() < len(x) and set(zone[active]) == {0, 1, 2}
+    assert np.all(energy[active] > 0) and not energy[~active].any()
+    assert not grad[~active].any() and not hess[~active].any()
+    dist = distance_derivatives(x[:, 0], x[:, 1:])
+    for i in range(len(x)):
+        single = contact_kernel(x[i:i + 1], d0[i], ke[i])
+        for batch, one in zip((energy, grad, hess), single):
+            np.testing.assert_allclose(batch[i], one[0], rtol=1e-12, atol=1e-300)
+        single = distance_derivatives(x[i:i + 1, 0], x[i:i + 1, 1:])
+        for batch, one in zip(dist, single):
+            np.testing.assert_allclose(batch[i], one[0], rtol=1e-12, atol=1e-300)
+
+
+def test_kernel_fd_near_contact_range():
+    """d just inside d0: the potential's series branch, alone and mixed with the closed form."""
+    rng = np.random.default_rng(12)
+    x = np.concatenate([_pairs(rng, z, f, rng.uniform(0.93, 0.99, 3) * D0, n=3) for z, f in CASES])
+    errs = check_kernel(_contact, x, h=3e-11)             # FD truncation ~ (h / (d0 - d))^2
+    assert errs["gradient"] < 1e-7 and errs["hessian"] < 1e-7
+    deeper = np.concatenate([x, _pairs(rng, 0, -1, [0.5 * D0] * 3, n=3)])
+    np.testing.assert_allclose(contact_kernel(deeper, D0, KE)[2][:len(x)], _contact(x)[2],
+                               rtol=1e-13)
+
+
+def test_empty_batch_and_scalar_potential():
+    energy, grad, hess = contact_kernel(np.zeros((0, 4, 3)), D0, KE)
+    assert energy.shape == (0,) and grad.shape == (0, 12) and hess.shape == (0, 12, 12)
+    U, dU, d2U = contact_potential(0.5 * D0, D0, KE)
+    assert np.ndim(U) == np.ndim(dU) == np.ndim(d2U) == 0 and U > 0 > dU and d2U > 0
