@@ -5,7 +5,9 @@ The CLI sits on top of both layers (simulator and design), so it lives here;
 
 * ``etorigami demo``: the main demo (single crease: residual fold, gravity, substrate contact);
 * ``etorigami cases``: the paper's cases with their parameters, defaults and units;
-* ``etorigami run CASE [--set name=value ...] --out DIR``: run a case and write its results.
+* ``etorigami run CASE [--set name=value ...] --out DIR``: run a case and write its results;
+* ``etorigami gripper evaluate``, ``etorigami optimize``, ``etorigami sweep residual-fold``: the
+  design tools (:mod:`design.cli_design`).
 """
 
 from __future__ import annotations
@@ -155,6 +157,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_run)
+    from .cli_design import add_design_commands
+
+    add_design_commands(sub)
     return parser
 
 
@@ -172,6 +177,9 @@ def main(argv=None) -> int:
     except (EtorigamiError, EtorigamiCLIError) as exc:
         print(f"etorigami: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:                       # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -155,11 +155,15 @@ class GripperResult:
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
 
     def to_dict(self) -> dict:
-        """Flat summary with units in the keys (the CLI's JSON)."""
+        """Flat summary with units in the keys (the CLI's JSON); powers of stages whose
+        criterion was not met are None (never a silent zero)."""
+        def mw(stage):
+            return 1e3 * stage.power_per_crease if stage.met else None
+
         return {
-            "assembly_power_mW": 1e3 * self.assembly.power_per_crease,
-            "grip_power_mW": 1e3 * self.grip.power_per_crease,
-            "total_power_mW": 1e3 * (self.assembly.power_per_crease + self.grip.power_per_crease),
+            "assembly_power_mW": mw(self.assembly),
+            "grip_power_mW": mw(self.grip),
+            "total_power_mW": 1e3 * self.total_power if self.feasible else None,
             "assembly_temperature_C": self.assembly.temperature,
             "grip_temperature_C": self.grip.temperature,
             "max_crease_temperature_C": max(self.assembly.max_crease_temperature,

@@ -171,7 +171,8 @@ class GripperProblem(DesignProblem):
             else d["max_crease_temperature_C"]
         constraints = dict(self.space.bound_margins(values))
         constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
-        metrics = {k: v for k, v in d.items() if not k.endswith("[m]") and k not in
+        metrics = {k: (math.nan if v is None else v) for k, v in d.items()
+                   if not k.endswith("[m]") and k not in
                    ("feasible", "message", "mode", "residual_fold [rad]")}
         metrics["temperature_C"] = temp
         return res.total_power, constraints, metrics, not res.feasible, res.message

@@ -1,0 +1,68 @@
+"""Design subcommands: gripper evaluate, optimize (with resume), sweep residual-fold."""
+
+import json
+
+import pandas as pd
+import pytest
+
+from design.cli import main
+
+
+def test_gripper_evaluate_json_matches_reference_g2(capsys):
+    code = main(["gripper", "evaluate", "--W", "300", "--La", "1500", "--L1", "500", "--L2",
+                 "500", "--mode", "staircase", "--json"])
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    for key in ("assembly_power_mW", "grip_power_mW", "total_power_mW",
+                "max_crease_temperature_C", "feasible", "message"):
+        assert key in out
+    assert out["assembly_power_mW"] == pytest.approx(9.1)
+    assert out["grip_power_mW"] == pytest.approx(0.8)
+    assert out["feasible"] is True
+
+
+def test_gripper_evaluate_table(capsys):
+    assert main(["gripper", "evaluate", "--W", "300", "--La", "1500", "--L1", "500", "--L2",
+                 "500"]) == 0
+    out = capsys.readouterr().out
+    assert "assembly" in out and "grip" in out and "mW per crease" in out
+
+
+def test_optimize_resumes_from_its_log(tmp_path, capsys):
+    out = tmp_path / "cd"
+    argv = ["optimize", "gripper", "--method", "cd", "--out", str(out), "-q"]
+    assert main(argv + ["--max-evaluations", "2"]) in (0, 1)
+    first = capsys.readouterr().out
+    assert "2 computed, 0 reused" in first
+    main(argv + ["--max-evaluations", "3"])
+    second = capsys.readouterr().out
+    assert "1 computed, 2 reused" in second
+    assert (out / "evaluations.csv").exists() and (out / "result.json").exists()
+
+
+def test_sweep_residual_fold(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert main(["sweep", "residual-fold", "--values=-10,0", "--design",
+                 "W=300,La=1500,L1=500,L2=500", "--out", str(out), "-q"]) == 0
+    frame = pd.read_csv(out / "sweep.csv")
+    assert len(frame) == 2 and "total_power [mW]" in frame.columns
+    assert list(frame["residual_fold [deg]"]) == [-10.0, 0.0]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["gripper", "evaluate", "--W", "-5"], "GripperDesign.W"),
+    (["sweep", "residual-fold", "--values", "a,b", "--out", "x"], "comma-separated numbers"),
+    (["sweep", "residual-fold", "--design", "Q=3", "--out", "x"], "Unknown design variable"),
+])
+def test_design_cli_errors(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_infeasible_design_reports_not_met_not_zero(capsys):
+    code = main(["gripper", "evaluate", "--W", "50", "--json"])
+    assert code == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["feasible"] is False and out["total_power_mW"] is None
+    assert out["assembly_power_mW"] is None and "power cap" in out["message"]

@@ -1,0 +1,111 @@
+"""Executors: ordered results, progress, clear task errors, option parsing (no simulations)."""
+
+import os
+import time
+
+import pytest
+
+from design.executors import (DaskExecutor, ExecutorError, ProcessExecutor, SerialExecutor,
+                              TaskError, executor_from_option, make_executor)
+from simulator.errors import ParameterError
+
+
+# Worker functions: top level, so that process and Dask workers can import them.
+def slow_square(x):
+    """Later items finish first (reverse sleep), so completion order != input order."""
+    time.sleep(0.02 * (8 - x % 8))
+    return x * x
+
+
+def fail_on_three(x):
+    if x == 3:
+        raise ValueError(f"bad item {x}")
+    return x
+
+
+def die_on_two(x):
+    if x == 2:
+        os._exit(3)              # a worker process crash, not an exception
+    time.sleep(0.2)
+    return x
+
+
+@pytest.fixture(scope="module", params=["serial", "process", "dask"])
+def executor(request):
+    with make_executor(request.param, workers=2) as ex:
+        yield ex
+
+
+def test_map_returns_results_in_input_order_with_progress(executor):
+    calls = []
+    out = executor.map(slow_square, range(8), progress=lambda d, t: calls.append((d, t)))
+    assert out == [x * x for x in range(8)]
+    assert calls == [(d, 8) for d in range(1, 9)]
+    assert executor.map(slow_square, []) == []
+    assert executor.kind in ("serial", "process", "dask")
+    assert executor.workers == (1 if executor.kind == "serial" else 2)
+
+
+def test_task_error_names_task_and_keeps_cause(executor):
+    with pytest.raises(TaskError) as info:
+        executor.map(fail_on_three, range(6))
+    err = info.value
+    assert err.index == 3 and err.item == 3
+    assert "task 3 of 6" in str(err) and "fail_on_three" in str(err)
+    assert "ValueError: bad item 3" in str(err)
+    assert isinstance(err.__cause__, ValueError)
+    assert executor.map(slow_square, [1, 2]) == [1, 4]          # still usable
+
+
+def test_process_executor_rejects_unpicklable_function():
+    with ProcessExecutor(2) as ex:
+        with pytest.raises(ExecutorError, match="top-level function"):
+            ex.map(lambda x: x, [1, 2])
+        assert ex._pool is None                                  # rejected before starting
+
+
+def test_process_executor_recovers_from_a_crashed_worker():
+    with ProcessExecutor(2) as ex:
+        with pytest.raises(TaskError, match="BrokenProcessPool"):
+            ex.map(die_on_two, range(4))
+        assert ex.map(slow_square, [3]) == [9]
+    assert ex._pool is None
+
+
+def test_serial_executor_runs_in_process():
+    seen = []
+    assert SerialExecutor().map(seen.append, [1, 2]) == [None, None]   # a closure is fine
+    assert seen == [1, 2]
+
+
+def test_make_executor_and_options():
+    assert isinstance(make_executor(), SerialExecutor)
+    assert make_executor("process", 3).workers == 3
+    assert make_executor("process").workers == os.cpu_count()
+    with pytest.raises(ParameterError, match="serial, process, dask"):
+        make_executor("threads")
+    for value in (None, "serial", "0", "1", "off"):
+        assert isinstance(executor_from_option(value), SerialExecutor), value
+    for value, n in (("auto", os.cpu_count()), ("", os.cpu_count()), ("3", 3)):
+        ex = executor_from_option(value)
+        assert isinstance(ex, ProcessExecutor) and ex.workers == n, value
+    with pytest.raises(ParameterError, match="number of worker"):
+        executor_from_option("many")
+    with pytest.raises(ParameterError, match="has its own workers"):
+        executor_from_option("4", "tcp://127.0.0.1:8786")
+    with pytest.raises(ParameterError, match="positive integer"):
+        ProcessExecutor(0)
+
+
+def test_dask_executor_reports_unreachable_scheduler():
+    with pytest.raises(ExecutorError, match="could not connect to the Dask scheduler"):
+        DaskExecutor("tcp://127.0.0.1:1", timeout=1)
+
+
+def test_dask_local_cluster_is_closed_on_exit():
+    with executor_from_option("1", "local") as ex:
+        assert isinstance(ex, DaskExecutor) and ex.workers == 1
+        assert ex.map(slow_square, [2, 5]) == [4, 25]
+        cluster = ex._cluster
+    assert ex.client is None and ex._cluster is None
+    assert cluster.status.name == "closed"
