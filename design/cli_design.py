@@ -11,7 +11,6 @@ import math
 import pathlib
 import time
 
-import numpy as np
 
 from simulator.errors import ParameterError
 

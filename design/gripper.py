@@ -60,6 +60,8 @@ class GripperDesign:
     undercut : gap to the substrate [m] (150 um)
     panel_thickness : SPR panel thickness [m] (5 um)
     residual_fold : residual fold of the four actuated creases after fabrication [rad]
+    residual_fold_base, residual_fold_arm : optional residual folds of the base hinges and of
+        the arm hinges [rad] that override ``residual_fold`` for that crease group
     """
 
     W: float = 200e-6
@@ -72,20 +74,30 @@ class GripperDesign:
     undercut: float = 150e-6
     panel_thickness: float = 5e-6
     residual_fold: float = 0.0
+    residual_fold_base: float | None = None
+    residual_fold_arm: float | None = None
 
     def __post_init__(self):
         for name, value in asdict(self).items():
-            ok = math.isfinite(value) and (value > 0 or name == "residual_fold")
-            if not ok:
-                raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, finite "
-                                     "length in metres" + (" (or an angle in rad)" if name ==
-                                                           "residual_fold" else "") + ".")
+            if name.startswith("residual_fold"):
+                if value is not None and not (math.isfinite(value) and abs(value) < math.pi):
+                    raise ParameterError(f"GripperDesign.{name} = {value!r} must be a finite "
+                                         "angle in rad, |value| < pi.")
+            elif not (math.isfinite(value) and value > 0):
+                raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, "
+                                     "finite length in metres.")
         if self.W >= min(self.L1, self.L2, self.La):
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    def crease_residual_folds(self) -> dict:
+        """Residual fold [rad] of each actuated crease id."""
+        base = self.residual_fold if self.residual_fold_base is None else self.residual_fold_base
+        arm = self.residual_fold if self.residual_fold_arm is None else self.residual_fold_arm
+        return {**{c: base for c in BASE_CREASES}, **{c: arm for c in ARM_CREASES}}
 
 
 @dataclass(frozen=True)
@@ -171,7 +183,7 @@ class GripperResult:
             "assembly_simulations": self.assembly.simulations,
             "grip_simulations": self.grip.simulations,
             "feasible": self.feasible, "message": self.message, "mode": self.mode,
-            **{f"{k} [m]" if k != "residual_fold" else "residual_fold [rad]": v
+            **{f"{k} [rad]" if k.startswith("residual_fold") else f"{k} [m]": v
                for k, v in self.design.to_dict().items()},
         }
 
@@ -220,9 +232,9 @@ def gripper_model(design: GripperDesign):
                        contact=ContactParameters(1e-4, 40e-6, 40e-6), thermal=thermal,
                        actuators=actuators)
     pre = []
-    if design.residual_fold != 0:
-        pre.append(SelfFold({c: design.residual_fold for c in BASE_CREASES + ARM_CREASES},
-                            increments=40, name="residual_fold"))
+    folds = design.crease_residual_folds()
+    if any(v != 0 for v in folds.values()):
+        pre.append(SelfFold(folds, increments=40, name="residual_fold"))
     pre.append(Load(_gravity(design, mesh.n_nodes), increments=_GRAVITY_INCREMENTS,
                     name="gravity"))
     return model, pre

@@ -131,6 +131,8 @@ class GripperProblem(DesignProblem):
     mode : {"bisect", "staircase"}
     residual_fold : float
         Residual fold of the actuated creases [rad].
+    residual_fold_groups : tuple of (group, rad) pairs
+        Residual folds of crease groups ``"base"`` / ``"arm"`` overriding ``residual_fold``.
     glass_transition : float
         T_g of the crease polymer [deg C] (SU-8: 210).
     temperature_factor : float
@@ -141,6 +143,7 @@ class GripperProblem(DesignProblem):
 
     mode: str = "bisect"
     residual_fold: float = 0.0
+    residual_fold_groups: tuple = ()
     glass_transition: float = SU8_TG
     temperature_factor: float = 1.2
     temperature_measure: str = "centre_line"
@@ -155,6 +158,15 @@ class GripperProblem(DesignProblem):
                                  "'centre_line' or 'crease_max'.")
         if self.mode not in ("bisect", "staircase"):
             raise ParameterError(f"mode = {self.mode!r}; use 'bisect' or 'staircase'.")
+        groups = dict(self.residual_fold_groups)
+        if set(groups) - {"base", "arm"}:
+            raise ParameterError(f"residual_fold_groups {groups!r}: groups are 'base' and 'arm'.")
+        object.__setattr__(self, "residual_fold_groups", tuple(sorted(groups.items())))
+
+    def group_folds(self) -> dict:
+        """Residual fold [rad] of each crease group."""
+        given = dict(self.residual_fold_groups)
+        return {g: float(given.get(g, self.residual_fold)) for g in ("base", "arm")}
 
     @property
     def temperature_limit(self) -> float:
@@ -162,7 +174,9 @@ class GripperProblem(DesignProblem):
 
     def design(self, values: dict) -> GripperDesign:
         from dataclasses import replace
-        return replace(self.base, residual_fold=self.residual_fold, **values)
+        folds = self.group_folds()
+        return replace(self.base, residual_fold=self.residual_fold,
+                       residual_fold_base=folds["base"], residual_fold_arm=folds["arm"], **values)
 
     def _evaluate(self, values):
         res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap)
@@ -172,13 +186,16 @@ class GripperProblem(DesignProblem):
         constraints = dict(self.space.bound_margins(values))
         constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
         metrics = {k: (math.nan if v is None else v) for k, v in d.items()
-                   if not k.endswith("[m]") and k not in
-                   ("feasible", "message", "mode", "residual_fold [rad]")}
+                   if not k.endswith("[m]") and not k.startswith("residual_fold")
+                   and k not in ("feasible", "message", "mode")}
         metrics["temperature_C"] = temp
         return res.total_power, constraints, metrics, not res.feasible, res.message
 
     def settings(self) -> dict:
-        return {"problem": self.name, "mode": self.mode, "residual_fold [rad]": self.residual_fold,
+        folds = self.group_folds()
+        return {"problem": self.name, "mode": self.mode,
+                "residual_fold [rad]": (folds["base"] if folds["base"] == folds["arm"]
+                                        else folds),
                 "T_limit [degC]": self.temperature_limit,
                 "temperature_measure": self.temperature_measure,
                 "power_cap [W]": self.power_cap, "base": self.base.to_dict(),

@@ -10,16 +10,13 @@ A residual-fold *spec* is a dict ``{group: fold [rad]}``: ``{"all": r}`` for one
 actuated creases, or ``{"base": r1, "arm": r2}`` per group (a group left out takes the problem's
 own ``residual_fold``). A plain number is ``{"all": number}``, in rad.
 
-``GripperDesign`` has a single ``residual_fold``, so per-group specs are evaluated by
-:class:`GroupResidualProblem`, a :class:`~design.problem.GripperProblem` that builds the model
-with :func:`~design.gripper.gripper_model` and applies the per-group ``SelfFold`` itself, then
-runs the same two-stage power search as :func:`~design.gripper.evaluate_gripper` (with equal
-group values it reproduces ``GripperProblem(residual_fold=r)`` bit for bit; tested).
+Per-group specs set :attr:`GripperProblem.residual_fold_groups`, which the gripper model
+applies as residual folds of the base and arm hinges (with equal group values it reproduces
+``GripperProblem(residual_fold=r)`` bit for bit; tested).
 """
 
 from __future__ import annotations
 
-import inspect
 import itertools
 import logging
 import math
@@ -30,13 +27,12 @@ import numpy as np
 import pandas as pd
 
 from simulator.errors import ParameterError
-from simulator.loading import SelfFold, simulate
 
 from . import gripper as _gr
 from .executors import SerialExecutor
 from .problem import DesignProblem, GripperProblem
 
-__all__ = ["CREASE_GROUPS", "residual_fold_grid", "with_residual_fold", "GroupResidualProblem",
+__all__ = ["CREASE_GROUPS", "residual_fold_grid", "with_residual_fold",
            "sweep_residual_fold", "RobustGripperProblem", "TIMING_COLUMNS"]
 
 logger = logging.getLogger(__name__)
@@ -112,95 +108,23 @@ def _label(spec: dict) -> str:
     return ",".join(f"{g}={_deg(v):g}deg" for g, v in spec.items())
 
 
-@dataclass(frozen=True)
-class GroupResidualProblem(GripperProblem):
-    """A :class:`GripperProblem` with a residual fold per crease group.
-
-    Parameters
-    ----------
-    residual_folds : tuple of (group, rad) pairs
-        Residual fold per group of :data:`CREASE_GROUPS`; groups not listed take
-        ``residual_fold``. Other parameters as :class:`GripperProblem`.
-    """
-
-    residual_folds: tuple = ()
-
-    def __post_init__(self):
-        super().__post_init__()
-        spec = _normalize_spec(dict(self.residual_folds)) if self.residual_folds else {}
-        if "all" in spec:
-            raise ParameterError("GroupResidualProblem: give groups, or use GripperProblem("
-                                 "residual_fold=...) for one value on all creases.")
-        object.__setattr__(self, "residual_folds", tuple(spec.items()))
-
-    def group_folds(self) -> dict:
-        given = dict(self.residual_folds)
-        return {g: given.get(g, self.residual_fold) for g in CREASE_GROUPS}
-
-    def _evaluate(self, values):
-        res = _evaluate_gripper_groups(self.design(values), self.group_folds(), self.mode,
-                                       self.power_cap)
-        d = res.to_dict()
-        temp = res.max_temperature if self.temperature_measure == "centre_line" \
-            else d["max_crease_temperature_C"]
-        constraints = dict(self.space.bound_margins(values))
-        constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
-        metrics = {k: v for k, v in d.items() if not k.endswith("[m]") and k not in
-                   ("feasible", "message", "mode", "residual_fold [rad]")}
-        metrics["temperature_C"] = temp
-        return res.total_power, constraints, metrics, not res.feasible, res.message
-
-    def settings(self) -> dict:
-        out = super().settings()
-        out["residual_fold [rad]"] = self.group_folds()
-        return out
-
-
-_SEARCH = {k: p.default for k, p in inspect.signature(_gr.evaluate_gripper).parameters.items()
-           if k in ("step", "tol", "max_step")}
-
-
-def _evaluate_gripper_groups(design, folds: dict, mode: str, power_cap: float):
-    """:func:`~design.gripper.evaluate_gripper` with a residual fold per crease group."""
-    model, pre = _gr.gripper_model(replace(design, residual_fold=0.0))
-    per_crease = {c: folds[g] for g, creases in CREASE_GROUPS.items() for c in creases}
-    if any(v != 0 for v in per_crease.values()):
-        pre.insert(0, SelfFold(per_crease, increments=40, name="residual_fold"))
-    start = simulate(model, pre)
-    results, state = {}, start.state
-    for name in ("assembly", "grip"):
-        stage = _gr._Stage(model, name)
-        if not start.converged:
-            results[name] = stage.result(False, 0.0, state, f"pre-loading failed: {start.message}")
-        elif name == "grip" and not results["assembly"].met:
-            results[name] = stage.result(False, 0.0, state, "not attempted: assembly not met")
-        elif mode == "staircase":
-            results[name], state = _gr._staircase(stage, state, _SEARCH["step"], power_cap)
-        else:
-            results[name], state = _gr._bisect(stage, state, _SEARCH["step"], _SEARCH["tol"],
-                                               power_cap, _SEARCH["max_step"])
-    return _gr.GripperResult(design, mode, results["assembly"], results["grip"])
-
-
 def with_residual_fold(problem, spec):
     """The problem evaluated at a residual-fold spec.
 
     ``{"all": r}`` (or a number) replaces the ``residual_fold`` field of any dataclass
-    problem that has one; per-group specs need a :class:`GripperProblem` and give a
-    :class:`GroupResidualProblem`.
+    problem that has one (clearing per-group values of a :class:`GripperProblem`); per-group
+    specs set :attr:`GripperProblem.residual_fold_groups`.
     """
     spec = _normalize_spec(spec)
     if "all" in spec:
-        if isinstance(problem, GroupResidualProblem):
-            return replace(problem, residual_fold=spec["all"], residual_folds=())
         if not any(f.name == "residual_fold" for f in fields(problem)):
             raise ParameterError(f"{type(problem).__name__} has no residual_fold to vary.")
-        return replace(problem, residual_fold=spec["all"])
+        extra = {"residual_fold_groups": ()} if isinstance(problem, GripperProblem) else {}
+        return replace(problem, residual_fold=spec["all"], **extra)
     if not isinstance(problem, GripperProblem):
         raise ParameterError(f"per-group residual folds need a GripperProblem; got "
                              f"{type(problem).__name__}.")
-    kw = {f.name: getattr(problem, f.name) for f in fields(GripperProblem) if f.init}
-    return GroupResidualProblem(**kw, residual_folds=tuple(spec.items()))
+    return replace(problem, residual_fold_groups=tuple(spec.items()))
 
 
 def _evaluate_point(task):

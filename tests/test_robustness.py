@@ -14,7 +14,7 @@ import pytest
 
 from design.executors import SerialExecutor, make_executor
 from design.problem import GripperProblem
-from design.robustness import (TIMING_COLUMNS, GroupResidualProblem, RobustGripperProblem,
+from design.robustness import (TIMING_COLUMNS, RobustGripperProblem,
                                residual_fold_grid, sweep_residual_fold, with_residual_fold)
 from simulator.errors import ParameterError
 
@@ -146,8 +146,9 @@ def test_with_residual_fold_builds_the_point_problems():
     p = with_residual_fold(PROBLEM, R10)
     assert type(p) is GripperProblem and p.residual_fold == R10
     g = with_residual_fold(PROBLEM, {"arm": R10})
-    assert isinstance(g, GroupResidualProblem) and g.group_folds() == {"base": 0.0, "arm": R10}
+    assert type(g) is GripperProblem and g.group_folds() == {"base": 0.0, "arm": R10}
     assert g.settings()["residual_fold [rad]"] == {"base": 0.0, "arm": R10}
+    assert g.design({}).crease_residual_folds() == {2: 0.0, 5: 0.0, 3: R10, 9: R10}
     assert with_residual_fold(g, R10).group_folds() == {"base": R10, "arm": R10}
     with pytest.raises(ParameterError, match="crease groups"):
         with_residual_fold(PROBLEM, {"all": 0.0, "arm": 0.1})
