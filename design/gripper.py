@@ -33,6 +33,8 @@ from simulator.patterns import gripper_pattern
 from simulator.properties import BarHingeParameters
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
+from .power_search import bisect_search, staircase_search
+
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
            "BASE_CREASES", "ARM_CREASES"]
 
@@ -293,50 +295,6 @@ class _Stage:
                            self.increments, message)
 
 
-def _staircase(stage, state, step, cap):
-    power = 0.0
-    while power < cap - 1e-15:
-        state, ok, msg = stage.heat(state, step)
-        power += step
-        if not ok:
-            return stage.result(False, power, state, f"simulation failed at {power * 1e3:.2f} mW: "
-                                                     f"{msg}"), state
-        if stage.look(state)[1]:
-            return stage.result(True, power, state, "criterion met"), state
-    return stage.result(False, power, state, f"criterion not met below the power cap "
-                                             f"{cap * 1e3:.3g} mW per crease"), state
-
-
-def _bisect(stage, state, step, tol, cap, max_step, coupling="staggered"):
-    lo_state, lo, dp = state, 0.0, step
-    while True:                                            # grow until the criterion holds
-        hi = min(lo + dp, cap)
-        trial, ok, msg = stage.heat(lo_state, hi - lo, coupling=coupling)
-        if not ok:
-            if dp > step:                                  # too big a jump: retry smaller
-                dp = max(step, dp / 4)
-                continue
-            return stage.result(False, hi, trial, f"simulation failed at {hi * 1e3:.3g} mW: "
-                                                  f"{msg}"), trial
-        if stage.look(trial)[1]:
-            hi_state = trial
-            break
-        if hi >= cap - 1e-15:
-            return stage.result(False, hi, trial, f"criterion not met below the power cap "
-                                                  f"{cap * 1e3:.3g} mW per crease"), trial
-        lo_state, lo, dp = trial, hi, min(2 * dp, max_step)
-    while hi - lo > tol:                                   # bisect the crossing
-        mid = 0.5 * (lo + hi)
-        trial, ok, msg = stage.heat(lo_state, mid - lo, coupling=coupling)
-        if ok and stage.look(trial)[1]:
-            hi, hi_state = mid, trial
-        elif ok:
-            lo, lo_state = mid, trial
-        else:
-            break
-    return stage.result(True, hi, hi_state, "criterion met"), hi_state
-
-
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",
                      step: float = 0.1e-3, tol: float = 0.01e-3, power_cap: float = 40e-3,
                      max_step: float = 0.4e-3, callback=None) -> GripperResult:
@@ -377,8 +335,8 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
             results[name] = stage.result(False, 0.0, state, "not attempted: assembly not met")
             continue
         if mode == "staircase":
-            results[name], state = _staircase(stage, state, step, power_cap)
+            results[name], state = staircase_search(stage, state, step, power_cap)
         else:
-            results[name], state = _bisect(stage, state, step, tol, power_cap, max_step)
+            results[name], state = bisect_search(stage, state, step, tol, power_cap, max_step)
         logger.info("gripper %s: %s", name, results[name])
     return GripperResult(design, mode, results["assembly"], results["grip"])

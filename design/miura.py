@@ -25,7 +25,7 @@ from simulator.patterns import miura_sheet_pattern, with_substrate
 from simulator.properties import BarHingeParameters
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
-from .gripper import _bisect, _staircase
+from .power_search import bisect_search, staircase_search
 from .problem import SU8_TG, DesignProblem
 from .space import DesignSpace, Variable
 
@@ -237,8 +237,8 @@ def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
                        target_lift)
     state = simulate(model, []).state
     if mode == "staircase":
-        return _staircase(stage, state, step, power_cap)[0]
-    return _bisect(stage, state, step, tol, power_cap, max_step)[0]
+        return staircase_search(stage, state, step, power_cap)[0]
+    return bisect_search(stage, state, step, tol, power_cap, max_step)[0]
 
 
 #: Design variables: panel sides, sector angle (rad, shown in deg), crease width.
