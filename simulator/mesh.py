@@ -199,21 +199,8 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     # Pass A: panel edge bars, bar q = (prev corner, corner q)
     edge_bars = np.sort(np.column_stack([prev, np.arange(S)]), axis=1)
 
-    # Pass B: crease nodes, bars, triangles
-    order = np.argsort(pattern.corner_edges, kind="stable")
-    on_crease = pattern.is_crease[pattern.corner_edges[order]]
-    pair = order[on_crease].reshape(C, 2)           # (edge1, edge2) bar ids per crease, ascending
-    n11, n12 = edge_bars[pair[:, 0]].T
-    n21, n22 = edge_bars[pair[:, 1]].T
-    swap = (np.linalg.norm(corners[n11] - corners[n21], axis=1)
-            >= np.linalg.norm(corners[n11] - corners[n22], axis=1))
-    n21, n22 = np.where(swap, n22, n21), np.where(swap, n21, n22)
-    a = S + 3 * np.arange(C)
-    cn = np.column_stack([n11, n12, n21, n22, a, a + 1, a + 2])
-    pos_a = (corners[n11] + corners[n21]) / 2
-    pos_b = (corners[n12] + corners[n22]) / 2
-    pos_c = (corners[n11] + corners[n12] + corners[n21] + corners[n22]) / 4
-    crease_pos = np.stack([pos_a, pos_b, pos_c], axis=1).reshape(-1, 3)
+    # Pass B: crease nodes (N11, N12, N21, N22, A, B, Ctr) and their positions
+    pair, cn, crease_pos = _crease_nodes(pattern, corners, edge_bars)
 
     # Pass C: centres, spokes, fans
     centre = S + 3 * C + np.arange(P)
@@ -231,29 +218,8 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     bar_panel = np.r_[corner_panel, np.full(10 * C, -1), corner_panel]
     crease_bars = S + 10 * np.arange(C)[:, None] + np.arange(10)
 
-    # Springs: (bar, i, j, k, l, kind) for every bar that carries one, sorted by bar.
-    edge_spr = np.vstack([
-        np.column_stack([cn[:, _CTR], n11, n12, centre[corner_panel[pair[:, 0]]]]),
-        np.column_stack([cn[:, _CTR], n22, n21, centre[corner_panel[pair[:, 1]]]])])
-    spr_nodes = np.vstack([
-        edge_spr,
-        cn[:, _CREASE_SPRINGS].reshape(-1, 4),
-        np.column_stack([nxt, np.arange(S), centre[corner_panel], prev])])
-    spr_bar = np.r_[pair[:, 0], pair[:, 1], (crease_bars[:, _CREASE_SPRING_BARS]).ravel(),
-                    S + 10 * C + np.arange(S)]
-    spr_kind = np.r_[np.full(2 * C, SpringKind.CREASE_EDGE), np.tile(_CREASE_SPRING_KIND, C),
-                     np.full(S, SpringKind.PANEL)]
-    o = np.argsort(spr_bar, kind="stable")
-    # The polarity fix applies to crease springs only: the reference keeps panel springs as
-    # (p_{j+1}, p_j, centre, p_{j-1}); their rest angle is the initial angle, so it is immaterial.
-    is_crease_spr = spr_kind != SpringKind.PANEL
-    spr_nodes[is_crease_spr] = _polarity_fix(nodes, spr_nodes[is_crease_spr])
-    springs, spring_bar, spring_kind = spr_nodes[o], spr_bar[o], spr_kind[o]
-    slot = np.empty(len(o), int)
-    slot[o] = np.arange(len(o))
-    # creaseRef order: edge1, edge2, then crease-bar springs #2, #3, #5, #6, #8, #9
-    crease_springs = np.column_stack([slot[:C], slot[C:2 * C],
-                                      slot[2 * C:8 * C].reshape(C, 6)])
+    springs, spring_bar, spring_kind, crease_springs = _springs(
+        nodes, cn, pair, centre[corner_panel], prev, nxt, crease_bars)
 
     triangles = np.vstack([cn[:, _CREASE_TRIANGLES].reshape(-1, 3), fans])
     node_kind = np.r_[np.full(S, NodeKind.CORNER), np.full(3 * C, NodeKind.CREASE),
@@ -276,6 +242,56 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     logger.debug("meshed %d panels, %d creases: %d nodes, %d bars, %d springs, %d triangles",
                  P, C, len(nodes), len(bars), len(springs), len(triangles))
     return mesh
+
+
+def _crease_nodes(pattern: Pattern, corners: np.ndarray, edge_bars: np.ndarray):
+    """Pass B: the two shrunk edges of every crease, its 7 nodes and the 3 new positions.
+
+    Returns ``pair`` (C, 2) edge bars (edge1 of the earlier panel, edge2), ``cn`` (C, 7) nodes
+    N11, N12, N21, N22, A, B, Ctr and the (3C, 3) positions of A, B, Ctr per crease.
+    """
+    S, C = len(corners), len(pattern.creases)
+    order = np.argsort(pattern.corner_edges, kind="stable")
+    on_crease = pattern.is_crease[pattern.corner_edges[order]]
+    pair = order[on_crease].reshape(C, 2)           # (edge1, edge2) bar ids per crease, ascending
+    n11, n12 = edge_bars[pair[:, 0]].T
+    n21, n22 = edge_bars[pair[:, 1]].T
+    swap = (np.linalg.norm(corners[n11] - corners[n21], axis=1)
+            >= np.linalg.norm(corners[n11] - corners[n22], axis=1))
+    n21, n22 = np.where(swap, n22, n21), np.where(swap, n21, n22)
+    a = S + 3 * np.arange(C)
+    cn = np.column_stack([n11, n12, n21, n22, a, a + 1, a + 2])
+    pos_a = (corners[n11] + corners[n21]) / 2
+    pos_b = (corners[n12] + corners[n22]) / 2
+    pos_c = (corners[n11] + corners[n12] + corners[n21] + corners[n22]) / 4
+    return pair, cn, np.stack([pos_a, pos_b, pos_c], axis=1).reshape(-1, 3)
+
+
+def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars):
+    """Pass D: every spring (i, j, k, l), its bar and kind, sorted by bar; crease maps.
+
+    ``corner_centre`` (S,) is the centre node of each corner's panel.
+    """
+    S, C = len(prev), len(cn)
+    edge_spr = np.vstack([
+        np.column_stack([cn[:, _CTR], cn[:, _N11], cn[:, _N12], corner_centre[pair[:, 0]]]),
+        np.column_stack([cn[:, _CTR], cn[:, _N22], cn[:, _N21], corner_centre[pair[:, 1]]])])
+    spr_nodes = np.vstack([edge_spr, cn[:, _CREASE_SPRINGS].reshape(-1, 4),
+                           np.column_stack([nxt, np.arange(S), corner_centre, prev])])
+    spr_bar = np.r_[pair[:, 0], pair[:, 1], (crease_bars[:, _CREASE_SPRING_BARS]).ravel(),
+                    S + 10 * C + np.arange(S)]
+    spr_kind = np.r_[np.full(2 * C, SpringKind.CREASE_EDGE), np.tile(_CREASE_SPRING_KIND, C),
+                     np.full(S, SpringKind.PANEL)]
+    # The polarity fix applies to crease springs only: the reference keeps panel springs as
+    # (p_{j+1}, p_j, centre, p_{j-1}); their rest angle is the initial angle, so it is immaterial.
+    is_crease_spr = spr_kind != SpringKind.PANEL
+    spr_nodes[is_crease_spr] = _polarity_fix(nodes, spr_nodes[is_crease_spr])
+    o = np.argsort(spr_bar, kind="stable")
+    slot = np.empty(len(o), int)
+    slot[o] = np.arange(len(o))
+    # creaseRef order: edge1, edge2, then crease-bar springs #2, #3, #5, #6, #8, #9
+    crease_springs = np.column_stack([slot[:C], slot[C:2 * C], slot[2 * C:8 * C].reshape(C, 6)])
+    return spr_nodes[o], spr_bar[o], spr_kind[o], crease_springs
 
 
 def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:

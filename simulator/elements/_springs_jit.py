@@ -19,6 +19,8 @@ except ImportError:  # pragma: no cover - numba is optional
 __all__ = ["AVAILABLE", "spring_kernel_jit"]
 
 AVAILABLE = njit is not None
+#: (row node, column node) of the stored Hessian blocks ii, ij, ik, jj, jk, kk, lj, lk, ll.
+_BLOCK_POS = np.array([[0, 0], [0, 1], [0, 2], [1, 1], [1, 2], [2, 2], [3, 1], [3, 2], [3, 3]])
 
 
 def _kernel(x, k, theta0, want_hess, energy, grad, hess):
@@ -96,26 +98,8 @@ def _kernel(x, k, theta0, want_hess, energy, grad, hess):
         for p in range(12):
             for q in range(12):
                 hess[e, p, q] = k[e] * g[p] * g[q]
-        # block positions (row node, col node) of the 9 stored blocks
         for idx in range(9):
-            if idx == 0:
-                p, q = 0, 0
-            elif idx == 1:
-                p, q = 0, 1
-            elif idx == 2:
-                p, q = 0, 2
-            elif idx == 3:
-                p, q = 1, 1
-            elif idx == 4:
-                p, q = 1, 2
-            elif idx == 5:
-                p, q = 2, 2
-            elif idx == 6:
-                p, q = 3, 1
-            elif idx == 7:
-                p, q = 3, 2
-            else:
-                p, q = 3, 3
+            p, q = _BLOCK_POS[idx, 0], _BLOCK_POS[idx, 1]
             for a in range(3):
                 for b in range(3):
                     val = moment * blk[idx, a, b]
