@@ -50,6 +50,9 @@ class NewtonOptions:
         Newton iterations per increment before it counts as failed.
     max_cuts : int
         How many times one increment may be halved before the path gives up.
+    max_total_cuts : int
+        Halvings allowed over a whole path (so a path that keeps failing and recovering
+        always ends, with status "failed").
     raise_on_failure : bool
         Raise :class:`~simulator.errors.ConvergenceError` instead of returning a failed result.
 
@@ -62,6 +65,7 @@ class NewtonOptions:
     rtol: float = 1e-10
     max_iter: int = 30
     max_cuts: int = 10
+    max_total_cuts: int = 60
     raise_on_failure: bool = False
 
     def __post_init__(self):
@@ -74,7 +78,7 @@ class NewtonOptions:
                 raise ParameterError(f"NewtonOptions.{name} = {v!r} must be finite and >= 0.")
         if self.atol == 0 and self.rtol == 0:
             raise ParameterError("NewtonOptions: atol and rtol cannot both be 0.")
-        for name in ("max_iter", "max_cuts"):
+        for name in ("max_iter", "max_cuts", "max_total_cuts"):
             v = getattr(self, name)
             if not (isinstance(v, int) and v >= (1 if name == "max_iter" else 0)):
                 raise ParameterError(f"NewtonOptions.{name} = {v!r} must be a non-negative integer "
@@ -233,9 +237,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
                      rest_start + t_try * (rest_end - rest_start), options)
         total_iter += res.iterations
         if not res.converged:
-            if cuts_in_row >= options.max_cuts:
-                msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts "
-                       f"(increment {dt:.3g}): {res.message}")
+            if cuts_in_row >= options.max_cuts or total_cuts >= options.max_total_cuts:
+                msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts in a row, "
+                       f"{total_cuts} in all (increment {dt:.3g}): {res.message}")
                 logger.warning(msg)
                 return PathResult(False, "failed", msg, u, t, total_iter, total_cuts, history,
                                   residuals, last_ev)

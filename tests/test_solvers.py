@@ -174,3 +174,12 @@ def test_unknown_crease_and_node_in_steps(free_hinge):
         simulate(free_hinge, [SelfFold({0: 0.1})])
     with pytest.raises(ParameterError, match="node 500"):
         simulate(free_hinge, [Load({500: (0, 0, 1)})])
+
+
+def test_total_cut_budget_ends_a_struggling_path(free_hinge):
+    """A path that fails, recovers and fails again cannot cut forever."""
+    absurd = Load({5: (0, 0, 1e3), 6: (0, 0, -1e3)}, increments=1)
+    res = simulate(free_hinge, [absurd], options=NewtonOptions(max_iter=8, max_cuts=50,
+                                                                max_total_cuts=5))
+    assert res.status == "failed" and res.steps[0].cuts == 5
+    assert "5 in all" in res.message
