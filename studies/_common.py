@@ -8,10 +8,14 @@ I/O), ``plot(df) -> Figure`` (re-creatable from the CSV alone) and
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import pathlib
+import signal
+import threading
 import time
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -21,7 +25,8 @@ from simulator import __version__
 from simulator.cases import get_case
 
 __all__ = ["RESULTS", "study_main", "progress_bar", "write_outputs", "node_frame",
-           "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP"]
+           "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP",
+           "time_limit", "EvaluationTimeout", "TimeLimited"]
 
 #: Default output root: ``results/`` at the top of the repository.
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "results"
@@ -137,3 +142,49 @@ def run_case(name: str, params: dict, progress: bool, desc: str):
     if not res.converged:
         raise RuntimeError(f"{name} ({desc}): {res.message}")
     return case, res
+
+
+# ----------------------------------------------------------------------------- time limit
+class EvaluationTimeout(Exception):
+    """An evaluation ran longer than its time limit."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float):
+    """Raise :class:`EvaluationTimeout` inside the block after ``seconds`` [s].
+
+    Uses ``SIGALRM``, so it works only in the main thread of a process (the serial executor
+    and process-pool workers); elsewhere the block runs without a limit. Not nestable: an
+    inner block cancels the timer of an outer one.
+    """
+    if seconds is None or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise EvaluationTimeout(f"evaluation stopped after the time limit of {seconds:g} s")
+
+    previous = signal.signal(signal.SIGALRM, handler)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@dataclass(frozen=True)
+class TimeLimited:
+    """Mixin for frozen dataclass problems: each evaluation stops (and fails) after
+    ``time_limit`` [s]. A safety net for long studies; the solvers end every path on their own
+    (step-cut budgets), so it should not trigger."""
+
+    time_limit: float = 30.0
+
+    def _evaluate(self, values):
+        with time_limit(self.time_limit):
+            return super()._evaluate(values)
+
+    def settings(self) -> dict:
+        return {**super().settings(), "time_limit [s]": self.time_limit}
+

@@ -64,11 +64,8 @@ and the best feasible power vs evaluation).
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import signal
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,7 +74,8 @@ import pandas as pd
 from design.executors import make_executor
 from design.optimize import optimize
 from design.problem import GripperProblem
-from studies._common import progress_bar, study_main
+from studies._common import (EvaluationTimeout, TimeLimited, progress_bar, study_main,
+                             time_limit)
 
 __all__ = [
     "EvaluationTimeout",
@@ -105,51 +103,12 @@ POWER, ASM, GRIP, TEMP = ("total_power [mW]", "assembly_power [mW]", "grip_power
                           "temperature [degC]")
 
 
-# ----------------------------------------------------------------------------- time limit
-class EvaluationTimeout(Exception):
-    """An evaluation ran longer than its time limit."""
-
-
-@contextlib.contextmanager
-def time_limit(seconds: float):
-    """Raise :class:`EvaluationTimeout` inside the block after ``seconds`` [s].
-
-    Uses ``SIGALRM``, so it works only in the main thread of a process (the serial executor
-    and process-pool workers); elsewhere the block runs without a limit. Not nestable: an
-    inner block cancels the timer of an outer one.
-    """
-    if seconds is None or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        raise EvaluationTimeout(f"evaluation stopped after the time limit of {seconds:g} s")
-
-    previous = signal.signal(signal.SIGALRM, handler)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
-
-
 @dataclass(frozen=True)
-class TimeLimitedGripperProblem(GripperProblem):
-    """:class:`~design.problem.GripperProblem` whose evaluations stop after ``time_limit`` [s].
-
-    A stopped evaluation is a failed design (the problem's ``evaluate`` turns the
-    :class:`EvaluationTimeout` into a failed :class:`~design.problem.Evaluation`).
-    """
+class TimeLimitedGripperProblem(TimeLimited, GripperProblem):
+    """:class:`~design.problem.GripperProblem` whose evaluations stop (fail) after
+    ``time_limit`` [s]."""
 
     time_limit: float = TIME_LIMIT
-
-    def _evaluate(self, values):
-        with time_limit(self.time_limit):
-            return super()._evaluate(values)
-
-    def settings(self) -> dict:
-        return {**super().settings(), "time_limit [s]": self.time_limit}
 
 
 # ----------------------------------------------------------------------------- run

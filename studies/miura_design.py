@@ -83,7 +83,7 @@ from design.miura import (
 )
 from simulator.errors import ParameterError
 from studies._common import progress_bar, study_main
-from studies.gripper_optimization import EvaluationTimeout, time_limit
+from studies._common import EvaluationTimeout, TimeLimited, time_limit
 
 NAME = "miura_design"
 _DEG = math.pi / 180
@@ -104,18 +104,11 @@ LPP, TMAX = "lift_per_power [um/mW]", "max_crease_temperature [degC]"
 
 
 @dataclass(frozen=True)
-class TimeLimitedMiuraProblem(MiuraProblem):
+class TimeLimitedMiuraProblem(TimeLimited, MiuraProblem):
     """:class:`~design.miura.MiuraProblem` whose evaluations stop (fail) after ``time_limit``
     [s]."""
 
     time_limit: float = TIME_LIMIT
-
-    def _evaluate(self, values):
-        with time_limit(self.time_limit):
-            return super()._evaluate(values)
-
-    def settings(self) -> dict:
-        return {**super().settings(), "time_limit [s]": self.time_limit}
 
 
 # ----------------------------------------------------------------------------- run
