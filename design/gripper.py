@@ -31,12 +31,13 @@ from simulator.model import ContactParameters, Supports, make_model
 from simulator.errors import ParameterError
 from simulator.patterns import gripper_pattern
 from simulator.properties import BarHingeParameters
+from simulator.solvers import NewtonOptions
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
 from .power_search import bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
-           "BASE_CREASES", "ARM_CREASES"]
+           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON"]
 
 logger = logging.getLogger(__name__)
 
@@ -45,6 +46,9 @@ BASE_CREASES = (2, 5)
 ARM_CREASES = (3, 9)
 _G = 9.8              # the reference gripper script's gravity [m/s^2]
 _GRAVITY_INCREMENTS = 80
+#: The reference script's solver settings (digest 7.3, 8.7: tol 5e-7 N, iterMax 30, its loop),
+#: for comparisons with its outputs; its equilibria are under-converged.
+REFERENCE_NEWTON = NewtonOptions(atol=5e-7, max_iter=30, reference_loop=True)
 
 
 @dataclass(frozen=True)
@@ -263,15 +267,16 @@ _STAGES = {
 class _Stage:
     """Run one stage's heating trials from saved states."""
 
-    def __init__(self, model, name, callback=None):
-        self.model, self.name, self.callback = model, name, callback
+    def __init__(self, model, name, callback=None, options=NewtonOptions()):
+        self.model, self.name, self.callback, self.options = model, name, callback, options
         self.creases, self.measure_fn, self.met_fn, self.centre_lines = _STAGES[name]
         self.simulations = self.increments = 0
 
     def heat(self, state, dp, increments=1, coupling="staggered"):
         """Add ``dp`` per crease in ``increments`` increments; returns (state, ok, message)."""
         res = simulate(self.model, [Heat({self.creases: dp}, increments=increments,
-                                         coupling=coupling)], state=state)
+                                         coupling=coupling)], state=state,
+                       options=self.options)
         self.simulations += 1
         self.increments += res.steps[-1].increments
         if self.callback is not None and res.converged:
@@ -297,7 +302,8 @@ class _Stage:
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",
                      step: float = 0.1e-3, tol: float = 0.01e-3, power_cap: float = 40e-3,
-                     max_step: float = 0.4e-3, callback=None) -> GripperResult:
+                     max_step: float = 0.4e-3, callback=None,
+                     options: NewtonOptions = NewtonOptions()) -> GripperResult:
     """Power per heated crease needed to assemble, then grip (digest 8.7).
 
     Parameters
@@ -316,6 +322,9 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     max_step : float
         Largest growth step of the bisect mode [W per crease]; larger jumps cost more Newton
         iterations than they save (contact limits the step per iteration).
+    options : NewtonOptions
+        Equilibrium solver settings; :data:`REFERENCE_NEWTON` emulates the reference's loose
+        loop (for comparisons with its outputs only).
     """
     if mode not in ("bisect", "staircase"):
         raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
@@ -323,11 +332,11 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
         if not (math.isfinite(v) and v > 0):
             raise ParameterError(f"{name} = {v!r} must be a positive power in W.")
     model, pre = gripper_model(design)
-    start = simulate(model, pre)
+    start = simulate(model, pre, options=options)
     results = {}
     state = start.state
     for name in ("assembly", "grip"):
-        stage = _Stage(model, name, callback)
+        stage = _Stage(model, name, callback, options)
         if not start.converged:
             results[name] = stage.result(False, 0.0, state, f"pre-loading failed: {start.message}")
             continue

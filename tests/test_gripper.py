@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from design.gripper import GripperDesign, evaluate_gripper, gripper_model
+from design.gripper import REFERENCE_NEWTON, GripperDesign, evaluate_gripper, gripper_model
 from simulator.errors import ParameterError
 
 DATA = __import__("pathlib").Path(__file__).parent / "data"
@@ -34,9 +34,9 @@ def test_g2_staircase_follows_the_reference_call_by_call(g2_staircase):
 
     Measured: identical (< 1e-4 rad) for the first calls and from call 60 to the stop; in
     between our fold runs up to 0.011 rad (0.6 deg) ahead of the reference and the crease
-    temperature up to 0.09 degC higher. The cause is not identified yet (contact is inactive
-    there; the reference's loose 5e-7 N tolerance is a candidate); the bounds below pin the
-    measured deviation so that any change to it is noticed.
+    temperature up to 0.09 degC higher. The cause is the reference's under-converged
+    equilibria (see the ``reference_loop`` test below); the bounds below pin the measured
+    deviation so that any change to it is noticed.
     """
     _, trace = g2_staircase
     frame = pd.DataFrame(trace)
@@ -62,6 +62,46 @@ def test_g2_staircase_follows_the_reference_call_by_call(g2_staircase):
     np.testing.assert_allclose(ours["temperature [degC]"], ref_t, atol=2e-3)
     np.testing.assert_allclose(ours["max_crease_temperature [degC]"], grip.T_node_max_C,
                                atol=2e-3)
+
+
+def test_reference_loop_explains_the_g2_trace_deviation():
+    """With the reference's own Newton loop the G2 trace comes 8x closer to its data.
+
+    The reference stops at a 5e-7 N residual, above the gripper's forces (a base panel weighs
+    1.5e-8 N), so it takes one to a few Newton updates per call and lags the equilibrium.
+    Emulating that loop (``REFERENCE_NEWTON``) brings the assembly fold within 0.0013 rad of
+    the reference (0.0105 fully converged) and gives the irregular grip steps of its data
+    (reference 67-87 um per call, ours fully converged 70-76 um). What remains comes from the
+    reference's inexact contact Hessians (digest 5.6), which steer its under-converged
+    iterates wherever contact is active (two pairs during part of the run).
+    """
+    trace = []
+    res = evaluate_gripper(G2, mode="staircase", callback=trace.append, options=REFERENCE_NEWTON)
+    assert (res.assembly.simulations, res.grip.simulations) == (91, 8)
+    frame = pd.DataFrame(trace)
+    base = pd.read_csv(DATA / "gripper_G2_base.csv")
+    dev = np.abs(frame[frame.stage == "assembly"]["measure"].to_numpy()
+                 - base.base_fold_rad.to_numpy())
+    assert dev.max() < 0.0015
+    steps = -np.diff(frame[frame.stage == "grip"]["measure"].to_numpy() * 1e6)
+    assert steps.max() - steps.min() > 10
+
+
+def test_start_design_staircase_is_the_same_under_both_solver_loops():
+    """Start design (W 200, L1 L2 1000, La 700 um): 26.5 + 5.9 mW per crease (265 + 59 calls).
+
+    The reference's stopping calls do not depend on its under-convergence: its own loop
+    (emulated) stops at the same calls with temperatures within 0.01 degC of ours.
+    """
+    ours = evaluate_gripper(GripperDesign(), mode="staircase")
+    ref = evaluate_gripper(GripperDesign(), mode="staircase", options=REFERENCE_NEWTON)
+    for r in (ours, ref):
+        assert r.feasible
+        assert (r.assembly.simulations, r.grip.simulations) == (265, 59)
+        assert r.assembly.power_per_crease == pytest.approx(26.5e-3)
+        assert r.grip.power_per_crease == pytest.approx(5.9e-3)
+    assert ours.assembly.temperature == pytest.approx(ref.assembly.temperature, abs=0.01)
+    assert ours.grip.temperature == pytest.approx(ref.grip.temperature, abs=0.01)
 
 
 def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):

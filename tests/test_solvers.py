@@ -183,3 +183,30 @@ def test_total_cut_budget_ends_a_struggling_path(free_hinge):
                                                                 max_total_cuts=5))
     assert res.status == "failed" and res.steps[0].cuts == 5
     assert "5 in all" in res.message
+
+
+def test_reference_loop_applies_one_update_past_its_tolerance(free_hinge, caplog):
+    """Digest 7.3: the measure is taken before the update, so the loop stops one update late."""
+    system = equilibrium_system(free_hinge)
+    state = initial_state(free_hinge)
+    rest = spring_rest_angles(free_hinge.mesh, np.array([np.pi + np.radians(2)]))
+    f = state.applied_load.ravel()
+    full = newton(system, state.u, f, rest, NewtonOptions(atol=1e-16, rtol=1e-16))
+    r = full.residual_norms                       # r[k]: residual before update k
+    # r: 5e-8, 1.5e-2, 1.3e-5, 1e-11, ...: the first update overshoots (large rotation)
+    assert r[0] < 1e-7 < r[1] and r[3] < 1e-9 < r[2]
+    ref = newton(system, state.u, f, rest, NewtonOptions(atol=1e-9, reference_loop=True))
+    assert ref.converged and ref.iterations == 4  # updates 1-3 and the one after r[3] < atol
+    np.testing.assert_allclose(ref.residual_norms, r[:4])
+    np.testing.assert_allclose(ref.u, full.u, atol=1e-12)
+    # a loose tolerance above the first residual: one update only, far from equilibrium
+    loose = newton(system, state.u, f, rest, NewtonOptions(atol=1e-7, reference_loop=True))
+    assert loose.iterations == 1
+    assert np.abs(loose.u - full.u).max() > 0.01 * np.abs(full.u).max()   # 3% off here
+    atol = 1e-9
+    # an iteration cap below that: accepted, but said (message and warning), never silent
+    with caplog.at_level("WARNING", logger="simulator.solvers"):
+        short = newton(system, state.u, f, rest,
+                       NewtonOptions(atol=atol, max_iter=2, reference_loop=True))
+    assert short.converged and short.iterations == 1 and short.residual_norms[-1] > atol
+    assert "accepted unconverged" in short.message and "accepted unconverged" in caplog.text
