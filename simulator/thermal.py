@@ -294,14 +294,15 @@ class ThermalModel:
                            minlength=mesh.n_nodes).astype(float)
 
     def solve(self, x, q, room_temperature=None) -> np.ndarray:
-        """Steady structure temperatures [deg C], (n,).
+        """Steady structure temperatures [deg C], (n,) (or (n, k) for k heat inputs).
 
         Parameters
         ----------
         x : (n, 3) array
             Current node positions [m] (the conductivity depends on the shape).
-        q : (n,) array
-            Nodal heat input [W], e.g. from :meth:`heat_vector`.
+        q : (n,) or (n, k) array
+            Nodal heat input [W], e.g. from :meth:`heat_vector`; k columns give k independent
+            solutions from one factorisation (returned as (n, k)).
         room_temperature : float, optional
             Temperature [deg C] of the far layer and of the room-temperature nodes
             (default ``params.room_temperature``).
@@ -316,15 +317,16 @@ class ThermalModel:
         rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
         q = np.asarray(q, float)
         n = self.mesh.n_nodes
-        if q.shape != (n,) or not np.all(np.isfinite(q)) or not math.isfinite(rt):
-            raise ParameterError(f"q must be a finite array of shape ({n},) [W] and the room "
-                                 "temperature finite.")
+        if q.shape[:1] != (n,) or q.ndim > 2 or not np.all(np.isfinite(q)) \
+                or not math.isfinite(rt):
+            raise ParameterError(f"q must be a finite array of shape ({n},) or ({n}, k) [W] and "
+                                 "the room temperature finite.")
         K, area = self._conduction(x)
         g = self.layer_conductance(x, area)
         with np.errstate(divide="ignore"):
             g_eff = np.where(np.all(g > 0, axis=1), 1 / np.sum(1 / g, axis=1), 0.0)
         A = self._free_pattern.matrix([K, g_eff[self.free_nodes]])
-        rise = np.zeros(n)
+        rise = np.zeros(q.shape)
         if len(self.free_nodes):
             rise[self.free_nodes] = splu(A.tocsc()).solve(q[self.free_nodes])
         return rt + rise

@@ -1,0 +1,94 @@
+"""Minimum-power heater allocation (design.heaters)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from design.heaters import allocate_heaters, influence_matrices
+from simulator.cases import double_fold
+from simulator.errors import EtorigamiError
+from simulator.heating import Heat, thermal_model
+from simulator.loading import simulate
+
+P_REF = 6e-3          # W per crease that made the target shape
+
+
+@pytest.fixture(scope="module")
+def folded():
+    case = double_fold(thermal_steps=30, power_mW=1e3 * P_REF)
+    pre = simulate(case.model, case.steps[:-1])
+    full = simulate(case.model, case.steps[-1:], state=pre.state)
+    mesh = case.model.mesh
+    fold = full.fold_angle[-1]
+    targets = {c: float(fold[mesh.crease_row_of(c)]) for c in (2, 5)}
+    return case.model, pre.state, full.state, targets
+
+
+def test_influence_matrices_are_the_linear_thermal_response(folded):
+    """G p and H p equal the temperature rises of a full thermal solve with powers p."""
+    model, _, state, _ = folded
+    mesh, tm = model.mesh, thermal_model(model)
+    x = mesh.nodes + state.u
+    heaters = {"a": (2,), "b": (5,)}
+    G, H = influence_matrices(model, x, heaters)
+    p = np.array([3e-3, 7e-3])
+    power = np.zeros(mesh.n_creases)
+    power[[mesh.crease_row_of(2), mesh.crease_row_of(5)]] = p
+    T = tm.solve(x, tm.heat_vector(power))
+    rise = T[mesh.crease_nodes] - tm.params.room_temperature
+    np.testing.assert_allclose(H @ p, rise.ravel(), rtol=1e-10)
+    w = np.array([1 / 8] * 4 + [1 / 6] * 3)
+    np.testing.assert_allclose(G @ p, rise @ w, rtol=1e-10)
+    # heat flows both ways: each heater warms the other crease a little, its own much more
+    rows = [mesh.crease_row_of(2), mesh.crease_row_of(5)]
+    assert np.all(G[rows, [0, 1]] > 20 * G[rows, [1, 0]]) and np.all(G[rows, [1, 0]] > 0)
+
+
+def test_allocation_recovers_the_powers_that_made_the_shape(folded):
+    """Two heaters, two target folds: the unique answer is the 6 + 6 mW that folded them,
+    found by iterating over the shape-dependent heat loss (7 rounds when measured)."""
+    model, start, _, targets = folded
+    res = allocate_heaters(model, targets, state=start, increments=30)
+    assert res.status == "converged", res.message
+    assert res.total_power == pytest.approx(2 * P_REF, rel=0.02)
+    np.testing.assert_allclose(res.power, P_REF, rtol=0.03)
+    for c, t in targets.items():
+        assert abs(res.achieved[c] - t) <= math.radians(0.5)
+    assert res.max_temperature <= res.temperature_limit
+    assert len(res.history) == res.rounds and res.rounds <= 10
+    frame = res.to_frame()
+    assert list(frame["crease"]) == [2, 5]
+    np.testing.assert_allclose(frame["power [mW]"], 1e3 * res.power)
+
+
+def test_temperature_limit_makes_it_infeasible_with_the_reason(folded):
+    model, start, _, targets = folded
+    res = allocate_heaters(model, targets, state=start, increments=30, temperature_limit=60.0)
+    assert res.status == "infeasible" and not res.converged
+    assert "60 degC" in res.message and "%" in res.message
+
+
+def test_one_heater_cannot_set_two_independent_folds(folded):
+    model, start, _, targets = folded
+    res = allocate_heaters(model, targets, state=start, increments=30,
+                           heaters={"both": (2, 5)})
+    assert res.status == "infeasible"
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"targets": {}}, "targets is empty"),
+    ({"targets": {99: 0.3}}, "99"),
+    ({"targets": {2: -0.5}}, "against its actuation direction"),
+    ({"targets": {2: float("nan")}}, r"targets\[2\]"),
+    ({"heaters": {"h": ()}}, "lists no crease"),
+    ({"max_rounds": 0}, "max_rounds"),
+    ({"fold_tol": 0.0}, "fold_tol"),
+    ({"relaxation": 1.5}, "relaxation"),
+    ({"max_power": -1.0}, "max_power"),
+])
+def test_bad_input_is_named(folded, kwargs, match):
+    model, start, _, targets = folded
+    args = {"targets": targets, **kwargs}
+    with pytest.raises(EtorigamiError, match=match):
+        allocate_heaters(model, args.pop("targets"), state=start, **args)
