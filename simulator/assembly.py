@@ -56,11 +56,30 @@ class StiffnessPattern:
         self.indices = (uniq % self.n_free).astype(np.int32)
         self.indptr = np.searchsorted(uniq // self.n_free, np.arange(self.n_free + 1)).astype(np.int32)
         self.nnz = len(uniq)
+        # position in the CSR data of every Hessian entry (-1: fixed DOF), per family
+        pos = np.full(len(self.keep), -1, dtype=np.int64)
+        pos[self.keep] = self.scatter
+        sizes = [d.size * d.shape[1] for d in dofs] + ([len(rows[-1])] if diagonal is not None
+                                                      else [])
+        split = np.split(pos, np.cumsum(sizes)[:-1]) if sizes else []
+        self._family_pos = [p.reshape(len(d), -1) for p, d in zip(split, dofs)] + split[len(dofs):]
 
-    def matrix(self, values: list[np.ndarray]) -> sp.csr_matrix:
-        """CSR matrix from element Hessians (same order as the families) and diagonal terms."""
-        flat = np.concatenate([v.ravel() for v in values])[self.keep]
-        data = np.bincount(self.scatter, flat, minlength=self.nnz)
+    def matrix(self, values: list[np.ndarray], subsets: dict | None = None) -> sp.csr_matrix:
+        """CSR matrix from element Hessians (same order as the families) and diagonal terms.
+
+        ``subsets[i]``, if given, lists the elements of family ``i`` that ``values[i]`` holds
+        (the others are zero), e.g. the active pairs of a contact family.
+        """
+        if not subsets:
+            flat = np.concatenate([v.ravel() for v in values])[self.keep]
+            data = np.bincount(self.scatter, flat, minlength=self.nnz)
+        else:
+            pos = [self._family_pos[i][subsets[i]] if i in subsets else self._family_pos[i]
+                   for i in range(len(values))]
+            p = np.concatenate([q.ravel() for q in pos])
+            v = np.concatenate([np.ravel(x) for x in values])
+            k = p >= 0
+            data = np.bincount(p[k], v[k], minlength=self.nnz)
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_free, self.n_free))
 
 

@@ -79,7 +79,6 @@ class EquilibriumSystem:
         families = [self.bar_dofs, self.spr_dofs]
         if self.contact_in_pattern:
             families.append(element_dofs(static))
-            self._contact_hess = np.zeros((len(static), 12, 12))
         self.pattern = StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
         self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
         self.spr_kind = self.spr_is_panel.astype(int)
@@ -112,13 +111,13 @@ class EquilibriumSystem:
                     "contact": 0.0,
                     "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2))}
         families = [hb, hs]
+        subsets = None
         extra = None
         n_contacts = 0
         if self.contact is not None:
-            hc_all = self._contact_hess if self.contact_in_pattern else None
-            if hc_all is not None:
-                hc_all[:] = 0.0
-                families.append(hc_all)
+            if self.contact_in_pattern:        # only the active pairs' entries are scattered
+                families.append(np.zeros((0, 12, 12)))
+                subsets = {2: np.zeros(0, dtype=int)}
             conn, d0, index = self.contact.candidates(x)
             if len(conn):
                 ec, gc, hc = contact_kernel(x[conn], d0, self.model.contact.stiffness)
@@ -127,14 +126,14 @@ class EquilibriumSystem:
                 if n_contacts:
                     f += assemble_vector(self.n_dof, element_dofs(conn[active]), gc[active])
                     energies["contact"] = float(ec[active].sum())
-                    if hc_all is not None:
-                        hc_all[index[active]] = hc[active]
+                    if subsets is not None:
+                        families[2], subsets[2] = hc[active], index[active]
                     elif hessian:
                         extra = assemble_matrix(element_dofs(conn[active]), hc[active],
                                                 self.free_index, self.n_free)
         K = None
         if hessian:
-            K = self.pattern.matrix(families + [self.elastic_k])
+            K = self.pattern.matrix(families + [self.elastic_k], subsets)
             if extra is not None:
                 K = K + extra
         return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)
