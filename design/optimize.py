@@ -197,10 +197,8 @@ def _nlopt_codes(nlopt):
             nlopt.MAXTIME_REACHED: ("max_time", "time limit reached")}
 
 
-def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
-    import nlopt
-
-    space, n = run.space, len(run.space)
+def _nlopt_initial_step(space, method, o) -> np.ndarray:
+    """Check the NLopt options of ``method`` and return the normalised initial step."""
     handling = o["constraint_handling"]
     allowed = {"cobyla": ("native", "penalty"), "direct": ("penalty",)}.get(
         method, ("penalty", "auglag"))
@@ -212,59 +210,81 @@ def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
             raise ParameterError(f"{key} = {o[key]!r} must be a non-negative number.")
     span = space.upper - space.lower
     step = np.broadcast_to(np.asarray(space.step / span if o["initial_step"] is None
-                                      else o["initial_step"], float), (n,)).copy()
+                                      else o["initial_step"], float), (len(space),)).copy()
     if not np.all(step > 0):
         raise ParameterError(f"initial_step = {o['initial_step']!r} must be positive "
                              "(normalised units, fraction of each variable's range).")
-    bounds = {f"{v}_{s}" for v in space.names for s in ("lower", "upper")}
-    state = {"exc": None, "ref": None}
-    names = None
-    if handling in ("native", "auglag"):  # constraint names from the start design
-        first = run.evaluate(x0)
-        names = [k for k in first.constraints if k not in bounds] or None
-        names = names if names is not None or first.failed else []
+    return step
 
-    def ev_at(z):
-        return run.evaluate(space.denormalize(np.clip(z, 0.0, 1.0)))
 
-    def gvals(ev):
-        if names is None:  # unknown names: one aggregated constraint
-            g = [v for k, v in ev.constraints.items() if k not in bounds]
-            return [1.0 if ev.failed else max(g, default=-1.0)]
-        return [1.0 if ev.failed else float(ev.constraints.get(k, 0.0)) for k in names]
+def _nlopt_constraint_names(run: EvaluationRun, x0, handling, bounds):
+    """Constraint names passed to NLopt, from the start design (None: one aggregate)."""
+    if handling not in ("native", "auglag"):
+        return None
+    first = run.evaluate(x0)
+    names = [k for k in first.constraints if k not in bounds] or None
+    return names if names is not None or first.failed else []
 
-    def value(ev, penalised):
-        if not ev.failed and math.isfinite(ev.objective) and state["ref"] is None:
-            state["ref"] = ev.objective
-        ref = state["ref"] or 0.0
+
+class _NloptCallbacks:
+    """Objective and constraint callbacks for NLopt that never let an exception escape."""
+
+    def __init__(self, run: EvaluationRun, names, bounds, penalised, o):
+        self.run, self.names, self.bounds, self.penalised = run, names, bounds, penalised
+        self.penalty, self.failure_value = o["penalty"], o["failure_value"]
+        self.exc, self.ref, self.opt = None, None, None
+
+    def _evaluate(self, z) -> Evaluation:
+        """Evaluate the design at normalised ``z`` (clipped to the unit box)."""
+        return self.run.evaluate(self.run.space.denormalize(np.clip(z, 0.0, 1.0)))
+
+    def _value(self, ev) -> float:
+        """Objective for NLopt: penalised if asked, a finite stand-in for a failure."""
+        if not ev.failed and math.isfinite(ev.objective) and self.ref is None:
+            self.ref = ev.objective
+        ref = self.ref or 0.0
         scale = abs(ref) or 1.0
         if ev.failed or not math.isfinite(ev.objective):
-            fv = o["failure_value"]
+            fv = self.failure_value
             return float(fv) if fv is not None else ref + 1e3 * scale
-        if not penalised:
+        if not self.penalised:
             return ev.objective
         viol = sum(max(0.0, g) for g in ev.constraints.values())
-        return ev.objective + o["penalty"] * scale * viol
+        return ev.objective + self.penalty * scale * viol
 
-    def guard(fn, fallback):
-        def wrapped(*args):
-            if state["exc"] is not None:
-                return fallback(*args)
-            try:
-                return fn(*args)
-            except BaseException as exc:  # noqa: BLE001 - nothing may escape into NLopt
-                state["exc"] = exc
-                opt.force_stop()
-                return fallback(*args)
-        return wrapped
+    def _constraint_values(self, ev) -> list:
+        """Constraint values for NLopt (1 for each on a failed evaluation)."""
+        if self.names is None:  # unknown names: one aggregated constraint
+            g = [v for k, v in ev.constraints.items() if k not in self.bounds]
+            return [1.0 if ev.failed else max(g, default=-1.0)]
+        return [1.0 if ev.failed else float(ev.constraints.get(k, 0.0)) for k in self.names]
 
-    big = o["failure_value"] if o["failure_value"] is not None else 1e300
-    fobj = guard(lambda z, grad: value(ev_at(z), handling == "penalty"), lambda z, grad: big)
+    def _guarded(self, fn, fallback):
+        """Call ``fn``; after any exception keep it, stop NLopt and use ``fallback``."""
+        if self.exc is not None:
+            return fallback()
+        try:
+            return fn()
+        except BaseException as exc:  # noqa: BLE001 - nothing may escape into NLopt
+            self.exc = exc
+            self.opt.force_stop()
+            return fallback()
 
-    def fcons(result, z, grad):
-        result[:] = gvals(ev_at(z))
-    fcons = guard(fcons, lambda result, z, grad: result.__setitem__(slice(None), 1.0))
+    def objective(self, z, grad):
+        """NLopt objective ``f(z, grad)``."""
+        big = self.failure_value if self.failure_value is not None else 1e300
+        return self._guarded(lambda: self._value(self._evaluate(z)), lambda: big)
 
+    def constraints(self, result, z, grad):
+        """NLopt vector constraint ``c(result, z, grad)``, ``result <= 0`` when feasible."""
+        def fill():
+            result[:] = self._constraint_values(self._evaluate(z))
+
+        self._guarded(fill, lambda: result.__setitem__(slice(None), 1.0))
+
+
+def _nlopt_optimizers(nlopt, method, n, handling, step, max_evaluations, o):
+    """NLopt optimizer (and AUGLAG's local one) with bounds, tolerances and budgets set."""
     alg = getattr(nlopt, _NLOPT[method])
     opt = nlopt.opt(nlopt.AUGLAG if handling == "auglag" else alg, n)
     local = nlopt.opt(alg, n) if handling == "auglag" else None
@@ -279,35 +299,131 @@ def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
             p.set_initial_step(step)
     if local is not None:
         opt.set_local_optimizer(local)
-    opt.set_min_objective(fobj)
     opt.set_maxeval(int(max_evaluations))
     if o["max_time"] is not None:
         opt.set_maxtime(float(o["max_time"]))
-    m = 1 if names is None else len(names)
-    if handling in ("native", "auglag") and m:
-        opt.add_inequality_mconstraint(fcons, np.zeros(m))
+    return opt, local
+
+
+def _nlopt_status(nlopt, opt, z0):
+    """Run ``opt`` from ``z0``; return NLopt's outcome as ``(status, message)``."""
     codes = _nlopt_codes(nlopt)
     try:
-        opt.optimize(space.normalize(x0))
-        status, msg = codes.get(opt.last_optimize_result(), ("success", "NLopt finished"))
+        opt.optimize(z0)
+        return codes.get(opt.last_optimize_result(), ("success", "NLopt finished"))
     except nlopt.RoundoffLimited:
-        status, msg = "roundoff_limited", "NLopt: roundoff errors limited progress"
+        return "roundoff_limited", "NLopt: roundoff errors limited progress"
     except nlopt.ForcedStop:
-        status, msg = "stopped", "stopped by the callback"
+        return "stopped", "stopped by the callback"
     except ValueError as exc:
-        status, msg = "invalid_args", f"NLopt rejected the arguments: {exc}"
+        return "invalid_args", f"NLopt rejected the arguments: {exc}"
     except MemoryError:
-        status, msg = "out_of_memory", "NLopt ran out of memory"
+        return "out_of_memory", "NLopt ran out of memory"
     except RuntimeError as exc:
-        status, msg = "failure", f"NLopt failure: {exc}"
-    exc = state["exc"]
+        return "failure", f"NLopt failure: {exc}"
+
+
+def _callback_status(exc, status, msg):
+    """Let an exception caught in a callback override NLopt's outcome (or re-raise it)."""
     if isinstance(exc, BudgetExhausted):
-        status, msg = "max_evaluations", "evaluation budget reached"
-    elif isinstance(exc, StopOptimization):
-        status, msg = "stopped", f"stopped by the callback: {exc}"
-    elif exc is not None:
+        return "max_evaluations", "evaluation budget reached"
+    if isinstance(exc, StopOptimization):
+        return "stopped", f"stopped by the callback: {exc}"
+    if exc is not None:
         raise exc
+    return status, msg
+
+
+def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
+    """Run NLopt ``method`` in normalised variables; return ``(None, status, message)``."""
+    import nlopt
+
+    space, n = run.space, len(run.space)
+    handling = o["constraint_handling"]
+    step = _nlopt_initial_step(space, method, o)
+    bounds = {f"{v}_{s}" for v in space.names for s in ("lower", "upper")}
+    names = _nlopt_constraint_names(run, x0, handling, bounds)
+    callbacks = _NloptCallbacks(run, names, bounds, handling == "penalty", o)
+    opt, local = _nlopt_optimizers(nlopt, method, n, handling, step, max_evaluations, o)
+    callbacks.opt = opt
+    opt.set_min_objective(callbacks.objective)
+    m = 1 if names is None else len(names)
+    if handling in ("native", "auglag") and m:
+        opt.add_inequality_mconstraint(callbacks.constraints, np.zeros(m))
+    status, msg = _nlopt_status(nlopt, opt, space.normalize(x0))
+    status, msg = _callback_status(callbacks.exc, status, msg)
     return None, status, f"{_NLOPT[method]}" + (" (AUGLAG)" if local else "") + f": {msg}"
+
+
+def _resolve_method(method) -> str:
+    """Canonical name of an optimisation ``method`` (aliases resolved)."""
+    if not isinstance(method, str) or method.lower() not in METHODS:
+        raise ParameterError(f"Unknown optimisation method {method!r}; use one of "
+                             f"{', '.join(METHODS)}.")
+    return _ALIASES.get(method.lower(), method.lower())
+
+
+def _resolve_options(method, options, max_evaluations):
+    """Check ``options`` and the budget of ``method``; return them with defaults filled in."""
+    defaults = _CD_OPTIONS if method == "cd" else _NLOPT_OPTIONS
+    unknown = sorted(set(options) - set(defaults))
+    if unknown:
+        raise ParameterError(f"Unknown option(s) {unknown} for method {method!r}; options: "
+                             f"{', '.join(defaults)}.")
+    opts = {**defaults, **options}
+    if method != "cd" and opts["constraint_handling"] is None:
+        opts["constraint_handling"] = "native" if method == "cobyla" else "penalty"
+    if max_evaluations is None and method != "cd":
+        max_evaluations = 60
+    if max_evaluations is not None and not (isinstance(max_evaluations, (int, np.integer))
+                                            and max_evaluations >= 1):
+        raise ParameterError(f"max_evaluations = {max_evaluations!r} must be a positive integer.")
+    return opts, max_evaluations
+
+
+def _start_design(problem, x0) -> np.ndarray:
+    """Check that ``problem`` is a design problem; return its validated start design."""
+    if not hasattr(problem, "space") or not hasattr(problem, "evaluate"):
+        raise ParameterError(f"optimize needs a design problem (space, evaluate); got "
+                             f"{type(problem).__name__}.")
+    return problem.space.validate(problem.space.start if x0 is None else x0)
+
+
+def _logged_problem(problem, out) -> LoggedProblem:
+    """``problem`` behind an evaluation log (``out/evaluations.csv`` with ``out``)."""
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+    if isinstance(problem, LoggedProblem):
+        return problem
+    path = None if out is None else os.path.join(out, "evaluations.csv")
+    return LoggedProblem(problem, EvaluationLog(path, problem))
+
+
+def _dispatch(run: EvaluationRun, x0, method, max_evaluations, opts):
+    """Run ``method``; return ``(cycles, status, message)``."""
+    try:
+        if method == "cd":
+            return _coordinate_descent(run, x0, **opts)
+        return _run_nlopt(run, x0, method, max_evaluations, **opts)
+    except StopOptimization as exc:
+        return None, "stopped", f"stopped by the callback: {exc}"
+
+
+def _result(run: EvaluationRun, method, outcome, counts, t0, options) -> OptimizationResult:
+    """Assemble the result from the run's best evaluation and ``(cycles, status, message)``."""
+    cycles, status, message = outcome
+    logged, (c0, r0) = run.logged, counts
+    best = run.best()
+    if best is not None and not best.feasible:
+        message += "; no feasible evaluation (the least-violating design is returned)"
+    return OptimizationResult(
+        method=method, x=dict(best.x) if best else {}, status=status, message=message,
+        objective=best.objective if best else math.inf,
+        constraints=dict(best.constraints) if best else {},
+        feasible=bool(best and best.feasible), n_evaluations=len(run.evaluations),
+        n_computed=logged.n_computed - c0, n_reused=logged.n_reused - r0,
+        wall_time=time.perf_counter() - t0, history=run.history(), best=best,
+        cycles=None if cycles is None else pd.DataFrame(cycles), options=options)
 
 
 def optimize(problem, method: str, x0=None, *, out=None, executor=None,
@@ -350,57 +466,17 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     OptimizationResult
     """
     t0 = time.perf_counter()
-    if not isinstance(method, str) or method.lower() not in METHODS:
-        raise ParameterError(f"Unknown optimisation method {method!r}; use one of "
-                             f"{', '.join(METHODS)}.")
-    method = _ALIASES.get(method.lower(), method.lower())
-    defaults = _CD_OPTIONS if method == "cd" else _NLOPT_OPTIONS
-    unknown = sorted(set(options) - set(defaults))
-    if unknown:
-        raise ParameterError(f"Unknown option(s) {unknown} for method {method!r}; options: "
-                             f"{', '.join(defaults)}.")
-    opts = {**defaults, **options}
-    if method != "cd" and opts["constraint_handling"] is None:
-        opts["constraint_handling"] = "native" if method == "cobyla" else "penalty"
-    if max_evaluations is None and method != "cd":
-        max_evaluations = 60
-    if max_evaluations is not None and not (isinstance(max_evaluations, (int, np.integer))
-                                            and max_evaluations >= 1):
-        raise ParameterError(f"max_evaluations = {max_evaluations!r} must be a positive integer.")
-    if not hasattr(problem, "space") or not hasattr(problem, "evaluate"):
-        raise ParameterError(f"optimize needs a design problem (space, evaluate); got "
-                             f"{type(problem).__name__}.")
-    x0 = problem.space.validate(problem.space.start if x0 is None else x0)
-    if out is not None:
-        os.makedirs(out, exist_ok=True)
-    if isinstance(problem, LoggedProblem):
-        logged = problem
-    else:
-        path = None if out is None else os.path.join(out, "evaluations.csv")
-        logged = LoggedProblem(problem, EvaluationLog(path, problem))
-    c0, r0 = logged.n_computed, logged.n_reused
+    method = _resolve_method(method)
+    opts, max_evaluations = _resolve_options(method, options, max_evaluations)
+    x0 = _start_design(problem, x0)
+    logged = _logged_problem(problem, out)
+    counts = (logged.n_computed, logged.n_reused)
     run = EvaluationRun(logged, max_evaluations, callback, executor)
-    try:
-        if method == "cd":
-            cycles, status, message = _coordinate_descent(run, x0, **opts)
-        else:
-            cycles, status, message = _run_nlopt(run, x0, method, max_evaluations, **opts)
-    except StopOptimization as exc:
-        cycles, status, message = None, "stopped", f"stopped by the callback: {exc}"
-    best = run.best()
-    if best is not None and not best.feasible:
-        message += "; no feasible evaluation (the least-violating design is returned)"
-    result = OptimizationResult(
-        method=method, x=dict(best.x) if best else {}, status=status, message=message,
-        objective=best.objective if best else math.inf,
-        constraints=dict(best.constraints) if best else {},
-        feasible=bool(best and best.feasible), n_evaluations=len(run.evaluations),
-        n_computed=logged.n_computed - c0, n_reused=logged.n_reused - r0,
-        wall_time=time.perf_counter() - t0, history=run.history(), best=best,
-        cycles=None if cycles is None else pd.DataFrame(cycles),
-        options={"max_evaluations": max_evaluations, **opts})
+    outcome = _dispatch(run, x0, method, max_evaluations, opts)
+    result = _result(run, method, outcome, counts, t0,
+                     options={"max_evaluations": max_evaluations, **opts})
     logger.info("%s: %s (%s) after %d evaluations (%d computed, %d reused): objective %.6g",
-                method, status, message, result.n_evaluations, result.n_computed,
+                method, result.status, result.message, result.n_evaluations, result.n_computed,
                 result.n_reused, result.objective)
     if out is not None:
         _write(out, result, logged)
