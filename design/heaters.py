@@ -1,28 +1,34 @@
 """Minimum-power heater allocation: which power on which heater folds the creases as asked.
 
 For a fixed shape the steady temperatures are linear in the heater powers ``p`` [W]: the
-actuation temperature rise of crease ``i`` (the 7-node weighted mean, digest 6.7) is
-``(G p)_i`` and the rise of every crease node is ``H p``, with ``G`` and ``H`` from one
-factorisation of the condensed conductivity (:meth:`ThermalModel.solve` with one column per
-heater). The rest-angle change is ``r_i (G p)_i`` (Timoshenko, linear in the rise), so
+actuation temperature rise of every crease (the 7-node weighted mean, digest 6.7) is ``G p``
+and the rise of every crease node is ``H p``, with ``G`` and ``H`` from one factorisation of
+the condensed conductivity (:meth:`ThermalModel.solve` with one column per heater). The
+rest-angle change is ``r * (G p)`` (Timoshenko, linear in the rise), and near an equilibrium
+the fold angles answer to the rest angles through the sensitivity ``S = d fold / d rest``
+(one Newton solve per actuated crease: creases around a vertex move together). So, about the
+current state (powers ``p_c``, folds ``f_c``), ``fold(p) ~ f_c + A (p - p_c)`` with
+``A = S diag(r) G`` and
 
-    minimise    sum_j n_j p_j                      total power (n_j creases on heater j)
-    subject to  (G p)_i = dT_i      for each target crease i (the rise its target fold needs)
-                T_room + H p <= T_limit            every crease node below the limit
+    minimise    sum_j n_j p_j                       total power (n_j creases on heater j)
+    subject to  |f_c + A (p - p_c) - target| <= band   for the target creases
+                T_room + H p <= T_limit             every crease node below the limit
                 0 <= p_j <= p_max
 
 is a linear programme (solved with cvxpy). With more heaters than targets (or heaters on
-creases without a target) it chooses how to share the work; heat conducted between
-neighbouring creases is used, not fought.
+creases without a target, or a tolerance band) it chooses how to share the work; heat
+conducted between neighbouring creases is used, not fought.
 
-Folding changes the heat loss (and gravity or contact keep the fold from following the rest
-angle exactly), so :func:`allocate_heaters` iterates: solve the LP at the current shape,
-simulate heating with those powers, measure how far the fold lags the rest-angle change,
-rebuild ``G`` and ``H`` at the folded shape, and repeat until every target is met within
-``fold_tol``. Where the limits make the LP infeasible at the current shape (the flat shape
-loses more heat than the folded one), the round takes the largest reachable fraction of the
-required rises instead; the allocation is declared infeasible only when that fraction stops
-growing. Each round is logged and kept in the result's history.
+Folding changes the heat loss, which the linear model does not see, so
+:func:`allocate_heaters` iterates: solve the LP, simulate heating with those powers from the
+start state, rebuild ``G``, ``H`` and ``S`` at the folded shape, and repeat until every
+target is met within ``fold_tol``. The targets are approached in stages, and each LP keeps
+the powers within a trust region that grows while the linear model predicts the simulated
+folds well and shrinks when it does not (the heat-loss feedback makes full steps overshoot).
+Where the targets cannot be met, the LP finds the allocation closest to them (least total
+excess over the band); the allocation is declared infeasible when that excess stays above
+``fold_tol`` while the model predicts well. Each round is logged and kept in the result's
+history.
 """
 
 from __future__ import annotations
@@ -39,13 +45,14 @@ from simulator.bimorph import crease_temperature_weights
 from simulator.errors import ParameterError
 from simulator.geometry import fold_angles
 from simulator.heating import Heat, thermal_model
-from simulator.loading import SimulationState, initial_state, simulate
+from simulator.loading import SimulationState, equilibrium_system, initial_state, simulate
 from simulator.model import Model
-from simulator.solvers import NewtonOptions
+from simulator.properties import spring_rest_angles
+from simulator.solvers import NewtonOptions, newton
 
 from .problem import SU8_TG
 
-__all__ = ["HeaterAllocation", "influence_matrices", "allocate_heaters"]
+__all__ = ["HeaterAllocation", "influence_matrices", "fold_sensitivity", "allocate_heaters"]
 
 logger = logging.getLogger(__name__)
 
@@ -148,89 +155,151 @@ class HeaterAllocation:
         return pd.DataFrame(rows)
 
 
-def _solve_lp(G_t, d_rise, H, rise_limit, weights, p_max):
-    """The allocation LP at one shape.
+def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
+    """The allocation LP about the current state, within a trust region.
 
-    Returns ``(p, reach, status)``: ``reach`` (<= 1) is the largest fraction of the required
-    rises ``d_rise`` that the limits allow; ``p`` is the least-power allocation reaching that
-    fraction (None if the LP could not be solved).
+    Asked: fold change ``A (p - p_cur)`` equal to ``step`` within ``band``, every power within
+    ``radius`` of ``p_cur``. First the least total excess ``sum s`` over the band is found
+    (0 if the step can be met), then the least power with that excess. Returns
+    ``(p, excess [rad], status)``, ``p`` None if an LP was not solved.
     """
     import cvxpy as cp
 
-    p, lam = cp.Variable(G_t.shape[1], nonneg=True), cp.Variable()
-    limits = [H @ p <= rise_limit] + ([p <= p_max] if p_max is not None else [])
+    solver = "SCIPY" if "SCIPY" in cp.installed_solvers() else None   # HiGHS via scipy, quiet
+    p, s = cp.Variable(A.shape[1], nonneg=True), cp.Variable(A.shape[0], nonneg=True)
+    change = A @ p - A @ p_cur - step
+    cons = [change <= band + s, change >= -band - s, H @ p <= rise_limit] + (
+        [p <= p_max] if p_max is not None else [])
     try:
-        reach_lp = cp.Problem(cp.Maximize(lam), [G_t @ p == lam * d_rise, lam <= 1] + limits)
-        reach_lp.solve()
-        if reach_lp.status not in ("optimal", "optimal_inaccurate"):
-            return None, math.nan, reach_lp.status
-        reach = min(1.0, float(lam.value))
+        region = [cp.abs(p - p_cur) <= radius]
+        fit = cp.Problem(cp.Minimize(cp.sum(s)), cons + region)
+        fit.solve(solver=solver)
+        if fit.status == "infeasible":   # p_cur too hot for the limit: leave the region
+            fit = cp.Problem(cp.Minimize(cp.sum(s)), cons)
+            fit.solve(solver=solver)
+        else:
+            cons += region
+        if fit.status not in ("optimal", "optimal_inaccurate"):
+            return None, math.nan, fit.status
+        excess = float(np.sum(s.value))
         power_lp = cp.Problem(cp.Minimize(weights @ p),
-                              [G_t @ p == (reach - 1e-9) * d_rise] + limits)
-        power_lp.solve()
+                              cons + [cp.sum(s) <= excess + 1e-9 + 1e-6 * excess])
+        power_lp.solve(solver=solver)
     except cp.error.SolverError as exc:
         return None, math.nan, f"solver error: {exc}"
     if power_lp.status not in ("optimal", "optimal_inaccurate") or p.value is None:
-        return None, reach, power_lp.status
-    return np.maximum(np.asarray(p.value, float), 0.0), reach, power_lp.status
+        return None, excess, power_lp.status
+    return np.maximum(np.asarray(p.value, float), 0.0), excess, power_lp.status
+
+
+def fold_sensitivity(model: Model, state: SimulationState, creases=None,
+                     delta: float = 1e-4) -> np.ndarray:
+    """``S[i, j] = d fold_i / d rest_j`` [rad/rad] at the equilibrium ``state``.
+
+    Rows: every crease row; columns: the crease rows ``creases`` (default all). One Newton
+    solve per column from ``state`` with crease ``j``'s rest angle moved by ``delta`` [rad].
+    """
+    mesh = model.mesh
+    cols = np.arange(mesh.n_creases) if creases is None else np.asarray(creases, int)
+    system = equilibrium_system(model)
+    f = state.applied_load.ravel()
+
+    def folds(rest):
+        res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
+        if not res.converged:
+            raise ParameterError(f"fold_sensitivity: equilibrium not found ({res.message})")
+        return fold_angles(mesh, mesh.nodes + res.u)
+
+    base = folds(state.crease_rest)
+    S = np.empty((mesh.n_creases, len(cols)))
+    for k, j in enumerate(cols):
+        rest = state.crease_rest.copy()
+        rest[j] += delta
+        S[:, k] = (folds(rest) - base) / delta
+    return S
 
 
 class _Rounds:
-    """One LP at the current shape, then one heating simulation with its powers."""
+    """One LP about the current state, then one heating simulation with its powers."""
 
-    def __init__(self, model, state, table, rows, fold0, limit, max_power, increments, options,
-                 out, relaxation):
-        self.relaxation = relaxation
-        self.model, self.state, self.table, self.rows, self.fold0 = model, state, table, rows, fold0
+    def __init__(self, model, state, table, rows, limit, max_power, increments, options,
+                 out, band):
+        self.band = band
+        self.model, self.state, self.table, self.rows = model, state, table, rows
         self.limit, self.max_power, self.increments, self.options = (limit, max_power,
                                                                      increments, options)
         mesh = model.mesh
-        self.rot = model.actuators.rotation_per_kelvin(mesh)[rows]
+        rot = model.actuators.rotation_per_kelvin(mesh)
+        self.act = np.flatnonzero(rot)                   # actuated crease rows
+        self.rot_act = rot[self.act]
         self.rise_limit = limit - state.temperature[mesh.crease_nodes].ravel()
+        if np.any(self.rise_limit <= 0):
+            raise ParameterError(f"temperature_limit = {limit!r} degC is not above the start "
+                                 "state's crease temperatures.")
         self.weights = np.array([len(c) for c in table.values()], float)
-        self.offset = np.zeros(len(rows))   # fold change minus rest-angle change (gravity...)
-        self.x, self.out = mesh.nodes + state.u, out
+        self.out, self.p_cur = out, np.zeros(len(table))
+        self._linearise(state)
+        # first trust radius: the power that takes each heater's hottest node a tenth of the
+        # way to the limit
+        self.radius = 0.1 * self.rise_limit.max() / np.maximum(self.H.max(axis=0), 1e-300)
+
+    def _linearise(self, state):
+        """``A``, ``H`` and the folds at ``state`` (heated with ``p_cur``)."""
+        mesh = self.model.mesh
+        G, self.H = influence_matrices(self.model, mesh.nodes + state.u, self.table)
+        S = fold_sensitivity(self.model, state, self.act)[self.rows]
+        self.A = S @ (self.rot_act[:, None] * G[self.act])
+        folds = fold_angles(mesh, mesh.nodes + state.u)[self.rows]
+        if hasattr(self, "folds"):       # continuous through +-pi (atan2 wraps)
+            folds = self.folds + (folds - self.folds + np.pi) % (2 * np.pi) - np.pi
+        self.folds = folds
 
     def round(self, goal, tol):
-        """Returns (goal met, reachable fraction, shortfall per target [rad])."""
-        t0, out, mesh, rows = time.perf_counter(), self.out, self.model.mesh, self.rows
-        G, H = influence_matrices(self.model, self.x, self.table)
-        d_rise = np.maximum((goal - self.fold0 - self.offset) / self.rot, 0.0)
-        p, reach, lp_status = _solve_lp(G[rows], d_rise, H, self.rise_limit, self.weights,
-                                        self.max_power)
+        """Returns (goal met, excess over the band that the LP could not remove [rad])."""
+        t0, out, mesh, A = time.perf_counter(), self.out, self.model.mesh, self.A
+        p, excess, lp_status = _solve_lp(A, goal - self.folds, self.band, self.H,
+                                         self.rise_limit, self.weights, self.p_cur,
+                                         self.radius, self.max_power)
         out.rounds += 1
         if p is None:
             out.status, out.message = "failed", f"round {out.rounds}: LP not solved ({lp_status})"
             logger.warning(out.message)
-            return False, reach, None
-        if out.rounds > 1:       # under-relaxed: the heat-loss feedback makes plain updates swing
-            p = (1 - self.relaxation) * out.power + self.relaxation * p
-        out.power = p
+            return False, excess
+        planned = self.folds + A @ (p - self.p_cur)      # what the linear model expects
         res = simulate(self.model, [Heat({c: pj for pj, c in zip(p, self.table.values())},
                                          increments=self.increments)],
                        state=self.state, options=self.options)
-        if not res.converged:
-            out.status = "failed"
-            out.message = f"round {out.rounds}: heating failed: {res.message}"
-            logger.warning(out.message)
-            return False, reach, None
-        out.state, self.x = res.state, mesh.nodes + res.state.u
-        reached = fold_angles(mesh, self.x)[rows]
-        self.offset = (reached - self.fold0) - (res.state.crease_rest
-                                                - self.state.crease_rest)[rows]
+        if not res.converged:                            # too far: shrink the region, retry
+            self.radius = self.radius / 4
+            logger.info("heater allocation round %d: heating failed (%s); trust radius cut",
+                        out.rounds, res.message)
+            return False, excess
+        previous = self.folds
+        out.power = self.p_cur = p
+        out.state = res.state
+        try:
+            self._linearise(res.state)
+        except ParameterError as exc:
+            out.status, out.message = "failed", f"round {out.rounds}: {exc}"
+            return False, excess
+        reached = self.folds
+        # trust region: grow when the linear model predicted the move well, shrink if not
+        moved, miss = np.abs(planned - previous).max(), np.abs(reached - planned).max()
+        self.radius = self.radius * (2.0 if miss <= 0.25 * moved + tol else
+                                     0.5 if miss > 0.75 * moved else 1.0)
         out.achieved = dict(zip(out.targets, map(float, reached)))
         out.max_temperature = float(res.state.temperature[mesh.crease_nodes].max())
-        short = (goal - reached) * np.sign(goal - self.fold0)     # > 0: not folded far enough
+        error = np.maximum(np.abs(reached - goal) - self.band, 0.0)
         out.history.append({"round": out.rounds, "total_power [mW]": 1e3 * out.total_power,
-                            "reach": reach, "worst_fold_error [deg]": math.degrees(np.abs(short).max()),
+                            "worst_fold_error [deg]": math.degrees(error.max()),
+                            "model_miss [deg]": math.degrees(miss),
                             "max_crease_temperature [degC]": out.max_temperature,
                             "wall_time [s]": time.perf_counter() - t0})
-        logger.info("heater allocation round %d: %.4g mW, reach %.3f, worst fold error %.3g deg, "
-                    "%.4g degC", out.rounds, 1e3 * out.total_power, reach,
-                    math.degrees(np.abs(short).max()), out.max_temperature)
-        met = (reach >= 1 - 1e-9 and np.abs(short).max() <= tol
-               and out.max_temperature <= self.limit + 1e-6)
-        return met, reach, short
+        logger.info("heater allocation round %d: %.4g mW, fold error %.3g deg beyond the band, "
+                    "model miss %.3g deg, %.4g degC", out.rounds, 1e3 * out.total_power,
+                    math.degrees(error.max()), math.degrees(miss), out.max_temperature)
+        met = (error.max() <= tol and miss <= tol and out.max_temperature <= self.limit + 1e-6)
+        return met, excess
 
 
 def _check_targets(model, targets, rot):
@@ -252,7 +321,7 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
                      state: SimulationState | None = None,
                      temperature_limit: float = 1.2 * SU8_TG, max_power: float | None = None,
                      fold_tol: float = math.radians(0.5), max_rounds: int = 20, stages: int = 3,
-                     relaxation: float = 0.5,
+                     band: float = 0.0,
                      increments: int = 50, options: NewtonOptions = NewtonOptions()
                      ) -> HeaterAllocation:
     """Least total power that folds every target crease to its target angle.
@@ -275,15 +344,15 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
         Upper bound per heater [W].
     fold_tol : float
         Accepted fold error [rad] (default 0.5 deg).
+    band : float
+        Freedom given to every target [rad]: a fold anywhere within ``band`` of its target is
+        acceptable, and the LP uses it to save power (default 0: exact targets).
     max_rounds : int
         LP + simulation rounds before giving up (status "max_rounds").
     stages : int
         The targets are approached in this many equal fractions, each shape predicting the
         heat loss of the next (from the flat shape alone the powers overshoot badly); one
         round per intermediate stage, then rounds until the targets are met.
-    relaxation : float
-        Each round moves the powers this fraction of the way to the new LP solution (1: no
-        relaxation); 0.5 damps the swing from the heat-loss feedback.
     increments : int
         Heating increments of each simulation.
     options : NewtonOptions
@@ -294,16 +363,8 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
         ``status`` is "converged", "infeasible" (the LP has no solution: limit or direction),
         "failed" (a simulation did not converge) or "max_rounds"; never raises for these.
     """
-    if not (isinstance(max_rounds, int) and max_rounds >= 1):
-        raise ParameterError(f"max_rounds = {max_rounds!r} must be a positive integer.")
-    if not (0 < relaxation <= 1):
-        raise ParameterError(f"relaxation = {relaxation!r} must be in (0, 1].")
-    if not (isinstance(stages, int) and stages >= 1):
-        raise ParameterError(f"stages = {stages!r} must be a positive integer.")
-    if not (math.isfinite(fold_tol) and fold_tol > 0):
-        raise ParameterError(f"fold_tol = {fold_tol!r} must be a positive angle in rad.")
-    if max_power is not None and not (math.isfinite(max_power) and max_power > 0):
-        raise ParameterError(f"max_power = {max_power!r} must be a positive power in W.")
+    _check_settings(max_rounds=max_rounds, stages=stages, band=band, fold_tol=fold_tol,
+                    max_power=max_power)
     table = _heater_table(model, heaters)
     state = initial_state(model) if state is None else state
     mesh = model.mesh
@@ -319,35 +380,59 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
                              "cannot do that.")
     out = HeaterAllocation(table, np.zeros(len(table)), "max_rounds", "", 0, dict(targets),
                            temperature_limit=float(temperature_limit))
-    run = _Rounds(model, state, table, rows, fold0, temperature_limit, max_power, increments,
-                  options, out, relaxation)
+    run = _Rounds(model, state, table, rows, temperature_limit, max_power, increments,
+                  options, out, band)
+    return _run_stages(run, fold0, target, stages, max_rounds, fold_tol)
+
+
+def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> HeaterAllocation:
+    """Approach the targets in ``stages`` fractions; rounds until met at the last one."""
+    out, band = run.out, run.band
+    limits = f"{out.temperature_limit:.4g} degC" + (f", {1e3 * run.max_power:.4g} mW per heater"
+                                                    if run.max_power else "")
+    stuck = 0
     for k in range(1, stages + 1):
         goal = fold0 + (k / stages) * (target - fold0)
-        last_reach = -1.0
         while out.rounds < max_rounds:
-            done, reach, short = run.round(goal, fold_tol)
+            done, excess = run.round(goal, fold_tol)
             if out.status == "failed":
                 return out
-            if done or k < stages:       # one round per intermediate stage: a shape for G
+            if done or (k < stages and out.achieved):   # one round per intermediate stage
                 break
-            if reach < 1 - 1e-9 and reach <= last_reach + 1e-3:
+            # the LP cannot remove the excess although its region is not the limit
+            stuck = stuck + 1 if excess > fold_tol and out.history and \
+                out.history[-1]["model_miss [deg]"] <= math.degrees(fold_tol) else 0
+            if stuck >= 2:
                 out.status = "infeasible"
-                out.message = (f"round {out.rounds}: the limits ({temperature_limit:.4g} degC" +
-                               (f", {1e3 * max_power:.4g} mW per heater" if max_power else "") +
-                               f") allow only {100 * reach:.1f}% of the temperature rise needed "
-                               f"for {100 * k / stages:.0f}% of the target folds")
+                out.message = (f"round {out.rounds}: the heaters ({len(out.heaters)} circuits) "
+                               f"and limits ({limits}) leave the folds "
+                               f"{math.degrees(excess):.3g} deg (sum over targets) from "
+                               f"{100 * k / stages:.0f}% of the targets")
                 logger.warning(out.message)
                 return out
-            last_reach = reach
         else:
             break
     else:
         out.status = "converged"
-        out.message = (f"targets met within {math.degrees(fold_tol):.3g} deg in {out.rounds} "
-                       f"rounds: {1e3 * out.total_power:.4g} mW")
+        out.message = (f"targets met within {math.degrees(band + fold_tol):.3g} deg in "
+                       f"{out.rounds} rounds: {1e3 * out.total_power:.4g} mW")
         return out
-    out.message = (f"targets not met within {math.degrees(fold_tol):.3g} deg after "
-                   f"{max_rounds} rounds (worst fold error "
-                   f"{out.history[-1]['worst_fold_error [deg]']:.3g} deg)")
+    out.message = (f"targets not met within {math.degrees(band + fold_tol):.3g} deg after "
+                   f"{max_rounds} rounds" + (f" (worst fold error "
+                                             f"{out.history[-1]['worst_fold_error [deg]']:.3g} "
+                                             "deg)" if out.history else ""))
     logger.warning(out.message)
     return out
+
+
+def _check_settings(*, max_rounds, stages, band, fold_tol, max_power):
+    for name, v in (("max_rounds", max_rounds), ("stages", stages)):
+        if not (isinstance(v, int) and v >= 1):
+            raise ParameterError(f"{name} = {v!r} must be a positive integer.")
+    for name, v in (("band", band), ("fold_tol", fold_tol)):
+        if not (math.isfinite(v) and v >= (0 if name == "band" else np.finfo(float).tiny)):
+            raise ParameterError(f"{name} = {v!r} must be a "
+                                 f"{'non-negative' if name == 'band' else 'positive'} angle "
+                                 "in rad.")
+    if max_power is not None and not (math.isfinite(max_power) and max_power > 0):
+        raise ParameterError(f"max_power = {max_power!r} must be a positive power in W.")
