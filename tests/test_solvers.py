@@ -210,3 +210,42 @@ def test_reference_loop_applies_one_update_past_its_tolerance(free_hinge, caplog
                        NewtonOptions(atol=atol, max_iter=2, reference_loop=True))
     assert short.converged and short.iterations == 1 and short.residual_norms[-1] > atol
     assert "accepted unconverged" in short.message and "accepted unconverged" in caplog.text
+
+
+class _StallingSystem:
+    """f_int(u) = u + a residual floor of alternating sign (like a contact kink): Newton
+    cannot push the residual below ``floor``."""
+
+    def __init__(self, floor):
+        import types
+        import scipy.sparse as sp
+
+        self.floor, self.calls = floor, 0
+        self.free = np.arange(6)
+        self.max_step = None
+        self.model = types.SimpleNamespace(mesh=types.SimpleNamespace(nodes=np.eye(2, 3)))
+        self._K = sp.identity(6, format="csr")
+
+    def evaluate(self, u, spring_rest, hessian=True):
+        from simulator.equilibrium import Evaluation
+
+        self.calls += 1
+        f = u.ravel() + self.floor * (-1) ** self.calls
+        return Evaluation(f_int=f, K=self._K, energies={})
+
+
+@pytest.mark.parametrize("load, stall_rtol, converged", [
+    (1e-8, 1e-3, True),      # floor 1e-12 N <= 1e-3 of a 2.4e-8 N load: accepted, said
+    (1e-8, 0.0, False),      # rescue disabled
+    (0.0, 1e-3, False),      # no external load: no scale, no rescue
+])
+def test_a_stalled_residual_is_accepted_only_below_a_fraction_of_the_load(load, stall_rtol,
+                                                                         converged):
+    system = _StallingSystem(floor=1e-12)
+    res = newton(system, np.zeros((2, 3)), np.full(6, load), np.zeros(0),
+                 NewtonOptions(max_iter=8, stall_rtol=stall_rtol))
+    assert res.converged is converged
+    if converged:
+        assert "stalled" in res.message and res.residual_norms.min() <= 1e-3 * load * 6**0.5
+    else:
+        assert "no convergence" in res.message
