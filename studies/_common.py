@@ -176,10 +176,11 @@ def time_limit(seconds: float):
 @dataclass(frozen=True)
 class TimeLimited:
     """Mixin for frozen dataclass problems: each evaluation stops (and fails) after
-    ``time_limit`` [s]. A safety net for long studies; the solvers end every path on their own
-    (step-cut budgets), so it should not trigger."""
+    ``time_limit`` [s] (None: no limit). An opt-in safety net for long studies: the solvers
+    end every path on their own (step-cut budgets), and a limit makes results depend on the
+    machine's speed."""
 
-    time_limit: float = 30.0
+    time_limit: float | None = None
 
     def _evaluate(self, values):
         with time_limit(self.time_limit):

@@ -12,8 +12,8 @@ design optimised for the worst case over residual folds look like?
 Method
 ------
 * Problem: :class:`studies.gripper_optimization.TimeLimitedGripperProblem` (the paper's
-  gripper problem, bisect power search, temperature limit 1.2 T_g = 252 degC, evaluations
-  stopped after 30 s count as failed).
+  gripper problem, bisect power search, temperature limit 1.2 T_g = 252 degC; no time limit
+  unless ``gripper_optimization.TIME_LIMIT`` is set).
 * Designs:
 
   - ``start``: the paper's start design (W 200, La 700, L1 1000, L2 1000 um);
@@ -29,9 +29,9 @@ Method
     best method of the study ``gripper_optimization`` (lowest power, tied with COBYLA, with
     fewer evaluations). The paper's coordinate descent cannot be used from the start here:
     it only accepts feasible moves, and the start design and all its neighbours exceed the
-    temperature limit at -20 deg (281 degC at the start). COBYLA, tried as well, ended at
-    W 300, La 1008, L1 555, L2 500 um with a worst case of 14.2 mW after 60 evaluations (5
-    of them stopped by the time limit around La 1000 um, L1 550-600 um).
+    temperature limit at -20 deg (281 degC at the start). COBYLA, tried as well in an
+    earlier version (with a 30 s time limit per evaluation), ended at W 300, La 1008,
+    L1 555, L2 500 um with a worst case of 14.2 mW after 60 evaluations.
 
 * Sweep: :func:`~design.robustness.sweep_residual_fold` of the three designs at residual
   folds -20, -15, ..., +10 deg (the same value on all four actuated creases), on a
