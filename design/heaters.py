@@ -52,7 +52,8 @@ from simulator.solvers import NewtonOptions, newton
 
 from .problem import SU8_TG
 
-__all__ = ["HeaterAllocation", "influence_matrices", "fold_sensitivity", "allocate_heaters"]
+__all__ = ["HeaterAllocation", "influence_matrices", "fold_sensitivity", "linear_allocation",
+           "allocate_heaters"]
 
 logger = logging.getLogger(__name__)
 
@@ -171,7 +172,7 @@ def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
     cons = [change <= band + s, change >= -band - s, H @ p <= rise_limit] + (
         [p <= p_max] if p_max is not None else [])
     try:
-        region = [cp.abs(p - p_cur) <= radius]
+        region = [cp.abs(p - p_cur) <= radius] if np.all(np.isfinite(radius)) else []
         fit = cp.Problem(cp.Minimize(cp.sum(s)), cons + region)
         fit.solve(solver=solver)
         if fit.status == "infeasible":   # p_cur too hot for the limit: leave the region
@@ -185,7 +186,7 @@ def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
         power_lp = cp.Problem(cp.Minimize(weights @ p),
                               cons + [cp.sum(s) <= excess + 1e-9 + 1e-6 * excess])
         power_lp.solve(solver=solver)
-    except cp.error.SolverError as exc:
+    except (cp.error.SolverError, ValueError) as exc:
         return None, math.nan, f"solver error: {exc}"
     if power_lp.status not in ("optimal", "optimal_inaccurate") or p.value is None:
         return None, excess, power_lp.status
@@ -315,6 +316,35 @@ def _check_targets(model, targets, rot):
     if not rows:
         raise ParameterError("targets is empty; give {crease id: fold angle [rad]}.")
     return np.array(list(rows.values()))
+
+
+def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None = None,
+                      state: SimulationState | None = None,
+                      temperature_limit: float = 1.2 * SU8_TG, band: float = 0.0
+                      ) -> np.ndarray:
+    """Powers [W] per heater from one LP at ``state`` (default flat), without simulating.
+
+    The design one would make ignoring that folding changes the heat loss and the
+    mechanics: the baseline that :func:`allocate_heaters` improves on. Raises
+    :class:`ParameterError` if the LP has no solution.
+    """
+    table = _heater_table(model, heaters)
+    state = initial_state(model) if state is None else state
+    mesh = model.mesh
+    rot = model.actuators.rotation_per_kelvin(mesh)
+    rows = _check_targets(model, targets, rot)
+    act = np.flatnonzero(rot)
+    G, H = influence_matrices(model, mesh.nodes + state.u, table)
+    A = fold_sensitivity(model, state, act)[rows] @ (rot[act, None] * G[act])
+    step = np.array([float(v) for v in dict(targets).values()]) - \
+        fold_angles(mesh, mesh.nodes + state.u)[rows]
+    p, _, status = _solve_lp(A, step, band, H,
+                             temperature_limit - state.temperature[mesh.crease_nodes].ravel(),
+                             np.array([len(c) for c in table.values()], float),
+                             np.zeros(len(table)), np.inf, None)
+    if p is None:
+        raise ParameterError(f"linear_allocation: LP not solved ({status}).")
+    return p
 
 
 def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None = None,
