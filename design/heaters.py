@@ -220,6 +220,22 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     return S
 
 
+def _weights(table) -> np.ndarray:
+    """Creases per heater: the weight of its power in the total."""
+    return np.array([len(c) for c in table.values()], float)
+
+
+def _linear_model(model, state, table, rows) -> tuple:
+    """``(A, H, folds)`` at ``state``: fold change of the target rows per heater watt
+    (``S diag(r) G``), crease-node temperature rise per watt, current target folds."""
+    mesh = model.mesh
+    rot = model.actuators.rotation_per_kelvin(mesh)
+    act = np.flatnonzero(rot)                            # actuated crease rows
+    G, H = influence_matrices(model, mesh.nodes + state.u, table)
+    A = fold_sensitivity(model, state, act)[rows] @ (rot[act, None] * G[act])
+    return A, H, fold_angles(mesh, mesh.nodes + state.u)[rows]
+
+
 class _Rounds:
     """One LP about the current state, then one heating simulation with its powers."""
 
@@ -229,30 +245,23 @@ class _Rounds:
         self.model, self.state, self.table, self.rows = model, state, table, rows
         self.limit, self.max_power, self.increments, self.options = (limit, max_power,
                                                                      increments, options)
-        mesh = model.mesh
-        rot = model.actuators.rotation_per_kelvin(mesh)
-        self.act = np.flatnonzero(rot)                   # actuated crease rows
-        self.rot_act = rot[self.act]
-        self.rise_limit = limit - state.temperature[mesh.crease_nodes].ravel()
+        self.rise_limit = limit - state.temperature[model.mesh.crease_nodes].ravel()
         if np.any(self.rise_limit <= 0):
             raise ParameterError(f"temperature_limit = {limit!r} degC is not above the start "
                                  "state's crease temperatures.")
-        self.weights = np.array([len(c) for c in table.values()], float)
+        self.weights = _weights(table)
         self.out, self.p_cur = out, np.zeros(len(table))
         self._linearise(state)
         # first trust radius: the power that takes each heater's hottest node a tenth of the
         # way to the limit
         self.radius = 0.1 * self.rise_limit.max() / np.maximum(self.H.max(axis=0), 1e-300)
 
-    def _linearise(self, state):
-        """``A``, ``H`` and the folds at ``state`` (heated with ``p_cur``)."""
-        mesh = self.model.mesh
-        G, self.H = influence_matrices(self.model, mesh.nodes + state.u, self.table)
-        S = fold_sensitivity(self.model, state, self.act)[self.rows]
-        self.A = S @ (self.rot_act[:, None] * G[self.act])
-        folds = fold_angles(mesh, mesh.nodes + state.u)[self.rows]
-        if hasattr(self, "folds"):       # continuous through +-pi (atan2 wraps)
-            folds = self.folds + (folds - self.folds + np.pi) % (2 * np.pi) - np.pi
+    def _linearise(self, state, previous=None):
+        """``A``, ``H`` and the folds at ``state`` (heated with ``p_cur``); the folds are kept
+        continuous with ``previous`` through +-pi (atan2 wraps)."""
+        self.A, self.H, folds = _linear_model(self.model, state, self.table, self.rows)
+        if previous is not None:
+            folds = previous + (folds - previous + np.pi) % (2 * np.pi) - np.pi
         self.folds = folds
 
     def round(self, goal, tol):
@@ -279,7 +288,7 @@ class _Rounds:
         out.power = self.p_cur = p
         out.state = res.state
         try:
-            self._linearise(res.state)
+            self._linearise(res.state, previous)
         except ParameterError as exc:
             out.status, out.message = "failed", f"round {out.rounds}: {exc}"
             return False, excess
@@ -330,18 +339,13 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
     """
     table = _heater_table(model, heaters)
     state = initial_state(model) if state is None else state
-    mesh = model.mesh
-    rot = model.actuators.rotation_per_kelvin(mesh)
-    rows = _check_targets(model, targets, rot)
-    act = np.flatnonzero(rot)
-    G, H = influence_matrices(model, mesh.nodes + state.u, table)
-    A = fold_sensitivity(model, state, act)[rows] @ (rot[act, None] * G[act])
-    step = np.array([float(v) for v in dict(targets).values()]) - \
-        fold_angles(mesh, mesh.nodes + state.u)[rows]
+    rows = _check_targets(model, targets, model.actuators.rotation_per_kelvin(model.mesh))
+    A, H, folds = _linear_model(model, state, table, rows)
+    step = np.array([float(v) for v in dict(targets).values()]) - folds
     p, _, status = _solve_lp(A, step, band, H,
-                             temperature_limit - state.temperature[mesh.crease_nodes].ravel(),
-                             np.array([len(c) for c in table.values()], float),
-                             np.zeros(len(table)), np.inf, None)
+                             temperature_limit
+                             - state.temperature[model.mesh.crease_nodes].ravel(),
+                             _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
         raise ParameterError(f"linear_allocation: LP not solved ({status}).")
     return p
