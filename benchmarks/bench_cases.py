@@ -33,7 +33,7 @@ def main():
         heat = res.steps[-1]
         print(f"{name:<14}{str(kw):<58}{heat.increments:>11}{heat.iterations:>11}{wall:>10.2f}"
               f"{1e3 * heat.wall_time / max(heat.increments, 1):>20.2f}   {paper}"
-              + ("" if res.converged else f"   [{res.status}: {res.message}]"))
+              + ("" if res.success else f"   [{res.status}: {res.message}]"))
 
 
 if __name__ == "__main__":

@@ -16,11 +16,12 @@ import time
 import numpy as np
 
 from simulator.demo import single_fold_model
-from simulator.loading import SelfFold, equilibrium_system, simulate
+from simulator import SelfFold, simulate
+from simulator.state import equilibrium_system
 from simulator.model import ContactParameters, Supports, make_model
-from simulator.patterns import gripper_pattern, miura_sheet_pattern
+from simulator.example_patterns import gripper_pattern, miura_sheet_pattern
 from simulator.properties import BarHingeParameters
-from simulator.solvers import _solve_linear
+from simulator.newton import _solve_linear
 
 
 def _time_iteration(model, u, rest, repeat):
@@ -63,7 +64,7 @@ def _miura(cells):
     rng = np.random.default_rng(0)
     u = rng.normal(size=(model.mesh.n_nodes, 3)) * 1e-9
     u[panel0] = 0
-    from simulator.loading import initial_state
+    from simulator import initial_state
     return model, u, initial_state(model).spring_rest
 
 

@@ -132,7 +132,7 @@ def _run(args) -> int:
           f"results in {out}")
     print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
                 "temperature_max [degC]"]].to_string(index=False))
-    return 0 if result.converged else 1
+    return 0 if result.success else 1
 
 
 def _parser() -> argparse.ArgumentParser:

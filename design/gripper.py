@@ -23,15 +23,15 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from simulator.bimorph import Actuators, Bimorph
-from simulator.heating import Heat
-from simulator.loading import Load, SelfFold, simulate
+from simulator.simulation import simulate
+from simulator.steps import Heat, Load, SelfFold
 from simulator.materials import SPR
 from simulator.mesh import build_mesh
 from simulator.model import ContactParameters, Supports, make_model
 from simulator.errors import ParameterError
-from simulator.patterns import gripper_pattern
+from simulator.example_patterns import gripper_pattern
 from simulator.properties import BarHingeParameters
-from simulator.solvers import NewtonOptions
+from simulator.newton import NewtonOptions
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
 from .power_search import bisect_search, staircase_search
@@ -283,13 +283,13 @@ class _Stage:
                        options=self.options)
         self.simulations += 1
         self.increments += res.steps[-1].increments
-        if self.callback is not None and res.converged:
+        if self.callback is not None and res.success:
             value, met, temp, tmax = self.look(res.state)
             self.callback({"stage": self.name, "power_per_crease [W]": float(
                 res.state.crease_power[self.model.mesh.crease_row[self.creases[0]]]),
                 "measure": value, "met": met, "temperature [degC]": temp,
                 "max_crease_temperature [degC]": tmax})
-        return res.state, res.converged, res.message
+        return res.state, res.success, res.message
 
     def look(self, state):
         x = self.model.mesh.nodes + state.u
@@ -342,7 +342,7 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     state = start.state
     for name in ("assembly", "grip"):
         stage = _Stage(model, name, callback, options)
-        if not start.converged:
+        if not start.success:
             results[name] = stage.result(False, 0.0, state, f"pre-loading failed: {start.message}")
             continue
         if name == "grip" and not results["assembly"].met:

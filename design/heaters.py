@@ -44,11 +44,12 @@ import numpy as np
 from simulator.bimorph import crease_temperature_weights
 from simulator.errors import ParameterError
 from simulator.geometry import fold_angles
-from simulator.heating import Heat, thermal_model
-from simulator.loading import SimulationState, equilibrium_system, initial_state, simulate
+from simulator.simulation import simulate
+from simulator.state import SimulationState, equilibrium_system, initial_state, thermal_model
+from simulator.steps import Heat
 from simulator.model import Model
 from simulator.properties import spring_rest_angles
-from simulator.solvers import NewtonOptions, newton
+from simulator.newton import NewtonOptions, newton
 
 from .problem import SU8_TG
 
@@ -207,7 +208,7 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
 
     def folds(rest):
         res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
-        if not res.converged:
+        if not res.success:
             raise ParameterError(f"fold_sensitivity: equilibrium not found ({res.message})")
         return fold_angles(mesh, mesh.nodes + res.u)
 
@@ -279,7 +280,7 @@ class _Rounds:
         res = simulate(self.model, [Heat({c: pj for pj, c in zip(p, self.table.values())},
                                          increments=self.increments)],
                        state=self.state, options=self.options)
-        if not res.converged:                            # too far: shrink the region, retry
+        if not res.success:                            # too far: shrink the region, retry
             self.radius = self.radius / 4
             logger.info("heater allocation round %d: heating failed (%s); trust radius cut",
                         out.rounds, res.message)

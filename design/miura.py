@@ -17,11 +17,11 @@ import numpy as np
 from simulator.bimorph import Actuators, Bimorph
 from simulator.cases import miura_fold_signs
 from simulator.errors import ParameterError, PatternError
-from simulator.heating import Heat
-from simulator.loading import simulate
+from simulator.simulation import simulate
+from simulator.steps import Heat
 from simulator.mesh import build_mesh
 from simulator.model import ContactParameters, Model, Supports, make_model
-from simulator.patterns import miura_sheet_pattern, with_substrate
+from simulator.example_patterns import miura_sheet_pattern, with_substrate
 from simulator.properties import BarHingeParameters
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
@@ -187,7 +187,7 @@ class _LiftStage:
         res = simulate(self.model, [Heat({self.creases: dp}, increments=increments,
                                          coupling=coupling)], state=state)
         self.simulations += 1
-        return res.state, res.converged, res.message
+        return res.state, res.success, res.message
 
     def look(self, state):
         lift = float(state.u[self.nodes, 2].mean())

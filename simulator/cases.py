@@ -14,14 +14,14 @@ from dataclasses import dataclass, field
 
 from .bimorph import Actuators, Bimorph
 from .errors import ParameterError
-from .heating import Heat
-from .loading import Gravity, SelfFold, simulate
+from .simulation import simulate
+from .steps import Gravity, Heat, SelfFold
 from .materials import Material
 from .model import ContactParameters, Model, Supports, make_model
-from .patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
+from .example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, single_fold_pattern, strip_pattern, with_substrate)
 from .properties import BarHingeParameters
-from .solvers import NewtonOptions
+from .newton import NewtonOptions
 from .thermal import REFERENCE_BETA, ThermalParameters
 
 __all__ = ["Case", "CASES", "get_case", "describe_cases"]

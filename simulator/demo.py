@@ -12,9 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from .geometry import fold_angles
-from .loading import Gravity, SelfFold, equilibrium_system, simulate
+from .simulation import simulate
+from .state import equilibrium_system
+from .steps import Gravity, SelfFold
 from .model import ContactParameters, Model, Supports, make_model
-from .patterns import single_fold_pattern
+from .example_patterns import single_fold_pattern
 from .properties import BarHingeParameters
 
 __all__ = ["single_fold_model", "single_fold_demo", "SINGLE_FOLD_SUPPORTS"]

@@ -31,9 +31,9 @@ class StepResult:
     Attributes
     ----------
     name : str
-    converged : bool
+    success : bool
     status : str
-        "converged", "failed" or "stopped".
+        "converged" on success; otherwise "failed", "stopped", "limit_point", ...
     message : str
     state : SimulationState
         State at the end of the step (the last converged one if it failed).
@@ -48,10 +48,14 @@ class StepResult:
     reactions : (n_nodes, 3) support reactions on the structure at the end [N]
     energies : dict of energy components at the end [J]
     wall_time : float [s]
+    settings : dict
+        The step's parameters (:meth:`Step.describe`).
+    columns : dict of (m,) arrays
+        Step-specific per-increment quantities (e.g. ``stable``, ``time [s]``).
     """
 
     name: str
-    converged: bool
+    success: bool
     status: str
     message: str
     state: object
@@ -67,6 +71,7 @@ class StepResult:
     energies: dict
     wall_time: float
     settings: dict = field(default_factory=dict)
+    columns: dict = field(default_factory=dict)
 
     @property
     def increments(self) -> int:
@@ -75,7 +80,7 @@ class StepResult:
 
 @dataclass(frozen=True, eq=False)
 class SimulationResult:
-    """Results of all steps of :func:`~simulator.loading.simulate` and the final state.
+    """Results of all steps of :func:`~simulator.simulation.simulate` and the final state.
 
     ``initial_state`` is the state before the first step (record 0 of the history).
     """
@@ -88,17 +93,19 @@ class SimulationResult:
     wall_time: float = 0.0
 
     @property
-    def converged(self) -> bool:
-        return all(s.converged for s in self.steps)
+    def success(self) -> bool:
+        """True if every step succeeded."""
+        return all(s.success for s in self.steps)
 
     @property
     def status(self) -> str:
-        bad = [s for s in self.steps if not s.converged]
+        """"converged", or the status of the first step that did not succeed."""
+        bad = [s for s in self.steps if not s.success]
         return "converged" if not bad else bad[0].status
 
     @property
     def message(self) -> str:
-        bad = [s for s in self.steps if not s.converged]
+        bad = [s for s in self.steps if not s.success]
         return "all steps converged" if not bad else f"step {bad[0].name!r}: {bad[0].message}"
 
     # ------------------------------------------------------------------ history

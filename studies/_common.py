@@ -139,7 +139,7 @@ def run_case(name: str, params: dict, progress: bool, desc: str):
     res = case.run(progress=callback if progress else None)
     if progress:
         bar.close()
-    if not res.converged:
+    if not res.success:
         raise RuntimeError(f"{name} ({desc}): {res.message}")
     return case, res
 

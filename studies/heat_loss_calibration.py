@@ -88,7 +88,7 @@ import pandas as pd
 from simulator.cases import verification_strip
 from simulator.materials import Material
 from simulator.model import make_model
-from simulator.patterns import strip_pattern
+from simulator.example_patterns import strip_pattern
 from studies._common import progress_bar, study_main
 
 NAME = "heat_loss_calibration"
@@ -129,7 +129,7 @@ def strip_case(W, beta_deg=BETA, t_env=T_ENV, layers=LAYERS, k=0.3, k_env=0.026,
 def crease_temperatures(case) -> tuple:
     """(T_max, T_ave): T(Ctr) and mean of the centre line A, B, Ctr."""
     res = case.run()
-    if not res.converged:
+    if not res.success:
         raise RuntimeError(f"{case.name} {case.parameters}: {res.message}")
     t = res.state.temperature
     return float(t[10]), float(np.mean(t[[8, 9, 10]]))

@@ -224,7 +224,7 @@ def _key(W, tc, L1, L2):
 def bar_hinge(W, tc, L1, L2, L_=L, tp=TP) -> tuple:
     """(T_max, T_ave) of the bar-and-hinge strip: node Ctr and the mean of A, B, Ctr."""
     res = verification_strip("within", W=W, L=L_, L1=L1, L2=L2, tc=tc, tp=tp).run()
-    if not res.converged:
+    if not res.success:
         raise RuntimeError(f"strip W={W}, tc={tc}, L1={L1}, L2={L2}: {res.message}")
     t = res.state.temperature
     return float(t[10]), float(np.mean(t[[8, 9, 10]]))

@@ -58,8 +58,7 @@ import pandas as pd
 
 from design.heaters import HeaterAllocation, allocate_heaters, linear_allocation
 from simulator.cases import get_case
-from simulator.heating import Heat
-from simulator.loading import simulate
+from simulator import Heat, simulate
 from studies._common import progress_bar, study_main
 
 NAME = "heater_allocation"
@@ -75,7 +74,7 @@ PAPER_CIRCUITS = {"4 q": (1, 18), "1.5 q": (3, 5, 14, 15), "2 q": (7, 8, 10, 12)
 def _targets(case):
     """Fold angles [rad] the case reaches, per heated crease, and the powers that did it."""
     res = simulate(case.model, case.steps)
-    if not res.converged:
+    if not res.success:
         raise RuntimeError(f"{case.name}: {res.message}")
     mesh, heat = case.model.mesh, case.steps[-1]
     power = {c: float(v) for k, v in dict(heat.power).items()
@@ -96,7 +95,7 @@ def _rows(case_name, variant, band, res, reference, targets, wall, achieved=None
     label = {"case": case_name, "variant": variant, "band [deg]": band}
     summary = {"table": "summary", **label,
                "status": res.status if alloc else
-               ("simulated" if res.converged else "failed"),
+               ("simulated" if res.success else "failed"),
                "rounds": res.rounds if alloc else 1,
                "total_power [mW]": 1e3 * sum(power.values()),
                "reference_power [mW]": 1e3 * sum(reference.values()),

@@ -6,7 +6,7 @@ import pytest
 from simulator.bimorph import Actuators, Bimorph, crease_temperature_weights, timoshenko_curvature
 from simulator.errors import ParameterError
 from simulator.mesh import build_mesh
-from simulator.patterns import single_fold_pattern
+from simulator.example_patterns import single_fold_pattern
 
 
 def test_digest_example_value():

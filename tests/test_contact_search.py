@@ -6,7 +6,7 @@ import simulator.contact_search as cs
 from simulator.contact_search import ContactSearch
 from simulator.mesh import build_mesh
 from simulator.model import ContactParameters
-from simulator.patterns import miura_sheet_pattern, single_fold_pattern
+from simulator.example_patterns import miura_sheet_pattern, single_fold_pattern
 
 
 def _pairs(search, x):

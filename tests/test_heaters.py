@@ -8,8 +8,8 @@ import pytest
 from design.heaters import allocate_heaters, influence_matrices
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
-from simulator.heating import Heat, thermal_model
-from simulator.loading import simulate
+from simulator import Heat, simulate
+from simulator.state import thermal_model
 
 P_REF = 6e-3          # W per crease that made the target shape
 
@@ -116,7 +116,7 @@ def test_fold_sensitivity_of_a_free_hinge_is_one():
     """Nothing resists a free hinge: its fold follows its rest angle one to one."""
     from design.heaters import fold_sensitivity
     from simulator.demo import single_fold_model
-    from simulator.loading import initial_state
+    from simulator import initial_state
 
     model = single_fold_model(contact=False, substrate=False)
     S = fold_sensitivity(model, initial_state(model))

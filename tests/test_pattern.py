@@ -9,7 +9,7 @@ import pytest
 from simulator.errors import PatternError
 from simulator.materials import SU8
 from simulator.pattern import Pattern
-from simulator.patterns import gripper_pattern, miura_sheet_pattern, single_fold_pattern
+from simulator.example_patterns import gripper_pattern, miura_sheet_pattern, single_fold_pattern
 
 SQ = [(0, 0), (1, 0), (1, 1), (0, 1)]
 PENTAGON = [(math.cos(2 * math.pi * k / 5), math.sin(2 * math.pi * k / 5)) for k in range(5)]

@@ -14,7 +14,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from simulator.demo import single_fold_model
-from simulator.loading import SelfFold, simulate
+from simulator import SelfFold, simulate
 from studies.plotting import (animate, plot_fold_vs_power, plot_shape, plot_temperature_vs_power,
                               save_figure)
 
@@ -23,7 +23,7 @@ from studies.plotting import (animate, plot_fold_vs_power, plot_shape, plot_temp
 def cold():
     """Mechanics-only result: 6 records, uniform 21 deg C, zero power."""
     res = simulate(single_fold_model(), [SelfFold({2: 0.5}, increments=5)])
-    assert res.converged
+    assert res.success
     return res
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from simulator.errors import ParameterError
 from simulator.mesh import build_mesh
-from simulator.patterns import single_fold_pattern
+from simulator.example_patterns import single_fold_pattern
 from simulator.properties import BarHingeParameters, mechanical_properties, spring_rest_angles
 
 RTOL = 1e-9  # the digest prints 10 significant digits

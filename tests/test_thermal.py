@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 from simulator.errors import ParameterError
 from simulator.materials import Material
 from simulator.mesh import build_mesh
-from simulator.patterns import single_fold_pattern, strip_pattern
+from simulator.example_patterns import single_fold_pattern, strip_pattern
 from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
 
 DATA = pathlib.Path(__file__).parent / "data"

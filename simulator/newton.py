@@ -4,7 +4,7 @@
 :func:`follow_path` drives a linear path in (external load, spring rest angles)
 from a start to an end over a number of increments, halving an increment that
 fails and growing back after successes. Failures are returned as data
-(``converged``, ``status``, ``message``); :class:`~simulator.errors.ConvergenceError`
+(``success``, ``status``, ``message``); :class:`~simulator.errors.ConvergenceError`
 is raised only when ``NewtonOptions.raise_on_failure`` is set.
 """
 
@@ -107,15 +107,20 @@ class NewtonOptions:
 
 @dataclass(frozen=True, eq=False)
 class NewtonResult:
-    """Outcome of one Newton solve."""
+    """Outcome of one Newton solve (``success``, ``status``, ``message`` as every result)."""
 
     u: np.ndarray
-    converged: bool
+    success: bool
     iterations: int
     residual_norms: np.ndarray
     correction_norms: np.ndarray
     message: str
     evaluation: Evaluation | None = None
+
+    @property
+    def status(self) -> str:
+        """'converged' or 'failed'."""
+        return "converged" if self.success else "failed"
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,10 +129,10 @@ class PathResult:
 
     Attributes
     ----------
-    converged : bool
+    success : bool
         True if the path reached its end.
     status : str
-        "converged" or "failed".
+        "converged", "failed" or "stopped".
     message : str
     u : (n_nodes, 3) final displacements (the last converged ones on failure)
     t : float
@@ -141,7 +146,7 @@ class PathResult:
     evaluation : Evaluation at the final state
     """
 
-    converged: bool
+    success: bool
     status: str
     message: str
     u: np.ndarray
@@ -266,7 +271,7 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
 
 
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):
-    return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), converged=converged,
+    return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), success=converged,
                         iterations=iterations, residual_norms=np.array(res),
                         correction_norms=np.array(cor), message=message, evaluation=ev)
 
@@ -292,7 +297,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         res = newton(system, u, f_start + t_try * (f_end - f_start),
                      rest_start + t_try * (rest_end - rest_start), options)
         total_iter += res.iterations
-        if not res.converged:
+        if not res.success:
             if cuts_in_row >= options.max_cuts or total_cuts >= options.max_total_cuts:
                 msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts in a row, "
                        f"{total_cuts} in all (increment {dt:.3g}): {res.message}")

@@ -1,0 +1,97 @@
+"""The state a simulation carries from one step to the next.
+
+:class:`SimulationState` holds everything a later step needs to continue: displacements,
+accumulated dead loads, crease and spring rest angles, node temperatures, crease powers and the
+room temperature (the reference's controller list, digest 7.1). Steps never mutate a state; they
+return a new one.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from .elements.springs import fold_angle
+from .equilibrium import EquilibriumSystem
+from .errors import ParameterError
+from .model import Model
+from .thermal import ThermalModel
+
+__all__ = ["ROOM_TEMPERATURE", "SimulationState", "initial_state", "equilibrium_system",
+           "thermal_model"]
+
+#: Default room temperature [deg C].
+ROOM_TEMPERATURE = 21.0
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationState:
+    """State handed from one step to the next.
+
+    Attributes
+    ----------
+    u : (n_nodes, 3) displacements from the mesh nodes [m]
+    applied_load : (n_nodes, 3) accumulated dead loads (incl. gravity) [N]
+    crease_rest : (C,) crease rest angles [rad], pi = flat (crease-row order)
+    spring_rest : (n_springs,) spring rest angles [rad]
+    temperature : (n_nodes,) node temperatures [deg C]
+    crease_power : (C,) heating power applied to each crease [W]
+    room_temperature : float
+        Ambient (room) temperature of the thermal boundary conditions [deg C].
+    """
+
+    u: np.ndarray
+    applied_load: np.ndarray
+    crease_rest: np.ndarray
+    spring_rest: np.ndarray
+    temperature: np.ndarray
+    crease_power: np.ndarray
+    room_temperature: float = ROOM_TEMPERATURE
+
+    @property
+    def rest_fold(self) -> np.ndarray:
+        """Crease rest fold angles [rad], 0 = flat, positive towards +z."""
+        return self.crease_rest - np.pi
+
+
+def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
+    """Unloaded state: zero displacement, flat crease rest angles, spring rest angles equal to
+    the spring angles of the initial geometry (digest 7.1), uniform room temperature (from the
+    model's thermal parameters, else 21 deg C), no heating."""
+    mesh = model.mesh
+    if room_temperature is None:
+        room_temperature = ROOM_TEMPERATURE if model.thermal is None \
+            else model.thermal.room_temperature
+    return SimulationState(
+        u=np.zeros((mesh.n_nodes, 3)), applied_load=np.zeros((mesh.n_nodes, 3)),
+        crease_rest=np.full(mesh.n_creases, np.pi),
+        spring_rest=fold_angle(mesh.nodes[mesh.springs]),
+        temperature=np.full(mesh.n_nodes, float(room_temperature)),
+        crease_power=np.zeros(mesh.n_creases), room_temperature=float(room_temperature))
+
+
+_SYSTEMS: "weakref.WeakKeyDictionary[Model, EquilibriumSystem]" = weakref.WeakKeyDictionary()
+
+
+def equilibrium_system(model: Model) -> EquilibriumSystem:
+    """The cached :class:`EquilibriumSystem` of a model (built on first use)."""
+    sys = _SYSTEMS.get(model)
+    if sys is None:
+        sys = _SYSTEMS[model] = EquilibriumSystem(model)
+    return sys
+
+
+_THERMAL: "weakref.WeakKeyDictionary[Model, ThermalModel]" = weakref.WeakKeyDictionary()
+
+
+def thermal_model(model: Model) -> ThermalModel:
+    """The cached :class:`~simulator.thermal.ThermalModel` of a model (built on first use)."""
+    if model.thermal is None:
+        raise ParameterError("This model has no thermal parameters: pass thermal="
+                             "ThermalParameters(...) to make_model to use heating steps.")
+    tm = _THERMAL.get(model)
+    if tm is None:
+        tm = _THERMAL[model] = ThermalModel(model.mesh, model.thermal)
+    return tm

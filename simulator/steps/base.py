@@ -1,0 +1,191 @@
+"""The step protocol: what every loading step implements and returns.
+
+A simulation is an ordered list of steps. Each step receives a :class:`StepContext` (the
+model, its cached equilibrium system, the Newton options and an optional progress callback)
+and the :class:`~simulator.state.SimulationState` left by the previous step, and returns a
+:class:`StepOutcome`: success flag, status and message, the state it ends in, and one record
+per accepted increment (path parameter, displacements, temperatures, powers, iterations, plus
+any step-specific columns). :func:`~simulator.simulation.simulate` only ever calls
+``step.run(context, state)``, so a new physics is a new :class:`Step` subclass, never a new
+branch in the facade.
+
+To write a step, subclass :class:`Step` (a frozen dataclass is the house style), validate the
+parameters in ``__post_init__``, implement :meth:`Step.run` with a :class:`StepRecorder`, and
+describe the parameters for ``meta.json`` in :meth:`Step.describe`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..state import SimulationState, equilibrium_system, thermal_model
+
+__all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "check_increments",
+           "SUCCESS_STATUSES"]
+
+#: Statuses that count as success.
+SUCCESS_STATUSES = ("converged",)
+
+
+@dataclass(frozen=True, eq=False)
+class StepContext:
+    """What a step needs besides the state: the model and the settings of the run.
+
+    Attributes
+    ----------
+    model : Model
+    options : NewtonOptions
+        Newton settings of the run.
+    progress : callable or None
+        ``progress(done, total)`` after every accepted increment of a step.
+    """
+
+    model: object
+    options: object
+    progress: Callable[[int, int], None] | None = None
+
+    @cached_property
+    def system(self):
+        """The model's cached :class:`~simulator.equilibrium.EquilibriumSystem`."""
+        return equilibrium_system(self.model)
+
+    @cached_property
+    def thermal(self):
+        """The model's cached :class:`~simulator.thermal.ThermalModel` (error if it has none)."""
+        return thermal_model(self.model)
+
+    def report(self, done: int, total: int) -> None:
+        """Call the progress callback, if any."""
+        if self.progress is not None:
+            self.progress(done, total)
+
+
+@dataclass(frozen=True, eq=False)
+class StepOutcome:
+    """What :meth:`Step.run` returns (``m`` accepted increments).
+
+    Attributes
+    ----------
+    success : bool
+    status : str
+        "converged" on success; otherwise "failed", "stopped", "limit_point", ...
+    message : str
+    state : SimulationState
+        State at the end of the step (the last accepted one if it failed).
+    f_ext : (n_dof,) external load at the end [N] (for the support reactions)
+    iterations, cuts : int
+        Total Newton iterations and increment halvings.
+    load_factor : (m,) path parameter of every accepted increment
+    u : (m, n_nodes, 3) displacements [m]
+    temperature : (m, n_nodes) node temperatures [deg C]
+    power : (m, C) crease powers [W]
+    increment_iterations : (m,) Newton iterations per increment
+    residual_norms : tuple of (k,) arrays, Newton residual norms per increment [N]
+    columns : dict of (m,) arrays
+        Step-specific per-increment quantities with unit-bearing names (``"stable"``,
+        ``"time [s]"``, ...).
+    evaluation : Evaluation or None
+        Equilibrium evaluation at the end state, if the step has it.
+    """
+
+    success: bool
+    status: str
+    message: str
+    state: SimulationState
+    f_ext: np.ndarray
+    iterations: int
+    cuts: int
+    load_factor: np.ndarray
+    u: np.ndarray
+    temperature: np.ndarray
+    power: np.ndarray
+    increment_iterations: np.ndarray
+    residual_norms: tuple = ()
+    columns: dict = field(default_factory=dict)
+    evaluation: object = None
+
+
+class StepRecorder:
+    """Collects the records of a running step and builds its :class:`StepOutcome`."""
+
+    def __init__(self, state: SimulationState):
+        self.start = state
+        self.iterations = 0
+        self.cuts = 0
+        self._rows: dict[str, list] = {k: [] for k in (
+            "load_factor", "u", "temperature", "power", "increment_iterations")}
+        self._residuals: list = []
+        self._columns: dict[str, list] = {}
+
+    def __len__(self) -> int:
+        return len(self._rows["load_factor"])
+
+    def record(self, load_factor: float, u, temperature, power, iterations: int = 0,
+               residual_norms=(), **columns) -> None:
+        """Add one accepted increment; ``columns`` are step-specific named values."""
+        for key, value in (("load_factor", load_factor), ("u", u), ("temperature", temperature),
+                           ("power", power), ("increment_iterations", iterations)):
+            self._rows[key].append(value)
+        self._residuals.append(np.asarray(residual_norms, float))
+        for name, value in columns.items():
+            self._columns.setdefault(name, [None] * (len(self) - 1)).append(value)
+        for name, values in self._columns.items():
+            if len(values) < len(self):
+                values.append(None)
+
+    def add_path(self, path, temperature, power) -> None:
+        """Record every accepted increment of a :class:`~simulator.newton.PathResult`."""
+        self.iterations += path.iterations
+        self.cuts += path.cuts
+        for (t, u, its), res in zip(path.history, path.residual_norms):
+            self.record(t, u, temperature, power, its, res)
+
+    def finish(self, success: bool, status: str, message: str, state: SimulationState,
+               f_ext: np.ndarray, evaluation=None) -> StepOutcome:
+        """The frozen outcome of the step."""
+        s0 = self.start
+        n, C = s0.u.shape, s0.crease_power.shape
+        rows = self._rows
+        return StepOutcome(
+            success=bool(success), status=status, message=message, state=state,
+            f_ext=np.asarray(f_ext, float), iterations=self.iterations, cuts=self.cuts,
+            load_factor=np.array(rows["load_factor"], float),
+            u=np.array(rows["u"], float).reshape(-1, *n),
+            temperature=np.array(rows["temperature"], float).reshape(-1, n[0]),
+            power=np.array(rows["power"], float).reshape(-1, *C),
+            increment_iterations=np.array(rows["increment_iterations"], int),
+            residual_norms=tuple(self._residuals),
+            columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation)
+
+
+class Step(ABC):
+    """A loading step: the one interface :func:`~simulator.simulation.simulate` knows.
+
+    Subclasses have a ``name`` attribute (used in tables) and implement :meth:`run`; they
+    should be immutable and validate their parameters on construction.
+    """
+
+    name: str = "step"
+
+    @abstractmethod
+    def run(self, context: StepContext, state: SimulationState) -> StepOutcome:
+        """Apply the step to ``state`` and return its outcome; never raise on non-convergence
+        (report it in the outcome), raise :class:`~simulator.errors.ParameterError` on bad
+        input."""
+
+    def describe(self) -> dict:
+        """The step's parameters, JSON-able, with units in the keys (for ``meta.json``)."""
+        return {}
+
+
+def check_increments(step, name: str = "increments") -> None:
+    """Raise :class:`ParameterError` unless ``step.<name>`` is a positive integer."""
+    n = getattr(step, name)
+    if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
+        raise ParameterError(f"{type(step).__name__}.{name} = {n!r} must be a positive integer.")

@@ -1,0 +1,220 @@
+"""Electro-thermal loading steps: the paper's three-step loop per heating increment.
+
+For every increment of a :class:`Heat` step (digest 7.5):
+
+1. heat transfer: node temperatures for the current crease powers, with the conductivity
+   assembled on the current shape (so folding changes heat loss);
+2. Timoshenko bimorph: crease rest angles = rest angles at the start of the step plus
+   ``W kappa(dT)``, dT = 7-node crease temperature minus its value at the start of the step;
+3. bar-and-hinge equilibrium (contact, persisting gravity) by Newton with step cutting.
+
+``coupling="staggered"`` (default, the reference's behaviour) uses the shape of the previous
+increment in step 1; ``coupling="iterated"`` repeats steps 1-3 within the increment until
+temperature and shape agree. :class:`AmbientTemperature` ramps the room temperature instead
+(digest 7.7).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..bimorph import crease_temperature_weights
+from ..errors import ParameterError
+from ..newton import follow_path
+from ..properties import spring_rest_angles
+from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
+
+__all__ = ["Heat", "AmbientTemperature", "Coupling", "coupled_increments"]
+
+
+def _rotation_per_kelvin(model) -> np.ndarray:
+    if model.actuators is None:
+        return np.zeros(model.mesh.n_creases)
+    return model.actuators.rotation_per_kelvin(model.mesh)
+
+
+@dataclass(frozen=True)
+class Coupling:
+    """How heat and shape are coupled within an increment.
+
+    Parameters
+    ----------
+    mode : {"staggered", "iterated"}
+        "staggered" (the reference's behaviour): temperatures on the previous increment's
+        shape; "iterated": repeat heat / rest angles / equilibrium until temperatures agree.
+    tol : float
+        Temperature agreement [K] that ends an "iterated" increment.
+    max_iterations : int
+        Coupling iterations per increment ("iterated" only).
+    fixed_shape : bool
+        Conductivity assembled once on the start shape (the reference's ambient step).
+    """
+
+    mode: str = "staggered"
+    tol: float = 1e-6
+    max_iterations: int = 20
+    fixed_shape: bool = False
+
+
+def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
+                       coupling: Coupling = Coupling()) -> StepOutcome:
+    """The paper's three-step loop over increments s = 1..S (digest 7.5).
+
+    Per increment: node temperatures for crease powers ``powers[s]`` (S, C) [W] and room
+    temperature ``ambient[s]`` [deg C] on the current shape; crease rest angles from the
+    Timoshenko bimorph (temperature change since the start of the step); equilibrium by
+    Newton with step cutting. Returns the outcome with one record per increment; stops at the
+    first increment whose equilibrium fails (status "failed").
+    """
+    model, tm = context.model, context.thermal
+    mesh = model.mesh
+    rot = _rotation_per_kelvin(model)
+    w = crease_temperature_weights()
+    t_ref, rest0 = state.temperature, state.crease_rest
+    u, spring, f = state.u, state.spring_rest, state.applied_load.ravel()
+    x_start = mesh.nodes + state.u
+    rec = StepRecorder(state)
+    n_inc = len(powers)
+    temp, target, evaluation = state.temperature, state.crease_rest, None
+    iterated = coupling.mode == "iterated" and not coupling.fixed_shape
+    for s, (power, room) in enumerate(zip(powers, ambient), start=1):
+        q = tm.heat_vector(power)
+        temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
+        for _ in range(coupling.max_iterations if iterated else 1):
+            target = rest0 + rot * ((temp - t_ref)[mesh.crease_nodes] @ w)
+            rest = spring_rest_angles(mesh, target, model.params)
+            path = follow_path(context.system, u, f, f, spring, rest, 1, context.options)
+            rec.iterations += path.iterations
+            rec.cuts += path.cuts
+            if not path.success:
+                last = rec._rows["temperature"][-1] if len(rec) else state.temperature
+                message = (f"increment {s}/{n_inc} (crease power up to "
+                           f"{1e3 * np.max(power, initial=0):.4g} mW): {path.message}")
+                return rec.finish(False, "failed", message,
+                                  replace(state, u=u, spring_rest=spring, temperature=last),
+                                  f, evaluation)
+            if not iterated:
+                break
+            new_temp = tm.solve(mesh.nodes + path.u, q, room)
+            agreed = np.max(np.abs(new_temp - temp)) <= coupling.tol
+            temp = new_temp
+            if agreed:
+                break
+        u, spring, evaluation = path.u, rest, path.evaluation
+        rec.record(s / n_inc, u, temp, np.asarray(power, float), path.iterations,
+                   np.concatenate(path.residual_norms) if path.residual_norms else ())
+        context.report(s, n_inc)
+    end = replace(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
+                  crease_power=np.asarray(powers[-1], float),
+                  room_temperature=float(ambient[-1]))
+    return rec.finish(True, "converged", "converged", end, f, evaluation)
+
+
+def _coupling(step) -> Coupling:
+    """Validate a step's coupling fields and return them as a :class:`Coupling`."""
+    if step.coupling not in ("staggered", "iterated"):
+        raise ParameterError(f"{type(step).__name__}.coupling = {step.coupling!r}; use "
+                             "'staggered' or 'iterated'.")
+    n = step.max_coupling_iterations
+    if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
+        raise ParameterError(f"{type(step).__name__}.max_coupling_iterations = {n!r} must be a "
+                             "positive integer.")
+    if not (isinstance(step.coupling_tol, (int, float)) and math.isfinite(step.coupling_tol)
+            and step.coupling_tol > 0):
+        raise ParameterError(f"{type(step).__name__}.coupling_tol = {step.coupling_tol!r} must "
+                             "be positive [K].")
+    return Coupling(step.coupling, float(step.coupling_tol), n)
+
+
+@dataclass(frozen=True)
+class Heat(Step):
+    """Ramp crease heating powers linearly over ``increments`` (digest 7.5).
+
+    Parameters
+    ----------
+    power : mapping
+        Power ADDED by this step on top of the current one [W], keyed by crease id, or by a
+        tuple of crease ids for a heater circuit (each crease of the circuit gets the value).
+    increments : int
+        Heating increments (each solves temperature, rest angles and equilibrium).
+    coupling : {"staggered", "iterated"}
+        See :class:`Coupling`.
+    coupling_tol : float
+        Temperature agreement [K] that ends the "iterated" loop of an increment.
+    max_coupling_iterations : int
+    """
+
+    power: Mapping = field(default_factory=dict)
+    increments: int = 200
+    coupling: str = "staggered"
+    coupling_tol: float = 1e-6
+    max_coupling_iterations: int = 20
+    name: str = "heat"
+
+    def __post_init__(self):
+        check_increments(self)
+        _coupling(self)
+        for key, v in dict(self.power).items():
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
+                raise ParameterError(f"Heat: power of crease {key} is {v!r}; give watts.")
+
+    def power_array(self, mesh) -> np.ndarray:
+        """(C,) power added per crease row [W]."""
+        out = np.zeros(mesh.n_creases)
+        for key, v in dict(self.power).items():
+            for c in (key if isinstance(key, tuple) else (key,)):
+                out[mesh.crease_row_of(c)] += float(v)
+        return out
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        mesh = context.model.mesh
+        dP = self.power_array(mesh)
+        end = state.crease_power + dP
+        if np.any(end < 0):
+            row = int(np.argmin(end))
+            raise ParameterError(
+                f"Heat: crease {int(mesh.crease_ids[row])} would end at "
+                f"{1e3 * end[row]:.4g} mW; a step may lower the power (negative values) but not "
+                "below zero.")
+        s = np.arange(1, self.increments + 1)[:, None] / self.increments
+        powers = state.crease_power + s * dP
+        ambient = np.full(self.increments, state.room_temperature)
+        return coupled_increments(context, state, powers, ambient, _coupling(self))
+
+    def describe(self) -> dict:
+        return {"power_added [mW]": {str(k): 1e3 * float(v) for k, v in
+                                     dict(self.power).items()},
+                "increments": self.increments, "coupling": self.coupling}
+
+
+@dataclass(frozen=True)
+class AmbientTemperature(Step):
+    """Ramp the room temperature to ``target`` [deg C] with the heating unchanged (digest 7.7).
+
+    The conductivity is assembled once on the shape at the start of the step, as in the
+    reference.
+    """
+
+    target: float = 21.0
+    increments: int = 50
+    name: str = "ambient_temperature"
+
+    def __post_init__(self):
+        check_increments(self)
+        if not (isinstance(self.target, (int, float, np.integer, np.floating))
+                and math.isfinite(self.target)):
+            raise ParameterError(f"AmbientTemperature.target = {self.target!r} must be a finite "
+                                 "temperature [deg C].")
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        s = np.arange(1, self.increments + 1) / self.increments
+        ambient = state.room_temperature + s * (self.target - state.room_temperature)
+        powers = np.repeat(state.crease_power[None], self.increments, axis=0)
+        return coupled_increments(context, state, powers, ambient, Coupling(fixed_shape=True))
+
+    def describe(self) -> dict:
+        return {"target [degC]": self.target, "increments": self.increments}

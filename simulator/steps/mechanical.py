@@ -1,0 +1,179 @@
+"""Mechanical loading steps under load control: self-folding, dead loads, gravity.
+
+Each step drives a linear path in (external load, spring rest angles) with
+:func:`~simulator.newton.follow_path` (Newton with step cutting); loads and rest angles
+persist into later steps (digest 7.3, 7.4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..model import STANDARD_GRAVITY, Model, gravity_loads
+from ..newton import follow_path
+from ..properties import spring_rest_angles
+from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
+
+__all__ = ["SelfFold", "Load", "Gravity"]
+
+
+def _follow(context: StepContext, state, f_start, f_end, rest_end, increments):
+    """Follow the load / rest-angle path; returns (path, recorder) with every increment
+    recorded (temperatures and powers unchanged)."""
+    total = increments
+
+    def callback(t, u):
+        context.report(min(total, round(t * total)), total)
+        return False
+
+    path = follow_path(context.system, state.u, f_start, f_end, state.spring_rest, rest_end,
+                       increments, context.options, callback=callback)
+    rec = StepRecorder(state)
+    rec.add_path(path, state.temperature, state.crease_power)
+    return path, rec
+
+
+@dataclass(frozen=True)
+class SelfFold(Step):
+    """Drive crease rest angles linearly to target fold angles (digest 7.3).
+
+    Parameters
+    ----------
+    folds : mapping {crease id: fold angle [rad]}
+        Target rest fold angle (0 = flat, > 0 towards +z) of the listed creases, in
+        (-pi, pi].
+    increments : int
+    reset_others : bool
+        Unlisted creases go to flat (True, the reference behaviour) or keep their rest angle.
+    """
+
+    folds: Mapping = field(default_factory=dict)
+    increments: int = 50
+    reset_others: bool = True
+    name: str = "self_fold"
+
+    def __post_init__(self):
+        check_increments(self)
+        for c, v in dict(self.folds).items():
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
+                raise ParameterError(f"SelfFold: fold angle of crease {c} is {v!r}; give "
+                                     "radians.")
+            if not -np.pi < v <= np.pi:
+                raise ParameterError(
+                    f"SelfFold: fold angle of crease {c} is {np.degrees(v):.6g} deg; fold "
+                    "angles must lie in (-180, 180] deg (give radians in Python).")
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        mesh = context.model.mesh
+        target = np.full(mesh.n_creases, np.pi) if self.reset_others else state.crease_rest.copy()
+        for c, v in dict(self.folds).items():
+            target[mesh.crease_row_of(c)] = np.pi + float(v)
+        rest_end = spring_rest_angles(mesh, target, context.model.params)
+        f = state.applied_load.ravel()
+        path, rec = _follow(context, state, f, f, rest_end, self.increments)
+        t = path.t
+        new = replace(state, u=path.u,
+                      crease_rest=state.crease_rest + t * (target - state.crease_rest),
+                      spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
+        return rec.finish(path.success, path.status, path.message, new, f, path.evaluation)
+
+    def describe(self) -> dict:
+        return {"folds [rad]": {str(k): float(v) for k, v in dict(self.folds).items()},
+                "increments": self.increments, "reset_others": self.reset_others}
+
+
+@dataclass(frozen=True)
+class Load(Step):
+    """Add dead loads linearly over the step; they stay applied in later steps (digest 7.4).
+
+    Parameters
+    ----------
+    forces : mapping {node: (fx, fy, fz)} or (n_nodes, 3) array
+        TOTAL load added by this step [N] (the reference gives it per increment).
+    increments : int
+    """
+
+    forces: object
+    increments: int = 50
+    name: str = "load"
+
+    def __post_init__(self):
+        check_increments(self)
+
+    def load_array(self, model: Model) -> np.ndarray:
+        """(n_nodes, 3) load added by the step [N]."""
+        n = model.mesh.n_nodes
+        if isinstance(self.forces, Mapping):
+            out = np.zeros((n, 3))
+            for node, fvec in self.forces.items():
+                if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
+                    raise ParameterError(f"Load: node {node!r} does not exist (0..{n - 1}).")
+                out[node] += np.asarray(fvec, float)
+        else:
+            out = np.asarray(self.forces, float)
+            if out.shape != (n, 3):
+                raise ParameterError(f"Load: forces must be a mapping or an ({n}, 3) array, got "
+                                     f"shape {out.shape}.")
+        if not np.isfinite(out).all():
+            raise ParameterError("Load: forces contain NaN or inf.")
+        return out
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        dF = self.load_array(context.model)
+        f0 = state.applied_load.ravel()
+        path, rec = _follow(context, state, f0, f0 + dF.ravel(), state.spring_rest,
+                            self.increments)
+        new = replace(state, u=path.u, applied_load=state.applied_load + path.t * dF)
+        return rec.finish(path.success, path.status, path.message, new,
+                          new.applied_load.ravel(), path.evaluation)
+
+    def describe(self) -> dict:
+        return {"total_load [N]": self.load_sum(), "increments": self.increments}
+
+    def load_sum(self) -> list | None:
+        if isinstance(self.forces, Mapping):
+            vecs = [np.asarray(v, float) for v in self.forces.values()]
+            return np.sum(vecs, axis=0).tolist() if vecs else [0.0, 0.0, 0.0]
+        return np.asarray(self.forces, float).reshape(-1, 3).sum(axis=0).tolist()
+
+
+@dataclass(frozen=True)
+class Gravity(Step):
+    """Apply panel self-weight (lumped by fan-triangle areas) as a persisting dead load.
+
+    Parameters
+    ----------
+    g : float
+        Gravitational acceleration [m/s^2] (the reference scripts use 9.8).
+    scale : float
+        Factor on the weight (the reference's Ex02 applies 0.9 of it).
+    panels : sequence of int or None
+        Panels that carry weight (default all; supported panels only add reactions).
+    increments : int
+    """
+
+    g: float = STANDARD_GRAVITY
+    scale: float = 1.0
+    panels: tuple | None = None
+    increments: int = 50
+    name: str = "gravity"
+
+    def __post_init__(self):
+        check_increments(self)
+        for attr in ("g", "scale"):
+            v = getattr(self, attr)
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
+                raise ParameterError(f"Gravity.{attr} = {v!r} must be a finite number.")
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        load = Load(self.scale * gravity_loads(context.model.mesh, self.g, panels=self.panels),
+                    self.increments)
+        return load.run(context, state)
+
+    def describe(self) -> dict:
+        return {"g [m/s^2]": self.g, "scale": self.scale, "increments": self.increments,
+                "panels": None if self.panels is None else list(self.panels)}
