@@ -10,6 +10,7 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 ``save()``).
 """
 
+from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
@@ -28,7 +29,7 @@ from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold,
 from .thermal import ThermalParameters
 
 __all__ = [
-    "__version__",
+    "__version__", "example_patterns",
     # patterns, meshes, models
     "Pattern", "BarHingeMesh", "build_mesh", "Material", "SU8", "SPR", "SUBSTRATE",
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
