@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import pathlib
 import re
+import sys
+import types
 
 import pytest
 
@@ -36,7 +38,9 @@ def test_code_blocks_run(path, tmp_path, monkeypatch):
         assert len(blocks) >= 3, "the README lost its examples"
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
-    namespace: dict = {"__name__": "__docs__"}
+    module = types.ModuleType("_docs_namespace")       # dataclasses need a real module
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    namespace = module.__dict__
     for line, code in blocks:
         try:
             exec(compile(code, f"{path.name}:{line}", "exec"), namespace)
