@@ -122,7 +122,8 @@
   const request = () => { if (!pending) { pending = true; requestAnimationFrame(draw); } };
 
   // ---------------------------------------------------------------- labels and side panels
-  const fmt = (x, d) => (x === null || x === undefined || !isFinite(x) ? "-" : Number(x).toFixed(d));
+  const fmt = (x, d) => (x === null || x === undefined || !isFinite(x) ? "-"
+    : (Math.abs(x) < 0.5 * Math.pow(10, -d) ? 0 : Number(x)).toFixed(d));   // no "-0.0"
 
   function panels() {
     let tmin = Infinity, tmax = -Infinity, ptot = 0;
