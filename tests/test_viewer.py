@@ -98,6 +98,18 @@ def test_bad_result_dir_is_a_parameter_error(tmp_path, crane_dir):
         write_viewer(crane_dir, out=tmp_path)
     with pytest.raises(ParameterError, match="max_bytes"):
         viewer_html(load_viewer_data(crane_dir), max_bytes=0)
+    broken = tmp_path / "broken"
+    shutil.copytree(crane_dir, broken)
+    with np.load(crane_dir / "nodes.npz") as npz:
+        arrays = dict(npz)
+    arrays["positions"][3, 0, 0] = np.nan
+    np.savez(broken / "nodes.npz", **arrays)
+    with pytest.raises(ParameterError, match="positions has non-finite values"):
+        write_viewer(broken)
+    del arrays["triangles"]
+    np.savez(broken / "nodes.npz", **arrays)
+    with pytest.raises(ParameterError, match="lacks triangles"):
+        write_viewer(broken)
 
 
 # ------------------------------------------------------------------------------ browser

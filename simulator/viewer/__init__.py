@@ -16,6 +16,7 @@ min/max, fold angles and powers are float32; all base64. If the data would excee
 from __future__ import annotations
 
 import base64
+import html
 import json
 import logging
 import pathlib
@@ -68,6 +69,10 @@ def load_viewer_data(result_dir) -> dict:
                                  "result with SimulationResult.save.")
         data = {k: np.asarray(npz[k]) for k in _NPZ_KEYS}
     frame = pd.read_csv(path / "creases.csv")
+    bad = [k for k in ("positions", "temperature") if not np.isfinite(data[k]).all()]
+    if bad:
+        raise ParameterError(f"{path / 'nodes.npz'}: {bad[0]} has non-finite values; the viewer "
+                             "needs finite positions and temperatures of every record.")
     data["meta"] = json.loads((path / "meta.json").read_text())
     data.update(_record_columns(frame, data, path))
     return data
@@ -163,17 +168,11 @@ def viewer_html(data: dict, max_bytes: int = MAX_DATA_BYTES) -> str:
     assets = resources.files(__name__)
     page = assets.joinpath("viewer.html").read_text(encoding="utf-8")
     script = assets.joinpath("viewer.js").read_text(encoding="utf-8")
-    payload = json.dumps(_payload(data, max_bytes), separators=(",", ":")).replace("</", "<\\/")
-    title = _payload_title(data)
-    return (page.replace("__TITLE__", title).replace("/*__DATA__*/", payload)
+    payload = _payload(data, max_bytes)
+    text = json.dumps(payload, separators=(",", ":")).replace("</", "<\\/")
+    title = html.escape(f"etorigami: {payload['title']}")
+    return (page.replace("__TITLE__", title).replace("/*__DATA__*/", text)
             .replace("/*__SCRIPT__*/", script))
-
-
-def _payload_title(data: dict) -> str:
-    import html
-
-    meta = data["meta"]
-    return html.escape(f"etorigami: {meta.get('case') or meta.get('name') or 'result'}")
 
 
 def write_viewer(result_dir, out=None, *, max_bytes: int = MAX_DATA_BYTES) -> pathlib.Path:
