@@ -27,6 +27,7 @@ from .state import ROOM_TEMPERATURE, SimulationState, initial_state
 from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold, Step,
                     StepContext, StepOutcome, StepRecorder)
 from .thermal import ThermalParameters
+from .viewer import load_viewer_data, viewer_html, write_viewer
 
 __all__ = [
     "__version__", "example_patterns",
@@ -40,6 +41,8 @@ __all__ = [
     "initial_state",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
+    # result viewer (self-contained HTML)
+    "write_viewer", "viewer_html", "load_viewer_data",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError",
 ]
