@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -24,7 +24,7 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
-           "check_power_mapping", "crease_power_function"]
+           "check_power_mapping", "crease_power_function", "CreasePowers"]
 
 
 def _number(owner, name: str, value, ok=lambda v: True, allowed: str = "finite"):
@@ -62,6 +62,16 @@ class PowerSchedule(ABC):
     def _values(self, t: np.ndarray) -> np.ndarray:
         """Power [W] at the times ``t`` (any shape)."""
 
+    @abstractmethod
+    def _energy(self, t: np.ndarray) -> np.ndarray:
+        """An antiderivative of the power [J] at the times ``t`` (differences are energies)."""
+
+    def mean(self, t0, t1):
+        """Mean power [W] over ``[t0, t1]`` [s] (exact; arrays broadcast; t1 > t0)."""
+        t0, t1 = np.asarray(t0, float), np.asarray(t1, float)
+        out = (self._energy(t1) - self._energy(t0)) / (t1 - t0)
+        return float(out) if out.ndim == 0 else out
+
     def describe(self) -> dict:
         """JSON-able description (class name and fields, SI units)."""
         return {"schedule": type(self).__name__, **asdict(self)}
@@ -85,6 +95,9 @@ class StepPower(PowerSchedule):
     def _values(self, t):
         return np.where((t >= self.t_on) & (t < self.t_off), self.power, 0.0)
 
+    def _energy(self, t):
+        return self.power * (np.clip(t, self.t_on, self.t_off) - self.t_on)
+
 
 @dataclass(frozen=True)
 class Ramp(PowerSchedule):
@@ -101,6 +114,11 @@ class Ramp(PowerSchedule):
 
     def _values(self, t):
         return self.power * np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
+
+    def _energy(self, t):
+        u = np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
+        held = np.maximum(t - self.t_start - self.duration, 0.0)
+        return self.power * (0.5 * self.duration * u**2 + held)
 
 
 @dataclass(frozen=True)
@@ -128,6 +146,11 @@ class SquareWave(PowerSchedule):
         on = (phase >= 0) & (phase - np.floor(phase) < self.duty)
         return np.where(on, self.power, 0.0)
 
+    def _energy(self, t):
+        phase = np.maximum((t - self.t_start) / self.period, 0.0)
+        whole = np.floor(phase)
+        return self.power * self.period * (whole * self.duty + np.minimum(phase - whole, self.duty))
+
 
 @dataclass(frozen=True)
 class Sine(PowerSchedule):
@@ -152,6 +175,10 @@ class Sine(PowerSchedule):
 
     def _values(self, t):
         return self.offset + self.amplitude * np.sin(2 * np.pi * self.frequency * t + self.phase)
+
+    def _energy(self, t):
+        w = 2 * np.pi * self.frequency
+        return self.offset * t - self.amplitude / w * np.cos(w * t + self.phase)
 
 
 @dataclass(frozen=True)
@@ -181,6 +208,17 @@ class PiecewiseLinear(PowerSchedule):
     def _values(self, t):
         return np.interp(t, self.times, self.values)
 
+    def _energy(self, t):
+        tk, pk = np.array(self.times), np.array(self.values)
+        if len(tk) == 1:
+            return pk[0] * (t - tk[0])
+        ek = np.r_[0.0, np.cumsum(0.5 * (pk[1:] + pk[:-1]) * np.diff(tk))]
+        i = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, len(tk) - 2)
+        s = np.clip(t, tk[0], tk[-1]) - tk[i]
+        slope = (pk[i + 1] - pk[i]) / (tk[i + 1] - tk[i])
+        inside = ek[i] + pk[i] * s + 0.5 * slope * s**2
+        return inside + pk[0] * np.minimum(t - tk[0], 0.0) + pk[-1] * np.maximum(t - tk[-1], 0.0)
+
 
 def check_power_mapping(owner: str, power) -> dict:
     """Validate ``{crease id or tuple of ids: PowerSchedule or constant power [W]}``.
@@ -208,28 +246,46 @@ def check_power_mapping(owner: str, power) -> dict:
     return out
 
 
-def crease_power_function(mesh, power) -> Callable:
-    """Function t -> crease powers [W] for a mesh: (C,) for a float t, (m, C) for m times.
+class CreasePowers:
+    """Crease powers [W] of a mesh from a mapping of schedules (see :func:`crease_power_function`).
 
-    ``power`` maps crease ids or tuples of crease ids (a circuit: each of its creases gets the
-    schedule's value) to schedules or constant powers; creases listed twice add up.
+    ``powers(t)`` gives (C,) for a float t and (m, C) for m times; ``powers.mean(t0, t1)`` the
+    exact (C,) mean power over ``[t0, t1]`` [s]. ``base`` (C,) [W] is a constant power added
+    to every crease row (e.g. the powers already on before a step).
     """
-    power = check_power_mapping("crease_power_function", power)
-    schedules = list(power.values())
-    rows = [[mesh.crease_row_of(int(c)) for c in (k if isinstance(k, tuple) else (k,))]
-            for k in power]
-    share = np.zeros((len(schedules), mesh.n_creases))
-    for j, r in enumerate(rows):
-        np.add.at(share[j], r, 1.0)
 
-    def powers(t):
+    def __init__(self, mesh, power, base=None):
+        power = check_power_mapping("crease powers", power)
+        self.schedules = list(power.values())
+        self.n_creases = mesh.n_creases
+        self.base = np.zeros(mesh.n_creases) if base is None else np.asarray(base, float)
+        self.share = np.zeros((len(self.schedules), mesh.n_creases))
+        for j, key in enumerate(power):
+            for c in (key if isinstance(key, tuple) else (key,)):
+                self.share[j, mesh.crease_row_of(int(c))] += 1.0
+
+    def _combine(self, values, shape):
+        if not self.schedules:
+            return np.broadcast_to(self.base, (*shape, self.n_creases)).copy()
+        out = np.array(values).reshape(len(self.schedules), -1).T @ self.share + self.base
+        return out.reshape(*shape, self.n_creases)
+
+    def __call__(self, t):
         t = np.asarray(t, float)
         if not np.all(np.isfinite(t)):
             raise ParameterError("crease powers: times must be finite [s].")
-        if not schedules:
-            return np.zeros((*t.shape, mesh.n_creases))
-        values = np.array([s(t.ravel()) for s in schedules]).reshape(len(schedules), -1)
-        out = values.T @ share
-        return out[0] if t.ndim == 0 else out.reshape(*t.shape, mesh.n_creases)
+        return self._combine([s(t.ravel()) for s in self.schedules], t.shape)
 
-    return powers
+    def mean(self, t0: float, t1: float) -> np.ndarray:
+        """(C,) mean crease powers [W] over ``[t0, t1]`` [s], t1 > t0."""
+        return self._combine([s.mean(t0, t1) for s in self.schedules], ())
+
+
+def crease_power_function(mesh, power) -> CreasePowers:
+    """Function t -> crease powers [W] for a mesh: (C,) for a float t, (m, C) for m times.
+
+    ``power`` maps crease ids or tuples of crease ids (a circuit: each of its creases gets the
+    schedule's value) to schedules or constant powers; creases listed twice add up. The result
+    also has ``mean(t0, t1)``, the exact mean crease powers over an interval.
+    """
+    return CreasePowers(mesh, power)

@@ -19,7 +19,9 @@ free unknowns are integrated as temperature rises ``dT`` with the theta-method
 theta in [1/2, 1] (1/2 Crank-Nicolson, second order; 1 backward Euler, first order, L-stable;
 the reference uses :data:`REFERENCE_THETA` = 2/3). The conductivity and capacity are assembled
 on the shape at the start of each time step and re-assembled only when the shape changes, so
-``C / dt + theta K`` is factorised once while dt and shape are fixed.
+``C / dt + theta K`` is factorised once while dt and shape are fixed. Powers given as schedules
+enter each step as their exact mean over the step (``q_k = q_{k+1}`` = mean), so the heat put
+in equals the integral of the power even for pulses shorter than dt.
 """
 
 from __future__ import annotations
@@ -89,7 +91,8 @@ def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
 def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     """Lumped heat capacity [J/K] of every unknown, ((N + 1) n,), at positions ``x`` (n, 3) [m].
 
-    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (digest D5.1).
+    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (digest D5.1). With
+    ``env_conductivity = 0`` the environment is not in thermal contact and holds no heat.
     """
     prm, mesh = tm.params, tm.mesh
     n, N = mesh.n_nodes, prm.layers
@@ -97,10 +100,12 @@ def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     solid = _volumetric_capacity(tm) * tm.thickness * area / 3
     C = np.zeros((N + 1, n))
     C[0] = np.bincount(mesh.triangles.ravel(), np.repeat(solid, 3), minlength=n)
-    a_q, t_air = tm.environment_geometry(x, area)
-    seg = tm.node_layer_sum(prm.env_density * prm.env_specific_heat * a_q * t_air[:, None] / N)
-    C[:-1] += 0.5 * seg.T
-    C[1:] += 0.5 * seg.T
+    if prm.env_conductivity > 0:                   # k_env = 0: no environment in contact
+        a_q, t_air = tm.environment_geometry(x, area)
+        rho_c = prm.env_density * prm.env_specific_heat
+        seg = tm.node_layer_sum(rho_c * a_q * t_air[:, None] / N)
+        C[:-1] += 0.5 * seg.T
+        C[1:] += 0.5 * seg.T
     return C.ravel()
 
 
@@ -297,6 +302,9 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     powers : mapping or callable
         ``{crease id or tuple of ids: PowerSchedule or watts}`` (see
         :mod:`simulator.power_schedules`), or ``powers(t)`` giving the (C,) crease powers [W].
+        If ``powers`` has a ``mean(t0, t1)`` method (schedules given as a mapping do), each
+        step uses the exact mean power over the step (so pulses shorter than dt keep their
+        energy); otherwise the theta-weighted powers at the two ends of the step.
     t_end, dt : float
         End time and (largest) time step [s], > 0.
     theta : float
@@ -331,14 +339,15 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     rise = _initial_rise(tm, x_now, T0, room)
     T = rise[system.free]
 
-    def heat(t):
-        p = np.asarray(powers(t), float)
+    def heat(p):
         q = np.zeros(tm.n_dof)
         q[:n] = tm.heat_vector(p)
-        return p, q[system.free]
+        return q[free]
 
-    p_old, q_old = heat(0.0)
-    log = {"time": [0.0], "temperature": [room + rise[:n]], "power": [p_old], "heat_in": [0.0],
+    free, averaged = system.free, hasattr(powers, "mean")   # the free set never changes
+    p_new = np.asarray(powers(0.0), float)
+    q_new = heat(p_new)
+    log = {"time": [0.0], "temperature": [room + rise[:n]], "power": [p_new], "heat_in": [0.0],
            "heat_out": [0.0], "heat_stored": [system.C @ T]}
     e_in = e_out = 0.0
     status, message = "converged", f"reached t = {t_end:g} s in {n_steps} steps"
@@ -346,17 +355,18 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
         t0, t1 = (k - 1) * h, k * h
         x_new = np.asarray(shape(t0), float)
         if k > 1 and not np.array_equal(x_new, x_now):
-            rise[system.free] = T
             x_now, system = x_new, heat_system(tm, x_new)
             stepper, assemblies = ThetaStepper(system.K, system.C, h, theta), assemblies + 1
-            T = rise[system.free]
-            q_old = heat(t0)[1]
-        p_new, q_new = heat(t1)
+        p_new = np.asarray(powers(t1), float)
+        if averaged:                          # exact heat input per step (PWM, steps, ramps)
+            q_old = q_new = heat(powers.mean(t0, t1))
+        else:
+            q_old, q_new = q_new, heat(p_new)
         T_new = stepper.step(T, q_old, q_new)
         e_in += h * np.sum(theta * q_new + (1 - theta) * q_old)
         e_out += h * system.outflow @ (theta * T_new + (1 - theta) * T)
-        T, q_old = T_new, q_new
-        rise[system.free] = T
+        T = T_new
+        rise[free] = T
         if not np.all(np.isfinite(T)):
             status, message = "failed", f"non-finite temperature at t = {t1:g} s (step {k})"
         elif callback is not None and callback(k, n_steps, t1, room + rise[:n]):
