@@ -73,8 +73,10 @@ class PowerSchedule(ABC):
         return float(out) if out.ndim == 0 else out
 
     def describe(self) -> dict:
-        """JSON-able description (class name and fields, SI units)."""
-        return {"schedule": type(self).__name__, **asdict(self)}
+        """JSON-able description (class name and fields, SI units; infinite times as None)."""
+        fields = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                  for k, v in asdict(self).items()}
+        return {"schedule": type(self).__name__, **fields}
 
 
 @dataclass(frozen=True)

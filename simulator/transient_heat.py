@@ -36,7 +36,9 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from .errors import ParameterError
+from .model import Model
 from .power_schedules import crease_power_function
+from .state import thermal_model
 from .thermal import ThermalModel
 
 __all__ = ["REFERENCE_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
@@ -295,7 +297,8 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
 
     Parameters
     ----------
-    tm : ThermalModel
+    tm : ThermalModel or Model
+        The heat-transfer model (a :class:`~simulator.model.Model` gives its cached one).
     x : (n, 3) array or callable
         Node positions [m], or ``x(t)`` giving them at time t [s]; K and C are assembled on the
         positions at the start of each time step and re-assembled when they change.
@@ -319,6 +322,11 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     callback : callable, optional
         ``callback(k, n_steps, t, temperature)`` after step k; returning True stops the run.
     """
+    if isinstance(tm, Model):
+        tm = thermal_model(tm)
+    elif not isinstance(tm, ThermalModel):
+        raise ParameterError(f"integrate_heat: give a Model with thermal parameters or a "
+                             f"ThermalModel, not {type(tm).__name__}.")
     t_end, dt = check_time_step(t_end, "t_end"), check_time_step(dt)
     theta = check_theta(theta)
     if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
@@ -357,7 +365,8 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
         if k > 1 and not np.array_equal(x_new, x_now):
             x_now, system = x_new, heat_system(tm, x_new)
             stepper, assemblies = ThetaStepper(system.K, system.C, h, theta), assemblies + 1
-        p_new = np.asarray(powers(t1), float)
+        record = k % record_every == 0 or k == n_steps
+        p_new = np.asarray(powers(t1), float) if record or not averaged else None
         if averaged:                          # exact heat input per step (PWM, steps, ramps)
             q_old = q_new = heat(powers.mean(t0, t1))
         else:
@@ -371,7 +380,8 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
             status, message = "failed", f"non-finite temperature at t = {t1:g} s (step {k})"
         elif callback is not None and callback(k, n_steps, t1, room + rise[:n]):
             status, message = "stopped", f"stopped by the callback at t = {t1:g} s (step {k})"
-        if k % record_every == 0 or k == n_steps or status != "converged":
+        if record or status != "converged":
+            p_new = np.asarray(powers(t1), float) if p_new is None else p_new
             for key, val in (("time", t1), ("temperature", room + rise[:n]), ("power", p_new),
                              ("heat_in", e_in), ("heat_out", e_out),
                              ("heat_stored", system.C @ T)):

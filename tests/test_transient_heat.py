@@ -259,6 +259,23 @@ def test_transient_heat_step_in_simulate():
     np.testing.assert_array_equal(r.state.u, r.steps[0].state.u)
 
 
+def test_transient_result_saves(tmp_path):
+    import json
+    model = get_case("single_fold").model
+    r = simulate(model, [TransientHeat({2: StepPower(5e-3, t_off=0.01), (2,): Ramp(1e-3, 0.02)},
+                                       duration=0.02, dt=2e-3)])
+    r.save(tmp_path)
+    meta = json.loads((tmp_path / "meta.json").read_text())
+    settings = meta["steps"][0]
+    assert settings["dt [s]"] == 2e-3 and settings["power_added"]["2"]["t_off"] == 0.01
+    text = (tmp_path / "creases.csv").read_text().splitlines()
+    assert "time [s]" in text[0] and text[1].endswith(",,,,")      # initial record: empty
+    direct = integrate_heat(model, model.mesh.nodes, {2: StepPower(5e-3, t_off=0.01),
+                                                      (2,): Ramp(1e-3, 0.02)}, 0.02, 2e-3)
+    np.testing.assert_allclose(r.steps[0].temperature_history, direct.temperature[1:],
+                               rtol=1e-12)
+
+
 # ---------------------------------------------------------------- errors
 @pytest.mark.parametrize("make, match", [
     (lambda: TransientHeat({2: 1e-3}, duration=1.0, dt=0.0), "time step"),
