@@ -277,6 +277,18 @@ class TransientHeatResult:
     steps: int
     assemblies: int
 
+    def to_frame(self):
+        """Long table, one row per record and structure node: ``time [s]``, ``node``,
+        ``temperature [degC]``, ``heat_in [J]``, ``heat_out [J]``, ``heat_stored [J]``."""
+        import pandas as pd
+
+        m, n = self.temperature.shape
+        rep = lambda a: np.repeat(a, n)  # noqa: E731
+        return pd.DataFrame({"time [s]": rep(self.time), "node": np.tile(np.arange(n), m),
+                             "temperature [degC]": self.temperature.ravel(),
+                             "heat_in [J]": rep(self.heat_in), "heat_out [J]": rep(self.heat_out),
+                             "heat_stored [J]": rep(self.heat_stored)})
+
 
 def _initial_rise(tm, x, T0, room) -> np.ndarray:
     n, size = tm.mesh.n_nodes, tm.n_dof

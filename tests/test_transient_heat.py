@@ -337,3 +337,7 @@ def test_callable_powers_and_callback_stop():
                        callback=lambda k, n, t, T: seen.append((k, n)) or k == 3)
     assert (c.success, c.status, c.steps, seen[-1]) == (False, "stopped", 3, (3, 10))
     np.testing.assert_allclose(c.temperature[-1], a.temperature[3], rtol=1e-12)
+    df = a.to_frame()
+    assert len(df) == 11 * tm.mesh.n_nodes and df["time [s]"].iloc[-1] == pytest.approx(0.01)
+    np.testing.assert_allclose(df["temperature [degC]"].to_numpy()[-tm.mesh.n_nodes:],
+                               a.temperature[-1])
