@@ -15,18 +15,21 @@ from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
-from .materials import SPR, SU8, SUBSTRATE, Material
+from .materials import AIR, GOLD, SILICON, SPR, SU8, SUBSTRATE, WATER, Fluid, Material
 from .mesh import BarHingeMesh, build_mesh
 from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
 from .newton import NewtonOptions
 from .pattern import Pattern
+from .power_schedules import PiecewiseLinear, PowerSchedule, Ramp, Sine, SquareWave, StepPower
 from .properties import BarHingeParameters
 from .results import SimulationResult, StepResult
 from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
 from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold, Step,
-                    StepContext, StepOutcome, StepRecorder)
+                    StepContext, StepOutcome, StepRecorder, TransientHeat)
 from .thermal import ThermalParameters
+from .transient_heat import (REFERENCE_THETA, ThetaStepper, TransientHeatResult, capacity_vector,
+                             integrate_heat, theta_step)
 from .viewer import load_viewer_data, viewer_html, write_viewer
 
 __all__ = [
@@ -35,10 +38,15 @@ __all__ = [
     "Pattern", "BarHingeMesh", "build_mesh", "Material", "SU8", "SPR", "SUBSTRATE",
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
+    "Fluid", "GOLD", "SILICON", "AIR", "WATER",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
     "initial_state",
+    # transient heat
+    "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
+    "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
+    "ThetaStepper", "theta_step", "REFERENCE_THETA",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)

@@ -115,7 +115,8 @@ class SimulationResult:
 
         Keys: ``stage`` (step index, -1 for the initial record), ``stage_name``, ``increment``,
         ``u`` (m, n, 3) [m], ``temperature`` (m, n) [deg C], ``power`` (m, C) [W],
-        ``iterations`` (m,).
+        ``iterations`` (m,), ``columns`` (dict of the steps' step-specific columns, each a list
+        of m values with None for records of steps without that column).
         """
         s0 = self.initial_state
         stage, names, inc = [-1], ["initial"], [0]
@@ -129,9 +130,14 @@ class SimulationResult:
             temp += list(step.temperature_history)
             power += list(step.power_history)
             its += list(step.increment_iterations)
+        columns: dict = {}
+        for k, step in enumerate(self.steps):
+            for name, values in step.columns.items():
+                col = columns.setdefault(name, [None] * len(stage))
+                col[stage.index(k):stage.index(k) + step.increments] = list(values)
         return {"stage": np.array(stage), "stage_name": np.array(names), "increment": np.array(inc),
                 "u": np.array(u), "temperature": np.array(temp), "power": np.array(power),
-                "iterations": np.array(its)}
+                "iterations": np.array(its), "columns": columns}
 
     @cached_property
     def fold_angle(self) -> np.ndarray:
@@ -155,7 +161,8 @@ class SimulationResult:
 
         Columns: ``step`` (record index, 0 = initial state), ``stage``, ``increment``,
         ``crease`` (edge id), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
-        ``temperature_max [degC]``, ``iterations``.
+        ``temperature_max [degC]``, ``iterations``, then the steps' step-specific columns (e.g.
+        ``time [s]``; empty for records of steps without them).
         """
         import pandas as pd
 
@@ -171,6 +178,8 @@ class SimulationResult:
             "temperature [degC]": self.crease_temperature.ravel(),
             "temperature_max [degC]": self.crease_temperature_max.ravel(),
             "iterations": rep(h["iterations"]),
+            **{name: pd.Series(values).repeat(C).reset_index(drop=True)
+               for name, values in h["columns"].items()},
         })
 
     def save(self, directory, metadata: dict | None = None) -> pathlib.Path:

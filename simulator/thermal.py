@@ -32,6 +32,7 @@ from scipy.sparse.linalg import splu
 from .assembly import StiffnessPattern
 from .elements.contact import point_triangle_distance
 from .errors import ParameterError, PatternError
+from .materials import AIR
 from .mesh import BarHingeMesh
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
@@ -87,6 +88,11 @@ class ThermalParameters:
         Panel ids of thermal boundaries (substrate); their distance caps t_env.
     room_temperature_nodes : tuple of int
         Mesh node ids whose structure temperature is held at room temperature.
+    env_density : float
+        Environment density rho_env [kg/m^3], >= 0 (transient heat only; default air as in the
+        reference transient example, :data:`~simulator.materials.AIR`).
+    env_specific_heat : float
+        Environment specific heat c_env [J/(kg K)], >= 0 (transient heat only; default air).
     """
 
     env_thickness: float
@@ -96,9 +102,13 @@ class ThermalParameters:
     room_temperature: float = 21.0
     boundary_panels: tuple = ()
     room_temperature_nodes: tuple = ()
+    env_density: float = AIR.density
+    env_specific_heat: float = AIR.specific_heat
 
     def __post_init__(self):
         checks = {
+            "env_density": (lambda v: v >= 0, ">= 0 kg/m^3"),
+            "env_specific_heat": (lambda v: v >= 0, ">= 0 J/(kg K)"),
             "env_thickness": (lambda v: v > 0, "> 0 m"),
             "env_conductivity": (lambda v: v >= 0, ">= 0 W/(m K)"),
             "dissipation_angle": (lambda v: 0 <= v < math.pi / 2, "in [0, pi/2) rad"),
@@ -219,6 +229,11 @@ class ThermalModel:
         K = scale[:, None, None] * (b[:, :, None] * b[:, None, :] + c[:, :, None] * c[:, None, :])
         return K, area
 
+    def triangle_areas(self, x) -> np.ndarray:
+        """Conduction areas A_t [m^2] of every triangle at positions ``x`` (n, 3) [m], (n_tri,)
+        (reference edge lengths, current angle at the first node; digest 6.2)."""
+        return self._conduction(x)[1]
+
     def tcap(self, x) -> np.ndarray:
         """Cap of t_env per triangle [m], (n_tri,) (digest 6.4).
 
@@ -237,9 +252,18 @@ class ThermalModel:
         dmin[p] = d.reshape(len(p), len(bc)).min(axis=1)
         return np.where(self.is_boundary, _CAP_BOUNDARY, dmin[tri].mean(axis=1))
 
-    def layer_conductance(self, x, area=None) -> np.ndarray:
-        """Environment conductance of every node and layer [W/K], (n, N) (digest 6.3)."""
-        prm, tri = self.params, self.mesh.triangles
+    def environment_geometry(self, x, area=None):
+        """Environment layer areas and thickness of every triangle (digest 6.3-6.4).
+
+        Returns
+        -------
+        a_q : (n_tri, N) array
+            Heat-loss area A_q [m^2] of layer q seen by EACH of the triangle's three nodes,
+            ``(2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N``.
+        t_air : (n_tri,) array
+            Environment thickness [m], ``min(t_env, tcap)`` (floored, see the module notes).
+        """
+        prm = self.params
         if area is None:
             area = self._conduction(x)[1]
         t_env = prm.env_thickness
@@ -252,13 +276,22 @@ class ThermalModel:
         s = (np.arange(1, N + 1) - 0.5) / N
         l_sum = self.edge_lengths.sum(axis=1)
         spread = l_sum * t_air * math.tan(prm.dissipation_angle)
-        a_q = (2 / 3) * area[:, None] + (2 / 3) * spread[:, None] * s            # (n_tri, N)
-        g = prm.env_conductivity * a_q * N / t_air[:, None]                # (n_tri, N)
+        return (2 / 3) * area[:, None] + (2 / 3) * spread[:, None] * s, t_air
+
+    def node_layer_sum(self, per_triangle) -> np.ndarray:
+        """Sum a per-triangle, per-layer quantity (n_tri, N) onto every node's chain, (n, N)."""
+        N, tri = self.params.layers, self.mesh.triangles
         nodes = np.repeat(tri, N, axis=1).ravel()
         layer = np.tile(np.arange(N), 3 * len(tri))
-        flat = np.bincount(nodes * N + layer, np.repeat(g, 3, axis=0).ravel(),
+        flat = np.bincount(nodes * N + layer, np.repeat(per_triangle, 3, axis=0).ravel(),
                            minlength=self.mesh.n_nodes * N)
         return flat.reshape(-1, N)
+
+    def layer_conductance(self, x, area=None) -> np.ndarray:
+        """Environment conductance of every node and layer [W/K], (n, N) (digest 6.3)."""
+        a_q, t_air = self.environment_geometry(x, area)
+        N = self.params.layers
+        return self.node_layer_sum(self.params.env_conductivity * a_q * N / t_air[:, None])
 
     # ------------------------------------------------------------------ matrices
     @cached_property

@@ -3,6 +3,7 @@
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .heating import AmbientTemperature, Coupling, Heat, coupled_increments
 from .mechanical import Gravity, Load, SelfFold
+from .transient import TransientHeat
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity",
-           "Heat", "AmbientTemperature", "Coupling", "coupled_increments"]
+           "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat"]

@@ -1,0 +1,94 @@
+"""Time-domain steps: transient heat transfer on a fixed shape (dynamics digest D5).
+
+:class:`TransientHeat` integrates the heat equation with the theta-method of
+:mod:`simulator.transient_heat` over ``duration`` seconds, with time-varying crease or circuit
+powers (:mod:`simulator.power_schedules`) added on top of the state's crease powers. The shape
+is the state's shape for the whole step and the crease rest angles are not updated (heat
+only; the thermo-mechanical coupling is a later step). Each record carries ``time [s]`` (from
+the start of the step) and the energy bookkeeping since the start of the step: ``heat_in [J]``
+(heat put in), ``heat_out [J]`` (heat lost to room temperature) and ``heat_stored [J]``
+(change of the heat stored above room temperature); ``heat_stored = heat_in - heat_out``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..power_schedules import CreasePowers, check_power_mapping
+from ..transient_heat import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
+from .base import Step, StepContext, StepOutcome, StepRecorder
+
+__all__ = ["TransientHeat"]
+
+
+@dataclass(frozen=True)
+class TransientHeat(Step):
+    """Transient heating over ``duration`` [s] with time steps ``dt`` [s] on the current shape.
+
+    Parameters
+    ----------
+    power : mapping
+        Power ADDED on top of the state's crease powers, keyed by crease id or by a tuple of
+        crease ids (a heater circuit): a :class:`~simulator.power_schedules.PowerSchedule`
+        (time from the start of this step) or a constant power [W].
+    duration : float
+        Length of the step [s], > 0.
+    dt : float
+        Time step [s], > 0 (reduced to ``duration / ceil(duration / dt)`` if it does not divide
+        the duration).
+    theta : float
+        Weight of the new time level in [1/2, 1] (default 2/3, the reference's).
+    record_every : int
+        Record every k-th time step (the last one is always recorded).
+
+    Notes
+    -----
+    The start temperatures are the state's node temperatures with a quasi-steady environment
+    (:func:`~simulator.transient_heat.environment_profile`), so a steady state stays steady.
+    """
+
+    power: Mapping = field(default_factory=dict)
+    duration: float = 1.0
+    dt: float = 1e-3
+    theta: float = REFERENCE_THETA
+    record_every: int = 1
+    name: str = "transient_heat"
+
+    def __post_init__(self):
+        check_power_mapping("TransientHeat", self.power)
+        check_time_step(self.duration, "TransientHeat.duration")
+        check_time_step(self.dt, "TransientHeat.dt")
+        check_theta(self.theta)
+        n = self.record_every
+        if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
+            raise ParameterError(f"TransientHeat.record_every = {n!r} must be a positive "
+                                 "integer.")
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        mesh, tm = context.model.mesh, context.thermal
+        powers = CreasePowers(mesh, self.power, base=state.crease_power)
+        result = integrate_heat(
+            tm, mesh.nodes + state.u, powers, self.duration, self.dt, self.theta,
+            state.room_temperature, state.temperature, self.record_every,
+            callback=lambda k, n, t, T: context.report(k, n))
+        rec = StepRecorder(state)
+        for k in range(1, len(result.time)):
+            rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
+                       result.power[k], 0, (), **{
+                           "time [s]": result.time[k], "heat_in [J]": result.heat_in[k],
+                           "heat_out [J]": result.heat_out[k],
+                           "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]})
+        end = replace(state, temperature=result.temperature[-1], crease_power=result.power[-1])
+        return rec.finish(result.success, result.status, result.message, end,
+                          state.applied_load.ravel())
+
+    def describe(self) -> dict:
+        return {"power_added": {str(k): (v.describe() if hasattr(v, "describe") else
+                                         {"schedule": "constant", "power [W]": float(v)})
+                                for k, v in dict(self.power).items()},
+                "duration [s]": self.duration, "dt [s]": self.dt, "theta": self.theta,
+                "record_every": self.record_every}
