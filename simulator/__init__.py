@@ -13,7 +13,10 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
-from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
+from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
+                     PatternError)
+from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fold, read_fold,
+                   read_model, result_to_fold_frames, write_fold, write_fold_frames, write_model)
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
 from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
@@ -39,6 +42,9 @@ __all__ = [
     "initial_state",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
+    # FOLD files
+    "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
+    "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
     # errors
-    "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError",
+    "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
 ]
