@@ -3,6 +3,9 @@
 import copy
 import json
 import math
+import os
+import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -138,6 +141,15 @@ def test_flat_edges_merge_triangulated_panels():
     assert p.edge_assignment[p.creases[0]] == "V"
 
 
+def test_vertices_in_no_face_are_dropped_with_a_warning(caplog):
+    data = two_panels()
+    data["vertices_coords"].append([5, 5])
+    data["vertices_other:n"] = list(range(7))
+    p = fold_to_pattern(data)
+    assert p.n_vertices == 6 and p.metadata["vertices_other:n"] == list(range(6))
+    assert "vertices [6] belong to no face" in caplog.text
+
+
 def test_written_files_are_fold_json(tmp_path):
     path = write_fold(single_fold_pattern(), tmp_path / "s.fold")
     data = json.loads(path.read_text())
@@ -223,3 +235,21 @@ def test_invalid_json_names_the_line(tmp_path):
         read_fold(path)
     with pytest.raises(FoldFormatError, match="cannot read FOLD file"):
         read_fold(tmp_path / "missing.fold")
+
+
+# ---------------------------------------------------------------------- documentation
+def test_docs_example_file_and_code_blocks_run():
+    root = pathlib.Path(__file__).resolve().parents[1]
+    text = (root / "docs" / "fold-format.md").read_text()
+    example = json.loads((root / "docs" / "examples" / "two_panels.fold").read_text())
+    blocks = re.findall(r"```(\w*)\n(.*?)```", text, flags=re.S)
+    assert json.loads([b for lang, b in blocks if lang == "json" and "vertices_coords" in b][0]) \
+        == example
+    cwd = os.getcwd()
+    os.chdir(root)
+    try:
+        for lang, code in blocks:
+            if lang == "python":
+                exec(compile(code, "fold-format.md", "exec"), {})
+    finally:
+        os.chdir(cwd)

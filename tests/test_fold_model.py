@@ -142,6 +142,29 @@ def test_folded_3d_file_is_in_equilibrium_at_its_start_shape(fold_deg):
     assert fold[-1] > fold_deg + 5                               # heating folds it further
 
 
+def test_vertex_supports_and_merged_faces_in_model_files():
+    """A triangulated panel (F edge) is one panel; a vertex support fixes its corner nodes."""
+    data = folded_pair(0.0)
+    data["faces_vertices"] = [[0, 1, 2], [0, 2, 3], [1, 4, 5, 2]]
+    data["edges_vertices"].append([0, 2])
+    data["edges_assignment"].append("F")
+    data["edges_foldAngle"].append(0)
+    for key in ("edges_etorigami:width", "edges_etorigami:thickness",
+                "edges_etorigami:delta_alpha"):
+        data[key].append(None)
+    data["faces_etorigami:thickness"] = [10e-6] * 3
+    data["faces_etorigami:support"] = [None, None, None]
+    data["vertices_etorigami:support"] = ["xyz", "z", None, "xyz", None, None]
+    model, steps = fold_to_model(data)
+    mesh = model.mesh
+    assert mesh.pattern.n_panels == 2 and mesh.n_creases == 1
+    fixed = {n: d for n, d in model.supports.fixed.items()}
+    corner = {v: np.flatnonzero(mesh.node_vertex == v).tolist() for v in range(4)}
+    assert all(fixed[n] == "xyz" for n in corner[0] + corner[3])
+    assert all(fixed[n] == "z" for n in corner[1]) and len(corner[1]) == 2
+    assert simulate(model, steps).success
+
+
 # ---------------------------------------------------------------------- model-file errors
 MODEL_ERRORS = [
     (lambda d: d.__setitem__("etorigami:steps", [{"type": "Explode"}]),

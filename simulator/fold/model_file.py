@@ -16,13 +16,14 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..bimorph import Actuators, Bimorph
-from ..errors import FoldFormatError, ParameterError
+from ..errors import ParameterError
 from ..mesh import build_mesh
 from ..model import ContactParameters, Model, Supports, make_model
 from ..properties import BarHingeParameters
 from ..steps import Step
 from ..thermal import ThermalParameters
-from .reader import NS, load_fold_json, parse_fold
+from ._common import NS, array_field, fail
+from .reader import load_fold_json, parse_fold
 from .writer import dump_fold, pattern_to_fold
 
 __all__ = ["model_to_fold", "write_model", "fold_to_model", "read_model"]
@@ -169,20 +170,13 @@ def _guard(field: str, build):
     try:
         return build()
     except (TypeError, ValueError) as exc:
-        raise FoldFormatError(f"FOLD {field}: {exc}") from None
+        fail(field, str(exc))
 
 
 def _obj(data, field) -> dict:
     value = data.get(field) or {}
     if not isinstance(value, dict):
-        raise FoldFormatError(f"FOLD {field}: must be a JSON object, got {value!r}.")
-    return value
-
-
-def _per_file_index(data, field, n, what):
-    value = data.get(field)
-    if value is not None and (not isinstance(value, list) or len(value) != n):
-        raise FoldFormatError(f"FOLD {field}: needs one entry per {what} ({n}).")
+        fail(field, f"must be a JSON object, got {value!r}.")
     return value
 
 
@@ -190,16 +184,16 @@ def _supports(data, geo, mesh) -> Supports:
     raw = _obj(data, f"{NS}supports")
     fixed = {int(k): v for k, v in (raw.get("fixed") or {}).items()}
     supports = Supports(fixed, tuple(tuple(e) for e in raw.get("elastic") or ()))
-    faces = _per_file_index(data, f"faces_{NS}support", len(geo.face), "face")
+    faces = array_field(data, f"faces_{NS}support", len(geo.face), "face")
     for f, dirs in enumerate(faces or ()):
         if dirs:
             supports = supports | Supports.nodes(mesh.panel_nodes(int(geo.face[f])), dirs)
-    verts = _per_file_index(data, f"vertices_{NS}support", len(geo.vertex), "vertex")
+    verts = array_field(data, f"vertices_{NS}support", len(geo.vertex), "vertex")
     for v, dirs in enumerate(verts or ()):
         if dirs:
             if geo.vertex[v] < 0:
-                raise FoldFormatError(f"FOLD vertices_{NS}support[{v}]: vertex {v} was merged "
-                                      "away (inside an F/J region); support a panel instead.")
+                fail(f"vertices_{NS}support[{v}]", f"vertex {v} was merged "
+                     "away (inside an F/J region); support a panel instead.")
             supports = supports | Supports.nodes(
                 np.flatnonzero(mesh.node_vertex == geo.vertex[v]), dirs)
     return supports
@@ -210,7 +204,7 @@ def _thermal(data, geo):
     if raw is None:
         return None
     raw = dict(_obj(data, f"{NS}thermal"))
-    flags = _per_file_index(data, f"faces_{NS}substrate", len(geo.face), "face") or ()
+    flags = array_field(data, f"faces_{NS}substrate", len(geo.face), "face") or ()
     raw["boundary_panels"] = tuple(sorted({int(geo.face[f]) for f, s in enumerate(flags) if s}))
     raw["room_temperature_nodes"] = tuple(raw.get("room_temperature_nodes", ()))
     return _guard(f"{NS}thermal", lambda: ThermalParameters(**raw))
@@ -222,17 +216,17 @@ def _actuators(data, geo):
         return None
     bimorph = _guard(f"{NS}bimorph", lambda: Bimorph(**_obj(data, f"{NS}bimorph")))
     field = f"edges_{NS}delta_alpha"
-    values = _per_file_index(data, field, len(geo.edge), "edge") or ()
+    values = array_field(data, field, len(geo.edge), "edge") or ()
     da = {}
     for i, v in enumerate(values):
         if v is None:
             continue
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
-            raise FoldFormatError(f"FOLD {field}[{i}]: {v!r} must be a number in 1/K or null.")
+            fail(f"{field}[{i}]", f"{v!r} must be a number in 1/K or null.")
         e = int(geo.edge[i])
         if e < 0 or not geo.pattern.is_crease[e]:
-            raise FoldFormatError(f"FOLD {field}[{i}]: edge {i} is not a crease; only creases "
-                                  "can be actuators.")
+            fail(f"{field}[{i}]", f"edge {i} is not a crease; only creases "
+                 "can be actuators.")
         da[e] = float(v)
     return Actuators(bimorph, da)
 
@@ -240,7 +234,7 @@ def _actuators(data, geo):
 def _steps(data, geo) -> tuple:
     raw = data.get(f"{NS}steps", [])
     if not isinstance(raw, list):
-        raise FoldFormatError(f"FOLD {NS}steps: must be a list of step objects.")
+        fail(f"{NS}steps", "must be a list of step objects.")
     known = _step_classes()
     circuits = _heater_circuits(data, geo)
     steps = []
@@ -248,8 +242,8 @@ def _steps(data, geo) -> tuple:
         where = f"{NS}steps[{i}]"
         if not isinstance(item, dict) or item.get("type") not in known:
             got = item.get("type") if isinstance(item, dict) else item
-            raise FoldFormatError(f"FOLD {where}: type {got!r} is not a step; known: "
-                                  f"{', '.join(sorted(known))}.")
+            fail(where, f"type {got!r} is not a step; known: "
+                 f"{', '.join(sorted(known))}.")
         kind = item["type"]
         kwargs = {k: _decode(v) for k, v in item.items() if k != "type"}
         field = _EDGE_KEYED.get(kind)
@@ -287,15 +281,15 @@ def _decode_key(k: str):
 
 def _heater_circuits(data, geo) -> dict:
     field = f"edges_{NS}heater"
-    names = _per_file_index(data, field, len(geo.edge), "edge") or ()
+    names = array_field(data, field, len(geo.edge), "edge") or ()
     out = {}
     for i, name in enumerate(names):
         if name is None:
             continue
         e = int(geo.edge[i])
         if not isinstance(name, str) or e < 0 or not geo.pattern.is_crease[e]:
-            raise FoldFormatError(f"FOLD {field}[{i}]: {name!r}; give a circuit name (string) "
-                                  "on creases only, null elsewhere.")
+            fail(f"{field}[{i}]", f"{name!r}; give a circuit name (string) "
+                 "on creases only, null elsewhere.")
         out.setdefault(name, []).append(e)
     return {k: tuple(sorted(v)) for k, v in out.items()}
 
@@ -303,21 +297,21 @@ def _heater_circuits(data, geo) -> dict:
 def _edge_keys(mapping, geo, circuits, where) -> dict:
     """Map file edge ids / circuit names to pattern crease ids."""
     if not isinstance(mapping, dict):
-        raise FoldFormatError(f"FOLD {where}: must be an object keyed by edge id or circuit.")
+        fail(where, "must be an object keyed by edge id or circuit.")
     n = len(geo.edge)
 
     def edge(i):
         if not 0 <= i < n or geo.edge[i] < 0:
-            raise FoldFormatError(f"FOLD {where}: edge {i} is not an edge of the file "
-                                  f"(0..{n - 1}, F/J edges excluded).")
+            fail(where, f"edge {i} is not an edge of the file "
+                 f"(0..{n - 1}, F/J edges excluded).")
         return int(geo.edge[i])
 
     out = {}
     for k, v in mapping.items():
         if isinstance(k, str):
             if k not in circuits:
-                raise FoldFormatError(f"FOLD {where}: {k!r} is neither an edge id nor a circuit "
-                                      f"of edges_{NS}heater (circuits: {sorted(circuits)}).")
+                fail(where, f"{k!r} is neither an edge id nor a circuit "
+                     f"of edges_{NS}heater (circuits: {sorted(circuits)}).")
             out[circuits[k]] = v
         else:
             out[tuple(edge(i) for i in k) if isinstance(k, tuple) else edge(k)] = v
