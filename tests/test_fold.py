@@ -3,7 +3,6 @@
 import copy
 import json
 import math
-import os
 import pathlib
 import re
 
@@ -180,38 +179,57 @@ def _delete(key):
     return lambda d: d.pop(key)
 
 
-MALFORMED = [
+MALFORMED = [   # (id, edit of the valid two-panel file, expected message)
     ("missing coords", _delete("vertices_coords"), r"vertices_coords: missing required"),
     ("missing faces", _delete("faces_vertices"), r"faces_vertices: missing required"),
-    ("coordinate text", _set(("vertices_coords", 2), [2, "a"]), r"vertices_coords\[2\].*non-numeric"),
-    ("coordinate nan", _set(("vertices_coords", 1), [1, math.nan]), r"vertices_coords\[1\].*non-finite"),
-    ("coordinate length", _set(("vertices_coords", 0), [0]), r"vertices_coords\[0\]: \[0\] must be"),
-    ("face index", _set(("faces_vertices", 1), [1, 2, 9, 4]), r"faces_vertices\[1\]: index 9 is out of range"),
+    ("coordinate text", _set(("vertices_coords", 2), [2, "a"]),
+     r"vertices_coords\[2\].*non-numeric"),
+    ("coordinate nan", _set(("vertices_coords", 1), [1, math.nan]),
+     r"vertices_coords\[1\].*non-finite"),
+    ("coordinate length", _set(("vertices_coords", 0), [0]),
+     r"vertices_coords\[0\]: \[0\] must be"),
+    ("face index", _set(("faces_vertices", 1), [1, 2, 9, 4]),
+     r"faces_vertices\[1\]: index 9 is out of range"),
     ("face size", _set(("faces_vertices", 0), [0, 1]), r"faces_vertices\[0\].*at least 3"),
     ("edge index", _set(("edges_vertices", 3), [5, 7]), r"edges_vertices\[3\]: index 7"),
-    ("assignment length", _set(("edges_assignment",), ["B"] * 6), r"edges_assignment: has 6 entries.*\(7\)"),
-    ("assignment letter", _set(("edges_assignment", 6), "X"), r"edges_assignment\[6\]: 'X' is not"),
-    ("crease on boundary", _set(("edges_assignment", 0), "M"), r"edges_assignment\[0\]: 'M' is a crease on the boundary"),
-    ("B between faces", _set(("edges_assignment", 6), "B"), r"edges_assignment\[6\]: 'B' but edge 1-4 borders two"),
-    ("edge not a side", _set(("edges_vertices", 6), [1, 5]), r"edges_vertices\[6\].*not a side of any face"),
-    ("side not an edge", _set(("edges_vertices",), [[0, 1], [1, 2], [2, 5], [5, 4], [4, 3], [3, 0]]),
+    ("assignment length", _set(("edges_assignment",), ["B"] * 6),
+     r"edges_assignment: has 6 entries.*\(7\)"),
+    ("assignment letter", _set(("edges_assignment", 6), "X"),
+     r"edges_assignment\[6\]: 'X' is not"),
+    ("crease on boundary", _set(("edges_assignment", 0), "M"),
+     r"edges_assignment\[0\]: 'M' is a crease on the boundary"),
+    ("B between faces", _set(("edges_assignment", 6), "B"),
+     r"edges_assignment\[6\]: 'B' but edge 1-4 borders two"),
+    ("edge not a side", _set(("edges_vertices", 6), [1, 5]),
+     r"edges_vertices\[6\].*not a side of any face"),
+    ("side not an edge", _set(("edges_vertices",), [[0, 1], [1, 2], [2, 5], [5, 4], [4, 3],
+                                                     [3, 0]]),
      r"faces_vertices\[0\]: side 1-4 is not in edges_vertices"),
-    ("non-planar", _set(("vertices_coords", 5), [2, 1, 0.2]), r"faces_vertices\[1\]: panel 1 is not planar"),
-    ("duplicate vertex", _set(("vertices_coords", 5), [1, 1]), r"vertices_coords\[5\]: vertices 4 and 5 coincide"),
-    ("unknown unit", _set(("frame_unit",), "furlong"), r"frame_unit: 'furlong' is not a FOLD unit"),
-    ("fold sign", _set(("edges_foldAngle",), [0] * 6 + [-30]), r"edges_foldAngle\[6\]: -30 deg does not match assignment 'V'"),
-    ("fold range", _set(("edges_foldAngle",), [0] * 6 + [270]), r"edges_foldAngle\[6\]: 270 must be"),
+    ("non-planar", _set(("vertices_coords", 5), [2, 1, 0.2]),
+     r"faces_vertices\[1\]: panel 1 is not planar"),
+    ("duplicate vertex", _set(("vertices_coords", 5), [1, 1]),
+     r"vertices_coords\[5\]: vertices 4 and 5 coincide"),
+    ("unknown unit", _set(("frame_unit",), "furlong"),
+     r"frame_unit: 'furlong' is not a FOLD unit"),
+    ("fold sign", _set(("edges_foldAngle",), [0] * 6 + [-30]),
+     r"edges_foldAngle\[6\]: -30 deg does not match assignment 'V'"),
+    ("fold range", _set(("edges_foldAngle",), [0] * 6 + [270]),
+     r"edges_foldAngle\[6\]: 270 must be"),
     ("missing width", _delete("edges_etorigami:width"), r"edges_etorigami:width: missing"),
-    ("negative width", _set(("edges_etorigami:width", 6), -1e-4), r"edges_etorigami:width\[6\]: -0.0001"),
-    ("bad thickness", _set(("faces_etorigami:thickness", 1), 0), r"faces_etorigami:thickness\[1\]: 0 must be"),
+    ("negative width", _set(("edges_etorigami:width", 6), -1e-4),
+     r"edges_etorigami:width\[6\]: -0.0001"),
+    ("bad thickness", _set(("faces_etorigami:thickness", 1), 0),
+     r"faces_etorigami:thickness\[1\]: 0 must be"),
     ("unknown material", _set(("faces_etorigami:material",), ["SU-8", "unobtainium"]),
      r"faces_etorigami:material\[1\]: 'unobtainium' is not defined"),
     ("flat but folded", lambda d: (_set(("edges_assignment", 6), "F")(d),
                                    _set(("vertices_coords", 2), [1.5, 0, 0.5])(d),
                                    _set(("vertices_coords", 5), [1.5, 1, 0.5])(d)),
      r"edges_assignment\[6\]: 'F' \(flat\) but faces 0 and 1 meet at a fold angle of 45"),
-    ("faces not a list", _set(("faces_vertices",), {"0": [0, 1, 2]}), r"faces_vertices: must be a non-empty list"),
-    ("slit", _set(("faces_vertices", 0), [0, 1, 4, 1, 3]), r"faces_vertices\[0\].*repeats a vertex"),
+    ("faces not a list", _set(("faces_vertices",), {"0": [0, 1, 2]}),
+     r"faces_vertices: must be a non-empty list"),
+    ("slit", _set(("faces_vertices", 0), [0, 1, 4, 1, 3]),
+     r"faces_vertices\[0\].*repeats a vertex"),
 ]
 
 
@@ -238,18 +256,16 @@ def test_invalid_json_names_the_line(tmp_path):
 
 
 # ---------------------------------------------------------------------- documentation
-def test_docs_example_file_and_code_blocks_run():
+def test_docs_example_file_and_code_blocks_run(tmp_path, monkeypatch):
     root = pathlib.Path(__file__).resolve().parents[1]
     text = (root / "docs" / "fold-format.md").read_text()
     example = json.loads((root / "docs" / "examples" / "two_panels.fold").read_text())
     blocks = re.findall(r"```(\w*)\n(.*?)```", text, flags=re.S)
     assert json.loads([b for lang, b in blocks if lang == "json" and "vertices_coords" in b][0]) \
         == example
-    cwd = os.getcwd()
-    os.chdir(root)
-    try:
-        for lang, code in blocks:
-            if lang == "python":
-                exec(compile(code, "fold-format.md", "exec"), {})
-    finally:
-        os.chdir(cwd)
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    for lang, code in blocks:
+        if lang == "python":
+            exec(compile(code, "fold-format.md", "exec"), namespace)
+    assert namespace["result"].success

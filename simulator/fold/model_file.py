@@ -22,7 +22,7 @@ from ..model import ContactParameters, Model, Supports, make_model
 from ..properties import BarHingeParameters
 from ..steps import Step
 from ..thermal import ThermalParameters
-from ._common import NS, array_field, fail
+from ._common import NS, array_field, fail, is_number
 from .reader import load_fold_json, parse_fold
 from .writer import dump_fold, pattern_to_fold
 
@@ -215,20 +215,23 @@ def _actuators(data, geo):
     if raw is None:
         return None
     bimorph = _guard(f"{NS}bimorph", lambda: Bimorph(**_obj(data, f"{NS}bimorph")))
-    field = f"edges_{NS}delta_alpha"
-    values = array_field(data, field, len(geo.edge), "edge") or ()
-    da = {}
-    for i, v in enumerate(values):
+    da = _crease_values(data, f"edges_{NS}delta_alpha", geo, "a number in 1/K",
+                        lambda v: is_number(v) and math.isfinite(v))
+    return Actuators(bimorph, {e: float(v) for e, v in da.items()})
+
+
+def _crease_values(data, field, geo, allowed: str, ok) -> dict:
+    """{pattern crease id: value} of a per-edge field; non-null entries must be on creases and
+    pass ``ok``."""
+    out = {}
+    for i, v in enumerate(array_field(data, field, len(geo.edge), "edge") or ()):
         if v is None:
             continue
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
-            fail(f"{field}[{i}]", f"{v!r} must be a number in 1/K or null.")
         e = int(geo.edge[i])
-        if e < 0 or not geo.pattern.is_crease[e]:
-            fail(f"{field}[{i}]", f"edge {i} is not a crease; only creases "
-                 "can be actuators.")
-        da[e] = float(v)
-    return Actuators(bimorph, da)
+        if not ok(v) or e < 0 or not geo.pattern.is_crease[e]:
+            fail(f"{field}[{i}]", f"{v!r}; give {allowed} on creases only, null elsewhere.")
+        out[e] = v
+    return out
 
 
 def _steps(data, geo) -> tuple:
@@ -280,16 +283,10 @@ def _decode_key(k: str):
 
 
 def _heater_circuits(data, geo) -> dict:
-    field = f"edges_{NS}heater"
-    names = array_field(data, field, len(geo.edge), "edge") or ()
+    names = _crease_values(data, f"edges_{NS}heater", geo, "a circuit name (string)",
+                           lambda v: isinstance(v, str))
     out = {}
-    for i, name in enumerate(names):
-        if name is None:
-            continue
-        e = int(geo.edge[i])
-        if not isinstance(name, str) or e < 0 or not geo.pattern.is_crease[e]:
-            fail(f"{field}[{i}]", f"{name!r}; give a circuit name (string) "
-                 "on creases only, null elsewhere.")
+    for e, name in names.items():
         out.setdefault(name, []).append(e)
     return {k: tuple(sorted(v)) for k, v in out.items()}
 

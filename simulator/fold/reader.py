@@ -161,9 +161,9 @@ def _scale(data: dict, unit_scale) -> float:
     unit = data.get("frame_unit", "unit")
     if unit == "unit":
         if unit_scale is None:
-            _fail("frame_unit", f"is {unit!r}{' (the FOLD default)' if 'frame_unit' not in data else ''}"
-                  "; pass unit_scale=<metres per unit> or set frame_unit to one of "
-                  f"{', '.join(UNITS)}.")
+            default = "" if "frame_unit" in data else " (the FOLD default)"
+            _fail("frame_unit", f"is {unit!r}{default}; pass unit_scale=<metres per unit> or set "
+                  f"frame_unit to one of {', '.join(UNITS)}.")
         if not (_is_number(unit_scale) and math.isfinite(unit_scale) and unit_scale > 0):
             raise FoldFormatError(f"unit_scale = {unit_scale!r} must be a positive number of "
                                   "metres per unit.")
