@@ -85,6 +85,10 @@ def test_other_namespace_fields_follow_the_edges_on_file_round_trip():
     label = dict(zip(map(tuple, map(sorted, data["edges_vertices"])), data["edges_other:label"]))
     assert [label[tuple(e)] for e in out["edges_vertices"]] == out["edges_other:label"]
     assert out["vertices_other:w"] == list(range(6)) and out["file_author"] == "me"
+    clash = Pattern(p.vertices, p.panels, crease_width=1e-4, crease_thickness=1e-6,
+                    panel_thickness=1e-5, metadata={"edges_vertices": [], "etorigami:x": 1})
+    out = pattern_to_fold(clash)
+    assert out["edges_vertices"] == clash.edges.tolist() and "etorigami:x" not in out
     assert_same_pattern(p, fold_to_pattern(out))
 
 

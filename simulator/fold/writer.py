@@ -17,7 +17,8 @@ import numpy as np
 from .._version import __version__
 from ..errors import ParameterError
 from ..pattern import Pattern
-from .reader import NS
+from ._common import NS
+from ._data import OWN_FIELDS
 
 __all__ = ["pattern_to_fold", "write_fold", "result_to_fold_frames", "write_fold_frames",
            "dump_fold"]
@@ -31,7 +32,8 @@ def pattern_to_fold(pattern: Pattern) -> dict:
     """FOLD dict of a pattern (key frame only); see ``docs/fold-format.md``."""
     if not isinstance(pattern, Pattern):
         raise ParameterError(f"pattern_to_fold expects a Pattern, got {type(pattern).__name__}.")
-    meta = dict(pattern.metadata)
+    meta = {k: v for k, v in pattern.metadata.items()
+            if k not in OWN_FIELDS and NS not in k}          # never overrides our own fields
     file_meta = {k: meta.pop(k) for k in list(meta) if k.startswith("file_")}
     crease = pattern.is_crease
     mats = _material_table(pattern)
