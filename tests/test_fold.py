@@ -87,8 +87,8 @@ def test_other_namespace_fields_follow_the_edges_on_file_round_trip():
     assert out["vertices_other:w"] == list(range(6)) and out["file_author"] == "me"
     clash = Pattern(p.vertices, p.panels, crease_width=1e-4, crease_thickness=1e-6,
                     panel_thickness=1e-5, metadata={"edges_vertices": [], "etorigami:x": 1})
-    out = pattern_to_fold(clash)
-    assert out["edges_vertices"] == clash.edges.tolist() and "etorigami:x" not in out
+    written = pattern_to_fold(clash)
+    assert written["edges_vertices"] == clash.edges.tolist() and "etorigami:x" not in written
     assert_same_pattern(p, fold_to_pattern(out))
 
 
