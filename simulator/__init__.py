@@ -14,7 +14,10 @@ from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
-from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
+from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
+                     PatternError)
+from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fold, read_fold,
+                   read_model, result_to_fold_frames, write_fold, write_fold_frames, write_model)
 from .materials import AIR, GOLD, SILICON, SPR, SU8, SUBSTRATE, WATER, Fluid, Material
 from .mesh import BarHingeMesh, build_mesh
 from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
@@ -51,6 +54,9 @@ __all__ = [
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)
     "write_viewer", "viewer_html", "load_viewer_data",
+    # FOLD files
+    "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
+    "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
     # errors
-    "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError",
+    "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
 ]

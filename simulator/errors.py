@@ -20,6 +20,10 @@ class ParameterError(EtorigamiError, ValueError):
     """A parameter, option or loading step was given an invalid value."""
 
 
+class FoldFormatError(ParameterError):
+    """A FOLD file is malformed; the message names the field and the index (one line)."""
+
+
 class ConvergenceError(EtorigamiError, RuntimeError):
     """A solver did not converge and the caller asked for an exception.
 

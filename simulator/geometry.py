@@ -35,10 +35,14 @@ def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     ref = panel_normals(mesh, mesh.nodes)
     cur = panel_normals(mesh, x)
     p1, p2 = mesh.crease_panels.T
-    # orient both panels' normals to +z in the reference (flip = consistent orientation)
-    flip = np.where(ref[:, 2] < 0, -1.0, 1.0)
-    n1, n2 = cur[p1] * flip[p1, None], cur[p2] * flip[p2, None]
-    n1_ref = ref[p1] * flip[p1, None]
+    # orient the first panel's normal to +z in the reference and the second one consistently
+    # with it across the crease (the shared edge run in opposite directions); for a flat
+    # reference both then point to +z, and a start shape folded past 90 deg keeps its sign
+    end = mesh.pattern.corner_vertices[mesh.crease_edge_bars]
+    s1 = np.where(ref[p1, 2] < 0, -1.0, 1.0)
+    s2 = s1 * np.where(end[:, 0] != end[:, 1], 1.0, -1.0)
+    n1, n2 = cur[p1] * s1[:, None], cur[p2] * s2[:, None]
+    n1_ref = ref[p1] * s1[:, None]
     n11, n12 = mesh.crease_nodes[:, 0], mesh.crease_nodes[:, 1]
     X = mesh.nodes
     d = X[mesh.panel_center[p2]] - X[mesh.panel_center[p1]]

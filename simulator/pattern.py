@@ -48,6 +48,18 @@ class Pattern:
         Panel material, one for all panels or one per panel.
     crease_material : Material
         Material used for the crease bars and springs (its modulus and Poisson ratio).
+    edge_assignment : sequence of str, optional
+        FOLD assignment letter of every edge, in edge-id order: ``"M"``, ``"V"`` or ``"U"``
+        for interior creases, ``"B"`` or ``"C"`` for boundary edges. Default ``"U"`` / ``"B"``.
+        Design data only: the mechanics does not read it.
+    edge_fold_angle : array_like, shape (n_edges,), optional
+        Design (target) fold angle of every edge [rad], in [-pi, pi], <= 0 for ``"M"``, >= 0
+        for ``"V"``, 0 on boundary edges; default -pi for ``"M"``, pi for ``"V"``, else 0 (the
+        FOLD convention). Design data only: the start shape's fold angles are those of the
+        vertex coordinates.
+    metadata : mapping, optional
+        Extra FOLD fields (other namespaces, ``file_*`` / ``frame_*`` data) kept so that a file
+        read with :func:`~simulator.fold.read_fold` is written back with them.
 
     Attributes
     ----------
@@ -66,6 +78,9 @@ class Pattern:
     panel_thickness: object
     panel_material: object = SU8
     crease_material: Material = SU8
+    edge_assignment: object = None
+    edge_fold_angle: object = None
+    metadata: Mapping = field(default_factory=dict)
     _edge_of_corner: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -82,6 +97,7 @@ class Pattern:
             raise PatternError(f"crease_material must be a Material, got {self.crease_material!r}.")
         for name in ("crease_width", "crease_thickness"):
             object.__setattr__(self, name, self._per_crease_positive(getattr(self, name), name))
+        _set_fold_data(self)
 
     # ------------------------------------------------------------------ topology
     def _enumerate_edges(self):
@@ -430,6 +446,49 @@ def _check_geometry(pattern: Pattern) -> None:
     bad = np.flatnonzero((np.minimum.reduceat(angle, starts) <= 0) | (np.abs(total - 2 * np.pi) > 1e-6))
     if len(bad):
         _raise_self_intersecting(pattern, bad[0])
+
+
+_CREASE_LETTERS, _BOUNDARY_LETTERS = "MVU", "BC"
+
+
+def _set_fold_data(pattern: Pattern) -> None:
+    """Normalise ``edge_assignment``, ``edge_fold_angle`` and ``metadata`` (design data)."""
+    n, crease = pattern.n_edges, pattern.is_crease
+    given = pattern.edge_assignment
+    letters = np.where(crease, "U", "B") if given is None else np.array(list(given), dtype="<U1")
+    if letters.shape != (n,):
+        raise PatternError(f"edge_assignment has {letters.size} letters for {n} edges; give one "
+                           "letter per edge in edge-id order.")
+    ok = np.where(crease, np.char.find(_CREASE_LETTERS, letters) >= 0,
+                  np.char.find(_BOUNDARY_LETTERS, letters) >= 0) & (np.char.str_len(letters) == 1)
+    if not ok.all():
+        e = int(np.flatnonzero(~ok)[0])
+        kind, allowed = ("an interior crease", "M, V or U") if crease[e] else \
+            ("a boundary edge", "B or C")
+        raise PatternError(f"edge_assignment of edge {e} is {str(letters[e])!r}, but the edge is "
+                           f"{kind}; use {allowed}.")
+    default = np.select([letters == "M", letters == "V"], [-np.pi, np.pi], 0.0)
+    angle = default if pattern.edge_fold_angle is None else \
+        _as_float_array(pattern.edge_fold_angle, "edge_fold_angle")
+    if angle.shape != (n,):
+        raise PatternError(f"edge_fold_angle must have one entry per edge ({n}); got shape "
+                           f"{angle.shape}.")
+    bad = ~np.isfinite(angle) | (np.abs(angle) > np.pi) | ((letters == "M") & (angle > 0)) \
+        | ((letters == "V") & (angle < 0)) | (~crease & (angle != 0))
+    if bad.any():
+        e = int(np.flatnonzero(bad)[0])
+        raise PatternError(f"edge_fold_angle of edge {e} ({str(letters[e])}) is "
+                           f"{float(angle[e])!r} rad; fold angles lie in [-pi, pi], <= 0 for M, "
+                           ">= 0 for V and 0 on boundary edges.")
+    letters.setflags(write=False)
+    angle = angle.copy()
+    angle.setflags(write=False)
+    if not isinstance(pattern.metadata, Mapping):
+        raise PatternError(f"metadata must be a mapping of FOLD fields, got "
+                           f"{type(pattern.metadata).__name__}.")
+    object.__setattr__(pattern, "edge_assignment", letters)
+    object.__setattr__(pattern, "edge_fold_angle", angle)
+    object.__setattr__(pattern, "metadata", dict(pattern.metadata))
 
 
 def _raise_self_intersecting(pattern: Pattern, i: int) -> None:

@@ -10,15 +10,22 @@ preserve their in-plane stiffness and spoke springs for bending.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .elements.springs import fold_angle
 from .errors import ParameterError
+from .geometry import fold_angles
 from .mesh import BarHingeMesh, BarType, SpringKind
 
 __all__ = ["BarHingeParameters", "MechanicalProperties", "mechanical_properties",
-           "spring_rest_angles"]
+           "spring_rest_angles", "initial_crease_rest", "FLAT_FOLD_TOL"]
+
+#: Creases whose fold angle in the mesh's reference geometry is at most this [rad] count as
+#: flat (rest angle exactly pi); the reference's Miura generator leaves ~1e-8 rad of round-off.
+FLAT_FOLD_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -142,11 +149,42 @@ def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
     -------
     (ns,) array: pi for panel and diagonal springs; edge lines get
     ``pi + (theta0 - pi)(1 - f)/2`` each, the centre line ``pi + f (theta0 - pi)``.
+    A crease folded in the mesh's reference geometry (a 3-D start shape) starts instead from
+    its springs' initial angles and from :func:`initial_crease_rest`, so that its initial
+    rest angles give back the start shape.
     """
     f = params.centre_line_share
-    rho = np.asarray(crease_rest, dtype=float) - np.pi
-    out = np.full(len(mesh.springs), np.pi)
+    rest0, base = _initial_rest(mesh)
+    rho = np.asarray(crease_rest, dtype=float) - rest0
+    out = base.copy()
     cs = mesh.crease_springs
-    out[cs[:, :2]] = np.pi + (rho * (1 - f) / 2)[:, None]
-    out[cs[:, 4:6]] = np.pi + (rho * f)[:, None]
+    out[cs[:, :2]] += (rho * (1 - f) / 2)[:, None]
+    out[cs[:, 4:6]] += (rho * f)[:, None]
     return out
+
+
+def initial_crease_rest(mesh: BarHingeMesh) -> np.ndarray:
+    """Crease rest angles [rad] of the mesh's reference geometry, (C,) in crease-row order.
+
+    pi (flat) plus the fold angle of each crease in ``mesh.nodes``; exactly pi where that
+    angle is at most :data:`FLAT_FOLD_TOL`. A folded start shape (a 3-D FOLD file) thus
+    keeps its initial dihedral angles as rest angles.
+    """
+    return _initial_rest(mesh)[0].copy()
+
+
+_INITIAL: "weakref.WeakKeyDictionary[BarHingeMesh, tuple]" = weakref.WeakKeyDictionary()
+
+
+def _initial_rest(mesh: BarHingeMesh) -> tuple:
+    """(crease rest (C,), spring base angles (ns,)) of the reference geometry, cached per mesh."""
+    cached = _INITIAL.get(mesh)
+    if cached is None:
+        fold = fold_angles(mesh, mesh.nodes) if mesh.n_creases else np.zeros(0)
+        folded = np.abs(fold) > FLAT_FOLD_TOL
+        rest0 = np.where(folded, np.pi + fold, np.pi)
+        base = np.full(len(mesh.springs), np.pi)
+        springs = mesh.crease_springs[folded].ravel()
+        base[springs] = fold_angle(mesh.nodes[mesh.springs[springs]])
+        cached = _INITIAL[mesh] = (rest0, base)
+    return cached

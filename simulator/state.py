@@ -17,6 +17,7 @@ from .elements.springs import fold_angle
 from .equilibrium import EquilibriumSystem
 from .errors import ParameterError
 from .model import Model
+from .properties import initial_crease_rest
 from .thermal import ThermalModel
 
 __all__ = ["ROOM_TEMPERATURE", "SimulationState", "initial_state", "equilibrium_system",
@@ -57,16 +58,17 @@ class SimulationState:
 
 
 def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
-    """Unloaded state: zero displacement, flat crease rest angles, spring rest angles equal to
-    the spring angles of the initial geometry (digest 7.1), uniform room temperature (from the
-    model's thermal parameters, else 21 deg C), no heating."""
+    """Unloaded state: zero displacement, crease rest angles of the initial geometry (flat, pi,
+    unless the mesh starts folded: :func:`~simulator.properties.initial_crease_rest`), spring
+    rest angles equal to the spring angles of the initial geometry (digest 7.1), uniform room
+    temperature (from the model's thermal parameters, else 21 deg C), no heating."""
     mesh = model.mesh
     if room_temperature is None:
         room_temperature = ROOM_TEMPERATURE if model.thermal is None \
             else model.thermal.room_temperature
     return SimulationState(
         u=np.zeros((mesh.n_nodes, 3)), applied_load=np.zeros((mesh.n_nodes, 3)),
-        crease_rest=np.full(mesh.n_creases, np.pi),
+        crease_rest=initial_crease_rest(mesh),
         spring_rest=fold_angle(mesh.nodes[mesh.springs]),
         temperature=np.full(mesh.n_nodes, float(room_temperature)),
         crease_power=np.zeros(mesh.n_creases), room_temperature=float(room_temperature))
