@@ -16,7 +16,8 @@ from .cases import Case, describe_cases, get_case
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
-from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
+from .model import (REFERENCE_GRAVITY, STANDARD_GRAVITY, ContactParameters, Model, Supports,
+                    make_model)
 from .newton import NewtonOptions
 from .pattern import Pattern
 from .properties import BarHingeParameters
@@ -33,6 +34,7 @@ __all__ = [
     "Pattern", "BarHingeMesh", "build_mesh", "Material", "SU8", "SPR", "SUBSTRATE",
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
+    "REFERENCE_GRAVITY",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",

@@ -20,10 +20,13 @@ from .pattern import Pattern
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
 
 __all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads",
-           "STANDARD_GRAVITY"]
+           "STANDARD_GRAVITY", "REFERENCE_GRAVITY"]
 
-#: Standard gravity [m/s^2].
+#: Standard gravity [m/s^2] (the default of :func:`gravity_loads` and the ``Gravity`` step).
 STANDARD_GRAVITY = 9.80665
+#: Gravity of the reference scripts (Zhu & Filipov 2021: Example01, Example02 and the gripper)
+#: [m/s^2]. Kept at 9.8 wherever results are compared with the reference's numbers.
+REFERENCE_GRAVITY = 9.8
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
