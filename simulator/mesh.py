@@ -24,6 +24,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ._arrays import read_only
 from .errors import PatternError
 from .pattern import Pattern
 
@@ -121,6 +122,12 @@ class BarHingeMesh:
     panel_center: np.ndarray
     panel_corner_start: np.ndarray
 
+    def __post_init__(self):
+        """Lock every array: a mesh is immutable, so no caller can edit it in place."""
+        for name, value in vars(self).items():
+            if isinstance(value, np.ndarray):
+                object.__setattr__(self, name, read_only(value))
+
     @property
     def n_nodes(self) -> int:
         return len(self.nodes)
@@ -138,24 +145,24 @@ class BarHingeMesh:
         """Row in the crease arrays of each edge id, -1 for boundary edges, shape (n_edges,)."""
         row = np.full(self.pattern.n_edges, -1)
         row[self.crease_ids] = np.arange(self.n_creases)
-        return row
+        return read_only(row)
 
     @cached_property
     def spring_crease(self) -> np.ndarray:
         """Crease row of each spring (-1 for panel springs), shape (ns,)."""
         out = np.full(len(self.springs), -1)
         out[self.crease_springs] = np.arange(self.n_creases)[:, None]
-        return out
+        return read_only(out)
 
     @cached_property
     def fan_triangles(self) -> np.ndarray:
         """Indices (into ``triangles``) of the panel fan triangles."""
-        return np.flatnonzero(self.triangle_panel >= 0)
+        return read_only(np.flatnonzero(self.triangle_panel >= 0))
 
     @cached_property
     def corner_nodes(self) -> np.ndarray:
         """Panel corner nodes (the first S nodes)."""
-        return np.arange(self.panel_corner_start[-1])
+        return read_only(np.arange(self.panel_corner_start[-1]))
 
     def panel_nodes(self, panel: int) -> np.ndarray:
         """Corner nodes and centre node of one panel."""
@@ -173,7 +180,7 @@ class BarHingeMesh:
         Reproduces the reference's post-meshing node edits (gripper, digest 8.7):
         bars then carry the originally meshed reference lengths.
         """
-        nodes = np.asarray(nodes, dtype=float)
+        nodes = np.array(nodes, dtype=float)          # a copy: the caller's array stays theirs
         if nodes.shape != self.nodes.shape or not np.all(np.isfinite(nodes)):
             raise PatternError(f"nodes must be a finite array of shape {self.nodes.shape}.")
         return replace(self, nodes=nodes)

@@ -18,6 +18,7 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._arrays import read_only
 from .errors import PatternError
 from .materials import SU8, Material
 
@@ -82,6 +83,9 @@ class Pattern:
             raise PatternError(f"crease_material must be a Material, got {self.crease_material!r}.")
         for name in ("crease_width", "crease_thickness"):
             object.__setattr__(self, name, self._per_crease_positive(getattr(self, name), name))
+        for name in ("edges", "edge_panels", "_edge_of_corner", "panel_thickness", "crease_width",
+                     "crease_thickness"):
+            object.__setattr__(self, name, read_only(getattr(self, name)))
 
     # ------------------------------------------------------------------ topology
     def _enumerate_edges(self):
@@ -136,22 +140,22 @@ class Pattern:
     @cached_property
     def is_crease(self) -> np.ndarray:
         """Boolean mask over edges: True for interior creases (edge shared by two panels)."""
-        return self.edge_panels[:, 1] >= 0
+        return read_only(self.edge_panels[:, 1] >= 0)
 
     @cached_property
     def creases(self) -> np.ndarray:
         """Edge ids of the interior creases, ascending."""
-        return np.flatnonzero(self.is_crease)
+        return read_only(np.flatnonzero(self.is_crease))
 
     @cached_property
     def corner_sizes(self) -> np.ndarray:
         """Number of corners of each panel, shape (n_panels,)."""
-        return np.array([len(p) for p in self.panels])
+        return read_only([len(p) for p in self.panels])
 
     @cached_property
     def corner_vertices(self) -> np.ndarray:
         """Vertex id of every panel corner, panels concatenated in order, shape (S,)."""
-        return np.concatenate(self.panels)
+        return read_only(np.concatenate(self.panels))
 
     @cached_property
     def corner_edges(self) -> np.ndarray:
