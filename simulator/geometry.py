@@ -20,6 +20,7 @@ import numpy as np
 
 from .elements.springs import fold_angle
 from .mesh import BarHingeMesh
+from .polygons import unit_normals
 
 __all__ = ["panel_normals", "fold_angles", "crease_rotations"]
 
@@ -31,17 +32,10 @@ _EDGE_LINES, _CENTRE_LINE = [0, 1], [4, 5]
 def panel_normals(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     """Unit normals (P, 3) of the shrunk panels at positions x (n, 3), by Newell's method.
 
-    Orientation follows the panel's corner order.
+    Orientation follows the panel's corner order; the fans run from the panel's centre node.
     """
     s = mesh.panel_corner_start
-    sizes = np.diff(s)
-    S = s[-1]
-    start = np.repeat(s[:-1], sizes)
-    nxt = start + (np.arange(S) - start + 1) % np.repeat(sizes, sizes)
-    c = x[mesh.panel_center]
-    panel = np.repeat(np.arange(len(sizes)), sizes)
-    n = np.add.reduceat(np.cross(x[:S] - c[panel], x[nxt] - c[panel]), s[:-1])
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+    return unit_normals(x[:s[-1]], np.diff(s), x[mesh.panel_center])
 
 
 def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:

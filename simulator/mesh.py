@@ -27,6 +27,7 @@ import numpy as np
 from ._arrays import read_only
 from .errors import PatternError
 from .pattern import Pattern
+from .polygons import area_vectors, centroids, fan_normals, rings
 
 __all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind"]
 
@@ -192,14 +193,11 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
         raise PatternError(f"build_mesh expects a Pattern, got {type(pattern).__name__}.")
     sizes = pattern.corner_sizes
     S, P = int(sizes.sum()), pattern.n_panels
-    start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-    local = np.arange(S) - start
-    prev = start + (local - 1) % np.repeat(sizes, sizes)
-    nxt = start + (local + 1) % np.repeat(sizes, sizes)
-    corner_panel = np.repeat(np.arange(P), sizes)
+    ring = rings(sizes)
+    prev, nxt, corner_panel = ring.prev, ring.nxt, ring.owner
 
     corners = _shrink_corners(pattern, prev, nxt)
-    _check_shrunk_panels(pattern, corners, nxt)
+    _check_shrunk_panels(pattern, corners)
     crease_ids = pattern.creases
     C = len(crease_ids)
 
@@ -211,11 +209,12 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
 
     # Pass C: centres, spokes, fans
     centre = S + 3 * C + np.arange(P)
-    centre_pos = np.add.reduceat(corners, np.cumsum(sizes) - sizes) / sizes[:, None]
+    centre_pos = centroids(corners, sizes)
     nodes = np.vstack([corners, crease_pos, centre_pos])
     spokes = np.column_stack([np.arange(S), centre[corner_panel]])
-    last = local == np.repeat(sizes, sizes) - 1
-    fans = np.column_stack([centre[corner_panel], np.where(last, start, np.arange(S)),
+    last = ring.local == sizes[corner_panel] - 1                   # fan (centre, C_1, C_N) last
+    fans = np.column_stack([centre[corner_panel],
+                            np.where(last, ring.first[corner_panel], np.arange(S)),
                             np.where(last, np.arange(S), nxt)])
 
     bars = np.vstack([edge_bars, np.sort(cn[:, _CREASE_BARS].reshape(-1, 2), axis=1), spokes])
@@ -336,18 +335,15 @@ def _polarity_fix(nodes: np.ndarray, springs: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray, nxt: np.ndarray) -> None:
+def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray) -> None:
     """Crease widths must leave every shrunk panel with positive area and the same orientation."""
     sizes = pattern.corner_sizes
-    starts = np.cumsum(sizes) - sizes
-    centre = np.add.reduceat(corners, starts) / sizes[:, None]
-    panel = np.repeat(np.arange(pattern.n_panels), sizes)
-    fan = np.cross(corners - centre[panel], corners[nxt] - centre[panel])
-    x0 = pattern.vertices[pattern.corner_vertices]
-    c0 = np.add.reduceat(x0, starts) / sizes[:, None]
-    normal0 = np.add.reduceat(np.cross(x0 - c0[panel], x0[nxt] - c0[panel]), starts)
-    ok = np.einsum("ij,ij->i", fan, normal0[panel]) > 1e-8 * np.einsum("ij,ij->i", normal0, normal0)[panel]
-    bad = np.flatnonzero(~np.logical_and.reduceat(ok, starts))
+    ring = rings(sizes)
+    fan = fan_normals(corners, sizes)
+    normal0 = 2 * area_vectors(pattern.vertices[pattern.corner_vertices], sizes)
+    ok = (np.einsum("ij,ij->i", fan, normal0[ring.owner])
+          > 1e-8 * np.einsum("ij,ij->i", normal0, normal0)[ring.owner])
+    bad = np.flatnonzero(~np.logical_and.reduceat(ok, ring.first))
     if len(bad):
         raise PatternError(f"panel {bad[0]} vanishes or turns inside out after shrinking by half "
                            "the crease widths; reduce the widths of its creases or enlarge the panel.")

@@ -18,6 +18,7 @@ from .bimorph import Actuators
 from .errors import ParameterError
 from .mesh import BarHingeMesh, build_mesh
 from .pattern import Pattern
+from .polygons import triangle_areas
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
 from .thermal import ThermalParameters
 
@@ -266,8 +267,7 @@ def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,
     fans = mesh.triangles[mesh.fan_triangles]
     panel = mesh.triangle_panel[mesh.fan_triangles]
     x = mesh.nodes
-    area = 0.5 * np.linalg.norm(np.cross(x[fans[:, 1]] - x[fans[:, 0]],
-                                         x[fans[:, 2]] - x[fans[:, 0]]), axis=1)
+    area = triangle_areas(x[fans[:, 0]], x[fans[:, 1]], x[fans[:, 2]])
     rho = np.array([m.density for m in pat.panel_material])
     weight = rho[panel] * pat.panel_thickness[panel] * area * g
     if panels is not None:

@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 from ._arrays import read_only
 from .errors import PatternError
 from .materials import SU8, Material
+from .polygons import area_vectors, centroids, fan_normals, rings
 
 __all__ = ["Pattern"]
 
@@ -93,9 +94,8 @@ class Pattern:
         n_v = len(self.vertices)
         sizes = np.array([len(p) for p in self.panels])
         flat = np.concatenate(self.panels)
-        start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        local = np.arange(len(flat)) - start
-        prev = flat[start + (local - 1) % np.repeat(sizes, sizes)]
+        ring = rings(sizes)
+        prev = flat[ring.prev]
         # visiting order per panel: (C1, CN) first, then (C_{j-1}, C_j) for j = 2..N; that is the
         # edge *ending* at corner j in corner order, which is exactly (prev, flat).
         key = np.minimum(prev, flat) * n_v + np.maximum(prev, flat)
@@ -106,7 +106,7 @@ class Pattern:
         rank[order] = np.arange(len(order))
         edge_of_corner = rank[inverse]
         edges = np.column_stack([uniq[order] // n_v, uniq[order] % n_v])
-        panel_of_corner = np.repeat(np.arange(len(self.panels)), sizes)
+        panel_of_corner = ring.owner
         if np.any(counts > 2):
             bad = order[np.flatnonzero(counts[order] > 2)[0]]
             e = rank[bad]
@@ -213,7 +213,7 @@ class Pattern:
         p = _as_point(point)
         tol = 1e-9 * self.size if tol is None else tol
         c, a, b, panel = self._fan_triangles()
-        n = np.cross(a - c, b - c)
+        n = fan_normals(a, self.corner_sizes)
         nn = np.einsum("ij,ij->i", n, n)
         dist = np.einsum("ij,ij->i", p - c, n) / np.sqrt(nn)
         q = p - dist[:, None] * n / np.sqrt(nn)[:, None]
@@ -235,13 +235,9 @@ class Pattern:
 
     def _fan_triangles(self):
         """Fan triangles (centroid, C_j, C_{j+1}) of the original panels, flat over panels."""
-        sizes = self.corner_sizes
-        start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        nxt = start + (np.arange(len(start)) - start + 1) % np.repeat(sizes, sizes)
-        panel = np.repeat(np.arange(self.n_panels), sizes)
+        ring = rings(self.corner_sizes)
         xc = self.vertices[self.corner_vertices]
-        centroid = np.add.reduceat(xc, np.cumsum(sizes) - sizes) / sizes[:, None]
-        return centroid[panel], xc, xc[nxt], panel
+        return centroids(xc, self.corner_sizes)[ring.owner], xc, xc[ring.nxt], ring.owner
 
     # ------------------------------------------------------------------ data normalisation
     def _per_panel_positive(self, value, name):
@@ -408,8 +404,8 @@ def _check_geometry(pattern: Pattern) -> None:
     c, a, b, panel = pattern._fan_triangles()
     sizes = pattern.corner_sizes
     starts = np.cumsum(sizes) - sizes
-    fan_normal = np.cross(a - c, b - c)
-    normal = np.add.reduceat(fan_normal, starts)               # Newell vector area x 2
+    fan_normal = fan_normals(a, sizes)
+    normal = 2 * area_vectors(a, sizes)                        # Newell vector area x 2
     area2 = np.linalg.norm(normal, axis=1)
     diam = np.maximum.reduceat(np.linalg.norm(a - c, axis=1), starts)
     bad = np.flatnonzero(area2 <= 1e-8 * diam**2)
