@@ -30,7 +30,8 @@ logger = logging.getLogger(__name__)
 
 @dataclass(frozen=True, eq=False)
 class Pattern:
-    """Flat (or gently non-flat) origami pattern with compliant creases.
+    """Flat (or gently non-flat) origami pattern with compliant creases (immutable; its arrays
+    are read-only).
 
     Parameters
     ----------
