@@ -226,7 +226,8 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
     rf = math.radians(residual_fold_deg)
     steps = [SelfFold({2: rf, 5: rf}, increments=50)]
     if gravity:
-        steps.append(Gravity(g=REFERENCE_GRAVITY, scale=gravity_scale, panels=[1, 2], increments=80))
+        steps.append(Gravity(g=REFERENCE_GRAVITY, scale=gravity_scale, panels=[1, 2],
+                             increments=80))
     steps.append(Heat({(2, 5): _power(power_mW)}, increments=_steps_int("thermal_steps",
                                                                          thermal_steps),
                       coupling=coupling))

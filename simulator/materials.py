@@ -68,8 +68,8 @@ class Material:
 #: paper bounds the gripper's crease temperature by 1.2 T_g of SU-8 (section 6.3) without printing
 #: T_g; 210 deg C is the manufacturer's value for fully cross-linked SU-8 (MicroChem SU-8 2000
 #: data sheet; "above 200 deg C" in the literature), giving the 252 deg C limit used throughout.
-SU8 = Material("SU-8", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0, thermal_conductivity=0.3,
-               glass_transition=210.0)
+SU8 = Material("SU-8", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
+               thermal_conductivity=0.3, glass_transition=210.0)
 
 #: SPR photoresist panels of the gripper; the reference models them with SU-8 properties.
 SPR = Material("SPR", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0, thermal_conductivity=0.3)

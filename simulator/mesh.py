@@ -67,7 +67,7 @@ _CREASE_TRIANGLES = np.array([[_CTR, _A, _N11], [_N21, _A, _CTR], [_N21, _CTR, _
 class BarHingeMesh:
     """Bar-and-hinge mesh of a :class:`~simulator.pattern.Pattern` (all indices 0-based).
 
-    Immutable: every array is read-only (variants by :meth:`with_nodes` or ``dataclasses.replace``).
+    Immutable: every array is read-only (variants: :meth:`with_nodes`, ``dataclasses.replace``).
 
     Attributes
     ----------

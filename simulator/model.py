@@ -235,7 +235,8 @@ _ARGUMENTS = {
     "contact": ((ContactParameters, bool), True,
                 "pass ContactParameters(...), True (defaults), False or None (no contact)"),
     "thermal": ((ThermalParameters,), True, "pass ThermalParameters(...) or None"),
-    "actuators": ((Actuators,), True, "pass Actuators(Bimorph(...), {crease: delta_alpha}) or None"),
+    "actuators": ((Actuators,), True,
+                  "pass Actuators(Bimorph(...), {crease: delta_alpha}) or None"),
 }
 
 

@@ -26,13 +26,14 @@ def test_make_model_rejects_wrong_argument_types(pattern, kwargs, match):
 
 
 def test_make_model_rejects_a_non_pattern():
-    with pytest.raises(ParameterError, match=r"pattern_or_mesh is a str .* Pattern or BarHingeMesh"):
+    with pytest.raises(ParameterError, match=r"pattern_or_mesh is a str .* Pattern or BarHing"):
         make_model("single_fold")
 
 
 def test_make_model_accepts_every_documented_form(pattern):
     mesh = build_mesh(pattern)
-    act = Actuators(Bimorph(E1=39.5e9, t1=0.1e-6, E2=2e9, t2=0.4e-6), {int(mesh.crease_ids[0]): 38e-6})
+    act = Actuators(Bimorph(E1=39.5e9, t1=0.1e-6, E2=2e9, t2=0.4e-6),
+                    {int(mesh.crease_ids[0]): 38e-6})
     m = make_model(mesh, {0: "xyz"}, contact=True, thermal=ThermalParameters(env_thickness=1e-3),
                    actuators=act)
     assert isinstance(m.supports, Supports) and m.supports.fixed == {0: "xyz"}
