@@ -27,7 +27,7 @@ from simulator.simulation import simulate
 from simulator.steps import Heat, Load, SelfFold
 from simulator.materials import SPR
 from simulator.mesh import build_mesh
-from simulator.model import ContactParameters, Supports, make_model
+from simulator.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
 from simulator.errors import ParameterError
 from simulator.example_patterns import gripper_pattern
 from simulator.properties import BarHingeParameters
@@ -44,7 +44,6 @@ logger = logging.getLogger(__name__)
 #: Heater circuits (0-based crease ids): base hinges (reference 3, 6), arm hinges (4, 10).
 BASE_CREASES = (2, 5)
 ARM_CREASES = (3, 9)
-_G = 9.8              # the reference gripper script's gravity [m/s^2]
 #: Self-weight increments. The reference uses 80 for its loose Newton loop; converged, the sag is
 #: path-independent (4 and 80 increments end within 1e-12 m, measured on the start and G2
 #: designs) and 4 cost a fifth of the time.
@@ -214,8 +213,8 @@ def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
 def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
     """The reference's hand-lumped self-weight [N] (digest 8.7): 1/6 per corner, 2/6 per centre."""
     rho, t = SPR.density, design.panel_thickness
-    base = design.L1 * design.L2 * t * rho * _G / 6
-    arm = 0.75 * design.L1 * design.La * t * rho * _G / 6
+    base = design.L1 * design.L2 * t * rho * REFERENCE_GRAVITY / 6
+    arm = 0.75 * design.L1 * design.La * t * rho * REFERENCE_GRAVITY / 6
     f = np.zeros((n_nodes, 3))
     f[[0, 1, 2, 3, 8, 9, 10, 11], 2] = -base
     f[[36, 38], 2] = -2 * base

@@ -264,7 +264,7 @@ class MiuraProblem(DesignProblem):
     ----------
     target_lift : required lift [m] (200 um)
     mode, power_cap, step, tol : search settings of :func:`lift_power` (powers per crease [W])
-    glass_transition : T_g of SU-8 [deg C] (210)
+    glass_transition : T_g of the crease polymer [deg C]; default ``SU8.glass_transition`` (210)
     temperature_factor : allowed multiple of T_g (1.2)
     base : MiuraDesign (values of everything that is not a design variable)
     """

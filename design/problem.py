@@ -14,6 +14,7 @@ import traceback
 from dataclasses import dataclass, field
 
 from simulator.errors import ParameterError
+from simulator.materials import SU8
 
 from .gripper import GripperDesign, evaluate_gripper
 from .space import DesignSpace, Variable
@@ -22,8 +23,9 @@ __all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU
 
 logger = logging.getLogger(__name__)
 
-#: Glass transition temperature of SU-8 [deg C] (the paper's value).
-SU8_TG = 210.0
+#: Glass transition temperature [deg C] of SU-8, the crease polymer of the paper's devices, read
+#: from the material (:data:`simulator.materials.SU8`, 210 deg C); problems take it as default.
+SU8_TG = SU8.glass_transition
 
 #: The paper's gripper design space (section 6.3 and digest 8.7): bounds, steps, start.
 GRIPPER_SPACE = DesignSpace([
@@ -134,7 +136,7 @@ class GripperProblem(DesignProblem):
     residual_fold_groups : tuple of (group, rad) pairs
         Residual folds of crease groups ``"base"`` / ``"arm"`` overriding ``residual_fold``.
     glass_transition : float
-        T_g of the crease polymer [deg C] (SU-8: 210).
+        T_g of the crease polymer [deg C]; default ``SU8.glass_transition`` (210).
     temperature_factor : float
         Allowed multiple of T_g (1.2).
     base : GripperDesign

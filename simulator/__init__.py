@@ -20,7 +20,8 @@ from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fol
                    read_model, result_to_fold_frames, write_fold, write_fold_frames, write_model)
 from .materials import AIR, GOLD, SILICON, SPR, SU8, SUBSTRATE, WATER, Fluid, Material
 from .mesh import BarHingeMesh, build_mesh
-from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
+from .model import (REFERENCE_GRAVITY, STANDARD_GRAVITY, ContactParameters, Model, Supports,
+                    make_model)
 from .newton import NewtonOptions
 from .pattern import Pattern
 from .power_schedules import PiecewiseLinear, PowerSchedule, Ramp, Sine, SquareWave, StepPower
@@ -42,6 +43,7 @@ __all__ = [
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
+    "REFERENCE_GRAVITY",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",

@@ -17,7 +17,7 @@ from .errors import ParameterError
 from .simulation import simulate
 from .steps import Gravity, Heat, SelfFold
 from .materials import Material
-from .model import ContactParameters, Model, Supports, make_model
+from .model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
 from .example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, single_fold_pattern, strip_pattern, with_substrate)
 from .properties import BarHingeParameters
@@ -28,8 +28,6 @@ __all__ = ["Case", "CASES", "get_case", "describe_cases"]
 
 #: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
 DELTA_ALPHA_AU_SU8 = 38e-6
-#: Gravity used by the reference scripts [m/s^2].
-G_REFERENCE = 9.8
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,7 +156,7 @@ def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_
                        actuators=actuators)
     steps = [SelfFold({2: math.radians(residual_fold_deg)}, increments=self_fold_steps)]
     if gravity:
-        steps.append(Gravity(g=G_REFERENCE, panels=[1], increments=50))
+        steps.append(Gravity(g=REFERENCE_GRAVITY, panels=[1], increments=50))
     steps.append(Heat({2: _power(power_mW)}, increments=_steps_int("thermal_steps", thermal_steps),
                       coupling=coupling))
     return Case(name, model, tuple(steps))
@@ -228,7 +226,8 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
     rf = math.radians(residual_fold_deg)
     steps = [SelfFold({2: rf, 5: rf}, increments=50)]
     if gravity:
-        steps.append(Gravity(g=G_REFERENCE, scale=gravity_scale, panels=[1, 2], increments=80))
+        steps.append(Gravity(g=REFERENCE_GRAVITY, scale=gravity_scale, panels=[1, 2],
+                             increments=80))
     steps.append(Heat({(2, 5): _power(power_mW)}, increments=_steps_int("thermal_steps",
                                                                          thermal_steps),
                       coupling=coupling))

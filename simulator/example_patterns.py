@@ -15,6 +15,7 @@ import numpy as np
 from .errors import ParameterError
 from .materials import SU8, SUBSTRATE, Material
 from .pattern import Pattern
+from .polygons import centroids, unit_normals
 
 __all__ = ["single_fold_pattern", "strip_pattern", "double_fold_pattern", "miura_sheet_pattern",
            "gripper_pattern", "crane_pattern"]
@@ -205,13 +206,9 @@ def fold_directions(vertices, panels) -> dict:
     """
     verts = np.asarray(vertices, float)
     geo = Pattern(verts, panels, crease_width=1.0, crease_thickness=1.0, panel_thickness=1.0)
-    sizes = geo.corner_sizes
-    starts = np.cumsum(sizes) - sizes
-    c, a, b, panel = geo._fan_triangles()
-    normal = np.add.reduceat(np.cross(a - c, b - c), starts)
-    normal *= np.where(normal[:, 2] < 0, -1.0, 1.0)[:, None]
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    centroid = np.add.reduceat(verts[geo.corner_vertices], starts) / sizes[:, None]
+    corners, sizes = verts[geo.corner_vertices], geo.corner_sizes
+    normal = unit_normals(corners, sizes, upward=True)
+    centroid = centroids(corners, sizes)
     p1, p2 = geo.edge_panels[geo.creases].T
     axis = np.cross(centroid[p2] - centroid[p1], normal[p1])
     s = np.einsum("ij,ij->i", np.cross(normal[p1], normal[p2]), axis)

@@ -1,28 +1,41 @@
-"""Geometric measures of a deformed mesh: panel normals and crease fold angles."""
+"""Geometric measures of a deformed mesh: panel normals, crease fold angles and rotations.
+
+Two measures of how far a crease has folded, both signed (> 0 towards +z) and 0 when flat:
+
+* :func:`fold_angles`, the **fold angle**: the rotation of one panel relative to the other
+  (panel-to-panel, from the panels' mean planes). It is what one sees and what the reference
+  scripts measure between panel edges.
+* :func:`crease_rotations`, the **crease rotation**: the rotation taken up by the crease itself,
+  the sum over its fold lines (edge line 1, centre line, edge line 2) of their rotations from flat.
+  It is the reference implementation's measure of a crease and what the bimorph drives (the
+  rest angles of the fold lines add up to the crease's rest-angle change).
+
+They agree when the panels stay flat; when panels bend (the crane, up to about 8 deg) the fold
+angle also contains the panels' bending near the crease.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .elements.springs import fold_angle
 from .mesh import BarHingeMesh
+from .polygons import unit_normals
 
-__all__ = ["panel_normals", "fold_angles"]
+__all__ = ["panel_normals", "fold_angles", "crease_rotations"]
+
+#: Columns of ``BarHingeMesh.crease_springs`` on the crease's fold lines: edge1, edge2 and the
+#: two halves (A-Ctr, B-Ctr) of the centre line; the diagonals are not fold lines.
+_EDGE_LINES, _CENTRE_LINE = [0, 1], [4, 5]
 
 
 def panel_normals(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     """Unit normals (P, 3) of the shrunk panels at positions x (n, 3), by Newell's method.
 
-    Orientation follows the panel's corner order.
+    Orientation follows the panel's corner order; the fans run from the panel's centre node.
     """
     s = mesh.panel_corner_start
-    sizes = np.diff(s)
-    S = s[-1]
-    start = np.repeat(s[:-1], sizes)
-    nxt = start + (np.arange(S) - start + 1) % np.repeat(sizes, sizes)
-    c = x[mesh.panel_center]
-    panel = np.repeat(np.arange(len(sizes)), sizes)
-    n = np.add.reduceat(np.cross(x[:S] - c[panel], x[nxt] - c[panel]), s[:-1])
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+    return unit_normals(x[:s[-1]], np.diff(s), x[mesh.panel_center])
 
 
 def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
@@ -51,3 +64,16 @@ def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     axis = (x[n12] - x[n11]) * sign[:, None]
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
     return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), axis), np.einsum("ij,ij->i", n1, n2))
+
+
+def crease_rotations(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
+    """Signed rotation [rad] of every crease (crease-row order) at positions x (n, 3).
+
+    The sum over the crease's three fold lines of their rotations from flat, ``theta - pi`` of
+    their springs (> 0 towards +z, as the rest-angle change); the centre line is two springs
+    (A-Ctr, B-Ctr) and counts with their mean. Equals :func:`fold_angles` while the panels stay
+    flat; see the module docstring.
+    """
+    springs = mesh.springs[mesh.crease_springs[:, _EDGE_LINES + _CENTRE_LINE]]     # (C, 4, 4)
+    rot = fold_angle(x[springs.reshape(-1, 4)]).reshape(-1, 4) - np.pi
+    return rot[:, 0] + rot[:, 1] + 0.5 * (rot[:, 2] + rot[:, 3])

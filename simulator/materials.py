@@ -33,6 +33,9 @@ class Material:
     specific_heat : float
         Specific heat capacity c [J/(kg K)], >= 0 (0 = not given; transient heat transfer needs
         it, together with ``density``).
+    glass_transition : float or None
+        Glass-transition temperature T_g [deg C], finite; None if unknown. Design problems
+        bound crease temperatures by a multiple of the crease material's T_g.
     """
 
     name: str
@@ -41,6 +44,7 @@ class Material:
     density: float = 0.0
     thermal_conductivity: float = 0.0
     specific_heat: float = 0.0
+    glass_transition: float | None = None
 
     def __post_init__(self):
         checks = {
@@ -54,6 +58,10 @@ class Material:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and ok(value)):
                 raise ParameterError(
                     f"Material {self.name!r}: {field} = {value!r} is invalid; it must be {allowed}.")
+        tg = self.glass_transition
+        if tg is not None and not (isinstance(tg, (int, float)) and math.isfinite(tg)):
+            raise ParameterError(f"Material {self.name!r}: glass_transition = {tg!r} is invalid; "
+                                 "give T_g in deg C as a finite number, or None if unknown.")
 
     def to_dict(self) -> dict:
         """Plain-dict view for result metadata."""
@@ -66,9 +74,13 @@ _SU8_RHO_C = 2e6
 
 #: SU-8 epoxy photoresist. E = 2 GPa, nu = 0.3, rho = 1200 kg/m^3 and k = 0.3 W/(m K) as in the
 #: reference examples (Zhu & Filipov 2021, Example01-04 and the gripper); c = 2e6/1200 =
-#: 1666.7 J/(kg K) from the reference transient example (dynamics digest D8).
+#: 1666.7 J/(kg K) from the reference transient example (dynamics digest D8). T_g = 210 deg C: the
+#: paper bounds the gripper's crease temperature by 1.2 T_g of SU-8 (section 6.3) without printing
+#: T_g; 210 deg C is the manufacturer's value for fully cross-linked SU-8 (MicroChem SU-8 2000
+#: data sheet; "above 200 deg C" in the literature), giving the 252 deg C limit used throughout.
 SU8 = Material("SU-8", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
-               thermal_conductivity=0.3, specific_heat=_SU8_RHO_C / 1200.0)
+               thermal_conductivity=0.3, specific_heat=_SU8_RHO_C / 1200.0,
+               glass_transition=210.0)
 
 #: SPR photoresist panels of the gripper; the reference models them with SU-8 properties
 #: (including rho and c).

@@ -24,8 +24,10 @@ from functools import cached_property
 
 import numpy as np
 
+from ._arrays import read_only
 from .errors import PatternError
 from .pattern import Pattern
+from .polygons import area_vectors, centroids, fan_normals, rings
 
 __all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind"]
 
@@ -64,6 +66,8 @@ _CREASE_TRIANGLES = np.array([[_CTR, _A, _N11], [_N21, _A, _CTR], [_N21, _CTR, _
 @dataclass(frozen=True, eq=False)
 class BarHingeMesh:
     """Bar-and-hinge mesh of a :class:`~simulator.pattern.Pattern` (all indices 0-based).
+
+    Immutable: every array is read-only (variants: :meth:`with_nodes`, ``dataclasses.replace``).
 
     Attributes
     ----------
@@ -121,6 +125,12 @@ class BarHingeMesh:
     panel_center: np.ndarray
     panel_corner_start: np.ndarray
 
+    def __post_init__(self):
+        """Lock every array: a mesh is immutable, so no caller can edit it in place."""
+        for name, value in vars(self).items():
+            if isinstance(value, np.ndarray):
+                object.__setattr__(self, name, read_only(value))
+
     @property
     def n_nodes(self) -> int:
         return len(self.nodes)
@@ -138,24 +148,24 @@ class BarHingeMesh:
         """Row in the crease arrays of each edge id, -1 for boundary edges, shape (n_edges,)."""
         row = np.full(self.pattern.n_edges, -1)
         row[self.crease_ids] = np.arange(self.n_creases)
-        return row
+        return read_only(row)
 
     @cached_property
     def spring_crease(self) -> np.ndarray:
         """Crease row of each spring (-1 for panel springs), shape (ns,)."""
         out = np.full(len(self.springs), -1)
         out[self.crease_springs] = np.arange(self.n_creases)[:, None]
-        return out
+        return read_only(out)
 
     @cached_property
     def fan_triangles(self) -> np.ndarray:
         """Indices (into ``triangles``) of the panel fan triangles."""
-        return np.flatnonzero(self.triangle_panel >= 0)
+        return read_only(np.flatnonzero(self.triangle_panel >= 0))
 
     @cached_property
     def corner_nodes(self) -> np.ndarray:
         """Panel corner nodes (the first S nodes)."""
-        return np.arange(self.panel_corner_start[-1])
+        return read_only(np.arange(self.panel_corner_start[-1]))
 
     def panel_nodes(self, panel: int) -> np.ndarray:
         """Corner nodes and centre node of one panel."""
@@ -173,7 +183,7 @@ class BarHingeMesh:
         Reproduces the reference's post-meshing node edits (gripper, digest 8.7):
         bars then carry the originally meshed reference lengths.
         """
-        nodes = np.asarray(nodes, dtype=float)
+        nodes = np.array(nodes, dtype=float)          # a copy: the caller's array stays theirs
         if nodes.shape != self.nodes.shape or not np.all(np.isfinite(nodes)):
             raise PatternError(f"nodes must be a finite array of shape {self.nodes.shape}.")
         return replace(self, nodes=nodes)
@@ -185,14 +195,11 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
         raise PatternError(f"build_mesh expects a Pattern, got {type(pattern).__name__}.")
     sizes = pattern.corner_sizes
     S, P = int(sizes.sum()), pattern.n_panels
-    start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-    local = np.arange(S) - start
-    prev = start + (local - 1) % np.repeat(sizes, sizes)
-    nxt = start + (local + 1) % np.repeat(sizes, sizes)
-    corner_panel = np.repeat(np.arange(P), sizes)
+    ring = rings(sizes)
+    prev, nxt, corner_panel = ring.prev, ring.nxt, ring.owner
 
     corners = _shrink_corners(pattern, prev, nxt)
-    _check_shrunk_panels(pattern, corners, nxt)
+    _check_shrunk_panels(pattern, corners)
     crease_ids = pattern.creases
     C = len(crease_ids)
 
@@ -204,11 +211,12 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
 
     # Pass C: centres, spokes, fans
     centre = S + 3 * C + np.arange(P)
-    centre_pos = np.add.reduceat(corners, np.cumsum(sizes) - sizes) / sizes[:, None]
+    centre_pos = centroids(corners, sizes)
     nodes = np.vstack([corners, crease_pos, centre_pos])
     spokes = np.column_stack([np.arange(S), centre[corner_panel]])
-    last = local == np.repeat(sizes, sizes) - 1
-    fans = np.column_stack([centre[corner_panel], np.where(last, start, np.arange(S)),
+    last = ring.local == sizes[corner_panel] - 1                   # fan (centre, C_1, C_N) last
+    fans = np.column_stack([centre[corner_panel],
+                            np.where(last, ring.first[corner_panel], np.arange(S)),
                             np.where(last, np.arange(S), nxt)])
 
     bars = np.vstack([edge_bars, np.sort(cn[:, _CREASE_BARS].reshape(-1, 2), axis=1), spokes])
@@ -329,18 +337,15 @@ def _polarity_fix(nodes: np.ndarray, springs: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray, nxt: np.ndarray) -> None:
+def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray) -> None:
     """Crease widths must leave every shrunk panel with positive area and the same orientation."""
     sizes = pattern.corner_sizes
-    starts = np.cumsum(sizes) - sizes
-    centre = np.add.reduceat(corners, starts) / sizes[:, None]
-    panel = np.repeat(np.arange(pattern.n_panels), sizes)
-    fan = np.cross(corners - centre[panel], corners[nxt] - centre[panel])
-    x0 = pattern.vertices[pattern.corner_vertices]
-    c0 = np.add.reduceat(x0, starts) / sizes[:, None]
-    normal0 = np.add.reduceat(np.cross(x0 - c0[panel], x0[nxt] - c0[panel]), starts)
-    ok = np.einsum("ij,ij->i", fan, normal0[panel]) > 1e-8 * np.einsum("ij,ij->i", normal0, normal0)[panel]
-    bad = np.flatnonzero(~np.logical_and.reduceat(ok, starts))
+    ring = rings(sizes)
+    fan = fan_normals(corners, sizes)
+    normal0 = 2 * area_vectors(pattern.vertices[pattern.corner_vertices], sizes)
+    ok = (np.einsum("ij,ij->i", fan, normal0[ring.owner])
+          > 1e-8 * np.einsum("ij,ij->i", normal0, normal0)[ring.owner])
+    bad = np.flatnonzero(~np.logical_and.reduceat(ok, ring.first))
     if len(bad):
         raise PatternError(f"panel {bad[0]} vanishes or turns inside out after shrinking by half "
                            "the crease widths; reduce the widths of its creases or enlarge the panel.")

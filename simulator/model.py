@@ -14,16 +14,22 @@ from functools import cached_property
 
 import numpy as np
 
+from .bimorph import Actuators
 from .errors import ParameterError
 from .mesh import BarHingeMesh, build_mesh
 from .pattern import Pattern
+from .polygons import triangle_areas
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
+from .thermal import ThermalParameters
 
 __all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads",
-           "STANDARD_GRAVITY"]
+           "STANDARD_GRAVITY", "REFERENCE_GRAVITY"]
 
-#: Standard gravity [m/s^2].
+#: Standard gravity [m/s^2] (the default of :func:`gravity_loads` and the ``Gravity`` step).
 STANDARD_GRAVITY = 9.80665
+#: Gravity of the reference scripts (Zhu & Filipov 2021: Example01, Example02 and the gripper)
+#: [m/s^2]. Kept at 9.8 wherever results are compared with the reference's numbers.
+REFERENCE_GRAVITY = 9.8
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
@@ -186,17 +192,23 @@ class Model:
 
 def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Mapping = None,
                params: BarHingeParameters | None = None,
-               contact: ContactParameters | bool | None = None, thermal=None,
-               actuators=None) -> Model:
+               contact: ContactParameters | bool | None = None,
+               thermal: ThermalParameters | None = None,
+               actuators: Actuators | None = None) -> Model:
     """Build a :class:`Model`: mesh (if given a pattern), element properties, supports.
 
+    ``supports`` is a :class:`Supports` or a mapping ``{node: "xyz"-subset}``;
     ``contact=True`` switches contact on with default :class:`ContactParameters`;
     ``thermal`` (:class:`~simulator.thermal.ThermalParameters`) and ``actuators``
-    (:class:`~simulator.bimorph.Actuators`) are needed for heating steps.
+    (:class:`~simulator.bimorph.Actuators`) are needed for heating steps. Every argument is
+    type-checked; a wrong type raises :class:`~simulator.errors.ParameterError` naming the
+    argument, the type given and what to pass instead.
     """
+    _check_arguments(pattern_or_mesh=pattern_or_mesh, supports=supports, params=params,
+                     contact=contact, thermal=thermal, actuators=actuators)
     mesh = pattern_or_mesh if isinstance(pattern_or_mesh, BarHingeMesh) \
         else build_mesh(pattern_or_mesh)
-    params = params or BarHingeParameters()
+    params = BarHingeParameters() if params is None else params
     if supports is None:
         supports = Supports()
     elif not isinstance(supports, Supports):
@@ -210,6 +222,32 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
         actuators.delta_alpha_array(mesh)          # validates the crease ids
     return Model(mesh=mesh, properties=props, params=params, supports=supports, contact=contact,
                  thermal=thermal, actuators=actuators)
+
+
+#: make_model's arguments: accepted types and how to build a valid value.
+_ARGUMENTS = {
+    "pattern_or_mesh": ((Pattern, BarHingeMesh), False,
+                        "pass a Pattern (e.g. simulator.example_patterns.single_fold_pattern()) "
+                        "or a BarHingeMesh from build_mesh(pattern)"),
+    "supports": ((Supports, Mapping), True,
+                 "pass Supports(...), Supports.nodes([...]) or a mapping {node: 'xyz'}"),
+    "params": ((BarHingeParameters,), True, "pass BarHingeParameters(...) or None for defaults"),
+    "contact": ((ContactParameters, bool), True,
+                "pass ContactParameters(...), True (defaults), False or None (no contact)"),
+    "thermal": ((ThermalParameters,), True, "pass ThermalParameters(...) or None"),
+    "actuators": ((Actuators,), True,
+                  "pass Actuators(Bimorph(...), {crease: delta_alpha}) or None"),
+}
+
+
+def _check_arguments(**given) -> None:
+    for name, value in given.items():
+        types, optional, fix = _ARGUMENTS[name]
+        if (value is None and optional) or isinstance(value, types):
+            continue
+        allowed = " or ".join(t.__name__ for t in types) + (" or None" if optional else "")
+        raise ParameterError(f"make_model: {name} is a {type(value).__name__} ({value!r:.60}); "
+                             f"it must be {allowed}; {fix}.")
 
 
 def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,
@@ -230,8 +268,7 @@ def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,
     fans = mesh.triangles[mesh.fan_triangles]
     panel = mesh.triangle_panel[mesh.fan_triangles]
     x = mesh.nodes
-    area = 0.5 * np.linalg.norm(np.cross(x[fans[:, 1]] - x[fans[:, 0]],
-                                         x[fans[:, 2]] - x[fans[:, 0]]), axis=1)
+    area = triangle_areas(x[fans[:, 0]], x[fans[:, 1]], x[fans[:, 2]])
     rho = np.array([m.density for m in pat.panel_material])
     weight = rho[panel] * pat.panel_thickness[panel] * area * g
     if panels is not None:

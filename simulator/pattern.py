@@ -18,8 +18,10 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._arrays import read_only
 from .errors import PatternError
 from .materials import SU8, Material
+from .polygons import area_vectors, centroids, fan_normals, rings
 
 __all__ = ["Pattern"]
 
@@ -28,7 +30,8 @@ logger = logging.getLogger(__name__)
 
 @dataclass(frozen=True, eq=False)
 class Pattern:
-    """Flat (or gently non-flat) origami pattern with compliant creases.
+    """Flat (or gently non-flat) origami pattern with compliant creases (immutable; its arrays
+    are read-only).
 
     Parameters
     ----------
@@ -98,6 +101,9 @@ class Pattern:
         for name in ("crease_width", "crease_thickness"):
             object.__setattr__(self, name, self._per_crease_positive(getattr(self, name), name))
         _set_fold_data(self)
+        for name in ("edges", "edge_panels", "_edge_of_corner", "panel_thickness", "crease_width",
+                     "crease_thickness"):
+            object.__setattr__(self, name, read_only(getattr(self, name)))
 
     # ------------------------------------------------------------------ topology
     def _enumerate_edges(self):
@@ -105,9 +111,8 @@ class Pattern:
         n_v = len(self.vertices)
         sizes = np.array([len(p) for p in self.panels])
         flat = np.concatenate(self.panels)
-        start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        local = np.arange(len(flat)) - start
-        prev = flat[start + (local - 1) % np.repeat(sizes, sizes)]
+        ring = rings(sizes)
+        prev = flat[ring.prev]
         # visiting order per panel: (C1, CN) first, then (C_{j-1}, C_j) for j = 2..N; that is the
         # edge *ending* at corner j in corner order, which is exactly (prev, flat).
         key = np.minimum(prev, flat) * n_v + np.maximum(prev, flat)
@@ -118,7 +123,7 @@ class Pattern:
         rank[order] = np.arange(len(order))
         edge_of_corner = rank[inverse]
         edges = np.column_stack([uniq[order] // n_v, uniq[order] % n_v])
-        panel_of_corner = np.repeat(np.arange(len(self.panels)), sizes)
+        panel_of_corner = ring.owner
         if np.any(counts > 2):
             bad = order[np.flatnonzero(counts[order] > 2)[0]]
             e = rank[bad]
@@ -152,22 +157,22 @@ class Pattern:
     @cached_property
     def is_crease(self) -> np.ndarray:
         """Boolean mask over edges: True for interior creases (edge shared by two panels)."""
-        return self.edge_panels[:, 1] >= 0
+        return read_only(self.edge_panels[:, 1] >= 0)
 
     @cached_property
     def creases(self) -> np.ndarray:
         """Edge ids of the interior creases, ascending."""
-        return np.flatnonzero(self.is_crease)
+        return read_only(np.flatnonzero(self.is_crease))
 
     @cached_property
     def corner_sizes(self) -> np.ndarray:
         """Number of corners of each panel, shape (n_panels,)."""
-        return np.array([len(p) for p in self.panels])
+        return read_only([len(p) for p in self.panels])
 
     @cached_property
     def corner_vertices(self) -> np.ndarray:
         """Vertex id of every panel corner, panels concatenated in order, shape (S,)."""
-        return np.concatenate(self.panels)
+        return read_only(np.concatenate(self.panels))
 
     @cached_property
     def corner_edges(self) -> np.ndarray:
@@ -225,7 +230,7 @@ class Pattern:
         p = _as_point(point)
         tol = 1e-9 * self.size if tol is None else tol
         c, a, b, panel = self._fan_triangles()
-        n = np.cross(a - c, b - c)
+        n = fan_normals(a, self.corner_sizes)
         nn = np.einsum("ij,ij->i", n, n)
         dist = np.einsum("ij,ij->i", p - c, n) / np.sqrt(nn)
         q = p - dist[:, None] * n / np.sqrt(nn)[:, None]
@@ -247,13 +252,9 @@ class Pattern:
 
     def _fan_triangles(self):
         """Fan triangles (centroid, C_j, C_{j+1}) of the original panels, flat over panels."""
-        sizes = self.corner_sizes
-        start = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        nxt = start + (np.arange(len(start)) - start + 1) % np.repeat(sizes, sizes)
-        panel = np.repeat(np.arange(self.n_panels), sizes)
+        ring = rings(self.corner_sizes)
         xc = self.vertices[self.corner_vertices]
-        centroid = np.add.reduceat(xc, np.cumsum(sizes) - sizes) / sizes[:, None]
-        return centroid[panel], xc, xc[nxt], panel
+        return centroids(xc, self.corner_sizes)[ring.owner], xc, xc[ring.nxt], ring.owner
 
     # ------------------------------------------------------------------ data normalisation
     def _per_panel_positive(self, value, name):
@@ -420,8 +421,8 @@ def _check_geometry(pattern: Pattern) -> None:
     c, a, b, panel = pattern._fan_triangles()
     sizes = pattern.corner_sizes
     starts = np.cumsum(sizes) - sizes
-    fan_normal = np.cross(a - c, b - c)
-    normal = np.add.reduceat(fan_normal, starts)               # Newell vector area x 2
+    fan_normal = fan_normals(a, sizes)
+    normal = 2 * area_vectors(a, sizes)                        # Newell vector area x 2
     area2 = np.linalg.norm(normal, axis=1)
     diam = np.maximum.reduceat(np.linalg.norm(a - c, axis=1), starts)
     bad = np.flatnonzero(area2 <= 1e-8 * diam**2)

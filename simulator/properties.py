@@ -19,6 +19,7 @@ from .elements.springs import fold_angle
 from .errors import ParameterError
 from .geometry import fold_angles
 from .mesh import BarHingeMesh, BarType, SpringKind
+from .polygons import triangle_areas
 
 __all__ = ["BarHingeParameters", "MechanicalProperties", "mechanical_properties",
            "spring_rest_angles", "initial_crease_rest", "FLAT_FOLD_TOL"]
@@ -112,8 +113,7 @@ def mechanical_properties(mesh: BarHingeMesh,
     nu_p = np.array([m.poisson_ratio for m in pat.panel_material])
     fans = mesh.triangles[mesh.fan_triangles]
     x = mesh.nodes
-    fan_area = 0.5 * np.linalg.norm(np.cross(x[fans[:, 1]] - x[fans[:, 0]],
-                                             x[fans[:, 2]] - x[fans[:, 0]]), axis=1)
+    fan_area = triangle_areas(x[fans[:, 0]], x[fans[:, 1]], x[fans[:, 2]])
     panel_area = np.bincount(mesh.triangle_panel[mesh.fan_triangles], fan_area, pat.n_panels)
     in_panel = mesh.bar_panel >= 0
     l_sum = np.bincount(mesh.bar_panel[in_panel], L0[in_panel], pat.n_panels)

@@ -1,8 +1,9 @@
 """Simulation results: per-step outcomes, per-increment history, tables and files.
 
 Every accepted increment of every loading step is a record: displacements,
-node temperatures and crease powers. Crease fold angles and crease temperatures
-are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
+node temperatures and crease powers. Crease fold angles (panel to panel), crease
+rotations (sum over the crease's fold lines, see :mod:`simulator.geometry`) and crease
+temperatures are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
 table (one row per record and crease, unit-bearing column names) and
 :meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``.
 """
@@ -19,7 +20,7 @@ import numpy as np
 
 from ._version import __version__
 from .bimorph import crease_temperature_weights
-from .geometry import fold_angles
+from .geometry import crease_rotations, fold_angles
 
 __all__ = ["StepResult", "SimulationResult"]
 
@@ -146,6 +147,14 @@ class SimulationResult:
         return np.array([fold_angles(mesh, mesh.nodes + u) for u in self.history["u"]])
 
     @cached_property
+    def crease_rotation(self) -> np.ndarray:
+        """(m, C) crease rotations [rad] of every record: the sum of the rotations of each
+        crease's fold lines (what the bimorph drives); equals :attr:`fold_angle` (panel to
+        panel) while the panels stay flat (:func:`~simulator.geometry.crease_rotations`)."""
+        mesh = self.model.mesh
+        return np.array([crease_rotations(mesh, mesh.nodes + u) for u in self.history["u"]])
+
+    @cached_property
     def crease_temperature(self) -> np.ndarray:
         """(m, C) crease temperature used for actuation [deg C] (7-node weighted mean)."""
         t = self.history["temperature"][:, self.model.mesh.crease_nodes]
@@ -160,7 +169,9 @@ class SimulationResult:
         """Long table: one row per record and crease.
 
         Columns: ``step`` (record index, 0 = initial state), ``stage``, ``increment``,
-        ``crease`` (edge id), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
+        ``crease`` (edge id), ``power [mW]``, ``fold_angle [deg]`` (panel-to-panel rotation),
+        ``crease_rotation [deg]`` (sum of the crease's fold-line rotations, what the bimorph
+        drives; differs from the fold angle when panels bend), ``temperature [degC]``,
         ``temperature_max [degC]``, ``iterations``, then the steps' step-specific columns (e.g.
         ``time [s]``; empty for records of steps without them).
         """
@@ -175,6 +186,7 @@ class SimulationResult:
             "increment": rep(h["increment"]), "crease": np.tile(creases, m),
             "power [mW]": h["power"].ravel() * 1e3,
             "fold_angle [deg]": np.degrees(self.fold_angle).ravel(),
+            "crease_rotation [deg]": np.degrees(self.crease_rotation).ravel(),
             "temperature [degC]": self.crease_temperature.ravel(),
             "temperature_max [degC]": self.crease_temperature_max.ravel(),
             "iterations": rep(h["iterations"]),

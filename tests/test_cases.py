@@ -54,6 +54,19 @@ def test_single_fold_matches_reference_tightly(single_fold_run):
     assert np.max(np.abs(res.history["temperature"][heat, 14] - ref["T_center_max_C"])) < 0.01
 
 
+def test_single_fold_crease_rotation_is_its_fold_angle(single_fold_run):
+    """Flat panels: the crease's fold-line rotations add up to the panel-to-panel fold angle,
+    so crease_rotation [deg] follows the reference curve as fold_angle [deg] does."""
+    case, res = single_fold_run
+    frame = res.to_frame()
+    np.testing.assert_allclose(frame["crease_rotation [deg]"], frame["fold_angle [deg]"],
+                               rtol=0, atol=1e-9)
+    ref = pd.read_csv(DATA / "single_fold_res0.csv")
+    heat = np.flatnonzero(res.history["stage_name"] == "heat")
+    np.testing.assert_allclose(np.degrees(res.crease_rotation[heat, 0]),
+                               ref[ref.step > 0]["fold_angle_signed_deg"], atol=0.25)
+
+
 @pytest.mark.parametrize("variant, expected", [
     ("within", [0, 0.2, 0.2, 0, 0.2, 0, 0, 0.2, 0.34949494949495, 0.34949494949495,
                 0.45050505050505, 0.1, 0.1]),

@@ -122,3 +122,25 @@ def test_counts_formula_large_miura():
 def test_with_nodes_keeps_bar_lengths(single):
     moved = single.with_nodes(single.nodes * 1.1)
     np.testing.assert_array_equal(moved.bar_length, single.bar_length)
+
+
+def test_mesh_and_pattern_arrays_are_read_only(single):
+    arrays = {k: v for k, v in vars(single).items() if isinstance(v, np.ndarray)}
+    arrays.update(crease_row=single.crease_row, spring_crease=single.spring_crease,
+                  fan_triangles=single.fan_triangles)
+    pat = single.pattern
+    arrays.update(vertices=pat.vertices, edges=pat.edges, edge_panels=pat.edge_panels,
+                  crease_width=pat.crease_width, panel_thickness=pat.panel_thickness,
+                  creases=pat.creases, corner_edges=pat.corner_edges)
+    assert len(arrays) > 30
+    for name, a in arrays.items():
+        assert not a.flags.writeable, name
+    with pytest.raises(ValueError, match="read-only"):
+        single.nodes[0, 0] = 1.0
+
+
+def test_with_nodes_copies_the_callers_array(single):
+    x = np.array(single.nodes)
+    moved = single.with_nodes(x)
+    x[0, 0] = 1.0                      # the caller's array stays writable and does not leak in
+    assert moved.nodes[0, 0] == single.nodes[0, 0] and not moved.nodes.flags.writeable
