@@ -14,17 +14,20 @@ from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
+from .dynamics import DynamicsOptions, DynamicsResult, MotionState, TimeIntegrator, integrate
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
+from .mass import lumped_masses
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
 from .model import STANDARD_GRAVITY, ContactParameters, Model, Supports, make_model
+from .modes import ModesResult, natural_modes
 from .newton import NewtonOptions
 from .pattern import Pattern
 from .properties import BarHingeParameters
 from .results import SimulationResult, StepResult
 from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
-from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold, Step,
+from .steps import (AmbientTemperature, Coupling, Dynamics, Gravity, Heat, Load, SelfFold, Step,
                     StepContext, StepOutcome, StepRecorder)
 from .thermal import ThermalParameters
 
@@ -38,6 +41,9 @@ __all__ = [
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
     "initial_state",
+    # dynamics and natural modes
+    "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
+    "lumped_masses", "natural_modes", "ModesResult",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # errors

@@ -373,13 +373,18 @@ class DynamicsResult:
         total = self.kinetic + self.strain
         return self.external_work - self.dissipated - (total - total[0])
 
+    @property
+    def energies(self) -> dict:
+        """{column name: (m,) array} for :data:`ENERGY_COLUMNS` [J]."""
+        return dict(zip(ENERGY_COLUMNS, (self.kinetic, self.strain, self.dissipated,
+                                         self.external_work, self.numerical_dissipation)))
+
     def to_frame(self):
         """One row per record: ``time [s]``, the energy columns [J], ``iterations``."""
         import pandas as pd
 
-        return pd.DataFrame({"time [s]": self.time, **dict(zip(ENERGY_COLUMNS, (
-            self.kinetic, self.strain, self.dissipated, self.external_work,
-            self.numerical_dissipation))), "iterations": self.iterations})
+        return pd.DataFrame({"time [s]": self.time, **self.energies,
+                             "iterations": self.iterations})
 
 
 def integrate(system: EquilibriumSystem, u0, v0, duration: float, dt: float, f_ext,
