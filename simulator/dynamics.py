@@ -5,9 +5,14 @@ Equation of motion on the free DOFs (supports eliminated as in statics)::
     M a + C v + f_int(u; theta0) = f_ext(t)
 
 with the lumped mass ``M`` of :mod:`simulator.mass`, the internal force of bars, springs, contact
-and elastic supports, and a damping matrix ``C = alpha M + beta K0 + diag(c_air A_node)``
-(Rayleigh damping with ``K0`` the tangent at the start of the step, plus linear air damping per
-unit sheet area). One time step is the generalized-alpha family (Chung & Hulbert 1993)::
+and elastic supports, and a damping matrix ``C = alpha M + beta K_mat(u) + diag(c_air A_node)``
+(Rayleigh damping plus linear air damping per unit sheet area). ``K_mat`` is the material part
+of the stiffness at the current configuration
+(:meth:`~simulator.equilibrium.EquilibriumSystem.material_stiffness`: no stress or contact terms),
+so it is positive semi-definite and never damps rigid-body rotations. The reference uses the full
+tangent at the start of each step instead (digest D9.8); with the stiff crease bars that lagged
+matrix damps a rotating panel spuriously (0.7 % of its energy per period at 1e-3 rad and 100
+steps per period, against 2e-6 here). One time step is the generalized-alpha family (Chung & Hulbert 1993)::
 
     M a_{n+1-am} + C v_{n+1-af} + f_int_{n+1-af} - f_ext_{n+1-af} = 0,  x_{n+1-a} = (1-a) x_{n+1} + a x_n
 
@@ -58,9 +63,12 @@ class DynamicsOptions:
     rayleigh_alpha : float
         Mass-proportional damping alpha [1/s] (damping ratio alpha / (2 omega)). Default 0.
     rayleigh_beta : float
-        Stiffness-proportional damping beta [s] (damping ratio beta omega / 2), applied to the
-        tangent at the start of each step. Default 0. (The reference's defaults are
-        alpha = beta = 1e-4, which over-damps modes above a few kHz, digest D9.8.)
+        Stiffness-proportional damping beta [s] (damping ratio beta omega / 2) on the material
+        stiffness at the current configuration. Default 0. (The reference's defaults are
+        alpha = beta = 1e-4, which over-damps modes above a few kHz, digest D9.8.) A small beta,
+        or a dissipative method, calms the stiff crease-node modes that a sudden rest-angle
+        change excites (the crease's centre line takes half of it, its edge lines a quarter
+        each, so about 1/9 of the released energy goes into an S-shaped crease mode).
     air_damping : float
         Linear air damping c_air [N s/m^3]: a force ``-c_air A_i v_i`` on every node with the
         sheet area ``A_i`` lumped to it like the mass (:func:`~simulator.mass.lumped_areas`).
@@ -139,7 +147,7 @@ class MotionState:
         (zero velocity and acceleration on fixed DOFs)
     f_ext : (n_dof,) external load at this time [N]
     spring_rest : (n_springs,) spring rest angles at this time [rad]
-    evaluation : Evaluation at (u, spring_rest), with the tangent (the next step's K0)
+    evaluation : Evaluation at (u, spring_rest), with the tangent
     """
 
     time: float
@@ -217,20 +225,22 @@ class TimeIntegrator:
         ev = sys.evaluate(u, spring_rest, hessian=True)
         vf = v.ravel()[free]
         a = np.zeros(sys.n_dof)
-        a[free] = (f_ext[free] - self._damping(ev.K)[0](vf) - ev.f_int[free]) / self.m
+        a[free] = (f_ext[free] - self._damping(u.ravel())[0](vf) - ev.f_int[free]) / self.m
         return MotionState(float(time), u, v, a.reshape(-1, 3), f_ext,
                            np.asarray(spring_rest, float).copy(), ev)
 
-    def _damping(self, K0):
-        """Damping operator ``v -> C v`` and its parts: (diagonal [N s/m], stiffness factor [s],
-        K0)."""
+    def _damping(self, u):
+        """Damping at displacements ``u`` (n_dof,): (``v -> C v`` on the free DOFs, its diagonal
+        part [N s/m], its stiffness part ``beta K_mat`` [N s/m] or None)."""
         o = self.options
         diag = o.rayleigh_alpha * self.m + self.c_air
-        beta = o.rayleigh_beta
+        Kb = None
+        if o.rayleigh_beta > 0:
+            Kb = o.rayleigh_beta * self.system.material_stiffness(u.reshape(-1, 3))
 
         def apply(v):
-            return diag * v + (beta * (K0 @ v) if beta > 0 else 0.0)
-        return apply, diag, beta
+            return diag * v if Kb is None else diag * v + Kb @ v
+        return apply, diag, Kb
 
     # ------------------------------------------------------------------ stepping
     def step(self, state: MotionState, dt: float, f_ext, spring_rest=None) -> StepReport:
@@ -270,20 +280,20 @@ class TimeIntegrator:
         free = sys.free
         am, af, beta, gamma = o.coefficients
         un, vn, an = s.u.ravel()[free], s.v.ravel()[free], s.a.ravel()[free]
-        K0 = s.evaluation.K
-        C, c_diag, c_beta = self._damping(K0)
+        C0 = self._damping(s.u.ravel())[0]                        # damping at t_n
         # generalized-alpha terms known at t_n
-        known = am * m * an + af * (C(vn) + s.evaluation.f_int[free] - s.f_ext[free]) \
+        known = am * m * an + af * (C0(vn) + s.evaluation.f_int[free] - s.f_ext[free]) \
             - (1 - af) * f_ext[free]
         c_a, c_v = 1 / (beta * dt**2), gamma / (beta * dt)
         u = s.u.ravel().copy()
-        u[free] = un + dt * vn + 0.5 * dt**2 * an            # predictor a_{n+1} = a_n
+        u[free] = un + dt * vn           # predictor: constant velocity (see _solve)
         norms = []
         for it in range(o.max_iter + 1):
             ev = sys.evaluate(u.reshape(-1, 3), rest, hessian=True)
             uf = u[free]
             a = c_a * (uf - un - dt * vn) - (0.5 / beta - 1) * an
             v = vn + dt * ((1 - gamma) * an + gamma * a)
+            C, c_diag, Kb = self._damping(u)        # stiffness part at the current iterate
             inertia, damping = (1 - am) * m * a, (1 - af) * C(v)
             r = inertia + damping + (1 - af) * ev.f_int[free] + known
             rn = float(np.linalg.norm(r))
@@ -293,12 +303,13 @@ class TimeIntegrator:
             scale = max(np.linalg.norm(inertia), np.linalg.norm(damping),
                         np.linalg.norm(ev.f_int[free]), np.linalg.norm(f_ext[free]))
             if rn <= max(o.atol, o.rtol * scale) or (it and np.max(np.abs(du)) <= 1e-13 * self.size):
-                return self._accept(s, dt, f_ext, rest, ev, u, v, a, C, it, norms)
+                power = 0.5 * (C0(vn) + C(v))        # damping force, trapezoidal mean
+                return self._accept(s, dt, f_ext, rest, ev, u, v, a, power, it, norms)
             if it == o.max_iter:
                 break
             J = (1 - af) * ev.K
-            if c_beta > 0:
-                J = J + ((1 - af) * c_v * c_beta) * K0
+            if Kb is not None:                   # d(Kb(u) v)/du ~ c_v Kb
+                J = J + ((1 - af) * c_v) * Kb
             J = J.tocsr()
             J.setdiag(J.diagonal() + (1 - am) * c_a * m + (1 - af) * c_v * c_diag)
             du = _solve_linear(J, -r)
@@ -311,17 +322,16 @@ class TimeIntegrator:
         return StepReport(False, f"no convergence in {o.max_iter} Newton iterations (residual "
                           f"{norms[-1]:.3g} N)", s, o.max_iter, 0, (np.array(norms),))
 
-    def _accept(self, s, dt, f_ext, rest, ev, u, v, a, C, it, norms) -> StepReport:
+    def _accept(self, s, dt, f_ext, rest, ev, u, v, a, damping, it, norms) -> StepReport:
         free, n = self.system.free, self.system.n_dof
         vv, aa = np.zeros(n), np.zeros(n)
         vv[free], aa[free] = v, a
         new = MotionState(s.time + dt, u.reshape(-1, 3), vv.reshape(-1, 3), aa.reshape(-1, 3),
                           f_ext, np.asarray(rest, float), ev)
         du = u[free] - s.u.ravel()[free]
-        v_mid = 0.5 * (s.v.ravel()[free] + v)
         work = float(du @ (0.5 * (s.f_ext[free] + f_ext[free])))
         return StepReport(True, "converged", new, it, 0, (np.array(norms),),
-                          dissipated=float(du @ C(v_mid)), external_work=work)
+                          dissipated=float(du @ damping), external_work=work)
 
 
 # ---------------------------------------------------------------------- whole integrations
@@ -341,7 +351,10 @@ class DynamicsResult:
     time : (m,) [s]
     u, v, a : (m, n_nodes, 3) displacements [m], velocities [m/s], accelerations [m/s^2]
     kinetic, strain : (m,) kinetic energy 1/2 v.M v and internal energy [J]
-    dissipated : (m,) energy taken out by Rayleigh and air damping since t_0 [J]
+    dissipated : (m,) energy taken out by Rayleigh and air damping since t_0 [J] (the
+        trapezoidal damping work of the scheme; exact for linear problems; when stiff modes ring
+        in a strongly nonlinear motion only its sum with :attr:`numerical_dissipation` is
+        meaningful)
     external_work : (m,) work of the external loads since t_0 [J]
     iterations : (m,) Newton iterations of the step ending at each record (0 for record 0)
     cuts : int

@@ -108,13 +108,15 @@ def test_free_vibration_matches_modes_and_the_hinge_chain(fold):
     assert f_vib == pytest.approx(f_chain, rel=1e-2)
 
 
-@pytest.mark.parametrize("damping", ["rayleigh", "air"])
+@pytest.mark.parametrize("damping", ["rayleigh", "stiffness", "air"])
 def test_damped_panel_decays_at_the_analytic_rate(fold, damping):
     """Log decrement 2 pi zeta / sqrt(1 - zeta^2) and damped frequency f sqrt(1 - zeta^2)."""
     f = chain_frequency(fold)
     omega, zeta = 2 * np.pi * f, 0.05
     if damping == "rayleigh":
         options = DynamicsOptions(rayleigh_alpha=2 * zeta * omega)
+    elif damping == "stiffness":
+        options = DynamicsOptions(rayleigh_beta=2 * zeta / omega)
     else:   # modal damping ratio of area-proportional damping: c phi.A phi / (2 omega)
         from simulator.mass import lumped_areas
         phi = natural_modes(fold, count=1).shapes[0]
