@@ -286,7 +286,10 @@ class TimeIntegrator:
             - (1 - af) * f_ext[free]
         c_a, c_v = 1 / (beta * dt**2), gamma / (beta * dt)
         u = s.u.ravel().copy()
-        u[free] = un + dt * vn           # predictor: constant velocity (see _solve)
+        step = dt * vn                    # predictor: constant velocity; with contact, no node
+        if sys.max_step is not None and np.max(np.abs(step)) > sys.max_step:   # may jump
+            step *= sys.max_step / np.max(np.abs(step))                         # through a panel
+        u[free] = un + step
         norms = []
         for it in range(o.max_iter + 1):
             ev = sys.evaluate(u.reshape(-1, 3), rest, hessian=True)

@@ -6,6 +6,12 @@ initial velocities, the response to a suddenly applied (or removed) load, releas
 displaced state, or a sudden change of crease rest angles. Unlike the reference, dead loads of
 earlier steps stay applied (digest D9.3), supported DOFs keep their displacements (D9.5) and the
 velocities carry over to a following dynamic step (``SimulationState.velocity``).
+
+Choosing the scheme: the default (undamped average acceleration) is right for free vibration
+and conserves energy. A sudden rest-angle change or an impact on a contact layer also excites
+the very stiff modes of the crease nodes; use ``DynamicsOptions(method="generalized_alpha",
+rho_inf=0.0, rayleigh_beta=1e-6)`` (or similar) there, which removes them within a few steps
+while leaving the fold modes practically undamped (zeta = beta omega / 2).
 """
 
 from __future__ import annotations
