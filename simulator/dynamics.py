@@ -216,18 +216,26 @@ class TimeIntegrator:
         """State at ``time`` with the acceleration from dynamic equilibrium,
         ``a = M^-1 (f_ext - C v - f_int)`` on the free DOFs."""
         sys, free = self.system, self.system.free
-        u = np.array(u, float).reshape(-1, 3)
-        v = np.array(v, float).reshape(-1, 3)
-        f_ext = np.asarray(f_ext, float).ravel()
-        if not (np.isfinite(u).all() and np.isfinite(v).all() and np.isfinite(f_ext).all()):
-            raise ParameterError("initial displacements, velocities and loads must be finite.")
+        n = sys.n_dof
+        u = self._vector(u, n, "initial displacements").reshape(-1, 3)
+        v = self._vector(v, n, "initial velocities").reshape(-1, 3)
+        f_ext = self._vector(f_ext, n, "external load")
+        spring_rest = self._vector(spring_rest, len(sys.spr_k), "spring rest angles")
         v.ravel()[sys.free_index < 0] = 0.0
         ev = sys.evaluate(u, spring_rest, hessian=True)
         vf = v.ravel()[free]
         a = np.zeros(sys.n_dof)
         a[free] = (f_ext[free] - self._damping(u.ravel())[0](vf) - ev.f_int[free]) / self.m
-        return MotionState(float(time), u, v, a.reshape(-1, 3), f_ext,
-                           np.asarray(spring_rest, float).copy(), ev)
+        return MotionState(float(time), u, v, a.reshape(-1, 3), f_ext, spring_rest, ev)
+
+    @staticmethod
+    def _vector(value, size: int, what: str) -> np.ndarray:
+        """A finite float copy of ``value`` with ``size`` entries (any shape), else an error."""
+        arr = np.array(value, float).ravel()
+        if arr.size != size or not np.isfinite(arr).all():
+            raise ParameterError(f"{what} must be {size} finite numbers (got shape "
+                                 f"{np.shape(value)}{'' if arr.size != size else ' with NaN/inf'}).")
+        return arr
 
     def _damping(self, u):
         """Damping at displacements ``u`` (n_dof,): (``v -> C v`` on the free DOFs, its diagonal
@@ -252,8 +260,9 @@ class TimeIntegrator:
         """
         if not (_real(dt) and dt > 0):
             raise ParameterError(f"time step dt = {dt!r} must be a positive number of seconds.")
-        f_ext = np.asarray(f_ext, float).ravel()
-        rest = state.spring_rest if spring_rest is None else np.asarray(spring_rest, float)
+        f_ext = self._vector(f_ext, self.system.n_dof, "external load")
+        rest = state.spring_rest if spring_rest is None else \
+            self._vector(spring_rest, len(state.spring_rest), "spring rest angles")
         return self._step(state, dt, f_ext, rest, self.options.max_cuts)
 
     def _step(self, state, dt, f_ext, rest, cuts_left) -> StepReport:

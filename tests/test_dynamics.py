@@ -221,3 +221,15 @@ def test_sudden_fold_lands_on_the_substrate():
     assert tip_z.min() > substrate and tip_z.min() < substrate + d0     # held by the contact
     energy = step.columns["kinetic_energy [J]"] + step.columns["strain_energy [J]"]
     assert energy[-1] < 0.6 * energy[0]
+
+
+def test_bad_vectors_are_clear_errors(fold):
+    integ = TimeIntegrator(equilibrium_system(fold))
+    s0 = initial_state(fold)
+    with pytest.raises(ParameterError, match="external load must be"):
+        integ.initial_state(s0.u, s0.u, np.zeros(5), s0.spring_rest)
+    with pytest.raises(ParameterError, match="initial velocities .* NaN"):
+        integ.initial_state(s0.u, np.full_like(s0.u, np.nan), np.zeros(fold.mesh.n_dof),
+                            s0.spring_rest)
+    with pytest.raises(ParameterError, match="Dynamics: velocity must be"):
+        simulate(fold, [Dynamics(duration=1e-3, dt=1e-4, velocity=np.zeros(3))])
