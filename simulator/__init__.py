@@ -14,14 +14,17 @@ from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case
+from .dynamics import DynamicsOptions, DynamicsResult, MotionState, TimeIntegrator, integrate
 from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
                      PatternError)
 from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fold, read_fold,
                    read_model, result_to_fold_frames, write_fold, write_fold_frames, write_model)
 from .materials import AIR, GOLD, SILICON, SPR, SU8, SUBSTRATE, WATER, Fluid, Material
+from .mass import lumped_masses
 from .mesh import BarHingeMesh, build_mesh
 from .model import (REFERENCE_GRAVITY, STANDARD_GRAVITY, ContactParameters, Model, Supports,
                     make_model)
+from .modes import ModesResult, natural_modes
 from .newton import NewtonOptions
 from .pattern import Pattern
 from .power_schedules import PiecewiseLinear, PowerSchedule, Ramp, Sine, SquareWave, StepPower
@@ -29,7 +32,7 @@ from .properties import BarHingeParameters
 from .results import SimulationResult, StepResult
 from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
-from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold, Step,
+from .steps import (AmbientTemperature, Coupling, Dynamics, Gravity, Heat, Load, SelfFold, Step,
                     StepContext, StepOutcome, StepRecorder, TransientHeat)
 from .thermal import ThermalParameters
 from .transient_heat import (REFERENCE_THETA, ThetaStepper, TransientHeatResult, capacity_vector,
@@ -52,6 +55,9 @@ __all__ = [
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
     "ThetaStepper", "theta_step", "REFERENCE_THETA",
+    # dynamics and natural modes
+    "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
+    "lumped_masses", "natural_modes", "ModesResult",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)

@@ -17,7 +17,7 @@ from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, elemen
 from .contact_search import ContactSearch
 from .elements.bars import bar_kernel
 from .elements.contact import contact_kernel
-from .elements.springs import spring_kernel
+from .elements.springs import fold_angle_derivatives, spring_kernel
 from .mesh import BarType, SpringKind
 from .model import Model, _AXES
 
@@ -137,3 +137,23 @@ class EquilibriumSystem:
             if extra is not None:
                 K = K + extra
         return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)
+
+    def material_stiffness(self, u: np.ndarray) -> sp.csr_matrix:
+        """Free-DOF stiffness without stress (geometric) terms and contact [N/m].
+
+        ``sum EA L0 g g^T`` over bars (g = d strain / d x) and ``sum k grad(theta) grad(theta)^T``
+        over springs, plus elastic supports, at displacements ``u`` (n_nodes, 3) [m]. It is
+        positive semi-definite and annihilates the rigid-body velocities of the current
+        configuration, which makes it the matrix of stiffness-proportional damping.
+        """
+        mesh = self.model.mesh
+        dx = self.bar_dX + u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
+        g = np.concatenate([-dx, dx], axis=1) / (self.bar_L0**2)[:, None]
+        hb = (self.bar_EA * self.bar_L0)[:, None, None] * (g[:, :, None] * g[:, None, :])
+        _, gs, _ = fold_angle_derivatives((mesh.nodes + u)[mesh.springs], hessian=False)
+        hs = self.spr_k[:, None, None] * (gs[:, :, None] * gs[:, None, :])
+        families, subsets = [hb, hs], None
+        if self.contact_in_pattern:
+            families.append(np.zeros((0, 12, 12)))
+            subsets = {2: np.zeros(0, dtype=int)}
+        return self.pattern.matrix(families + [self.elastic_k], subsets)

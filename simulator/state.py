@@ -41,6 +41,10 @@ class SimulationState:
     crease_power : (C,) heating power applied to each crease [W]
     room_temperature : float
         Ambient (room) temperature of the thermal boundary conditions [deg C].
+    velocity : (n_nodes, 3) array or None
+        Node velocities [m/s] left by a dynamic step; None means at rest (quasi-static steps).
+    time : float
+        Time reached by dynamic steps [s] (quasi-static steps do not advance it).
     """
 
     u: np.ndarray
@@ -50,6 +54,13 @@ class SimulationState:
     temperature: np.ndarray
     crease_power: np.ndarray
     room_temperature: float = ROOM_TEMPERATURE
+    velocity: np.ndarray | None = None
+    time: float = 0.0
+
+    @property
+    def node_velocity(self) -> np.ndarray:
+        """(n_nodes, 3) velocities [m/s], zeros when at rest."""
+        return np.zeros_like(self.u) if self.velocity is None else self.velocity
 
     @property
     def rest_fold(self) -> np.ndarray:

@@ -1,9 +1,11 @@
 """Loading steps: the step protocol and the steps that implement it."""
 
 from .base import Step, StepContext, StepOutcome, StepRecorder
+from .dynamics import Dynamics
 from .heating import AmbientTemperature, Coupling, Heat, coupled_increments
 from .mechanical import Gravity, Load, SelfFold
 from .transient import TransientHeat
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity",
-           "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat"]
+           "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat",
+           "Dynamics"]

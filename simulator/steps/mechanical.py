@@ -18,7 +18,47 @@ from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 
-__all__ = ["SelfFold", "Load", "Gravity"]
+__all__ = ["SelfFold", "Load", "Gravity", "node_vectors", "check_folds", "crease_targets"]
+
+
+def check_folds(folds, step: str) -> None:
+    """Raise :class:`ParameterError` unless every fold angle [rad] is finite and in (-pi, pi]."""
+    for c, v in dict(folds).items():
+        if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
+            raise ParameterError(f"{step}: fold angle of crease {c} is {v!r}; give radians.")
+        if not -np.pi < v <= np.pi:
+            raise ParameterError(
+                f"{step}: fold angle of crease {c} is {np.degrees(v):.6g} deg; fold "
+                "angles must lie in (-180, 180] deg (give radians in Python).")
+
+
+def crease_targets(mesh, folds, base: np.ndarray) -> np.ndarray:
+    """(C,) crease rest angles [rad]: ``base`` with the listed creases set to pi + fold."""
+    target = np.array(base, float)
+    for c, v in dict(folds).items():
+        target[mesh.crease_row_of(c)] = np.pi + float(v)
+    return target
+
+
+def node_vectors(value, n: int, step: str, name: str) -> np.ndarray:
+    """(n, 3) array from a mapping {node: (x, y, z)} (summed per node) or an (n, 3) array.
+
+    ``step`` and ``name`` (e.g. "Load", "forces") label the error messages.
+    """
+    if isinstance(value, Mapping):
+        out = np.zeros((n, 3))
+        for node, vec in value.items():
+            if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
+                raise ParameterError(f"{step}: node {node!r} does not exist (0..{n - 1}).")
+            out[node] += np.asarray(vec, float)
+    else:
+        out = np.asarray(value, float)
+        if out.shape != (n, 3):
+            raise ParameterError(f"{step}: {name} must be a mapping or an ({n}, 3) array, got "
+                                 f"shape {out.shape}.")
+    if not np.isfinite(out).all():
+        raise ParameterError(f"{step}: {name} contain NaN or inf.")
+    return out
 
 
 def _follow(context: StepContext, state, f_start, f_end, rest_end, increments):
@@ -58,25 +98,17 @@ class SelfFold(Step):
 
     def __post_init__(self):
         check_increments(self)
-        for c, v in dict(self.folds).items():
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
-                raise ParameterError(f"SelfFold: fold angle of crease {c} is {v!r}; give "
-                                     "radians.")
-            if not -np.pi < v <= np.pi:
-                raise ParameterError(
-                    f"SelfFold: fold angle of crease {c} is {np.degrees(v):.6g} deg; fold "
-                    "angles must lie in (-180, 180] deg (give radians in Python).")
+        check_folds(self.folds, "SelfFold")
 
     def run(self, context: StepContext, state) -> StepOutcome:
         mesh = context.model.mesh
-        target = np.full(mesh.n_creases, np.pi) if self.reset_others else state.crease_rest.copy()
-        for c, v in dict(self.folds).items():
-            target[mesh.crease_row_of(c)] = np.pi + float(v)
+        base = np.full(mesh.n_creases, np.pi) if self.reset_others else state.crease_rest
+        target = crease_targets(mesh, self.folds, base)
         rest_end = spring_rest_angles(mesh, target, context.model.params)
         f = state.applied_load.ravel()
         path, rec = _follow(context, state, f, f, rest_end, self.increments)
         t = path.t
-        new = replace(state, u=path.u,
+        new = replace(state, u=path.u, velocity=None,
                       crease_rest=state.crease_rest + t * (target - state.crease_rest),
                       spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
         return rec.finish(path.success, path.status, path.message, new, f, path.evaluation)
@@ -106,28 +138,15 @@ class Load(Step):
 
     def load_array(self, model: Model) -> np.ndarray:
         """(n_nodes, 3) load added by the step [N]."""
-        n = model.mesh.n_nodes
-        if isinstance(self.forces, Mapping):
-            out = np.zeros((n, 3))
-            for node, fvec in self.forces.items():
-                if not (isinstance(node, (int, np.integer)) and 0 <= node < n):
-                    raise ParameterError(f"Load: node {node!r} does not exist (0..{n - 1}).")
-                out[node] += np.asarray(fvec, float)
-        else:
-            out = np.asarray(self.forces, float)
-            if out.shape != (n, 3):
-                raise ParameterError(f"Load: forces must be a mapping or an ({n}, 3) array, got "
-                                     f"shape {out.shape}.")
-        if not np.isfinite(out).all():
-            raise ParameterError("Load: forces contain NaN or inf.")
-        return out
+        return node_vectors(self.forces, model.mesh.n_nodes, "Load", "forces")
 
     def run(self, context: StepContext, state) -> StepOutcome:
         dF = self.load_array(context.model)
         f0 = state.applied_load.ravel()
         path, rec = _follow(context, state, f0, f0 + dF.ravel(), state.spring_rest,
                             self.increments)
-        new = replace(state, u=path.u, applied_load=state.applied_load + path.t * dF)
+        new = replace(state, u=path.u, velocity=None,
+                      applied_load=state.applied_load + path.t * dF)
         return rec.finish(path.success, path.status, path.message, new,
                           new.applied_load.ravel(), path.evaluation)
 
