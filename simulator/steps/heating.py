@@ -95,7 +95,8 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                 message = (f"increment {s}/{n_inc} (crease power up to "
                            f"{1e3 * np.max(power, initial=0):.4g} mW): {path.message}")
                 return rec.finish(False, "failed", message,
-                                  replace(state, u=u, spring_rest=spring, temperature=last),
+                                  replace(state, u=u, spring_rest=spring, temperature=last,
+                                          velocity=None),
                                   f, evaluation)
             if not iterated:
                 break
@@ -110,7 +111,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         context.report(s, n_inc)
     end = replace(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
                   crease_power=np.asarray(powers[-1], float),
-                  room_temperature=float(ambient[-1]))
+                  room_temperature=float(ambient[-1]), velocity=None)   # quasi-static: at rest
     return rec.finish(True, "converged", "converged", end, f, evaluation)
 
 

@@ -4,8 +4,8 @@
 :mod:`simulator.transient_heat` over ``duration`` seconds, with time-varying crease or circuit
 powers (:mod:`simulator.power_schedules`) added on top of the state's crease powers. The shape
 is the state's shape for the whole step and the crease rest angles are not updated (heat
-only; the thermo-mechanical coupling is a later step). Each record carries ``time [s]`` (from
-the start of the step) and the energy bookkeeping since the start of the step: ``heat_in [J]``
+only; the thermo-mechanical coupling is a later step). Each record carries ``time [s]`` (the simulation clock,
+``SimulationState.time``, continued by every time-domain step) and the energy bookkeeping since the start of the step: ``heat_in [J]``
 (heat put in), ``heat_out [J]`` (heat lost to room temperature) and ``heat_stored [J]``
 (change of the heat stored above room temperature); ``heat_stored = heat_in - heat_out``.
 """
@@ -79,10 +79,12 @@ class TransientHeat(Step):
         for k in range(1, len(result.time)):
             rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
                        result.power[k], 0, (), **{
-                           "time [s]": result.time[k], "heat_in [J]": result.heat_in[k],
+                           "time [s]": state.time + result.time[k],
+                           "heat_in [J]": result.heat_in[k],
                            "heat_out [J]": result.heat_out[k],
                            "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]})
-        end = replace(state, temperature=result.temperature[-1], crease_power=result.power[-1])
+        end = replace(state, temperature=result.temperature[-1], crease_power=result.power[-1],
+                      time=state.time + float(result.time[-1]))
         return rec.finish(result.success, result.status, result.message, end,
                           state.applied_load.ravel())
 
