@@ -12,7 +12,7 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
-from .cases import Case, describe_cases, get_case
+from .cases import Case, describe_cases, get_case, miura_sheet_model
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
@@ -39,6 +39,7 @@ __all__ = [
     "initial_state",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
+    "miura_sheet_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError",
 ]
