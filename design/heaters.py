@@ -54,8 +54,8 @@ from simulator.newton import NewtonOptions, newton
 from ._contract import check_outcome
 from .problem import SU8_TG
 
-__all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity", "linear_allocation",
-           "allocate_heaters"]
+__all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity",
+           "linear_allocation", "allocate_heaters"]
 
 logger = logging.getLogger(__name__)
 

@@ -1,8 +1,8 @@
 """Design problems: ``evaluate(x) -> Evaluation`` with objective, constraints g <= 0, metrics.
 
 A simulator failure or any exception inside a problem's evaluation becomes an unsuccessful
-:class:`Evaluation` (``success=False``, status ``"failed"``) with a message; it never propagates into an optimiser. Problems are
-plain picklable objects so that process pools and Dask workers can evaluate them.
+:class:`Evaluation` (``success=False``, status ``"failed"``) with a message; it never
+propagates into an optimiser. Problems are plain picklable objects so that process pools and Dask workers can evaluate them.
 """
 
 from __future__ import annotations

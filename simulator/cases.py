@@ -25,7 +25,8 @@ from .properties import BarHingeParameters
 from .newton import NewtonOptions
 from .thermal import REFERENCE_BETA, ThermalParameters
 
-__all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model", "miura_fold_signs"]
+__all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
+           "miura_fold_signs"]
 
 #: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
 DELTA_ALPHA_AU_SU8 = 38e-6

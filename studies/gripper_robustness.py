@@ -57,7 +57,7 @@ Outputs (``results/gripper_robustness/``)
   ``temperature_margin [degC]``, ``simulations``, ``message``, ``wall_time [s]``.
 * ``designs`` - one row per design: ``design``, ``source``, the variables (um), and for the
   optimised ones the run's ``method``, ``success`` (a feasible design was found),
-  ``status``, ``evaluations``, ``failed_evaluations``, ``wall_time [s]`` and
+  ``status``, ``message``, ``evaluations``, ``failed_evaluations``, ``wall_time [s]`` and
   ``objective [mW]`` (robust: worst-case power over the robust
   problem's residual folds, ``robust_residual_folds [deg]``).
 
@@ -125,7 +125,8 @@ def _design_row(label, source, x, result=None, **extra) -> dict:
                    evaluations=result.n_evaluations,
                    failed_evaluations=int((~result.history["success"].astype(bool)).sum()),
                    **{"wall_time [s]": result.wall_time,
-                      "objective [mW]": 1e3 * result.objective}, success=result.success)
+                      "objective [mW]": 1e3 * result.objective}, success=result.success,
+                   message=result.message)
     return {**row, **extra}
 
 

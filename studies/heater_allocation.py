@@ -36,9 +36,9 @@ Outputs (``results/heater_allocation/``)
 
 * ``summary`` - one row per run: ``case``, ``variant``, ``band [deg]``, ``success``
   (targets met; flat-shape LP: its heating simulation converged), ``status``,
-  ``rounds``, ``total_power [mW]`` (empty if no round was simulated), ``reference_power [mW]`` (the powers that made the
-  shape), ``worst_fold_error [deg]``, ``max_crease_temperature [degC]``, ``wall_time [s]``,
-  ``message``.
+  ``rounds``, ``total_power [mW]`` (empty if no round was simulated),
+  ``reference_power [mW]`` (the powers that made the shape), ``worst_fold_error [deg]``,
+  ``max_crease_temperature [degC]``, ``wall_time [s]``, ``message``.
 * ``crease`` - one row per run and crease: ``crease``, ``crease_ref``, ``heater``,
   ``power [mW]``, ``reference_power [mW]``, ``target_fold [deg]``, ``fold_angle [deg]``.
 * ``rounds`` - every round of every run: ``round``, ``total_power [mW]``,

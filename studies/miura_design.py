@@ -58,8 +58,9 @@ Outputs (``results/miura_design/``)
   ``max_crease_temperature [degC]``, ``temperature_limit [degC]``, ``margin temperature [-]``
   (``-g``), ``feasible``, ``power_staircase [mW]`` and ``total_power_staircase [mW]`` (the
   same design re-checked with the staircase search, 0.1 mW steps per crease; empty if the
-  target is not reached), and the run's
-  ``method``, ``status``, ``evaluations``, ``failed_evaluations``, ``wall_time [s]``.
+  target is not reached), and the run's ``method``, ``success`` (a feasible design was
+  found), ``status``, ``message``, ``evaluations``, ``failed_evaluations``,
+  ``wall_time [s]``.
 * ``cycles`` - the coordinate descent per cycle: ``cycle``, ``moved``, the design,
   ``total_power [mW]``, ``max_crease_temperature [degC]``, ``evaluations``.
 
@@ -86,7 +87,6 @@ from design.miura import (
     lift_per_power_table,
     lift_power,
 )
-from design._contract import power_if
 from simulator.errors import ParameterError
 from studies._common import progress_bar, study_main
 from studies._common import EvaluationTimeout, TimeLimited, time_limit
@@ -203,11 +203,12 @@ def _optimum_rows(problem, result) -> pd.DataFrame:
                      "temperature_limit [degC]": problem.temperature_limit,
                      "margin temperature [-]": -g.get("temperature", math.nan),
                      "feasible": feasible,
-                     "power_staircase [mW]": _nan(power_if(check.success,
-                                                           check.power_per_crease, 1e3)),
-                     "total_power_staircase [mW]": _nan(power_if(check.success,
-                                                                 check.total_power, 1e3)),
-                     "method": result.method, "status": result.status,
+                     "power_staircase [mW]": 1e3 * check.power_per_crease
+                     if check.success else math.nan,
+                     "total_power_staircase [mW]": 1e3 * check.total_power
+                     if check.success else math.nan,
+                     "method": result.method, "success": result.success,
+                     "status": result.status, "message": result.message,
                      "evaluations": result.n_evaluations,
                      "failed_evaluations": int((~h["success"].astype(bool)).sum()),
                      "wall_time [s]": result.wall_time})

@@ -1,7 +1,5 @@
 """Gripper evaluation against the reference implementation (digest 8.7, reference data G2)."""
 
-import math
-
 import numpy as np
 import pandas as pd
 import pytest

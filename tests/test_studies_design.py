@@ -257,3 +257,33 @@ def test_miura_grid_reports_a_design_that_does_not_mesh():
     assert len(table) == 2 and not table["success"].any()
     assert table["message"].str.contains("collapses").all()
     assert table["b [um]"].iloc[0] == pytest.approx(500)
+
+
+# ----------------------------------------------------------------------------- regression
+def test_quick_study_numbers_stay_as_they_are(quick):
+    """Key numbers of the quick studies, as before the result contract (issue 8; equal to
+    the last digit in CSV before and after). A change here is a change of behaviour."""
+    _, _, df = quick("gripper_optimization")
+    comp = _table(df, "comparison").set_index("method")
+    assert comp.loc["cd", "start_power [mW]"] == pytest.approx(32.3, rel=1e-9)
+    assert comp["total_power [mW]"].to_dict() == pytest.approx(
+        {"cd": 31.11875, "cobyla": 30.64375, "sbplx": 29.5625}, rel=1e-9)
+    assert [comp.loc["sbplx", k] for k in START_UM] == pytest.approx([220, 750, 1000, 1000])
+    assert comp.loc["sbplx", "temperature [degC]"] == pytest.approx(212.819022, rel=1e-7)
+    assert list(comp["status"]) == ["max_evaluations"] * 3 and _bool(comp["success"]).all()
+
+    _, _, df = quick("gripper_robustness")
+    sweep = _table(df, "sweep")
+    start = sweep[sweep["design"] == "start"].set_index("residual_fold [deg]")
+    assert start["total_power [mW]"].to_dict() == pytest.approx({-10.0: 36.75625, 0.0: 32.3},
+                                                                rel=1e-9)
+    assert start["assembly_power [mW]"].to_dict() == pytest.approx(
+        {-10.0: 29.4125, 0.0: 26.4375}, rel=1e-9)
+    assert list(start["status"]) == ["infeasible", "feasible"]     # 257 degC at -10 deg
+
+    _, _, df = quick("miura_design")
+    grid, opt = _table(df, "grid"), _table(df, "optimum").set_index("label")
+    np.testing.assert_allclose(grid["lift [um]"], [56.051001, 102.461910], rtol=1e-7)
+    assert opt["total_power [mW]"].to_dict() == pytest.approx(
+        {"start": 115.078125, "optimum": 100.078125}, rel=1e-9)
+    assert opt.loc["optimum", "lift [um]"] == pytest.approx(206.407324, rel=1e-7)
