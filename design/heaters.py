@@ -99,6 +99,11 @@ def influence_matrices(model: Model, x: np.ndarray, heaters: Mapping) -> tuple:
     return G, nodes.reshape(-1, len(heaters))
 
 
+def _total_power(power, heaters) -> float:
+    """Sum over creases of their heater's power [W]."""
+    return float(sum(p * len(c) for p, c in zip(power, heaters.values())))
+
+
 #: Status words of :func:`allocate_heaters`: converged (success), and why it did not.
 ALLOCATION_STATUSES = ("converged", "infeasible", "failed", "max_rounds")
 
@@ -145,9 +150,7 @@ class HeaterAllocation:
     @property
     def total_power(self) -> float | None:
         """Sum over creases of their power [W] (None if no round was simulated)."""
-        if self.power is None:
-            return None
-        return float(sum(p * len(c) for p, c in zip(self.power, self.heaters.values())))
+        return None if self.power is None else _total_power(self.power, self.heaters)
 
     def power_by_crease(self) -> dict:
         """{crease id: power [W]} (empty if no round was simulated)."""
@@ -191,7 +194,7 @@ class _Allocation:
 
     @property
     def total_power(self) -> float:
-        return float(sum(p * len(c) for p, c in zip(self.power, self.heaters.values())))
+        return _total_power(self.power, self.heaters)
 
     def result(self) -> HeaterAllocation:
         return HeaterAllocation(
