@@ -54,17 +54,17 @@ def _gripper_evaluate(args) -> int:
     else:
         print(f"gripper W={args.W:g} L1={args.L1:g} L2={args.L2:g} La={args.La:g} um, residual "
               f"fold {args.residual_fold:g} deg ({args.mode}): "
-              f"{'feasible' if res.feasible else 'INFEASIBLE'} - {res.message}")
+              f"{'met' if res.success else 'NOT MET'} - {res.message}")
         def mw(value):
             return f"{value:8.3f} mW" if value is not None else "   not met"
 
         for stage in ("assembly", "grip"):
-            print(f"  {stage:<9} {mw(out[f'{stage}_power_mW'])} per crease   "
-                  f"{out[f'{stage}_temperature_C']:7.2f} degC   "
+            print(f"  {stage:<9} {mw(out[f'{stage}_power [mW]'])} per crease   "
+                  f"{out[f'{stage}_temperature [degC]']:7.2f} degC   "
                   f"{out[f'{stage}_simulations']:4d} simulations")
-        print(f"  total     {mw(out['total_power_mW'])}   max crease temperature "
-              f"{out['max_crease_temperature_C']:.2f} degC   ({out['wall_time_s']:.2f} s)")
-    return 0 if res.feasible else 1
+        print(f"  total     {mw(out['total_power [mW]'])}   max crease temperature "
+              f"{out['max_crease_temperature [degC]']:.2f} degC   ({out['wall_time_s']:.2f} s)")
+    return 0 if res.success else 1
 
 
 # ---------------------------------------------------------------------------- optimize
@@ -105,7 +105,7 @@ def _optimize(args) -> int:
     print(f"{args.method}: {res.status} ({res.message}); best {res.objective * 1e3:.4g} mW at "
           f"{x}; {res.n_evaluations} evaluations ({res.n_computed} computed, {res.n_reused} "
           f"reused) in {res.wall_time:.1f} s" + (f"; results in {args.out}" if args.out else ""))
-    return 0 if res.feasible else 1
+    return 0 if res.success else 1
 
 
 def _display(problem, name, value):

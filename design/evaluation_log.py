@@ -41,7 +41,7 @@ logger = logging.getLogger(__name__)
 #: Relative resolution (of each variable's range) of the design keys.
 KEY_RESOLUTION = 1e-9
 _FIXED = ["eval", "settings_hash"]
-_TAIL = ["objective", "failed", "message", "wall_time [s]", "timestamp"]
+_TAIL = ["objective", "success", "status", "message", "wall_time [s]", "timestamp"]
 
 
 def settings_hash(settings: dict) -> str:
@@ -145,8 +145,13 @@ class EvaluationLog:
         x = {v.name: float(row[c]) for v, c in zip(self.space.variables, self._x_cols)}
         cons = {k[2:]: float(v) for k, v in row.items() if k.startswith("g.") and v != ""}
         metrics = {k[2:]: _parse(v) for k, v in row.items() if k.startswith("m.") and v != ""}
-        return Evaluation(x, float(row["objective"]), cons, metrics, row["failed"] == "True",
-                          row["message"], float(row["wall_time [s]"]))
+        if "success" in row:
+            success, status = row["success"] == "True", row.get("status", "")
+        else:                                   # logs written before the result contract
+            success, status = row["failed"] != "True", ""
+        return Evaluation(x, float(row["objective"]), cons, metrics, success=success,
+                          status=status, message=row["message"],
+                          wall_time=float(row["wall_time [s]"]))
 
     def lookup(self, x) -> Evaluation | None:
         """The logged evaluation of design ``x`` (vector or mapping) for this problem, or None."""
@@ -162,9 +167,10 @@ class EvaluationLog:
                     for v, c in zip(self.space.variables, self._x_cols)})
         row["objective"] = repr(float(ev.objective))
         row.update({f"g.{k}": repr(float(v)) for k, v in ev.constraints.items()})
-        row.update({f"m.{k}": repr(v) if isinstance(v, float) else str(v)
+        row.update({f"m.{k}": repr(v) if isinstance(v, float) else "" if v is None else str(v)
                     for k, v in ev.metrics.items()})
-        row.update({"failed": str(bool(ev.failed)), "message": ev.message,
+        row.update({"success": str(bool(ev.success)), "status": ev.status,
+                    "message": ev.message,
                     "wall_time [s]": repr(float(ev.wall_time)),
                     "timestamp": datetime.now(UTC).isoformat(timespec="seconds")})
         return row
@@ -324,12 +330,13 @@ class EvaluationRun:
             for k, (ev, reused) in zip(new, done):
                 self.cache[k] = ev
                 self.evaluations.append(ev)
-                self.rows.append({"eval": len(self.evaluations), **ev.to_row(), "reused": reused})
+                self.rows.append({"eval": len(self.evaluations), **ev.to_row(self.space),
+                                  "reused": reused})
                 logger.info("eval %d%s: objective %.6g, %s%s", len(self.evaluations),
-                            " (from log)" if reused else "", ev.objective,
-                            "failed" if ev.failed else "feasible" if ev.feasible
-                            else f"infeasible (max g = {ev.max_violation:.3g})",
-                            f" - {ev.message}" if ev.failed else "")
+                            " (from log)" if reused else "", ev.objective, ev.status
+                            + (f" (max g = {ev.max_violation:.3g})"
+                               if ev.status == "infeasible" else ""),
+                            "" if ev.success else f" - {ev.message}")
                 if self.callback is not None:
                     self.callback(ev)
         return [self.cache[k] for k in keys]
@@ -338,7 +345,7 @@ class EvaluationRun:
         feas = [e for e in self.evaluations if e.feasible]
         if feas:
             return min(feas, key=lambda e: e.objective)
-        ok = [e for e in self.evaluations if not e.failed]
+        ok = [e for e in self.evaluations if e.success]
         if ok:
             return min(ok, key=lambda e: (e.max_violation, e.objective))
         return self.evaluations[0] if self.evaluations else None
@@ -360,5 +367,6 @@ class _safe_evaluate:
         except Exception as exc:  # noqa: BLE001 - contract: a failed design never raises
             logger.warning("problem.evaluate(%s) raised %s: %s", x, type(exc).__name__, exc)
             values = self.problem.space.to_dict(x)
-            return Evaluation(values, math.inf, {}, {}, True, f"{type(exc).__name__}: {exc}",
-                              time.perf_counter() - t0)
+            return Evaluation(values, math.inf, success=False, status="failed",
+                              message=f"{type(exc).__name__}: {exc}",
+                              wall_time=time.perf_counter() - t0)

@@ -34,10 +34,11 @@ from simulator.properties import BarHingeParameters
 from simulator.newton import NewtonOptions
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
+from ._contract import check_outcome, power_if
 from .power_search import bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
-           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON"]
+           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES"]
 
 logger = logging.getLogger(__name__)
 
@@ -109,18 +110,28 @@ class GripperDesign:
         return {**{c: base for c in BASE_CREASES}, **{c: arm for c in ARM_CREASES}}
 
 
+#: Status words of a stage: met (success), criterion not met below the power cap, a
+#: simulation failed, not attempted (assembly not met).
+STAGE_STATUSES = ("met", "not_met", "failed", "not_attempted")
+
+
 @dataclass(frozen=True)
 class StageResult:
     """Outcome of one stage's power search.
 
     Attributes
     ----------
-    met : bool
+    success : bool
         The criterion holds at ``power_per_crease``.
-    power_per_crease : float
-        Smallest power per heated crease [W] found to meet the criterion (0 if never met).
+    status : str
+        ``"met"``, ``"not_met"`` (not below the power cap), ``"failed"`` (a simulation or the
+        pre-loading failed) or ``"not_attempted"`` (grip: assembly not met).
+    message : str
+    power_per_crease : float or None
+        Smallest power per heated crease [W] found to meet the criterion; None if not met.
     measure : float
-        Criterion measure at that power (fold [rad] or tip distance [m]).
+        Criterion measure at that power (fold [rad] or tip distance [m]); at the last trial
+        if not met.
     temperature : float
         max of the centre-line mean temperatures of the stage's heated creases [deg C]
         (the reference's measure).
@@ -130,22 +141,34 @@ class StageResult:
         Heating solves (calls) used by the search.
     increments : int
         Thermal increments solved in total.
-    message : str
     """
 
-    met: bool
-    power_per_crease: float
+    success: bool
+    status: str
+    message: str
+    power_per_crease: float | None
     measure: float
     temperature: float
     max_crease_temperature: float
     simulations: int
     increments: int
-    message: str
+
+    def __post_init__(self):
+        check_outcome(self, ("met",), STAGE_STATUSES[1:])
+        if (self.power_per_crease is None) == self.success:
+            raise ParameterError(f"StageResult.power_per_crease = {self.power_per_crease!r} "
+                                 f"with success = {self.success}: a met stage has a power, "
+                                 "an unmet one None.")
 
 
 @dataclass(frozen=True)
 class GripperResult:
-    """Both stages; powers per heated crease as in the paper."""
+    """Both stages; powers per heated crease as in the paper.
+
+    ``success``: both stages met; ``status``: ``"met"``, or the status of the first stage
+    that was not met; ``total_power``: assembly + grip power per crease [W], None unless
+    both were met.
+    """
 
     design: GripperDesign
     mode: str
@@ -153,14 +176,18 @@ class GripperResult:
     grip: StageResult
 
     @property
-    def feasible(self) -> bool:
-        return self.assembly.met and self.grip.met
+    def success(self) -> bool:
+        return self.assembly.success and self.grip.success
 
     @property
-    def total_power(self) -> float:
-        """Objective of the paper: assembly + grip power per crease [W] (inf if infeasible)."""
-        if not self.feasible:
-            return math.inf
+    def status(self) -> str:
+        return self.grip.status if self.assembly.success else self.assembly.status
+
+    @property
+    def total_power(self) -> float | None:
+        """Objective of the paper: assembly + grip power per crease [W] (None if not met)."""
+        if not self.success:
+            return None
         return self.assembly.power_per_crease + self.grip.power_per_crease
 
     @property
@@ -170,28 +197,27 @@ class GripperResult:
 
     @property
     def message(self) -> str:
-        if self.feasible:
+        if self.success:
             return "both stages met"
-        bad = self.assembly if not self.assembly.met else self.grip
+        bad = self.assembly if not self.assembly.success else self.grip
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
 
     def to_dict(self) -> dict:
-        """Flat summary with units in the keys (the CLI's JSON); powers of stages whose
+        """Flat summary, keys ``name [unit]`` (the CLI's JSON); powers of stages whose
         criterion was not met are None (never a silent zero)."""
-        def mw(stage):
-            return 1e3 * stage.power_per_crease if stage.met else None
-
         return {
-            "assembly_power_mW": mw(self.assembly),
-            "grip_power_mW": mw(self.grip),
-            "total_power_mW": 1e3 * self.total_power if self.feasible else None,
-            "assembly_temperature_C": self.assembly.temperature,
-            "grip_temperature_C": self.grip.temperature,
-            "max_crease_temperature_C": max(self.assembly.max_crease_temperature,
-                                            self.grip.max_crease_temperature),
+            "assembly_power [mW]": power_if(self.assembly.success,
+                                            self.assembly.power_per_crease, 1e3),
+            "grip_power [mW]": power_if(self.grip.success, self.grip.power_per_crease, 1e3),
+            "total_power [mW]": power_if(self.success, self.total_power, 1e3),
+            "assembly_temperature [degC]": self.assembly.temperature,
+            "grip_temperature [degC]": self.grip.temperature,
+            "max_crease_temperature [degC]": max(self.assembly.max_crease_temperature,
+                                                 self.grip.max_crease_temperature),
             "assembly_simulations": self.assembly.simulations,
             "grip_simulations": self.grip.simulations,
-            "feasible": self.feasible, "message": self.message, "mode": self.mode,
+            "success": self.success, "status": self.status, "message": self.message,
+            "mode": self.mode,
             **{f"{k} [rad]" if k.startswith("residual_fold") else f"{k} [m]": v
                for k, v in self.design.to_dict().items()},
         }
@@ -297,10 +323,11 @@ class _Stage:
         temp = max(float(t[list(c)].mean()) for c in self.centre_lines)
         return value, self.met_fn(value), temp, float(t[self.model.mesh.crease_nodes].max())
 
-    def result(self, met, power, state, message):
+    def result(self, status, power, state, message):
         value, _, temp, tmax = self.look(state)
-        return StageResult(met, power if met else 0.0, value, temp, tmax, self.simulations,
-                           self.increments, message)
+        met = status == "met"
+        return StageResult(met, status, message, power if met else None, value, temp, tmax,
+                           self.simulations, self.increments)
 
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",
@@ -318,7 +345,8 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     tol : float
         Bisection tolerance [W per crease].
     power_cap : float
-        Give up (infeasible) above this power per crease [W] (the reference: 400 x 0.1 mW).
+        Give up (status ``"not_met"``) above this power per crease [W] (the reference:
+        400 x 0.1 mW).
     callback : callable, optional
         Called after every heating simulation with a dict (stage, power per crease [W],
         measure, met, temperature [deg C], max crease temperature [deg C]).
@@ -342,10 +370,12 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     for name in ("assembly", "grip"):
         stage = _Stage(model, name, callback, options)
         if not start.success:
-            results[name] = stage.result(False, 0.0, state, f"pre-loading failed: {start.message}")
+            results[name] = stage.result("failed", None, state,
+                                         f"pre-loading failed: {start.message}")
             continue
-        if name == "grip" and not results["assembly"].met:
-            results[name] = stage.result(False, 0.0, state, "not attempted: assembly not met")
+        if name == "grip" and not results["assembly"].success:
+            results[name] = stage.result("not_attempted", None, state,
+                                         "not attempted: assembly not met")
             continue
         if mode == "staircase":
             results[name], state = staircase_search(stage, state, step, power_cap)

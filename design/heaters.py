@@ -51,10 +51,11 @@ from simulator.model import Model
 from simulator.properties import spring_rest_angles
 from simulator.newton import NewtonOptions, newton
 
+from ._contract import check_outcome
 from .problem import SU8_TG
 
-__all__ = ["HeaterAllocation", "influence_matrices", "fold_sensitivity", "linear_allocation",
-           "allocate_heaters"]
+__all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity",
+           "linear_allocation", "allocate_heaters"]
 
 logger = logging.getLogger(__name__)
 
@@ -98,63 +99,109 @@ def influence_matrices(model: Model, x: np.ndarray, heaters: Mapping) -> tuple:
     return G, nodes.reshape(-1, len(heaters))
 
 
-@dataclass
+def _total_power(power, heaters) -> float:
+    """Sum over creases of their heater's power [W]."""
+    return float(sum(p * len(c) for p, c in zip(power, heaters.values())))
+
+
+#: Status words of :func:`allocate_heaters`: converged (success), and why it did not.
+ALLOCATION_STATUSES = ("converged", "infeasible", "failed", "max_rounds")
+
+
+@dataclass(frozen=True, eq=False)
 class HeaterAllocation:
     """Outcome of :func:`allocate_heaters`.
 
     Attributes
     ----------
-    heaters : {name: crease ids}
-    power : (k,) power of each heater [W] (each of its creases gets this value)
-    status : "converged", "infeasible", "failed" or "max_rounds"
+    success : bool
+        Every target fold is met within the tolerance, below the temperature limit.
+    status : "converged", "infeasible" (the LP cannot meet the targets within the limits),
+        "failed" (an LP or a simulation failed) or "max_rounds"
     message : str
+    heaters : {name: crease ids}
+    power : (k,) array or None
+        Power of each heater [W] (each of its creases gets this value) in the last simulated
+        round, i.e. the powers that gave ``achieved``; None if no round was simulated.
     rounds : number of LP + simulation rounds
     targets, achieved : {crease id: fold angle [rad]} asked for and reached
     max_temperature : hottest crease node at the end of the last simulation [deg C]
     temperature_limit : [deg C]
-    history : one dict per round (total power [mW], worst fold error [deg], ...)
+    history : tuple of dicts, one per round (total power [mW], worst fold error [deg], ...)
     state : SimulationState after heating with ``power`` (None if no simulation ran)
     """
 
-    heaters: dict
-    power: np.ndarray
+    success: bool
     status: str
     message: str
+    heaters: dict
+    power: np.ndarray | None
     rounds: int
     targets: dict
     achieved: dict = field(default_factory=dict)
     max_temperature: float = math.nan
     temperature_limit: float = math.nan
+    history: tuple = ()
+    state: SimulationState | None = None
+
+    def __post_init__(self):
+        check_outcome(self, ALLOCATION_STATUSES[:1], ALLOCATION_STATUSES[1:])
+
+    @property
+    def total_power(self) -> float | None:
+        """Sum over creases of their power [W] (None if no round was simulated)."""
+        return None if self.power is None else _total_power(self.power, self.heaters)
+
+    def power_by_crease(self) -> dict:
+        """{crease id: power [W]} (empty if no round was simulated)."""
+        if self.power is None:
+            return {}
+        return {c: float(p) for p, cs in zip(self.power, self.heaters.values()) for c in cs}
+
+    def to_frame(self):
+        """One row per heated or target crease: heater, power (NaN if no round was
+        simulated; 0 on a crease without heater), target and reached folds."""
+        import pandas as pd
+
+        by_crease = self.power_by_crease()
+        unheated = 0.0 if self.power is not None else math.nan
+        heater_of = {c: name for name, cs in self.heaters.items() for c in cs}
+        rows = []
+        for c in sorted(set(heater_of) | set(self.targets)):
+            t, a = self.targets.get(c), self.achieved.get(c)
+            rows.append({"crease": c, "heater": heater_of.get(c, ""),
+                         "power [mW]": 1e3 * by_crease.get(c, unheated),
+                         "target_fold [deg]": math.degrees(t) if t is not None else math.nan,
+                         "fold_angle [deg]": math.degrees(a) if a is not None else math.nan})
+        return pd.DataFrame(rows)
+
+
+@dataclass
+class _Allocation:
+    """The allocation while the rounds run (mutable); :meth:`result` freezes it."""
+
+    heaters: dict
+    targets: dict
+    temperature_limit: float
+    status: str = "max_rounds"
+    message: str = ""
+    rounds: int = 0
+    power: np.ndarray | None = None
+    achieved: dict = field(default_factory=dict)
+    max_temperature: float = math.nan
     history: list = field(default_factory=list)
     state: SimulationState | None = None
 
     @property
-    def converged(self) -> bool:
-        return self.status == "converged"
-
-    @property
     def total_power(self) -> float:
-        """Sum over creases of their power [W]."""
-        return float(sum(p * len(c) for p, c in zip(self.power, self.heaters.values())))
+        return _total_power(self.power, self.heaters)
 
-    def power_by_crease(self) -> dict:
-        """{crease id: power [W]}."""
-        return {c: float(p) for p, cs in zip(self.power, self.heaters.values()) for c in cs}
-
-    def to_frame(self):
-        """One row per heated or target crease: heater, power, target and reached folds."""
-        import pandas as pd
-
-        by_crease = self.power_by_crease()
-        heater_of = {c: name for name, cs in self.heaters.items() for c in cs}
-        rows = []
-        for c in sorted(set(by_crease) | set(self.targets)):
-            t, a = self.targets.get(c), self.achieved.get(c)
-            rows.append({"crease": c, "heater": heater_of.get(c, ""),
-                         "power [mW]": 1e3 * by_crease.get(c, 0.0),
-                         "target_fold [deg]": math.degrees(t) if t is not None else math.nan,
-                         "fold_angle [deg]": math.degrees(a) if a is not None else math.nan})
-        return pd.DataFrame(rows)
+    def result(self) -> HeaterAllocation:
+        return HeaterAllocation(
+            self.status == "converged", self.status, self.message, self.heaters,
+            None if self.state is None else self.power, self.rounds, self.targets,
+            self.achieved, self.max_temperature, self.temperature_limit, tuple(self.history),
+            self.state)
 
 
 def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
@@ -395,8 +442,9 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     Returns
     -------
     HeaterAllocation
-        ``status`` is "converged", "infeasible" (the LP has no solution: limit or direction),
-        "failed" (a simulation did not converge) or "max_rounds"; never raises for these.
+        ``success`` when converged; else ``status`` is "infeasible" (the LP has no solution:
+        limit or direction), "failed" (an LP or a simulation failed) or "max_rounds"; never
+        raises for these.
     """
     _check_settings(max_rounds=max_rounds, stages=stages, band=band, fold_tol=fold_tol,
                     max_power=max_power)
@@ -413,14 +461,13 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
         raise ParameterError(f"targets[{c}]: folding crease {c} to {math.degrees(targets[c]):.4g}"
                              " deg needs folding against its actuation direction; heating "
                              "cannot do that.")
-    out = HeaterAllocation(table, np.zeros(len(table)), "max_rounds", "", 0, dict(targets),
-                           temperature_limit=float(temperature_limit))
+    out = _Allocation(table, dict(targets), float(temperature_limit))
     run = _Rounds(model, state, table, rows, temperature_limit, max_power, increments,
                   options, out, band)
-    return _run_stages(run, fold0, target, stages, max_rounds, fold_tol)
+    return _run_stages(run, fold0, target, stages, max_rounds, fold_tol).result()
 
 
-def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> HeaterAllocation:
+def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _Allocation:
     """Approach the targets in ``stages`` fractions; rounds until met at the last one."""
     out, band = run.out, run.band
     limits = f"{out.temperature_limit:.4g} degC" + (f", {1e3 * run.max_power:.4g} mW per heater"

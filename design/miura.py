@@ -14,23 +14,21 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator.bimorph import Actuators, Bimorph
-from simulator.cases import miura_fold_signs
+from simulator.cases import miura_fold_signs, miura_sheet_model
 from simulator.errors import ParameterError, PatternError
 from simulator.simulation import simulate
 from simulator.steps import Heat
 from simulator.mesh import build_mesh
-from simulator.model import ContactParameters, Model, Supports, make_model
-from simulator.example_patterns import miura_sheet_pattern, with_substrate
-from simulator.properties import BarHingeParameters
-from simulator.thermal import REFERENCE_BETA, ThermalParameters
+from simulator.model import Model
+from simulator.example_patterns import miura_sheet_pattern
 
+from ._contract import check_outcome, power_if
 from .power_search import bisect_search, staircase_search
 from .problem import SU8_TG, DesignProblem
 from .space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
-           "lift_per_power_table", "lift_power", "miura_model"]
+           "lift_per_power_table", "lift_power", "miura_model", "design_columns"]
 
 _DEG = math.pi / 180
 
@@ -108,31 +106,21 @@ def heated_creases(design: MiuraDesign) -> dict:
     return miura_fold_signs(design.a, design.b, design.gamma, design.cells_x, design.cells_y)
 
 
-def miura_model(design: MiuraDesign = MiuraDesign()) -> Model:
-    """The ``miura_lifter`` case's model for ``design``.
+def design_columns(values) -> dict:
+    """``a [um]``, ``b [um]``, ``gamma [deg]``, ``W [um]`` of a :class:`MiuraDesign` or of a
+    mapping with these keys (SI)."""
+    v = values if isinstance(values, Mapping) else asdict(values)
+    return {"a [um]": 1e6 * v["a"], "b [um]": 1e6 * v["b"], "gamma [deg]": v["gamma"] / _DEG,
+            "W [um]": 1e6 * v["W"]}
 
-    Built here with the case's helpers because the case cannot take the layer and panel
-    thicknesses; for its parameters (1 um creases = 0.2 um gold + 0.8 um SU-8, 10 um panels)
-    the model is the case's.
-    """
+
+def miura_model(design: MiuraDesign = MiuraDesign()) -> Model:
+    """The ``miura_lifter`` case's model for ``design`` (one builder for both:
+    :func:`simulator.cases.miura_sheet_model`)."""
     d = design
-    pattern = miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=d.W,
-                                  crease_thickness=d.t_gold + d.t_su8,
-                                  panel_thickness=d.panel_thickness)
-    boundary = ()
-    if d.substrate:
-        pattern = with_substrate(pattern, undercut=d.undercut, margin=0.5 * max(d.a, d.b))
-        boundary = (pattern.n_panels - 1,)
-    actuators = Actuators(Bimorph(E1=50e9, t1=d.t_gold, E2=2e9, t2=d.t_su8),
-                          {c: -50e-6 * s for c, s in heated_creases(d).items()})
-    thermal = ThermalParameters(env_thickness=(d.a + d.b) / 2, env_conductivity=0.026,
-                                dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
-    mesh = build_mesh(pattern)
-    clamped = list(range(d.cells_y)) + ([pattern.n_panels - 1] if d.substrate else [])
-    fixed = {int(i): "xyz" for p in clamped for i in mesh.panel_nodes(p)}
-    return make_model(mesh, Supports(fixed), BarHingeParameters(),
-                      contact=ContactParameters() if d.substrate else None, thermal=thermal,
-                      actuators=actuators)
+    return miura_sheet_model(d.a, d.b, d.gamma, d.cells_x, d.cells_y, d.W, t_gold=d.t_gold,
+                             t_su8=d.t_su8, panel_thickness=d.panel_thickness,
+                             substrate=d.substrate, undercut=d.undercut)
 
 
 def _lift_nodes(model: Model, design: MiuraDesign) -> np.ndarray:
@@ -149,31 +137,43 @@ class LiftPowerResult:
 
     Attributes
     ----------
-    met : bool (the target lift is reached at ``power_per_crease``)
-    power_per_crease : smallest power per heated crease found to reach it [W] (inf if not met)
-    total_power : ``power_per_crease`` x ``n_creases`` [W] (inf if not met)
+    success : bool (the target lift is reached at ``power_per_crease``)
+    status : ``"met"``, ``"not_met"`` (not below the power cap) or ``"failed"`` (a heating
+        simulation failed)
+    message : str (why not met: power cap or simulation failure)
+    power_per_crease : smallest power per heated crease found to reach it [W] (None if not)
+    total_power : ``power_per_crease`` x ``n_creases`` [W] (None if not met)
     lift : lift of the free end there (at the last trial if not met) [m]
     max_crease_temperature : hottest crease node there [deg C]
     simulations : heating solves used by the search
     n_creases : heated creases
-    message : str (why not met: power cap or simulation failure)
     """
 
-    met: bool
-    power_per_crease: float
-    total_power: float
+    success: bool
+    status: str
+    message: str
+    power_per_crease: float | None
+    total_power: float | None
     lift: float
     max_crease_temperature: float
     simulations: int
     n_creases: int
-    message: str
+
+    def __post_init__(self):
+        check_outcome(self, ("met",), ("not_met", "failed"))
+        if (self.power_per_crease is None) == self.success:
+            raise ParameterError(f"LiftPowerResult.power_per_crease = {self.power_per_crease!r}"
+                                 f" with success = {self.success}: a reached target has a "
+                                 "power, an unreached one None.")
 
     def to_dict(self) -> dict:
-        """Flat summary with units in the keys."""
-        return {"power_per_crease_mW": 1e3 * self.power_per_crease, "total_power_mW": 1e3 *
-                self.total_power, "lift_um": 1e6 * self.lift, "max_crease_temperature_C":
-                self.max_crease_temperature, "simulations": self.simulations,
-                "n_creases": self.n_creases, "met": self.met, "message": self.message}
+        """Flat summary, keys ``name [unit]`` (powers None when not met)."""
+        return {"power_per_crease [mW]": power_if(self.success, self.power_per_crease, 1e3),
+                "total_power [mW]": power_if(self.success, self.total_power, 1e3),
+                "lift [um]": 1e6 * self.lift,
+                "max_crease_temperature [degC]": self.max_crease_temperature,
+                "simulations": self.simulations, "n_creases": self.n_creases,
+                "success": self.success, "status": self.status, "message": self.message}
 
 
 class _LiftStage:
@@ -194,14 +194,15 @@ class _LiftStage:
         tmax = float(state.temperature[self.model.mesh.crease_nodes].max())
         return lift, lift >= self.target, tmax, tmax
 
-    def result(self, met, power, state, message):
+    def result(self, status, power, state, message):
         lift, _, _, tmax = self.look(state)
-        p = power if met else math.inf
+        met = status == "met"
+        p = power if met else None
         if not met:
             message = (f"target lift {self.target * 1e6:g} um not reached (lift "
                        f"{lift * 1e6:.4g} um): {message}")
-        return LiftPowerResult(met, p, p * len(self.creases), lift, tmax, self.simulations,
-                               len(self.creases), message)
+        return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
+                               lift, tmax, self.simulations, len(self.creases))
 
 
 def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
@@ -223,7 +224,7 @@ def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
     Returns
     -------
     LiftPowerResult
-        ``met=False`` with the reason (power cap, simulation failure) if not reached.
+        ``success=False`` with the reason (power cap, simulation failure) if not reached.
     """
     if mode not in ("bisect", "staircase"):
         raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
@@ -258,7 +259,8 @@ class MiuraProblem(DesignProblem):
     Objective: total power of all heated creases [W]. Constraints (g <= 0): the normalised
     size bounds and ``(T - T_limit) / T_limit`` with ``T`` the hottest crease node and
     ``T_limit = temperature_factor x glass_transition``. A target not reached below
-    ``power_cap`` (per crease) is a failed evaluation.
+    ``power_cap`` (per crease) is an unsuccessful evaluation (status ``"not_met"``, or
+    ``"failed"`` if a simulation failed).
 
     Parameters
     ----------
@@ -297,8 +299,10 @@ class MiuraProblem(DesignProblem):
         constraints = dict(self.space.bound_margins(values))
         t = res.max_crease_temperature
         constraints["temperature"] = (t - self.temperature_limit) / self.temperature_limit
-        metrics = {k: v for k, v in res.to_dict().items() if k not in ("met", "message")}
-        return res.total_power, constraints, metrics, not res.met, res.message
+        metrics = {k: v for k, v in res.to_dict().items()
+                   if k not in ("success", "status", "message")}
+        return (res.total_power, constraints, metrics, None if res.success else res.status,
+                res.message)
 
     def settings(self) -> dict:
         return {"problem": self.name, "mode": self.mode, "target_lift [m]": self.target_lift,
@@ -321,8 +325,11 @@ def lift_per_power_table(designs, power_mW, increments: int = 20):
     Returns
     -------
     pandas.DataFrame
-        One row per design and power: label, design values (um, deg), power per crease and
-        total [mW], ``lift_um``, ``max_crease_temperature_C``, ``converged``, ``message``.
+        One row per design and power: ``label``, ``a [um]``, ``b [um]``, ``gamma [deg]``,
+        ``W [um]``, ``cells_x``, ``cells_y``, ``substrate``, ``power [mW]`` (per crease),
+        ``total_power [mW]``, ``lift [um]``, ``max_crease_temperature [degC]``, ``success``
+        (the heating simulation converged), ``status`` (``converged`` or ``failed``),
+        ``message``; lift and temperature NaN (empty in CSV) when it failed.
     """
     import pandas as pd
     items = designs.items() if isinstance(designs, Mapping) else enumerate(designs)
@@ -341,9 +348,9 @@ def lift_per_power_table(designs, power_mW, increments: int = 20):
                 state, ok, msg = stage.heat(state, 1e-3 * (p - done), increments=increments)
                 done = p
             lift, _, _, tmax = stage.look(state) if ok else (math.nan,) * 4
-            rows.append({"label": label, "a_um": 1e6 * d.a, "b_um": 1e6 * d.b, "gamma_deg":
-                         d.gamma / _DEG, "W_um": 1e6 * d.W, "cells_x": d.cells_x, "cells_y":
-                         d.cells_y, "substrate": d.substrate, "power_mW": p, "total_power_mW":
-                         p * len(stage.creases), "lift_um": 1e6 * lift,
-                         "max_crease_temperature_C": tmax, "converged": ok, "message": msg})
+            rows.append({"label": label, **design_columns(d), "cells_x": d.cells_x,
+                         "cells_y": d.cells_y, "substrate": d.substrate, "power [mW]": p,
+                         "total_power [mW]": p * len(stage.creases), "lift [um]": 1e6 * lift,
+                         "max_crease_temperature [degC]": tmax, "success": ok,
+                         "status": "converged" if ok else "failed", "message": msg})
     return pd.DataFrame(rows)

@@ -38,6 +38,7 @@ from simulator.errors import ParameterError
 
 from .evaluation_log import (BudgetExhausted, EvaluationLog, EvaluationRun, LoggedProblem,
                              settings_hash)
+from ._contract import check_outcome
 from .problem import Evaluation
 
 __all__ = ["optimize", "OptimizationResult", "StopOptimization", "METHODS"]
@@ -50,7 +51,7 @@ _ALIASES = {"coordinate_descent": "cd", "nelder-mead": "neldermead", "nelder_mea
             "subplex": "sbplx", "direct_l": "direct"}
 #: Accepted method names (aliases included).
 METHODS = ("cd",) + tuple(_NLOPT) + tuple(_ALIASES)
-_CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": False, "metric": "temperature_C"}
+_CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": False, "metric": "temperature [degC]"}
 _NLOPT_OPTIONS = {"xtol_rel": 1e-4, "ftol_rel": 1e-6, "xtol_abs": 1e-6, "ftol_abs": 0.0,
                   "initial_step": None, "constraint_handling": None, "penalty": 100.0,
                   "failure_value": None, "max_time": None}
@@ -70,11 +71,16 @@ class OptimizationResult:
     x : dict
         Best feasible design (SI); the least-violating one if none was feasible.
     objective : float
+        Its objective (``inf`` when no evaluation succeeded).
     constraints : dict
-    feasible : bool
+    success : bool
+        A feasible design was found (``x`` satisfies every constraint). Whatever stopped the
+        run (``status``), the best feasible design seen is returned; a run that stopped on
+        its budget still succeeds if it found one.
     status : str
-        ``converged``, ``max_cycles`` (cd); ``success``, ``xtol_reached``, ``ftol_reached``,
-        ``roundoff_limited``, ``failure`` ... (NLopt); ``max_evaluations``, ``stopped``.
+        Why the run stopped: ``converged``, ``max_cycles`` (cd); ``success``,
+        ``xtol_reached``, ``ftol_reached``, ``roundoff_limited``, ``failure`` ... (NLopt);
+        ``max_evaluations``, ``stopped``.
     message : str
     n_evaluations, n_computed, n_reused : int
         Distinct designs of the run; computed now; served from the log.
@@ -91,7 +97,7 @@ class OptimizationResult:
     x: dict
     objective: float
     constraints: dict
-    feasible: bool
+    success: bool
     status: str
     message: str
     n_evaluations: int
@@ -102,6 +108,9 @@ class OptimizationResult:
     best: Evaluation | None
     cycles: pd.DataFrame | None = None
     options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        check_outcome(self)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (non-finite numbers become None)."""
@@ -115,8 +124,8 @@ class OptimizationResult:
             if isinstance(v, (list, tuple, np.ndarray)):
                 return [clean(u) for u in v]
             return v if isinstance(v, (str, type(None))) else repr(v)
-        d = {k: getattr(self, k) for k in ("method", "status", "message", "x", "objective",
-                                           "constraints", "feasible", "n_evaluations",
+        d = {k: getattr(self, k) for k in ("method", "success", "status", "message", "x",
+                                           "objective", "constraints", "n_evaluations",
                                            "n_computed", "n_reused", "wall_time", "options")}
         if self.best is not None:
             d.update(metrics=self.best.metrics, best_message=self.best.message)
@@ -128,7 +137,7 @@ def _x_columns(space, x) -> dict:
 
 
 def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidates=False,
-                        metric="temperature_C"):
+                        metric="temperature [degC]"):
     space = run.space
     if not (isinstance(max_cycles, int) and max_cycles >= 1):
         raise ParameterError(f"max_cycles = {max_cycles!r} must be a positive integer.")
@@ -223,7 +232,7 @@ def _nlopt_constraint_names(run: EvaluationRun, x0, handling, bounds):
         return None
     first = run.evaluate(x0)
     names = [k for k in first.constraints if k not in bounds] or None
-    return names if names is not None or first.failed else []
+    return names if names is not None or not first.success else []
 
 
 class _NloptCallbacks:
@@ -240,11 +249,11 @@ class _NloptCallbacks:
 
     def _value(self, ev) -> float:
         """Objective for NLopt: penalised if asked, a finite stand-in for a failure."""
-        if not ev.failed and math.isfinite(ev.objective) and self.ref is None:
+        if ev.success and math.isfinite(ev.objective) and self.ref is None:
             self.ref = ev.objective
         ref = self.ref or 0.0
         scale = abs(ref) or 1.0
-        if ev.failed or not math.isfinite(ev.objective):
+        if not ev.success or not math.isfinite(ev.objective):
             fv = self.failure_value
             return float(fv) if fv is not None else ref + 1e3 * scale
         if not self.penalised:
@@ -256,8 +265,9 @@ class _NloptCallbacks:
         """Constraint values for NLopt (1 for each on a failed evaluation)."""
         if self.names is None:  # unknown names: one aggregated constraint
             g = [v for k, v in ev.constraints.items() if k not in self.bounds]
-            return [1.0 if ev.failed else max(g, default=-1.0)]
-        return [1.0 if ev.failed else float(ev.constraints.get(k, 0.0)) for k in self.names]
+            return [1.0 if not ev.success else max(g, default=-1.0)]
+        return [1.0 if not ev.success else float(ev.constraints.get(k, 0.0))
+                for k in self.names]
 
     def _guarded(self, fn, fallback):
         """Call ``fn``; after any exception keep it, stop NLopt and use ``fallback``."""
@@ -420,7 +430,7 @@ def _result(run: EvaluationRun, method, outcome, counts, t0, options) -> Optimiz
         method=method, x=dict(best.x) if best else {}, status=status, message=message,
         objective=best.objective if best else math.inf,
         constraints=dict(best.constraints) if best else {},
-        feasible=bool(best and best.feasible), n_evaluations=len(run.evaluations),
+        success=bool(best and best.feasible), n_evaluations=len(run.evaluations),
         n_computed=logged.n_computed - c0, n_reused=logged.n_reused - r0,
         wall_time=time.perf_counter() - t0, history=run.history(), best=best,
         cycles=None if cycles is None else pd.DataFrame(cycles), options=options)
@@ -453,7 +463,7 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
         after the evaluation has been logged).
     **options
         cd: ``max_cycles`` (15), ``parallel_candidates`` (False), ``metric``
-        ("temperature_C", reported per cycle). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
+        ("temperature [degC]", reported per cycle). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
         (1e-6), ``xtol_abs`` (1e-6, normalised), ``ftol_abs`` (0), ``initial_step``
         (normalised; default the cd step), ``constraint_handling`` ("native" for cobyla,
         "penalty" or "auglag"), ``penalty`` (100, weight of the exact penalty

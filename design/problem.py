@@ -1,8 +1,8 @@
 """Design problems: ``evaluate(x) -> Evaluation`` with objective, constraints g <= 0, metrics.
 
-A simulator failure or any exception inside a problem's evaluation becomes a *failed*
-:class:`Evaluation` with a message; it never propagates into an optimiser. Problems are
-plain picklable objects so that process pools and Dask workers can evaluate them.
+A simulator failure or any exception inside a problem's evaluation becomes an unsuccessful
+:class:`Evaluation` (``success=False``, status ``"failed"``) with a message; it never
+propagates into an optimiser. Problems are plain picklable objects so that process pools and Dask workers can evaluate them.
 """
 
 from __future__ import annotations
@@ -16,10 +16,12 @@ from dataclasses import dataclass, field
 from simulator.errors import ParameterError
 from simulator.materials import SU8
 
+from ._contract import check_outcome
 from .gripper import GripperDesign, evaluate_gripper
 from .space import DesignSpace, Variable
 
-__all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU8_TG"]
+__all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU8_TG",
+           "EVALUATION_STATUSES"]
 
 logger = logging.getLogger(__name__)
 
@@ -36,21 +38,37 @@ GRIPPER_SPACE = DesignSpace([
 ])
 
 
+#: Status words of an evaluation: success (objective and constraints computed) is
+#: "feasible" or "infeasible"; a failure is "not_met" (the problem's criterion was never met,
+#: e.g. below a power cap) or "failed" (a simulation failed, an exception, a bad design).
+EVALUATION_STATUSES = ("feasible", "infeasible", "not_met", "failed")
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """One evaluated design.
+
+    ``success`` means the thing asked of an evaluation was done: the objective and the
+    constraints were computed. It says nothing about the constraints; ``feasible`` does
+    (success and every ``g <= 0``), so both are kept, and ``status`` combines them.
 
     Attributes
     ----------
     x : dict {variable: value} (SI)
     objective : float
-        Value to minimise (SI; ``inf`` when the evaluation failed).
+        Value to minimise (SI); ``inf`` when the evaluation did not succeed, so that every
+        optimiser ranks it last (the objective is an optimiser's number, not a reported
+        power: the metrics give powers, None when not met).
     constraints : dict {name: g}
         Constraint values, feasible when ``g <= 0`` (normalised, dimensionless).
     metrics : dict
-        Further results with units in their names.
-    failed : bool
-        The evaluation could not produce an objective (simulation failure, criterion never met).
+        Further results, keys ``name [unit]``.
+    success : bool
+        Objective and constraints were computed.
+    status : str
+        ``"feasible"`` or ``"infeasible"`` (success), ``"not_met"`` (the criterion was never
+        met, e.g. below the power cap) or ``"failed"`` (simulation failure, exception, design
+        outside the bounds). Default: from ``success`` and the constraints.
     message : str
     wall_time : float [s]
     """
@@ -59,33 +77,47 @@ class Evaluation:
     objective: float
     constraints: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
-    failed: bool = False
+    success: bool = True
+    status: str = ""
     message: str = ""
     wall_time: float = 0.0
 
+    def __post_init__(self):
+        ok = all(g <= 0 for g in self.constraints.values())
+        derived = ("feasible" if ok else "infeasible") if self.success else "failed"
+        if not self.status:
+            object.__setattr__(self, "status", derived)
+        check_outcome(self, (derived,), EVALUATION_STATUSES[2:])
+
     @property
     def feasible(self) -> bool:
-        return (not self.failed) and all(g <= 0 for g in self.constraints.values())
+        """Evaluated and every constraint ``g <= 0``."""
+        return self.success and all(g <= 0 for g in self.constraints.values())
 
     @property
     def max_violation(self) -> float:
         return max([0.0] + [g for g in self.constraints.values()])
 
-    def to_row(self) -> dict:
-        """Flat dict for tables and the evaluation log."""
-        row = {f"x.{k}": v for k, v in self.x.items()}
+    def to_row(self, space=None) -> dict:
+        """Flat dict for tables and the evaluation log: ``x.<name> [unit]`` (unit from
+        ``space``; ``x.<name>`` without it), ``objective``, ``g.<name>``, ``m.<metric>``,
+        ``success``, ``status``, ``feasible``, ``message``, ``wall_time [s]``."""
+        unit = {} if space is None else {v.name: f" [{v.unit}]" for v in space.variables}
+        row = {f"x.{k}{unit.get(k, '')}": v for k, v in self.x.items()}
         row["objective"] = self.objective
         row.update({f"g.{k}": v for k, v in self.constraints.items()})
         row.update({f"m.{k}": v for k, v in self.metrics.items()})
-        row.update(failed=self.failed, feasible=self.feasible, message=self.message,
-                   wall_time=self.wall_time)
+        row.update({"success": self.success, "status": self.status, "feasible": self.feasible,
+                    "message": self.message, "wall_time [s]": self.wall_time})
         return row
 
 
 class DesignProblem:
     """Base class: subclasses set ``space`` and implement :meth:`_evaluate`.
 
-    ``_evaluate(values: dict) -> (objective, constraints, metrics, failed, message)``.
+    ``_evaluate(values: dict) -> (objective, constraints, metrics, failure, message)``:
+    ``failure`` is None when the objective and constraints were computed, else the status
+    word saying why not (``"not_met"``, ``"failed"``).
     """
 
     space: DesignSpace
@@ -97,17 +129,18 @@ class DesignProblem:
         t0 = time.perf_counter()
         try:
             self.space.validate(values)
-            objective, constraints, metrics, failed, message = self._evaluate(values)
+            objective, constraints, metrics, failure, message = self._evaluate(values)
         except ParameterError as exc:
-            objective, constraints, metrics, failed, message = math.inf, {}, {}, True, str(exc)
+            objective, constraints, metrics, failure, message = (math.inf, {}, {}, "failed",
+                                                                 str(exc))
         except Exception as exc:  # noqa: BLE001 - a failed design must not crash an optimiser
             logger.warning("evaluation of %s failed: %s", values, exc)
-            objective, constraints, metrics, failed = math.inf, {}, {}, True
+            objective, constraints, metrics, failure = math.inf, {}, {}, "failed"
             message = f"{type(exc).__name__}: {exc} ({traceback.format_exc(limit=1).strip()})"
-        ev = Evaluation(values, float(objective), constraints, metrics, failed, message,
-                        time.perf_counter() - t0)
-        logger.info("evaluated %s -> %.6g (%s)", values, ev.objective,
-                    "failed" if failed else "feasible" if ev.feasible else "infeasible")
+        ev = Evaluation(values, math.inf if failure else float(objective), constraints, metrics,
+                        success=not failure, status=failure or "", message=message,
+                        wall_time=time.perf_counter() - t0)
+        logger.info("evaluated %s -> %.6g (%s)", values, ev.objective, ev.status)
         return ev
 
     def _evaluate(self, values: dict):  # pragma: no cover - abstract
@@ -184,14 +217,15 @@ class GripperProblem(DesignProblem):
         res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap)
         d = res.to_dict()
         temp = res.max_temperature if self.temperature_measure == "centre_line" \
-            else d["max_crease_temperature_C"]
+            else d["max_crease_temperature [degC]"]
         constraints = dict(self.space.bound_margins(values))
         constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
-        metrics = {k: (math.nan if v is None else v) for k, v in d.items()
+        metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]") and not k.startswith("residual_fold")
-                   and k not in ("feasible", "message", "mode")}
-        metrics["temperature_C"] = temp
-        return res.total_power, constraints, metrics, not res.feasible, res.message
+                   and k not in ("success", "status", "message", "mode")}
+        metrics["temperature [degC]"] = temp
+        return (res.total_power, constraints, metrics, None if res.success else res.status,
+                res.message)
 
     def settings(self) -> dict:
         folds = self.group_folds()

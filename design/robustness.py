@@ -145,10 +145,14 @@ def _design_list(space, designs) -> list:
 
 
 def _stage_power(ev, key):
-    """Stage power [mW]; NaN when the stage was not met (reported as None, or 0)."""
+    """Stage power [mW] from the metrics; None when the stage was not met."""
     v = ev.metrics.get(key)
-    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and (v > 0 or not ev.failed)
-    return v if ok else math.nan
+    return v if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+
+def _nan(v) -> float:
+    """A table cell: None (not met) becomes NaN, written as an empty CSV cell."""
+    return math.nan if v is None else v
 
 
 def _row(problem, x: dict, spec: dict, columns: list, ev) -> dict:
@@ -161,16 +165,16 @@ def _row(problem, x: dict, spec: dict, columns: list, ev) -> dict:
             row[f"residual_fold {g} [deg]"] = _deg(spec.get(g, spec.get("all", getattr(
                 problem, "residual_fold", 0.0))))
     m = ev.metrics
-    converged = not ev.failed or "criterion not met below the power cap" in ev.message
-    row.update({"converged": converged, "failed": ev.failed, "feasible": ev.feasible,
-                "assembly_power [mW]": _stage_power(ev, "assembly_power_mW"),
-                "grip_power [mW]": _stage_power(ev, "grip_power_mW"),
-                "total_power [mW]": math.nan if ev.failed else 1e3 * ev.objective,
-                "temperature [degC]": m.get("temperature_C", math.nan),
+    row.update({"success": ev.success, "status": ev.status, "feasible": ev.feasible,
+                "assembly_power [mW]": _nan(_stage_power(ev, "assembly_power [mW]")),
+                "grip_power [mW]": _nan(_stage_power(ev, "grip_power [mW]")),
+                "total_power [mW]": 1e3 * ev.objective if ev.success else math.nan,
+                "temperature [degC]": m.get("temperature [degC]", math.nan),
                 "temperature_limit [degC]": getattr(problem, "temperature_limit", math.nan),
-                "assembly_temperature [degC]": m.get("assembly_temperature_C", math.nan),
-                "grip_temperature [degC]": m.get("grip_temperature_C", math.nan),
-                "max_crease_temperature [degC]": m.get("max_crease_temperature_C", math.nan),
+                "assembly_temperature [degC]": m.get("assembly_temperature [degC]", math.nan),
+                "grip_temperature [degC]": m.get("grip_temperature [degC]", math.nan),
+                "max_crease_temperature [degC]": m.get("max_crease_temperature [degC]",
+                                                       math.nan),
                 "simulations": m.get("assembly_simulations", 0) + m.get("grip_simulations", 0)})
     for name in ["temperature"] + list(space.bound_margins(x)):
         row[f"margin {name} [-]"] = -ev.constraints.get(name, math.nan)
@@ -203,9 +207,11 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
     pandas.DataFrame
         One row per (design, residual fold), designs outer, residual folds inner: design
         variables in display units (``W [um]``), ``residual_fold [deg]`` (or
-        ``residual_fold <group> [deg]`` per group), ``converged`` (no simulation failure;
-        reaching the power cap counts as converged), ``failed``, ``feasible``, stage and total
-        powers [mW] (NaN when not met), temperatures [degC], ``margin <constraint> [-]``
+        ``residual_fold <group> [deg]`` per group), ``success`` (the point was evaluated),
+        ``status`` (``feasible``, ``infeasible``, ``not_met``: a criterion not met below the
+        power cap, ``failed``: a simulation failure), ``feasible``, stage and total powers
+        [mW] (NaN, an empty CSV cell, when not met), temperatures [degC],
+        ``margin <constraint> [-]``
         (``-g``, positive when satisfied), ``simulations``, ``message``, ``wall_time [s]``.
         Everything except :data:`TIMING_COLUMNS` is the same whatever the executor.
     """
@@ -253,10 +259,12 @@ class RobustGripperProblem(DesignProblem):
 
     Objective: the largest total power [W] over the residual folds. Constraints: the size
     bounds and ``temperature`` = the largest temperature constraint over the residual folds
-    (the limit must hold at every one). Failed if any residual fold fails (message names
-    them). Metrics per residual fold: ``total_power_mW@-10deg``, ``assembly_power_mW@...``,
-    ``grip_power_mW@...``, ``temperature_C@...`` (``@base=-10deg,arm=0deg`` per group),
-    plus the worst ``total_power_mW`` and ``temperature_C``. The residual folds are evaluated
+    (the limit must hold at every one). Not successful if any residual fold is not (message
+    names them; status ``"failed"`` if a simulation failed at one, else ``"not_met"``).
+    Metrics per residual fold: ``total_power@-10deg [mW]``, ``assembly_power@... [mW]``,
+    ``grip_power@... [mW]``, ``temperature@... [degC]`` (``@base=-10deg,arm=0deg`` per
+    group; powers None when not met), plus the worst ``total_power [mW]`` and
+    ``temperature [degC]``. The residual folds are evaluated
     one after the other in the calling process; parallelise over designs (e.g.
     ``executor.map(robust.evaluate, designs)``).
 
@@ -288,22 +296,27 @@ class RobustGripperProblem(DesignProblem):
         evs = [(label, p.evaluate(values)) for label, p in self._problems]
         metrics, temps = {}, []
         for label, ev in evs:
-            metrics[f"total_power_mW@{label}"] = 1e3 * ev.objective
-            for key in ("assembly_power_mW", "grip_power_mW"):
-                metrics[f"{key}@{label}"] = _stage_power(ev, key)
-            metrics[f"temperature_C@{label}"] = ev.metrics.get("temperature_C", math.nan)
+            metrics[f"total_power@{label} [mW]"] = 1e3 * ev.objective if ev.success else None
+            for key in ("assembly_power", "grip_power"):
+                metrics[f"{key}@{label} [mW]"] = _stage_power(ev, f"{key} [mW]")
+            metrics[f"temperature@{label} [degC]"] = ev.metrics.get("temperature [degC]",
+                                                                    math.nan)
             if "temperature" in ev.constraints:
                 temps.append(ev.constraints["temperature"])
+        bad = [(label, ev) for label, ev in evs if not ev.success]
         objective = max(ev.objective for _, ev in evs)
-        metrics["total_power_mW"] = 1e3 * objective
-        metrics["temperature_C"] = max([ev.metrics["temperature_C"] for _, ev in evs
-                                        if "temperature_C" in ev.metrics], default=math.nan)
+        metrics["total_power [mW]"] = None if bad else 1e3 * objective
+        metrics["temperature [degC]"] = max([ev.metrics["temperature [degC]"] for _, ev in evs
+                                             if "temperature [degC]" in ev.metrics],
+                                            default=math.nan)
         constraints = dict(self.space.bound_margins(values))
         if temps:
             constraints["temperature"] = max(temps)
-        bad = [f"residual fold {label}: {ev.message}" for label, ev in evs if ev.failed]
-        message = "; ".join(bad) if bad else f"all {len(evs)} residual folds met"
-        return (math.inf if bad else objective), constraints, metrics, bool(bad), message
+        message = ("; ".join(f"residual fold {label}: {ev.message}" for label, ev in bad)
+                   if bad else f"all {len(evs)} residual folds met")
+        failure = None if not bad else ("failed" if any(ev.status == "failed" for _, ev in bad)
+                                        else "not_met")
+        return (math.inf if bad else objective), constraints, metrics, failure, message
 
     def settings(self) -> dict:
         return {"problem": self.name, "aggregate": "max over residual folds",

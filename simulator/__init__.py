@@ -13,7 +13,7 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
-from .cases import Case, describe_cases, get_case
+from .cases import Case, describe_cases, get_case, miura_sheet_model
 from .dynamics import DynamicsOptions, DynamicsResult, MotionState, TimeIntegrator, integrate
 from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
                      PatternError)
@@ -65,6 +65,7 @@ __all__ = [
     # FOLD files
     "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
     "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
+    "miura_sheet_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
 ]

@@ -17,6 +17,7 @@ from .errors import ParameterError
 from .simulation import simulate
 from .steps import Gravity, Heat, SelfFold
 from .materials import Material
+from .mesh import build_mesh
 from .model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
 from .example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, single_fold_pattern, strip_pattern, with_substrate)
@@ -24,7 +25,8 @@ from .properties import BarHingeParameters
 from .newton import NewtonOptions
 from .thermal import REFERENCE_BETA, ThermalParameters
 
-__all__ = ["Case", "CASES", "get_case", "describe_cases"]
+__all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
+           "miura_fold_signs"]
 
 #: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
 DELTA_ALPHA_AU_SU8 = 38e-6
@@ -241,6 +243,54 @@ def miura_fold_signs(a, b, gamma, m, n) -> dict:
     return fold_directions(v, p)
 
 
+def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radians(60.0),
+                      cells_x: int = 2, cells_y: int = 2, crease_width: float = 200e-6,
+                      t_gold: float = 0.2e-6, t_su8: float = 0.8e-6,
+                      panel_thickness: float = 10e-6, substrate: bool = False,
+                      undercut: float = 100e-6) -> Model:
+    """The Miura-ori lifter's model (paper 6.2, Example03, digest 8.3): the one builder behind
+    the ``miura_lifter`` case and :func:`design.miura.miura_model`.
+
+    A Miura sheet of ``cells_x`` x ``cells_y`` cells, clamped along its first column of panels
+    (x = 0 side); every crease an actuator (gold ``t_gold`` on SU-8 ``t_su8``, the crease
+    ``t_gold + t_su8`` thick, ``|delta_alpha|`` = 50e-6 /K with the Miura fold directions);
+    optionally over a clamped substrate ``undercut`` below that is a thermal boundary and a
+    contact surface.
+
+    Parameters
+    ----------
+    a, b : panel sides [m]
+    gamma : sector angle [rad]
+    cells_x, cells_y : cells along x and y
+    crease_width : [m]
+    t_gold, t_su8 : actuator layer thicknesses [m]
+    panel_thickness : SU-8 panel thickness [m]
+    substrate : bool
+    undercut : gap between sheet and substrate [m]
+    """
+    m, n = cells_x, cells_y
+    pattern = miura_sheet_pattern(a, b, gamma, m, n, W=crease_width,
+                                  crease_thickness=t_gold + t_su8,
+                                  panel_thickness=panel_thickness)
+    boundary = ()
+    if substrate:
+        pattern = with_substrate(pattern, undercut=undercut, margin=0.5 * max(a, b))
+        boundary = (pattern.n_panels - 1,)
+    signs = miura_fold_signs(a, b, gamma, m, n)
+    actuators = Actuators(Bimorph(E1=50e9, t1=t_gold, E2=2e9, t2=t_su8),
+                          {c: -50e-6 * s for c, s in signs.items()})
+    thermal = ThermalParameters(env_thickness=(a + b) / 2, env_conductivity=0.026,
+                                dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
+    mesh = build_mesh(pattern)
+    # clamp the left end: every node of the first column of panels (x = 0 side)
+    fixed = {int(i): "xyz" for p in range(n) for i in mesh.panel_nodes(p)}
+    if substrate:
+        fixed.update({int(i): "xyz" for i in mesh.panel_nodes(pattern.n_panels - 1)})
+    return make_model(mesh, Supports(fixed), BarHingeParameters(),
+                      contact=ContactParameters() if substrate else None, thermal=thermal,
+                      actuators=actuators)
+
+
 @_case(a="m", b="m", gamma_deg="deg", crease_width="m", power_mW="mW per crease",
        thermal_steps="-", undercut="m")
 def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float = 1e-3,
@@ -251,32 +301,16 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     when all creases are heated; optionally over a substrate that cools the creases near it.
 
     Geometry and actuators of Example03 (digest 8.3): 10 um panels, 1 um creases, gold 0.2 um
-    on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions.
+    on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions
+    (:func:`miura_sheet_model`).
     """
     params = {k: v for k, v in locals().items()}
     _check(a=a, b=b, gamma_deg=gamma_deg, crease_width=crease_width, undercut=undercut)
     m, n = _steps_int("cells_x", cells_x), _steps_int("cells_y", cells_y)
     gamma = math.radians(gamma_deg)
-    pattern = miura_sheet_pattern(a, b, gamma, m, n, W=crease_width, crease_thickness=1e-6,
-                                  panel_thickness=10e-6)
-    boundary = ()
-    if substrate:
-        pattern = with_substrate(pattern, undercut=undercut, margin=0.5 * max(a, b))
-        boundary = (pattern.n_panels - 1,)
-    signs = miura_fold_signs(a, b, gamma, m, n)
-    actuators = Actuators(Bimorph(E1=50e9, t1=0.2e-6, E2=2e9, t2=0.8e-6),
-                          {c: -50e-6 * s for c, s in signs.items()})
-    thermal = ThermalParameters(env_thickness=(a + b) / 2, env_conductivity=0.026,
-                                dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
-    mesh = make_model(pattern).mesh
-    # clamp the left end: every node of the first column of panels (x = 0 side)
-    fixed = {int(i): "xyz" for p in range(n) for i in mesh.panel_nodes(p)}
-    if substrate:
-        fixed.update({int(i): "xyz" for i in mesh.panel_nodes(pattern.n_panels - 1)})
-    model = make_model(mesh, Supports(fixed), BarHingeParameters(),
-                       contact=ContactParameters() if substrate else None, thermal=thermal,
-                       actuators=actuators)
-    steps = (Heat({tuple(signs): _power(power_mW)},
+    model = miura_sheet_model(a, b, gamma, m, n, crease_width, substrate=substrate,
+                              undercut=undercut)
+    steps = (Heat({tuple(miura_fold_signs(a, b, gamma, m, n)): _power(power_mW)},
                   increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
     return Case("miura_lifter", model, steps, params, miura_lifter.__doc__)
 

@@ -42,20 +42,24 @@ Outputs (``results/gripper_optimization/``)
   ``L2 [um]``, ``total_power [mW]``, ``assembly_power [mW]``, ``grip_power [mW]``,
   ``temperature [degC]`` (of the current design, the reference's measure),
   ``temperature_limit [degC]``, ``last_candidate_temperature [degC]`` (the reference
-  script's history value), ``feasible``, ``evaluations`` (cumulative).
+  script's history value), ``feasible`` (of the current design), ``evaluations``
+  (cumulative).
 * ``comparison`` - one row per method: ``method``, ``options`` (non-default options),
   ``budget`` (evaluations; empty: none, the CD stops by its cycles), ``status``,
-  ``message``, ``feasible``, ``total_power [mW]``, ``assembly_power [mW]``,
+  ``message``, ``success`` (a feasible design was found; ``status`` says why the run
+  stopped), ``total_power [mW]`` (empty without a feasible design), ``assembly_power [mW]``,
   ``grip_power [mW]``, the design (um), ``start_power [mW]``,
-  ``reduction [%]``, ``evaluations`` (distinct designs), ``failed_evaluations``,
+  ``reduction [%]``, ``evaluations`` (distinct designs), ``failed_evaluations`` (not
+  successful: criterion not met below the power cap, simulation failure, time limit),
   ``best_at_evaluation``, ``wall_time [s]`` (of the run), ``evaluation_time [s]`` (sum over
   its evaluations), ``workers`` (processes the run used), ``temperature [degC]``,
   ``temperature_limit [degC]``, ``temperature_margin [degC]`` (limit - temperature),
   ``margin temperature [-]`` (``-g``, normalised by the limit), ``margin size [-]`` (smallest
   normalised size-bound margin, 0 on a bound), ``reaches_cd`` (power at or below the CD's).
 * ``history`` - every evaluation of every method, in order: ``method``, ``evaluation``,
-  ``total_power [mW]`` (NaN when failed), ``feasible``, ``failed``, ``best_so_far [mW]``
-  (best feasible power up to that evaluation).
+  ``total_power [mW]`` (empty when the evaluation did not succeed), ``success``,
+  ``status`` (``feasible``, ``infeasible``, ``not_met``, ``failed``), ``feasible``,
+  ``best_so_far [mW]`` (best feasible power up to that evaluation).
 
 Figures: ``gripper_optimization.png`` ((b) design variables and (c) power vs CD cycle),
 ``gripper_optimization_methods.png`` ((d) best power, evaluations and wall time per method,
@@ -125,7 +129,7 @@ def _cycles_table(result, limit: float) -> pd.DataFrame:
     """Rows ``table = "cycles"`` from a CD result (stage powers looked up in its history);
     ``limit``: the temperature limit [degC]."""
     h = result.history
-    xcols = [f"x.{v}" for v in VARIABLES]
+    xcols = [f"x.{v} [m]" for v in VARIABLES]
     rows = []
     for _, c in result.cycles.iterrows():
         x = np.array([c[f"x.{v} [m]"] for v in VARIABLES])
@@ -135,32 +139,34 @@ def _cycles_table(result, limit: float) -> pd.DataFrame:
                      "moved": c["moved"],
                      "complete": bool(c["complete"]), **_design_um(dict(zip(VARIABLES, x))),
                      POWER: 1e3 * c["objective"],
-                     ASM: m.get("m.assembly_power_mW", math.nan),
-                     GRIP: m.get("m.grip_power_mW", math.nan),
-                     TEMP: c["current.temperature_C"],
+                     ASM: m.get("m.assembly_power [mW]", math.nan),
+                     GRIP: m.get("m.grip_power [mW]", math.nan),
+                     TEMP: c["current.temperature [degC]"],
                      "temperature_limit [degC]": limit,
-                     "last_candidate_temperature [degC]": c["last_candidate.temperature_C"],
+                     "last_candidate_temperature [degC]":
+                         c["last_candidate.temperature [degC]"],
                      "feasible": bool(c["feasible"]), "evaluations": int(c["n_evaluations"])})
     return pd.DataFrame(rows)
 
 
 def _comparison_row(label, result, budget, options, workers, problem, start_power) -> dict:
     best, h = result.best, result.history
-    temp = _metric(best, "temperature_C")
+    temp = _metric(best, "temperature [degC]")
     size = [-g for k, g in result.constraints.items() if k != "temperature"]
-    power = 1e3 * result.objective if result.feasible else math.nan
+    power = 1e3 * result.objective if result.success else math.nan
     hist = _history_rows(label, result)
     reached = hist["evaluation"][hist["best_so_far [mW]"] <= power]
     best_at = int(reached.iloc[0]) if len(reached) else -1
     return {"table": "comparison", "method": label,
             "options": json.dumps(options, sort_keys=True), "budget": budget,
-            "status": result.status, "message": result.message, "feasible": result.feasible,
-            POWER: power, ASM: _metric(best, "assembly_power_mW"),
-            GRIP: _metric(best, "grip_power_mW"), **_design_um(result.x),
+            "success": result.success, "status": result.status, "message": result.message,
+            POWER: power, ASM: _metric(best, "assembly_power [mW]"),
+            GRIP: _metric(best, "grip_power [mW]"), **_design_um(result.x),
             "start_power [mW]": start_power, "reduction [%]": 100 * (1 - power / start_power),
-            "evaluations": result.n_evaluations, "failed_evaluations": int(h["failed"].sum()),
+            "evaluations": result.n_evaluations,
+            "failed_evaluations": int((~h["success"].astype(bool)).sum()),
             "best_at_evaluation": best_at, "wall_time [s]": result.wall_time,
-            "evaluation_time [s]": float(h["wall_time"].sum()), "workers": workers,
+            "evaluation_time [s]": float(h["wall_time [s]"].sum()), "workers": workers,
             TEMP: temp, "temperature_limit [degC]": problem.temperature_limit,
             "temperature_margin [degC]": problem.temperature_limit - temp,
             "margin temperature [-]": -result.constraints.get("temperature", math.nan),
@@ -170,12 +176,13 @@ def _comparison_row(label, result, budget, options, workers, problem, start_powe
 def _history_rows(label, result) -> pd.DataFrame:
     h = result.history
     ok = h["feasible"].to_numpy(bool)
-    power = np.where(h["failed"].to_numpy(bool), np.nan, 1e3 * h["objective"].to_numpy(float))
+    success = h["success"].to_numpy(bool)
+    power = np.where(success, 1e3 * h["objective"].to_numpy(float), np.nan)
     best = pd.Series(np.where(ok, power, np.nan)).cummin().ffill().to_numpy()
     return pd.DataFrame({"table": "history", "method": label,
                          "evaluation": h["eval"].to_numpy(int), POWER: power,
-                         "feasible": ok, "failed": h["failed"].to_numpy(bool),
-                         "best_so_far [mW]": best})
+                         "success": success, "status": h["status"].to_numpy(str),
+                         "feasible": ok, "best_so_far [mW]": best})
 
 
 def _run_nlopt(task):
@@ -210,7 +217,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
         if progress:
             bar.close()
     start = cd.history.iloc[0]
-    start_power = 1e3 * start["objective"] if not start["failed"] else math.nan
+    start_power = 1e3 * start["objective"] if start["success"] else math.nan
     rows = [_comparison_row("cd", cd, cd.options["max_evaluations"],
                             {k: cd.options[k] for k in CD_OPTIONS}, executor.workers, problem,
                             start_power)]
@@ -301,7 +308,7 @@ def _plot_methods(comp, hist):
         d = hist[hist["method"] == m]
         ax_h.plot(d["evaluation"], d["best_so_far [mW]"], color=c, lw=2, label=m)
         ax_h.plot(d["evaluation"], d[POWER], ".", color=c, ms=3, alpha=0.4)
-        bad = d[d["failed"]]
+        bad = d[~d["success"]]
         ax_h.plot(bad["evaluation"], np.full(len(bad), 0.97), "x", color=c,
                   transform=ax_h.get_xaxis_transform())
     ax_h.set_xlabel("evaluation")
@@ -318,7 +325,7 @@ def plot(df: pd.DataFrame) -> dict:
     cycles = df[df["table"] == "cycles"].sort_values("cycle")
     comp = df[df["table"] == "comparison"]
     hist = df[df["table"] == "history"].copy()
-    for col in ("feasible", "failed"):
+    for col in ("feasible", "success"):
         hist[col] = hist[col].astype(str).str.lower() == "true"
     return {NAME: _plot_cycles(cycles), f"{NAME}_methods": _plot_methods(comp, hist)}
 

@@ -44,19 +44,21 @@ Outputs (``results/gripper_robustness/``)
 ``gripper_robustness.csv``: one long table, the ``table`` column tells the row kind:
 
 * ``sweep`` - one row per design and residual fold: ``design`` (label), ``source``,
-  ``W [um]``, ``La [um]``, ``L1 [um]``, ``L2 [um]``, ``residual_fold [deg]``, ``converged``
-  (no simulation failure; reaching the power cap counts as converged), ``failed``
-  (criterion not met below the power cap, simulation failure or time limit), ``feasible``
-  (not failed and below the temperature limit), ``assembly_power [mW]``,
-  ``grip_power [mW]``, ``total_power [mW]`` (NaN when failed), ``temperature [degC]``
+  ``W [um]``, ``La [um]``, ``L1 [um]``, ``L2 [um]``, ``residual_fold [deg]``, ``success``
+  (the point was evaluated: both stages met), ``status`` (``feasible``, ``infeasible``,
+  ``not_met``: a criterion not met below the power cap, ``failed``: simulation failure or
+  time limit), ``feasible`` (success and below the temperature limit),
+  ``assembly_power [mW]``, ``grip_power [mW]``, ``total_power [mW]`` (empty when not
+  met), ``temperature [degC]``
   (reference measure: centre-line mean of the heated creases, larger stage),
   ``temperature_limit [degC]``, ``assembly_temperature [degC]``,
   ``grip_temperature [degC]``, ``max_crease_temperature [degC]``, ``margin <constraint> [-]``
   (``-g``, positive when satisfied: ``temperature`` and the size bounds),
   ``temperature_margin [degC]``, ``simulations``, ``message``, ``wall_time [s]``.
 * ``designs`` - one row per design: ``design``, ``source``, the variables (um), and for the
-  optimised ones the run's ``method``, ``status``, ``evaluations``, ``failed_evaluations``,
-  ``wall_time [s]`` and ``objective [mW]`` (robust: worst-case power over the robust
+  optimised ones the run's ``method``, ``success`` (a feasible design was found),
+  ``status``, ``message``, ``evaluations``, ``failed_evaluations``, ``wall_time [s]`` and
+  ``objective [mW]`` (robust: worst-case power over the robust
   problem's residual folds, ``robust_residual_folds [deg]``).
 
 Figure: ``gripper_robustness.png`` (total power and temperature vs residual fold per design;
@@ -121,9 +123,10 @@ def _design_row(label, source, x, result=None, **extra) -> dict:
     if result is not None:
         row.update(method=result.method, status=result.status,
                    evaluations=result.n_evaluations,
-                   failed_evaluations=int(result.history["failed"].sum()),
+                   failed_evaluations=int((~result.history["success"].astype(bool)).sum()),
                    **{"wall_time [s]": result.wall_time,
-                      "objective [mW]": 1e3 * result.objective}, feasible=result.feasible)
+                      "objective [mW]": 1e3 * result.objective}, success=result.success,
+                   message=result.message)
     return {**row, **extra}
 
 
@@ -195,11 +198,11 @@ def plot(df: pd.DataFrame):
     from matplotlib.figure import Figure
 
     sweep = df[df["table"] == "sweep"].copy()
-    for col in ("failed", "feasible"):
+    for col in ("success", "feasible"):
         sweep[col] = sweep[col].astype(str).str.lower() == "true"
     fig = Figure(figsize=(12, 4.8), layout="constrained")
     ax_p, ax_t = fig.subplots(1, 2)
-    hot = sweep[~sweep["failed"] & ~sweep["feasible"]]
+    hot = sweep[sweep["success"] & ~sweep["feasible"]]
     for i, (label, d) in enumerate(sweep.groupby("design", sort=False)):
         d = d.sort_values("residual_fold [deg]")
         x = d.iloc[0]
@@ -210,7 +213,7 @@ def plot(df: pd.DataFrame):
         for ax, col in ((ax_p, POWER), (ax_t, TEMP)):
             ax.plot(d["residual_fold [deg]"], d[col], **style,
                     label=name if ax is ax_p else label)
-            bad = d[d["failed"]]
+            bad = d[~d["success"]]
             ax.plot(bad["residual_fold [deg]"], np.full(len(bad), 0.97), "x", color=f"C{i}",
                     ms=9, mew=2, transform=ax.get_xaxis_transform())
     for ax, col in ((ax_p, POWER), (ax_t, TEMP)):

@@ -34,10 +34,11 @@ Outputs (``results/heater_allocation/``)
 ---------------------------------------
 ``heater_allocation.csv``, the ``table`` column tells the row kind:
 
-* ``summary`` - one row per run: ``case``, ``variant``, ``band [deg]``, ``status``,
-  ``rounds``, ``total_power [mW]``, ``reference_power [mW]`` (the powers that made the
-  shape), ``worst_fold_error [deg]``, ``max_crease_temperature [degC]``, ``wall_time [s]``,
-  ``message``.
+* ``summary`` - one row per run: ``case``, ``variant``, ``band [deg]``, ``success``
+  (targets met; flat-shape LP: its heating simulation converged), ``status``,
+  ``rounds``, ``total_power [mW]`` (empty if no round was simulated),
+  ``reference_power [mW]`` (the powers that made the shape), ``worst_fold_error [deg]``,
+  ``max_crease_temperature [degC]``, ``wall_time [s]``, ``message``.
 * ``crease`` - one row per run and crease: ``crease``, ``crease_ref``, ``heater``,
   ``power [mW]``, ``reference_power [mW]``, ``target_fold [deg]``, ``fold_angle [deg]``.
 * ``rounds`` - every round of every run: ``round``, ``total_power [mW]``,
@@ -93,18 +94,19 @@ def _rows(case_name, variant, band, res, reference, targets, wall, achieved=None
     heater_of = heater_of or {c: n for n, cs in res.heaters.items() for c in cs}
     err = max(abs(achieved[c] - t) for c, t in targets.items()) if achieved else math.nan
     label = {"case": case_name, "variant": variant, "band [deg]": band}
-    summary = {"table": "summary", **label,
+    unheated = 0.0 if power else math.nan                    # no round simulated: unknown
+    summary = {"table": "summary", **label, "success": bool(res.success),
                "status": res.status if alloc else
                ("simulated" if res.success else "failed"),
                "rounds": res.rounds if alloc else 1,
-               "total_power [mW]": 1e3 * sum(power.values()),
+               "total_power [mW]": 1e3 * sum(power.values()) if power else math.nan,
                "reference_power [mW]": 1e3 * sum(reference.values()),
                "worst_fold_error [deg]": math.degrees(err),
                "max_crease_temperature [degC]": res.max_temperature if alloc else
                float(res.crease_temperature_max[-1].max()),
                "wall_time [s]": wall, "message": res.message}
     creases = [{"table": "crease", **label, "crease": c, "crease_ref": c + 1,
-                "heater": heater_of.get(c, ""), "power [mW]": 1e3 * power.get(c, 0.0),
+                "heater": heater_of.get(c, ""), "power [mW]": 1e3 * power.get(c, unheated),
                 "reference_power [mW]": 1e3 * reference.get(c, 0.0),
                 "target_fold [deg]": math.degrees(t),
                 "fold_angle [deg]": math.degrees(achieved[c]) if achieved else math.nan}

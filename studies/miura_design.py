@@ -18,7 +18,7 @@ Method
   free end / total power of all heated creases [um/mW]. Designs whose creases collapse in
   the mesh, and designs whose heating fails (e.g. a = 0.5 mm, gamma 45 or 60 deg,
   W = 300 um above 8 mW: the solver gives up near a contact kink after its step-cut budget,
-  in about 4 s), are listed with ``converged = False`` and the reason. No time limit by
+  in about 4 s), are listed with ``success = False`` and the reason. No time limit by
   default (``TIME_LIMIT = None``; results must not depend on the machine's speed).
   Designs are spread over a 2-process executor.
 * Optimum: :class:`~design.miura.MiuraProblem` (target lift 200 um, bisect power search,
@@ -51,13 +51,16 @@ Outputs (``results/miura_design/``)
 * ``grid`` - one row per design and power: ``label``, ``a [um]``, ``b [um]``,
   ``gamma [deg]``, ``W [um]``, ``power [mW]`` (per crease), ``total_power [mW]``,
   ``n_creases``, ``lift [um]``, ``lift_per_power [um/mW]``,
-  ``max_crease_temperature [degC]``, ``converged``, ``message``.
+  ``max_crease_temperature [degC]``, ``success`` (the heating converged), ``status``
+  (``converged``, ``failed``), ``message``; lift and temperature empty when it failed.
 * ``optimum`` - two rows, ``label`` ``start`` and ``optimum``: the design, ``total_power [mW]``,
   ``power [mW]`` (per crease), ``lift [um]``, ``lift_per_power [um/mW]``,
   ``max_crease_temperature [degC]``, ``temperature_limit [degC]``, ``margin temperature [-]``
   (``-g``), ``feasible``, ``power_staircase [mW]`` and ``total_power_staircase [mW]`` (the
-  same design re-checked with the staircase search, 0.1 mW steps per crease), and the run's
-  ``method``, ``status``, ``evaluations``, ``failed_evaluations``, ``wall_time [s]``.
+  same design re-checked with the staircase search, 0.1 mW steps per crease; empty if the
+  target is not reached), and the run's ``method``, ``success`` (a feasible design was
+  found), ``status``, ``message``, ``evaluations``, ``failed_evaluations``,
+  ``wall_time [s]``.
 * ``cycles`` - the coordinate descent per cycle: ``cycle``, ``moved``, the design,
   ``total_power [mW]``, ``max_crease_temperature [degC]``, ``evaluations``.
 
@@ -80,6 +83,7 @@ from design.miura import (
     MIURA_SPACE,
     MiuraDesign,
     MiuraProblem,
+    design_columns,
     lift_per_power_table,
     lift_power,
 )
@@ -99,7 +103,8 @@ TARGET_LIFT = 200e-6
 #: Longest heating run of a design [s] before it is stopped (None: no limit).
 TIME_LIMIT = None
 CD_BUDGET, CD_BUDGET_QUICK = 80, 3
-CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": True, "metric": "max_crease_temperature_C"}
+CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": True,
+              "metric": "max_crease_temperature [degC]"}
 #: Display columns of the design variables: name -> (column, scale from SI).
 SHOW = {"a": ("a [um]", 1e6), "b": ("b [um]", 1e6), "gamma": ("gamma [deg]", 1 / _DEG),
         "W": ("W [um]", 1e6)}
@@ -122,19 +127,19 @@ def _label(values: dict) -> str:
 
 
 def _failed_rows(values: dict, powers, message: str) -> pd.DataFrame:
-    """Grid rows of a design that could not be evaluated (``converged = False``)."""
+    """Grid rows of a design that could not be evaluated (``success = False``)."""
     base = MiuraDesign()
     v = {**{k: getattr(base, k) for k in SHOW}, **values}
-    return pd.DataFrame([{"label": _label(values), "a_um": 1e6 * v["a"], "b_um": 1e6 * v["b"],
-                          "gamma_deg": v["gamma"] / _DEG, "W_um": 1e6 * v["W"], "power_mW": p,
-                          "converged": False, "message": message} for p in powers])
+    return pd.DataFrame([{"label": _label(values), **design_columns(v), "power [mW]": p,
+                          "success": False, "status": "failed", "message": message}
+                         for p in powers])
 
 
 def _grid_task(task) -> pd.DataFrame:
     """Worker task (top level, picklable): ``(values, powers, increments) -> table``.
 
     A design that does not mesh, or whose heating runs longer than :data:`TIME_LIMIT`, gives
-    rows with ``converged = False`` and the reason.
+    rows with ``success = False`` and the reason.
     """
     values, powers, increments = task
     try:
@@ -155,10 +160,7 @@ def grid_table(grid: dict, powers, increments, executor, progress=None) -> pd.Da
     tasks = [(dict(zip(names, combo)), tuple(powers), increments)
              for combo in itertools.product(*grid.values())]
     parts = executor.map(_grid_task, tasks, progress)
-    df = pd.concat(parts, ignore_index=True).rename(columns={
-        "a_um": "a [um]", "b_um": "b [um]", "gamma_deg": "gamma [deg]", "W_um": "W [um]",
-        "power_mW": "power [mW]", "total_power_mW": "total_power [mW]", "lift_um": "lift [um]",
-        "max_crease_temperature_C": TMAX})
+    df = pd.concat(parts, ignore_index=True)
     df["n_creases"] = (df["total_power [mW]"] / df["power [mW]"]).round()
     df[LPP] = df["lift [um]"] / df["total_power [mW]"]
     df = df.drop(columns=[c for c in ("cells_x", "cells_y", "substrate") if c in df])
@@ -170,6 +172,11 @@ def _design_columns(x: dict) -> dict:
     return {col: x[name] * scale for name, (col, scale) in SHOW.items()}
 
 
+def _nan(v) -> float:
+    """A table cell: None (not met) becomes NaN, an empty CSV cell."""
+    return math.nan if v is None else v
+
+
 def _optimum_rows(problem, result) -> pd.DataFrame:
     h = result.history
     rows = []
@@ -179,7 +186,7 @@ def _optimum_rows(problem, result) -> pd.DataFrame:
             x, m, g = best.x, best.metrics, best.constraints
             obj, feasible = best.objective, best.feasible
         else:
-            x = {n: ev[f"x.{n}"] for n in MIURA_SPACE.names}
+            x = {v.name: ev[f"x.{v.name} [{v.unit}]"] for v in MIURA_SPACE.variables}
             m = {k[2:]: ev[k] for k in h.columns if k.startswith("m.")}
             g = {k[2:]: ev[k] for k in h.columns if k.startswith("g.")}
             obj, feasible = ev["objective"], bool(ev["feasible"])
@@ -188,19 +195,22 @@ def _optimum_rows(problem, result) -> pd.DataFrame:
                            step=problem.step, power_cap=problem.power_cap)
         rows.append({"table": "optimum", "label": label, **_design_columns(x),
                      "total_power [mW]": total,
-                     "power [mW]": m.get("power_per_crease_mW", math.nan),
+                     "power [mW]": _nan(m.get("power_per_crease [mW]")),
                      "n_creases": m.get("n_creases", math.nan),
-                     "lift [um]": m.get("lift_um", math.nan),
-                     LPP: m.get("lift_um", math.nan) / total,
-                     TMAX: m.get("max_crease_temperature_C", math.nan),
+                     "lift [um]": m.get("lift [um]", math.nan),
+                     LPP: m.get("lift [um]", math.nan) / total,
+                     TMAX: m.get(TMAX, math.nan),
                      "temperature_limit [degC]": problem.temperature_limit,
                      "margin temperature [-]": -g.get("temperature", math.nan),
                      "feasible": feasible,
-                     "power_staircase [mW]": 1e3 * check.power_per_crease,
-                     "total_power_staircase [mW]": 1e3 * check.total_power,
-                     "method": result.method, "status": result.status,
+                     "power_staircase [mW]": 1e3 * check.power_per_crease
+                     if check.success else math.nan,
+                     "total_power_staircase [mW]": 1e3 * check.total_power
+                     if check.success else math.nan,
+                     "method": result.method, "success": result.success,
+                     "status": result.status, "message": result.message,
                      "evaluations": result.n_evaluations,
-                     "failed_evaluations": int(h["failed"].sum()),
+                     "failed_evaluations": int((~h["success"].astype(bool)).sum()),
                      "wall_time [s]": result.wall_time})
     return pd.DataFrame(rows)
 
@@ -260,7 +270,7 @@ def _grid_figure(grid):
               ("W [um]", "crease width W [um]")]
     fig = Figure(figsize=(13, 4.4), layout="constrained")
     axes = fig.subplots(1, 3, sharey=True)
-    ok = grid[grid["converged"]]
+    ok = grid[grid["success"]]
     powers = sorted(ok["power [mW]"].unique())
     for ax, (col, label) in zip(axes, params):
         others = [c for c, _ in params if c != col]
@@ -271,7 +281,7 @@ def _grid_figure(grid):
             base = base.sort_values(col)
             ax.plot(base[col], base[LPP], "-o", color=f"C{i}", ms=5,
                     label=f"{p:g} mW per crease")
-        bad = grid[~grid["converged"]].drop_duplicates(subset=["a [um]", "gamma [deg]",
+        bad = grid[~grid["success"]].drop_duplicates(subset=["a [um]", "gamma [deg]",
                                                                "W [um]"])
         if len(bad):
             ax.plot(bad[col], np.full(len(bad), 0.03), "kx", ms=7,
@@ -335,7 +345,7 @@ def _optimum_figure(opt, cycles):
 def plot(df: pd.DataFrame) -> dict:
     """``{"miura_design": lift per power vs parameters, "miura_design_optimum": ...}``."""
     grid = df[df["table"] == "grid"].copy()
-    grid["converged"] = grid["converged"].astype(str).str.lower() == "true"
+    grid["success"] = grid["success"].astype(str).str.lower() == "true"
     return {NAME: _grid_figure(grid),
             f"{NAME}_optimum": _optimum_figure(df[df["table"] == "optimum"],
                                                df[df["table"] == "cycles"].sort_values("cycle"))}

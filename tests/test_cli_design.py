@@ -13,12 +13,12 @@ def test_gripper_evaluate_json_matches_reference_g2(capsys):
                  "500", "--mode", "staircase", "--json"])
     assert code == 0
     out = json.loads(capsys.readouterr().out)
-    for key in ("assembly_power_mW", "grip_power_mW", "total_power_mW",
-                "max_crease_temperature_C", "feasible", "message"):
+    for key in ("assembly_power [mW]", "grip_power [mW]", "total_power [mW]",
+                "max_crease_temperature [degC]", "success", "status", "message"):
         assert key in out
-    assert out["assembly_power_mW"] == pytest.approx(9.1)
-    assert out["grip_power_mW"] == pytest.approx(0.8)
-    assert out["feasible"] is True
+    assert out["assembly_power [mW]"] == pytest.approx(9.1)
+    assert out["grip_power [mW]"] == pytest.approx(0.8)
+    assert out["success"] is True and out["status"] == "met"
 
 
 def test_gripper_evaluate_table(capsys):
@@ -64,5 +64,5 @@ def test_infeasible_design_reports_not_met_not_zero(capsys):
     code = main(["gripper", "evaluate", "--W", "50", "--json"])
     assert code == 1
     out = json.loads(capsys.readouterr().out)
-    assert out["feasible"] is False and out["total_power_mW"] is None
-    assert out["assembly_power_mW"] is None and "power cap" in out["message"]
+    assert out["success"] is False and out["total_power [mW]"] is None
+    assert out["assembly_power [mW]"] is None and "power cap" in out["message"]

@@ -1,12 +1,11 @@
 """Gripper evaluation against the reference implementation (digest 8.7, reference data G2)."""
 
-import math
-
 import numpy as np
 import pandas as pd
 import pytest
 
-from design.gripper import REFERENCE_NEWTON, GripperDesign, evaluate_gripper, gripper_model
+from design.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult, evaluate_gripper,
+                            gripper_model)
 from simulator.errors import ParameterError
 
 DATA = __import__("pathlib").Path(__file__).parent / "data"
@@ -21,7 +20,7 @@ def g2_staircase():
 
 def test_g2_staircase_reproduces_reference_powers_and_temperatures(g2_staircase):
     res, _ = g2_staircase
-    assert res.feasible
+    assert res.success and res.status == "met"
     assert res.assembly.power_per_crease == pytest.approx(9.1e-3)
     assert res.grip.power_per_crease == pytest.approx(0.8e-3)
     assert (res.assembly.simulations, res.grip.simulations) == (91, 8)
@@ -96,7 +95,7 @@ def test_start_design_staircase_is_the_same_under_both_solver_loops():
     ours = evaluate_gripper(GripperDesign(), mode="staircase")
     ref = evaluate_gripper(GripperDesign(), mode="staircase", options=REFERENCE_NEWTON)
     for r in (ours, ref):
-        assert r.feasible
+        assert r.success
         assert (r.assembly.simulations, r.grip.simulations) == (265, 59)
         assert r.assembly.power_per_crease == pytest.approx(26.5e-3)
         assert r.grip.power_per_crease == pytest.approx(5.9e-3)
@@ -107,7 +106,7 @@ def test_start_design_staircase_is_the_same_under_both_solver_loops():
 def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):
     stair, _ = g2_staircase
     bis = evaluate_gripper(G2, mode="bisect")
-    assert bis.feasible
+    assert bis.success
     for a, b in ((stair.assembly, bis.assembly), (stair.grip, bis.grip)):
         assert 0 <= a.power_per_crease - b.power_per_crease < 0.1e-3 + 1e-12
         assert b.simulations < a.simulations or a.simulations < 12
@@ -115,14 +114,23 @@ def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):
         stair.assembly.simulations + stair.grip.simulations
 
 
-def test_power_cap_gives_infeasible_result_with_reason():
+def test_power_cap_gives_unmet_result_with_reason():
     res = evaluate_gripper(G2, mode="bisect", power_cap=2e-3)
-    assert not res.feasible
-    assert math.isinf(res.total_power)
-    assert "power cap" in res.message and res.assembly.power_per_crease == 0
-    assert "not attempted" in res.grip.message
+    assert not res.success and res.status == "not_met"
+    assert res.total_power is None                       # unmet: None, never 0 or inf
+    assert "power cap" in res.message and res.assembly.power_per_crease is None
+    assert res.assembly.status == "not_met" and not res.assembly.success
+    assert "not attempted" in res.grip.message and res.grip.status == "not_attempted"
     d = res.to_dict()
-    assert d["feasible"] is False and "power cap" in d["message"]
+    assert d["success"] is False and d["status"] == "not_met" and "power cap" in d["message"]
+    assert d["total_power [mW]"] is None and d["assembly_power [mW]"] is None
+
+
+def test_stage_result_contract_is_checked():
+    with pytest.raises(ParameterError, match="status = 'met' with success = False"):
+        StageResult(False, "met", "", None, 0.0, 20.0, 20.0, 1, 1)
+    with pytest.raises(ParameterError, match="power_per_crease = 0.0 with success = False"):
+        StageResult(False, "not_met", "", 0.0, 0.0, 20.0, 20.0, 1, 1)
 
 
 def test_model_matches_reference_setup():

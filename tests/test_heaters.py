@@ -77,7 +77,7 @@ def test_a_tolerance_band_is_used_to_save_power(folded):
 def test_temperature_limit_makes_it_infeasible_with_the_reason(folded):
     model, start, _, targets = folded
     res = allocate_heaters(model, targets, state=start, increments=30, temperature_limit=60.0)
-    assert res.status == "infeasible" and not res.converged
+    assert res.status == "infeasible" and not res.success
     assert "60 degC" in res.message and "%" in res.message
 
 

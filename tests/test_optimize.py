@@ -39,7 +39,8 @@ class Quad(DesignProblem):
         x, y = v["x"], v["y"]
         cons = dict(self.space.bound_margins(v), sum=(x + y - 2) / 2)
         return ((x - 1) ** 2 + (y - 2) ** 2 + self.shift, cons,
-                {"temperature_C": 100 + 10 * x, "label": f"p{x:.2f}", "count": 3}, False, "")
+                {"temperature [degC]": 100 + 10 * x, "label": f"p{x:.2f}", "count": 3}, None,
+                "")
 
     def settings(self):
         return {"problem": self.name, "shift": self.shift}
@@ -55,7 +56,7 @@ class Lattice3(DesignProblem):
     def _evaluate(self, v):
         f = (v["x"] - 0.6) ** 2 + (v["y"] + 0.3) ** 2 + (v["z"] - 2.0) ** 2
         cons = dict(self.space.bound_margins(v), xmax=v["x"] - 0.5)
-        return f, cons, {"temperature_C": 50 + v["z"]}, False, ""
+        return f, cons, {"temperature [degC]": 50 + v["z"]}, None, ""
 
 
 class Flaky(Quad):
@@ -106,7 +107,7 @@ class CountingExecutor:
 def _assert_best_feasible(res):
     h = res.history
     feas = h[h["feasible"]]
-    assert res.feasible and res.best.feasible
+    assert res.success and res.best.feasible
     assert res.objective == pytest.approx(feas["objective"].min(), rel=0, abs=0)
     assert len(h) == res.n_evaluations == res.n_computed + res.n_reused
 
@@ -125,20 +126,20 @@ def test_cd_finds_lattice_optimum_and_respects_bounds_and_constraints():
     _assert_best_feasible(res)
     h = res.history
     for v in p.space.variables:  # never a candidate outside the bounds
-        assert h[f"x.{v.name}"].between(v.lower, v.upper).all()
-    assert h["x.x"].max() == 0.75 and not h.loc[h["x.x"] > 0.5, "feasible"].any()
+        assert h[f"x.{v.name} [-]"].between(v.lower, v.upper).all()
+    assert h["x.x [-]"].max() == 0.75 and not h.loc[h["x.x [-]"] > 0.5, "feasible"].any()
     c = res.cycles
     assert c["cycle"].tolist() == list(range(len(c))) and c["moved"].iloc[-1] == ""
     assert (np.diff(c["objective"]) <= 0).all() and c["feasible"].all()
-    assert c["current.temperature_C"].iloc[-1] == pytest.approx(51.5)
-    assert {"last_candidate.temperature_C", "x.z [-]", "n_evaluations"} <= set(c.columns)
+    assert c["current.temperature [degC]"].iloc[-1] == pytest.approx(51.5)
+    assert {"last_candidate.temperature [degC]", "x.z [-]", "n_evaluations"} <= set(c.columns)
 
 
 def test_cd_start_on_lower_bound_and_cycle_limit():
     p = Quad(start=(-1.0, -1.0))
     res = optimize(p, "cd", max_cycles=2)
     assert res.status == "max_cycles" and len(res.cycles) == 3
-    assert (res.history[["x.x", "x.y"]] >= -1.0).all().all()  # no minus candidate below -1
+    assert (res.history[["x.x [-]", "x.y [-]"]] >= -1.0).all().all()  # no minus candidate below -1
     assert res.x == {"x": -0.5, "y": -0.5}
 
 
@@ -147,7 +148,8 @@ def test_cd_parallel_candidates_gives_the_sequential_result():
     ex = CountingExecutor()
     par = optimize(Quad(), "cd", executor=ex, parallel_candidates=True)
     assert par.x == seq.x and par.objective == seq.objective and par.status == seq.status
-    cols = ["cycle", "moved", "objective", "last_candidate.temperature_C", "x.x [-]", "x.y [-]"]
+    cols = ["cycle", "moved", "objective", "last_candidate.temperature [degC]", "x.x [-]",
+            "x.y [-]"]
     pd.testing.assert_frame_equal(par.cycles[cols], seq.cycles[cols])
     assert 2 in ex.sizes and par.n_evaluations >= seq.n_evaluations
 
@@ -187,24 +189,24 @@ def test_nlopt_methods_reach_the_constrained_optimum(method, options, tol):
 def test_nlopt_default_budget_and_single_evaluation_per_point():
     res = optimize(Quad(), "cobyla")
     assert res.n_evaluations <= 60
-    keys = res.history[["x.x", "x.y"]].round(12).apply(tuple, axis=1)
+    keys = res.history[["x.x [-]", "x.y [-]"]].round(12).apply(tuple, axis=1)
     assert keys.is_unique  # constraint callbacks never re-evaluate a design
 
 
 @pytest.mark.parametrize("method", ALL_METHODS)
 def test_failing_evaluations_do_not_crash(method):
     res = optimize(Flaky(start=(2.0, 0.0)), method, max_evaluations=120)
-    failed = res.history[res.history["failed"]]
-    assert len(failed) > 0
+    failed = res.history[~res.history["success"]]
+    assert len(failed) > 0 and (failed["status"] == "failed").all()
     assert failed["message"].str.contains("divergence|raised").all()
-    assert res.feasible and res.objective < 10.0
+    assert res.success and res.objective < 10.0
     _assert_best_feasible(res)
 
 
 @pytest.mark.parametrize("method", ["cd", "cobyla", "sbplx", "direct"])
 def test_all_evaluations_failing(method):
     res = optimize(AlwaysFails(), method, max_evaluations=15)
-    assert not res.feasible and res.history["failed"].all()
+    assert not res.success and not res.history["success"].any()
     assert "no feasible evaluation" in res.message and res.objective == math.inf
 
 
@@ -213,14 +215,16 @@ def test_log_round_trip_header_growth_and_truncated_row(tmp_path):
     path = tmp_path / "evaluations.csv"
     p = Quad()
     log = EvaluationLog(path, p)
-    failed = Evaluation({"x": 9.0, "y": 0.0}, math.inf, failed=True, message="bad, \"x\"\nhere")
+    failed = Evaluation({"x": 9.0, "y": 0.0}, math.inf, success=False,
+                        message="bad, \"x\"\nhere")
     good = p.evaluate([0.1 / 3, 1.0 + 1e-13])
     assert log.append(failed) == 1 and log.append(good) == 2  # new columns: header rewritten
     back = EvaluationLog(path, p)
     assert back.n_loaded == 2 and back.lookup([9.0, 0.0]).message == failed.message
+    assert back.lookup([9.0, 0.0]).status == "failed"
     e = back.lookup(good.x)
     assert e.objective == good.objective and e.constraints == good.constraints
-    assert e.metrics == good.metrics and e.x == good.x and not e.failed
+    assert e.metrics == good.metrics and e.x == good.x and e.success and e == good
     assert EvaluationLog(path, Quad(shift=1.0)).lookup(good.x) is None  # other settings
     assert back.lookup([0.5, 0.5]) is None
     with open(path, "a", encoding="utf-8") as fh:  # a write cut short by a kill
@@ -309,7 +313,7 @@ def test_gripper_coordinate_descent_one_cycle(tmp_path):
     from design.problem import GripperProblem
 
     res = optimize(GripperProblem(), "cd", out=tmp_path, max_cycles=1)
-    assert res.status in ("converged", "max_cycles") and res.feasible
+    assert res.status in ("converged", "max_cycles") and res.success
     assert res.objective <= res.history["objective"].iloc[0]
     assert len(res.cycles) == 2 and (tmp_path / "cycles.csv").exists()
     again = optimize(GripperProblem(), "cd", out=tmp_path, max_cycles=1)

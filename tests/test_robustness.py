@@ -64,7 +64,7 @@ def test_sweep_csv_identical_across_executors(sweeps):
     table, path = sweeps["serial"]
     assert list(table["W [um]"]) == [200.0, 200.0, 150.0, 150.0]       # designs outer
     assert list(table["residual_fold [deg]"]) == [-10.0, 0.0, -10.0, 0.0]
-    assert not table["failed"].any() and table["converged"].all()
+    assert table["success"].all() and table["status"].isin(["feasible", "infeasible"]).all()
     for col in ("assembly_power [mW]", "grip_power [mW]", "total_power [mW]",
                 "temperature [degC]", "margin temperature [-]", "wall_time [s]", "message"):
         assert col in table.columns
@@ -100,11 +100,11 @@ def test_robust_objective_is_worst_case(sweeps):
                                                                                      "0deg"]
     ev = robust.evaluate(DESIGNS[0])
     rows = sweeps["serial"][0].iloc[:2]
-    assert not ev.failed and ev.message == "all 2 residual folds met"
+    assert ev.success and ev.message == "all 2 residual folds met"
     assert 1e3 * ev.objective == rows["total_power [mW]"].max()
     assert ev.constraints["temperature"] == (-rows["margin temperature [-]"]).max()
-    assert ev.metrics["total_power_mW@-10deg"] == rows["total_power [mW]"].iloc[0]
-    assert ev.metrics["total_power_mW@0deg"] == rows["total_power [mW]"].iloc[1]
+    assert ev.metrics["total_power@-10deg [mW]"] == rows["total_power [mW]"].iloc[0]
+    assert ev.metrics["total_power@0deg [mW]"] == rows["total_power [mW]"].iloc[1]
     assert ev.feasible == rows["feasible"].all()
 
 
@@ -112,7 +112,8 @@ def test_failed_point_and_robust_evaluation_failed_by_one_residual(tmp_path):
     # the start design assembles with 26.4 mW per crease at 0 deg, 29.4 mW at -10 deg
     capped = GripperProblem(mode="bisect", power_cap=28e-3)
     row = sweep_residual_fold(capped, None, GRID[:1], log=tmp_path / "log.csv")
-    assert row["failed"].all() and row["converged"].all() and not row["feasible"].any()
+    assert not row["success"].any() and (row["status"] == "not_met").all()
+    assert not row["feasible"].any()
     assert row[["assembly_power [mW]", "grip_power [mW]", "total_power [mW]"]].isna().to_numpy().all()
     assert row["message"].iloc[0].startswith("assembly: criterion not met below the power cap")
     again = sweep_residual_fold(capped, None, GRID[:1], log=tmp_path / "log.csv")
@@ -120,11 +121,13 @@ def test_failed_point_and_robust_evaluation_failed_by_one_residual(tmp_path):
 
     robust = RobustGripperProblem(capped, GRID)
     ev = robust.evaluate({})
-    assert ev.failed and math.isinf(ev.objective) and not ev.feasible
+    assert not ev.success and ev.status == "not_met" and math.isinf(ev.objective)
+    assert not ev.feasible and ev.metrics["total_power [mW]"] is None
     assert ev.message.startswith("residual fold -10deg: assembly: criterion not met")
     assert "residual fold 0deg" not in ev.message
-    assert math.isinf(ev.metrics["total_power_mW@-10deg"])
-    assert math.isfinite(ev.metrics["total_power_mW@0deg"])
+    assert ev.metrics["total_power@-10deg [mW]"] is None          # not met: None, never inf
+    assert ev.metrics["assembly_power@-10deg [mW]"] is None
+    assert math.isfinite(ev.metrics["total_power@0deg [mW]"])
 
 
 def test_per_group_residual_folds(sweeps):

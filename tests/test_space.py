@@ -55,17 +55,23 @@ class _Exploding(DesignProblem):
 
 def test_failures_become_failed_evaluations():
     ev = _Exploding().evaluate({"a": 0.3})
-    assert ev.failed and not ev.feasible and math.isinf(ev.objective)
-    assert "solver exploded" in ev.message
+    assert not ev.success and ev.status == "failed" and math.isinf(ev.objective)
+    assert not ev.feasible and "solver exploded" in ev.message
     out = _Exploding().evaluate({"a": 3.0})                     # outside the bounds
-    assert out.failed and "outside its bounds" in out.message
+    assert not out.success and "outside its bounds" in out.message
 
 
 def test_evaluation_row_and_feasibility():
     ev = Evaluation({"a": 1.0}, 2.0, {"g1": -0.1, "g2": 0.2}, {"m [mW]": 3.0})
     assert not ev.feasible and ev.max_violation == pytest.approx(0.2)
+    assert ev.success and ev.status == "infeasible"
     row = ev.to_row()
     assert row["x.a"] == 1.0 and row["g.g2"] == 0.2 and row["m.m [mW]"] == 3.0
+    assert row["success"] and row["status"] == "infeasible" and "wall_time [s]" in row
+    with pytest.raises(ParameterError, match="status = 'feasible' with success = True"):
+        Evaluation({"a": 1.0}, 2.0, {"g2": 0.2}, status="feasible")
+    with pytest.raises(ParameterError, match="success = 1"):
+        Evaluation({"a": 1.0}, 2.0, success=1)
 
 
 def test_gripper_problem_is_picklable_and_validated():

@@ -134,7 +134,7 @@ def test_optimization_tables(quick):
     assert {k: first[k] for k in START_UM} == START_UM
     assert list(comp["method"]) == ["cd"] + [m for m, _, _ in module.NLOPT_RUNS_QUICK]
     assert (comp["evaluations"] <= comp["budget"]).all()
-    assert _bool(comp["feasible"]).all()
+    assert _bool(comp["success"]).all()
     start = comp["start_power [mW]"].iloc[0]
     assert 20 < start < 45                                      # the paper's start: ~30 mW
     assert (comp["total_power [mW]"] <= start).all()
@@ -168,7 +168,8 @@ def test_time_limit_fails_the_evaluation_and_restores_the_handler(monkeypatch):
     t0 = time.perf_counter()
     ev = problem.evaluate(problem.space.start)
     assert time.perf_counter() - t0 < 2
-    assert ev.failed and not ev.feasible and math.isinf(ev.objective)
+    assert not ev.success and ev.status == "failed" and math.isinf(ev.objective)
+    assert not ev.feasible
     assert "EvaluationTimeout" in ev.message and "time limit of 0.05 s" in ev.message
     assert signal.getsignal(signal.SIGALRM) is before
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
@@ -203,7 +204,7 @@ def test_robustness_tables(quick):
     assert {k: start[k] for k in START_UM} == START_UM
     paper = designs[designs["design"] == module.PAPER].iloc[0]
     assert "re-run" in paper["source"] and paper["evaluations"] <= 3   # no CSV: fallback CD
-    ok = sweep[~_bool(sweep["failed"])]
+    ok = sweep[_bool(sweep["success"])]
     np.testing.assert_allclose(ok["total_power [mW]"],
                                ok["assembly_power [mW]"] + ok["grip_power [mW]"])
     np.testing.assert_array_equal(_bool(ok["feasible"]), ok["temperature [degC]"]
@@ -232,7 +233,7 @@ def test_miura_tables(quick):
     grid, opt, cycles = (_table(df, k) for k in ("grid", "optimum", "cycles"))
     n_grid = int(np.prod([len(v) for v in module.GRID_QUICK.values()]))
     assert len(grid) == n_grid * len(module.POWERS_MW_QUICK)
-    assert _bool(grid["converged"]).all()
+    assert _bool(grid["success"]).all()
     np.testing.assert_allclose(grid["lift_per_power [um/mW]"],
                                grid["lift [um]"] / grid["total_power [mW]"])
     np.testing.assert_allclose(grid["total_power [mW]"],
@@ -253,6 +254,36 @@ def test_miura_grid_reports_a_design_that_does_not_mesh():
 
     values = {"a": 0.5e-3, "b": 0.5e-3, "gamma": math.radians(45), "W": 300e-6}
     table = _grid_task((values, (4.0, 8.0), 5))
-    assert len(table) == 2 and not table["converged"].any()
+    assert len(table) == 2 and not table["success"].any()
     assert table["message"].str.contains("collapses").all()
-    assert table["b_um"].iloc[0] == pytest.approx(500)
+    assert table["b [um]"].iloc[0] == pytest.approx(500)
+
+
+# ----------------------------------------------------------------------------- regression
+def test_quick_study_numbers_stay_as_they_are(quick):
+    """Key numbers of the quick studies, as before the result contract (issue 8; equal to
+    the last digit in CSV before and after). A change here is a change of behaviour."""
+    _, _, df = quick("gripper_optimization")
+    comp = _table(df, "comparison").set_index("method")
+    assert comp.loc["cd", "start_power [mW]"] == pytest.approx(32.3, rel=1e-9)
+    assert comp["total_power [mW]"].to_dict() == pytest.approx(
+        {"cd": 31.11875, "cobyla": 30.64375, "sbplx": 29.5625}, rel=1e-9)
+    assert [comp.loc["sbplx", k] for k in START_UM] == pytest.approx([220, 750, 1000, 1000])
+    assert comp.loc["sbplx", "temperature [degC]"] == pytest.approx(212.819022, rel=1e-7)
+    assert list(comp["status"]) == ["max_evaluations"] * 3 and _bool(comp["success"]).all()
+
+    _, _, df = quick("gripper_robustness")
+    sweep = _table(df, "sweep")
+    start = sweep[sweep["design"] == "start"].set_index("residual_fold [deg]")
+    assert start["total_power [mW]"].to_dict() == pytest.approx({-10.0: 36.75625, 0.0: 32.3},
+                                                                rel=1e-9)
+    assert start["assembly_power [mW]"].to_dict() == pytest.approx(
+        {-10.0: 29.4125, 0.0: 26.4375}, rel=1e-9)
+    assert list(start["status"]) == ["infeasible", "feasible"]     # 257 degC at -10 deg
+
+    _, _, df = quick("miura_design")
+    grid, opt = _table(df, "grid"), _table(df, "optimum").set_index("label")
+    np.testing.assert_allclose(grid["lift [um]"], [56.051001, 102.461910], rtol=1e-7)
+    assert opt["total_power [mW]"].to_dict() == pytest.approx(
+        {"start": 115.078125, "optimum": 100.078125}, rel=1e-9)
+    assert opt.loc["optimum", "lift [um]"] == pytest.approx(206.407324, rel=1e-7)
