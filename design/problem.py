@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from simulator.errors import ParameterError
 
-from .gripper import GripperDesign, evaluate_gripper
+from .gripper import GripperDesign, check_fold, evaluate_gripper
 from .space import DesignSpace, Variable
 
 __all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU8_TG"]
@@ -161,6 +161,9 @@ class GripperProblem(DesignProblem):
         groups = dict(self.residual_fold_groups)
         if set(groups) - {"base", "arm"}:
             raise ParameterError(f"residual_fold_groups {groups!r}: groups are 'base' and 'arm'.")
+        check_fold("GripperProblem.residual_fold", self.residual_fold)
+        for group, value in groups.items():
+            check_fold(f"GripperProblem.residual_fold_groups[{group!r}]", value)
         object.__setattr__(self, "residual_fold_groups", tuple(sorted(groups.items())))
 
     def group_folds(self) -> dict:

@@ -12,7 +12,7 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
-from .cases import Case, describe_cases, get_case
+from .cases import Case, describe_cases, get_case, single_fold_model
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
@@ -38,7 +38,7 @@ __all__ = [
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
     "initial_state",
     # results and cases
-    "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
+    "SimulationResult", "StepResult", "Case", "get_case", "describe_cases", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError",
 ]

@@ -89,10 +89,11 @@ def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
 def spring_kernel(x: np.ndarray, k: np.ndarray, theta0: np.ndarray, hessian: bool = True):
     """Energy [J], gradient [N] (n, 12) and Hessian [N/m] (n, 12, 12) of all springs.
 
-    Uses the compiled kernel of :mod:`._springs_jit` when numba is installed (same formulas,
-    one call instead of ~60 array operations), else :func:`spring_kernel_numpy`.
+    Uses :func:`spring_kernel_numpy`, or the compiled kernel of :mod:`._springs_jit` (same
+    formulas, one call instead of ~60 array operations) once a process has made enough calls
+    for its compilation to pay (see :func:`._springs_jit.use_compiled`).
     """
-    if _jit.AVAILABLE:
+    if _jit.use_compiled():
         return _jit.spring_kernel_jit(x, k, theta0, hessian)
     return spring_kernel_numpy(x, k, theta0, hessian)
 
