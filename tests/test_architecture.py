@@ -31,3 +31,14 @@ def test_simulator_sources_import_only_downwards():
             offenders += [f"{path.name}: {n}" for n in names
                           if n.split(".")[0] in ("matplotlib", "design", "studies")]
     assert offenders == []
+
+
+def test_imports_stay_light():
+    """``import simulator`` / the CLI load no compiler, plotting, optimiser or cluster library;
+    those are imported where they are used (numba only once the spring kernel is compiled)."""
+    code = ("import sys, simulator, design.cli\n"
+            "heavy = ('numba', 'llvmlite', 'matplotlib', 'cvxpy', 'dask', 'distributed', 'nlopt')\n"
+            "print(','.join(sorted({m.split('.')[0] for m in sys.modules} & set(heavy))))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=ROOT)
+    assert out.stdout.strip() == ""

@@ -105,3 +105,23 @@ def test_compiled_spring_kernel_equals_numpy_kernel():
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
     e, g, h = _springs_jit.spring_kernel_jit(x, k, t0, hessian=False)
     assert h is None and np.allclose(g, spring_kernel_numpy(x, k, t0)[1])
+
+
+def test_compiled_kernel_policy(monkeypatch):
+    """numba is only used once a process has made enough calls (or when asked for)."""
+    from simulator.elements import springs
+
+    monkeypatch.setattr(_springs_jit, "_compiled", None)
+    monkeypatch.setattr(_springs_jit, "_calls", 0)
+    monkeypatch.setenv("ETORIGAMI_JIT", "never")
+    assert not any(_springs_jit.use_compiled() for _ in range(_springs_jit.JIT_AFTER_CALLS + 2))
+    monkeypatch.setenv("ETORIGAMI_JIT", "auto")
+    monkeypatch.setattr(_springs_jit, "_calls", 0)
+    assert not any(_springs_jit.use_compiled() for _ in range(_springs_jit.JIT_AFTER_CALLS))
+    x, k, t0 = _springs(20)
+    e, g, h = springs.spring_kernel(x, k, t0)
+    if _springs_jit.AVAILABLE:
+        assert _springs_jit._compiled is not None       # the call after the threshold compiled
+        assert _springs_jit.use_compiled()
+    for a, b in zip((e, g, h), spring_kernel_numpy(x, k, t0)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())

@@ -108,4 +108,5 @@ def resume_message(log, what: str = "evaluations") -> str:
     if log is None:
         return f"interrupted: nothing saved (no --out); give --out DIR to keep the {what}"
     n = saved_rows(log)
-    return (f"interrupted: {n} {what} saved in {log}; run the same command again to resume")
+    noun = what if n != 1 else what[:-1]
+    return f"interrupted: {n} {noun} saved in {log}; run the same command again to resume"

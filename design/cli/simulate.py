@@ -52,7 +52,7 @@ def heating_table(result):
 
     h = result.history
     heat = np.flatnonzero(h["stage_name"] == "heat")
-    recs = np.concatenate(([heat[0] - 1], heat))
+    recs = np.concatenate(([heat[0] - 1], heat)) if len(heat) else np.array([len(h["stage"]) - 1])
     system = equilibrium_system(result.model)
     rest = result.steps[-1].state.spring_rest        # contact does not depend on it
     contact = [system.evaluate(h["u"][r], rest, hessian=False).n_contacts > 0 for r in recs]
