@@ -13,6 +13,7 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
 from .cases import Case, describe_cases, get_case, single_fold_model
+from .elements.springs import spring_kernel_backend
 from .errors import ConvergenceError, EtorigamiError, ParameterError, PatternError
 from .materials import SPR, SU8, SUBSTRATE, Material
 from .mesh import BarHingeMesh, build_mesh
@@ -36,7 +37,7 @@ __all__ = [
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
-    "initial_state",
+    "initial_state", "spring_kernel_backend",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases", "single_fold_model",
     # errors

@@ -1,5 +1,7 @@
 """The etorigami command."""
 
+import os
+import pathlib
 import subprocess
 import sys
 
@@ -7,6 +9,8 @@ import pytest
 
 from design.cli import main
 from simulator import __version__
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def test_version(capsys):
@@ -135,3 +139,28 @@ def test_python_entry_points_reject_fold_angles_outside_a_turn():
         GripperProblem(residual_fold=7.0)
     with pytest.raises(ParameterError, match=r"residual_fold_groups\['arm'\]"):
         GripperProblem(residual_fold_groups=(("arm", -4.0),))
+
+
+def test_short_commands_use_the_numpy_kernel(monkeypatch, tmp_path, capsys):
+    """No numba compilation for one case or one gripper evaluation (it would cost more than
+    the run); ETORIGAMI_JIT overrides."""
+    from simulator.elements import _springs_jit
+
+    monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
+    used = []
+    monkeypatch.setattr(_springs_jit, "spring_kernel_jit", lambda *a: used.append(1))
+    argv = ["run", "single-fold", "--set", "thermal_steps=2", "--out", str(tmp_path), "-q"]
+    assert main(argv) == 0
+    assert used == [] and _springs_jit.backend is None
+
+
+def test_first_demo_compiles_nothing(tmp_path):
+    """A fresh install (empty numba cache): the demo neither compiles nor imports numba."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    env.pop("ETORIGAMI_JIT", None)
+    code = ("import sys; from design.cli import main; code = main(['demo']); "
+            "print('numba' in sys.modules); sys.exit(code)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         cwd=ROOT)
+    assert out.returncode == 0 and out.stdout.strip().endswith("False"), out.stderr
+    assert not (tmp_path / "numba").exists() or not any((tmp_path / "numba").iterdir())

@@ -107,21 +107,27 @@ def test_compiled_spring_kernel_equals_numpy_kernel():
     assert h is None and np.allclose(g, spring_kernel_numpy(x, k, t0)[1])
 
 
-def test_compiled_kernel_policy(monkeypatch):
-    """numba is only used once a process has made enough calls (or when asked for)."""
-    from simulator.elements import springs
+def test_spring_kernel_backend_selects_the_kernel(monkeypatch):
+    """One backend per block or process; both kernels give the same values."""
+    from simulator import ParameterError, spring_kernel_backend
 
-    monkeypatch.setattr(_springs_jit, "_compiled", None)
-    monkeypatch.setattr(_springs_jit, "_calls", 0)
-    monkeypatch.setenv("ETORIGAMI_JIT", "never")
-    assert not any(_springs_jit.use_compiled() for _ in range(_springs_jit.JIT_AFTER_CALLS + 2))
-    monkeypatch.setenv("ETORIGAMI_JIT", "auto")
-    monkeypatch.setattr(_springs_jit, "_calls", 0)
-    assert not any(_springs_jit.use_compiled() for _ in range(_springs_jit.JIT_AFTER_CALLS))
     x, k, t0 = _springs(20)
-    e, g, h = springs.spring_kernel(x, k, t0)
-    if _springs_jit.AVAILABLE:
-        assert _springs_jit._compiled is not None       # the call after the threshold compiled
-        assert _springs_jit.use_compiled()
-    for a, b in zip((e, g, h), spring_kernel_numpy(x, k, t0)):
-        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+    calls = []
+    monkeypatch.setattr(_springs_jit, "spring_kernel_jit",
+                        lambda *a: calls.append("numba") or spring_kernel_numpy(*a))
+    with spring_kernel_backend("numpy"):
+        spring_kernel(x, k, t0)
+        assert calls == []
+        if _springs_jit.AVAILABLE:
+            with spring_kernel_backend("numba"):
+                spring_kernel(x, k, t0)
+            assert calls == ["numba"]
+        spring_kernel(x, k, t0)
+    assert _springs_jit.backend is None                    # restored: the default again
+    monkeypatch.setenv("ETORIGAMI_JIT", "0")
+    assert _springs_jit.default_backend() == "numpy"
+    monkeypatch.setenv("ETORIGAMI_JIT", "1")
+    assert _springs_jit.default_backend() == ("numba" if _springs_jit.AVAILABLE else "numpy")
+    with pytest.raises(ParameterError, match="backend 'cuda'; use one of 'numba', 'numpy'"):
+        with spring_kernel_backend("cuda"):
+            pass

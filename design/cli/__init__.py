@@ -11,6 +11,8 @@ never imports it. One module per command group:
 
 Options are in um, mW and degrees. A usage error ends with one line on stderr and exit status
 2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.
+Short commands (demo, run, gripper evaluate) use the numpy spring kernel, long ones the
+compiled one (see :func:`simulator.spring_kernel_backend`).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import sys
 from simulator import __version__
 from simulator.errors import EtorigamiError
 
-from ._common import EXIT_INTERRUPTED, CLIError
+from ._common import EXIT_INTERRUPTED, CLIError, kernel_backend
 from .gripper import add_gripper_commands
 from .optimize import add_optimize_command
 from .simulate import add_simulate_commands
@@ -67,7 +69,8 @@ def main(argv=None) -> int:
         parser.print_help()
         return 0
     try:
-        return args.func(args)
+        with kernel_backend(short=getattr(args, "short", False)):
+            return args.func(args)
     except KeyboardInterrupt:
         return _interrupted(args)
     except (EtorigamiError, CLIError) as exc:

@@ -13,7 +13,7 @@ import math
 import os
 
 __all__ = ["CLIError", "length_um", "fold_deg", "floats", "progress_bar", "add_parallel_options",
-           "executor", "succeeded", "saved_rows", "resume_message", "EXIT_INTERRUPTED"]
+           "executor", "kernel_backend", "succeeded", "saved_rows", "resume_message", "EXIT_INTERRUPTED"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
 RESIDUAL_LIMIT_DEG = 90.0
@@ -84,6 +84,17 @@ def executor(args):
     from design.executors import executor_from_option
 
     return executor_from_option(getattr(args, "parallel", None), getattr(args, "dask", None))
+
+
+def kernel_backend(short: bool):
+    """Context for a command: short ones (one case, one gripper evaluation: a few thousand
+    spring-kernel calls) use the numpy kernel, since compiling numba's costs more than it saves
+    there; long ones (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
+    if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
+        return contextlib.nullcontext()
+    from simulator import spring_kernel_backend
+
+    return spring_kernel_backend("numpy")
 
 
 def succeeded(result) -> bool:

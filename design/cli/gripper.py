@@ -71,4 +71,4 @@ def add_gripper_commands(sub) -> None:
     ev.add_argument("--residual-fold", type=float, default=0.0, metavar="DEG",
                     help="residual fold of the actuated creases in degrees, in (-180, 180]")
     ev.add_argument("--json", action="store_true", help="print the result as JSON")
-    ev.set_defaults(func=_gripper_evaluate, interrupted=_not_saved)
+    ev.set_defaults(func=_gripper_evaluate, interrupted=_not_saved, short=True)

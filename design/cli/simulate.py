@@ -218,7 +218,7 @@ def add_simulate_commands(sub) -> None:
     demo.add_argument("--no-gravity", action="store_true", help="switch gravity off")
     demo.add_argument("--out", metavar="DIR", help="write creases.csv, nodes.npz, meta.json "
                                                    "and demo.png")
-    demo.set_defaults(func=_demo, interrupted=_not_saved)
+    demo.set_defaults(func=_demo, interrupted=_not_saved, short=True)
 
     cases = sub.add_parser("cases", help="list the paper's cases with parameters and defaults")
     cases.set_defaults(func=_cases)
@@ -230,4 +230,4 @@ def add_simulate_commands(sub) -> None:
                           "(repeatable), e.g. --set gravity=true")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    run.set_defaults(func=_run, interrupted=_not_saved)
+    run.set_defaults(func=_run, interrupted=_not_saved, short=True)

@@ -7,15 +7,18 @@ few microseconds each; this loop-based version does one call (about 10 us instea
 checked against the numpy kernel by the tests.
 
 Compiling costs about 2.9 s of CPU once per install (0.5 s importing numba, 2.4 s compiling;
-the previous array-style kernel took 5.4-6.7 s), and loading the kernel from numba's cache
-(next to this file or in ``NUMBA_CACHE_DIR``) 0.7 s. A run of the paper's cases calls the
-kernel 1,200-2,500 times, one gripper evaluation 870-1,650 times, so neither would win it
-back; an optimisation (tens of evaluations) does: 15 coordinate-descent evaluations took 12.7
-s of CPU compiled (compilation included) against 15.1 s on numpy. So numba is imported and
-the kernel compiled lazily: :func:`use_compiled` answers False for the first
-``JIT_AFTER_CALLS`` calls of a process, then compiles or loads the cached kernel. The
-environment variable ``ETORIGAMI_JIT`` overrides this: ``auto`` (default), ``always`` or
-``never``.
+the previous array-style kernel took 5.4-6.7 s); loading it from numba's cache (next to this
+file or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. A run of one of the paper's cases
+calls the kernel 1,200-2,500 times and one gripper evaluation 870-1,650 times, too few to win
+that back; an optimisation does (15 coordinate-descent evaluations: 12.7 s of CPU compiled,
+compilation included, against 15.1 s on numpy).
+
+So numba is imported, and the kernel compiled, only when the kernel is first called with the
+``"numba"`` backend. The backend is fixed per process, never switched by how much has been
+computed, so that the same computation gives the same floats in every process (serial and
+process-pool sweeps are compared bit for bit): ``"numba"`` when numba is installed, unless the
+environment variable ``ETORIGAMI_JIT`` is ``0`` (``off``, ``numpy``); short commands select
+``"numpy"`` with :func:`simulator.elements.springs.spring_kernel_backend`.
 """
 
 from __future__ import annotations
@@ -27,16 +30,17 @@ import os
 
 import numpy as np
 
-__all__ = ["AVAILABLE", "JIT_AFTER_CALLS", "spring_kernel_jit", "use_compiled"]
+__all__ = ["AVAILABLE", "BACKENDS", "default_backend", "spring_kernel_jit", "use_compiled"]
 
 logger = logging.getLogger(__name__)
 
 #: numba is installed (checked without importing it).
 AVAILABLE = importlib.util.find_spec("numba") is not None
-#: Calls of the spring kernel per process before ``auto`` switches to the compiled kernel
-#: (above every single case run and gripper evaluation, see the module docstring).
-JIT_AFTER_CALLS = 3000
-_MODES = ("auto", "always", "never")
+BACKENDS = ("numba", "numpy")
+#: The one specialisation compiled: x (n, 4, 3), k (n,), theta0 (n,), want_hess, energy (n,),
+#: grad (n, 12), hess (n or 0, 12, 12); all C-contiguous float64.
+_SIGNATURE = "void(f8[:, :, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], f8[:, :, ::1])"
+_OFF = ("0", "off", "no", "false", "never", "numpy")
 
 #: (row node, column node) of the stored Hessian blocks ii, ij, ik, jj, jk, kk, lj, lk, ll.
 _BLOCK_POS = np.array([[0, 0], [0, 1], [0, 2], [1, 1], [1, 2], [2, 2], [3, 1], [3, 2], [3, 3]])
@@ -143,55 +147,54 @@ def _hessian(w, blk, g, A, B, r, rr, mm, nn, ke, moment, h):
 
 
 _compiled = None
-_calls = 0
+_broken = False                    # compilation failed once: numpy from then on
+#: The backend in force: None = :func:`default_backend`, else one of BACKENDS.
+backend = None
 
 
-def _mode() -> str:
-    mode = os.environ.get("ETORIGAMI_JIT", "auto").strip().lower()
-    mode = {"1": "always", "on": "always", "0": "never", "off": "never", "": "auto"}.get(mode, mode)
-    if mode not in _MODES:
-        logger.warning("ETORIGAMI_JIT=%r is not one of %s; using 'auto'", mode, ", ".join(_MODES))
-        return "auto"
-    return mode
+def default_backend() -> str:
+    """``"numba"`` if installed and not switched off by ``ETORIGAMI_JIT``, else ``"numpy"``."""
+    off = os.environ.get("ETORIGAMI_JIT", "").strip().lower() in _OFF
+    return "numba" if AVAILABLE and not off else "numpy"
 
 
 def _compile():
-    """Compile (or load from numba's cache) the kernel and its helpers; None on failure."""
-    global _compiled
+    """Compile (or load from numba's cache) the kernel and its helpers; None if that fails
+    (then the numpy kernel is used, and compilation is not tried again)."""
+    global _compiled, _broken
     try:
         from numba import njit
-    except ImportError:  # pragma: no cover - AVAILABLE said otherwise
+
+        g = globals()
+        for name in ("_cross", "_dot", "_hessian"):
+            if not hasattr(g[name], "py_func"):
+                g[name] = njit(cache=True)(g[name])
+        _compiled = njit(_SIGNATURE, cache=True)(_kernel)       # compiles (or loads) now
+        return _compiled
+    except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
+        logger.warning("numba could not compile the spring kernel (%s: %s); using numpy",
+                       type(exc).__name__, exc)
+        _broken = True
         return None
-    g = globals()
-    for name in ("_cross", "_dot", "_hessian"):
-        if not hasattr(g[name], "py_func"):
-            g[name] = njit(cache=True)(g[name])
-    _compiled = njit(cache=True)(_kernel)
-    return _compiled
 
 
 def use_compiled() -> bool:
-    """Whether :func:`simulator.elements.springs.spring_kernel` should call the compiled kernel
-    now; counts the calls (see the module docstring for the policy)."""
-    global _calls
-    if _compiled is not None:
-        return True
-    if not AVAILABLE:
+    """Whether :func:`simulator.elements.springs.spring_kernel` calls the compiled kernel
+    (compiling or loading it on the first call)."""
+    if _broken or (backend or default_backend()) != "numba":
         return False
-    mode = _mode()
-    if mode == "never":
-        return False
-    _calls += 1
-    if mode == "auto" and _calls <= JIT_AFTER_CALLS:
-        return False
-    logger.info("compiling the spring kernel with numba (cached after the first time)")
-    return _compile() is not None
+    if _compiled is None:
+        logger.info("compiling the spring kernel with numba (cached after the first time)")
+    return (_compiled or _compile()) is not None
 
 
 def spring_kernel_jit(x, k, theta0, hessian=True):
     """Energy (n,), gradient (n, 12), Hessian (n, 12, 12) or None: see
     :func:`simulator.elements.springs.spring_kernel`. Compiles on first use."""
     kernel = _compiled or _compile()
+    if kernel is None:
+        raise RuntimeError("the compiled spring kernel is not available (numba missing or "
+                           "compilation failed); use spring_kernel_numpy")
     n = len(x)
     energy = np.empty(n)
     grad = np.empty((n, 12))
