@@ -55,6 +55,7 @@ Closing the executor closes only its client; the cluster keeps running.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import logging
 import multiprocessing
 import os
@@ -172,6 +173,21 @@ def _ignore_sigint() -> None:
     """Worker initializer: Ctrl-C is the parent's business (it stops the workers), so a
     worker neither raises KeyboardInterrupt nor prints a traceback."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def _children_ignore_sigint():
+    """Processes started in this block inherit an ignored SIGINT: Ctrl-C reaches every process
+    of a terminal's foreground group, and only this one should handle it (it stops them)."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:                            # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _default_start_method() -> str:
@@ -296,7 +312,7 @@ class DaskExecutor(Executor):
         self.address, self._cluster = address, None
         if address == "local":
             n = workers or os.cpu_count() or 1
-            with dask.config.set({_MALLOC_KEY: None}):     # see _MALLOC_KEY
+            with dask.config.set({_MALLOC_KEY: None}), _children_ignore_sigint():  # _MALLOC_KEY
                 self._cluster = LocalCluster(  # no dashboard; its bare HTTP server: any port
                     n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                     scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL)

@@ -63,3 +63,17 @@ def test_ctrl_c_during_optimize_saves_and_resumes(tmp_path, parallel):
     assert f"1 computed, {saved} reused" in rerun.stdout, rerun.stdout + rerun.stderr
     evals = [int(r["eval"]) for r in _rows(log)]
     assert evals == list(range(1, saved + 2))          # the log continues, it does not restart
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_dask_sweep_is_one_line(tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "sweep"
+    values = ",".join(str(v) for v in range(-30, 1, 2))
+    argv = ["sweep", "residual-fold", f"--values={values}", "--out", str(out), "--dask", "local",
+            "-q"]
+    code, _, stderr = _interrupt_after_first_row(argv, out / "evaluations.csv")
+    assert code == 130
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("interrupted: "), stderr
+    assert "points saved in" in lines[0] and "resume" in lines[0]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import logging
 import math
 import os
 
@@ -80,8 +81,17 @@ def add_parallel_options(parser) -> None:
 
 
 def executor(args):
-    """The executor chosen by ``--parallel`` / ``--dask`` (serial by default)."""
+    """The executor chosen by ``--parallel`` / ``--dask`` (serial by default).
+
+    Dask's own INFO and WARNING logs (cluster start, workers killed on Ctrl-C) are shown only
+    with ``--verbose``.
+    """
     from design.executors import executor_from_option
+
+    if getattr(args, "dask", None) and not getattr(args, "verbose", False):
+        import distributed  # noqa: F401 - configures its loggers on import; quieten them after
+
+        logging.getLogger("distributed").setLevel(logging.ERROR)
 
     return executor_from_option(getattr(args, "parallel", None), getattr(args, "dask", None))
 
