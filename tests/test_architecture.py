@@ -37,7 +37,8 @@ def test_imports_stay_light():
     """``import simulator`` / the CLI load no compiler, plotting, optimiser or cluster library;
     those are imported where they are used (numba only once the spring kernel is compiled)."""
     code = ("import sys, simulator, design.cli\n"
-            "heavy = ('numba', 'llvmlite', 'matplotlib', 'cvxpy', 'dask', 'distributed', 'nlopt')\n"
+            "heavy = ('numba', 'llvmlite', 'matplotlib', 'cvxpy', 'dask', 'distributed',\n"
+            "         'nlopt')\n"
             "print(','.join(sorted({m.split('.')[0] for m in sys.modules} & set(heavy))))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          cwd=ROOT)

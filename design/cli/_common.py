@@ -14,7 +14,8 @@ import math
 import os
 
 __all__ = ["CLIError", "length_um", "fold_deg", "floats", "progress_bar", "add_parallel_options",
-           "executor", "kernel_backend", "succeeded", "saved_rows", "resume_message", "EXIT_INTERRUPTED"]
+           "executor", "kernel_backend", "succeeded", "saved_rows", "resume_message",
+           "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
 RESIDUAL_LIMIT_DEG = 90.0
