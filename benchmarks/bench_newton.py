@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from simulator.demo import single_fold_model
+from simulator.cases import single_fold_model
 from simulator import SelfFold, simulate
 from simulator.state import equilibrium_system
 from simulator.model import ContactParameters, Supports, make_model

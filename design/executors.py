@@ -55,10 +55,12 @@ Closing the executor closes only its client; the cluster keeps running.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import logging
 import multiprocessing
 import os
 import pickle
+import signal
 from abc import ABC, abstractmethod
 from concurrent.futures.process import BrokenProcessPool
 
@@ -167,6 +169,27 @@ class SerialExecutor(Executor):
         return out
 
 
+def _ignore_sigint() -> None:
+    """Worker initializer: Ctrl-C is the parent's business (it stops the workers), so a
+    worker neither raises KeyboardInterrupt nor prints a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def _children_ignore_sigint():
+    """Processes started in this block inherit an ignored SIGINT: Ctrl-C reaches every process
+    of a terminal's foreground group, and only this one should handle it (it stops them)."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:                            # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def _default_start_method() -> str:
     return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 
@@ -203,7 +226,8 @@ class ProcessExecutor(Executor):
     def _ensure_pool(self):
         if self._pool is None:
             ctx = multiprocessing.get_context(self.start_method)
-            self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx)
+            self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+                                                initializer=_ignore_sigint)
             logger.info("process pool: %d workers (%s)", self.workers, self.start_method)
         return self._pool
 
@@ -230,9 +254,23 @@ class ProcessExecutor(Executor):
         except BaseException as exc:
             for fut in futures:
                 fut.cancel()
-            if isinstance(exc.__cause__, BrokenProcessPool):
+            if isinstance(exc, KeyboardInterrupt):
+                self._terminate()                 # Ctrl-C: do not wait for running tasks
+            elif isinstance(exc.__cause__, BrokenProcessPool):
                 self.close()                      # a worker died: the next map starts a new pool
             raise
+
+    def _terminate(self) -> None:
+        """Stop the workers now; their running tasks are lost."""
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        processes = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in processes:
+            proc.terminate()
+        for proc in processes:
+            proc.join(timeout=5)
 
     def close(self) -> None:
         if self._pool is not None:
@@ -274,7 +312,7 @@ class DaskExecutor(Executor):
         self.address, self._cluster = address, None
         if address == "local":
             n = workers or os.cpu_count() or 1
-            with dask.config.set({_MALLOC_KEY: None}):     # see _MALLOC_KEY
+            with dask.config.set({_MALLOC_KEY: None}), _children_ignore_sigint():  # _MALLOC_KEY
                 self._cluster = LocalCluster(  # no dashboard; its bare HTTP server: any port
                     n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                     scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL)

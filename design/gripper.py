@@ -55,6 +55,17 @@ _REFERENCE_GRAVITY_INCREMENTS = 80
 REFERENCE_NEWTON = NewtonOptions(atol=5e-7, max_iter=30, reference_loop=True)
 
 
+def check_fold(name: str, value) -> float:
+    """Check a fold angle given in rad: a finite number in (-pi, pi] (-180 to 180 deg)."""
+    if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value) and -math.pi < value <= math.pi):
+        deg = f" ({math.degrees(value):g} deg)" if isinstance(value, (int, float)) else ""
+        raise ParameterError(f"{name} = {value!r} rad{deg} must be a fold angle in radians in "
+                             "(-pi, pi], i.e. (-180, 180] deg; convert degrees with "
+                             "math.radians.")
+    return float(value)
+
+
 @dataclass(frozen=True)
 class GripperDesign:
     """Gripper geometry and actuator layers (SI units).
@@ -90,9 +101,8 @@ class GripperDesign:
     def __post_init__(self):
         for name, value in asdict(self).items():
             if name.startswith("residual_fold"):
-                if value is not None and not (math.isfinite(value) and abs(value) < math.pi):
-                    raise ParameterError(f"GripperDesign.{name} = {value!r} must be a finite "
-                                         "angle in rad, |value| < pi.")
+                if value is not None:
+                    check_fold(f"GripperDesign.{name}", value)
             elif not (math.isfinite(value) and value > 0):
                 raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, "
                                      "finite length in metres.")

@@ -17,7 +17,7 @@ from simulator.errors import ParameterError
 from simulator.materials import SU8
 
 from ._contract import check_outcome
-from .gripper import GripperDesign, evaluate_gripper
+from .gripper import GripperDesign, check_fold, evaluate_gripper
 from .space import DesignSpace, Variable
 
 __all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU8_TG",
@@ -196,6 +196,9 @@ class GripperProblem(DesignProblem):
         groups = dict(self.residual_fold_groups)
         if set(groups) - {"base", "arm"}:
             raise ParameterError(f"residual_fold_groups {groups!r}: groups are 'base' and 'arm'.")
+        check_fold("GripperProblem.residual_fold", self.residual_fold)
+        for group, value in groups.items():
+            check_fold(f"GripperProblem.residual_fold_groups[{group!r}]", value)
         object.__setattr__(self, "residual_fold_groups", tuple(sorted(groups.items())))
 
     def group_folds(self) -> dict:

@@ -13,8 +13,9 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 from . import example_patterns
 from ._version import __version__
 from .bimorph import Actuators, Bimorph
-from .cases import Case, describe_cases, get_case, miura_sheet_model
+from .cases import Case, describe_cases, get_case, miura_sheet_model, single_fold_model
 from .dynamics import DynamicsOptions, DynamicsResult, MotionState, TimeIntegrator, integrate
+from .elements.springs import spring_kernel_backend
 from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
                      PatternError)
 from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fold, read_fold,
@@ -50,7 +51,7 @@ __all__ = [
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
-    "initial_state",
+    "initial_state", "spring_kernel_backend",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
@@ -65,7 +66,7 @@ __all__ = [
     # FOLD files
     "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
     "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
-    "miura_sheet_model",
+    "miura_sheet_model", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
 ]

@@ -26,7 +26,7 @@ from .newton import NewtonOptions
 from .thermal import REFERENCE_BETA, ThermalParameters
 
 __all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
-           "miura_fold_signs"]
+           "miura_fold_signs", "single_fold_model", "SINGLE_FOLD_SUPPORTS"]
 
 #: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
 DELTA_ALPHA_AU_SU8 = 38e-6
@@ -98,6 +98,15 @@ def _check(**kw):
             raise ParameterError(f"{k} = {v!r} must be a positive number.")
 
 
+def _fold_deg(name, value):
+    """A fold angle given in degrees, checked to lie in (-180, 180]; returned in rad."""
+    if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value) and -180.0 < value <= 180.0):
+        raise ParameterError(f"{name} = {value!r} deg must be a fold angle in degrees in "
+                             "(-180, 180] (0 flat, > 0 folded up).")
+    return math.radians(value)
+
+
 def _steps_int(name, value):
     if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
         raise ParameterError(f"{name} = {value!r} must be a positive integer.")
@@ -136,8 +145,36 @@ def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1
 
 
 # ------------------------------------------------------------------------------ single fold
+#: Supports of the reference single fold (digest 8.1), 0-based nodes: anchor edge and substrate.
 SINGLE_FOLD_SUPPORTS = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz", 8: "xyz", 9: "xyz",
                                  10: "xyz", 11: "xyz"})
+#: The same without the substrate panel (nodes 8-11).
+_SINGLE_FOLD_SUPPORTS_FREE = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz"})
+
+
+def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None, actuators=None,
+                      **pattern_kwargs) -> Model:
+    """Model of the reference single fold (Example01, digest 8.1): the one builder of the
+    single-fold cases, the demo and the tests.
+
+    Parameters
+    ----------
+    contact : bool
+        Substrate contact (``ContactParameters(1e-4, 40e-6, 40e-6)``: stiffness 1e-4, d0 and
+        d1 40 um), only meaningful with the substrate.
+    substrate : bool
+        Include the substrate panel (supported) under the folding panel.
+    thermal, actuators : optional
+        :class:`~simulator.thermal.ThermalParameters` and :class:`~simulator.bimorph.Actuators`,
+        needed for heating steps.
+    **pattern_kwargs
+        Geometry of :func:`~simulator.example_patterns.single_fold_pattern` (SI units).
+    """
+    pattern = single_fold_pattern(substrate=substrate, **pattern_kwargs)
+    supports = SINGLE_FOLD_SUPPORTS if substrate else _SINGLE_FOLD_SUPPORTS_FREE
+    return make_model(pattern, supports, BarHingeParameters(diagonal_rate=1000),
+                      contact=ContactParameters(1e-4, 40e-6, 40e-6) if contact else None,
+                      thermal=thermal, actuators=actuators)
 
 
 def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_mW,
@@ -146,17 +183,15 @@ def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_
     _check(crease_width=crease_width, env_thickness=env_thickness, t_gold=t_gold, t_su8=t_su8)
     if not (isinstance(env_conductivity, (int, float)) and env_conductivity >= 0):
         raise ParameterError(f"env_conductivity = {env_conductivity!r} must be >= 0 W/(m K).")
-    pattern = single_fold_pattern(L=L, W=crease_width, undercut=undercut,
-                                  panel_thickness=panel_thickness,
-                                  crease_thickness=t_gold + t_su8)
     thermal = ThermalParameters(env_thickness=env_thickness, env_conductivity=env_conductivity,
                                 dissipation_angle=REFERENCE_BETA, boundary_panels=(2,),
                                 room_temperature_nodes=(0, 3))
     actuators = Actuators(Bimorph(E1=E_gold, t1=t_gold, E2=2e9, t2=t_su8), {2: delta_alpha})
-    model = make_model(pattern, SINGLE_FOLD_SUPPORTS, BarHingeParameters(diagonal_rate=1000),
-                       contact=ContactParameters(1e-4, 40e-6, 40e-6), thermal=thermal,
-                       actuators=actuators)
-    steps = [SelfFold({2: math.radians(residual_fold_deg)}, increments=self_fold_steps)]
+    model = single_fold_model(thermal=thermal, actuators=actuators, L=L, W=crease_width,
+                              undercut=undercut, panel_thickness=panel_thickness,
+                              crease_thickness=t_gold + t_su8)
+    steps = [SelfFold({2: _fold_deg("residual_fold_deg", residual_fold_deg)},
+                      increments=self_fold_steps)]
     if gravity:
         steps.append(Gravity(g=REFERENCE_GRAVITY, panels=[1], increments=50))
     steps.append(Heat({2: _power(power_mW)}, increments=_steps_int("thermal_steps", thermal_steps),
@@ -225,7 +260,7 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
     model = make_model(pattern, supports, BarHingeParameters(diagonal_rate=1000),
                        contact=ContactParameters(1e-4, 20e-6, 20e-6), thermal=thermal,
                        actuators=actuators)
-    rf = math.radians(residual_fold_deg)
+    rf = _fold_deg("residual_fold_deg", residual_fold_deg)
     steps = [SelfFold({2: rf, 5: rf}, increments=50)]
     if gravity:
         steps.append(Gravity(g=REFERENCE_GRAVITY, scale=gravity_scale, panels=[1, 2],

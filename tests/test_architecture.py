@@ -35,7 +35,7 @@ def test_simulator_sources_import_only_downwards():
 
 def test_gravity_is_named_in_one_place():
     """9.8 / 9.81 / 9.80665 m/s^2 appear only as the named constants in simulator/model.py."""
-    allowed = {"model.py", "demo.py"}        # demo.py: owned by the CLI work, uses 9.8 as before
+    allowed = {"model.py"}
     offenders = []
     for pkg in ("simulator", "design", "studies"):
         for path in (ROOT / pkg).rglob("*.py"):
@@ -46,3 +46,15 @@ def test_gravity_is_named_in_one_place():
                           if isinstance(node, ast.Constant) and node.value in (9.8, 9.81, 9.80665)
                           and not isinstance(node.value, bool)]
     assert offenders == []
+
+
+def test_imports_stay_light():
+    """``import simulator`` / the CLI load no compiler, plotting, optimiser or cluster library;
+    those are imported where they are used (numba only once the spring kernel is compiled)."""
+    code = ("import sys, simulator, design.cli\n"
+            "heavy = ('numba', 'llvmlite', 'matplotlib', 'cvxpy', 'dask', 'distributed',\n"
+            "         'nlopt')\n"
+            "print(','.join(sorted({m.split('.')[0] for m in sys.modules} & set(heavy))))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=ROOT)
+    assert out.stdout.strip() == ""

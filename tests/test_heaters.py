@@ -115,7 +115,7 @@ def test_bad_input_is_named(folded, kwargs, match):
 def test_fold_sensitivity_of_a_free_hinge_is_one():
     """Nothing resists a free hinge: its fold follows its rest angle one to one."""
     from design.heaters import fold_sensitivity
-    from simulator.demo import single_fold_model
+    from simulator.cases import single_fold_model
     from simulator import initial_state
 
     model = single_fold_model(contact=False, substrate=False)

@@ -105,3 +105,29 @@ def test_compiled_spring_kernel_equals_numpy_kernel():
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
     e, g, h = _springs_jit.spring_kernel_jit(x, k, t0, hessian=False)
     assert h is None and np.allclose(g, spring_kernel_numpy(x, k, t0)[1])
+
+
+def test_spring_kernel_backend_selects_the_kernel(monkeypatch):
+    """One backend per block or process; both kernels give the same values."""
+    from simulator import ParameterError, spring_kernel_backend
+
+    x, k, t0 = _springs(20)
+    calls = []
+    monkeypatch.setattr(_springs_jit, "spring_kernel_jit",
+                        lambda *a: calls.append("numba") or spring_kernel_numpy(*a))
+    with spring_kernel_backend("numpy"):
+        spring_kernel(x, k, t0)
+        assert calls == []
+        if _springs_jit.AVAILABLE:
+            with spring_kernel_backend("numba"):
+                spring_kernel(x, k, t0)
+            assert calls == ["numba"]
+        spring_kernel(x, k, t0)
+    assert _springs_jit.backend is None                    # restored: the default again
+    monkeypatch.setenv("ETORIGAMI_JIT", "0")
+    assert _springs_jit.default_backend() == "numpy"
+    monkeypatch.setenv("ETORIGAMI_JIT", "1")
+    assert _springs_jit.default_backend() == ("numba" if _springs_jit.AVAILABLE else "numpy")
+    with pytest.raises(ParameterError, match="backend 'cuda'; use one of 'numba', 'numpy'"):
+        with spring_kernel_backend("cuda"):
+            pass

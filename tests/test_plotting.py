@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
-from simulator.demo import single_fold_model
+from simulator.cases import single_fold_model
 from simulator import SelfFold, simulate
 from studies.plotting import (animate, plot_fold_vs_power, plot_shape, plot_temperature_vs_power,
                               save_figure)

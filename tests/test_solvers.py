@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from simulator.demo import single_fold_model
+from simulator.cases import single_fold_model
 from simulator.errors import ConvergenceError, ParameterError
 from simulator.geometry import fold_angles
 from simulator import Gravity, Load, SelfFold, initial_state, simulate

@@ -8,12 +8,16 @@ penalty is inactive for compliant creases).
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
+from ..errors import ParameterError
 from . import _springs_jit as _jit
 from ._vec import cross, dot as _dot, outer as _outer
 
-__all__ = ["fold_angle", "fold_angle_derivatives", "spring_kernel", "spring_kernel_numpy"]
+__all__ = ["fold_angle", "fold_angle_derivatives", "spring_kernel", "spring_kernel_numpy",
+           "spring_kernel_backend"]
 
 
 def fold_angle(x: np.ndarray) -> np.ndarray:
@@ -86,13 +90,37 @@ def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
     return theta, grad, hess
 
 
+@contextlib.contextmanager
+def spring_kernel_backend(name: str):
+    """Use the ``"numba"`` or ``"numpy"`` spring kernel inside the ``with`` block.
+
+    The default is ``"numba"`` when numba is installed (compiled on first use: about 3 s of
+    CPU once per install, 0.7 s per process to load from numba's cache, then 10-30 us per call
+    instead of 150-500 us) unless ``ETORIGAMI_JIT=0``. ``"numpy"`` suits short runs (a few
+    thousand kernel calls, one case or one gripper evaluation). Both give the same values to
+    rounding; keep one backend for runs whose floats are compared bit for bit.
+    """
+    if name not in _jit.BACKENDS:
+        raise ParameterError(f"spring kernel backend {name!r}; use one of "
+                             f"{', '.join(map(repr, _jit.BACKENDS))}.")
+    if name == "numba" and not _jit.AVAILABLE:
+        raise ParameterError("spring kernel backend 'numba' needs numba; install it or use "
+                             "'numpy'.")
+    previous, _jit.backend = _jit.backend, name
+    try:
+        yield
+    finally:
+        _jit.backend = previous
+
+
 def spring_kernel(x: np.ndarray, k: np.ndarray, theta0: np.ndarray, hessian: bool = True):
     """Energy [J], gradient [N] (n, 12) and Hessian [N/m] (n, 12, 12) of all springs.
 
-    Uses the compiled kernel of :mod:`._springs_jit` when numba is installed (same formulas,
-    one call instead of ~60 array operations), else :func:`spring_kernel_numpy`.
+    Uses the compiled kernel of :mod:`._springs_jit` (same formulas, one call instead of ~60
+    array operations) with the ``"numba"`` backend, else :func:`spring_kernel_numpy`; see
+    :func:`spring_kernel_backend`.
     """
-    if _jit.AVAILABLE:
+    if _jit.use_compiled():
         return _jit.spring_kernel_jit(x, k, theta0, hessian)
     return spring_kernel_numpy(x, k, theta0, hessian)
 

@@ -1,0 +1,81 @@
+"""Command-line interface: ``etorigami`` (also ``python -m design.cli``).
+
+The CLI sits on top of both layers (simulator and design), so it lives here; ``simulator/``
+never imports it. One module per command group:
+
+* :mod:`.simulate`: ``etorigami demo`` (the main demo: a crease on a substrate heated until it
+  lifts off), ``etorigami cases``, ``etorigami run CASE [--set name=value ...] --out DIR``;
+* :mod:`.gripper`: ``etorigami gripper evaluate``;
+* :mod:`.optimize`: ``etorigami optimize gripper|miura`` (resumable with ``--out``);
+* :mod:`.sweep`: ``etorigami sweep residual-fold`` (resumable).
+
+Options are in um, mW and degrees. A usage error ends with one line on stderr and exit status
+2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.
+Short commands (demo, run, gripper evaluate) use the numpy spring kernel, long ones the
+compiled one (see :func:`simulator.spring_kernel_backend`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+
+from simulator import __version__
+from simulator.errors import EtorigamiError
+
+from ._common import EXIT_INTERRUPTED, CLIError, kernel_backend
+from .gripper import add_gripper_commands
+from .optimize import add_optimize_command
+from .simulate import add_simulate_commands
+from .sweep import add_sweep_commands
+
+__all__ = ["main"]
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="etorigami",
+        description="Simulation and design of electro-thermally actuated origami. "
+                    "Lengths in um, powers in mW, angles in degrees.")
+    parser.add_argument("--version", action="version", version=f"etorigami {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log solver progress")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    add_simulate_commands(sub)
+    add_gripper_commands(sub)
+    add_optimize_command(sub)
+    add_sweep_commands(sub)
+    return parser
+
+
+def _interrupted(args) -> int:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)       # a second Ctrl-C must not add a traceback
+    try:
+        line = args.interrupted(args) if hasattr(args, "interrupted") else "interrupted"
+    except Exception:  # noqa: BLE001 - the report of an interrupt must not fail
+        line = "interrupted"
+    print(line, file=sys.stderr, flush=True)
+    return EXIT_INTERRUPTED
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``etorigami`` command; returns the exit code."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    if args.command is None:
+        parser.print_help()
+        return 0
+    try:
+        with kernel_backend(short=getattr(args, "short", False)):
+            return args.func(args)
+    except KeyboardInterrupt:
+        return _interrupted(args)
+    except (EtorigamiError, CLIError) as exc:
+        print(f"etorigami: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:                       # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0

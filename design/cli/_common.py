@@ -1,0 +1,134 @@
+"""Helpers shared by the ``etorigami`` subcommands: CLI units, progress bars, executors.
+
+The command line speaks micrometres, milliwatts and degrees; everything is checked here in
+those units (so an error names the option and the value as typed) and converted to SI before
+it reaches the library.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import logging
+import math
+import os
+
+__all__ = ["CLIError", "length_um", "fold_deg", "floats", "progress_bar", "add_parallel_options",
+           "executor", "kernel_backend", "succeeded", "saved_rows", "resume_message",
+           "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG"]
+
+#: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
+RESIDUAL_LIMIT_DEG = 90.0
+#: Exit status of a command ended by Ctrl-C (128 + SIGINT), as shells report it.
+EXIT_INTERRUPTED = 130
+
+
+class CLIError(Exception):
+    """A command-line usage error, reported in one line (exit status 2)."""
+
+
+def length_um(flag: str, value: float, *, minimum: float = 0.0, field: str = "") -> float:
+    """Check a length given in um (``> minimum``) and return it in metres; ``field`` names the
+    library parameter it sets (shown in the error)."""
+    if not (math.isfinite(value) and value > minimum):
+        where = f" ({field})" if field else ""
+        raise CLIError(f"{flag} = {value:g} um must be > {minimum:g} um{where}")
+    return value * 1e-6
+
+
+def fold_deg(flag: str, value: float, *, within: float | None = None) -> float:
+    """Check a fold angle given in degrees (in (-180, 180], or in [-within, within]) and
+    return it in rad."""
+    if not (math.isfinite(value) and -180.0 < value <= 180.0):
+        raise CLIError(f"{flag} = {value:g} deg must be a fold angle in (-180, 180] deg")
+    if within is not None and abs(value) > within:
+        raise CLIError(f"{flag} = {value:g} deg must be within -{within:g} to {within:g} deg")
+    return math.radians(value)
+
+
+def floats(flag: str, text: str) -> list:
+    """Comma-separated numbers, e.g. ``-20,-10,0``."""
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise CLIError(f"{flag}: expected comma-separated numbers, got {text!r}") from None
+    if not values:
+        raise CLIError(f"{flag}: expected comma-separated numbers, got {text!r}")
+    return values
+
+
+@contextlib.contextmanager
+def progress_bar(total=None, desc: str = "", unit: str = "eval", disable: bool = False):
+    """A tqdm bar on stderr that erases itself when the command is interrupted or fails."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, desc=desc, unit=unit, disable=disable)
+    try:
+        yield bar
+    except BaseException:
+        bar.leave = False
+        raise
+    finally:
+        bar.close()
+
+
+def add_parallel_options(parser) -> None:
+    """``--parallel N`` / ``--dask ADDRESS`` (mutually exclusive)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--parallel", metavar="N", help="evaluate on N local processes "
+                                                       "('all' = every core)")
+    group.add_argument("--dask", metavar="ADDRESS", help="evaluate on a Dask cluster: a "
+                       "scheduler address (tcp://host:8786) or 'local' for a LocalCluster")
+
+
+def executor(args):
+    """The executor chosen by ``--parallel`` / ``--dask`` (serial by default).
+
+    Dask's own INFO and WARNING logs (cluster start, workers killed on Ctrl-C) are shown only
+    with ``--verbose``.
+    """
+    from design.executors import executor_from_option
+
+    if getattr(args, "dask", None) and not getattr(args, "verbose", False):
+        import distributed  # noqa: F401 - configures its loggers on import; quieten them after
+
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+
+    return executor_from_option(getattr(args, "parallel", None), getattr(args, "dask", None))
+
+
+def kernel_backend(short: bool):
+    """Context for a command: short ones (one case, one gripper evaluation: a few thousand
+    spring-kernel calls) use the numpy kernel, since compiling numba's costs more than it saves
+    there; long ones (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
+    if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
+        return contextlib.nullcontext()
+    from simulator import spring_kernel_backend
+
+    return spring_kernel_backend("numpy")
+
+
+def succeeded(result) -> bool:
+    """``result.success`` (the result contract)."""
+    return bool(result.success)
+
+
+def saved_rows(path) -> int:
+    """Complete data rows of a CSV file (0 if it does not exist)."""
+    if path is None or not os.path.exists(path):
+        return 0
+    with open(path, newline="", encoding="utf-8") as fh:
+        text = fh.read()
+    rows = list(csv.reader(text.splitlines()))
+    if rows and not text.endswith("\n"):
+        rows = rows[:-1]                       # a row cut by the interrupt is dropped on resume
+    return max(len(rows) - 1, 0)
+
+
+def resume_message(log, what: str = "evaluations") -> str:
+    """The one line printed when a resumable command is interrupted."""
+    if log is None:
+        return f"interrupted: nothing saved (no --out); give --out DIR to keep the {what}"
+    n = saved_rows(log)
+    noun = what if n != 1 else what[:-1]
+    return f"interrupted: {n} {noun} saved in {log}; run the same command again to resume"

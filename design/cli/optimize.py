@@ -1,0 +1,84 @@
+"""``etorigami optimize``: minimise the power of a gripper or Miura design.
+
+With ``--out DIR`` every evaluation is appended to ``DIR/evaluations.csv`` as it finishes; the
+same command run again reuses them (an interrupted run resumes where it stopped).
+"""
+
+from __future__ import annotations
+
+import os
+
+from ._common import (RESIDUAL_LIMIT_DEG, add_parallel_options, executor, floats, fold_deg,
+                      progress_bar, resume_message, succeeded)
+
+__all__ = ["add_optimize_command", "METHODS"]
+
+METHODS = ("cd", "cobyla", "bobyqa", "neldermead", "sbplx", "direct")
+
+
+def _problem(args):
+    from design.problem import GripperProblem
+
+    if args.target == "miura":
+        from design.miura import MiuraProblem
+        return MiuraProblem()
+    base = GripperProblem(mode=args.mode,
+                          residual_fold=fold_deg("--residual-fold", args.residual_fold))
+    if args.robust:
+        from design.robustness import RobustGripperProblem
+        folds = [fold_deg("--robust", v, within=RESIDUAL_LIMIT_DEG)
+                 for v in floats("--robust", args.robust)]
+        return RobustGripperProblem(base, folds)
+    return base
+
+
+def _display(problem, name, value):
+    var = problem.space[name]
+    return f"{value * var.display_scale:.4g} {var.display_unit}"
+
+
+def _optimize(args) -> int:
+    from design.optimize import optimize
+
+    problem = _problem(args)
+    ex = executor(args)
+    options = {"parallel_candidates": True} if args.method == "cd" and (
+        args.parallel or args.dask) else {}
+    try:
+        with progress_bar(desc=f"{args.target} {args.method}", disable=args.quiet) as bar:
+            def callback(evaluation):
+                bar.update(1)
+                bar.set_postfix(objective=f"{evaluation.objective * 1e3:.4g} mW")
+
+            res = optimize(problem, args.method, out=args.out, executor=ex,
+                           max_evaluations=args.max_evaluations, callback=callback, **options)
+    finally:
+        ex.close()
+    x = ", ".join(f"{k}={_display(problem, k, v)}" for k, v in res.x.items())
+    print(f"{args.method}: {res.status} ({res.message}); best {res.objective * 1e3:.4g} mW at "
+          f"{x}; {res.n_evaluations} evaluations ({res.n_computed} computed, {res.n_reused} "
+          f"reused) in {res.wall_time:.1f} s" + (f"; results in {args.out}" if args.out else ""))
+    return 0 if succeeded(res) else 1
+
+
+def _interrupted(args) -> str:
+    return resume_message(os.path.join(args.out, "evaluations.csv") if args.out else None)
+
+
+def add_optimize_command(sub) -> None:
+    """Register ``optimize`` on an argparse subparsers object."""
+    opt = sub.add_parser("optimize", help="minimise the power of a gripper or Miura design")
+    opt.add_argument("target", choices=("gripper", "miura"))
+    opt.add_argument("--method", choices=METHODS, default="cd")
+    opt.add_argument("--out", metavar="DIR", help="folder for the evaluation log (resumable) "
+                                                  "and results")
+    opt.add_argument("--max-evaluations", type=int, default=None, metavar="N")
+    opt.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
+    opt.add_argument("--residual-fold", type=float, default=0.0, metavar="DEG",
+                     help="residual fold of the actuated creases in degrees, in (-180, 180]")
+    opt.add_argument("--robust", metavar="DEG,DEG,...",
+                     help="optimise the worst case over these residual folds (gripper), "
+                          "e.g. --robust=-20,-10,0")
+    opt.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_parallel_options(opt)
+    opt.set_defaults(func=_optimize, interrupted=_interrupted)

@@ -1,0 +1,233 @@
+"""Simulation subcommands: ``demo``, ``cases``, ``run``.
+
+``etorigami demo`` shows the paper's headline result (section 5.1): a single electro-thermal
+crease (gold on SU-8) with a residual fold rests on the substrate under gravity; heated by a
+power ramp it stays down until the power passes a threshold, then lifts off and folds up.
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+
+import numpy as np
+
+from simulator import __version__
+
+from ._common import CLIError, fold_deg, progress_bar
+
+__all__ = ["add_simulate_commands", "demo_run", "heating_table", "threshold_power"]
+
+#: The demo's heating ramp: power at its end [mW] and thermal increments (2.5 mW each).
+DEMO_POWER_MW = 100.0
+DEMO_INCREMENTS = 40
+#: Rows of the printed table (about; the threshold row is added).
+DEMO_ROWS = 10
+#: Without substrate contact the threshold is the power where the fold has risen this much [deg].
+FOLD_RISE_DEG = 1.0
+
+POWER, FOLD, TEMP, CONTACT = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
+                              "substrate_contact")
+
+
+# ------------------------------------------------------------------------------ demo
+def demo_run(residual_fold_deg: float = -10.0, gravity: bool = True, progress=None):
+    """Run the demo case: ``single_fold`` with gravity, heated to 100 mW in 40 increments."""
+    from simulator import get_case
+
+    case = get_case("single_fold", residual_fold_deg=residual_fold_deg, gravity=gravity,
+                    thermal_steps=DEMO_INCREMENTS, power_mW=DEMO_POWER_MW)
+    return case, case.run(progress=progress)
+
+
+def heating_table(result):
+    """One row per record of the heating ramp (from the last state before it).
+
+    Columns ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]`` (crease) and
+    ``substrate_contact`` (any contact pair of the folding panel with the substrate active).
+    """
+    import pandas as pd
+
+    from simulator.state import equilibrium_system
+
+    h = result.history
+    heat = np.flatnonzero(h["stage_name"] == "heat")
+    recs = np.concatenate(([heat[0] - 1], heat)) if len(heat) else np.array([len(h["stage"]) - 1])
+    system = equilibrium_system(result.model)
+    rest = result.steps[-1].state.spring_rest        # contact does not depend on it
+    contact = [system.evaluate(h["u"][r], rest, hessian=False).n_contacts > 0 for r in recs]
+    return pd.DataFrame({POWER: h["power"][recs, 0] * 1e3,
+                         FOLD: np.degrees(result.fold_angle[recs, 0]),
+                         TEMP: result.crease_temperature[recs, 0], CONTACT: contact})
+
+
+def threshold_power(table) -> tuple:
+    """(power [mW] or None, what it marks) from a :func:`heating_table`.
+
+    On the substrate: the first power at which the panel has left it (no contact). Otherwise
+    (no gravity): the first power at which the fold is ``FOLD_RISE_DEG`` above its start.
+    """
+    if table[CONTACT].iloc[0]:
+        above, what = ~table[CONTACT].to_numpy(), "the panel leaves the substrate"
+    else:
+        fold = table[FOLD].to_numpy()
+        above, what = fold - fold[0] >= FOLD_RISE_DEG, f"the fold rises by {FOLD_RISE_DEG:g} deg"
+    hits = np.flatnonzero(above)
+    return (float(table[POWER].iloc[hits[0]]) if len(hits) else None), what
+
+
+def _print_demo(case, result, table, threshold, what, wall):
+    rf, grav = case.parameters["residual_fold_deg"], case.parameters["gravity"]
+    print(f"etorigami {__version__} demo: one electro-thermal crease (gold on SU-8), residual "
+          f"fold {rf:g} deg, {'on the substrate under gravity' if grav else 'no gravity'}, "
+          f"heated to {DEMO_POWER_MW:g} mW")
+    print("  steps: " + ", ".join(f"{s.name} {s.status} ({s.increments} increments)"
+                                  for s in result.steps))
+    every = max(1, round((len(table) - 1) / DEMO_ROWS))
+    rows = set(range(0, len(table), every)) | {len(table) - 1}
+    if threshold is not None:
+        rows.add(int(np.flatnonzero(table[POWER].to_numpy() == threshold)[0]))
+    print(f"  {'power [mW]':>10}  {'fold angle [deg]':>16}  {'temperature [degC]':>18}"
+          f"  {'on substrate':>12}")
+    for i in sorted(rows):
+        r = table.iloc[i]
+        mark = "  <- threshold" if threshold is not None and r[POWER] == threshold else ""
+        print(f"  {r[POWER]:10.1f}  {r[FOLD]:16.2f}  {r[TEMP]:18.1f}"
+              f"  {'yes' if r[CONTACT] else 'no':>12}{mark}")
+    if threshold is None:
+        print(f"  threshold: not reached below {DEMO_POWER_MW:g} mW ({what} never)")
+    else:
+        print(f"  threshold: {threshold:.1f} mW ({what}; to within the "
+              f"{DEMO_POWER_MW / DEMO_INCREMENTS:g} mW ramp increment)")
+    print(f"  wall time {wall:.2f} s")
+
+
+def _demo(args) -> int:
+    fold_deg("--residual-fold", args.residual_fold)
+    t0 = time.perf_counter()
+    case, result = demo_run(args.residual_fold, gravity=not args.no_gravity)
+    table = heating_table(result)
+    threshold, what = threshold_power(table)
+    _print_demo(case, result, table, threshold, what, time.perf_counter() - t0)
+    if args.out:
+        from ._plots import demo_figure
+
+        out = result.save(args.out, {"case": case.name, "parameters": case.parameters,
+                                     "threshold_power [mW]": threshold})
+        demo_figure(table, threshold, what).savefig(out / "demo.png", dpi=120)
+        print(f"  results in {out}: creases.csv, nodes.npz, meta.json, demo.png")
+    return 0 if result.success else 1
+
+
+# ------------------------------------------------------------------------------ cases, run
+def _cases(args) -> int:
+    from simulator.cases import describe_cases
+
+    for name, doc, params in describe_cases():
+        print(f"{name.replace('_', '-')}: {doc}")
+        for pname, default, unit in params:
+            unit = f" [{unit}]" if unit and unit != "-" else ""
+            print(f"    {pname} = {default!r}{unit}")
+    return 0
+
+
+def _parse_value(text: str):
+    low = text.strip().lower()
+    if low in ("true", "yes", "on"):
+        return True
+    if low in ("false", "no", "off"):
+        return False
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _convert(name, text, default):
+    value = _parse_value(text)
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise CLIError(f"{name} expects true or false, got {text!r}")
+    elif isinstance(default, int):
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise CLIError(f"{name} expects an integer, got {text!r}")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise CLIError(f"{name} expects a number, got {text!r}")
+        value = float(value)
+    return value
+
+
+def _overrides(pairs, case_name) -> dict:
+    from simulator.cases import CASES, get_case
+
+    fn = CASES.get(case_name.replace("-", "_"))
+    if fn is None:
+        get_case(case_name)                     # raises the unknown-case error
+    params = inspect.signature(fn).parameters
+    out = {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise CLIError(f"--set expects name=value, got {pair!r}")
+        name, text = pair.split("=", 1)
+        name = name.strip().replace("-", "_")
+        if name not in params:
+            raise CLIError(f"case {case_name!r} has no parameter {name!r}; "
+                           f"parameters: {', '.join(params)}")
+        out[name] = _convert(name, text, params[name].default)
+    return out
+
+
+def _run(args) -> int:
+    from simulator.cases import get_case
+
+    case = get_case(args.case, **_overrides(args.set, args.case))
+    t0 = time.perf_counter()
+    with progress_bar(desc=case.name, unit="inc", disable=args.quiet) as bar:
+        def progress(done, total):
+            if bar.total != total:
+                bar.reset(total=total)
+            bar.update(done - bar.n)
+
+        result = case.run(progress=progress)
+    out = result.save(args.out, {"case": case.name, "parameters": case.parameters})
+    frame = result.to_frame()
+    last = frame[frame["step"] == frame["step"].max()]
+    print(f"{case.name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
+          f"results in {out}")
+    print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
+                "temperature_max [degC]"]].to_string(index=False))
+    return 0 if result.success else 1
+
+
+def _not_saved(args) -> str:
+    return ("interrupted: nothing saved (results are written when the run ends); run the same "
+            "command again")
+
+
+# ------------------------------------------------------------------------------ parser
+def add_simulate_commands(sub) -> None:
+    """Register ``demo``, ``cases`` and ``run`` on an argparse subparsers object."""
+    demo = sub.add_parser("demo", help="the main demo: a crease with a residual fold on a "
+                          "substrate under gravity, heated until it lifts off")
+    demo.add_argument("--residual-fold", type=float, default=-10.0, metavar="DEG",
+                      help="residual fold angle of the crease in degrees, in (-180, 180] "
+                           "(default -10)")
+    demo.add_argument("--no-gravity", action="store_true", help="switch gravity off")
+    demo.add_argument("--out", metavar="DIR", help="write creases.csv, nodes.npz, meta.json "
+                                                   "and demo.png")
+    demo.set_defaults(func=_demo, interrupted=_not_saved, short=True)
+
+    cases = sub.add_parser("cases", help="list the paper's cases with parameters and defaults")
+    cases.set_defaults(func=_cases)
+
+    run = sub.add_parser("run", help="run a case and write creases.csv, nodes.npz, meta.json")
+    run.add_argument("case", help="case name, e.g. single-fold (see 'etorigami cases')")
+    run.add_argument("--set", action="append", metavar="NAME=VALUE",
+                     help="override a case parameter in the unit 'etorigami cases' lists "
+                          "(repeatable), e.g. --set gravity=true")
+    run.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=_run, interrupted=_not_saved, short=True)

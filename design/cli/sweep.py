@@ -1,0 +1,87 @@
+"""``etorigami sweep residual-fold``: gripper power vs the residual fold of its creases.
+
+Designs are given in micrometres and residual folds in degrees. Every point is appended to
+``DIR/evaluations.csv``; the same command run again reuses them.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+
+from ._common import (RESIDUAL_LIMIT_DEG, CLIError, add_parallel_options, executor, floats,
+                      fold_deg, length_um, progress_bar, resume_message)
+
+__all__ = ["add_sweep_commands"]
+
+
+def _design_arg(text: str, space) -> dict:
+    """``start`` or ``W=300,La=1500,L1=500,L2=500`` (display units) -> {name: SI value}."""
+    if text.strip().lower() == "start":
+        return space.to_dict(space.start)
+    out = {}
+    for part in text.split(","):
+        if "=" not in part:
+            raise CLIError(f"--design expects name=value pairs or 'start', got {text!r}")
+        name, value = part.split("=", 1)
+        var = space[name.strip()]
+        try:
+            number = float(value)
+        except ValueError:
+            raise CLIError(f"--design: {name} = {value!r} is not a number") from None
+        length_um(f"--design {var.name}", number)
+        out[var.name] = number / var.display_scale
+    return space.to_dict(out)
+
+
+def _sweep(args) -> int:
+    from design.problem import GripperProblem
+    from design.robustness import residual_fold_grid, sweep_residual_fold
+
+    problem = GripperProblem(mode=args.mode)
+    designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
+    values = floats("--values", args.values)
+    for v in values:
+        fold_deg("--values", v, within=RESIDUAL_LIMIT_DEG)
+    groups = tuple(g.strip() for g in args.groups.split(",")) if args.groups else None
+    grid = residual_fold_grid(values, creases=groups)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    ex = executor(args)
+    try:
+        with progress_bar(total=len(designs) * len(grid), desc="residual-fold sweep",
+                          disable=args.quiet) as bar:
+            frame = sweep_residual_fold(problem, designs, grid, executor=ex,
+                                        log=out / "evaluations.csv",
+                                        progress=lambda done, total: bar.update(done - bar.n))
+    finally:
+        ex.close()
+    frame.to_csv(out / "sweep.csv", index=False)
+    cols = [c for c in frame.columns if c.startswith("residual_fold") or c in (
+        "W [um]", "La [um]", "L1 [um]", "L2 [um]", "total_power [mW]", "feasible", "success")]
+    print(frame[cols].to_string(index=False))
+    print(f"{len(frame)} points written to {out / 'sweep.csv'}")
+    return 0
+
+
+def _interrupted(args) -> str:
+    return resume_message(os.path.join(args.out, "evaluations.csv"), "points")
+
+
+def add_sweep_commands(sub) -> None:
+    """Register ``sweep residual-fold`` on an argparse subparsers object."""
+    sweep = sub.add_parser("sweep", help="robustness sweeps")
+    ssub = sweep.add_subparsers(dest="sweep_command", metavar="KIND", required=True)
+    rf = ssub.add_parser("residual-fold", help="gripper power vs residual fold angle")
+    rf.add_argument("--values", default="-20,-10,0", metavar="DEG,DEG,...",
+                    help="residual folds in degrees, e.g. --values=-20,-10,0 (the default; "
+                         "use the = form when the first value is negative)")
+    rf.add_argument("--groups", metavar="base,arm", help="sweep crease groups independently "
+                                                        "(product grid)")
+    rf.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
+                    help="design in um (repeatable; default the start design)")
+    rf.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
+    rf.add_argument("--out", required=True, metavar="DIR")
+    rf.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_parallel_options(rf)
+    rf.set_defaults(func=_sweep, interrupted=_interrupted)
