@@ -16,7 +16,7 @@ import scipy.linalg
 from simulator import (Dynamics, DynamicsOptions, Load, Material, ParameterError, SelfFold,
                        TimeIntegrator, integrate, lumped_masses, make_model, natural_modes,
                        simulate)
-from simulator.demo import single_fold_model
+from simulator import single_fold_model
 from simulator.example_patterns import single_fold_pattern
 from simulator.geometry import fold_angles
 from simulator.state import equilibrium_system, initial_state

@@ -7,7 +7,7 @@ from matplotlib.figure import Figure
 
 from simulator import (Gravity, ParameterError, SelfFold, Supports, initial_state, make_model,
                        natural_modes, simulate)
-from simulator.demo import single_fold_model
+from simulator import single_fold_model
 from simulator.example_patterns import miura_sheet_pattern
 from studies.mode_plots import plot_mode_shape, save_mode_plots
 
