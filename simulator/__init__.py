@@ -25,6 +25,9 @@ from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
 from .steps import (AmbientTemperature, Coupling, Gravity, Heat, Load, SelfFold, Step,
                     StepContext, StepOutcome, StepRecorder)
+from .steps import ArcLengthLoad, DisplacementControl
+from .continuation import ContinuationResult, CriticalPoint, LoadPath, displacement_control, mgdcm
+from .stability import Stability, tangent_stability
 from .thermal import ThermalParameters
 
 __all__ = [
@@ -37,6 +40,9 @@ __all__ = [
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
     "initial_state",
+    # path following through limit points
+    "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
+    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # errors

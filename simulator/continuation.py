@@ -257,19 +257,30 @@ def _correct(path, u, lam, constraint, options, size):
 
 # ---------------------------------------------------------------------------- bookkeeping
 class _Trace:
-    """Accepted points of a continuation, with their stability and the critical points."""
+    """Accepted points of a continuation, with their stability and the critical points.
 
-    def __init__(self, path, monitor, stability):
+    The start point seeds the limit-point search (a restart exactly at a limit point turns
+    there) but is not recorded.
+    """
+
+    def __init__(self, path, monitor, stability, u0, lam0, prior=None):
         self.path, self.monitor, self.check = path, monitor, stability
         self.history, self.residuals, self.stab, self.temps = [], [], [], []
         self.iterations, self.cuts, self.critical = 0, 0, []
-        self.arc = [0.0]
+        self.points, self.arc = [], []
+        for u, lam in ([] if prior is None else [prior]) + [(u0, lam0)]:
+            self._add(np.asarray(u, float), float(lam))
+        self.offset = len(self.points)           # point k is history entry k - offset
         self.last = None
 
+    def _add(self, u, lam):
+        du = 0.0 if not self.points else np.linalg.norm(
+            (u - self.points[-1][1]).ravel()[self.path.free])
+        self.arc.append((self.arc[-1] if self.arc else 0.0) + float(du))
+        self.points.append((lam, u))
+
     def accept(self, u, lam, pt, its, res):
-        if self.history:
-            du = (u - self.history[-1][1]).ravel()[self.path.free]
-            self.arc.append(self.arc[-1] + float(np.linalg.norm(du)))
+        self._add(u, lam)
         self.history.append((lam, u, its))
         self.residuals.append(np.asarray(res, float))
         self.temps.append(pt.temperature)
@@ -284,23 +295,24 @@ class _Trace:
         """Critical points between accepted points: a limit point where the load factor passes
         an extremum (located by a parabola through three points in arc length), a bifurcation
         where the count of negative eigenvalues changes without one."""
-        h, out = self.history, []
-        lam = np.array([p[0] for p in h])
-        turns = [k for k in range(1, len(h) - 1)
+        pts, out, o = self.points, [], self.offset
+        lam = np.array([p[0] for p in pts])
+        turns = [k for k in range(1, len(pts) - 1)
                  if (lam[k] - lam[k - 1]) * (lam[k + 1] - lam[k]) < 0]
         for k in turns:
             s = np.array(self.arc[k - 1:k + 2]) - self.arc[k]
             c = np.polyfit(s, lam[k - 1:k + 2], 2)
             s_star = float(np.clip(-c[1] / (2 * c[0]), s[0], s[2])) if c[0] != 0 else 0.0
-            m = [self.measure(h[j][1]) for j in (k - 1, k, k + 1)]
+            m = [self.measure(pts[j][1]) for j in (k - 1, k, k + 1)]
             disp = None if m[0] is None else float(np.polyval(np.polyfit(s, m, 2), s_star))
             out.append(CriticalPoint("limit_point", float(np.polyval(c, s_star)),
-                                     k + 1 if s_star > 0 else k, disp, bool(lam[k] > lam[k - 1])))
+                                     max(0, k + 1 - o if s_star > 0 else k - o), disp,
+                                     bool(lam[k] > lam[k - 1])))
         neg = [st.negative for st in self.stab]
-        for j in range(1, len(neg)):
-            if neg[j] != neg[j - 1] and not any(k in (j - 1, j) for k in turns):
-                out.append(CriticalPoint("bifurcation", 0.5 * (lam[j - 1] + lam[j]), j,
-                                         self.measure(h[j][1])))
+        for j in range(1, len(neg)):              # history j is point j + o
+            if neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j) for k in turns):
+                out.append(CriticalPoint("bifurcation", 0.5 * (lam[j + o - 1] + lam[j + o]), j,
+                                         self.measure(pts[j + o][1])))
         return sorted(out, key=lambda c: c.increment)
 
     def result(self, success, status, message, u, lam):
@@ -367,7 +379,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           options: NewtonOptions = NewtonOptions(), adapt: bool = True,
           max_arc_length: float | None = None, step_norm: float | None = None,
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
-          until_stable: bool = False, callback=None) -> ContinuationResult:
+          until_stable: bool = False, direction=None, prior=None,
+          callback=None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
     Parameters
@@ -408,6 +421,14 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         End (with success, message "stable again past the limit point") at the first stable
         point after the load factor turned back, once it exceeds the load factor where it
         turned: the snap is passed and load control can take over.
+    direction : (n_nodes, 3) array, optional
+        Displacement direction the path comes from (e.g. the last load-controlled increment):
+        the first predictor moves along it, whatever the sign of the load factor change (a
+        restart at or just past a limit point); default: towards ``target_load_factor``, else
+        increasing the load factor.
+    prior : (u, lam), optional
+        An equilibrium point before the start (e.g. an earlier load-controlled increment), so
+        that a restart at a limit point finds the turn there.
     callback : callable, optional
         ``callback(lam, u)`` after every accepted point; True stops (status "stopped").
     """
@@ -423,9 +444,9 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     min_ds = arc_length / 2 ** options.max_cuts
     free, size = path.free, _size(path.system)
     c_t, v_t = _monitor_vector(path, target_displacement)
-    trace = _Trace(path, c_t if monitor is None else np.asarray(monitor, float).ravel(),
-                   stability)
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
+    trace = _Trace(path, c_t if monitor is None else np.asarray(monitor, float).ravel(),
+                   stability, u, lam, prior)
     pt = _begin(path, u, lam)
     sig = 1.0 if target_load_factor is None or target_load_factor >= lam else -1.0
     ds, uhat_prev, norm1 = arc_length, None, None
@@ -439,12 +460,23 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
             if not np.any(uhat):
                 raise ParameterError("mgdcm: the reference load does not act on any free DOF "
                                      "(K^-1 q = 0); load free nodes.")
-        s = sig if uhat_prev is None else sig * np.sign(uhat_prev @ uhat)
+        if uhat_prev is not None:
+            s = sig * np.sign(uhat_prev @ uhat)
+        elif direction is not None:
+            s = np.sign(np.asarray(direction, float).ravel()[free] @ uhat) or sig
+        else:
+            s = sig
         dlam = s * ds * norm1 / float(np.linalg.norm(uhat))
         end, dl, con = _predict(u, lam, dlam, uhat, free, target_load_factor, c_t, v_t)
         ok, u1, lam1, pt1, its, res, msg = _correct(path, _flat(u, free, dl * uhat), lam + dl,
                                                     con, options, size)
         trace.iterations += its
+        if ok and not end and (lam1 - lam) * dl < 0 and abs(lam1 - lam) > max(abs(dl),
+                                                                              arc_length):
+            ok, msg = False, (f"corrector reversed the load step ({dl:.3g} predicted, "
+                              f"{lam1 - lam:.3g} found: a jump to another branch)")
+        if ok and not end and _passed(u, lam, u1, lam1, target_load_factor, c_t, v_t):
+            ok, msg = False, "the corrector carried the point past the target"   # approach it
         if not ok:
             if ds / 2 < min_ds:
                 return trace.result(False, "failed", f"gave up at load factor {lam:.6g} after "
@@ -485,6 +517,14 @@ def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):
             return f"displacement {v_t:.6g} m", (v_t - m0) / rate, _Constraint(c_t[free], v_t)
     v = u.ravel()[free]
     return "", dlam, _Constraint(uhat, float(uhat @ v) + dlam * float(uhat @ uhat))
+
+
+def _passed(u, lam, u1, lam1, lam_t, c_t, v_t) -> bool:
+    """True if the step from (u, lam) to (u1, lam1) crossed the target load factor or
+    displacement (it is then retried shorter, so that a predictor lands on the target)."""
+    if lam_t is not None and (lam - lam_t) * (lam1 - lam_t) < 0:
+        return True
+    return c_t is not None and (c_t @ u.ravel() - v_t) * (c_t @ u1.ravel() - v_t) < 0
 
 
 def displacement_control(path, u0, lam0: float, c, target: float, *, increments: int = 50,
@@ -528,7 +568,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
         raise ParameterError("displacement_control: the reference load does not move the "
                              "controlled displacement (c . K^-1 P = 0); it cannot be controlled "
                              "by that load. Load the controlled node along its direction.")
-    trace = _Trace(path, c, stability)
+    trace = _Trace(path, c, stability, u, lam)
     start = float(c @ u.ravel())
     t, dt, in_row = 0.0, 1.0 / increments, 0
     while t < 1.0 - 1e-12:

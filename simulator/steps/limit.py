@@ -235,15 +235,22 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
 def _arc(context, start, outcome, path, increments, c, until_stable):
     """MGDCM from the last state of a failed load-controlled outcome towards load factor 1."""
     lam0 = float(outcome.load_factor[-1]) if len(outcome.load_factor) else 0.0
-    prev = outcome.u[-2] if len(outcome.u) >= 2 else start.u
-    step = float(np.linalg.norm((outcome.state.u - prev).ravel()[path.free]))
+    n = len(outcome.u)
+    # first predictor: the mean displacement per load-controlled increment, along the recent
+    # motion (the last increments before a failure can be vanishingly small)
+    step = float(np.linalg.norm((outcome.state.u - start.u).ravel()[path.free])) / max(n, 1)
+    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else (start.u, 0.0)
+    recent = outcome.state.u - prior[0]
+    if not np.any(recent):
+        prior, recent = (start.u, 0.0), outcome.state.u - start.u
     its = outcome.increment_iterations
     fast = max(FAST_ITERATIONS, int(np.median(its))) if len(its) else FAST_ITERATIONS
     return mgdcm(path, outcome.state.u, lam0, arc_length=1.0 / increments,
                  max_increments=CONTINUATION_INCREMENTS if until_stable else PROBE_INCREMENTS,
                  target_load_factor=1.0, monitor=c, options=context.options,
                  step_norm=step if step > 0 else None, fast_iterations=fast,
-                 stability=until_stable, until_stable=until_stable)
+                 stability=until_stable, until_stable=until_stable,
+                 direction=recent, prior=prior)
 
 
 def _probe(context, start, outcome, path, increments) -> StepOutcome:
