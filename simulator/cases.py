@@ -328,13 +328,13 @@ def snap_through(variant: str = "force", span: float = 1e-3, rise: float = 40e-6
     ``variant="force"``: a shallow two-panel roof (``roof_pattern``: span, rise, 20 um SU-8
     panels, a 20 um x 5 um ridge crease), pinned along both eaves and pushed down at its ridge
     by ``load_mN`` times the load factor until the ridge has moved 2.5 rises (through the
-    inverted shape). ``variant="heated"``: the Miura lifter with a = b = 0.5 mm, gamma = 45
+    inverted shape). ``variant="heated"``: the Miura lifter with a = 0.5 mm, b = 1 mm, gamma = 45
     deg, W = 300 um, 4 x 2 cells over a substrate heated on all creases to ``power_mW``; it
     snaps at ~9.2 mW per crease, which load control cannot pass (``on_limit_point="continue"``).
     """
     params = {k: v for k, v in locals().items()}
     if variant == "heated":
-        case = miura_lifter(cells_x=4, cells_y=2, a=0.5e-3, b=0.5e-3, gamma_deg=45.0,
+        case = miura_lifter(cells_x=4, cells_y=2, a=0.5e-3, b=1e-3, gamma_deg=45.0,
                             crease_width=300e-6, power_mW=power_mW, thermal_steps=thermal_steps,
                             substrate=True, on_limit_point="continue")
         return Case("snap_through", case.model, case.steps, params, snap_through.__doc__)

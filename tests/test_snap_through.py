@@ -161,3 +161,20 @@ def test_gravity_unchanged_by_limit_point_machinery():
     case = get_case("double_fold", thermal_steps=2)
     res = simulate(case.model, [Gravity(g=9.8, increments=5)])
     assert res.success and res.steps[0].columns == {}
+
+
+@pytest.mark.slow
+def test_heated_miura_passes_its_snap():
+    """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease."""
+    case = get_case("snap_through", variant="heated")
+    res = case.run()
+    assert res.success, res.message
+    step = res.steps[0]
+    assert step.power_history[-1].max() == pytest.approx(12e-3)
+    assert step.message.count("snap at load factor") == 1
+    lam = float(step.message.split("snap at load factor ")[1].split(" ")[0])
+    assert 9.0e-3 < 12e-3 * lam < 9.4e-3                       # the snap power
+    stable = step.columns["stable"]
+    assert any(v is False or v == False for v in stable)      # noqa: E712 (object array)
+    stop = simulate(case.model, [Heat(dict(case.steps[0].power), increments=60)])
+    assert stop.status == "limit_point" and "limit point at load factor" in stop.message

@@ -41,8 +41,9 @@ __all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "check_on_limit_point", "continue_
 
 #: Allowed values of ``on_limit_point``.
 LIMIT_POINT_ACTIONS = ("stop", "continue")
-#: Arc-length increments of the probe that looks for a limit point after a failure.
-PROBE_INCREMENTS = 12
+#: Arc-length increments at most of the probe that looks for a limit point after a failure
+#: (it stops as soon as the load factor turns).
+PROBE_INCREMENTS = 40
 #: Arc-length increments at most per snap with on_limit_point="continue".
 CONTINUATION_INCREMENTS = 200
 #: Load-control failures (snaps) passed by arc length at most within one step.
@@ -164,15 +165,17 @@ def _snaps(res, c) -> list:
     turned back, and the point where it crosses that load factor again moving forward."""
     lam = np.array([h[0] for h in res.history])
     m = np.array([float(c @ h[1].ravel()) for h in res.history])
-    out = []
+    out, used = [], set()
     for p in res.critical_points:
         k = p.increment
         if p.kind != "limit_point" or not p.maximum:
             continue                                   # only maxima (the path heads up)
         for j in range(k + 1, len(lam)):
             if lam[j - 1] < p.load_factor <= lam[j]:
-                a = (p.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
-                out.append((p.load_factor, p.displacement, m[j - 1] + a * (m[j] - m[j - 1])))
+                if j not in used:        # wiggles near one maximum land on the same segment
+                    a = (p.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
+                    out.append((p.load_factor, p.displacement, m[j - 1] + a * (m[j] - m[j - 1])))
+                    used.add(j)
                 break
     return out
 
@@ -206,7 +209,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     if outcome.success or outcome.status == "stopped":
         return outcome
     if action == "stop":
-        return _probe(context, start, outcome, path, increments)
+        return _probe(context, start, outcome, path, increments, powers)
     rec = StepRecorder(start)
     _replay(rec, outcome)
     notes, current, c = [], outcome, _motion_monitor(start, outcome)
@@ -245,15 +248,21 @@ def _arc(context, start, outcome, path, increments, c, until_stable):
         prior, recent = (start.u, 0.0), outcome.state.u - start.u
     its = outcome.increment_iterations
     fast = max(FAST_ITERATIONS, int(np.median(its))) if len(its) else FAST_ITERATIONS
+    lams = [lam0]
+
+    def turned(lam, u):                 # the probe stops once the load factor turns back
+        lams.append(lam)
+        return len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0
+
     return mgdcm(path, outcome.state.u, lam0, arc_length=1.0 / increments,
                  max_increments=CONTINUATION_INCREMENTS if until_stable else PROBE_INCREMENTS,
                  target_load_factor=1.0, monitor=c, options=context.options,
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
-                 direction=recent, prior=prior)
+                 direction=recent, prior=prior, callback=None if until_stable else turned)
 
 
-def _probe(context, start, outcome, path, increments) -> StepOutcome:
+def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
     """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
     c = _motion_monitor(start, outcome)
     res = _arc(context, start, outcome, path, increments, c, until_stable=False)
@@ -263,6 +272,8 @@ def _probe(context, start, outcome, path, increments) -> StepOutcome:
     p = limits[0]
     where = "" if p.displacement is None else \
         f", displacement {p.displacement * 1e6:.4g} um of the most-moving node"
+    if powers is not None:
+        where = f" ({1e3 * np.max(powers(p.load_factor)):.4g} mW per crease){where}"
     msg = (f"limit point at load factor {p.load_factor:.6g}{where}: load control cannot pass "
            f"it (on_limit_point='continue' follows the path by arc length); {outcome.message}")
     return replace(outcome, status="limit_point", message=msg)
