@@ -7,7 +7,8 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
 
 * ``on_limit_point="stop"`` (default): a short arc-length probe from the last converged state;
   if it passes a load-factor maximum the step ends with status ``"limit_point"`` and the load
-  factor and displacement there in the message, otherwise the failure is unchanged;
+  factor and displacement there in the message, otherwise (and when the step failed in its
+  first increment) the failure is unchanged;
 * ``on_limit_point="continue"``: the step carries on by arc length (MGDCM) with its path
   parameter as the unknown load factor until it reaches 1 on a stable branch, recording the
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
@@ -208,8 +209,9 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     """
     if outcome.success or outcome.status == "stopped":
         return outcome
-    if action == "stop":
-        return _probe(context, start, outcome, path, increments, powers)
+    if action == "stop":        # a step failing in its first increment stays "failed"
+        return _probe(context, start, outcome, path, increments, powers) \
+            if len(outcome.load_factor) else outcome
     rec = StepRecorder(start)
     _replay(rec, outcome)
     notes, current, c = [], outcome, _motion_monitor(start, outcome)
