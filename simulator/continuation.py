@@ -54,6 +54,8 @@ logger = logging.getLogger(__name__)
 #: halve after those needing at least :data:`SLOW_ITERATIONS`.
 FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
+#: A change of the negative-eigenvalue count is a bifurcation when |cos(mode, q)| is below this.
+BIFURCATION_ALIGNMENT = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,7 +122,7 @@ class CriticalPoint:
 
     Attributes
     ----------
-    kind : {"limit_point", "bifurcation"}
+    kind : {"limit_point", "bifurcation", "stability_change"}
     load_factor : float
         Estimated load factor there (parabola through three points for a limit point).
     increment : int
@@ -266,7 +268,7 @@ class _Trace:
     def __init__(self, path, monitor, stability, u0, lam0, prior=None):
         self.path, self.monitor, self.check = path, monitor, stability
         self.history, self.residuals, self.stab, self.temps = [], [], [], []
-        self.iterations, self.cuts, self.critical = 0, 0, []
+        self.iterations, self.cuts, self.critical, self.align = 0, 0, [], []
         self.points, self.arc = [], []
         for u, lam in ([] if prior is None else [prior]) + [(u0, lam0)]:
             self._add(np.asarray(u, float), float(lam))
@@ -287,14 +289,18 @@ class _Trace:
         self.last = pt
         if self.check:
             self.stab.append(tangent_stability(pt.K))
+            self.align.append(self.stab[-1].load_alignment(pt.q))
 
     def measure(self, u) -> float | None:
         return None if self.monitor is None else float(self.monitor @ u.ravel())
 
     def _locate(self) -> list:
         """Critical points between accepted points: a limit point where the load factor passes
-        an extremum (located by a parabola through three points in arc length), a bifurcation
-        where the count of negative eigenvalues changes without one."""
+        an extremum (located by a parabola through three points in arc length); where the count
+        of negative eigenvalues changes without one, a bifurcation if the critical mode is
+        orthogonal to the load derivative q (|cos| below :data:`BIFURCATION_ALIGNMENT`), else a
+        "stability_change" (e.g. heating paths, whose load-factor extremum includes the
+        thermal feedback that the mechanical tangent leaves out)."""
         pts, out, o = self.points, [], self.offset
         lam = np.array([p[0] for p in pts])
         turns = [k for k in range(1, len(pts) - 1)
@@ -311,7 +317,9 @@ class _Trace:
         neg = [st.negative for st in self.stab]
         for j in range(1, len(neg)):              # history j is point j + o
             if neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j) for k in turns):
-                out.append(CriticalPoint("bifurcation", 0.5 * (lam[j + o - 1] + lam[j + o]), j,
+                a = min(self.align[j - 1], self.align[j])
+                kind = "bifurcation" if a < BIFURCATION_ALIGNMENT else "stability_change"
+                out.append(CriticalPoint(kind, 0.5 * (lam[j + o - 1] + lam[j + o]), j,
                                          self.measure(pts[j + o][1])))
         return sorted(out, key=lambda c: c.increment)
 

@@ -131,3 +131,43 @@ def test_displacement_control_rejects_uncontrollable_dof(path):
     c[6] = 1.0                                           # apex x: a vertical load never moves it
     with pytest.raises(ParameterError, match="cannot be controlled"):
         displacement_control(path, np.zeros((3, 3)), 0.0, c, 0.1)
+
+
+class Column(Truss):
+    """One vertical bar (EA, length 1) on a pin, its top held sideways by a spring k = 1 N/m:
+    under a vertical load it bifurcates (buckles sideways) at N = k L = 1 N."""
+
+    def __init__(self):
+        super().__init__()
+        self.nodes = np.array([[0, 0, 0], [0, 0, 0], [0, 0, 1.0]])
+        self.bars = np.array([[0, 2]])
+        self.dX = self.nodes[[2]] - self.nodes[[0]]
+        self.L0 = np.linalg.norm(self.dX, axis=1)
+        self.dofs = self.dofs[:1]
+
+    def evaluate(self, u, rest, hessian=True):
+        du = u[[2]] - u[[0]]
+        _, g, Hs = bar_kernel(self.dX, du, self.L0, np.full(1, EA), hessian)
+        f = np.bincount(self.dofs.ravel(), g.ravel(), minlength=9)
+        f[6] += 1.0 * u[2, 0]                                # lateral spring
+        K = None
+        if hessian:
+            Kf = np.zeros((9, 9))
+            Kf[np.ix_(self.dofs[0], self.dofs[0])] = Hs[0]
+            Kf[6, 6] += 1.0
+            K = sp.csr_matrix(Kf[np.ix_(self.free, self.free)])
+        return SimpleNamespace(f_int=f, K=K, energies={})
+
+
+def test_bifurcation_located_on_the_primary_path():
+    P = np.zeros(9)
+    P[8] = -1.0
+    path = LoadPath(Column(), np.zeros(9), P, np.zeros(0))
+    res = mgdcm(path, np.zeros((3, 3)), arc_length=0.1, target_load_factor=2.0,
+                max_arc_length=0.1)
+    assert res.success
+    kinds = [c.kind for c in res.critical_points]
+    assert kinds == ["bifurcation"]
+    # lateral stiffness k - N / L with N = EA eps (1 + eps) ... zero at N ~ 1 N
+    assert res.critical_points[0].load_factor == pytest.approx(1.0, abs=0.06)
+    assert res.stability[0].stable and not res.stability[-1].stable
