@@ -327,8 +327,8 @@ def snap_through(variant: str = "force", span: float = 1e-3, rise: float = 40e-6
 
     ``variant="force"``: a shallow two-panel roof (``roof_pattern``: span, rise, 20 um SU-8
     panels, a 20 um x 5 um ridge crease), pinned along both eaves and pushed down at its ridge
-    by ``load_mN`` times the load factor until the ridge has moved 2.5 rises (through the
-    inverted shape). ``variant="heated"``: the Miura lifter with a = 0.5 mm, b = 1 mm, gamma = 45
+    by ``load_mN`` times the load factor until the ridge centre has moved down 2.5 rises
+    (through the inverted shape); ``path.csv`` records that displacement. ``variant="heated"``: the Miura lifter with a = 0.5 mm, b = 1 mm, gamma = 45
     deg, W = 300 um, 4 x 2 cells over a substrate heated on all creases to ``power_mW``; it
     snaps at ~9.2 mW per crease, which load control cannot pass (``on_limit_point="continue"``).
     """
@@ -348,7 +348,8 @@ def snap_through(variant: str = "force", span: float = 1e-3, rise: float = 40e-6
     model = make_model(model.mesh, Supports({int(i): "xyz" for i in eaves}))
     ridge = np.unique(model.mesh.crease_nodes[0])
     force = -1e-3 * load_mN / len(ridge)
+    centre = int(model.mesh.crease_nodes[0][6])
     step = ArcLengthLoad({int(i): (0.0, 0.0, force) for i in ridge}, arc_length=arc_length,
                          max_increments=_steps_int("max_increments", max_increments),
-                         target_displacement=2.5 * rise)
+                         target_displacement=2.5 * rise, monitor=(centre, "-z"))
     return Case("snap_through", model, (step,), params, snap_through.__doc__)

@@ -12,7 +12,7 @@ Method
 * Roof (``get_case("snap_through")``): a shallow two-panel roof (span 1 mm, rise 40 um, 20 um
   SU-8 panels, 20 um x 5 um ridge crease) pinned along its eaves and pushed down at its ridge
   (reference load 1 mN). Three ways: MGDCM arc length (the case; load factor unknown, arc
-  length 0.1, until the ridge has moved 2.5 rises), displacement control of the ridge centre
+  length 0.1, until the ridge centre has moved 2.5 rises), displacement control of the ridge centre
   (same reference load, 60 equal increments to 2 rises) and load control (``Load`` to 1.5
   times the first limit load in 30 increments, Newton from each increment).
   Stability = no negative eigenvalue of the reduced tangent at the converged point.
@@ -32,7 +32,7 @@ times load factor; empty for the Miura), ``power [mW]`` (per crease; Miura), ``d
 [um]`` (roof: ridge centre, downwards; Miura: lift of the free end), ``stable`` (True/False;
 empty where not computed, i.e. load-controlled increments), ``negative_eigenvalues``.
 Figure ``snap_through.png``: (a) roof load vs ridge displacement, (b) Miura lift vs power;
-unstable branches dashed.
+unstable branches red dashed.
 """
 
 from __future__ import annotations
@@ -106,8 +106,9 @@ def _branches(ax, x, y, stable, **style):
     start = 0
     for k in range(1, len(s) + 1):
         if k == len(s) or s[k] != s[start]:
+            unstable = {} if s[start] else {"color": "tab:red"}
             ax.plot(x[max(start - 1, 0):k], y[max(start - 1, 0):k],
-                    ls="-" if s[start] else "--", **style)
+                    ls="-" if s[start] else "--", **{**style, **unstable})
             style.pop("label", None)
             start = k
 
@@ -121,12 +122,12 @@ def plot(df: pd.DataFrame):
     roof = df[df["table"] == "roof"]
     arc = roof[roof["method"] == "arc length"]
     _branches(ax_r, arc[DISP].to_numpy(), arc[LOAD].to_numpy(), arc["stable"].tolist(),
-              color="k", lw=2, label="arc length (dashed: unstable)")
+              color="k", lw=2, label="arc length (red dashed: unstable)")
     dc = roof[roof["method"] == "displacement control"]
     ax_r.plot(dc[DISP], dc[LOAD], "o", ms=4, mfc="none", color="0.4",
               label="displacement control")
     lc = roof[roof["method"] == "load control"]
-    ax_r.plot(lc[DISP], lc[LOAD], "x", ms=6, color="tab:red", label="load control")
+    ax_r.plot(lc[DISP], lc[LOAD], "x", ms=6, color="tab:blue", label="load control")
     ax_r.axhline(0, color="0.7", lw=0.8)
     ax_r.set_xlabel("ridge displacement (down) [um]")
     ax_r.set_ylabel("ridge load [mN]")
@@ -135,8 +136,8 @@ def plot(df: pd.DataFrame):
 
     miura = df[df["table"] == "miura"]
     _branches(ax_m, miura[POWER].to_numpy(float), miura[DISP].to_numpy(float),
-              miura["stable"].tolist(), color="k", lw=2, marker=".", ms=3,
-              label="heating (dashed: unstable)")
+              miura["stable"].tolist(), color="k", lw=1.5,
+              label="heating (red dashed: unstable)")
     ax_m.set_xlabel("power per crease [mW]")
     ax_m.set_ylabel("lift of the free end [um]")
     ax_m.set_title("(b) Miura lifter a = 0.5 mm, 45 deg, W = 300 um")
