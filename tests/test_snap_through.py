@@ -178,3 +178,41 @@ def test_heated_miura_passes_its_snap():
     assert any(v is False or v == False for v in stable)      # noqa: E712 (object array)
     stop = simulate(case.model, [Heat(dict(case.steps[0].power), increments=60)])
     assert stop.status == "limit_point" and "limit point at load factor" in stop.message
+
+
+def test_heat_continuation_matches_iterated_load_control():
+    """Arc length in the power (temperatures on the current shape) traces the same coupled
+    equilibria as load control with iterated coupling."""
+    from simulator.continuation import mgdcm
+    from simulator.steps.base import StepContext
+    from simulator.steps.limit import HeatPath
+
+    model = get_case("single_fold").model
+    heat = Heat({2: 20e-3}, increments=20, coupling="iterated", coupling_tol=1e-10)
+    lc = simulate(model, [heat])
+    start = lc.initial_state
+    path = HeatPath(StepContext(model, NewtonOptions()), start, heat.power_array(model.mesh),
+                    model.actuators.rotation_per_kelvin(model.mesh), iterated=True)
+    res = mgdcm(path, start.u, 0.0, arc_length=0.1, target_load_factor=1.0,
+                options=NewtonOptions(max_iter=60))
+    assert lc.success and res.success and res.load_factor == 1.0
+    end = path.state_at(res.u, 1.0)
+    assert np.max(np.abs(end.u - lc.state.u)) <= 1e-7 * np.max(np.abs(lc.state.u))
+    np.testing.assert_allclose(end.temperature, lc.state.temperature, atol=1e-6)
+    np.testing.assert_allclose(end.crease_power, lc.state.crease_power, rtol=1e-14)
+
+
+@pytest.mark.slow
+def test_miura_power_search_reports_a_snap():
+    """A Miura lifter heated past its snap in the design layer's stage: met, with the snap."""
+    import math
+
+    from design.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, miura_model
+
+    d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
+    model = miura_model(d)
+    stage = _LiftStage(model, tuple(heated_creases(d)), _lift_nodes(model, d), 0.0)
+    state, ok, _ = stage.heat(simulate(model, []).state, 12e-3, increments=60)
+    assert ok
+    res = stage.result(True, 12e-3, state, "criterion met")
+    assert res.met and "after a snap" in res.message and "mW per crease" in res.message
