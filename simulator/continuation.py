@@ -42,7 +42,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
 from .newton import DENSE_LIMIT, NewtonOptions
-from .stability import Stability, tangent_stability
+from .stability import tangent_stability
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
            "displacement_control"]

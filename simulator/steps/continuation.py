@@ -16,7 +16,7 @@ displacement).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from ..continuation import LoadPath, displacement_control, mgdcm
 from ..errors import ParameterError
 from ..model import _AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
-from .limit import record_continuation
+from .limit import at_rest, record_continuation
 from .mechanical import Load
 
 __all__ = ["ArcLengthLoad", "DisplacementControl"]
@@ -144,7 +144,7 @@ class ArcLengthLoad(Step):
                     callback=_progress(context, self.max_increments))
         rec = StepRecorder(state)
         record_continuation(rec, res, state.temperature, state.crease_power, c)
-        new = replace(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
+        new = at_rest(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
         return rec.finish(res.success, res.status, res.message, new, new.applied_load.ravel(),
                           res.evaluation)
 
@@ -217,7 +217,7 @@ class DisplacementControl(Step):
         along = float(P[self.node] @ d)
         record_continuation(rec, res, state.temperature, state.crease_power, c,
                             extra=lambda lam: {"reaction [N]": lam * along})
-        new = replace(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
+        new = at_rest(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
         return rec.finish(res.success, res.status, res.message, new, new.applied_load.ravel(),
                           res.evaluation)
 

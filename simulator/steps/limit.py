@@ -27,7 +27,7 @@ not depend on the increments), whose tangent ignores the shape dependence of the
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -37,8 +37,8 @@ from ..errors import ParameterError
 from ..properties import spring_rest_angles
 from .base import StepOutcome, StepRecorder
 
-__all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "check_on_limit_point", "continue_past_limit",
-           "record_continuation"]
+__all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "at_rest", "check_on_limit_point",
+           "continue_past_limit", "record_continuation"]
 
 #: Allowed values of ``on_limit_point``.
 LIMIT_POINT_ACTIONS = ("stop", "continue")
@@ -49,6 +49,14 @@ PROBE_INCREMENTS = 40
 CONTINUATION_INCREMENTS = 200
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
+
+
+def at_rest(state, **changes):
+    """``replace(state, **changes)`` for a quasi-static step: a state that carries a velocity
+    (time-integration steps) is left at rest (velocity None)."""
+    if any(f.name == "velocity" for f in fields(state)):
+        changes.setdefault("velocity", None)
+    return replace(state, **changes)
 
 
 def check_on_limit_point(step) -> None:
@@ -137,7 +145,7 @@ class HeatPath(LoadPath):
     def state_at(self, u, lam):
         """Simulation state at a converged point of the path."""
         T0, dT, c0, dc = self._lin if self._lin is not None else self.linearise(u)
-        return replace(self.start, u=u, spring_rest=self.rest(lam), temperature=T0 + lam * dT,
+        return at_rest(self.start, u=u, spring_rest=self.rest(lam), temperature=T0 + lam * dT,
                        crease_rest=c0 + lam * dc, crease_power=self.powers(lam))
 
 

@@ -8,7 +8,7 @@ persist into later steps (digest 7.3, 7.4).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from ..continuation import LoadPath
 from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
-from .limit import check_on_limit_point, continue_past_limit
+from .limit import at_rest, check_on_limit_point, continue_past_limit
 
 __all__ = ["SelfFold", "Load", "Gravity"]
 
@@ -98,7 +98,7 @@ class SelfFold(Step):
         path, rec = _follow(context, state, f, f, rest_end, self.increments)
 
         def end_state(u, t):
-            return replace(state, u=u,
+            return at_rest(state, u=u,
                            crease_rest=state.crease_rest + t * (target - state.crease_rest),
                            spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
 
@@ -165,7 +165,7 @@ class Load(Step):
                             self.increments)
 
         def end_state(u, t):
-            return replace(state, u=u, applied_load=state.applied_load + t * dF)
+            return at_rest(state, u=u, applied_load=state.applied_load + t * dF)
 
         new = end_state(path.u, path.t)
         outcome = rec.finish(path.success, path.status, path.message, new,
