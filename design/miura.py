@@ -182,11 +182,19 @@ class _LiftStage:
     def __init__(self, model, creases, nodes, target):
         self.model, self.creases, self.nodes, self.target = model, creases, nodes, target
         self.simulations = 0
+        self.snaps = []
 
     def heat(self, state, dp, increments=1, coupling="staggered"):
+        """Heat by ``dp`` per crease; a snap (limit point) is followed by arc length in the
+        power (``on_limit_point="continue"``) and noted for the result's message."""
+        base = float(state.crease_power.max(initial=0.0))
         res = simulate(self.model, [Heat({self.creases: dp}, increments=increments,
-                                         coupling=coupling)], state=state)
+                                         coupling=coupling, on_limit_point="continue")],
+                       state=state)
         self.simulations += 1
+        msg = res.steps[-1].message if res.steps else res.message
+        if res.success and "snap at" in msg:
+            self.snaps.append((base, base + dp, msg[msg.index("snap at"):].split("; load")[0]))
         return res.state, res.success, res.message
 
     def look(self, state):
@@ -201,6 +209,9 @@ class _LiftStage:
         if not met:
             message = (f"target lift {self.target * 1e6:g} um not reached (lift "
                        f"{lift * 1e6:.4g} um): {message}")
+        snaps = [text for lo, hi, text in self.snaps if lo < power <= hi + 1e-15]
+        if met and snaps:
+            message = f"{message} after a snap ({snaps[-1]})"
         return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
                                lift, tmax, self.simulations, len(self.creases))
 

@@ -35,6 +35,9 @@ from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
 from .steps import (AmbientTemperature, Coupling, Dynamics, Gravity, Heat, Load, SelfFold, Step,
                     StepContext, StepOutcome, StepRecorder, TransientHeat)
+from .steps import ArcLengthLoad, DisplacementControl
+from .continuation import ContinuationResult, CriticalPoint, LoadPath, displacement_control, mgdcm
+from .stability import Stability, tangent_stability
 from .thermal import ThermalParameters
 from .transient_heat import (REFERENCE_THETA, ThetaStepper, TransientHeatResult, capacity_vector,
                              integrate_heat, theta_step)
@@ -59,6 +62,9 @@ __all__ = [
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",
+    # path following through limit points
+    "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
+    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)

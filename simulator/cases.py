@@ -11,16 +11,19 @@ import inspect
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 
 from .bimorph import Actuators, Bimorph
 from .errors import ParameterError
 from .simulation import simulate
-from .steps import Gravity, Heat, SelfFold
+from .steps import ArcLengthLoad, Gravity, Heat, SelfFold
 from .materials import Material
 from .mesh import build_mesh
 from .model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
 from .example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
-                       miura_vertices, single_fold_pattern, strip_pattern, with_substrate)
+                       miura_vertices, roof_pattern, single_fold_pattern, strip_pattern,
+                       with_substrate)
 from .properties import BarHingeParameters
 from .newton import NewtonOptions
 from .thermal import REFERENCE_BETA, ThermalParameters
@@ -331,13 +334,14 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
 def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float = 1e-3,
                  gamma_deg: float = 60.0, crease_width: float = 200e-6, power_mW: float = 9.0,
                  thermal_steps: int = 250, substrate: bool = False, undercut: float = 100e-6,
-                 coupling: str = "staggered") -> Case:
+                 coupling: str = "staggered", on_limit_point: str = "stop") -> Case:
     """Miura-ori lifter (paper 6.2): left end clamped (first column of panels), right end lifts
     when all creases are heated; optionally over a substrate that cools the creases near it.
 
     Geometry and actuators of Example03 (digest 8.3): 10 um panels, 1 um creases, gold 0.2 um
     on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions
     (:func:`miura_sheet_model`).
+    ``on_limit_point="continue"`` follows a snap of the sheet by arc length in the power.
     """
     params = {k: v for k, v in locals().items()}
     _check(a=a, b=b, gamma_deg=gamma_deg, crease_width=crease_width, undercut=undercut)
@@ -346,7 +350,8 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     model = miura_sheet_model(a, b, gamma, m, n, crease_width, substrate=substrate,
                               undercut=undercut)
     steps = (Heat({tuple(miura_fold_signs(a, b, gamma, m, n)): _power(power_mW)},
-                  increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
+                  increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling,
+                  on_limit_point=on_limit_point),)
     return Case("miura_lifter", model, steps, params, miura_lifter.__doc__)
 
 
@@ -378,3 +383,41 @@ def crane(deactivated: bool = False, power_mW: float = 4.0, thermal_steps: int =
     steps = (Heat({c - 1: v for c, v in heat.items()},
                   increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling),)
     return Case("crane", model, steps, params, crane.__doc__)
+
+
+# ------------------------------------------------------------------------------ snap-through
+@_case(span="m", rise="m", depth="m", load_mN="mN", arc_length="-", power_mW="mW per crease")
+def snap_through(variant: str = "force", span: float = 1e-3, rise: float = 40e-6,
+                 depth: float = 500e-6, load_mN: float = 1.0, arc_length: float = 0.1,
+                 max_increments: int = 300, power_mW: float = 12.0,
+                 thermal_steps: int = 60) -> Case:
+    """Snap-through followed past its limit points by arc length (issue 9).
+
+    ``variant="force"``: a shallow two-panel roof (``roof_pattern``: span, rise, 20 um SU-8
+    panels, a 20 um x 5 um ridge crease), pinned along both eaves and pushed down at its ridge
+    by ``load_mN`` times the load factor until the ridge centre has moved down 2.5 rises
+    (through the inverted shape); ``path.csv`` records that displacement. ``variant="heated"``: the Miura lifter with a = 0.5 mm, b = 1 mm, gamma = 45
+    deg, W = 300 um, 4 x 2 cells over a substrate heated on all creases to ``power_mW``; it
+    snaps at ~9.2 mW per crease, which load control cannot pass (``on_limit_point="continue"``).
+    """
+    params = {k: v for k, v in locals().items()}
+    if variant == "heated":
+        case = miura_lifter(cells_x=4, cells_y=2, a=0.5e-3, b=1e-3, gamma_deg=45.0,
+                            crease_width=300e-6, power_mW=power_mW, thermal_steps=thermal_steps,
+                            substrate=True, on_limit_point="continue")
+        return Case("snap_through", case.model, case.steps, params, snap_through.__doc__)
+    if variant != "force":
+        raise ParameterError(f"variant = {variant!r}; use 'force' or 'heated'.")
+    _check(span=span, rise=rise, depth=depth, load_mN=load_mN, arc_length=arc_length)
+    pattern = roof_pattern(span=span, rise=rise, depth=depth)
+    model = make_model(pattern)
+    x = model.mesh.nodes[:, 0]
+    eaves = np.flatnonzero(np.isclose(x, 0) | np.isclose(x, span))
+    model = make_model(model.mesh, Supports({int(i): "xyz" for i in eaves}))
+    ridge = np.unique(model.mesh.crease_nodes[0])
+    force = -1e-3 * load_mN / len(ridge)
+    centre = int(model.mesh.crease_nodes[0][6])
+    step = ArcLengthLoad({int(i): (0.0, 0.0, force) for i in ridge}, arc_length=arc_length,
+                         max_increments=_steps_int("max_increments", max_increments),
+                         target_displacement=2.5 * rise, monitor=(centre, "-z"))
+    return Case("snap_through", model, (step,), params, snap_through.__doc__)

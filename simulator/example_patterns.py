@@ -18,7 +18,7 @@ from .pattern import Pattern
 from .polygons import centroids, unit_normals
 
 __all__ = ["single_fold_pattern", "strip_pattern", "double_fold_pattern", "miura_sheet_pattern",
-           "gripper_pattern", "crane_pattern"]
+           "gripper_pattern", "crane_pattern", "roof_pattern"]
 
 
 def _positive(**kwargs):
@@ -174,6 +174,23 @@ def crane_pattern(a: float = 1e-3, W: float = 100e-6, crease_thickness: float = 
     panels = [tuple(int(i) - 1 for i in p) for p in panels]
     return Pattern(v, panels, crease_width=W, crease_thickness=crease_thickness,
                    panel_thickness=panel_thickness, panel_material=material, crease_material=material)
+
+
+def roof_pattern(span: float = 1e-3, rise: float = 40e-6, depth: float = 500e-6,
+                 crease_width: float = 20e-6, crease_thickness: float = 5e-6,
+                 panel_thickness: float = 20e-6, material: Material = SU8) -> Pattern:
+    """Shallow two-panel roof: eaves at x = 0 and x = ``span`` (z = 0), ridge crease (edge 2)
+    at x = span / 2, z = ``rise``, all ``depth`` long in y. Pinned along the eaves and pushed
+    at the ridge it is a von Mises truss in every section (a snap-through). Lengths in metres.
+    """
+    _positive(span=span, rise=rise, depth=depth, crease_width=crease_width,
+              crease_thickness=crease_thickness, panel_thickness=panel_thickness)
+    h = span / 2
+    v = [(0, 0, 0), (h, 0, rise), (span, 0, 0), (0, depth, 0), (h, depth, rise),
+         (span, depth, 0)]
+    return Pattern(np.array(v, float), [(0, 1, 4, 3), (1, 2, 5, 4)], crease_width=crease_width,
+                   crease_thickness=crease_thickness, panel_thickness=panel_thickness,
+                   panel_material=material, crease_material=material)
 
 
 def with_substrate(pattern: Pattern, undercut: float, margin: float,

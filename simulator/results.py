@@ -194,14 +194,45 @@ class SimulationResult:
                for name, values in h["columns"].items()},
         })
 
+    def path_frame(self):
+        """Equilibrium path of the steps with path-following columns (one row per increment),
+        or None if no step has them.
+
+        Columns: ``step`` (record index), ``stage``, ``increment``, ``load_factor``,
+        ``power [mW]`` (largest crease power), then the step columns with metres shown in um
+        (``displacement [um]``), e.g. ``stable``, ``negative_eigenvalues``,
+        ``lowest_eigenvalue [N/m]``, ``reaction [N]``; values a row lacks are empty.
+        """
+        import pandas as pd
+
+        frames, record = [], 1
+        for step in self.steps:
+            m = step.increments
+            if step.columns:
+                data = {"step": np.arange(record, record + m), "stage": [step.name] * m,
+                        "increment": np.arange(1, m + 1), "load_factor": step.load_factor,
+                        "power [mW]": 1e3 * step.power_history.max(axis=1, initial=0.0)}
+                for name, values in step.columns.items():
+                    if name.endswith(" [m]"):
+                        name = name[:-4] + " [um]"
+                        values = [None if v is None else 1e6 * v for v in values]
+                    data[name] = list(values)
+                frames.append(pd.DataFrame(data))
+            record += m
+        return pd.concat(frames, ignore_index=True) if frames else None
+
     def save(self, directory, metadata: dict | None = None) -> pathlib.Path:
-        """Write ``creases.csv``, ``nodes.npz`` and ``meta.json`` into ``directory``.
+        """Write ``creases.csv``, ``nodes.npz``, ``meta.json`` and, when a step followed a path
+        (:meth:`path_frame`), ``path.csv`` into ``directory``.
 
         ``metadata`` (e.g. the case name and its parameters) is added to ``meta.json``.
         """
         out = pathlib.Path(directory)
         out.mkdir(parents=True, exist_ok=True)
         self.to_frame().to_csv(out / "creases.csv", index=False)
+        path = self.path_frame()
+        if path is not None:
+            path.to_csv(out / "path.csv", index=False)
         h = self.history
         mesh = self.model.mesh
         np.savez_compressed(out / "nodes.npz", reference_positions=mesh.nodes,

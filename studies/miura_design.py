@@ -16,10 +16,13 @@ Method
   :data:`~design.miura.MIURA_SPACE`), each design heated to 4, 8 and 12 mW per crease
   (20 staggered increments per segment, from saved states). *Lift per power* = lift of the
   free end / total power of all heated creases [um/mW]. Designs whose creases collapse in
-  the mesh, and designs whose heating fails (e.g. a = 0.5 mm, gamma 45 or 60 deg,
-  W = 300 um above 8 mW: the solver gives up near a contact kink after its step-cut budget,
-  in about 4 s), are listed with ``success = False`` and the reason. No time limit by
-  default (``TIME_LIMIT = None``; results must not depend on the machine's speed).
+  the mesh, and designs whose heating fails, are listed with ``success = False`` and the
+  reason. Heating follows snaps (limit points) by arc length in the power
+  (``on_limit_point="continue"``, issue 9): a = 0.5 mm, W = 300 um snaps at 9.2 mW per
+  crease (gamma 45 deg) and 10.8 mW (gamma 60 deg) and is followed past it; gamma 60 deg
+  then fails at 12 mW on the unstable branch of a second snap (with two contact pairs
+  active). No time limit by default (``TIME_LIMIT = None``; results must not depend on the
+  machine's speed).
   Designs are spread over a 2-process executor.
 * Optimum: :class:`~design.miura.MiuraProblem` (target lift 200 um, bisect power search,
   objective = total power, constraints = size bounds and the hottest crease node below

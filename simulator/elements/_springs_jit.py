@@ -78,6 +78,7 @@ def _kernel(x, k, theta0, want_hess, energy, grad, hess):
         A = _dot(w[RIJ], w[RKJ]) / rr
         B = _dot(w[RKL], w[RKJ]) / rr
         d = theta - theta0[e]
+        d -= 2 * math.pi * math.floor(d / (2 * math.pi) + 0.5)      # periodic: see springs.py
         moment = k[e] * d
         energy[e] = 0.5 * moment * d
         for a in range(3):

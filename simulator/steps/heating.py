@@ -27,6 +27,7 @@ from ..errors import ParameterError
 from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
+from .limit import HeatPath, check_on_limit_point, continue_past_limit
 
 __all__ = ["Heat", "AmbientTemperature", "Coupling", "coupled_increments"]
 
@@ -147,6 +148,11 @@ class Heat(Step):
     coupling_tol : float
         Temperature agreement [K] that ends the "iterated" loop of an increment.
     max_coupling_iterations : int
+    on_limit_point : {"stop", "continue"}
+        When the heated structure reaches a limit point (it snaps): end with status
+        "limit_point" (default), or continue by arc length in the power (temperatures on the
+        current shape, :class:`~simulator.steps.limit.HeatPath`) through the unstable branch
+        to the step's final power.
     """
 
     power: Mapping = field(default_factory=dict)
@@ -155,9 +161,11 @@ class Heat(Step):
     coupling_tol: float = 1e-6
     max_coupling_iterations: int = 20
     name: str = "heat"
+    on_limit_point: str = "stop"
 
     def __post_init__(self):
         check_increments(self)
+        check_on_limit_point(self)
         _coupling(self)
         for key, v in dict(self.power).items():
             if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
@@ -184,12 +192,27 @@ class Heat(Step):
         s = np.arange(1, self.increments + 1)[:, None] / self.increments
         powers = state.crease_power + s * dP
         ambient = np.full(self.increments, state.room_temperature)
-        return coupled_increments(context, state, powers, ambient, _coupling(self))
+        outcome = coupled_increments(context, state, powers, ambient, _coupling(self))
+        if outcome.success:
+            return outcome
+        path = HeatPath(context, state, dP, _rotation_per_kelvin(context.model),
+                        iterated=self.coupling == "iterated")
+
+        def resume(mid, lam):
+            n = max(1, round((1 - lam) * self.increments))
+            s = lam + (1 - lam) * np.arange(1, n + 1)[:, None] / n
+            out = coupled_increments(context, mid, state.crease_power + s * dP,
+                                     np.full(n, state.room_temperature), _coupling(self))
+            return replace(out, load_factor=s[:len(out.load_factor), 0])
+
+        return continue_past_limit(context, state, outcome, path, self.increments,
+                                   self.on_limit_point, path.state_at, resume, path.powers)
 
     def describe(self) -> dict:
         return {"power_added [mW]": {str(k): 1e3 * float(v) for k, v in
                                      dict(self.power).items()},
-                "increments": self.increments, "coupling": self.coupling}
+                "increments": self.increments, "coupling": self.coupling,
+                "on_limit_point": self.on_limit_point}
 
 
 @dataclass(frozen=True)

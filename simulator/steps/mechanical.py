@@ -8,15 +8,17 @@ persist into later steps (digest 7.3, 7.4).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..model import STANDARD_GRAVITY, Model, gravity_loads
+from ..continuation import LoadPath
 from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
+from .limit import at_rest, check_on_limit_point, continue_past_limit
 
 __all__ = ["SelfFold", "Load", "Gravity", "node_vectors", "check_folds", "crease_targets"]
 
@@ -77,6 +79,20 @@ def _follow(context: StepContext, state, f_start, f_end, rest_end, increments):
     return path, rec
 
 
+def _resume(context, mid, lam, f_end, rest_end, increments, end_state) -> StepOutcome:
+    """Load control from a converged state ``mid`` at load factor ``lam`` to the end of the
+    step (after a snap passed by arc length); records carry the step's load factor."""
+    n = max(1, round((1 - lam) * increments))
+    path = follow_path(context.system, mid.u, mid.applied_load.ravel(), f_end,
+                       mid.spring_rest, rest_end, n, context.options)
+    rec = StepRecorder(mid)
+    rec.add_path(path, mid.temperature, mid.crease_power)
+    rec._rows["load_factor"] = [lam + (1 - lam) * t for t in rec._rows["load_factor"]]
+    new = end_state(path.u, lam + (1 - lam) * path.t)
+    return rec.finish(path.success, path.status, path.message, new, new.applied_load.ravel(),
+                      path.evaluation)
+
+
 @dataclass(frozen=True)
 class SelfFold(Step):
     """Drive crease rest angles linearly to target fold angles (digest 7.3).
@@ -89,15 +105,20 @@ class SelfFold(Step):
     increments : int
     reset_others : bool
         Unlisted creases go to flat (True, the reference behaviour) or keep their rest angle.
+    on_limit_point : {"stop", "continue"}
+        At a limit point of the rest-angle path: end with status "limit_point", or continue
+        by arc length with the rest-angle parameter as the unknown (see :mod:`.limit`).
     """
 
     folds: Mapping = field(default_factory=dict)
     increments: int = 50
     reset_others: bool = True
     name: str = "self_fold"
+    on_limit_point: str = "stop"
 
     def __post_init__(self):
         check_increments(self)
+        check_on_limit_point(self)
         check_folds(self.folds, "SelfFold")
 
     def run(self, context: StepContext, state) -> StepOutcome:
@@ -107,15 +128,25 @@ class SelfFold(Step):
         rest_end = spring_rest_angles(mesh, target, context.model.params)
         f = state.applied_load.ravel()
         path, rec = _follow(context, state, f, f, rest_end, self.increments)
-        t = path.t
-        new = replace(state, u=path.u, velocity=None,
-                      crease_rest=state.crease_rest + t * (target - state.crease_rest),
-                      spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
-        return rec.finish(path.success, path.status, path.message, new, f, path.evaluation)
+
+        def end_state(u, t):
+            return at_rest(state, u=u,
+                           crease_rest=state.crease_rest + t * (target - state.crease_rest),
+                           spring_rest=state.spring_rest + t * (rest_end - state.spring_rest))
+
+        outcome = rec.finish(path.success, path.status, path.message, end_state(path.u, path.t),
+                             f, path.evaluation)
+        lp = LoadPath(context.system, f, np.zeros_like(f), state.spring_rest,
+                      rest_end - state.spring_rest)
+        return continue_past_limit(
+            context, state, outcome, lp, self.increments, self.on_limit_point, end_state,
+            lambda mid, lam: _resume(context, mid, lam, f, rest_end, self.increments,
+                                     end_state))
 
     def describe(self) -> dict:
         return {"folds [rad]": {str(k): float(v) for k, v in dict(self.folds).items()},
-                "increments": self.increments, "reset_others": self.reset_others}
+                "increments": self.increments, "reset_others": self.reset_others,
+                "on_limit_point": self.on_limit_point}
 
 
 @dataclass(frozen=True)
@@ -127,14 +158,19 @@ class Load(Step):
     forces : mapping {node: (fx, fy, fz)} or (n_nodes, 3) array
         TOTAL load added by this step [N] (the reference gives it per increment).
     increments : int
+    on_limit_point : {"stop", "continue"}
+        At a limit point: end with status "limit_point", or continue by arc length with the
+        load factor as the unknown (see :mod:`.limit`).
     """
 
     forces: object
     increments: int = 50
     name: str = "load"
+    on_limit_point: str = "stop"
 
     def __post_init__(self):
         check_increments(self)
+        check_on_limit_point(self)
 
     def load_array(self, model: Model) -> np.ndarray:
         """(n_nodes, 3) load added by the step [N]."""
@@ -145,13 +181,22 @@ class Load(Step):
         f0 = state.applied_load.ravel()
         path, rec = _follow(context, state, f0, f0 + dF.ravel(), state.spring_rest,
                             self.increments)
-        new = replace(state, u=path.u, velocity=None,
-                      applied_load=state.applied_load + path.t * dF)
-        return rec.finish(path.success, path.status, path.message, new,
-                          new.applied_load.ravel(), path.evaluation)
+
+        def end_state(u, t):
+            return at_rest(state, u=u, applied_load=state.applied_load + t * dF)
+
+        new = end_state(path.u, path.t)
+        outcome = rec.finish(path.success, path.status, path.message, new,
+                             new.applied_load.ravel(), path.evaluation)
+        lp = LoadPath(context.system, f0, dF.ravel(), state.spring_rest)
+        return continue_past_limit(
+            context, state, outcome, lp, self.increments, self.on_limit_point, end_state,
+            lambda mid, lam: _resume(context, mid, lam, (f0 + dF.ravel()), state.spring_rest,
+                                     self.increments, end_state))
 
     def describe(self) -> dict:
-        return {"total_load [N]": self.load_sum(), "increments": self.increments}
+        return {"total_load [N]": self.load_sum(), "increments": self.increments,
+                "on_limit_point": self.on_limit_point}
 
     def load_sum(self) -> list | None:
         if isinstance(self.forces, Mapping):

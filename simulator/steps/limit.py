@@ -1,0 +1,297 @@
+"""What load-controlled steps do at a limit point, and the heating path for continuation.
+
+Load control fails where the equilibrium path turns back (a limit point: the tangent is
+singular there and Newton stalls). :func:`continue_past_limit` is called by
+:class:`~simulator.steps.SelfFold`, :class:`~simulator.steps.Load` and
+:class:`~simulator.steps.Heat` when their load control fails:
+
+* ``on_limit_point="stop"`` (default): a short arc-length probe from the last converged state;
+  if it passes a load-factor maximum the step ends with status ``"limit_point"`` and the load
+  factor and displacement there in the message, otherwise (and when the step failed in its
+  first increment) the failure is unchanged;
+* ``on_limit_point="continue"``: the step carries on by arc length (MGDCM) with its path
+  parameter as the unknown load factor until it reaches 1 on a stable branch, recording the
+  unstable branch in between (column ``stable``); the message gives the snaps (load factor,
+  power for heating, and the jump of the most-moving node's displacement).
+
+Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
+temperatures are affine in lambda (the heat problem is linear in the power), which gives the
+rest angles ``rest0 + lambda R`` and ``q = dr/dlambda`` exactly. Which shape: with the step's
+``coupling="staggered"`` (default, as the load-controlled increments) the temperatures are
+solved on the shape of the last converged point at the start of every increment, so the
+corrector is a true Newton method; with ``"iterated"`` they are solved on the current shape at
+every corrector iteration (the fixed point of the iterated coupling, so the traced curve does
+not depend on the increments), whose tangent ignores the shape dependence of the conductivity
+(the corrector then converges linearly in that weak coupling).
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+
+import numpy as np
+
+from ..bimorph import crease_temperature_weights
+from ..continuation import FAST_ITERATIONS, LoadPath, mgdcm
+from ..errors import ParameterError
+from ..properties import spring_rest_angles
+from .base import StepOutcome, StepRecorder
+
+__all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "at_rest", "check_on_limit_point",
+           "continue_past_limit", "record_continuation"]
+
+#: Allowed values of ``on_limit_point``.
+LIMIT_POINT_ACTIONS = ("stop", "continue")
+#: Arc-length increments at most of the probe that looks for a limit point after a failure
+#: (it stops as soon as the load factor turns).
+PROBE_INCREMENTS = 40
+#: Arc-length increments at most per snap with on_limit_point="continue".
+CONTINUATION_INCREMENTS = 200
+#: Load-control failures (snaps) passed by arc length at most within one step.
+MAX_SNAPS = 5
+
+
+def at_rest(state, **changes):
+    """``replace(state, **changes)`` for a quasi-static step: a state that carries a velocity
+    (time-integration steps) is left at rest (velocity None)."""
+    if any(f.name == "velocity" for f in fields(state)):
+        changes.setdefault("velocity", None)
+    return replace(state, **changes)
+
+
+def check_on_limit_point(step) -> None:
+    """Raise :class:`ParameterError` unless ``step.on_limit_point`` is allowed."""
+    if step.on_limit_point not in LIMIT_POINT_ACTIONS:
+        raise ParameterError(f"{type(step).__name__}.on_limit_point = {step.on_limit_point!r}; "
+                             "use 'stop' (end with status 'limit_point') or 'continue' (arc "
+                             "length past it).")
+
+
+def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=None,
+                        extra=None) -> None:
+    """Record every accepted point of a ContinuationResult with its stability columns.
+
+    ``powers(lam)`` gives the crease powers of a point (default ``power``); ``extra(lam)`` more
+    named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none).
+    """
+    rec.iterations += res.iterations
+    rec.cuts += res.cuts
+    for k, ((lam, u, its), norms) in enumerate(zip(res.history, res.residual_norms)):
+        st = res.stability[k] if res.stability else None
+        temp = res.temperatures[k] if res.temperatures[k] is not None else temperature
+        cols = {} if st is None else {"stable": st.stable, "negative_eigenvalues": st.negative,
+                                      "lowest_eigenvalue [N/m]": st.lowest}
+        if c is not None:
+            cols["displacement [m]"] = float(c @ u.ravel())
+        if extra is not None:
+            cols.update(extra(lam))
+        rec.record(lam, u, temp, power if powers is None else powers(lam), its, norms, **cols)
+
+
+
+class HeatPath(LoadPath):
+    """Heating path: crease powers ``P0 + lambda dP`` with temperatures on the current shape.
+
+    Parameters
+    ----------
+    context : StepContext
+    start : SimulationState at the start of the heating step (reference temperatures and rest
+        angles of the bimorph actuation, powers P0)
+    dP : (C,) power added per crease row over the step [W]
+    rotation_per_kelvin : (C,) actuator rest-angle change per kelvin [rad/K]
+    iterated : bool
+        Temperatures on the current shape at every evaluation (True) or on the shape given to
+        :meth:`begin_increment` (False, staggered).
+    """
+
+    def __init__(self, context, start, dP, rotation_per_kelvin, iterated=False):
+        model = context.model
+        self.mesh, self.params, self.tm = model.mesh, model.params, context.thermal
+        self.rot, self.w = rotation_per_kelvin, crease_temperature_weights()
+        self.start, self.dP = start, np.asarray(dP, float)
+        self.q = np.column_stack([self.tm.heat_vector(start.crease_power),
+                                  self.tm.heat_vector(self.dP)])
+        super().__init__(context.system, start.applied_load.ravel(),
+                         np.zeros(self.mesh.n_dof), start.spring_rest)
+        self.iterated, self._lin = iterated, None
+
+    def begin_increment(self, u):
+        """Staggered coupling: solve the temperatures on the shape ``u`` for the increment."""
+        if not self.iterated:
+            self._lin = self.linearise(u)
+
+    def linearise(self, u):
+        """Temperatures at lambda = 0 and per unit lambda on the shape ``u``; sets the
+        rest angles ``rest0 + lambda R``. Returns (T0, dT, crease rest at 0, per unit)."""
+        room = self.start.room_temperature
+        T = self.tm.solve(self.mesh.nodes + u, self.q, room)
+        T0, dT = T[:, 0], T[:, 1] - room
+        cn = self.mesh.crease_nodes
+        c0 = self.start.crease_rest + self.rot * ((T0 - self.start.temperature)[cn] @ self.w)
+        dc = self.rot * (dT[cn] @ self.w)
+        self.rest0 = spring_rest_angles(self.mesh, c0, self.params)
+        self.R = spring_rest_angles(self.mesh, c0 + dc, self.params) - self.rest0
+        return T0, dT, c0, dc
+
+    def at(self, u, lam):
+        if self.iterated or self._lin is None:
+            self._lin = self.linearise(u)
+        T0, dT, _, _ = self._lin
+        return replace(super().at(u, lam), temperature=T0 + lam * dT)
+
+    def powers(self, lam):
+        return self.start.crease_power + lam * self.dP
+
+    def state_at(self, u, lam):
+        """Simulation state at a converged point of the path."""
+        T0, dT, c0, dc = self._lin if self._lin is not None else self.linearise(u)
+        return at_rest(self.start, u=u, spring_rest=self.rest(lam), temperature=T0 + lam * dT,
+                       crease_rest=c0 + lam * dc, crease_power=self.powers(lam))
+
+
+def _replay(rec: StepRecorder, outcome: StepOutcome) -> None:
+    """Copy the records of a (failed) load-controlled outcome into ``rec``."""
+    rec.iterations += outcome.iterations
+    rec.cuts += outcome.cuts
+    for k in range(len(outcome.load_factor)):
+        rec.record(outcome.load_factor[k], outcome.u[k], outcome.temperature[k],
+                   outcome.power[k], int(outcome.increment_iterations[k]),
+                   outcome.residual_norms[k], **{n: v[k] for n, v in outcome.columns.items()})
+
+
+def _motion_monitor(start, outcome) -> np.ndarray:
+    """(n_dof,) weights of the most-moving node's displacement along its motion so far."""
+    du = outcome.state.u - start.u
+    node = int(np.argmax(np.linalg.norm(du, axis=1)))
+    c = np.zeros(du.size)
+    n = np.linalg.norm(du[node])
+    c[3 * node:3 * node + 3] = du[node] / n if n > 0 else (0.0, 0.0, 1.0)
+    return c
+
+
+def _snaps(res, c) -> list:
+    """[(load factor, displacement before, after)] of every snap: a limit point where the path
+    turned back, and the point where it crosses that load factor again moving forward."""
+    lam = np.array([h[0] for h in res.history])
+    m = np.array([float(c @ h[1].ravel()) for h in res.history])
+    out, used = [], set()
+    for p in res.critical_points:
+        k = p.increment
+        if p.kind != "limit_point" or not p.maximum:
+            continue                                   # only maxima (the path heads up)
+        for j in range(k + 1, len(lam)):
+            if lam[j - 1] < p.load_factor <= lam[j]:
+                if j not in used:        # wiggles near one maximum land on the same segment
+                    a = (p.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
+                    out.append((p.load_factor, p.displacement, m[j - 1] + a * (m[j] - m[j - 1])))
+                    used.add(j)
+                break
+    return out
+
+
+def continue_past_limit(context, start, outcome: StepOutcome, path, increments: int,
+                        action: str, end_state, resume, powers=None) -> StepOutcome:
+    """After a failed load-controlled step: look for a limit point, or continue past it.
+
+    Parameters
+    ----------
+    context : StepContext
+    start : SimulationState at the start of the step
+    outcome : StepOutcome of the load-controlled part (returned unchanged if it succeeded)
+    path : LoadPath whose load factor is the step's path parameter (0 at the start, 1 at the
+        end); ``outcome.state`` lies on it at the last recorded load factor
+    increments : int
+        The step's nominal increments (the arc length is ``1 / increments``, the first
+        predictor as long as the last load-controlled increment; the arc length doubles after
+        increments as easy as the median load-controlled one).
+    action : "stop" or "continue"
+    end_state : callable ``(u, lam) -> SimulationState`` at a converged point
+    resume : callable ``(state, lam) -> StepOutcome``
+        Load control from a converged state at ``lam`` to the end of the step (records with
+        the step's load factor).
+    powers : callable ``lam -> (C,) powers [W]``, optional (heating steps)
+
+    With "continue", arc length takes over from the last converged state until the path is
+    stable again beyond the snap (or reaches the end), then load control resumes; this repeats
+    for up to :data:`MAX_SNAPS` failures.
+    """
+    if outcome.success or outcome.status == "stopped":
+        return outcome
+    if action == "stop":        # a step failing in its first increment stays "failed"
+        return _probe(context, start, outcome, path, increments, powers) \
+            if len(outcome.load_factor) else outcome
+    rec = StepRecorder(start)
+    _replay(rec, outcome)
+    notes, current, c = [], outcome, _motion_monitor(start, outcome)
+    for _ in range(MAX_SNAPS):
+        res = _arc(context, start, current, path, increments, c, until_stable=True)
+        record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
+                            powers=powers)
+        state = end_state(res.u, res.load_factor) if res.history else current.state
+        lam0 = float(current.load_factor[-1]) if len(current.load_factor) else 0.0
+        notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
+                     f"{res.message}" + _snap_text(res, c, powers))
+        if not res.success or res.load_factor >= 1.0 - 1e-12:
+            return rec.finish(res.success, res.status, "; ".join(notes), state,
+                              state.applied_load.ravel(), res.evaluation)
+        current = resume(state, res.load_factor)
+        _replay(rec, current)
+        if current.success or current.status == "stopped":
+            notes.append(f"load control from load factor {res.load_factor:.6g}: "
+                         f"{current.message}")
+            return rec.finish(current.success, current.status, "; ".join(notes),
+                              current.state, current.f_ext, current.evaluation)
+    return rec.finish(False, "failed", "; ".join(notes) + f"; more than {MAX_SNAPS} snaps",
+                      current.state, current.f_ext, current.evaluation)
+
+
+def _arc(context, start, outcome, path, increments, c, until_stable):
+    """MGDCM from the last state of a failed load-controlled outcome towards load factor 1."""
+    lam0 = float(outcome.load_factor[-1]) if len(outcome.load_factor) else 0.0
+    n = len(outcome.u)
+    # first predictor: the mean displacement per load-controlled increment, along the recent
+    # motion (the last increments before a failure can be vanishingly small)
+    step = float(np.linalg.norm((outcome.state.u - start.u).ravel()[path.free])) / max(n, 1)
+    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else (start.u, 0.0)
+    recent = outcome.state.u - prior[0]
+    if not np.any(recent):
+        prior, recent = (start.u, 0.0), outcome.state.u - start.u
+    its = outcome.increment_iterations
+    fast = max(FAST_ITERATIONS, int(np.median(its))) if len(its) else FAST_ITERATIONS
+    lams = [lam0]
+
+    def turned(lam, u):                 # the probe stops once the load factor turns back
+        lams.append(lam)
+        return len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0
+
+    return mgdcm(path, outcome.state.u, lam0, arc_length=1.0 / increments,
+                 max_increments=CONTINUATION_INCREMENTS if until_stable else PROBE_INCREMENTS,
+                 target_load_factor=1.0, monitor=c, options=context.options,
+                 step_norm=step if step > 0 else None, fast_iterations=fast,
+                 stability=until_stable, until_stable=until_stable,
+                 direction=recent, prior=prior, callback=None if until_stable else turned)
+
+
+def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
+    """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
+    c = _motion_monitor(start, outcome)
+    res = _arc(context, start, outcome, path, increments, c, until_stable=False)
+    limits = [p for p in res.critical_points if p.kind == "limit_point"]
+    if not limits:
+        return outcome
+    p = limits[0]
+    where = "" if p.displacement is None else \
+        f", displacement {p.displacement * 1e6:.4g} um of the most-moving node"
+    if powers is not None:
+        where = f" ({1e3 * np.max(powers(p.load_factor)):.4g} mW per crease){where}"
+    msg = (f"limit point at load factor {p.load_factor:.6g}{where}: load control cannot pass "
+           f"it (on_limit_point='continue' follows the path by arc length); {outcome.message}")
+    return replace(outcome, status="limit_point", message=msg)
+
+
+def _snap_text(res, c, powers) -> str:
+    return "".join(
+        f"; snap at load factor {lam:.6g}"
+        + ("" if powers is None else f" ({1e3 * np.max(powers(lam)):.4g} mW per crease)")
+        + f": displacement jumps {1e6 * (after - before):.4g} um"
+        for lam, before, after in _snaps(res, c))

@@ -1,0 +1,218 @@
+"""Snap-through of a bar-and-hinge model: the ``snap_through`` case, path-following steps,
+load-control limit-point handling, agreement with load control, bad inputs."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from simulator import (ArcLengthLoad, DisplacementControl, Gravity, Heat, Load, NewtonOptions,
+                       SelfFold, get_case, simulate)
+from simulator.errors import ParameterError
+from simulator.model import gravity_loads
+
+
+@pytest.fixture(scope="module")
+def roof():
+    case = get_case("snap_through")
+    return case, case.run()
+
+
+#: Newton gives up at the limit point with this iteration cap (with 30 it jumps to the other
+#: branch in one increment, which is not a failure).
+STALLS = NewtonOptions(max_iter=8)
+
+
+def _ridge_load(case, scale=1.0):
+    return {n: scale * np.asarray(f) for n, f in case.steps[0].forces.items()}
+
+
+def test_snap_through_rises_falls_and_rises_again(roof):
+    case, res = roof
+    assert res.success, res.message
+    step = res.steps[0]
+    lam = step.load_factor
+    stable = step.columns["stable"].astype(bool)
+    top = int(np.argmax(np.diff(lam) < 0))                  # first local maximum
+    bottom = top + int(np.argmax(np.diff(lam[top:]) > 0))   # the minimum after it
+    assert 0 < top < bottom < len(lam) - 1 and lam[bottom] < 0 < lam[top]
+    assert lam[-1] > lam[top]                               # rises again past the first peak
+    assert np.all(np.diff(lam[:top]) > 0) and np.all(np.diff(lam[top + 1:bottom]) < 0)
+    assert stable[:top - 1].all() and stable[bottom + 2:].all()
+    assert not stable[top + 2:bottom - 1].any()             # unstable between the limit points
+    assert "limit point at load factor" in step.message
+    rise = case.parameters["rise"]
+    assert step.columns["displacement [m]"][-1] == pytest.approx(2.5 * rise, rel=1e-9)
+
+
+def test_stable_branches_coincide_with_load_control(roof):
+    case, res = roof
+    step = res.steps[0]
+    top = int(np.argmax(np.diff(step.load_factor) < 0))
+    k = top // 2                                            # a point of the first branch
+    lam = float(step.load_factor[k])
+    lc = simulate(case.model, [Load(_ridge_load(case, lam), increments=10)])
+    assert lc.success
+    ref = step.u_history[k]
+    assert np.max(np.abs(lc.state.u - ref)) <= 1e-8 * np.max(np.abs(ref))
+    # far branch: load control snaps there only with on_limit_point="continue"
+    lams = step.load_factor
+    j = int(np.flatnonzero((lams > 1.1 * lams[top]) & (np.arange(len(lams)) > top))[0])
+    lam = float(lams[j])
+    cont = simulate(case.model, [Load(_ridge_load(case, lam), increments=20,
+                                      on_limit_point="continue")], options=STALLS)
+    assert cont.success, cont.message
+    assert "snap at load factor" in cont.steps[0].message
+    ref = step.u_history[j]
+    assert np.max(np.abs(cont.state.u - ref)) <= 1e-8 * np.max(np.abs(ref))
+    assert not cont.steps[0].columns["stable"][np.not_equal(
+        cont.steps[0].columns["stable"], None)].all()       # it recorded the unstable branch
+
+
+def test_load_control_stops_with_limit_point_status(roof):
+    case, res = roof
+    lam = res.steps[0].load_factor
+    peak = float(lam[np.argmax(np.diff(lam) < 0)])
+    out = simulate(case.model, [Load(_ridge_load(case, 1.1 * peak), increments=20)],
+                   options=STALLS)
+    assert not out.success and out.status == "limit_point"
+    assert "limit point at load factor" in out.message
+    lam = float(out.message.split("limit point at load factor ")[1].split(",")[0])
+    assert lam * 1.1 * peak == pytest.approx(peak, rel=5e-3)
+
+
+def test_displacement_control_follows_the_same_path(roof):
+    case, res = roof
+    mesh = case.model.mesh
+    centre = int(mesh.crease_nodes[0][6])
+    rise = case.parameters["rise"]
+    dc = simulate(case.model, [DisplacementControl(centre, "-z", 2 * rise, increments=40,
+                                                   forces=_ridge_load(case))])
+    assert dc.success, dc.message
+    step = dc.steps[0]
+    assert step.columns["displacement [m]"][-1] == pytest.approx(2 * rise, rel=1e-12)
+    ref = res.steps[0].load_factor
+    assert step.load_factor.max() == pytest.approx(ref[np.argmax(np.diff(ref) < 0)], rel=5e-3)
+    assert step.load_factor.min() == pytest.approx(ref.min(), rel=5e-3)
+    assert "reaction [N]" in step.columns
+
+
+def test_path_csv_written(roof, tmp_path):
+    case, res = roof
+    res.save(tmp_path)
+    df = pd.read_csv(tmp_path / "path.csv")
+    assert {"load_factor", "displacement [um]", "stable"} <= set(df.columns)
+    assert len(df) == res.steps[0].increments and (~df["stable"]).any()
+    meta = json.loads((tmp_path / "meta.json").read_text())
+    assert meta["steps"][0]["name"] == "arc_length_load"
+
+
+@pytest.mark.parametrize("name,overrides", [
+    ("single_fold", {}), ("double_fold", {"gravity": False}), ("miura_lifter", {}),
+    ("crane", {})])
+def test_arc_length_agrees_with_load_control_without_limit_points(name, overrides):
+    model = get_case(name, **overrides).model
+    load = gravity_loads(model.mesh, 9.8)
+    lc = simulate(model, [Load(load, increments=4)])
+    al = simulate(model, [ArcLengthLoad(load, arc_length=0.3, target_load_factor=1.0)])
+    assert lc.success and al.success, al.message
+    assert al.steps[0].load_factor[-1] == 1.0
+    scale = np.max(np.abs(lc.state.u))
+    assert scale > 0
+    assert np.max(np.abs(al.state.u - lc.state.u)) <= 1e-8 * scale
+    np.testing.assert_allclose(al.state.applied_load, lc.state.applied_load, rtol=1e-14)
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"arc_length": 0.0}, "arc_length"), ({"arc_length": -0.1}, "arc_length"),
+    ({"max_increments": 0}, "max_increments"), ({"max_arc_length": -1.0}, "max_arc_length"),
+    ({"target_load_factor": float("nan")}, "target_load_factor")])
+def test_arc_length_load_rejects_bad_input(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        ArcLengthLoad({0: (0, 0, -1)}, **kwargs)
+
+
+def test_displacement_control_rejects_bad_input(roof):
+    case, _ = roof
+    supported = int(next(iter(case.model.supports.fixed)))
+    with pytest.raises(ParameterError, match="is supported in"):
+        simulate(case.model, [DisplacementControl(supported, "z", 1e-6)])
+    centre = int(case.model.mesh.crease_nodes[0][6])
+    with pytest.raises(ParameterError, match="cannot be controlled"):
+        simulate(case.model, [DisplacementControl(centre, "x", 1e-6,
+                                                  forces=_ridge_load(case))])
+    with pytest.raises(ParameterError, match="direction"):
+        DisplacementControl(centre, "w", 1e-6)
+    with pytest.raises(ParameterError, match="does not exist"):
+        simulate(case.model, [DisplacementControl(10_000, "z", 1e-6)])
+    with pytest.raises(ParameterError, match="increments"):
+        DisplacementControl(centre, "z", 1e-6, increments=0)
+
+
+@pytest.mark.parametrize("step", [Heat, SelfFold, Load])
+def test_on_limit_point_rejects_unknown_action(step):
+    args = ({0: (0, 0, 1.0)},) if step is Load else ()
+    with pytest.raises(ParameterError, match="on_limit_point"):
+        step(*args, on_limit_point="maybe")
+
+
+def test_gravity_unchanged_by_limit_point_machinery():
+    case = get_case("double_fold", thermal_steps=2)
+    res = simulate(case.model, [Gravity(g=9.8, increments=5)])
+    assert res.success and res.steps[0].columns == {}
+
+
+@pytest.mark.slow
+def test_heated_miura_passes_its_snap():
+    """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease."""
+    case = get_case("snap_through", variant="heated")
+    res = case.run()
+    assert res.success, res.message
+    step = res.steps[0]
+    assert step.power_history[-1].max() == pytest.approx(12e-3)
+    assert step.message.count("snap at load factor") == 1
+    lam = float(step.message.split("snap at load factor ")[1].split(" ")[0])
+    assert 9.0e-3 < 12e-3 * lam < 9.4e-3                       # the snap power
+    stable = step.columns["stable"]
+    assert any(v is False or v == False for v in stable)      # noqa: E712 (object array)
+    stop = simulate(case.model, [Heat(dict(case.steps[0].power), increments=60)])
+    assert stop.status == "limit_point" and "limit point at load factor" in stop.message
+
+
+def test_heat_continuation_matches_iterated_load_control():
+    """Arc length in the power (temperatures on the current shape) traces the same coupled
+    equilibria as load control with iterated coupling."""
+    from simulator.continuation import mgdcm
+    from simulator.steps.base import StepContext
+    from simulator.steps.limit import HeatPath
+
+    model = get_case("single_fold").model
+    heat = Heat({2: 20e-3}, increments=20, coupling="iterated", coupling_tol=1e-10)
+    lc = simulate(model, [heat])
+    start = lc.initial_state
+    path = HeatPath(StepContext(model, NewtonOptions()), start, heat.power_array(model.mesh),
+                    model.actuators.rotation_per_kelvin(model.mesh), iterated=True)
+    res = mgdcm(path, start.u, 0.0, arc_length=0.1, target_load_factor=1.0,
+                options=NewtonOptions(max_iter=60))
+    assert lc.success and res.success and res.load_factor == 1.0
+    end = path.state_at(res.u, 1.0)
+    assert np.max(np.abs(end.u - lc.state.u)) <= 1e-7 * np.max(np.abs(lc.state.u))
+    np.testing.assert_allclose(end.temperature, lc.state.temperature, atol=1e-6)
+    np.testing.assert_allclose(end.crease_power, lc.state.crease_power, rtol=1e-14)
+
+
+@pytest.mark.slow
+def test_miura_power_search_reports_a_snap():
+    """A Miura lifter heated past its snap in the design layer's stage: met, with the snap."""
+    import math
+
+    from design.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, miura_model
+
+    d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
+    model = miura_model(d)
+    stage = _LiftStage(model, tuple(heated_creases(d)), _lift_nodes(model, d), 0.0)
+    state, ok, _ = stage.heat(simulate(model, []).state, 12e-3, increments=60)
+    assert ok
+    res = stage.result(True, 12e-3, state, "criterion met")
+    assert res.met and "after a snap" in res.message and "mW per crease" in res.message
