@@ -4,7 +4,11 @@ The CLI sits on top of both layers (simulator and design), so it lives here; ``s
 never imports it. One module per command group:
 
 * :mod:`.simulate`: ``etorigami demo`` (the main demo: a crease on a substrate heated until it
-  lifts off), ``etorigami cases``, ``etorigami run CASE [--set name=value ...] --out DIR``;
+  lifts off), ``etorigami cases``, ``etorigami run CASE|FILE.fold [--set name=value ...] --out
+  DIR``;
+* :mod:`.files`: ``etorigami export CASE --format fold --out FILE``, ``etorigami check FILE``,
+  ``etorigami view RESULT_DIR [--out FILE.html]``;
+* :mod:`.modes`: ``etorigami modes CASE [--count N] --out DIR`` (natural modes);
 * :mod:`.gripper`: ``etorigami gripper evaluate``;
 * :mod:`.optimize`: ``etorigami optimize gripper|miura`` (resumable with ``--out``);
 * :mod:`.sweep`: ``etorigami sweep residual-fold`` (resumable).
@@ -26,7 +30,9 @@ from simulator import __version__
 from simulator.errors import EtorigamiError
 
 from ._common import EXIT_INTERRUPTED, CLIError, kernel_backend
+from .files import add_file_commands
 from .gripper import add_gripper_commands
+from .modes import add_modes_command
 from .optimize import add_optimize_command
 from .simulate import add_simulate_commands
 from .sweep import add_sweep_commands
@@ -43,6 +49,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log solver progress")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     add_simulate_commands(sub)
+    add_file_commands(sub)
+    add_modes_command(sub)
     add_gripper_commands(sub)
     add_optimize_command(sub)
     add_sweep_commands(sub)

@@ -160,7 +160,9 @@ def _convert(name, text, default):
     return value
 
 
-def _overrides(pairs, case_name) -> dict:
+def case_overrides(pairs, case_name) -> dict:
+    """Keyword overrides of a built-in case from ``--set name=value`` pairs (checked against
+    the case's parameters and their types)."""
     from simulator.cases import CASES, get_case
 
     fn = CASES.get(case_name.replace("-", "_"))
@@ -181,21 +183,29 @@ def _overrides(pairs, case_name) -> dict:
 
 
 def _run(args) -> int:
-    from simulator.cases import get_case
+    from simulator import get_case, simulate
 
-    case = get_case(args.case, **_overrides(args.set, args.case))
+    from .files import fold_case, is_fold_file, reader_options
+
+    if is_fold_file(args.case):
+        name, model, steps, params = fold_case(args.case, args.set, reader_options(args))
+        meta = {"model_file": str(args.case), "overrides": params}
+    else:
+        case = get_case(args.case, **case_overrides(args.set, args.case))
+        name, model, steps = case.name, case.model, case.steps
+        meta = {"case": case.name, "parameters": case.parameters}
     t0 = time.perf_counter()
-    with progress_bar(desc=case.name, unit="inc", disable=args.quiet) as bar:
+    with progress_bar(desc=name, unit="inc", disable=args.quiet) as bar:
         def progress(done, total):
             if bar.total != total:
                 bar.reset(total=total)
             bar.update(done - bar.n)
 
-        result = case.run(progress=progress)
-    out = result.save(args.out, {"case": case.name, "parameters": case.parameters})
+        result = simulate(model, steps, progress=progress)
+    out = result.save(args.out, meta)
     frame = result.to_frame()
     last = frame[frame["step"] == frame["step"].max()]
-    print(f"{case.name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
+    print(f"{name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
           f"results in {out}")
     print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
                 "temperature_max [degC]"]].to_string(index=False))
@@ -223,11 +233,18 @@ def add_simulate_commands(sub) -> None:
     cases = sub.add_parser("cases", help="list the paper's cases with parameters and defaults")
     cases.set_defaults(func=_cases)
 
-    run = sub.add_parser("run", help="run a case and write creases.csv, nodes.npz, meta.json")
-    run.add_argument("case", help="case name, e.g. single-fold (see 'etorigami cases')")
+    run = sub.add_parser("run", help="run a case or a FOLD model file and write creases.csv, "
+                                     "nodes.npz, meta.json")
+    run.add_argument("case", metavar="CASE|FILE.fold",
+                     help="case name, e.g. single-fold (see 'etorigami cases'), or a FOLD model "
+                          "file (see 'etorigami export')")
     run.add_argument("--set", action="append", metavar="NAME=VALUE",
                      help="override a case parameter in the unit 'etorigami cases' lists "
-                          "(repeatable), e.g. --set gravity=true")
+                          "(repeatable), e.g. --set gravity=true; for a FOLD file "
+                          "power.<crease id>=mW or thermal_steps=N")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    from .files import add_reader_options
+
+    add_reader_options(run)
     run.set_defaults(func=_run, interrupted=_not_saved, short=True)

@@ -1,0 +1,188 @@
+"""File subcommands: ``export``, ``check``, ``view`` (and the FOLD side of ``run``).
+
+* ``etorigami export CASE [--set ...] --format fold --out FILE``: a built-in case as a FOLD model
+  file (pattern, materials, supports, thermal model, actuators and loading steps under the
+  ``etorigami:`` namespace) that ``etorigami run FILE`` runs back to the same result;
+* ``etorigami check FILE``: validate a FOLD file and print its summary;
+* ``etorigami view RESULT_DIR [--out FILE.html]``: one self-contained HTML page with the
+  folded shape in 3-D over the run.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from ._common import CLIError
+
+__all__ = ["add_file_commands", "add_reader_options", "fold_case", "is_fold_file",
+           "reader_options"]
+
+
+def is_fold_file(name: str) -> bool:
+    """True if ``name`` names a FOLD file rather than a built-in case."""
+    return name.lower().endswith(".fold") or pathlib.Path(name).is_file()
+
+
+def fold_case(path: str, overrides: list | None, options: dict | None = None):
+    """``(name, model, steps, parameters)`` of a FOLD model file with ``--set`` overrides.
+
+    Overrides: ``power.<crease id>=MW`` sets the power added by the file's last heating step on
+    that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the increments
+    of its heating steps.
+    """
+    from simulator import Heat, read_model
+
+    model, steps = read_model(path, **(options or {}))
+    steps, params = list(steps), {}
+    for pair in overrides or []:
+        name, sep, text = pair.partition("=")
+        if not sep:
+            raise CLIError(f"--set expects name=value, got {pair!r}")
+        name = name.strip()
+        heats = [k for k, s in enumerate(steps) if isinstance(s, Heat)]
+        if not heats:
+            raise CLIError(f"{path} has no heating step; --set {name} needs one")
+        if name == "thermal_steps":
+            n = _number(name, text, int)
+            steps = [_replace(s, increments=n) if isinstance(s, Heat) else s for s in steps]
+        elif name.startswith("power."):
+            crease = _number(name, name[len("power."):], int)
+            k = heats[-1]
+            steps[k] = _replace(steps[k], power=_set_power(steps[k].power, crease,
+                                                           1e-3 * _number(name, text, float)))
+        else:
+            raise CLIError(f"--set {name}: a FOLD model takes power.<crease id>=mW or "
+                           "thermal_steps=N")
+        params[name] = text
+    return pathlib.Path(path).stem, model, tuple(steps), params
+
+
+def reader_options(args) -> dict:
+    """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale`` and the
+    ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um]."""
+    out = {}
+    if args.unit_scale is not None:
+        if not (np.isfinite(args.unit_scale) and args.unit_scale > 0):
+            raise CLIError(f"--unit-scale = {args.unit_scale:g} must be a positive length in "
+                           "metres per file unit")
+        out["unit_scale"] = args.unit_scale
+    for name in ("crease_width", "crease_thickness", "panel_thickness"):
+        value = getattr(args, name)
+        if value is not None:
+            if not (np.isfinite(value) and value > 0):
+                raise CLIError(f"--{name.replace('_', '-')} = {value:g} um must be > 0 um")
+            out[name] = value * 1e-6
+    return out
+
+
+def _number(name, text, kind):
+    try:
+        value = kind(text)
+    except ValueError:
+        raise CLIError(f"--set {name} expects {'an integer' if kind is int else 'a number'}, "
+                       f"got {text!r}") from None
+    if not np.isfinite(value) or value < 0:
+        raise CLIError(f"--set {name} = {text} must be finite and >= 0")
+    return value
+
+
+def _replace(step, **changes):
+    from dataclasses import replace
+
+    return replace(step, **changes)
+
+
+def _set_power(power, crease: int, watts: float) -> dict:
+    out = dict(power)
+    for key in out:
+        if crease in (key if isinstance(key, tuple) else (key,)):
+            out[key] = watts
+            return out
+    out[crease] = watts
+    return out
+
+
+# ------------------------------------------------------------------------------ commands
+def _export(args) -> int:
+    from simulator import get_case, write_model
+
+    from .simulate import case_overrides
+
+    case = get_case(args.case, **case_overrides(args.set, args.case))
+    out = pathlib.Path(args.out)
+    if out.suffix.lower() != ".fold":
+        raise CLIError(f"--out {out} must end in .fold")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_model(case.model, case.steps, out, title=case.name, description=case.description)
+    print(f"{case.name}: written to {out} ({out.stat().st_size / 1e3:.1f} kB); run it with "
+          f"'etorigami run {out} --out DIR'")
+    return 0
+
+
+def _check(args) -> int:
+    from simulator import Heat, read_model
+
+    model, steps = read_model(args.file, **reader_options(args))
+    mesh, pattern = model.mesh, model.mesh.pattern
+    heated = sorted({int(c) for s in steps if isinstance(s, Heat) for k in dict(s.power)
+                     for c in (k if isinstance(k, tuple) else (k,))})
+    circuits = [k for s in steps if isinstance(s, Heat) for k in dict(s.power)
+                if isinstance(k, tuple)]
+    size = np.ptp(pattern.vertices, axis=0) * 1e6
+    fixed = int(model.fixed_mask.sum()) if hasattr(model, "fixed_mask") else 0
+    print(f"{args.file}: valid FOLD model file")
+    print(f"  vertices {pattern.n_vertices}, panels {pattern.n_panels}, creases "
+          f"{len(pattern.creases)}, size {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} um "
+          "(lengths converted to metres inside)")
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs")
+    print(f"  supports: {fixed} fixed degrees of freedom; contact "
+          f"{'on' if model.contact is not None else 'off'}; thermal model "
+          f"{'yes' if model.thermal is not None else 'no'}; actuated creases "
+          f"{0 if model.actuators is None else len(model.actuators.delta_alpha_array(mesh).nonzero()[0])}")
+    print(f"  heaters: creases {heated or 'none'}"
+          + (f"; circuits {[list(c) for c in circuits]}" if circuits else ""))
+    print("  steps: " + (", ".join(f"{s.name}" for s in steps) or "none"))
+    return 0
+
+
+def _view(args) -> int:
+    from simulator import write_viewer
+
+    path = write_viewer(args.result_dir, args.out)
+    print(f"viewer written to {path} ({path.stat().st_size / 1e6:.2f} MB); open it in a browser")
+    return 0
+
+
+def add_reader_options(parser) -> None:
+    """Options for FOLD files drawn in an editor (no etorigami: fields)."""
+    parser.add_argument("--unit-scale", type=float, metavar="METRES",
+                        help="metres per length unit of a FOLD file whose frame_unit is 'unit' "
+                             "(e.g. 1e-3 for millimetres)")
+    for name, what in (("crease-width", "crease width"), ("crease-thickness", "crease thickness"),
+                       ("panel-thickness", "panel thickness")):
+        parser.add_argument(f"--{name}", type=float, metavar="UM",
+                            help=f"{what} in um for a FOLD file that does not give it")
+
+
+def add_file_commands(sub) -> None:
+    """Register ``export``, ``check`` and ``view``."""
+    export = sub.add_parser("export", help="write a built-in case as a FOLD model file")
+    export.add_argument("case", help="case name, e.g. crane (see 'etorigami cases')")
+    export.add_argument("--set", action="append", metavar="NAME=VALUE",
+                        help="override a case parameter (repeatable)")
+    export.add_argument("--format", choices=["fold"], default="fold", help="file format")
+    export.add_argument("--out", required=True, metavar="FILE", help="output file (.fold)")
+    export.set_defaults(func=_export, short=True)
+
+    check = sub.add_parser("check", help="validate a FOLD file and print its summary")
+    check.add_argument("file", help="FOLD file")
+    add_reader_options(check)
+    check.set_defaults(func=_check, short=True)
+
+    view = sub.add_parser("view", help="write a self-contained HTML 3-D viewer of a result")
+    view.add_argument("result_dir", help="folder written by 'etorigami run' (creases.csv, "
+                                         "nodes.npz, meta.json)")
+    view.add_argument("--out", metavar="FILE", help="HTML file (default RESULT_DIR/viewer.html)")
+    view.set_defaults(func=_view, short=True)
