@@ -96,3 +96,19 @@ def test_unit_files_need_a_scale(tmp_path, capsys):
     assert main(["check", str(path), "--unit-scale", "1e-3", "--crease-width", "100",
                  "--crease-thickness", "1", "--panel-thickness", "20"]) == 0
     assert "size 2000.0 x 1000.0" in capsys.readouterr().out
+
+
+def test_every_malformed_file_is_one_line_and_exit_2_at_the_cli(tmp_path, capsys):
+    import copy
+
+    from test_fold import MALFORMED, two_panels
+
+    assert len(MALFORMED) >= 15
+    for name, edit, _ in MALFORMED:
+        data = copy.deepcopy(two_panels())
+        edit(data)
+        path = tmp_path / f"{name.replace(' ', '_')}.fold"
+        path.write_text(json.dumps(data))
+        assert main(["check", str(path)]) == 2, name
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("etorigami: error: FOLD"), (name, err)
