@@ -104,7 +104,7 @@ def _mark_hot_nodes(ax, x_mm, temperature) -> int:
 
 
 def plot_shape(result, record=-1, ax=None, color_by="temperature", show_reference=False,
-               t_range=None, colorbar=True) -> Figure:
+               t_range=None, colorbar=True, hide_panels=()) -> Figure:
     """Deformed shape of one record in 3-D, faces coloured by temperature.
 
     Parameters
@@ -126,6 +126,9 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
         drawn side by side; default the record's nodal range.
     colorbar : bool
         Draw the colour bar (leave it out on all but one of several panels sharing a scale).
+    hide_panels : sequence of int
+        Panels not drawn (e.g. a large substrate that would dwarf the structure); the axis
+        limits then follow the drawn triangles.
 
     Returns
     -------
@@ -137,20 +140,22 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     record = range(len(h["u"]))[record]  # IndexError for a bad record, negatives allowed
     fig, ax = _shape_axes(ax)
     x = (mesh.nodes + h["u"][record]) * 1e3
-    coll = Poly3DCollection(x[mesh.triangles], edgecolors="0.2", linewidths=0.3)
+    tri = mesh.triangles[~np.isin(mesh.triangle_panel, list(hide_panels))]
+    coll = Poly3DCollection(x[tri], edgecolors="0.2", linewidths=0.3)
     if color_by == "temperature":
         t = np.asarray(h["temperature"][record], float)
-        coll.set(array=t[mesh.triangles].max(axis=1), cmap=CMAP,
+        coll.set(array=t[tri].max(axis=1), cmap=CMAP,
                  norm=_temperature_norm(t if t_range is None else t_range))
         if colorbar:
             _temperature_colorbar(fig, ax, coll)
     else:
-        coll.set_facecolor(np.where(mesh.triangle_panel[:, None] >= 0,
+        coll.set_facecolor(np.where(mesh.triangle_panel[~np.isin(mesh.triangle_panel,
+                                                                 list(hide_panels)), None] >= 0,
                                     (0.75, 0.78, 0.82, 1.0), (0.95, 0.55, 0.2, 1.0)))
     ax.add_collection3d(coll)
     if color_by == "temperature":
         _mark_hot_nodes(ax, x, t)
-    points = [x]
+    points = [x[np.unique(tri)]]
     if show_reference:
         x0 = mesh.nodes * 1e3
         ax.add_collection3d(Poly3DCollection(x0[mesh.triangles], facecolors="none",
