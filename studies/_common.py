@@ -24,7 +24,7 @@ import pandas as pd
 from simulator import __version__
 from simulator.cases import get_case
 
-__all__ = ["RESULTS", "default_out", "study_main", "progress_bar", "write_outputs", "node_frame",
+__all__ = ["RESULTS", "default_out", "study_main", "replot", "progress_bar", "write_outputs", "node_frame",
            "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP",
            "time_limit", "EvaluationTimeout", "TimeLimited"]
 
