@@ -10,8 +10,9 @@ how does the shape change along the descent (the paper built devices near steps 
 Method
 ------
 The designs and their stage powers (per heated crease, from the bisect power search) are read
-from the committed ``results/gripper_optimization/gripper_optimization.csv`` (``cycles``
-rows); the coordinate descent is not re-run. For each design below, the gripper model of
+from ``results/gripper_optimization/gripper_optimization.csv`` (``cycles`` rows; the current
+directory's if a run wrote one, else the repository's committed one); the coordinate descent is
+not re-run. For each design below, the gripper model of
 :func:`design.gripper.gripper_model` is loaded by its pre-steps (self-weight), then heated in
 ``INCREMENTS`` increments with iterated thermo-mechanical coupling to the assembly power on
 the two base creases, then, with the base heat kept on, to the grip power on the two arm
@@ -53,12 +54,13 @@ import pandas as pd
 from design.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gripper_model
 from simulator.simulation import simulate
 from simulator.steps import Heat
-from studies._common import (RESULTS, TEMP, XYZ, progress_bar, shape_from_frame, study_main)
+from studies._common import (RESULTS, TEMP, XYZ, default_out, progress_bar, shape_from_frame,
+                             study_main)
 
 __all__ = ["DESIGNS", "gripper_states", "main", "plot", "run"]
 
 NAME = "gripper_shapes"
-CD_CSV = RESULTS / "gripper_optimization" / "gripper_optimization.csv"
+CD_CSV = pathlib.Path("gripper_optimization") / "gripper_optimization.csv"
 INCREMENTS = 10
 INCREMENTS_QUICK = 3
 #: Design label -> CD cycle ("last" = the final cycle).
@@ -112,6 +114,13 @@ def _measures(x) -> tuple:
     return fold, 1e6 * float(np.linalg.norm(x[15] - x[18]))
 
 
+def _cd_csv() -> pathlib.Path:
+    """The descent's table: ``./results/gripper_optimization`` of the current directory if a
+    run wrote one there, else the repository's committed copy."""
+    here = default_out("gripper_optimization").parent / CD_CSV
+    return here if here.is_file() else RESULTS / CD_CSV
+
+
 def _cd_cycles(csv: pathlib.Path) -> pd.DataFrame:
     if not csv.is_file():
         raise FileNotFoundError(f"{csv} is missing: run `python -m studies.gripper_optimization` "
@@ -143,9 +152,12 @@ def _rows(label, cycle, row, model, results) -> list:
     return rows
 
 
-def run(quick: bool = False, progress: bool = True, csv: pathlib.Path = CD_CSV) -> pd.DataFrame:
-    """Re-simulate the chosen descent designs at their stage powers; see the docstring."""
-    cycles = _cd_cycles(pathlib.Path(csv))
+def run(quick: bool = False, progress: bool = True, csv=None) -> pd.DataFrame:
+    """Re-simulate the chosen descent designs at their stage powers; see the docstring.
+
+    ``csv``: the gripper_optimization table (default: ``./results/gripper_optimization/``
+    of the current directory if present, else the repository's committed one)."""
+    cycles = _cd_cycles(_cd_csv() if csv is None else pathlib.Path(csv))
     designs = DESIGNS_QUICK if quick else DESIGNS
     parts = []
     for label, cycle in progress_bar(designs.items(), enabled=progress, desc="gripper shapes"):

@@ -99,3 +99,24 @@ def test_results_readme_names_existing_files():
         assert files, f"row names no file: {row}"
         for name in files:
             assert (ROOT / "results" / name).is_file(), f"{name} missing ({row[:60]})"
+
+
+def test_main_writes_under_the_working_directory_by_default(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "results" / "double_fold"
+    out.mkdir(parents=True)
+    (out / "double_fold.csv").write_bytes(
+        (ROOT / "results" / "double_fold" / "double_fold.csv").read_bytes())
+    assert double_fold.main(["--figures-only"]) == out
+    assert (out / "double_fold.png").is_file()
+
+
+def test_gripper_shapes_reads_a_descent_in_the_working_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert gripper_shapes._cd_csv() == ROOT / "results" / gripper_shapes.CD_CSV
+    local = tmp_path / "results" / gripper_shapes.CD_CSV
+    local.parent.mkdir(parents=True)
+    local.write_text("table,cycle\n")
+    assert gripper_shapes._cd_csv() == local
+    with pytest.raises(FileNotFoundError, match="run `python -m studies.gripper_optimization`"):
+        gripper_shapes._cd_cycles(tmp_path / "none.csv")
