@@ -24,12 +24,19 @@ import pandas as pd
 from simulator import __version__
 from simulator.cases import get_case
 
-__all__ = ["RESULTS", "study_main", "progress_bar", "write_outputs", "node_frame",
+__all__ = ["RESULTS", "default_out", "study_main", "replot", "progress_bar", "write_outputs", "node_frame",
            "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP",
            "time_limit", "EvaluationTimeout", "TimeLimited"]
 
-#: Default output root: ``results/`` at the top of the repository.
+#: The repository's committed ``results/`` (inputs some studies read, e.g. the gripper's
+#: coordinate descent); outputs go to :func:`default_out` instead.
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "results"
+
+
+def default_out(name: str) -> pathlib.Path:
+    """Default output folder of a study: ``./results/<name>`` of the current directory
+    (never the installed package's folder)."""
+    return pathlib.Path.cwd() / "results" / name
 #: Column names of node tables (positions in um, temperatures in deg C).
 XYZ = ["x [um]", "y [um]", "z [um]"]
 TEMP = "temperature [degC]"
@@ -59,18 +66,26 @@ def write_outputs(out: pathlib.Path, name: str, frame, figures: dict, settings: 
 
 
 def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
-    """Command line of a study: ``--quick``, ``--out DIR``, ``--no-progress``.
+    """Command line of a study: ``--quick``, ``--out DIR``, ``--no-progress``,
+    ``--figures-only``.
 
-    ``plot(df)`` may return one Figure or a dict {file stem: Figure}.
+    ``plot(df)`` may return one Figure or a dict {file stem: Figure}. ``--figures-only``
+    re-creates the figures from ``<out>/<name>.csv`` without running the study (the CSV and
+    ``meta.json`` are left as they are).
     """
     parser = argparse.ArgumentParser(prog=f"python -m studies.{name}",
                                      description=doc.strip().splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="coarse, fast version (for tests)")
-    parser.add_argument("--out", type=pathlib.Path, default=RESULTS / name,
-                        help=f"output folder (default results/{name})")
+    parser.add_argument("--out", type=pathlib.Path, default=None,
+                        help=f"output folder (default ./results/{name} of the current directory)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--figures-only", action="store_true",
+                        help=f"only re-draw the figures from OUT/{name}.csv")
     args = parser.parse_args(argv)
+    args.out = default_out(name) if args.out is None else args.out
     logging.basicConfig(level=logging.WARNING)
+    if args.figures_only:
+        return replot(name, plot, args.out)
     t0 = time.perf_counter()
     frame = run(quick=args.quick, progress=not args.no_progress)
     figs = plot(frame)
@@ -79,6 +94,21 @@ def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
                   time.perf_counter() - t0)
     print(f"{name}: {len(frame)} rows written to {args.out} in {time.perf_counter() - t0:.1f} s")
     return args.out
+
+
+def replot(name: str, plot, out: pathlib.Path) -> pathlib.Path:
+    """Re-create a study's figures from ``out/<name>.csv`` (written by an earlier run)."""
+    from studies.plotting import save_figure
+
+    csv = pathlib.Path(out) / f"{name}.csv"
+    if not csv.is_file():
+        raise SystemExit(f"--figures-only needs {csv}; run the study first (without it).")
+    figs = plot(pd.read_csv(csv))
+    figs = figs if isinstance(figs, dict) else {name: figs}
+    for fig_name, fig in figs.items():
+        save_figure(fig, pathlib.Path(out) / f"{fig_name}.png")
+    print(f"{name}: {len(figs)} figure(s) re-drawn in {out}")
+    return pathlib.Path(out)
 
 
 # ----------------------------------------------------------------------------- records

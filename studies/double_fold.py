@@ -73,7 +73,7 @@ def plot(df: pd.DataFrame) -> dict:
     """``{"double_fold": folds and temperatures vs power, "double_fold_shape": final shape}``."""
     from matplotlib.figure import Figure
 
-    from studies.plotting import plot_shape
+    from studies.plotting import mark_temperature_limit, plot_shape
 
     sweep = df[df["table"] == "sweep"].sort_values("step", kind="stable")
     fig = Figure(figsize=(11.5, 4.6), layout="constrained")
@@ -92,6 +92,7 @@ def plot(df: pd.DataFrame) -> dict:
         ax.set_xlabel("power per crease [mW]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize="small")
+    mark_temperature_limit(ax_t)
 
     nodes = df[df["table"] == "nodes"]
     shape = plot_shape(shape_from_frame(nodes, get_case(NAME).model.mesh), record=-1)

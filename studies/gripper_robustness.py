@@ -224,7 +224,7 @@ def plot(df: pd.DataFrame):
         ax.grid(True, alpha=0.3)
     limit = sweep["temperature_limit [degC]"].iloc[0]
     ax_t.axhline(limit, color="red", ls="--", lw=1, label=f"limit 1.2 Tg = {limit:.0f} °C")
-    ax_p.set_ylabel("total power per heated crease [mW]")
+    ax_p.set_ylabel("assembly + grip power per heated crease [mW]")
     ax_t.set_ylabel("crease temperature [°C] (centre line)")
     ax_p.set_title("assembly + grip power (x at the top: criterion not met / failed)")
     ax_t.set_title("crease temperature at the stopping power")

@@ -259,6 +259,14 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def _same_as(a: pd.DataFrame, b: pd.DataFrame) -> bool:
+    """True when two sweeps' ratio columns are equal to 1e-12 (value by value, in order)."""
+    cols = [RATIO_MAX, RATIO_AVE]
+    a, b = (x.sort_values(["value [-]", "W/L [-]"])[cols] for x in (a, b))
+    return a.shape == b.shape and bool(np.allclose(a.to_numpy(float), b.to_numpy(float),
+                                                   rtol=1e-12, atol=0))
+
+
 def plot(df: pd.DataFrame):
     """Three panels like Fig. 5 d-f: T^BH/T_1D,max against W/L, one colour per ratio value.
 
@@ -285,6 +293,12 @@ def plot(df: pd.DataFrame):
         if sweep == "L1/L2" and len(groups) > 1:
             ax.text(0.03, 0.97, "0.5 and 2 are mirror images:\ntheir curves coincide",
                     transform=ax.transAxes, ha="left", va="top", fontsize="small")
+        if sweep == "L1/L" and _same_as(d, df[df["sweep"] == "tc/tp"]):
+            ax.text(0.03, 0.70, "identical to (d) to every digit, not a bug:\nthe ratios depend "
+                    "on $t_c L_1 / (t_p L)$ only,\nso $L_1/L$ = 0.5, 1, 2 (at $t_c/t_p$ = 0.1) "
+                    "is\n$t_c/t_p$ = 0.05, 0.1, 0.2 (at $L_1/L$ = 1)",
+                    transform=ax.transAxes, ha="left", va="top", fontsize="small",
+                    bbox=dict(facecolor="white", edgecolor="0.7", alpha=0.9))
         ax.axhline(1.0, color="k", lw=0.8, ls=":")
         ax.set_title(f"{tag} {label}")
         ax.set_xlabel("W/L [-]")

@@ -267,6 +267,8 @@ def optimize_miura(problem, executor, budget, callback=None):
 def _grid_figure(grid):
     from matplotlib.figure import Figure
 
+    from studies.plotting import T_LIMIT
+
     defaults = _design_columns({n: v.start for n, v in zip(MIURA_SPACE.names,
                                                             MIURA_SPACE.variables)})
     params = [("a [um]", "panel side a [um]"), ("gamma [deg]", "sector angle gamma [deg]"),
@@ -284,6 +286,16 @@ def _grid_figure(grid):
             base = base.sort_values(col)
             ax.plot(base[col], base[LPP], "-o", color=f"C{i}", ms=5,
                     label=f"{p:g} mW per crease")
+        hot = ok[ok[TMAX] > T_LIMIT]
+        if len(hot):
+            ax.plot(hot[col], hot[LPP], "o", ms=9, mfc="none", mec="r", mew=1.2,
+                    label=f"hottest crease node above 1.2 T_g = {T_LIMIT:.0f} °C "
+                          f"(up to {ok[TMAX].max():.0f} °C)")
+        down = ok[ok["lift [um]"] < 0]
+        if len(down):
+            ax.plot(down[col], down[LPP], "v", ms=9, mfc="none", mec="k", mew=1.2,
+                    label=f"negative lift (end moves down, {down['lift [um]'].min():.1f} um)")
+        ax.axhline(0, color="k", lw=0.8)
         bad = grid[~grid["success"]].drop_duplicates(subset=["a [um]", "gamma [deg]",
                                                                "W [um]"])
         if len(bad):
@@ -295,13 +307,20 @@ def _grid_figure(grid):
         ax.grid(True, alpha=0.3)
         ax.set_title(f"vs {col.split()[0]} (others: " + ", ".join(
             f"{c.split()[0]} {defaults[c]:.0f}" for c in others) + ")", fontsize="medium")
-    axes[0].legend(fontsize="small")
+    entries = {}
+    for ax in axes:
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, h)
+    fig.legend(entries.values(), entries.keys(), loc="outside lower center", ncols=3,
+               fontsize="small")
     return fig
 
 
 def _optimum_figure(opt, cycles):
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
+
+    from studies.plotting import mark_temperature_limit
 
     fig = Figure(figsize=(12, 4.6), layout="constrained")
     ax_x, ax_p = fig.subplots(1, 2)
@@ -336,6 +355,7 @@ def _optimum_figure(opt, cycles):
     ax_t.plot(cycles["cycle"], cycles[TMAX], "C3-", alpha=0.6)
     ax_t.set_ylabel("hottest crease node [°C]", color="C3")
     ax_t.tick_params(axis="y", colors="C3")
+    mark_temperature_limit(ax_t)
     for _, c in cycles.iterrows():
         if isinstance(c["moved"], str) and c["moved"]:
             ax_p.annotate(c["moved"], (c["cycle"], c["total_power [mW]"]), fontsize="x-small",

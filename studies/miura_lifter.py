@@ -110,7 +110,7 @@ def plot(df: pd.DataFrame) -> dict:
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
-    from studies.plotting import plot_shape
+    from studies.plotting import mark_temperature_limit, nodal_range, plot_shape
 
     sweep = df[df["table"] == "sweep"]
     creases = df[df["table"] == "crease"]
@@ -127,6 +127,11 @@ def plot(df: pd.DataFrame) -> dict:
     top = ax_l.secondary_xaxis("top", functions=(lambda p: p / p_max, lambda s: s * p_max))
     top.set_xlabel("normalised power [-]")
     ax_l.set_title("(a) lift vs heating power")
+    ax_l.axhline(0, color="k", lw=0.8)
+    low = sweep[LIFT].min()
+    if low < 0:
+        ax_l.text(0.02, 0.5, f"lift < 0 (end moves down) at low power, down to {low:.2f} um",
+                  transform=ax_l.transAxes, fontsize="small", color="C3")
     ax_l.legend(fontsize="small")
 
     for variant, d in creases.groupby("variant", sort=False):
@@ -140,15 +145,18 @@ def plot(df: pd.DataFrame) -> dict:
     ax_t.set_ylabel("crease temperature [°C]")
     ax_t.set_title(f"(b) crease temperatures at {p_max:.1f} mW per crease")
     ax_t.legend(fontsize="small")
+    mark_temperature_limit(ax_t)
     for ax in (ax_l, ax_t):
         ax.grid(True, alpha=0.3)
 
     nodes = df[df["table"] == "nodes"]
     shapes = Figure(figsize=(12.5, 5.0), layout="constrained")
+    t_range = nodal_range(nodes[TEMP])          # one colour scale: the comparison is the point
     for k, variant in enumerate(VARIANTS):
         ax = shapes.add_subplot(1, 2, k + 1, projection="3d")
         mesh = get_case(NAME, **_params(VARIANTS[variant])).model.mesh
-        plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax)
+        plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax,
+                   t_range=t_range, colorbar=k == len(VARIANTS) - 1)
         ax.collections[0].set_zsort("max")     # keeps the large substrate triangles behind
         spans = [abs(hi - lo) for lo, hi in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
         ax.set_box_aspect((*spans[:2], max(spans[2], Z_STRETCH * max(spans[:2]))))

@@ -16,18 +16,31 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+from simulator.materials import SU8
+
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
-           "save_figure"]
+           "save_figure", "mark_temperature_limit", "nodal_range", "T_LIMIT"]
 
 CMAP = "plasma"
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
                                "temperature_max [degC]")
 _T_LABEL = "temperature [°C]"
+#: The paper's crease temperature limit, 1.2 T_g of SU-8 [deg C] (252 deg C): above it the
+#: polymer softens. Every plot showing temperature marks values above it.
+T_LIMIT = 1.2 * SU8.glass_transition
+_LIMIT_LABEL = f"above 1.2 T_g = {T_LIMIT:.0f} °C"
+_FACE_LABEL = "temperature [°C] (facet: its hottest node)"
 
 
 # ----------------------------------------------------------------------------- 3-D shape
+def nodal_range(*temperatures) -> tuple:
+    """(lowest, highest) nodal temperature [deg C] over arrays: a shared colour scale."""
+    return (min(float(np.min(t)) for t in temperatures),
+            max(float(np.max(t)) for t in temperatures))
+
+
 def _temperature_norm(temperature) -> Normalize:
-    """Colour limits of a temperature array, widened to at least 1 deg C."""
+    """Colour limits of a temperature array (or a (lo, hi) range), widened to at least 1 deg C."""
     lo, hi = float(np.min(temperature)), float(np.max(temperature))
     if hi - lo < 1.0:
         mid = (hi + lo) / 2
@@ -65,7 +78,33 @@ def _shape_axes(ax):
     return ax.figure, ax
 
 
-def plot_shape(result, record=-1, ax=None, color_by="temperature", show_reference=False) -> Figure:
+def _temperature_colorbar(fig, ax, mappable, shrink=0.7):
+    """Colour bar in deg C with a dashed line at 1.2 T_g when the scale reaches it."""
+    bar = fig.colorbar(mappable, ax=ax, shrink=shrink, label=_FACE_LABEL)
+    lo, hi = mappable.norm.vmin, mappable.norm.vmax
+    if lo <= T_LIMIT <= hi:
+        bar.ax.axhline(T_LIMIT, color="k", ls="--", lw=1.2)
+        bar.ax.text(1.05, T_LIMIT, "1.2 T_g", transform=bar.ax.get_yaxis_transform(),
+                    va="bottom", fontsize="x-small")
+    return bar
+
+
+def _mark_hot_nodes(ax, x_mm, temperature) -> int:
+    """Circle the nodes above 1.2 T_g in a 3-D axes; returns how many there are."""
+    hot = np.asarray(temperature) > T_LIMIT
+    if hot.any():
+        p = x_mm[hot]
+        ax.computed_zorder = False          # the circles stay in front of the facets
+        ax.scatter(p[:, 0], p[:, 1], p[:, 2], s=90, facecolors="none", edgecolors="c",
+                   linewidths=2.0, depthshade=False, zorder=10)
+        n = int(hot.sum())
+        ax.text2D(0.0, 0.0, f"{n} node{'s' if n > 1 else ''} {_LIMIT_LABEL} (cyan circles)",
+                  transform=ax.transAxes, fontsize="small", color="teal")
+    return int(hot.sum())
+
+
+def plot_shape(result, record=-1, ax=None, color_by="temperature", show_reference=False,
+               t_range=None, colorbar=True, hide_panels=()) -> Figure:
     """Deformed shape of one record in 3-D, faces coloured by temperature.
 
     Parameters
@@ -76,10 +115,20 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     ax : mpl_toolkits.mplot3d.axes3d.Axes3D, optional
         Axes to draw into; a new figure is created if omitted.
     color_by : {"temperature", None}
-        Colour every triangle by the mean temperature of its nodes (with a colorbar in
-        deg C), or draw panels grey and crease triangles orange.
+        Colour every triangle by the temperature of its hottest node [deg C], on a scale that
+        spans the nodal range (so the colour bar reaches the hottest node), with a colour
+        bar; nodes above 1.2 T_g (:data:`T_LIMIT`) are circled. ``None``: panels grey and
+        crease triangles orange.
     show_reference : bool
         Also draw the undeformed mesh as a dashed wireframe.
+    t_range : (float, float), optional
+        Colour scale (lowest, highest) [deg C], e.g. :func:`nodal_range` of several shapes
+        drawn side by side; default the record's nodal range.
+    colorbar : bool
+        Draw the colour bar (leave it out on all but one of several panels sharing a scale).
+    hide_panels : sequence of int
+        Panels not drawn (e.g. a large substrate that would dwarf the structure); the axis
+        limits then follow the drawn triangles.
 
     Returns
     -------
@@ -91,16 +140,22 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     record = range(len(h["u"]))[record]  # IndexError for a bad record, negatives allowed
     fig, ax = _shape_axes(ax)
     x = (mesh.nodes + h["u"][record]) * 1e3
-    coll = Poly3DCollection(x[mesh.triangles], edgecolors="0.2", linewidths=0.3)
+    tri = mesh.triangles[~np.isin(mesh.triangle_panel, list(hide_panels))]
+    coll = Poly3DCollection(x[tri], edgecolors="0.2", linewidths=0.3)
     if color_by == "temperature":
-        face_t = h["temperature"][record][mesh.triangles].mean(axis=1)
-        coll.set(array=face_t, cmap=CMAP, norm=_temperature_norm(face_t))
-        fig.colorbar(coll, ax=ax, shrink=0.7, label=_T_LABEL)
+        t = np.asarray(h["temperature"][record], float)
+        coll.set(array=t[tri].max(axis=1), cmap=CMAP,
+                 norm=_temperature_norm(t if t_range is None else t_range))
+        if colorbar:
+            _temperature_colorbar(fig, ax, coll)
     else:
-        coll.set_facecolor(np.where(mesh.triangle_panel[:, None] >= 0,
+        coll.set_facecolor(np.where(mesh.triangle_panel[~np.isin(mesh.triangle_panel,
+                                                                 list(hide_panels)), None] >= 0,
                                     (0.75, 0.78, 0.82, 1.0), (0.95, 0.55, 0.2, 1.0)))
     ax.add_collection3d(coll)
-    points = [x]
+    if color_by == "temperature":
+        _mark_hot_nodes(ax, x, t)
+    points = [x[np.unique(tri)]]
     if show_reference:
         x0 = mesh.nodes * 1e3
         ax.add_collection3d(Poly3DCollection(x0[mesh.triangles], facecolors="none",
@@ -109,6 +164,53 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     _set_limits(ax, np.concatenate(points))
     ax.set_title(_title(result, record))
     return fig
+
+
+def mark_temperature_limit(ax, limit=T_LIMIT, axis="y") -> int:
+    """Mark temperatures above 1.2 T_g on a 2-D plot whose ``axis`` is a temperature [deg C].
+
+    Draws a dotted red line at ``limit`` when the plotted values reach 80 % of it, rings every
+    plotted point above it in red, outlines bars above it in red, and adds both to the
+    legend (if the axes has one). Call it after plotting.
+
+    Returns
+    -------
+    int
+        Number of plotted points and bars above the limit.
+    """
+    k = 1 if axis == "y" else 0
+    values, hot = [], []
+    for line in ax.get_lines():
+        xy = np.column_stack([np.asarray(line.get_xdata(), float),
+                              np.asarray(line.get_ydata(), float)])
+        if line.get_transform() != ax.transData or len(xy) == 0:
+            continue
+        values.append(xy[:, k])
+        hot.append(xy[xy[:, k] > limit])
+    n_bars = 0
+    for patch in ax.patches:
+        top = patch.get_y() + patch.get_height() if axis == "y" else patch.get_x() + patch.get_width()
+        values.append(np.array([top]))
+        if top > limit:
+            patch.set_edgecolor("r")
+            patch.set_linewidth(1.5)
+            n_bars += 1
+    vals = np.concatenate(values) if values else np.array([])
+    vals = vals[np.isfinite(vals)]
+    if not len(vals) or vals.max() < 0.8 * limit:
+        return 0
+    line_fn = ax.axhline if axis == "y" else ax.axvline
+    handles = [line_fn(limit, color="r", ls=":", lw=1.2, label=f"1.2 T_g = {limit:.0f} °C")]
+    pts = np.concatenate(hot) if hot else np.empty((0, 2))
+    if len(pts):
+        handles += ax.plot(pts[:, 0], pts[:, 1], "o", ms=6, mfc="none", mec="r", mew=1.2,
+                           label=_LIMIT_LABEL)
+    legend = ax.get_legend()
+    if legend is not None:
+        old = list(legend.legend_handles)
+        ax.legend(old + handles, [t.get_text() for t in legend.texts]
+                  + [h.get_label() for h in handles], fontsize="small")
+    return len(pts) + n_bars
 
 
 # ----------------------------------------------------------------------------- curves
@@ -186,6 +288,7 @@ def plot_temperature_vs_power(frame_or_result, creases=None, ax=None) -> Figure:
         ax.plot(d[POWER].to_numpy(), d[TEMP_MAX].to_numpy(), "--", color=line.get_color(),
                 label=f"crease {c} (max)")
     ax.legend(fontsize="small")
+    mark_temperature_limit(ax)
     return fig
 
 
@@ -220,14 +323,14 @@ def animate(result, path, every=1, fps=10) -> pathlib.Path:
     if frames[-1] != m - 1:
         frames.append(m - 1)
     x_all = (mesh.nodes + h["u"]) * 1e3
-    temp = h["temperature"][:, mesh.triangles].mean(axis=2)  # (m, nt) face temperatures
+    temp = h["temperature"][:, mesh.triangles].max(axis=2)  # (m, nt) hottest node per face
 
     fig, ax = _shape_axes(Figure(figsize=(6.4, 5.0), layout="constrained")
                           .add_subplot(projection="3d"))
     coll = Poly3DCollection(x_all[0][mesh.triangles], edgecolors="0.2", linewidths=0.3,
-                            array=temp[0], cmap=CMAP, norm=_temperature_norm(temp))
+                            array=temp[0], cmap=CMAP, norm=_temperature_norm(h["temperature"]))
     ax.add_collection3d(coll)
-    fig.colorbar(coll, ax=ax, shrink=0.7, label=_T_LABEL)
+    _temperature_colorbar(fig, ax, coll)
     _set_limits(ax, x_all)
 
     def update(k):

@@ -172,6 +172,12 @@ def plot(df: pd.DataFrame) -> dict:
             ax_g.plot([p_thr], [np.interp(p_thr, d[POWER], d[FOLD])], "o", color=line.get_color(),
                       mfc="none")
     ax_g.set_title("(a) with gravity and substrate contact")
+    start = sweep[sweep["variant"].isin(gravity)].groupby("variant")[FOLD].first()
+    ax_g.text(0.02, 0.55, f"All runs start near {start.mean():.0f} deg whatever the residual "
+              "fold:\nthe panel sags onto the substrate 150 um below, which\nstops it there; "
+              "the residual fold sets only the rest angle,\nhence the power needed to lift "
+              "off (the threshold)",
+              transform=ax_g.transAxes, fontsize="small", va="top")
     ax_g.legend(fontsize="small", title="o: threshold (fold +1 deg)", title_fontsize="small")
 
     ours = sweep[sweep["variant"] == EXAMPLE01]
