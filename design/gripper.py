@@ -24,7 +24,7 @@ import numpy as np
 
 from simulator.bimorph import Actuators, Bimorph
 from simulator.simulation import simulate
-from simulator.steps import Heat, Load, SelfFold
+from simulator.steps import Load, SelfFold
 from simulator.materials import SPR
 from simulator.mesh import build_mesh
 from simulator.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
@@ -35,7 +35,7 @@ from simulator.newton import NewtonOptions
 from simulator.thermal import REFERENCE_BETA, ThermalParameters
 
 from ._contract import check_outcome, power_if
-from .power_search import bisect_search, staircase_search
+from .power_search import HeatingStage, bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
            "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES"]
@@ -303,28 +303,24 @@ _STAGES = {
 }
 
 
-class _Stage:
-    """Run one stage's heating trials from saved states."""
+class _Stage(HeatingStage):
+    """Run one stage's heating trials from saved states (snaps followed by arc length)."""
 
     def __init__(self, model, name, callback=None, options=NewtonOptions()):
-        self.model, self.name, self.callback, self.options = model, name, callback, options
         self.creases, self.measure_fn, self.met_fn, self.centre_lines = _STAGES[name]
-        self.simulations = self.increments = 0
+        super().__init__(model, self.creases, options)
+        self.name, self.callback = name, callback
 
     def heat(self, state, dp, increments=1, coupling="staggered"):
         """Add ``dp`` per crease in ``increments`` increments; returns (state, ok, message)."""
-        res = simulate(self.model, [Heat({self.creases: dp}, increments=increments,
-                                         coupling=coupling)], state=state,
-                       options=self.options)
-        self.simulations += 1
-        self.increments += res.steps[-1].increments
-        if self.callback is not None and res.success:
-            value, met, temp, tmax = self.look(res.state)
+        state, ok, msg = super().heat(state, dp, increments, coupling)
+        if self.callback is not None and ok:
+            value, met, temp, tmax = self.look(state)
             self.callback({"stage": self.name, "power_per_crease [W]": float(
-                res.state.crease_power[self.model.mesh.crease_row[self.creases[0]]]),
+                state.crease_power[self.model.mesh.crease_row[self.creases[0]]]),
                 "measure": value, "met": met, "temperature [degC]": temp,
                 "max_crease_temperature [degC]": tmax})
-        return res.state, res.success, res.message
+        return state, ok, msg
 
     def look(self, state):
         x = self.model.mesh.nodes + state.u
@@ -336,6 +332,8 @@ class _Stage:
     def result(self, status, power, state, message):
         value, _, temp, tmax = self.look(state)
         met = status == "met"
+        if met:
+            message = self.after_snaps(message, state)
         return StageResult(met, status, message, power if met else None, value, temp, tmax,
                            self.simulations, self.increments)
 
