@@ -17,13 +17,12 @@ import numpy as np
 from simulator.cases import miura_fold_signs, miura_sheet_model
 from simulator.errors import ParameterError, PatternError
 from simulator.simulation import simulate
-from simulator.steps import Heat
 from simulator.mesh import build_mesh
 from simulator.model import Model
 from simulator.example_patterns import miura_sheet_pattern
 
 from ._contract import check_outcome, power_if
-from .power_search import bisect_search, staircase_search
+from .power_search import HeatingStage, bisect_search, staircase_search
 from .problem import SU8_TG, DesignProblem
 from .space import DesignSpace, Variable
 
@@ -176,26 +175,13 @@ class LiftPowerResult:
                 "success": self.success, "status": self.status, "message": self.message}
 
 
-class _LiftStage:
-    """Heating trials from saved states, with the interface the gripper searches use."""
+class _LiftStage(HeatingStage):
+    """Heating trials from saved states, with the interface the gripper searches use; a snap
+    (limit point) is followed by arc length in the power and noted for the result's message."""
 
     def __init__(self, model, creases, nodes, target):
-        self.model, self.creases, self.nodes, self.target = model, creases, nodes, target
-        self.simulations = 0
-        self.snaps = []
-
-    def heat(self, state, dp, increments=1, coupling="staggered"):
-        """Heat by ``dp`` per crease; a snap (limit point) is followed by arc length in the
-        power (``on_limit_point="continue"``) and noted for the result's message."""
-        base = float(state.crease_power.max(initial=0.0))
-        res = simulate(self.model, [Heat({self.creases: dp}, increments=increments,
-                                         coupling=coupling, on_limit_point="continue")],
-                       state=state)
-        self.simulations += 1
-        msg = res.steps[-1].message if res.steps else res.message
-        if res.success and "snap at" in msg:
-            self.snaps.append((base, base + dp, msg[msg.index("snap at"):].split("; load")[0]))
-        return res.state, res.success, res.message
+        super().__init__(model, creases)
+        self.nodes, self.target = nodes, target
 
     def look(self, state):
         lift = float(state.u[self.nodes, 2].mean())
@@ -209,9 +195,8 @@ class _LiftStage:
         if not met:
             message = (f"target lift {self.target * 1e6:g} um not reached (lift "
                        f"{lift * 1e6:.4g} um): {message}")
-        snaps = [text for lo, hi, text in self.snaps if lo < power <= hi + 1e-15]
-        if met and snaps:
-            message = f"{message} after a snap ({snaps[-1]})"
+        if met:
+            message = self.after_snaps(message, state)
         return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
                                lift, tmax, self.simulations, len(self.creases))
 

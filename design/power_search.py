@@ -13,11 +13,112 @@ Both strategies work on a *stage* object with three methods:
 the step and bisects the crossing, restarting trials from saved states so that nothing is
 recomputed from zero. Used by the gripper (:mod:`design.gripper`) and the Miura lifter
 (:mod:`design.miura`).
+
+Both stages heat through :class:`HeatingStage`: every trial is a :class:`~simulator.steps.Heat`
+step with ``on_limit_point="continue"``, so where load control stalls at a limit point (the
+structure snaps) arc length in the power carries the trial on to its final power, and the snap
+(power per crease, jump of the most-moving node) is kept with the trial's state. A criterion
+met only after a snap is reported as met, with ``after a snap (...)`` in the message. Load
+control is unchanged where it converges, so trials without a failure give the same numbers as
+plain load control.
 """
 
 from __future__ import annotations
 
-__all__ = ["staircase_search", "bisect_search"]
+import re
+from dataclasses import dataclass
+
+from simulator.simulation import simulate
+from simulator.steps import Heat
+
+__all__ = ["staircase_search", "bisect_search", "HeatingTrial", "HeatingStage", "heating_trial"]
+
+#: A snap in a Heat step's message (simulator.steps.limit): load factor of the step, jump [um].
+_SNAP = re.compile(r"snap at load factor ([-+0-9.eE]+)[^:;]*: displacement jumps ([-+0-9.eE]+) um")
+
+
+@dataclass(frozen=True)
+class HeatingTrial:
+    """One heating trial of a power search.
+
+    Attributes
+    ----------
+    state : SimulationState at the end of the trial (the last converged one if it failed)
+    success : bool (the trial reached its final power)
+    message : str (the simulation's message)
+    snap : str or None
+        The snaps passed by arc length, e.g. ``"snap at 9.21 mW per crease: displacement
+        jumps 302.8 um"`` (several joined by ``"; "``); None if load control never stalled at
+        a limit point.
+    increments : int (load-controlled and arc-length increments solved)
+    """
+
+    state: object
+    success: bool
+    message: str
+    snap: str | None
+    increments: int
+
+
+def heating_trial(model, creases, state, dp, increments=1, coupling="staggered",
+                  options=None) -> HeatingTrial:
+    """Add ``dp`` [W] to each crease of ``creases`` from ``state``, following snaps.
+
+    Load control in ``increments`` increments; where it stalls, arc length in the power
+    (``Heat(..., on_limit_point="continue")``). The snap powers in :attr:`HeatingTrial.snap`
+    are those of ``creases[0]`` [mW per crease] (the stage's heated creases, whatever other
+    creases carry).
+    """
+    res = simulate(model, [Heat({tuple(creases): dp}, increments=increments, coupling=coupling,
+                                on_limit_point="continue")], state=state, options=options)
+    step = res.steps[-1] if res.steps else None
+    msg = step.message if step is not None else res.message
+    p0 = float(state.crease_power[model.mesh.crease_row[creases[0]]])
+    snaps = [f"snap at {1e3 * (p0 + float(lam) * dp):.4g} mW per crease: displacement jumps "
+             f"{float(jump):.4g} um" for lam, jump in _SNAP.findall(msg)] if res.success else []
+    return HeatingTrial(res.state, res.success, res.message, "; ".join(snaps) or None,
+                        step.increments if step is not None else 0)
+
+
+class HeatingStage:
+    """Heating trials of a power search from saved states, with the snaps on the way to each.
+
+    Subclasses add ``look(state)`` and ``result(status, power, state, message)`` (see the
+    module docstring) and may extend :meth:`heat`.
+
+    Parameters
+    ----------
+    model : Model
+    creases : tuple of int (the heated creases; each gets the trial's power)
+    options : NewtonOptions, optional
+    """
+
+    def __init__(self, model, creases, options=None):
+        self.model, self.creases, self.options = model, tuple(creases), options
+        self.simulations = self.increments = 0
+        self._snaps = {}                       # id(state) -> (state, snaps on the way to it)
+
+    def heat(self, state, dp, increments=1, coupling="staggered"):
+        """Add ``dp`` [W] per heated crease in ``increments`` increments (snaps followed by
+        arc length); returns ``(state, ok, message)``."""
+        trial = heating_trial(self.model, self.creases, state, dp, increments, coupling,
+                              self.options)
+        self.simulations += 1
+        self.increments += trial.increments
+        snaps = self.snaps(state) + ((trial.snap,) if trial.snap else ())
+        if snaps:
+            self._snaps[id(trial.state)] = (trial.state, snaps)
+        return trial.state, trial.success, trial.message
+
+    def snaps(self, state) -> tuple:
+        """Snap notes of the trials that led from the search's start to ``state``."""
+        kept = self._snaps.get(id(state))
+        return kept[1] if kept is not None and kept[0] is state else ()
+
+    def after_snaps(self, message, state) -> str:
+        """``message`` with ``" after a snap (...)"`` if a snap led to ``state``."""
+        snaps = self.snaps(state)
+        return f"{message} after a snap ({'; '.join(snaps)})" if snaps else message
 
 
 def staircase_search(stage, state, step, cap):

@@ -133,6 +133,19 @@ def test_stage_result_contract_is_checked():
         StageResult(False, "not_met", "", 0.0, 0.0, 20.0, 20.0, 1, 1)
 
 
+def test_gripper_message_names_a_stage_met_after_a_snap():
+    from design.gripper import GripperResult
+
+    plain = StageResult(True, "met", "criterion met", 9e-3, 1.6, 150.0, 160.0, 30, 30)
+    snap = StageResult(True, "met", "criterion met after a snap (snap at 0.05 mW per crease: "
+                       "displacement jumps 0.2 um)", 1e-4, 4e-5, 24.0, 130.0, 1, 21)
+    assert GripperResult(G2, "bisect", plain, plain).message == "both stages met"
+    res = GripperResult(G2, "bisect", plain, snap)
+    assert res.message == ("both stages met; grip: criterion met after a snap (snap at "
+                           "0.05 mW per crease: displacement jumps 0.2 um)")
+    assert res.to_dict()["message"] == res.message and res.success
+
+
 def test_model_matches_reference_setup():
     model, pre = gripper_model(GripperDesign())
     mesh = model.mesh
@@ -153,3 +166,30 @@ def test_bad_design(kwargs, match):
 def test_bad_mode():
     with pytest.raises(ParameterError, match="mode"):
         evaluate_gripper(G2, mode="golden")
+
+
+@pytest.mark.slow
+def test_grip_after_a_snap_is_met_where_load_control_failed():
+    """Issue 9 item 5: start design with a residual fold of +45 deg (outside the paper's
+    -20..+10 deg, where no heating trial fails). After assembly (13.2 mW per crease, as the
+    staircase finds), the first grip step (0.1 mW) fails under plain load control; the stage
+    follows the snap of the closing arm tips by arc length (~50 s)."""
+    import math
+
+    from design.gripper import ARM_CREASES, BASE_CREASES, GripperResult, _Stage
+    from simulator import Heat, simulate
+
+    model, pre = gripper_model(GripperDesign(residual_fold=math.radians(45)))
+    start = simulate(model, pre + [Heat({BASE_CREASES: 13.2e-3}, increments=33)])
+    assert start.success and _Stage(model, "assembly").look(start.state)[1]
+    plain = simulate(model, [Heat({ARM_CREASES: 0.1e-3}, increments=1)], state=start.state)
+    assert not plain.success                                    # main before issue 9 item 5
+    grip = _Stage(model, "grip")
+    state, ok, _ = grip.heat(start.state, 0.1e-3)
+    assert ok and grip.look(state)[1] and grip.increments > 1
+    res = grip.result("met", 0.1e-3, state, "criterion met")
+    assert res.success and res.measure < 100e-6
+    note = res.message.split("after a snap (snap at ")[1]
+    assert 0.04 < float(note.split(" mW")[0]) < 0.07 and "displacement jumps" in note
+    both = GripperResult(GripperDesign(), "staircase", res, res)
+    assert both.message.startswith("both stages met; assembly: criterion met after a snap")

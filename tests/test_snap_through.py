@@ -214,5 +214,5 @@ def test_miura_power_search_reports_a_snap():
     stage = _LiftStage(model, tuple(heated_creases(d)), _lift_nodes(model, d), 0.0)
     state, ok, _ = stage.heat(simulate(model, []).state, 12e-3, increments=60)
     assert ok
-    res = stage.result(True, 12e-3, state, "criterion met")
-    assert res.met and "after a snap" in res.message and "mW per crease" in res.message
+    res = stage.result("met", 12e-3, state, "criterion met")
+    assert res.success and "after a snap" in res.message and "mW per crease" in res.message
