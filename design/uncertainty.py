@@ -29,7 +29,7 @@ from simulator.errors import ParameterError
 from .gripper import ARM_CREASES, BASE_CREASES
 
 __all__ = ["Distribution", "UncertainInput", "FabricationScenario", "PARAMETERS",
-           "SAMPLING_METHODS", "residual_fold_per_crease", "wilson_interval", "quantile",
+           "SAMPLING_METHODS", "SCENARIOS", "residual_fold_per_crease", "wilson_interval", "quantile",
            "rank_correlations"]
 
 #: Uncertain parameters: name -> (SI unit, display unit, display scale, lower, upper bound).
@@ -248,6 +248,32 @@ class FabricationScenario:
     def to_dict(self) -> dict:
         return {"name": self.name, "inputs": [i.to_dict() for i in self.inputs],
                 "correlations": dict(self.correlations)}
+
+
+_DEG = math.pi / 180
+#: Named scenarios. ``"default"``: an *assumed* fabrication spread (not measured): residual
+#: fold of each actuated crease normal, mean -5 deg, std 4 deg, truncated to [-20, 10] deg,
+#: correlated between the creases of one device (rho 0.7: one wafer's stress); gold and SU-8
+#: thicknesses normal with 5 % std (0.2 +- 0.01 um, 0.8 +- 0.04 um) truncated at 3 std;
+#: bimorph mismatch uniform on [34, 42] ppm/K; air conductivity uniform on [0.024, 0.030]
+#: W/(m K). ``"residual-fold"``: the residual folds of the default scenario only. ``"off"``:
+#: every input fixed at its nominal value (a check: the yield is the deterministic result).
+SCENARIOS = {
+    "default": FabricationScenario(
+        residual_fold_per_crease(Distribution.normal(-5 * _DEG, 4 * _DEG, -20 * _DEG,
+                                                     10 * _DEG))
+        + (UncertainInput("t_gold", Distribution.normal(0.2e-6, 0.01e-6, 0.17e-6, 0.23e-6)),
+           UncertainInput("t_su8", Distribution.normal(0.8e-6, 0.04e-6, 0.68e-6, 0.92e-6)),
+           UncertainInput("delta_alpha", Distribution.uniform(34e-6, 42e-6)),
+           UncertainInput("env_conductivity", Distribution.uniform(0.024, 0.030))),
+        correlations=(("residual_fold", 0.7),), name="default"),
+    "residual-fold": FabricationScenario(
+        residual_fold_per_crease(Distribution.normal(-5 * _DEG, 4 * _DEG, -20 * _DEG,
+                                                     10 * _DEG)),
+        correlations=(("residual_fold", 0.7),), name="residual-fold"),
+    "off": FabricationScenario((UncertainInput("residual_fold", Distribution.fixed(0.0)),),
+                               name="off"),
+}
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple:
