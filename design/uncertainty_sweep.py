@@ -205,8 +205,11 @@ def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, sa
 
 
 def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
-                    quantiles=(0.5, 0.9), confidence: float = 0.95) -> tuple:
+                    quantiles=(0.5, 0.9), confidence: float = 0.95, by=()) -> tuple:
     """Per design: yield and power spread; per design and input: rank correlations.
+
+    ``by``: further columns that tell designs apart (e.g. a ``design`` label column, so that
+    two labels with equal variables stay two rows).
 
     Returns
     -------
@@ -220,7 +223,7 @@ def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
         Per design, input and output (``total_power [mW]``, ``temperature [degC]``):
         Spearman's rho with its Fisher-z interval (:func:`rank_correlations`).
     """
-    dcols = [c for c in table.columns if c.split(" ")[0] in ("W", "La", "L1", "L2")]
+    dcols = list(by) + [c for c in table.columns if c.split(" ")[0] in ("W", "La", "L1", "L2")]
     rows, sens = [], []
     for values, group in table.groupby(dcols, sort=False):
         n, ok = len(group), int(group["works"].sum())
