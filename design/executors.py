@@ -376,9 +376,15 @@ class _PoolRun:
             suspect = any(self.deaths[j] for j in self.flight.values())
             if suspect or (self.deaths[i] and self.flight):
                 return                            # a suspect runs alone
+            try:
+                fut = pool.submit(self.fn, self.items[i])
+            except BrokenProcessPool:             # a worker died since the last wait
+                if not self.flight:               # no task of ours to learn it from
+                    self.ex._discard_pool()
+                return
             self.queue.popleft()
             self.starts[i] += 1
-            self.flight[pool.submit(self.fn, self.items[i])] = i
+            self.flight[fut] = i
 
     def _collect(self, finished) -> list:
         """Record finished futures; return the indices whose worker died."""

@@ -111,6 +111,17 @@ def _interrupted(args) -> str:
     return resume_message(os.path.join(args.out, "evaluations.csv"), "points")
 
 
+def _add_common_options(parser, func) -> None:
+    """``--design``, ``--mode``, ``--out``, ``-q``, ``--parallel``/``--dask`` of every sweep."""
+    parser.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
+                        help="design in um (repeatable; default the start design)")
+    parser.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
+    parser.add_argument("--out", required=True, metavar="DIR")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_parallel_options(parser)
+    parser.set_defaults(func=func, interrupted=_interrupted)
+
+
 def add_sweep_commands(sub) -> None:
     """Register ``sweep residual-fold`` and ``sweep uncertainty``."""
     sweep = sub.add_parser("sweep", help="robustness sweeps")
@@ -121,13 +132,7 @@ def add_sweep_commands(sub) -> None:
                          "use the = form when the first value is negative)")
     rf.add_argument("--groups", metavar="base,arm", help="sweep crease groups independently "
                                                         "(product grid)")
-    rf.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
-                    help="design in um (repeatable; default the start design)")
-    rf.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
-    rf.add_argument("--out", required=True, metavar="DIR")
-    rf.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    add_parallel_options(rf)
-    rf.set_defaults(func=_sweep, interrupted=_interrupted)
+    _add_common_options(rf, _sweep)
 
     un = ssub.add_parser("uncertainty", help="gripper yield and power spread under "
                                              "fabrication uncertainty")
@@ -138,10 +143,4 @@ def add_sweep_commands(sub) -> None:
                     help="Monte Carlo or Latin hypercube (default lhs)")
     un.add_argument("--scenario", choices=SCENARIO_NAMES, default="default",
                     help="fabrication scenario (see design.uncertainty.SCENARIOS)")
-    un.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
-                    help="design in um (repeatable; default the start design)")
-    un.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
-    un.add_argument("--out", required=True, metavar="DIR")
-    un.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    add_parallel_options(un)
-    un.set_defaults(func=_uncertainty, interrupted=_interrupted)
+    _add_common_options(un, _uncertainty)
