@@ -94,3 +94,33 @@ def test_killing_a_worker_of_a_cli_sweep_costs_nothing(tmp_path):
     calm = pd.read_csv(tmp_path / "calm" / "sweep.csv").drop(columns=["wall_time [s]"])
     assert hurt.to_csv(index=False) == calm.to_csv(index=False)
     assert hurt["success"].all()
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_uncertainty_sweep_resumes(tmp_path):
+    """Ctrl-C after the first logged point: one line, exit 130; the same command finishes
+    the sweep, reusing what was saved."""
+    out = tmp_path / "unc"
+    argv = [sys.executable, "-m", "design.cli", "sweep", "uncertainty", "--samples", "4",
+            "--seed", "2", "--scenario", "residual-fold", "--parallel", "2", "--out", str(out),
+            "-q"]
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    proc = subprocess.Popen(argv, cwd=REPO, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    log = out / "evaluations.csv"
+    deadline = time.monotonic() + 300
+    while (not log.exists() or log.read_text().count("\n") < 2) and proc.poll() is None \
+            and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert proc.poll() is None, "the sweep ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert proc.returncode == 130 and len(lines) == 1, stderr
+    assert " saved in " in lines[0] and "resume" in lines[0]
+    saved = log.read_text().count("\n") - 1
+    assert 1 <= saved < 4
+    done = subprocess.run(argv, cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert log.read_text().count("\n") - 1 == 4                 # saved points not recomputed
+    assert len(pd.read_csv(out / "uncertainty.csv")) == 4
