@@ -161,7 +161,7 @@ def _plot_yield(df):
         ax_p.plot(jitter[~ok], p[~ok], "x", color=f"C{i}", ms=7, mew=2)
     ax_p.set_xticks(pos, summary["design"], rotation=20)
     ax_p.set_ylabel("total power per heated crease [mW]")
-    ax_p.set_title("power of every sample (x: too hot; not met: not drawn)")
+    ax_p.set_title("power of every sample (x: too hot; not met or failed: not drawn)")
     ax_p.grid(True, alpha=0.3)
     return fig
 
