@@ -40,6 +40,19 @@ def _design_arg(text: str, space) -> dict:
     return space.to_dict(out)
 
 
+def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
+    """``sweep(executor, log, progress)`` on the chosen executor, logging to
+    ``out/evaluations.csv``, with a progress bar."""
+    out.mkdir(parents=True, exist_ok=True)
+    ex = executor(args)
+    try:
+        with progress_bar(total=total, desc=desc, disable=args.quiet) as bar:
+            return sweep(ex, out / "evaluations.csv",
+                         lambda done, _total: bar.update(done - bar.n))
+    finally:
+        ex.close()
+
+
 def _sweep(args) -> int:
     from design.problem import GripperProblem
     from design.robustness import residual_fold_grid, sweep_residual_fold
@@ -52,16 +65,9 @@ def _sweep(args) -> int:
     groups = tuple(g.strip() for g in args.groups.split(",")) if args.groups else None
     grid = residual_fold_grid(values, creases=groups)
     out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    ex = executor(args)
-    try:
-        with progress_bar(total=len(designs) * len(grid), desc="residual-fold sweep",
-                          disable=args.quiet) as bar:
-            frame = sweep_residual_fold(problem, designs, grid, executor=ex,
-                                        log=out / "evaluations.csv",
-                                        progress=lambda done, total: bar.update(done - bar.n))
-    finally:
-        ex.close()
+    frame = _run(args, out, len(designs) * len(grid), "residual-fold sweep",
+                 lambda ex, log, shown: sweep_residual_fold(problem, designs, grid, executor=ex,
+                                                            log=log, progress=shown))
     frame.to_csv(out / "sweep.csv", index=False)
     cols = [c for c in frame.columns if c.startswith("residual_fold") or c in (
         "W [um]", "La [um]", "L1 [um]", "L2 [um]", "total_power [mW]", "feasible", "success")]
@@ -84,16 +90,9 @@ def _uncertainty(args) -> int:
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     samples = scenario.sample(args.samples, args.seed, args.method)
     out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    ex = executor(args)
-    try:
-        with progress_bar(total=len(designs) * len(samples), desc="uncertainty sweep",
-                          disable=args.quiet) as bar:
-            table = sweep_uncertainty(problem, scenario, samples, designs, executor=ex,
-                                      log=out / "evaluations.csv",
-                                      progress=lambda done, total: bar.update(done - bar.n))
-    finally:
-        ex.close()
+    table = _run(args, out, len(designs) * len(samples), "uncertainty sweep",
+                 lambda ex, log, shown: sweep_uncertainty(problem, scenario, samples, designs,
+                                                          executor=ex, log=log, progress=shown))
     summary, sensitivity = summarize_yield(table, scenario)
     table.to_csv(out / "uncertainty.csv", index=False)
     summary.to_csv(out / "summary.csv", index=False)
