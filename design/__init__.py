@@ -28,6 +28,11 @@ from .heaters import (ALLOCATION_STATUSES, HeaterAllocation, allocate_heaters,
                       fold_sensitivity, influence_matrices, linear_allocation)
 from .executors import (DaskExecutor, Executor, ExecutorError, ProcessExecutor, SerialExecutor,
                         TaskError, executor_from_option, make_executor)
+from .executors import TaskFailure
+from .uncertainty import (SCENARIOS, Distribution, FabricationScenario, UncertainInput,
+                          rank_correlations, residual_fold_per_crease, wilson_interval)
+from .uncertainty_sweep import (GripperSampleProblem, RobustYieldProblem, summarize_yield,
+                                sweep_uncertainty)
 
 __all__ = [
     # design spaces and problems
@@ -51,4 +56,9 @@ __all__ = [
     # executors
     "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "ExecutorError",
     "TaskError", "make_executor", "executor_from_option",
+    "TaskFailure",
+    # fabrication uncertainty
+    "Distribution", "UncertainInput", "FabricationScenario", "SCENARIOS",
+    "residual_fold_per_crease", "wilson_interval", "rank_correlations",
+    "sweep_uncertainty", "summarize_yield", "GripperSampleProblem", "RobustYieldProblem",
 ]

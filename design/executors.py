@@ -21,6 +21,18 @@ escaping a task is unexpected: ``map`` cancels the pending tasks and raises :cla
 the same floats with every executor on one machine (each task runs the same deterministic
 code; tested bit for bit); across different CPUs this is not guaranteed.
 
+Per-task results and faults
+---------------------------
+``map(..., on_result=fn)`` calls ``fn(index, result)`` in the calling process as each task
+completes (completion order), so a sweep can log every point as soon as it is done. A worker
+that dies (killed, out of memory) costs only its own tasks: the process pool is rebuilt and
+the tasks that were running are retried, each at most ``max_retries`` times (default 2; a task
+retried after a crash runs alone, so an innocent neighbour is charged at most once); Dask
+reschedules such tasks itself (``distributed.scheduler.allowed-failures``) and then reports
+``KilledWorker``. With ``failures="return"`` a task that still fails (or raises) is returned as
+a :class:`TaskFailure` (index, item, reason, attempts) and the other tasks go on; the default,
+``failures="raise"``, raises :class:`TaskError`.
+
 Running a sweep on an existing Dask cluster
 -------------------------------------------
 Install etorigami in every worker's environment, then start a scheduler and single-threaded
@@ -62,12 +74,13 @@ import os
 import pickle
 import signal
 from abc import ABC, abstractmethod
-from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 
 from simulator.errors import EtorigamiError, ParameterError
 
 __all__ = ["Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "ExecutorError",
-           "TaskError", "make_executor", "executor_from_option", "KINDS"]
+           "TaskError", "TaskFailure", "make_executor", "executor_from_option", "KINDS",
+           "MAX_RETRIES"]
 
 logger = logging.getLogger(__name__)
 
@@ -75,6 +88,9 @@ KINDS = ("serial", "process", "dask")
 #: Dask's nannies set MALLOC_TRIM_THRESHOLD_=65536 in workers; a fixed glibc threshold also
 #: fixes the mmap threshold and made gripper evaluations 2.4 times slower: left unset here.
 _MALLOC_KEY = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
+#: Default retries of a task whose worker process died.
+MAX_RETRIES = 2
+_FAILURE_MODES = ("raise", "return")
 
 
 class ExecutorError(EtorigamiError, RuntimeError):
@@ -87,6 +103,36 @@ class TaskError(ExecutorError):
     def __init__(self, message: str, index: int, item):
         super().__init__(message)
         self.index, self.item = index, item
+
+
+@dataclass(frozen=True)
+class TaskFailure:
+    """A task that did not produce a result (returned by ``map(..., failures="return")``).
+
+    Attributes
+    ----------
+    index : int
+        Position of the task in the items.
+    item : object
+    reason : str
+        What happened (the exception, or the worker's death and the number of attempts).
+    attempts : int
+        Times the task was started.
+    """
+
+    index: int
+    item: object
+    reason: str
+    attempts: int = 1
+
+    @property
+    def success(self) -> bool:
+        return False
+
+
+def _check_failures(failures: str) -> None:
+    if failures not in _FAILURE_MODES:
+        raise ParameterError(f"map: failures = {failures!r}; use 'raise' or 'return'.")
 
 
 def _name(fn) -> str:
@@ -119,7 +165,7 @@ class Executor(ABC):
     workers: int = 1
 
     @abstractmethod
-    def map(self, fn, items, progress=None) -> list:
+    def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
         """``[fn(item) for item in items]``, possibly in parallel; results in input order.
 
         Parameters
@@ -129,11 +175,18 @@ class Executor(ABC):
         items : iterable
         progress : callable, optional
             ``progress(done, total)``, called as tasks complete (in completion order).
+        on_result : callable, optional
+            ``on_result(index, result)``, called in this process as each task completes
+            (before ``progress``; with a :class:`TaskFailure` for a failed task).
+        failures : {"raise", "return"}
+            A task that raised, or whose worker died more than ``max_retries`` times:
+            raise :class:`TaskError` (pending tasks cancelled) or return a
+            :class:`TaskFailure` in its place and go on.
 
         Raises
         ------
         TaskError
-            A task raised; pending tasks are cancelled.
+            A task failed and ``failures="raise"``.
         """
 
     def close(self) -> None:
@@ -156,17 +209,27 @@ class SerialExecutor(Executor):
     kind = "serial"
     workers = 1
 
-    def map(self, fn, items, progress=None) -> list:
+    def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
+        _check_failures(failures)
         items = list(items)
         out = []
         for i, item in enumerate(items):
             try:
                 out.append(fn(item))
             except Exception as exc:
-                raise _task_error(fn, i, len(items), item, exc, "serial") from exc
-            if progress is not None:
-                progress(i + 1, len(items))
+                err = _task_error(fn, i, len(items), item, exc, "serial")
+                if failures == "raise":
+                    raise err from exc
+                out.append(TaskFailure(i, item, str(err)))
+            _report(on_result, progress, i, out[-1], i + 1, len(items))
         return out
+
+
+def _report(on_result, progress, index, result, done, total) -> None:
+    if on_result is not None:
+        on_result(index, result)
+    if progress is not None:
+        progress(done, total)
 
 
 def _ignore_sigint() -> None:
@@ -211,7 +274,8 @@ class ProcessExecutor(Executor):
 
     kind = "process"
 
-    def __init__(self, workers: int | None = None, start_method: str | None = None):
+    def __init__(self, workers: int | None = None, start_method: str | None = None,
+                 max_retries: int = MAX_RETRIES):
         workers = (os.cpu_count() or 1) if workers is None else workers
         if not (isinstance(workers, int) and workers >= 1):
             raise ParameterError(f"ProcessExecutor: workers = {workers!r} must be a positive "
@@ -220,7 +284,10 @@ class ProcessExecutor(Executor):
         if start_method not in ("forkserver", "spawn"):
             raise ParameterError(f"ProcessExecutor: start_method = {start_method!r}; use "
                                  "'forkserver' or 'spawn'.")
-        self.workers, self.start_method = workers, start_method
+        if not (isinstance(max_retries, int) and max_retries >= 0):
+            raise ParameterError(f"ProcessExecutor: max_retries = {max_retries!r} must be a "
+                                 "non-negative integer.")
+        self.workers, self.start_method, self.max_retries = workers, start_method, max_retries
         self._pool = None
 
     def _ensure_pool(self):
@@ -231,34 +298,32 @@ class ProcessExecutor(Executor):
             logger.info("process pool: %d workers (%s)", self.workers, self.start_method)
         return self._pool
 
-    def map(self, fn, items, progress=None) -> list:
+    def worker_pids(self) -> list:
+        """Process ids of the current pool's workers (empty before the first ``map``)."""
+        return sorted((getattr(self._pool, "_processes", None) or {}).keys())
+
+    def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
+        _check_failures(failures)
         items = list(items)
         if not items:
             return []
         _check_picklable(fn, self.kind)
-        pool = self._ensure_pool()
-        futures = {}
+        from ._pool_run import PoolRun
+
+        run = PoolRun(self, fn, items, on_result, progress, failures)
         try:
-            for i, item in enumerate(items):
-                futures[pool.submit(fn, item)] = i
-            out = [None] * len(items)
-            for done, fut in enumerate(cf.as_completed(futures), 1):
-                i = futures[fut]
-                exc = fut.exception()
-                if exc is not None:
-                    raise _task_error(fn, i, len(items), items[i], exc, "process pool") from exc
-                out[i] = fut.result()
-                if progress is not None:
-                    progress(done, len(items))
-            return out
+            return run.run()
         except BaseException as exc:
-            for fut in futures:
-                fut.cancel()
+            run.cancel()
             if isinstance(exc, KeyboardInterrupt):
                 self._terminate()                 # Ctrl-C: do not wait for running tasks
-            elif isinstance(exc.__cause__, BrokenProcessPool):
-                self.close()                      # a worker died: the next map starts a new pool
             raise
+
+    def _discard_pool(self) -> None:
+        """Drop a broken pool (its workers are gone); the next task starts a new one."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
     def _terminate(self) -> None:
         """Stop the workers now; their running tasks are lost."""
@@ -334,9 +399,10 @@ class DaskExecutor(Executor):
             self.workers = max(1, sum(self.client.nthreads().values()))
         logger.info("dask executor: %s, %d worker threads", address, self.workers)
 
-    def map(self, fn, items, progress=None) -> list:
+    def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
         from distributed import as_completed
 
+        _check_failures(failures)
         items = list(items)
         if not items:
             return []
@@ -349,11 +415,13 @@ class DaskExecutor(Executor):
                 if fut.status != "finished":
                     exc = fut.exception().with_traceback(fut.traceback()) \
                         if fut.status == "error" else ExecutorError(f"task {fut.status}")
-                    raise _task_error(fn, i, len(items), items[i], exc,
-                                      f"dask {self.address}") from exc
-                out[i] = fut.result()
-                if progress is not None:
-                    progress(done, len(items))
+                    err = _task_error(fn, i, len(items), items[i], exc, f"dask {self.address}")
+                    if failures == "raise":
+                        raise err from exc
+                    out[i] = TaskFailure(i, items[i], str(err))
+                else:
+                    out[i] = fut.result()
+                _report(on_result, progress, i, out[i], done, len(items))
             return out
         finally:
             self.client.cancel(futures)           # pending ones on error; releases the rest

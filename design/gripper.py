@@ -91,6 +91,10 @@ class GripperDesign:
     residual_fold : residual fold of the four actuated creases after fabrication [rad]
     residual_fold_base, residual_fold_arm : optional residual folds of the base hinges and of
         the arm hinges [rad] that override ``residual_fold`` for that crease group
+    residual_fold_creases : ((crease id, rad), ...) residual folds of single actuated creases
+        that override the group values (default none)
+    delta_alpha : bimorph expansion mismatch alpha_SU8 - alpha_Au [1/K] (38e-6, the paper's)
+    env_conductivity : thermal conductivity of the surrounding air [W/(m K)] (0.026)
     """
 
     W: float = 200e-6
@@ -105,9 +109,20 @@ class GripperDesign:
     residual_fold: float = 0.0
     residual_fold_base: float | None = None
     residual_fold_arm: float | None = None
+    residual_fold_creases: tuple = ()
+    delta_alpha: float = 38e-6
+    env_conductivity: float = 0.026
 
     def __post_init__(self):
+        folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
+                      for c, v in dict(self.residual_fold_creases).items())
+        if set(dict(folds)) - set(BASE_CREASES + ARM_CREASES):
+            raise ParameterError(f"GripperDesign.residual_fold_creases = {folds!r}: crease ids "
+                                 f"must be actuated creases {BASE_CREASES + ARM_CREASES}.")
+        object.__setattr__(self, "residual_fold_creases", tuple(sorted(folds)))
         for name, value in asdict(self).items():
+            if name == "residual_fold_creases":
+                continue
             if name.startswith("residual_fold"):
                 if value is not None:
                     check_fold(f"GripperDesign.{name}", value)
@@ -119,13 +134,21 @@ class GripperDesign:
                                  "than the panels it joins (L1, L2, La).")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
+        ``env_conductivity``) only when they differ from their defaults, so that problem
+        settings, and the hashes of evaluation logs written before they existed, are kept."""
+        out = asdict(self)
+        for name in _OPTIONAL:
+            if out[name] == _OPTIONAL[name]:
+                del out[name]
+        return out
 
     def crease_residual_folds(self) -> dict:
         """Residual fold [rad] of each actuated crease id."""
         base = self.residual_fold if self.residual_fold_base is None else self.residual_fold_base
         arm = self.residual_fold if self.residual_fold_arm is None else self.residual_fold_arm
-        return {**{c: base for c in BASE_CREASES}, **{c: arm for c in ARM_CREASES}}
+        return {**{c: base for c in BASE_CREASES}, **{c: arm for c in ARM_CREASES},
+                **dict(self.residual_fold_creases)}
 
 
 #: Status words of a stage: met (success), criterion not met below the power cap, a
@@ -242,9 +265,13 @@ class GripperResult:
             "grip_simulations": self.grip.simulations,
             "success": self.success, "status": self.status, "message": self.message,
             "mode": self.mode,
-            **{f"{k} [rad]" if k.startswith("residual_fold") else f"{k} [m]": v
+            **{f"{k} [{_UNITS.get(k, 'rad' if k.startswith('residual_fold') else 'm')}]": v
                for k, v in self.design.to_dict().items()},
         }
+
+
+_UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)"}
+_OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
@@ -283,10 +310,10 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(env_thickness=1.5 * (design.L1 + design.L2) / 2,
-                                env_conductivity=0.026, dissipation_angle=REFERENCE_BETA,
+                                env_conductivity=design.env_conductivity, dissipation_angle=REFERENCE_BETA,
                                 boundary_panels=(5,), room_temperature_nodes=(37,))
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
-                          {c: 38e-6 for c in BASE_CREASES + ARM_CREASES})
+                          {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),
                        contact=ContactParameters(1e-4, 40e-6, 40e-6), thermal=thermal,
                        actuators=actuators)

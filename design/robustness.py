@@ -29,8 +29,8 @@ import pandas as pd
 from simulator.errors import ParameterError
 
 from . import gripper as _gr
-from .executors import SerialExecutor
-from .problem import DesignProblem, GripperProblem
+from .executors import SerialExecutor, TaskFailure
+from .problem import DesignProblem, Evaluation, GripperProblem
 
 __all__ = ["CREASE_GROUPS", "residual_fold_grid", "with_residual_fold",
            "sweep_residual_fold", "RobustGripperProblem", "TIMING_COLUMNS"]
@@ -133,6 +133,12 @@ def _evaluate_point(task):
     return problem.evaluate(x)
 
 
+def lost_evaluation(problem, x, reason: str) -> Evaluation:
+    """A failed evaluation of a point whose task never returned (its worker died)."""
+    return Evaluation(problem.space.to_dict(x), math.inf, success=False, status="failed",
+                      message=f"not evaluated: {reason}")
+
+
 def _design_list(space, designs) -> list:
     if designs is None:
         return [space.to_dict(space.start)]
@@ -197,8 +203,10 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
         Default serial; not closed here.
     log : str or os.PathLike, optional
         Evaluation log CSV (:class:`~design.evaluation_log.EvaluationLog`, one settings hash
-        per residual fold): logged points are reused, new ones appended after every batch of
-        ``4 * executor.workers`` points, so an interrupted sweep resumes where it stopped.
+        per residual fold): logged points are reused, each new one is appended as soon as it
+        finishes (on every executor), so an interrupted sweep resumes where it stopped. A
+        point whose worker died more often than the executor retries it is a failed row
+        (message ``"not evaluated: ..."``), not logged, and the sweep goes on.
     progress : callable, optional
         ``progress(done, total)`` as points complete (points computed, not reused).
 
@@ -229,20 +237,19 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
     todo = [i for i, ev in enumerate(evs) if ev is None]
     logger.info("residual-fold sweep: %d designs x %d residual folds on %r (%d logged)",
                 len(xs), len(specs), executor, len(points) - len(todo))
-    batch = len(todo) if log is None else 4 * executor.workers
-    for b in range(0, len(todo), max(batch, 1)):
-        idx = todo[b:b + batch]
-        shown = None if progress is None else (lambda d, _t, b=b: progress(b + d, len(todo)))
-        done = executor.map(_evaluate_point, [(probs[points[i][1]], points[i][0]) for i in idx],
-                            shown)
-        for i, ev in zip(idx, done):
-            evs[i] = ev
+    items = [(probs[points[i][1]], points[i][0]) for i in todo]
+
+    def finished(k, ev):                    # in this process, as each point completes
+        i = todo[k]
+        prob, x = probs[points[i][1]], points[i][0]
+        if isinstance(ev, TaskFailure):     # not logged: the same command tries it again
+            evs[i] = lost_evaluation(prob, x, ev.reason)
+            return
+        evs[i] = ev
         if log is not None:
-            for j in sorted({points[i][1] for i in idx}):           # fresh: the file changed
-                lg = _open_log(log, probs[j])
-                for i in idx:
-                    if points[i][1] == j:
-                        lg.append(evs[i])
+            _open_log(log, prob).append(ev)      # reopened: another point's log may add columns
+
+    executor.map(_evaluate_point, items, progress, on_result=finished, failures="return")
     columns = ["all"] if all("all" in s for s in specs) else list(CREASE_GROUPS)
     return pd.DataFrame([_row(probs[j], x, specs[j], columns, ev)
                          for (x, j), ev in zip(points, evs)])

@@ -6,7 +6,7 @@ import time
 import pytest
 
 from design.executors import (DaskExecutor, ExecutorError, ProcessExecutor, SerialExecutor,
-                              TaskError, executor_from_option, make_executor)
+                              TaskError, TaskFailure, executor_from_option, make_executor)
 from simulator.errors import ParameterError
 
 
@@ -109,3 +109,49 @@ def test_dask_local_cluster_is_closed_on_exit():
         cluster = ex._cluster
     assert ex.client is None and ex._cluster is None
     assert cluster.status.name == "closed"
+
+
+def slow_identity(x):
+    time.sleep(0.15)
+    return (x, x * 0.1)
+
+
+def _kill_one_worker(ex, seen):
+    """``on_result`` that kills one worker of the pool (SIGKILL) after the first result."""
+    import signal
+
+    def on_result(index, result):
+        seen.append(index)
+        if len(seen) == 1:
+            os.kill(ex.worker_pids()[0], signal.SIGKILL)
+    return on_result
+
+
+def test_killed_worker_costs_only_its_points():
+    """SIGKILL one worker of a running 2-process sweep: the pool is rebuilt, the lost points
+    are retried and every result equals the undisturbed run's."""
+    items = list(range(12))
+    with ProcessExecutor(2) as ex:
+        calm = ex.map(slow_identity, items)
+        seen, before = [], ex.worker_pids()
+        hurt = ex.map(slow_identity, items, on_result=_kill_one_worker(ex, seen))
+        assert before[0] not in ex.worker_pids()     # it was killed, the pool rebuilt
+    assert hurt == calm
+    assert sorted(seen) == items                 # every point reported once, as it finished
+
+
+def test_worker_that_always_dies_is_reported_and_the_rest_go_on(executor):
+    """Process pool: a task that kills its worker every time; serial and Dask (which retries a
+    killed worker's task itself, allowed-failures): a task that raises."""
+    dies = executor.kind == "process"
+    seen = []
+    out = executor.map(die_on_two if dies else fail_on_three, range(5),
+                       on_result=lambda i, r: seen.append(i), failures="return")
+    bad = 2 if dies else 3
+    assert [r for i, r in enumerate(out) if i != bad] == [i for i in range(5) if i != bad]
+    failure = out[bad]
+    assert isinstance(failure, TaskFailure) and not failure.success and failure.index == bad
+    assert ("died 3 times" if dies else "ValueError: bad item 3") in failure.reason
+    assert sorted(seen) == list(range(5))
+    with pytest.raises(ParameterError, match="failures"):
+        executor.map(slow_square, [1], failures="ignore")

@@ -11,7 +11,8 @@ never imports it. One module per command group:
 * :mod:`.modes`: ``etorigami modes CASE [--count N] --out DIR`` (natural modes);
 * :mod:`.gripper`: ``etorigami gripper evaluate``;
 * :mod:`.optimize`: ``etorigami optimize gripper|miura`` (resumable with ``--out``);
-* :mod:`.sweep`: ``etorigami sweep residual-fold`` (resumable).
+* :mod:`.sweep`: ``etorigami sweep residual-fold`` and ``etorigami sweep uncertainty``
+  (resumable; a dead worker costs only its own points).
 
 Options are in um, mW and degrees. A usage error ends with one line on stderr and exit status
 2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.

@@ -1,7 +1,9 @@
-"""``etorigami sweep residual-fold``: gripper power vs the residual fold of its creases.
+"""``etorigami sweep residual-fold`` (gripper power vs the residual fold of its creases) and
+``etorigami sweep uncertainty`` (yield, power spread and the inputs that matter under a
+fabrication scenario, sampled with a seed).
 
 Designs are given in micrometres and residual folds in degrees. Every point is appended to
-``DIR/evaluations.csv``; the same command run again reuses them.
+``DIR/evaluations.csv`` as soon as it finishes; the same command run again reuses them.
 """
 
 from __future__ import annotations
@@ -12,7 +14,11 @@ import pathlib
 from ._common import (RESIDUAL_LIMIT_DEG, CLIError, add_parallel_options, executor, floats,
                       fold_deg, length_um, progress_bar, resume_message)
 
-__all__ = ["add_sweep_commands"]
+__all__ = ["add_sweep_commands", "SCENARIO_NAMES"]
+
+#: Names of :data:`design.uncertainty.SCENARIOS` (listed here so that building the parser
+#: imports no simulator code; a test checks they agree).
+SCENARIO_NAMES = ("default", "residual-fold", "off")
 
 
 def _design_arg(text: str, space) -> dict:
@@ -34,6 +40,19 @@ def _design_arg(text: str, space) -> dict:
     return space.to_dict(out)
 
 
+def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
+    """``sweep(executor, log, progress)`` on the chosen executor, logging to
+    ``out/evaluations.csv``, with a progress bar."""
+    out.mkdir(parents=True, exist_ok=True)
+    ex = executor(args)
+    try:
+        with progress_bar(total=total, desc=desc, disable=args.quiet) as bar:
+            return sweep(ex, out / "evaluations.csv",
+                         lambda done, _total: bar.update(done - bar.n))
+    finally:
+        ex.close()
+
+
 def _sweep(args) -> int:
     from design.problem import GripperProblem
     from design.robustness import residual_fold_grid, sweep_residual_fold
@@ -46,16 +65,9 @@ def _sweep(args) -> int:
     groups = tuple(g.strip() for g in args.groups.split(",")) if args.groups else None
     grid = residual_fold_grid(values, creases=groups)
     out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    ex = executor(args)
-    try:
-        with progress_bar(total=len(designs) * len(grid), desc="residual-fold sweep",
-                          disable=args.quiet) as bar:
-            frame = sweep_residual_fold(problem, designs, grid, executor=ex,
-                                        log=out / "evaluations.csv",
-                                        progress=lambda done, total: bar.update(done - bar.n))
-    finally:
-        ex.close()
+    frame = _run(args, out, len(designs) * len(grid), "residual-fold sweep",
+                 lambda ex, log, shown: sweep_residual_fold(problem, designs, grid, executor=ex,
+                                                            log=log, progress=shown))
     frame.to_csv(out / "sweep.csv", index=False)
     cols = [c for c in frame.columns if c.startswith("residual_fold") or c in (
         "W [um]", "La [um]", "L1 [um]", "L2 [um]", "total_power [mW]", "feasible", "success")]
@@ -64,12 +76,53 @@ def _sweep(args) -> int:
     return 0
 
 
+def _uncertainty(args) -> int:
+    import json
+
+    from design.problem import GripperProblem
+    from design.uncertainty import SCENARIOS
+    from design.uncertainty_sweep import summarize_yield, sweep_uncertainty
+
+    if args.samples < 1:
+        raise CLIError(f"--samples = {args.samples} must be at least 1")
+    problem = GripperProblem(mode=args.mode)
+    scenario = SCENARIOS[args.scenario]
+    designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
+    samples = scenario.sample(args.samples, args.seed, args.method)
+    out = pathlib.Path(args.out)
+    table = _run(args, out, len(designs) * len(samples), "uncertainty sweep",
+                 lambda ex, log, shown: sweep_uncertainty(problem, scenario, samples, designs,
+                                                          executor=ex, log=log, progress=shown))
+    summary, sensitivity = summarize_yield(table, scenario)
+    table.to_csv(out / "uncertainty.csv", index=False)
+    summary.to_csv(out / "summary.csv", index=False)
+    sensitivity.to_csv(out / "sensitivity.csv", index=False)
+    with open(out / "scenario.json", "w", encoding="utf-8") as fh:
+        json.dump({**scenario.to_dict(), "samples": args.samples, "seed": args.seed,
+                   "method": args.method}, fh, indent=1)
+    print(summary.to_string(index=False))
+    print(f"{len(table)} points written to {out / 'uncertainty.csv'} (summary.csv, "
+          "sensitivity.csv beside it)")
+    return 0
+
+
 def _interrupted(args) -> str:
     return resume_message(os.path.join(args.out, "evaluations.csv"), "points")
 
 
+def _add_common_options(parser, func) -> None:
+    """``--design``, ``--mode``, ``--out``, ``-q``, ``--parallel``/``--dask`` of every sweep."""
+    parser.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
+                        help="design in um (repeatable; default the start design)")
+    parser.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
+    parser.add_argument("--out", required=True, metavar="DIR")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_parallel_options(parser)
+    parser.set_defaults(func=func, interrupted=_interrupted)
+
+
 def add_sweep_commands(sub) -> None:
-    """Register ``sweep residual-fold`` on an argparse subparsers object."""
+    """Register ``sweep residual-fold`` and ``sweep uncertainty``."""
     sweep = sub.add_parser("sweep", help="robustness sweeps")
     ssub = sweep.add_subparsers(dest="sweep_command", metavar="KIND", required=True)
     rf = ssub.add_parser("residual-fold", help="gripper power vs residual fold angle")
@@ -78,10 +131,15 @@ def add_sweep_commands(sub) -> None:
                          "use the = form when the first value is negative)")
     rf.add_argument("--groups", metavar="base,arm", help="sweep crease groups independently "
                                                         "(product grid)")
-    rf.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
-                    help="design in um (repeatable; default the start design)")
-    rf.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
-    rf.add_argument("--out", required=True, metavar="DIR")
-    rf.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    add_parallel_options(rf)
-    rf.set_defaults(func=_sweep, interrupted=_interrupted)
+    _add_common_options(rf, _sweep)
+
+    un = ssub.add_parser("uncertainty", help="gripper yield and power spread under "
+                                             "fabrication uncertainty")
+    un.add_argument("--samples", type=int, default=32, metavar="N", help="samples (default 32)")
+    un.add_argument("--seed", type=int, default=0, metavar="S",
+                    help="sampling seed: the same seed gives the same table (default 0)")
+    un.add_argument("--method", choices=("mc", "lhs"), default="lhs",
+                    help="Monte Carlo or Latin hypercube (default lhs)")
+    un.add_argument("--scenario", choices=SCENARIO_NAMES, default="default",
+                    help="fabrication scenario (see design.uncertainty.SCENARIOS)")
+    _add_common_options(un, _uncertainty)

@@ -1,0 +1,33 @@
+"""Study gripper_yield in quick mode: tables, figures, metadata."""
+
+import json
+
+import numpy as np
+import pandas as pd
+
+from studies import gripper_yield
+
+
+def test_gripper_yield_quick(tmp_path):
+    out = tmp_path / "gy"
+    assert gripper_yield.main(["--quick", "--out", str(out), "--no-progress"]) == out
+    for name in ("gripper_yield.csv", "gripper_yield.png", "gripper_yield_inputs.png",
+                 "meta.json"):
+        assert (out / name).exists(), name
+    assert json.loads((out / "meta.json").read_text())["settings"] == {"quick": True}
+    df = pd.read_csv(out / "gripper_yield.csv")
+    labels = [gripper_yield.START, gripper_yield.PAPER, gripper_yield.ROBUST,
+              *gripper_yield.PATH]
+    samples, summary = df[df["table"] == "samples"], df[df["table"] == "summary"]
+    assert list(summary["design"]) == labels
+    assert len(samples) == len(labels) * gripper_yield.SAMPLES_QUICK
+    works = samples["works"].astype(str).str.lower() == "true"
+    for label, row in summary.set_index("design").iterrows():
+        mine = works[samples["design"] == label]
+        assert row["yield [-]"] == mine.mean()
+        assert row["yield_low [-]"] <= row["yield [-]"] <= row["yield_high [-]"]
+    sens = df[df["table"] == "sensitivity"]
+    assert len(sens) == len(labels) * 2 * len(gripper_yield.SCENARIO.inputs)
+    assert np.all(np.abs(sens["spearman [-]"].dropna()) <= 1)
+    robust = df[(df["table"] == "designs") & (df["design"] == gripper_yield.ROBUST)].iloc[0]
+    assert robust["evaluations"] <= gripper_yield.ROBUST_BUDGET_QUICK
