@@ -32,8 +32,8 @@ from .properties import BarHingeParameters
 from .results import SimulationResult, StepResult
 from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
-from .steps import (AmbientTemperature, Coupling, Dynamics, Gravity, Heat, Load, SelfFold, Step,
-                    StepContext, StepOutcome, StepRecorder, TransientHeat)
+from .steps import (AmbientTemperature, Coupling, Dynamics, ElectroThermal, Gravity, Heat, Load,
+                    SelfFold, Step, StepContext, StepOutcome, StepRecorder, TransientHeat)
 from .thermal import ThermalParameters
 from .transient_heat import (REFERENCE_THETA, ThetaStepper, TransientHeatResult, capacity_vector,
                              integrate_heat, theta_step)
@@ -58,6 +58,8 @@ __all__ = [
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",
+    # coupled electro-thermal dynamics
+    "ElectroThermal",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)

@@ -2,10 +2,11 @@
 
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .dynamics import Dynamics
+from .electrothermal import ElectroThermal
 from .heating import AmbientTemperature, Coupling, Heat, coupled_increments
 from .mechanical import Gravity, Load, SelfFold
 from .transient import TransientHeat
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity",
            "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat",
-           "Dynamics"]
+           "Dynamics", "ElectroThermal"]
