@@ -13,14 +13,16 @@
 3. mechanics: one implicit time step of the equation of motion
    (:class:`~simulator.dynamics.TimeIntegrator`, Newton iterations and dead loads such as
    gravity kept, unlike the reference, digest D9.3 and D9.6), or with
-   ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected).
+   ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
+   angles moved from the previous step's with step cutting (:func:`~simulator.newton.follow_path`).
 
 The coupling is staggered as in the reference: the heat step sees the shape at the start of
 the step. Re-assembling K and C costs about as much as the mechanics; ``shape_tol`` [m] lets
 the heat step keep the previous assembly (and its factorisation) while no node has moved more
 than that since the last assembly (0, the default, re-assembles whenever the shape changed).
 
-Time steps adapt between ``dt_min`` and ``dt_max``: a step whose mechanics fails, or whose
+Time steps adapt between ``dt_min`` and ``dt_max`` and end on the switching times of
+step, square-wave and piecewise-linear schedules (so a power jump falls between steps): a step whose mechanics fails, or whose
 largest node temperature change exceeds ``2 * temperature_step``, is rejected and retried with
 half the step; the next step doubles after an easy step (mechanics in at most
 :data:`EASY_ITERATIONS` Newton iterations and a temperature change below
@@ -31,8 +33,9 @@ Every record carries ``time [s]`` (the simulation clock, ``SimulationState.time`
 in the step), ``dt [s]``, and the energy bookkeeping since the start of the step:
 ``kinetic_energy [J]``, ``strain_energy [J]`` (bars, springs, contact at the current rest
 angles), ``dissipated_energy [J]`` (Rayleigh and air damping; empty for quasi-static
-mechanics), ``external_work [J]`` (dead loads) and ``heat_in [J]`` (electrical heat put in),
-``heat_out [J]`` (heat lost to room-temperature nodes). The end state carries the velocities.
+mechanics), ``external_work [J]`` (dead loads), ``heat_in [J]`` (electrical heat put in, the
+integral of the crease powers) and ``heat_out [J]`` (heat lost to room temperature, including
+the share of the heater power that lands on room-temperature nodes). The end state carries the velocities.
 """
 
 from __future__ import annotations
@@ -46,8 +49,9 @@ import numpy as np
 
 from ..dynamics import DynamicsOptions, TimeIntegrator
 from ..errors import ParameterError
-from ..newton import newton
-from ..power_schedules import CreasePowers, check_power_mapping
+from ..newton import follow_path
+from ..power_schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
+                               check_power_mapping)
 from ..transient_heat import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -60,6 +64,26 @@ logger = logging.getLogger(__name__)
 MECHANICS = ("dynamic", "quasi_static")
 #: A mechanical step that converges in at most this many Newton iterations lets dt grow.
 EASY_ITERATIONS = 4
+
+
+def _next_switch(schedules, t: float) -> float:
+    """Earliest time after ``t`` [s] at which a schedule's power jumps or kinks (inf if none):
+    the on / off times of StepPower and SquareWave, the table times of PiecewiseLinear."""
+    best = math.inf
+    for s in schedules:
+        if isinstance(s, StepPower):
+            times = (s.t_on, s.t_off)
+        elif isinstance(s, PiecewiseLinear):
+            times = s.times
+        elif isinstance(s, SquareWave):
+            k = max(0.0, math.floor((t - s.t_start) / s.period))
+            start = s.t_start + k * s.period
+            times = (start, start + s.duty * s.period, start + s.period)
+        else:
+            continue
+        later = [x for x in times if x > t * (1 + 1e-12) + 1e-15]
+        best = min([best, *later])
+    return best
 
 
 def _positive_or_none(owner, name, value):
@@ -164,7 +188,7 @@ class ElectroThermal(Step):
         target, rest = state.crease_rest, state.spring_rest
         status, message = "converged", ""
         while t < self.duration * (1 - 1e-12):
-            h_try = min(h, self.duration - t)
+            h_try = min(h, self.duration - t, _next_switch(powers.schedules, t) - t)
             last = h_try >= self.duration - t - 1e-12 * self.duration
             new_temp = heat.trial(mech.x, powers.mean(t, t + h_try), h_try)
             change = float(np.max(np.abs(new_temp - temp)))
@@ -245,6 +269,8 @@ class _HeatPart:
         if self.stepper is None or self.stepper.dt != h:
             self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
         self._q = free_heat_input(self.tm, self.system.free, power)
+        self._electric = float(np.sum(power))      # W (the rest of _q heats fixed nodes)
+
         self._T = self.stepper.step(self.T, self._q, self._q)
         self._h = h
         rise = self.rise.copy()
@@ -254,8 +280,9 @@ class _HeatPart:
 
     def accept(self) -> None:
         th, h = self.theta, self._h
-        self.heat_in += h * float(np.sum(self._q))
-        self.heat_out += h * float(self.system.outflow @ (th * self._T + (1 - th) * self.T))
+        self.heat_in += h * self._electric
+        self.heat_out += h * (self._electric - float(np.sum(self._q)) + float(
+            self.system.outflow @ (th * self._T + (1 - th) * self.T)))
         self.T, self.rise = self._T, self._rise
 
     def energies(self) -> dict:
@@ -277,7 +304,7 @@ class _MechanicsPart:
             self.u, self.evaluation = self.motion.u, self.motion.evaluation
         else:
             self.u, self.evaluation = state.u, None
-        self.strain = None
+        self.rest = state.spring_rest
 
     @property
     def x(self) -> np.ndarray:
@@ -288,10 +315,11 @@ class _MechanicsPart:
         return self.motion.v if self.dynamic else None
 
     def trial(self, h, rest):
+        self.rest_trial = rest
         if self.dynamic:
             return self.integ.step(self.motion, h, self.f, rest)
-        return _QuasiStatic(newton(self.context.system, self.u, self.f, rest,
-                                   self.context.options))
+        return _QuasiStatic(follow_path(self.context.system, self.u, self.f, self.f,
+                                        self.rest, rest, 1, self.context.options))
 
     def accept(self, report) -> None:
         if self.dynamic:
@@ -300,7 +328,7 @@ class _MechanicsPart:
             self.dissipated += report.dissipated
         else:
             du = (report.result.u - self.u).ravel()
-            self.evaluation = report.result.evaluation
+            self.evaluation, self.rest = report.result.evaluation, self.rest_trial
         self.work += float(du @ self.f)
         self.u = self.motion.u if self.dynamic else report.result.u
 
@@ -317,24 +345,13 @@ class _MechanicsPart:
 
 @dataclass(frozen=True, eq=False)
 class _QuasiStatic:
-    """A Newton solve dressed as a time-step report (iterations, cuts, residual norms)."""
+    """An equilibrium path (one increment, halved on failure) dressed as a time-step report."""
 
     result: object
 
-    @property
-    def success(self) -> bool:
-        return self.result.success
-
-    @property
-    def message(self) -> str:
-        return self.result.message
-
-    @property
-    def iterations(self) -> int:
-        return self.result.iterations
-
-    cuts = 0
+    def __getattr__(self, name):              # success, message, iterations, cuts
+        return getattr(self.result, name)
 
     @property
     def residual_norms(self) -> tuple:
-        return (self.result.residual_norms,)
+        return tuple(self.result.residual_norms)
