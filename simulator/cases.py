@@ -210,12 +210,13 @@ SINGLE_FOLD_CHIP_NODES = (0, 1, 2, 3, 8, 9, 10, 11, 15, 17)
 
 
 @_case(power_mW="mW", t_on="s", t_off="s", dt="s", dt_min="s", dt_max="s",
-       residual_fold_deg="deg", air_damping="N s/m^3", env_conductivity="W/(m K)")
+       residual_fold_deg="deg", air_damping="N s/m^3", env_conductivity="W/(m K)",
+       shape_tol="m")
 def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: float = 1.0,
                               dt: float = 1e-3, dt_min: float = 1e-5, dt_max: float = 5e-3,
                               mechanics: str = "dynamic", residual_fold_deg: float = 0.0,
                               air_damping: float = 2.0, env_conductivity: float = 0.026,
-                              record_every: int = 1) -> Case:
+                              shape_tol: float = 5e-6, record_every: int = 1) -> Case:
     """Single crease (gravity, substrate) in air under a power step: on for t_on, off for t_off.
 
     The geometry and actuator of ``single_fold``; the chip (anchor panel and substrate) is a
@@ -223,6 +224,8 @@ def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: f
     :class:`~simulator.steps.ElectroThermal` step of ``t_on + t_off`` seconds with adaptive time
     steps in [dt_min, dt_max]. ``air_damping`` [N s/m^3] is a squeeze-film estimate for the
     panel 150 um above the substrate (damping ratio about 0.08 for the 40 Hz fold mode).
+    ``shape_tol`` [m]: the heat matrices are re-assembled when a node has moved more than this
+    (5 um: 20x fewer assemblies, fold within 0.02 deg of re-assembling every step).
     """
     params = {k: v for k, v in locals().items()}
     _check(t_on=t_on, t_off=t_off)
@@ -238,7 +241,7 @@ def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: f
         room_nodes=SINGLE_FOLD_CHIP_NODES)
     pulse = StepPower(_power(power_mW), 0.0, t_on)
     step = ElectroThermal({2: pulse}, duration=t_on + t_off, dt=dt, dt_min=dt_min,
-                          dt_max=dt_max, mechanics=mechanics,
+                          dt_max=dt_max, mechanics=mechanics, shape_tol=shape_tol,
                           options=DynamicsOptions(method="generalized_alpha", rho_inf=0.5,
                                                   rtol=1e-6, air_damping=air_damping),
                           record_every=_steps_int("record_every", record_every))
