@@ -63,7 +63,7 @@ logger = logging.getLogger(__name__)
 
 MECHANICS = ("dynamic", "quasi_static")
 #: A mechanical step that converges in at most this many Newton iterations lets dt grow.
-EASY_ITERATIONS = 4
+EASY_ITERATIONS = 8
 
 
 def _next_switch(schedules, t: float) -> float:

@@ -1,0 +1,64 @@
+"""Time-domain studies (studies/actuation_speed, studies/natural_modes): files, figures
+re-created from the CSV alone, and the physics of the quick runs."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.figure import Figure
+
+from studies import actuation_speed, natural_modes
+
+TEXT_COLUMNS = {"table", "mode", "converged"}
+
+
+@pytest.fixture(scope="module", params=["actuation_speed", "natural_modes"])
+def quick(request, tmp_path_factory):
+    module = {"actuation_speed": actuation_speed, "natural_modes": natural_modes}[request.param]
+    out = tmp_path_factory.mktemp(request.param)
+    assert module.main(["--quick", "--out", str(out), "--no-progress"]) == out
+    return module, out, pd.read_csv(out / f"{module.NAME}.csv")
+
+
+def test_quick_main_writes_files_and_replots_from_csv(quick):
+    module, out, df = quick
+    assert (out / f"{module.NAME}.png").stat().st_size > 10_000
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["study"] == module.NAME and meta["rows"] == len(df) > 0
+    assert all(c.endswith("]") for c in df.columns if c not in TEXT_COLUMNS)
+    fig = module.plot(df)
+    assert isinstance(fig, Figure) and fig.axes
+
+
+def test_physics_of_the_quick_runs(quick):
+    module, _, df = quick
+    if module is actuation_speed:
+        s = df[df["table"] == "summary"].set_index("power [mW]")
+        assert s["fold_change [deg]"].is_monotonic_increasing            # more power, more fold
+        assert (s["rise_time [s]"] > s["thermal_time_constant [s]"]).all()
+        assert ((s["release_time [s]"] > 0) & (s["release_time [s]"] < 0.05)).all()
+        # lifted off the substrate, the panel swings on its crease: 10x slower than resting
+        assert (s["mechanical_period_heated [s]"] > 5 * s["mechanical_period_unheated [s]"]).all()
+        np.testing.assert_allclose(s["energy [mJ]"], s.index * actuation_speed.PHASE_QUICK)
+        w = df[df["table"] == "square_wave"]
+        assert w["relative_amplitude [-]"].iloc[-1] < 0.7                   # 100 Hz: filtered
+        assert 10 < w["bandwidth [Hz]"].iloc[0] < 100
+    else:
+        assert df["converged"].all()
+        low = df[df["mode"] == 1].set_index("power [mW]")
+        assert low["fold_angle [deg]"].is_monotonic_increasing
+        assert low.loc[0.0, "frequency [Hz]"] > 5 * low.loc[4.0, "frequency [Hz]"]
+        assert (df.groupby("power [mW]")["frequency [Hz]"].apply(
+            lambda f: np.all(np.diff(f.to_numpy()) > 0))).all()                # sorted modes
+
+
+@pytest.mark.parametrize("t, y, level, expected", [
+    ([0.0, 1.0, 2.0], [0.0, 1.0, 2.0], 1.5, 1.5),
+    ([0.0, 1.0, 2.0], [2.0, 1.0, 0.0], 0.5, 1.5),
+    ([0.0, 1.0], [0.0, 1.0], 3.0, np.nan),
+])
+def test_crossing_and_bandwidth_helpers(t, y, level, expected):
+    np.testing.assert_allclose(actuation_speed.crossing(t, y, level), expected)
+    assert actuation_speed.bandwidth([1, 10, 100], [1.0, 1.0, 0.5]) == pytest.approx(
+        10 * 10 ** (np.log(1 / np.sqrt(2)) / np.log(0.5)))
