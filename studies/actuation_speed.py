@@ -163,7 +163,7 @@ def plot(df: pd.DataFrame):
                        ("mechanical_period_unheated [s]", "+:")):
         ax_s.plot(s["power [mW]"], s[col], style, label=col.split(" [")[0].replace("_", " "))
     ax_s.set(xlabel="power [mW]", ylabel="time [s]", yscale="log", title="(b) time scales")
-    ax_s.legend(fontsize="small")
+    ax_s.legend(fontsize="x-small", loc="center right")
     w = df[df["table"] == "square_wave"]
     ax_f.loglog(w["frequency [Hz]"], w["relative_amplitude [-]"], "o-")
     ax_f.axhline(1 / np.sqrt(2), color="grey", ls=":", label="-3 dB")

@@ -26,7 +26,8 @@ step, square-wave and piecewise-linear schedules (so a power jump falls between 
 largest node temperature change exceeds ``2 * temperature_step``, is rejected and retried with
 half the step; the next step doubles after an easy step (mechanics in at most
 :data:`EASY_ITERATIONS` Newton iterations and a temperature change below
-``temperature_step / 2``) and halves after a large temperature change. With ``dt_min = dt_max``
+``temperature_step / 2``) and halves after a large temperature change; a step cut short to
+end on a switching time does not change the step size. With ``dt_min = dt_max``
 (the default: both equal ``dt``) every step is ``dt``.
 
 Every record carries ``time [s]`` (the simulation clock, ``SimulationState.time`` plus the time
@@ -51,7 +52,7 @@ from ..dynamics import DynamicsOptions, TimeIntegrator
 from ..errors import ParameterError
 from ..newton import follow_path
 from ..power_schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
-                               check_power_mapping)
+                               check_power_mapping, describe_power_mapping)
 from ..transient_heat import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -189,7 +190,6 @@ class ElectroThermal(Step):
         status, message = "converged", ""
         while t < self.duration * (1 - 1e-12):
             h_try = min(h, self.duration - t, _next_switch(powers.schedules, t) - t)
-            last = h_try >= self.duration - t - 1e-12 * self.duration
             new_temp = heat.trial(mech.x, powers.mean(t, t + h_try), h_try)
             change = float(np.max(np.abs(new_temp - temp)))
             if change > 2 * self.temperature_step and h_try > dt_min:
@@ -210,7 +210,7 @@ class ElectroThermal(Step):
             t, k, temp, target, rest = t + h_try, k + 1, new_temp, new_target, new_rest
             rec.iterations += report.iterations
             rec.cuts += report.cuts
-            if k % self.record_every == 0 or last or t >= self.duration * (1 - 1e-12):
+            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12):
                 rec.record(t / self.duration, mech.u, temp, powers(t), report.iterations,
                            np.concatenate(report.residual_norms) if report.residual_norms
                            else (), **{"time [s]": state.time + t, "dt [s]": h_try,
@@ -218,10 +218,9 @@ class ElectroThermal(Step):
             context.report(k, k + math.ceil((self.duration - t) / h_try - 1e-9))
             if change > self.temperature_step:
                 h = max(dt_min, h_try / 2)
-            elif report.iterations <= EASY_ITERATIONS and change <= self.temperature_step / 2:
-                h = min(dt_max, 2 * h_try)
-            else:
-                h = h_try
+            elif (h_try == h and report.iterations <= EASY_ITERATIONS  # not cut short by a
+                  and change <= self.temperature_step / 2):             # switch or the end
+                h = min(dt_max, 2 * h)
         if status == "converged":
             message = (f"reached t = {self.duration:g} s in {k} time steps ({heat.assemblies} "
                        "heat assemblies)")
@@ -234,9 +233,7 @@ class ElectroThermal(Step):
 
     def describe(self) -> dict:
         dt_min, dt_max = self.bounds
-        return {"power_added": {str(k): (v.describe() if hasattr(v, "describe") else
-                                         {"schedule": "constant", "power [W]": float(v)})
-                                for k, v in dict(self.power).items()},
+        return {"power_added": describe_power_mapping(self.power),
                 "duration [s]": self.duration, "dt [s]": self.dt, "dt_min [s]": dt_min,
                 "dt_max [s]": dt_max, "mechanics": self.mechanics, "theta": self.theta,
                 "temperature_step [K]": self.temperature_step, "shape_tol [m]": self.shape_tol,
