@@ -40,11 +40,16 @@ Outputs (``results/actuation_speed/``)
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from simulator import Heat, SquareWave, get_case, natural_modes, simulate
+from design.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
+                            _tip_distance, gripper_model)
+from simulator import Heat, SquareWave, StepPower, get_case, natural_modes, simulate
+from simulator.geometry import fold_angles
 from studies._common import TEMP, progress_bar, study_main
 
 NAME = "actuation_speed"
@@ -54,7 +59,11 @@ PHASE, PHASE_QUICK = 1.0, 0.15                     # s, on and off
 FREQS, FREQS_QUICK = (1.0, 3.0, 10.0, 30.0, 100.0), (10.0, 100.0)
 WAVE_POWER_MW, PERIODS = 3.0, 4
 DT_MAX = 5e-4                                  # s, resolves the ~4 ms release
-T, FOLD = "time [s]", "fold_angle [deg]"
+#: Gripper powers per heated crease [mW]: assembly needs 26.4 (base fold 90 deg), grip 5.9
+#: (tips 100 um apart) with the base held at the assembly power (``evaluate_gripper``); above
+#: about 6.2 mW the arm tips touch and the static solution fails.
+ASSEMBLY_MW, GRIP_MW = (28.0, 32.0), (6.0, 5.5)
+T, FOLD, TIP = "time [s]", "fold_angle [deg]", "tip_distance [um]"
 
 
 def crossing(t, y, level) -> float:
@@ -67,59 +76,106 @@ def crossing(t, y, level) -> float:
     return float(t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i]))
 
 
-def _trace(case, pre):
-    res = simulate(case.model, case.steps[-1:], state=pre.state)
+@dataclass(frozen=True, eq=False)
+class Device:
+    """What one actuation heats and measures: ``creases`` (a heater circuit) of ``model``
+    heated from ``state``; ``measure(x)`` of the node positions (n, 3) [m] in ``column``."""
+
+    label: str
+    model: object
+    state: object
+    creases: tuple
+    measure: Callable
+    column: str
+
+
+def single_crease(residual_fold_deg: float = 0.0) -> Device:
+    """The single crease of ``single_fold_step_response`` after self-fold and gravity."""
+    case = get_case(CASE, residual_fold_deg=residual_fold_deg)
+    pre = simulate(case.model, case.steps[:-1])
+    mesh = case.model.mesh
+    return Device("single crease", case.model, pre.state, (2,),
+                  lambda x: float(np.degrees(fold_angles(mesh, x)[0])), FOLD)
+
+
+def gripper(stage: str, base_power: float = 0.0) -> Device:
+    """The gripper (``design.gripper``) before assembly, or assembled by ``base_power`` [W]
+    per base crease (static, held on) before the grip."""
+    model, pre = gripper_model(GripperDesign())
+    state = simulate(model, pre).state
+    if stage == "assembly":
+        return Device("gripper assembly", model, state, BASE_CREASES,
+                      lambda x: float(np.degrees(_base_fold(x))), FOLD)
+    state = _static(model, state, BASE_CREASES, base_power).state
+    return Device("gripper grip", model, state, ARM_CREASES, lambda x: 1e6 * _tip_distance(x),
+                  TIP)
+
+
+def _static(model, state, creases, power):
+    res = simulate(model, [Heat({creases: power}, increments=10, coupling="iterated")],
+                   state=state)
     if not res.success:
-        raise RuntimeError(f"{case.name}: {res.message}")
-    t = np.r_[pre.state.time, res.steps[0].columns[T]] - pre.state.time
-    return t, np.degrees(res.fold_angle[:, 0]), res.crease_temperature[:, 0]   # record 0: start
+        raise RuntimeError(f"static heating to {1e3 * power:g} mW: {res.message}")
+    return res
 
 
-def step_metrics(t, fold, temp, t_on) -> dict:
-    """Rise and release times (10-90 %), thermal time constant (63.2 %) [s], fold change."""
+def pulse(device: Device, schedule, duration: float, dt_max: float = DT_MAX):
+    """Times [s], measure and mean heated-crease temperature [deg C] (record 0 = start) of
+    one :class:`~simulator.steps.ElectroThermal` run of ``duration`` [s] driven by
+    ``schedule`` on the device's circuit (the step settings of the case)."""
+    step = dataclasses.replace(get_case(CASE).steps[-1], power={device.creases: schedule},
+                               duration=duration, dt=dt_max, dt_min=1e-6, dt_max=dt_max)
+    res = simulate(device.model, [step], state=device.state)
+    if not res.success:
+        raise RuntimeError(f"{device.label}: {res.message}")
+    t = np.r_[device.state.time, res.steps[0].columns[T]] - device.state.time
+    x = device.model.mesh.nodes[None] + res.history["u"]
+    rows = [device.model.mesh.crease_row_of(c) for c in device.creases]
+    return t, np.array([device.measure(xk) for xk in x]), \
+        res.crease_temperature[:, rows].mean(axis=1)
+
+
+def step_metrics(t, y, temp, t_on) -> dict:
+    """Rise and release times (10-90 % of the change reached at ``t_on``), the time to 90 %,
+    thermal time constant (63.2 % of the temperature rise) [s] and the change."""
     on = int(np.searchsorted(t, t_on - 1e-12))
-    f0, df = fold[0], fold[on] - fold[0]
-    rise = crossing(t[:on + 1], fold[:on + 1], f0 + 0.9 * df) - \
-        crossing(t[:on + 1], fold[:on + 1], f0 + 0.1 * df)
-    off_t, off_f = t[on:], fold[on:]
-    release = crossing(off_t, off_f, f0 + 0.1 * df) - crossing(off_t, off_f, f0 + 0.9 * df)
+    y0, dy = y[0], y[on] - y[0]
+    t10, t90 = (crossing(t[:on + 1], y[:on + 1], y0 + f * dy) for f in (0.1, 0.9))
+    release = crossing(t[on:], y[on:], y0 + 0.1 * dy) - crossing(t[on:], y[on:], y0 + 0.9 * dy)
     tau = crossing(t[:on + 1], temp[:on + 1], temp[0] + 0.632 * (temp[on] - temp[0]))
-    return {"rise_time [s]": rise, "release_time [s]": release,
-            "thermal_time_constant [s]": tau, "fold_change [deg]": df}
+    return {"rise_time [s]": t90 - t10, "release_time [s]": release, "time_to_90 [s]": t90,
+            "thermal_time_constant [s]": tau, "change [deg or um]": dy}
 
 
-def mechanical_periods(model, state, power) -> dict:
-    """First natural period [s] about the unheated state and about the static heated one."""
-    heated = simulate(model, [Heat({2: power}, increments=10, coupling="iterated")], state=state)
-    return {f"mechanical_period_{k} [s]": 1.0 / float(natural_modes(model, s, 1).frequency[0])
-            for k, s in (("unheated", state), ("heated", heated.state))}
+def mechanical_periods(device: Device, power) -> dict:
+    """First natural period [s] about the start state and about the static heated one."""
+    heated = _static(device.model, device.state, device.creases, power).state
+    return {f"mechanical_period_{k} [s]": 1.0 / float(natural_modes(device.model, s,
+                                                                   1).frequency[0])
+            for k, s in (("unheated", device.state), ("heated", heated))}
 
 
-def _step_response(powers, phase, progress):
+def _step_response(runs, phase, progress):
+    """``runs``: [(device, power per heated crease [mW])]."""
     rows, series = [], []
-    for p in progress_bar(powers, progress, desc="step response"):
-        case = get_case(CASE, power_mW=p, t_on=phase, t_off=phase, dt=DT_MAX,
-                        dt_max=DT_MAX)
-        pre = simulate(case.model, case.steps[:-1])
-        t, fold, temp = _trace(case, pre)
-        series.append(pd.DataFrame({"table": "response", "power [mW]": p, T: t, FOLD: fold,
-                                    TEMP: temp}))
-        rows.append({"table": "summary", "power [mW]": p, **step_metrics(t, fold, temp, phase),
-                     **mechanical_periods(case.model, pre.state, p * 1e-3),
-                     "energy [mJ]": p * phase})
+    for device, p in progress_bar(runs, progress, desc="step response"):
+        t, y, temp = pulse(device, StepPower(p * 1e-3, 0.0, phase), 2 * phase)
+        series.append(pd.DataFrame({"table": "response", "device": device.label,
+                                    "power [mW]": p, T: t, device.column: y, TEMP: temp}))
+        metrics = step_metrics(t, y, temp, phase)
+        total = p * len(device.creases)
+        rows.append({"table": "summary", "device": device.label, "power [mW]": p, **metrics,
+                     **mechanical_periods(device, p * 1e-3), "energy [mJ]": total * phase,
+                     "energy_to_90 [mJ]": total * metrics["time_to_90 [s]"]})
     return pd.concat([*series, pd.DataFrame(rows)], ignore_index=True)
 
 
 def _square_wave(freqs, progress):
-    case = get_case(CASE, power_mW=WAVE_POWER_MW)
-    pre = simulate(case.model, case.steps[:-1])
+    device = single_crease()
     rows = []
     for f in progress_bar(freqs, progress, desc="square wave"):
-        step = dataclasses.replace(
-            case.steps[-1], power={2: SquareWave(WAVE_POWER_MW * 1e-3, 1 / f, 0.5)},
-            duration=PERIODS / f, dt=min(1e-3, 0.02 / f), dt_min=1e-6,
-            dt_max=min(5e-3, 0.02 / f))
-        t, fold, _ = _trace(dataclasses.replace(case, steps=(*case.steps[:-1], step)), pre)
+        t, fold, _ = pulse(device, SquareWave(WAVE_POWER_MW * 1e-3, 1 / f, 0.5), PERIODS / f,
+                           min(5e-3, 0.02 / f))
         last = t >= (PERIODS - 1) / f - 1e-12
         rows.append({"table": "square_wave", "frequency [Hz]": f,
                      "amplitude [deg]": float(np.ptp(fold[last]))})
@@ -139,40 +195,57 @@ def bandwidth(freqs, relative) -> float:
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     """Step responses vs power and the square-wave sweep; see the module docstring."""
-    steps = _step_response(POWERS_QUICK if quick else POWERS_MW,
-                           PHASE_QUICK if quick else PHASE, progress)
+    crease = single_crease()
+    runs = [(crease, p) for p in (POWERS_QUICK if quick else POWERS_MW)]
+    assembly, grip = gripper("assembly"), gripper("grip", ASSEMBLY_MW[0] * 1e-3)
+    runs += [(assembly, p) for p in ASSEMBLY_MW[:1 if quick else None]]
+    runs += [(grip, p) for p in GRIP_MW[:1 if quick else None]]
+    steps = _step_response(runs, PHASE_QUICK if quick else PHASE, progress)
     return pd.concat([steps, _square_wave(FREQS_QUICK if quick else FREQS, progress)],
                      ignore_index=True)
 
 
+METRICS = (("rise_time [s]", "o"), ("release_time [s]", "s"),
+           ("thermal_time_constant [s]", "^"), ("mechanical_period_heated [s]", "x"),
+           ("mechanical_period_unheated [s]", "+"))
+
+
 def plot(df: pd.DataFrame):
-    """Fold vs time per power, times vs power, square-wave amplitude vs frequency."""
+    """(a) single-crease fold vs time per power, (b) normalised gripper responses, (c) time
+    scales of every run, (d) square-wave amplitude vs frequency."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(13, 4.2), layout="constrained")
-    ax_t, ax_s, ax_f = fig.subplots(1, 3)
+    fig = Figure(figsize=(12, 8.5), layout="constrained")
+    (ax_t, ax_g), (ax_s, ax_f) = fig.subplots(2, 2)
     resp = df[df["table"] == "response"]
-    for p, d in resp.groupby("power [mW]"):
-        ax_t.plot(d[T], d[FOLD], label=f"{p:g} mW")
-    ax_t.set(xlabel="time [s]", ylabel="fold angle [deg]", title="(a) power step on, then off")
-    ax_t.legend(fontsize="small")
-    s = df[df["table"] == "summary"]
-    for col, style in (("rise_time [s]", "o-"), ("release_time [s]", "s-"),
-                       ("thermal_time_constant [s]", "^--"),
-                       ("mechanical_period_heated [s]", "x:"),
-                       ("mechanical_period_unheated [s]", "+:")):
-        ax_s.plot(s["power [mW]"], s[col], style, label=col.split(" [")[0].replace("_", " "))
-    ax_s.set(xlabel="power [mW]", ylabel="time [s]", yscale="log", title="(b) time scales")
-    ax_s.legend(fontsize="x-small", loc="center right")
+    for (device, p), d in resp.groupby(["device", "power [mW]"], sort=False):
+        if device == "single crease":
+            ax_t.plot(d[T], d[FOLD], label=f"{p:g} mW")
+        else:
+            y = d[FOLD if device == "gripper assembly" else TIP].to_numpy()
+            on = int(np.argmin(np.abs(d[T].to_numpy() - d[T].max() / 2)))
+            ax_g.plot(d[T], (y - y[0]) / (y[on] - y[0]), label=f"{device}, {p:g} mW")
+    ax_t.set(xlabel="time [s]", ylabel="fold angle [deg]",
+             title="(a) single crease: power on, then off")
+    ax_g.set(xlabel="time [s]", ylabel="change / change at power off [-]",
+             title="(b) gripper: base fold (assembly), tip distance (grip)")
+    s = df[df["table"] == "summary"].reset_index(drop=True)
+    labels = [f"{d}\n{p:g} mW" for d, p in zip(s["device"], s["power [mW]"])]
+    for col, marker in METRICS:
+        ax_s.plot(range(len(s)), s[col], marker, ls="none", ms=7,
+                  label=col.split(" [")[0].replace("_", " "))
+    ax_s.set_xticks(range(len(s)), labels, fontsize="x-small")
+    ax_s.set(ylabel="time [s]", yscale="log", title="(c) time scales per run")
     w = df[df["table"] == "square_wave"]
     ax_f.loglog(w["frequency [Hz]"], w["relative_amplitude [-]"], "o-")
     ax_f.axhline(1 / np.sqrt(2), color="grey", ls=":", label="-3 dB")
     bw = w["bandwidth [Hz]"].iloc[0] if len(w) else np.nan
     ax_f.set(xlabel="square-wave frequency [Hz]", ylabel="fold amplitude / low-frequency one",
-             title=f"(c) bandwidth {bw:.3g} Hz" if np.isfinite(bw) else "(c) square wave")
-    ax_f.legend(fontsize="small")
-    for ax in (ax_t, ax_s, ax_f):
+             title=(f"(d) single crease, {WAVE_POWER_MW:g} mW square wave: bandwidth "
+                    f"{bw:.3g} Hz" if np.isfinite(bw) else "(d) square wave"))
+    for ax in (ax_t, ax_g, ax_s, ax_f):
         ax.grid(True, alpha=0.3)
+        ax.legend(fontsize="x-small")
     return fig
 
 

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from studies import actuation_speed, natural_modes
 
-TEXT_COLUMNS = {"table", "mode", "converged"}
+TEXT_COLUMNS = {"table", "mode", "converged", "device", "stage"}
 
 
 @pytest.fixture(scope="module", params=["actuation_speed", "natural_modes"])
@@ -34,13 +34,19 @@ def test_quick_main_writes_files_and_replots_from_csv(quick):
 def test_physics_of_the_quick_runs(quick):
     module, _, df = quick
     if module is actuation_speed:
-        s = df[df["table"] == "summary"].set_index("power [mW]")
-        assert s["fold_change [deg]"].is_monotonic_increasing            # more power, more fold
-        assert (s["rise_time [s]"] > s["thermal_time_constant [s]"]).all()
-        assert ((s["release_time [s]"] > 0) & (s["release_time [s]"] < 0.05)).all()
+        summary = df[df["table"] == "summary"]
+        assert (summary["rise_time [s]"] > summary["thermal_time_constant [s]"]).all()
+        assert ((summary["release_time [s]"] > 0) & (summary["release_time [s]"] < 0.1)).all()
+        s = summary[summary["device"] == "single crease"].set_index("power [mW]")
+        assert s["change [deg or um]"].is_monotonic_increasing          # more power, more fold
         # lifted off the substrate, the panel swings on its crease: 10x slower than resting
         assert (s["mechanical_period_heated [s]"] > 5 * s["mechanical_period_unheated [s]"]).all()
         np.testing.assert_allclose(s["energy [mJ]"], s.index * actuation_speed.PHASE_QUICK)
+        g = summary.set_index("device")
+        assert g.loc["gripper assembly", "change [deg or um]"] > 90         # assembled
+        assert g.loc["gripper grip", "change [deg or um]"] < -500           # arms closed [um]
+        np.testing.assert_allclose(g.loc["gripper assembly", "energy [mJ]"],
+                                   2 * 28.0 * actuation_speed.PHASE_QUICK)
         w = df[df["table"] == "square_wave"]
         assert w["relative_amplitude [-]"].iloc[-1] < 0.7                   # 100 Hz: filtered
         assert 10 < w["bandwidth [Hz]"].iloc[0] < 100
