@@ -1,4 +1,4 @@
-"""Natural frequencies of the single crease vs heating power and fold state (issue 10, item 6).
+"""Natural frequencies vs heating power and fold state: single crease and gripper (issue 10).
 
 Question
 --------
@@ -9,87 +9,112 @@ actuator in each state?
 
 Method
 ------
-* Model: ``get_case("single_fold_step_response")`` (gravity, substrate with contact, the chip
-  a heat sink, in air), self-fold to the residual fold and gravity, then static heating
-  (:class:`~simulator.steps.Heat`, iterated coupling) to each power in turn, every power
-  starting from the previous one's state.
-* At every power: the ``MODES`` lowest natural modes (:func:`~simulator.natural_modes`)
-  linearised about the heated equilibrium (with its stresses and contact), the fold angle
-  and the crease temperature.
-* Residual folds 0 and -10 deg (two fold histories); ``--quick``: residual 0, three powers.
-* Not done here: the gripper (``design.gripper``), left for a later run.
+* Single crease: ``get_case("single_fold_step_response")`` (gravity, substrate with contact,
+  the chip a heat sink, in air), self-fold to the residual fold (0 and -10 deg) and gravity;
+  gripper (``design.gripper``, reference design): self-weight, then the base circuit heated to
+  28 mW per crease (assembly: the base folds past 90 deg at 26.4 mW), then with the base held
+  there the arm circuit to 6 mW (grip: the tips close to 40 um; they touch above ~6.2 mW).
+* Static heating (:class:`~simulator.steps.Heat`, iterated coupling) to each power in turn,
+  every power from the previous one's state; at every power the ``MODES`` lowest natural
+  modes (:func:`~simulator.natural_modes`) about the heated equilibrium (with its stresses
+  and contact), the fold angle (base fold for the gripper) or the arm tip distance, and the
+  mean temperature of the heated creases.
+* ``--quick``: residual 0 with three powers, the gripper at 0 and full power per stage.
 
 Outputs (``results/natural_modes/``)
 ------------------------------------
-``natural_modes.csv``: one row per state and mode: ``residual_fold [deg]``, ``power [mW]``,
-``fold_angle [deg]``, ``temperature [degC]`` (crease), ``mode`` (1 = lowest),
-``frequency [Hz]``, ``converged``. Figure ``natural_modes.png``: frequencies vs power and vs
-fold angle.
+``natural_modes.csv``: one row per state and mode: ``device`` (single crease with its residual
+fold, gripper assembly, gripper grip), ``power [mW]`` (per heated crease of the circuit),
+``fold_angle [deg]`` or ``tip_distance [um]``, ``temperature [degC]``, ``mode`` (1 = lowest),
+``frequency [Hz]``, ``converged``. Figure ``natural_modes.png``.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 
-from simulator import Heat, get_case, natural_modes, simulate
+from simulator import Heat, natural_modes, simulate
 from studies._common import TEMP, progress_bar, study_main
+from studies.actuation_speed import gripper, single_crease
 
 NAME = "natural_modes"
-CASE = "single_fold_step_response"
 MODES = 4
 POWERS_MW = tuple(np.round(np.arange(0.0, 6.01, 0.5), 2))
 POWERS_QUICK = (0.0, 2.0, 4.0)
 RESIDUALS, RESIDUALS_QUICK = (0.0, -10.0), (0.0,)
+#: Gripper: base circuit 0 -> 28 mW per crease (assembly), then the arms 0 -> 6 mW (grip).
+ASSEMBLY_MW, ASSEMBLY_QUICK = tuple(range(0, 29, 4)), (0, 28)
+GRIP_MW, GRIP_QUICK = (0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.5, 6.0), (0.0, 6.0)
 FREQ, FOLD, POWER = "frequency [Hz]", "fold_angle [deg]", "power [mW]"
 
 
-def modes_vs_power(residual_deg: float, powers_mW, progress: bool = False) -> pd.DataFrame:
-    """Rows per power and mode for one residual fold (see the module docstring)."""
-    case = get_case(CASE, residual_fold_deg=residual_deg)
-    res = simulate(case.model, case.steps[:-1])
-    state, previous, rows = res.state, 0.0, []
-    for p in progress_bar(powers_mW, progress, desc=f"residual {residual_deg:g} deg"):
+def modes_vs_power(device, powers_mW, progress: bool = False) -> pd.DataFrame:
+    """Rows per power and mode: the device's circuit heated (static, iterated coupling) to
+    each power [mW per crease] in turn; natural modes about every equilibrium."""
+    state, previous, rows = device.state, 0.0, []
+    mesh, crease_rows = device.model.mesh, [device.model.mesh.crease_row_of(c)
+                                            for c in device.creases]
+    ok = True
+    for p in progress_bar(powers_mW, progress, desc=device.label):
         if p != previous:
-            res = simulate(case.model, [Heat({2: (p - previous) * 1e-3}, increments=10,
-                                             coupling="iterated")], state=state)
+            res = simulate(device.model, [Heat({device.creases: (p - previous) * 1e-3},
+                                               increments=10, coupling="iterated")],
+                           state=state)
+            ok = res.success
+            if not ok:
+                break
             state, previous = res.state, p
-        modes = natural_modes(case.model, state, MODES)
+        modes = natural_modes(device.model, state, MODES)
+        temp = float(np.mean(state.temperature[mesh.crease_nodes[crease_rows]]))
         for k, f in enumerate(modes.frequency, start=1):
-            rows.append({"residual_fold [deg]": residual_deg, POWER: p,
-                         FOLD: float(np.degrees(res.fold_angle[-1, 0])),
-                         TEMP: float(res.crease_temperature[-1, 0]), "mode": k, FREQ: float(f),
-                         "converged": bool(res.success and modes.success)})
-        if not res.success:
-            break
+            rows.append({"device": device.label, POWER: float(p),
+                         device.column: device.measure(mesh.nodes + state.u), TEMP: temp,
+                         "mode": k, FREQ: float(f), "converged": bool(ok and modes.success)})
     return pd.DataFrame(rows)
 
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
-    """Modes vs power for every residual fold; see the module docstring."""
-    return pd.concat([modes_vs_power(r, POWERS_QUICK if quick else POWERS_MW, progress)
-                      for r in (RESIDUALS_QUICK if quick else RESIDUALS)], ignore_index=True)
+    """Modes vs power for the single crease (every residual fold) and the gripper."""
+    parts = []
+    for r in (RESIDUALS_QUICK if quick else RESIDUALS):
+        device = dataclasses.replace(single_crease(r), label=f"single crease, residual {r:g} deg")
+        parts.append(modes_vs_power(device, POWERS_QUICK if quick else POWERS_MW, progress))
+    parts.append(modes_vs_power(gripper("assembly"), ASSEMBLY_QUICK if quick else ASSEMBLY_MW,
+                                progress))
+    parts.append(modes_vs_power(gripper("grip", ASSEMBLY_MW[-1] * 1e-3),
+                                GRIP_QUICK if quick else GRIP_MW, progress))
+    return pd.concat(parts, ignore_index=True)
 
 
 def plot(df: pd.DataFrame):
-    """Frequencies vs power (a) and vs fold angle (b), one line per mode and residual fold."""
+    """Single crease: frequencies vs power (a) and vs fold angle (b); gripper vs the power of
+    the stage's circuit (c). One line per mode and run."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(11, 4.2), layout="constrained")
-    ax_p, ax_f = fig.subplots(1, 2)
+    fig = Figure(figsize=(15, 4.4), layout="constrained")
+    ax_p, ax_f, ax_g = fig.subplots(1, 3)
     styles = ("-", "--", ":", "-.")
-    for j, (r, d) in enumerate(df.groupby("residual_fold [deg]", sort=False)):
+    for j, (device, d) in enumerate(df.groupby("device", sort=False)):
+        crease = device.startswith("single crease")
         for k, m in d.groupby("mode"):
-            kw = dict(color=f"C{k - 1}", ls=styles[j % len(styles)], marker="o", ms=3,
-                      label=f"mode {k}, residual {r:g} deg")
-            ax_p.plot(m[POWER], m[FREQ], **kw)
-            ax_f.plot(m[FOLD], m[FREQ], **kw)
-    ax_p.set(xlabel="crease power [mW]", title="(a) vs heating power")
-    ax_f.set(xlabel="fold angle [deg]", title="(b) vs fold state")
-    for ax in (ax_p, ax_f):
+            kw = dict(color=f"C{k - 1}", ls=styles[j % 2 if crease else j % 4], marker="o",
+                      ms=3, label=f"mode {k}, {device}")
+            if crease:
+                ax_p.plot(m[POWER], m[FREQ], **kw)
+                ax_f.plot(m[FOLD], m[FREQ], **kw)
+            else:
+                ax_g.plot(m[POWER], m[FREQ], **kw)
+    ax_p.set(xlabel="crease power [mW]", title="(a) single crease vs heating power")
+    ax_f.set(xlabel="fold angle [deg]", title="(b) single crease vs fold state")
+    ax_g.set(xlabel="power per heated crease [mW]",
+             title="(c) gripper: base circuit (assembly), then arms (grip)")
+    for ax in (ax_p, ax_f, ax_g):
         ax.set(ylabel="natural frequency [Hz]", yscale="log")
         ax.grid(True, alpha=0.3)
-    ax_p.legend(fontsize="x-small", ncol=2)
+        ax.legend(fontsize="xx-small", ncol=2)
     return fig
 
 

@@ -52,11 +52,16 @@ def test_physics_of_the_quick_runs(quick):
         assert 10 < w["bandwidth [Hz]"].iloc[0] < 100
     else:
         assert df["converged"].all()
-        low = df[df["mode"] == 1].set_index("power [mW]")
+        first = df[df["mode"] == 1]
+        low = first[first["device"].str.startswith("single crease")].set_index("power [mW]")
         assert low["fold_angle [deg]"].is_monotonic_increasing
+        # resting on the substrate's contact layer vs lifted off: 10x lower
         assert low.loc[0.0, "frequency [Hz]"] > 5 * low.loc[4.0, "frequency [Hz]"]
-        assert (df.groupby("power [mW]")["frequency [Hz]"].apply(
-            lambda f: np.all(np.diff(f.to_numpy()) > 0))).all()                # sorted modes
+        assert (df.groupby(["device", "power [mW]"])["frequency [Hz]"].apply(
+            lambda f: np.all(np.diff(f.to_numpy()) >= 0))).all()               # sorted modes
+        g = first.set_index(["device", "power [mW]"])
+        assert g.loc[("gripper assembly", 28.0), "fold_angle [deg]"] > 90
+        assert g.loc[("gripper grip", 6.0), "tip_distance [um]"] < 100
 
 
 @pytest.mark.parametrize("t, y, level, expected", [
