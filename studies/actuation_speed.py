@@ -28,7 +28,8 @@ Method
 
 Outputs (``results/actuation_speed/``)
 --------------------------------------
-``actuation_speed.csv`` with a ``table`` column: ``response`` (time series per power: ``time
+``actuation_speed.csv`` with a ``table`` column: ``response`` (time series per run, at most
+:data:`MAX_RECORDS` records evenly spread over the run's records: ``device``, ``time
 [s]``, ``fold_angle [deg]``, ``temperature [degC]`` crease), ``summary`` (per power: ``rise_time
 [s]``, ``release_time [s]``, ``thermal_time_constant [s]``,
 ``energy [mJ]``, ``fold_change [deg]``, ``mechanical_period_unheated [s]``,
@@ -59,6 +60,7 @@ PHASE, PHASE_QUICK = 1.0, 0.15                     # s, on and off
 FREQS, FREQS_QUICK = (1.0, 3.0, 10.0, 30.0, 100.0), (10.0, 100.0)
 WAVE_POWER_MW, PERIODS = 3.0, 4
 DT_MAX = 5e-4                                  # s, resolves the ~4 ms release
+MAX_RECORDS = 800                              # response rows kept per run in the table
 #: Gripper powers per heated crease [mW]: assembly needs 26.4 (base fold 90 deg), grip 5.9
 #: (tips 100 um apart) with the base held at the assembly power (``evaluate_gripper``); above
 #: about 6.2 mW the arm tips touch and the static solution fails.
@@ -160,8 +162,11 @@ def _step_response(runs, phase, progress):
     rows, series = [], []
     for device, p in progress_bar(runs, progress, desc="step response"):
         t, y, temp = pulse(device, StepPower(p * 1e-3, 0.0, phase), 2 * phase)
+        keep = np.unique(np.r_[np.linspace(0, len(t) - 1, MAX_RECORDS).astype(int),
+                               np.argmax(y), np.argmin(y)])              # keep the extremes
         series.append(pd.DataFrame({"table": "response", "device": device.label,
-                                    "power [mW]": p, T: t, device.column: y, TEMP: temp}))
+                                    "power [mW]": p, T: t[keep], device.column: y[keep],
+                                    TEMP: temp[keep]}))
         metrics = step_metrics(t, y, temp, phase)
         total = p * len(device.creases)
         rows.append({"table": "summary", "device": device.label, "power [mW]": p, **metrics,
