@@ -3,39 +3,46 @@
 Question
 --------
 A single gold / SU-8 crease (gravity, 150 um over a substrate, the chip a heat sink at room
-temperature, in air) is driven by a power step. How long do folding (rise) and release take,
-how do they scale with the power, what sets them - the thermal time constant or the
-mechanical period of the fold mode - and how much electrical energy does one actuation cost?
-Up to which drive frequency does a square wave still give a full fold (the -3 dB bandwidth)?
+temperature, in air) and the micro-gripper (``design.gripper``) are driven by power steps.
+How long do folding (rise) and release take, how do they scale with the power, what sets
+them - the thermal time constant or the mechanical period - and how much electrical energy
+does one actuation cost? Up to which drive frequency does a square wave still give a full
+fold of the single crease (the -3 dB bandwidth)?
 
 Method
 ------
-* Step response: ``get_case("single_fold_step_response", power_mW=P, t_on, t_off)`` (self-fold,
-  gravity, then one :class:`~simulator.steps.ElectroThermal` step, dynamic mechanics with
-  adaptive time steps). Rise time = 10 % to 90 % of the fold change reached at the end of the
-  on-phase; release time = 90 % to 10 % after the power is switched off. Thermal time
-  constant = time for the crease temperature to reach 63.2 % of its rise at the end of the
-  on-phase; mechanical periods = 1 / first natural frequency (:func:`~simulator.natural_modes`)
-  about the unheated state (the sagging panel rests on the substrate's contact layer: a stiff,
-  fast mode) and about the static heated state (lifted off: the fold mode on the crease).
-  Energy per actuation = P t_on.
-* Square wave: the same model driven by ``SquareWave(P, period=1/f, duty=0.5)`` for a few
-  periods; the fold amplitude (peak to peak over the last period) against f, normalised by the
-  lowest frequency's; the -3 dB bandwidth is where it falls to 1/sqrt(2) (log interpolation).
-* ``--quick``: two powers, 0.15 s phases, square waves at 10 and 100 Hz.
-* Not done here: the gripper's assembly and grip (the same functions work on ``design.gripper``
-  models, but one coupled run of the gripper takes minutes).
+* Step response: one :class:`~simulator.steps.ElectroThermal` run (the settings of the case
+  ``single_fold_step_response``: dynamic mechanics, generalized-alpha, air damping, adaptive
+  steps up to :data:`DT_MAX`) with the power on for a phase and off for a phase, from: the
+  single crease after self-fold and gravity (powers :data:`POWERS_MW` [mW]); the gripper
+  after its self-weight, base circuit (assembly, :data:`ASSEMBLY_MW` per crease); the
+  gripper assembled statically at 28 mW per base crease (held on), arm circuit (grip,
+  :data:`GRIP_MW`). Measures: fold angle (single crease), base fold (assembly), arm tip
+  distance (grip).
+* Rise time = 10 % to 90 % of the change reached at the end of the on-phase; release time =
+  90 % to 10 % after switching off; thermal time constant = time for the mean heated-crease
+  temperature to reach 63.2 % of its rise at the end of the on-phase; mechanical periods =
+  1 / first natural frequency (:func:`~simulator.natural_modes`) about the start state and
+  about the static heated one (the unheated single crease rests on the substrate's contact
+  layer: a stiff, fast mode; lifted off, it swings on its crease). Energy = total power x
+  on-phase; energy to 90 % = total power x time to 90 %.
+* Square wave (single crease): ``SquareWave(3 mW, period=1/f, duty=0.5)`` for
+  :data:`PERIODS` periods; fold amplitude (peak to peak over the last period) vs f,
+  normalised by the lowest frequency's; the -3 dB bandwidth is where it falls to 1/sqrt(2)
+  (log interpolation).
+* ``--quick``: two single-crease powers and one per gripper stage, 0.15 s phases, square
+  waves at 10 and 100 Hz.
 
 Outputs (``results/actuation_speed/``)
 --------------------------------------
 ``actuation_speed.csv`` with a ``table`` column: ``response`` (time series per run, at most
-:data:`MAX_RECORDS` records evenly spread over the run's records: ``device``, ``time
-[s]``, ``fold_angle [deg]``, ``temperature [degC]`` crease), ``summary`` (per power: ``rise_time
-[s]``, ``release_time [s]``, ``thermal_time_constant [s]``,
-``energy [mJ]``, ``fold_change [deg]``, ``mechanical_period_unheated [s]``,
-``mechanical_period_heated [s]``), ``square_wave`` (per frequency: ``frequency [Hz]``,
-``amplitude [deg]``, ``relative_amplitude [-]``, ``bandwidth [Hz]``). Figure
-``actuation_speed.png``.
+:data:`MAX_RECORDS` records spread over the run plus its extremes: ``device``, ``power [mW]``
+per heated crease, ``time [s]``, ``fold_angle [deg]`` or ``tip_distance [um]``,
+``temperature [degC]``), ``summary`` (per run: ``rise_time [s]``, ``release_time [s]``,
+``time_to_90 [s]``, ``thermal_time_constant [s]``, ``change [deg or um]``,
+``mechanical_period_unheated [s]``, ``mechanical_period_heated [s]``, ``energy [mJ]``,
+``energy_to_90 [mJ]``), ``square_wave`` (per frequency: ``frequency [Hz]``, ``amplitude
+[deg]``, ``relative_amplitude [-]``, ``bandwidth [Hz]``). Figure ``actuation_speed.png``.
 """
 
 from __future__ import annotations

@@ -151,3 +151,15 @@ def test_default_case_acceptance():
     on = len(res.fold_angle) - len(t) + np.searchsorted(t, 1.0 - 1e-12)
     assert abs(np.degrees(res.fold_angle[on, 0]) - np.degrees(static.fold_angle[-1, 0])) < 0.05
     assert np.max(np.abs(res.state.temperature - res.state.room_temperature)) < 0.5
+
+
+def test_case_is_registered_with_units():
+    from simulator import describe_cases
+
+    case = get_case("single-fold-step-response", power_mW=5.0, t_on=0.5, t_off=0.25)
+    step = case.steps[-1]
+    assert isinstance(step, ElectroThermal) and step.duration == pytest.approx(0.75)
+    assert step.power[2](0.49) == pytest.approx(5e-3) and step.power[2](0.5) == 0.0
+    assert step.bounds == (1e-5, 5e-3) and step.options.air_damping == 2.0
+    entry = {name: params for name, _, params in describe_cases()}["single_fold_step_response"]
+    assert ("power_mW", 3.0, "mW") in entry and ("t_on", 1.0, "s") in entry

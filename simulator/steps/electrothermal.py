@@ -14,21 +14,24 @@
    (:class:`~simulator.dynamics.TimeIntegrator`, Newton iterations and dead loads such as
    gravity kept, unlike the reference, digest D9.3 and D9.6), or with
    ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
-   angles moved from the previous step's with step cutting (:func:`~simulator.newton.follow_path`).
+   angles moved from the previous step's with step cutting
+   (:func:`~simulator.newton.follow_path`).
 
 The coupling is staggered as in the reference: the heat step sees the shape at the start of
-the step. Re-assembling K and C costs about as much as the mechanics; ``shape_tol`` [m] lets
-the heat step keep the previous assembly (and its factorisation) while no node has moved more
-than that since the last assembly (0, the default, re-assembles whenever the shape changed).
+the step. Re-assembling K and C and factorising costs about as much as the mechanics (single
+fold: 3.4 ms per coupled step re-assembling every step, 1.9 ms with ``shape_tol = 5 um``,
+``benchmarks/bench_step_response.py``); ``shape_tol`` [m] lets the heat step keep the previous
+assembly (and its factorisation) while no node has moved more than that since the last
+assembly (0, the default, re-assembles whenever the shape changed).
 
-Time steps adapt between ``dt_min`` and ``dt_max`` and end on the switching times of
-step, square-wave and piecewise-linear schedules (so a power jump falls between steps): a step whose mechanics fails, or whose
-largest node temperature change exceeds ``2 * temperature_step``, is rejected and retried with
-half the step; the next step doubles after an easy step (mechanics in at most
-:data:`EASY_ITERATIONS` Newton iterations and a temperature change below
+Time steps adapt between ``dt_min`` and ``dt_max`` and end on the switching times of step,
+square-wave and piecewise-linear schedules (so a power jump falls between steps): a step whose
+mechanics fails, or whose largest node temperature change exceeds ``2 * temperature_step``, is
+rejected and retried with half the step; the next step doubles after an easy step (mechanics
+in at most :data:`EASY_ITERATIONS` Newton iterations and a temperature change below
 ``temperature_step / 2``) and halves after a large temperature change; a step cut short to
-end on a switching time does not change the step size. With ``dt_min = dt_max``
-(the default: both equal ``dt``) every step is ``dt``.
+end on a switching time does not change the step size. With ``dt_min = dt_max`` (the default:
+both equal ``dt``) every step is ``dt``.
 
 Every record carries ``time [s]`` (the simulation clock, ``SimulationState.time`` plus the time
 in the step), ``dt [s]``, and the energy bookkeeping since the start of the step:
@@ -36,7 +39,8 @@ in the step), ``dt [s]``, and the energy bookkeeping since the start of the step
 angles), ``dissipated_energy [J]`` (Rayleigh and air damping; empty for quasi-static
 mechanics), ``external_work [J]`` (dead loads), ``heat_in [J]`` (electrical heat put in, the
 integral of the crease powers) and ``heat_out [J]`` (heat lost to room temperature, including
-the share of the heater power that lands on room-temperature nodes). The end state carries the velocities.
+the share of the heater power that lands on room-temperature nodes). The end state carries
+the velocities (None after quasi-static mechanics).
 """
 
 from __future__ import annotations
@@ -267,7 +271,6 @@ class _HeatPart:
             self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
         self._q = free_heat_input(self.tm, self.system.free, power)
         self._electric = float(np.sum(power))      # W (the rest of _q heats fixed nodes)
-
         self._T = self.stepper.step(self.T, self._q, self._q)
         self._h = h
         rise = self.rise.copy()
