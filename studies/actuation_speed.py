@@ -242,7 +242,8 @@ def plot(df: pd.DataFrame):
     ax_g.set(xlabel="time [s]", ylabel="change / change at power off [-]",
              title="(b) gripper: base fold (assembly), tip distance (grip)")
     s = df[df["table"] == "summary"].reset_index(drop=True)
-    labels = [f"{d}\n{p:g} mW" for d, p in zip(s["device"], s["power [mW]"])]
+    labels = [f"{d.replace('gripper ', '').replace('single ', '')}\n{p:g} mW"
+              for d, p in zip(s["device"], s["power [mW]"])]
     for col, marker in METRICS:
         ax_s.plot(range(len(s)), s[col], marker, ls="none", ms=7,
                   label=col.split(" [")[0].replace("_", " "))
