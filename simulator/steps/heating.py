@@ -28,7 +28,7 @@ from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 
-__all__ = ["Heat", "AmbientTemperature", "Coupling", "coupled_increments", "thermal_actuation"]
+__all__ = ["Heat", "AmbientTemperature", "Coupling", "coupled_increments"]
 
 
 def _rotation_per_kelvin(model) -> np.ndarray:
