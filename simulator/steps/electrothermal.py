@@ -22,7 +22,8 @@ the step. Re-assembling K and C and factorising costs about as much as the mecha
 fold: 3.4 ms per coupled step re-assembling every step, 1.9 ms with ``shape_tol = 5 um``,
 ``benchmarks/bench_step_response.py``); ``shape_tol`` [m] lets the heat step keep the previous
 assembly (and its factorisation) while no node has moved more than that since the last
-assembly (0, the default, re-assembles whenever the shape changed).
+assembly, for at most :data:`REFRESH_STEPS` steps (0, the default, re-assembles whenever the
+shape changed).
 
 Time steps adapt between ``dt_min`` and ``dt_max`` and end on the switching times of step,
 square-wave and piecewise-linear schedules (so a power jump falls between steps): a step whose
@@ -62,13 +63,16 @@ from ..transient_heat import (REFERENCE_THETA, ThetaStepper, check_theta, check_
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .heating import thermal_actuation
 
-__all__ = ["ElectroThermal", "MECHANICS", "EASY_ITERATIONS"]
+__all__ = ["ElectroThermal", "MECHANICS", "EASY_ITERATIONS", "REFRESH_STEPS"]
 
 logger = logging.getLogger(__name__)
 
 MECHANICS = ("dynamic", "quasi_static")
 #: A mechanical step that converges in at most this many Newton iterations lets dt grow.
 EASY_ITERATIONS = 8
+#: With ``shape_tol > 0`` the heat matrices are still re-assembled after this many steps if the
+#: shape changed at all, so a settled shape is eventually assembled exactly (no lasting bias).
+REFRESH_STEPS = 16
 
 
 def _next_switch(schedules, t: float) -> float:
@@ -128,7 +132,8 @@ class ElectroThermal(Step):
         docstring), > 0.
     shape_tol : float
         Largest node movement [m] since the last assembly of the heat matrices for which they
-        are kept, >= 0 (0: re-assemble whenever the shape changed).
+        are kept (for at most :data:`REFRESH_STEPS` steps), >= 0 (0: re-assemble whenever the
+        shape changed).
     record_every : int
         Record every k-th accepted time step (the last one is always recorded).
     """
@@ -260,13 +265,16 @@ class _HeatPart:
 
     def _assemble(self, x):
         self.x_assembled, self.system, self.stepper = x, heat_system(self.tm, x), None
+        self.age = 0
 
     def trial(self, x, power, h) -> np.ndarray:
         """Node temperatures [deg C] (n,) after a step of ``h`` [s] with mean crease powers
         ``power`` (C,) [W], the heat matrices on the shape ``x`` (n, 3) [m]."""
-        if np.max(np.abs(x - self.x_assembled), initial=0.0) > self.tol:
+        moved = np.max(np.abs(x - self.x_assembled), initial=0.0)
+        if moved > self.tol or (moved > 0 and self.age >= REFRESH_STEPS):
             self._assemble(x)
             self.assemblies += 1
+        self.age += 1
         if self.stepper is None or self.stepper.dt != h:
             self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
         self._q = free_heat_input(self.tm, self.system.free, power)
