@@ -2,9 +2,10 @@
 
 The case's ElectroThermal step (1 s on at 3 mW, 1 s off) with dt_min = dt_max = 1 ms, i.e.
 exactly 2000 coupled time steps (heat, rest angles, dynamic mechanics), after self-fold and
-gravity (not timed). Prints the wall time, the time per step and the share of heat assembly.
-``--shape-tol`` keeps the heat matrices while no node moved more than that [m] (default the
-case's 5e-6; 0 re-assembles every step: about 3.4 ms per step against 1.9 ms).
+gravity (not timed). Prints the wall time, the time per step, the heat assemblies and Newton
+iterations. ``--shape-tol`` keeps the heat matrices while no node moved more than that [m]
+(default the case's 5e-6; 0 re-assembles every step, about 1.8 times slower). About 80 % of
+the time is the mechanics (EquilibriumSystem.evaluate with contact, ~2.7 per step).
 
 Run: ``python benchmarks/bench_step_response.py [--steps N] [--shape-tol M] [--quasi-static]``
 """

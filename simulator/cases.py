@@ -225,7 +225,8 @@ def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: f
     steps in [dt_min, dt_max]. ``air_damping`` [N s/m^3] is a squeeze-film estimate for the
     panel 150 um above the substrate (damping ratio about 0.08 for the 40 Hz fold mode).
     ``shape_tol`` [m]: the heat matrices are re-assembled when a node has moved more than this
-    (5 um: 20x fewer assemblies, fold within 0.02 deg of re-assembling every step).
+    (5 um: 88 instead of 499 assemblies on the default run, fold at the end of the on-phase
+    within 1e-5 deg of re-assembling every step).
     """
     params = {k: v for k, v in locals().items()}
     _check(t_on=t_on, t_off=t_off)
