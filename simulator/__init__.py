@@ -33,8 +33,8 @@ from .properties import BarHingeParameters
 from .results import SimulationResult, StepResult
 from .simulation import simulate
 from .state import ROOM_TEMPERATURE, SimulationState, initial_state
-from .steps import (AmbientTemperature, Coupling, Dynamics, Gravity, Heat, Load, SelfFold, Step,
-                    StepContext, StepOutcome, StepRecorder, TransientHeat)
+from .steps import (AmbientTemperature, Coupling, Dynamics, ElectroThermal, Gravity, Heat, Load,
+                    SelfFold, Step, StepContext, StepOutcome, StepRecorder, TransientHeat)
 from .steps import ArcLengthLoad, DisplacementControl
 from .continuation import ContinuationResult, CriticalPoint, LoadPath, displacement_control, mgdcm
 from .stability import Stability, tangent_stability
@@ -65,6 +65,8 @@ __all__ = [
     # path following through limit points
     "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
     "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability",
+    # coupled electro-thermal dynamics
+    "ElectroThermal",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
     # result viewer (self-contained HTML)

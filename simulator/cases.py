@@ -17,7 +17,9 @@ import numpy as np
 from .bimorph import Actuators, Bimorph
 from .errors import ParameterError
 from .simulation import simulate
-from .steps import ArcLengthLoad, Gravity, Heat, SelfFold
+from .dynamics import DynamicsOptions
+from .power_schedules import StepPower
+from .steps import ArcLengthLoad, ElectroThermal, Gravity, Heat, SelfFold
 from .materials import Material
 from .mesh import build_mesh
 from .model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
@@ -182,13 +184,14 @@ def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None
 
 def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_mW,
                       env_conductivity, crease_width, env_thickness, coupling, t_gold, t_su8,
-                      panel_thickness, L, undercut, E_gold, delta_alpha, self_fold_steps):
+                      panel_thickness, L, undercut, E_gold, delta_alpha, self_fold_steps,
+                      room_nodes=(0, 3)):
     _check(crease_width=crease_width, env_thickness=env_thickness, t_gold=t_gold, t_su8=t_su8)
     if not (isinstance(env_conductivity, (int, float)) and env_conductivity >= 0):
         raise ParameterError(f"env_conductivity = {env_conductivity!r} must be >= 0 W/(m K).")
     thermal = ThermalParameters(env_thickness=env_thickness, env_conductivity=env_conductivity,
                                 dissipation_angle=REFERENCE_BETA, boundary_panels=(2,),
-                                room_temperature_nodes=(0, 3))
+                                room_temperature_nodes=room_nodes)
     actuators = Actuators(Bimorph(E1=E_gold, t1=t_gold, E2=2e9, t2=t_su8), {2: delta_alpha})
     model = single_fold_model(thermal=thermal, actuators=actuators, L=L, W=crease_width,
                               undercut=undercut, panel_thickness=panel_thickness,
@@ -239,6 +242,52 @@ def single_fold_prefolded(residual_fold_deg: float = 55.0, gravity: bool = False
         t_gold=0.2e-6, t_su8=0.86e-6, panel_thickness=6e-6, L=0.5e-3, undercut=50e-6,
         E_gold=39.5e9, delta_alpha=-DELTA_ALPHA_AU_SU8, self_fold_steps=80)
     return Case(case.name, case.model, case.steps, params, single_fold_prefolded.__doc__)
+
+
+#: Mesh nodes of the chip (anchor panel and substrate) of the single fold, held at room
+#: temperature by :func:`single_fold_step_response` (a heat sink).
+SINGLE_FOLD_CHIP_NODES = (0, 1, 2, 3, 8, 9, 10, 11, 15, 17)
+
+
+@_case(power_mW="mW", t_on="s", t_off="s", dt="s", dt_min="s", dt_max="s",
+       residual_fold_deg="deg", air_damping="N s/m^3", env_conductivity="W/(m K)",
+       shape_tol="m")
+def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: float = 1.0,
+                              dt: float = 1e-3, dt_min: float = 1e-5, dt_max: float = 5e-3,
+                              mechanics: str = "dynamic", residual_fold_deg: float = 0.0,
+                              air_damping: float = 2.0, env_conductivity: float = 0.026,
+                              shape_tol: float = 5e-6, record_every: int = 1) -> Case:
+    """Single crease (gravity, substrate) in air under a power step: on for t_on, off for t_off.
+
+    The geometry and actuator of ``single_fold``; the chip (anchor panel and substrate) is a
+    heat sink at room temperature. Self-fold to the residual fold, gravity, then one
+    :class:`~simulator.steps.ElectroThermal` step of ``t_on + t_off`` seconds with adaptive time
+    steps in [dt_min, dt_max]. ``air_damping`` [N s/m^3] is a squeeze-film estimate for the
+    panel 150 um above the substrate (damping ratio about 0.08 for the 40 Hz fold mode).
+    ``shape_tol`` [m]: the heat matrices are re-assembled when a node has moved more than this
+    (5 um: 88 instead of 499 assemblies on the default run, fold at the end of the on-phase
+    within 1e-5 deg of re-assembling every step).
+    """
+    params = {k: v for k, v in locals().items()}
+    _check(t_on=t_on, t_off=t_off)
+    if not (isinstance(air_damping, (int, float)) and math.isfinite(air_damping)
+            and air_damping >= 0):
+        raise ParameterError(f"air_damping = {air_damping!r} must be >= 0 N s/m^3.")
+    case = _single_fold_case(
+        "single_fold_step_response", residual_fold_deg=residual_fold_deg, gravity=True,
+        thermal_steps=1, power_mW=power_mW, env_conductivity=env_conductivity,
+        crease_width=200e-6, env_thickness=750e-6, coupling="staggered",
+        t_gold=0.1e-6, t_su8=0.4e-6, panel_thickness=21e-6, L=0.5e-3, undercut=150e-6,
+        E_gold=39.5e9, delta_alpha=DELTA_ALPHA_AU_SU8, self_fold_steps=80,
+        room_nodes=SINGLE_FOLD_CHIP_NODES)
+    pulse = StepPower(_power(power_mW), 0.0, t_on)
+    step = ElectroThermal({2: pulse}, duration=t_on + t_off, dt=dt, dt_min=dt_min,
+                          dt_max=dt_max, mechanics=mechanics, shape_tol=shape_tol,
+                          options=DynamicsOptions(method="generalized_alpha", rho_inf=0.5,
+                                                  rtol=1e-6, air_damping=air_damping),
+                          record_every=_steps_int("record_every", record_every))
+    return Case("single_fold_step_response", case.model, (*case.steps[:-1], step), params,
+                single_fold_step_response.__doc__)
 
 
 # ------------------------------------------------------------------------------ double fold

@@ -36,7 +36,7 @@ import numpy as np
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
 from .mass import check_masses, lumped_areas, lumped_masses
-from .newton import _solve_linear
+from .newton import DENSE_LIMIT, _solve_linear
 
 __all__ = ["DynamicsOptions", "MotionState", "StepReport", "TimeIntegrator", "DynamicsResult",
            "integrate"]
@@ -319,12 +319,7 @@ class TimeIntegrator:
                 return self._accept(s, dt, f_ext, rest, ev, u, v, a, power, it, norms)
             if it == o.max_iter:
                 break
-            J = (1 - af) * ev.K
-            if Kb is not None:                   # d(Kb(u) v)/du ~ c_v Kb
-                J = J + ((1 - af) * c_v) * Kb
-            J = J.tocsr()
-            J.setdiag(J.diagonal() + (1 - am) * c_a * m + (1 - af) * c_v * c_diag)
-            du = _solve_linear(J, -r)
+            du = _solve_linear(self._jacobian(ev.K, Kb, af, am, c_a, c_v, c_diag), -r)
             if du is None:
                 return StepReport(False, "effective stiffness is singular", s, it, 0,
                                   (np.array(norms),))
@@ -333,6 +328,22 @@ class TimeIntegrator:
             u[free] += du
         return StepReport(False, f"no convergence in {o.max_iter} Newton iterations (residual "
                           f"{norms[-1]:.3g} N)", s, o.max_iter, 0, (np.array(norms),))
+
+    def _jacobian(self, K, Kb, af, am, c_a, c_v, c_diag):
+        """Effective stiffness ``(1 - af) (K + c_v Kb) + (1 - am) c_a M + (1 - af) c_v C_diag``
+        on the free DOFs: dense for small systems (the same numbers as the sparse form, which
+        :func:`~simulator.newton._solve_linear` would densify anyway), else CSR."""
+        dense = K.shape[0] <= DENSE_LIMIT
+        J = (1 - af) * (K.toarray() if dense else K)
+        if Kb is not None:                   # d(Kb(u) v)/du ~ c_v Kb
+            J = J + ((1 - af) * c_v) * (Kb.toarray() if dense else Kb)
+        diagonal = J.diagonal() + (1 - am) * c_a * self.m + (1 - af) * c_v * c_diag
+        if dense:
+            J[np.diag_indices_from(J)] = diagonal
+            return J
+        J = J.tocsr()
+        J.setdiag(diagonal)
+        return J
 
     def _accept(self, s, dt, f_ext, rest, ev, u, v, a, damping, it, norms) -> StepReport:
         free, n = self.system.free, self.system.n_dof

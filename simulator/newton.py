@@ -161,7 +161,7 @@ class PathResult:
 def _solve_linear(K, r):
     """Solve K du = r; returns None if K is singular or the result is not finite.
 
-    Small systems are solved densely. Large ones use SuperLU in symmetric mode (symmetric
+    ``K`` is sparse or a dense array. Small systems are solved densely. Large ones use SuperLU in symmetric mode (symmetric
     minimum-degree ordering, diagonal pivots: ~3x less fill than the default COLAMD on
     bar-and-hinge meshes); if that solution is inaccurate (the tangent can be indefinite),
     it falls back to partial pivoting with COLAMD.
@@ -169,8 +169,9 @@ def _solve_linear(K, r):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
-            if K.shape[0] <= DENSE_LIMIT:
-                du = scipy.linalg.solve(K.toarray(), r, check_finite=False)
+            if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
+                dense = K if isinstance(K, np.ndarray) else K.toarray()
+                du = scipy.linalg.solve(dense, r, check_finite=False)
             else:
                 Kc = K.tocsc()
                 du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,

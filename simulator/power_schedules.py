@@ -24,7 +24,8 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
-           "check_power_mapping", "crease_power_function", "CreasePowers"]
+           "check_power_mapping", "describe_power_mapping", "crease_power_function",
+           "CreasePowers"]
 
 
 def _number(owner, name: str, value, ok=lambda v: True, allowed: str = "finite"):
@@ -246,6 +247,14 @@ def check_power_mapping(owner: str, power) -> dict:
             value = StepPower(float(value))
         out[key] = value
     return out
+
+
+def describe_power_mapping(power) -> dict:
+    """JSON-able ``{str(key): schedule description}`` of a power mapping (constants as
+    ``{"schedule": "constant", "power [W]": value}``), for ``meta.json``."""
+    return {str(k): (v.describe() if hasattr(v, "describe") else
+                     {"schedule": "constant", "power [W]": float(v)})
+            for k, v in dict(power).items()}
 
 
 class CreasePowers:

@@ -43,7 +43,7 @@ from .thermal import ThermalModel
 
 __all__ = ["REFERENCE_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
            "theta_step", "TransientHeatResult", "integrate_heat", "environment_profile",
-           "check_time_step", "check_theta"]
+           "free_heat_input", "initial_rise", "check_time_step", "check_theta"]
 
 logger = logging.getLogger(__name__)
 
@@ -159,6 +159,13 @@ def heat_system(tm: ThermalModel, x) -> HeatSystem:
                              "node needs a triangle with thickness, density and specific heat.")
     outflow = -np.asarray(K[np.flatnonzero(fixed)][:, free].sum(axis=0)).ravel()
     return HeatSystem(K[free][:, free].tocsc(), C, free, outflow)
+
+
+def free_heat_input(tm: ThermalModel, free: np.ndarray, power) -> np.ndarray:
+    """Heat input [W] of the free unknowns ``free`` for the (C,) crease powers [W]."""
+    q = np.zeros(tm.n_dof)
+    q[:tm.mesh.n_nodes] = tm.heat_vector(power)
+    return q[free]
 
 
 def environment_profile(tm: ThermalModel, x, rise) -> np.ndarray:
@@ -290,7 +297,9 @@ class TransientHeatResult:
                              "heat_stored [J]": rep(self.heat_stored)})
 
 
-def _initial_rise(tm, x, T0, room) -> np.ndarray:
+def initial_rise(tm, x, T0, room) -> np.ndarray:
+    """Start rise [K] of every unknown, ((N + 1) n,), from temperatures ``T0`` [deg C] of the
+    structure nodes (n,) (quasi-steady environment) or of all unknowns; None: zero."""
     n, size = tm.mesh.n_nodes, tm.n_dof
     if T0 is None:
         return np.zeros(size)
@@ -356,13 +365,11 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     x_now = np.asarray(shape(0.0), float)
     system = heat_system(tm, x_now)
     stepper, assemblies = ThetaStepper(system.K, system.C, h, theta), 1
-    rise = _initial_rise(tm, x_now, T0, room)
+    rise = initial_rise(tm, x_now, T0, room)
     T = rise[system.free]
 
     def heat(p):
-        q = np.zeros(tm.n_dof)
-        q[:n] = tm.heat_vector(p)
-        return q[free]
+        return free_heat_input(tm, free, p)
 
     free, averaged = system.free, hasattr(powers, "mean")   # the free set never changes
     p_new = np.asarray(powers(0.0), float)

@@ -3,10 +3,12 @@
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .dynamics import Dynamics
 from .continuation import ArcLengthLoad, DisplacementControl
+from .electrothermal import ElectroThermal
 from .heating import AmbientTemperature, Coupling, Heat, coupled_increments
 from .mechanical import Gravity, Load, SelfFold
 from .transient import TransientHeat
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity",
            "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat",
-           "Dynamics", "ArcLengthLoad", "DisplacementControl"]
+           "Dynamics", "ArcLengthLoad", "DisplacementControl",
+           "ElectroThermal"]

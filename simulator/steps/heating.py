@@ -38,6 +38,24 @@ def _rotation_per_kelvin(model) -> np.ndarray:
     return model.actuators.rotation_per_kelvin(model.mesh)
 
 
+def thermal_actuation(model, state):
+    """Timoshenko bimorph actuation measured from the start of a step (digest 7.5, step 2).
+
+    Returns ``rest(temp) -> (crease_rest, spring_rest)``: crease rest angles [rad] =
+    ``state.crease_rest + W kappa(dT)`` with dT the 7-node crease temperature [K] of the node
+    temperatures ``temp`` (n_nodes,) [deg C] minus that of ``state.temperature``, and the spring
+    rest angles they give (:func:`~simulator.properties.spring_rest_angles`).
+    """
+    mesh = model.mesh
+    rot, w = _rotation_per_kelvin(model), crease_temperature_weights()
+    t_ref, rest0 = state.temperature, state.crease_rest
+
+    def rest(temp):
+        target = rest0 + rot * ((temp - t_ref)[mesh.crease_nodes] @ w)
+        return target, spring_rest_angles(mesh, target, model.params)
+    return rest
+
+
 @dataclass(frozen=True)
 class Coupling:
     """How heat and shape are coupled within an increment.
@@ -73,9 +91,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     """
     model, tm = context.model, context.thermal
     mesh = model.mesh
-    rot = _rotation_per_kelvin(model)
-    w = crease_temperature_weights()
-    t_ref, rest0 = state.temperature, state.crease_rest
+    actuate = thermal_actuation(model, state)
     u, spring, f = state.u, state.spring_rest, state.applied_load.ravel()
     x_start = mesh.nodes + state.u
     rec = StepRecorder(state)
@@ -86,8 +102,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         q = tm.heat_vector(power)
         temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
         for _ in range(coupling.max_iterations if iterated else 1):
-            target = rest0 + rot * ((temp - t_ref)[mesh.crease_nodes] @ w)
-            rest = spring_rest_angles(mesh, target, model.params)
+            target, rest = actuate(temp)
             path = follow_path(context.system, u, f, f, spring, rest, 1, context.options)
             rec.iterations += path.iterations
             rec.cuts += path.cuts

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ParameterError
-from ..power_schedules import CreasePowers, check_power_mapping
+from ..power_schedules import CreasePowers, check_power_mapping, describe_power_mapping
 from ..transient_heat import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
 from .base import Step, StepContext, StepOutcome, StepRecorder
 
@@ -89,8 +89,6 @@ class TransientHeat(Step):
                           state.applied_load.ravel())
 
     def describe(self) -> dict:
-        return {"power_added": {str(k): (v.describe() if hasattr(v, "describe") else
-                                         {"schedule": "constant", "power [W]": float(v)})
-                                for k, v in dict(self.power).items()},
+        return {"power_added": describe_power_mapping(self.power),
                 "duration [s]": self.duration, "dt [s]": self.dt, "theta": self.theta,
                 "record_every": self.record_every}

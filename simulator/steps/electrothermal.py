@@ -1,0 +1,365 @@
+"""Coupled electro-thermal dynamics: heat and motion advanced together per time step.
+
+:class:`ElectroThermal` is the time-domain version of the paper's three-step loop
+(:func:`~simulator.steps.heating.coupled_increments`, dynamics digest D5.4). Per time step
+``[t, t + h]``:
+
+1. heat: one theta-method step of the transient heat equation
+   (:mod:`simulator.transient_heat`) with the conductivity and capacity assembled on the shape
+   at the start of the step, and the exact mean crease power over the step;
+2. Timoshenko bimorph: crease rest angles from the crease temperature change since the start
+   of the step (:func:`~simulator.steps.heating.thermal_actuation`, the same formula as
+   :class:`~simulator.steps.Heat`);
+3. mechanics: one implicit time step of the equation of motion
+   (:class:`~simulator.dynamics.TimeIntegrator`, Newton iterations and dead loads such as
+   gravity kept, unlike the reference, digest D9.3 and D9.6), or with
+   ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
+   angles moved from the previous step's with step cutting
+   (:func:`~simulator.newton.follow_path`).
+
+The coupling is staggered as in the reference: the heat step sees the shape at the start of
+the step. Re-assembling K and C and factorising costs almost as much as the mechanics (single
+fold, 2000 fixed steps, ``benchmarks/bench_step_response.py``: re-assembling every step takes
+1.8 times as long as with ``shape_tol = 5 um``); ``shape_tol`` [m] lets the heat step keep the
+previous assembly (and its factorisation) while no node has moved more than that since the last
+assembly, for at most :data:`REFRESH_STEPS` steps (0, the default, re-assembles whenever the
+shape changed).
+
+Time steps adapt between ``dt_min`` and ``dt_max`` and end on the switching times of step,
+square-wave and piecewise-linear schedules (so a power jump falls between steps): a step whose
+mechanics fails, or whose largest node temperature change exceeds ``2 * temperature_step``, is
+rejected and retried with half the step; the next step doubles after an easy step (mechanics
+in at most :data:`EASY_ITERATIONS` Newton iterations and a temperature change below
+``temperature_step / 2``) and halves after a large temperature change; a step cut short to
+end on a switching time does not change the step size. With ``dt_min = dt_max`` (the default:
+both equal ``dt``) every step is ``dt``.
+
+Every record carries ``time [s]`` (the simulation clock, ``SimulationState.time`` plus the time
+in the step), ``dt [s]``, and the energy bookkeeping since the start of the step:
+``kinetic_energy [J]``, ``strain_energy [J]`` (bars, springs, contact at the current rest
+angles), ``dissipated_energy [J]`` (Rayleigh and air damping; empty for quasi-static
+mechanics), ``external_work [J]`` (dead loads), ``heat_in [J]`` (electrical heat put in, the
+integral of the crease powers) and ``heat_out [J]`` (heat lost to room temperature, including
+the share of the heater power that lands on room-temperature nodes). The end state carries
+the velocities (None after quasi-static mechanics).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..dynamics import DynamicsOptions, TimeIntegrator
+from ..errors import ParameterError
+from ..newton import follow_path
+from ..power_schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
+                               check_power_mapping, describe_power_mapping)
+from ..transient_heat import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
+                              free_heat_input, heat_system, initial_rise)
+from .base import Step, StepContext, StepOutcome, StepRecorder
+from .heating import thermal_actuation
+
+__all__ = ["ElectroThermal", "MECHANICS", "EASY_ITERATIONS", "REFRESH_STEPS"]
+
+logger = logging.getLogger(__name__)
+
+MECHANICS = ("dynamic", "quasi_static")
+#: A mechanical step that converges in at most this many Newton iterations lets dt grow.
+EASY_ITERATIONS = 8
+#: With ``shape_tol > 0`` the heat matrices are still re-assembled after this many steps if the
+#: shape changed at all, so a settled shape is eventually assembled exactly (no lasting bias).
+REFRESH_STEPS = 16
+
+
+def _next_switch(schedules, t: float) -> float:
+    """Earliest time after ``t`` [s] at which a schedule's power jumps or kinks (inf if none):
+    the on / off times of StepPower and SquareWave, the table times of PiecewiseLinear."""
+    best = math.inf
+    for s in schedules:
+        if isinstance(s, StepPower):
+            times = (s.t_on, s.t_off)
+        elif isinstance(s, PiecewiseLinear):
+            times = s.times
+        elif isinstance(s, SquareWave):
+            k = max(0.0, math.floor((t - s.t_start) / s.period))
+            start = s.t_start + k * s.period
+            times = (start, start + s.duty * s.period, start + s.period)
+        else:
+            continue
+        later = [x for x in times if x > t * (1 + 1e-12) + 1e-15]
+        best = min([best, *later])
+    return best
+
+
+def _positive_or_none(owner, name, value):
+    return None if value is None else check_time_step(value, f"{owner}.{name}")
+
+
+@dataclass(frozen=True)
+class ElectroThermal(Step):
+    """Heat and motion together over ``duration`` [s] (see the module docstring).
+
+    Parameters
+    ----------
+    power : mapping
+        Power ADDED on top of the state's crease powers, keyed by crease id or by a tuple of
+        crease ids (a heater circuit): a :class:`~simulator.power_schedules.PowerSchedule`
+        (time from the start of this step) or a constant power [W].
+    duration : float
+        Length of the step [s], > 0.
+    dt : float
+        First time step [s], > 0.
+    dt_min, dt_max : float, optional
+        Bounds of the adaptive time step [s] (default: both ``dt``, i.e. fixed steps);
+        ``dt_min <= dt <= dt_max``.
+    mechanics : {"dynamic", "quasi_static"}
+        "dynamic": one implicit time step with inertia and damping (``options``);
+        "quasi_static": equilibrium at every time (inertia negligible).
+    theta : float
+        Weight of the new time level of the heat step, in [1/2, 1] (default 2/3, the
+        reference's).
+    options : DynamicsOptions
+        Scheme and damping of the dynamic mechanics. The default, generalized-alpha with
+        ``rho_inf = 0.5``, damps the stiff crease-node modes that a fast rest-angle change
+        excites, and for steps much longer than a vibration period it tends to the
+        quasi-static answer.
+    temperature_step : float
+        Node temperature change per step [K] that steers the adaptive step (see the module
+        docstring), > 0.
+    shape_tol : float
+        Largest node movement [m] since the last assembly of the heat matrices for which they
+        are kept (for at most :data:`REFRESH_STEPS` steps), >= 0 (0: re-assemble whenever the
+        shape changed).
+    record_every : int
+        Record every k-th accepted time step (the last one is always recorded).
+    """
+
+    power: Mapping = field(default_factory=dict)
+    duration: float = 1.0
+    dt: float = 1e-3
+    dt_min: float | None = None
+    dt_max: float | None = None
+    mechanics: str = "dynamic"
+    theta: float = REFERENCE_THETA
+    options: DynamicsOptions = DynamicsOptions(method="generalized_alpha", rho_inf=0.5)
+    temperature_step: float = 2.0
+    shape_tol: float = 0.0
+    record_every: int = 1
+    name: str = "electro_thermal"
+
+    def __post_init__(self):
+        owner = type(self).__name__
+        check_power_mapping(owner, self.power)
+        check_time_step(self.duration, f"{owner}.duration")
+        dt = check_time_step(self.dt, f"{owner}.dt")
+        lo = _positive_or_none(owner, "dt_min", self.dt_min)
+        hi = _positive_or_none(owner, "dt_max", self.dt_max)
+        lo, hi = dt if lo is None else lo, dt if hi is None else hi
+        if not lo <= hi:
+            raise ParameterError(f"{owner}: dt_min = {lo!r} s > dt_max = {hi!r} s; give "
+                                 "dt_min <= dt <= dt_max.")
+        if not lo <= dt <= hi:
+            raise ParameterError(f"{owner}: dt = {dt!r} s lies outside [dt_min, dt_max] = "
+                                 f"[{lo!r}, {hi!r}] s.")
+        if self.mechanics not in MECHANICS:
+            raise ParameterError(f"{owner}.mechanics = {self.mechanics!r}; use "
+                                 f"{' or '.join(map(repr, MECHANICS))}.")
+        check_theta(self.theta)
+        if not isinstance(self.options, DynamicsOptions):
+            raise ParameterError(f"{owner}.options is a {type(self.options).__name__}; give "
+                                 "DynamicsOptions(...).")
+        check_time_step(self.temperature_step, f"{owner}.temperature_step [K]")
+        tol = self.shape_tol
+        if not (isinstance(tol, (int, float, np.integer, np.floating)) and
+                not isinstance(tol, bool) and math.isfinite(tol) and tol >= 0):
+            raise ParameterError(f"{owner}.shape_tol = {tol!r} must be a finite length >= 0 m.")
+        n = self.record_every
+        if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
+            raise ParameterError(f"{owner}.record_every = {n!r} must be a positive integer.")
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """(dt_min, dt_max) [s] with the defaults filled in."""
+        return (self.dt if self.dt_min is None else float(self.dt_min),
+                self.dt if self.dt_max is None else float(self.dt_max))
+
+    def run(self, context: StepContext, state) -> StepOutcome:
+        heat = _HeatPart(context, state, self)
+        mech = _MechanicsPart(context, state, self)
+        actuate = thermal_actuation(context.model, state)
+        powers = CreasePowers(context.model.mesh, self.power, base=state.crease_power)
+        rec = StepRecorder(state)
+        dt_min, dt_max = self.bounds
+        t, h, k, temp = 0.0, float(self.dt), 0, state.temperature
+        target, rest = state.crease_rest, state.spring_rest
+        status, message = "converged", ""
+        while t < self.duration * (1 - 1e-12):
+            h_try = min(h, self.duration - t, _next_switch(powers.schedules, t) - t)
+            new_temp = heat.trial(mech.x, powers.mean(t, t + h_try), h_try)
+            change = float(np.max(np.abs(new_temp - temp)))
+            if change > 2 * self.temperature_step and h_try > dt_min:
+                h = max(dt_min, h_try / 2)                           # reject: too fast heating
+                continue
+            new_target, new_rest = actuate(new_temp)
+            report = mech.trial(h_try, new_rest)
+            if not report.success:
+                if h_try > dt_min:
+                    h = max(dt_min, h_try / 2)
+                    continue
+                status = "failed"
+                message = (f"time step {k + 1} at t = {state.time + t:.6g} s failed with the "
+                           f"smallest step {h_try:.3g} s: {report.message}")
+                break
+            heat.accept()
+            mech.accept(report)
+            t, k, temp, target, rest = t + h_try, k + 1, new_temp, new_target, new_rest
+            rec.iterations += report.iterations
+            rec.cuts += report.cuts
+            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12):
+                rec.record(t / self.duration, mech.u, temp, powers(t), report.iterations,
+                           np.concatenate(report.residual_norms) if report.residual_norms
+                           else (), **{"time [s]": state.time + t, "dt [s]": h_try,
+                                       **mech.energies(), **heat.energies()})
+            context.report(k, k + math.ceil((self.duration - t) / h_try - 1e-9))
+            if change > self.temperature_step:
+                h = max(dt_min, h_try / 2)
+            elif (h_try == h and report.iterations <= EASY_ITERATIONS  # not cut short by a
+                  and change <= self.temperature_step / 2):             # switch or the end
+                h = min(dt_max, 2 * h)
+        if status == "converged":
+            message = (f"reached t = {self.duration:g} s in {k} time steps ({heat.assemblies} "
+                       "heat assemblies)")
+        logger.info("ElectroThermal: %s", message)
+        end = replace(state, u=mech.u, velocity=mech.velocity, temperature=temp,
+                      crease_rest=target, spring_rest=rest, crease_power=powers(t),
+                      time=state.time + t)
+        return rec.finish(status == "converged", status, message, end,
+                          state.applied_load.ravel(), mech.evaluation)
+
+    def describe(self) -> dict:
+        dt_min, dt_max = self.bounds
+        return {"power_added": describe_power_mapping(self.power),
+                "duration [s]": self.duration, "dt [s]": self.dt, "dt_min [s]": dt_min,
+                "dt_max [s]": dt_max, "mechanics": self.mechanics, "theta": self.theta,
+                "temperature_step [K]": self.temperature_step, "shape_tol [m]": self.shape_tol,
+                "record_every": self.record_every, **self.options.to_dict()}
+
+
+class _HeatPart:
+    """Transient heat of one step: rises of the free unknowns, assembly and factorisation
+    cache, heat bookkeeping. ``trial`` proposes a time step, ``accept`` keeps it."""
+
+    def __init__(self, context, state, step: ElectroThermal):
+        self.tm, self.theta, self.tol = context.thermal, step.theta, step.shape_tol
+        self.room, self.n = state.room_temperature, context.model.mesh.n_nodes
+        x = context.model.mesh.nodes + state.u
+        self._assemble(x)
+        self.assemblies = 1
+        self.rise = initial_rise(self.tm, x, state.temperature, self.room)
+        self.T = self.rise[self.system.free]
+        self.heat_in = self.heat_out = 0.0
+
+    def _assemble(self, x):
+        self.x_assembled, self.system, self.stepper = x, heat_system(self.tm, x), None
+        self.age = 0
+
+    def trial(self, x, power, h) -> np.ndarray:
+        """Node temperatures [deg C] (n,) after a step of ``h`` [s] with mean crease powers
+        ``power`` (C,) [W], the heat matrices on the shape ``x`` (n, 3) [m]."""
+        moved = np.max(np.abs(x - self.x_assembled), initial=0.0)
+        if moved > self.tol or (moved > 0 and self.age >= REFRESH_STEPS):
+            self._assemble(x)
+            self.assemblies += 1
+        self.age += 1
+        if self.stepper is None or self.stepper.dt != h:
+            self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
+        self._q = free_heat_input(self.tm, self.system.free, power)
+        self._electric = float(np.sum(power))      # W (the rest of _q heats fixed nodes)
+        self._T = self.stepper.step(self.T, self._q, self._q)
+        self._h = h
+        rise = self.rise.copy()
+        rise[self.system.free] = self._T
+        self._rise = rise
+        return self.room + rise[:self.n]
+
+    def accept(self) -> None:
+        th, h = self.theta, self._h
+        self.heat_in += h * self._electric
+        self.heat_out += h * (self._electric - float(np.sum(self._q)) + float(
+            self.system.outflow @ (th * self._T + (1 - th) * self.T)))
+        self.T, self.rise = self._T, self._rise
+
+    def energies(self) -> dict:
+        return {"heat_in [J]": self.heat_in, "heat_out [J]": self.heat_out}
+
+
+class _MechanicsPart:
+    """The mechanical half of a step: a dynamic time step or a quasi-static Newton solve."""
+
+    def __init__(self, context, state, step: ElectroThermal):
+        self.context, self.dynamic = context, step.mechanics == "dynamic"
+        self.f = state.applied_load.ravel()
+        self.nodes = context.model.mesh.nodes
+        self.dissipated = self.work = 0.0
+        if self.dynamic:
+            self.integ = TimeIntegrator(context.system, step.options)
+            self.motion = self.integ.initial_state(state.u, state.node_velocity, self.f,
+                                                   state.spring_rest, 0.0)
+            self.u, self.evaluation = self.motion.u, self.motion.evaluation
+        else:
+            self.u, self.evaluation = state.u, None
+        self.rest = state.spring_rest
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.nodes + self.u
+
+    @property
+    def velocity(self):
+        return self.motion.v if self.dynamic else None
+
+    def trial(self, h, rest):
+        self.rest_trial = rest
+        if self.dynamic:
+            return self.integ.step(self.motion, h, self.f, rest)
+        return _QuasiStatic(follow_path(self.context.system, self.u, self.f, self.f,
+                                        self.rest, rest, 1, self.context.options))
+
+    def accept(self, report) -> None:
+        if self.dynamic:
+            du = (report.state.u - self.u).ravel()
+            self.motion, self.evaluation = report.state, report.state.evaluation
+            self.dissipated += report.dissipated
+        else:
+            du = (report.result.u - self.u).ravel()
+            self.evaluation, self.rest = report.result.evaluation, self.rest_trial
+        self.work += float(du @ self.f)
+        self.u = self.motion.u if self.dynamic else report.result.u
+
+    def energies(self) -> dict:
+        strain = float(sum(self.evaluation.energies.values()))
+        if self.dynamic:
+            vf = self.motion.v.ravel()[self.integ.system.free]
+            kinetic, dissipated = 0.5 * float(vf @ (self.integ.m * vf)), self.dissipated
+        else:
+            kinetic, dissipated = 0.0, None
+        return {"kinetic_energy [J]": kinetic, "strain_energy [J]": strain,
+                "dissipated_energy [J]": dissipated, "external_work [J]": self.work}
+
+
+@dataclass(frozen=True, eq=False)
+class _QuasiStatic:
+    """An equilibrium path (one increment, halved on failure) dressed as a time-step report."""
+
+    result: object
+
+    def __getattr__(self, name):              # success, message, iterations, cuts
+        return getattr(self.result, name)
+
+    @property
+    def residual_norms(self) -> tuple:
+        return tuple(self.result.residual_norms)
