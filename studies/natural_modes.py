@@ -26,7 +26,7 @@ Outputs (``results/natural_modes/``)
 ``natural_modes.csv``: one row per state and mode: ``device`` (single crease with its residual
 fold, gripper assembly, gripper grip), ``power [mW]`` (per heated crease of the circuit),
 ``fold_angle [deg]`` or ``tip_distance [um]``, ``temperature [degC]``, ``mode`` (1 = lowest),
-``frequency [Hz]``, ``converged``. Figure ``natural_modes.png``.
+``frequency [Hz]``, ``success``. Figure ``natural_modes.png``.
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def modes_vs_power(device, powers_mW, progress: bool = False) -> pd.DataFrame:
         for k, f in enumerate(modes.frequency, start=1):
             rows.append({"device": device.label, POWER: float(p),
                          device.column: device.measure(mesh.nodes + state.u), TEMP: temp,
-                         "mode": k, FREQ: float(f), "converged": bool(ok and modes.success)})
+                         "mode": k, FREQ: float(f), "success": bool(ok and modes.success)})
     return pd.DataFrame(rows)
 
 

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from studies import actuation_speed, natural_modes
 
-TEXT_COLUMNS = {"table", "mode", "converged", "device", "stage"}
+TEXT_COLUMNS = {"table", "mode", "success", "device", "stage"}
 
 
 @pytest.fixture(scope="module", params=["actuation_speed", "natural_modes"])
@@ -51,7 +51,7 @@ def test_physics_of_the_quick_runs(quick):
         assert w["relative_amplitude [-]"].iloc[-1] < 0.7                   # 100 Hz: filtered
         assert 10 < w["bandwidth [Hz]"].iloc[0] < 100
     else:
-        assert df["converged"].all()
+        assert df["success"].all()
         first = df[df["mode"] == 1]
         low = first[first["device"].str.startswith("single crease")].set_index("power [mW]")
         assert low["fold_angle [deg]"].is_monotonic_increasing
