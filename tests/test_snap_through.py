@@ -109,8 +109,9 @@ def test_path_csv_written(roof, tmp_path):
 
 
 @pytest.mark.parametrize("name,overrides", [
-    ("single_fold", {}), ("double_fold", {"gravity": False}), ("miura_lifter", {}),
-    ("crane", {})])
+    ("single_fold", {}), ("single_fold_prefolded", {}), ("double_fold", {"gravity": False}),
+    ("miura_lifter", {}), ("miura_lifter", {"substrate": True}), ("crane", {}),
+    ("single_fold_step_response", {})])
 def test_arc_length_agrees_with_load_control_without_limit_points(name, overrides):
     model = get_case(name, **overrides).model
     load = gravity_loads(model.mesh, 9.8)
@@ -182,23 +183,26 @@ def test_heated_miura_passes_its_snap():
 
 def test_heat_continuation_matches_iterated_load_control():
     """Arc length in the power (temperatures on the current shape) traces the same coupled
-    equilibria as load control with iterated coupling."""
+    equilibria as load control with iterated coupling: to 1e-8 relative (the issue's bound)
+    once both are converged tightly (5e-14 measured; with the default Newton tolerances the
+    two differ by 1.2e-8, the tolerance, not the method)."""
     from simulator.continuation import mgdcm
     from simulator.steps.base import StepContext
     from simulator.steps.limit import HeatPath
 
     model = get_case("single_fold").model
-    heat = Heat({2: 20e-3}, increments=20, coupling="iterated", coupling_tol=1e-10)
-    lc = simulate(model, [heat])
+    tight = NewtonOptions(rtol=1e-14, atol=1e-18, max_iter=60)
+    heat = Heat({2: 20e-3}, increments=20, coupling="iterated", coupling_tol=1e-12,
+                max_coupling_iterations=60)
+    lc = simulate(model, [heat], options=tight)
     start = lc.initial_state
-    path = HeatPath(StepContext(model, NewtonOptions()), start, heat.power_array(model.mesh),
+    path = HeatPath(StepContext(model, tight), start, heat.power_array(model.mesh),
                     model.actuators.rotation_per_kelvin(model.mesh), iterated=True)
-    res = mgdcm(path, start.u, 0.0, arc_length=0.1, target_load_factor=1.0,
-                options=NewtonOptions(max_iter=60))
+    res = mgdcm(path, start.u, 0.0, arc_length=0.1, target_load_factor=1.0, options=tight)
     assert lc.success and res.success and res.load_factor == 1.0
     end = path.state_at(res.u, 1.0)
-    assert np.max(np.abs(end.u - lc.state.u)) <= 1e-7 * np.max(np.abs(lc.state.u))
-    np.testing.assert_allclose(end.temperature, lc.state.temperature, atol=1e-6)
+    assert np.max(np.abs(end.u - lc.state.u)) <= 1e-8 * np.max(np.abs(lc.state.u))
+    np.testing.assert_allclose(end.temperature, lc.state.temperature, atol=1e-8)
     np.testing.assert_allclose(end.crease_power, lc.state.crease_power, rtol=1e-14)
 
 
