@@ -53,6 +53,7 @@ class StepResult:
         The step's parameters (:meth:`Step.describe`).
     columns : dict of (m,) arrays
         Step-specific per-increment quantities (e.g. ``stable``, ``time [s]``).
+    velocity_history : (m, n_nodes, 3) node velocities [m/s], or None (quasi-static step)
     """
 
     name: str
@@ -73,6 +74,7 @@ class StepResult:
     wall_time: float
     settings: dict = field(default_factory=dict)
     columns: dict = field(default_factory=dict)
+    velocity_history: np.ndarray | None = None
 
     @property
     def increments(self) -> int:
@@ -115,15 +117,19 @@ class SimulationResult:
         """Per-record arrays (record 0 = initial state, then every accepted increment).
 
         Keys: ``stage`` (step index, -1 for the initial record), ``stage_name``, ``increment``,
-        ``u`` (m, n, 3) [m], ``temperature`` (m, n) [deg C], ``power`` (m, C) [W],
+        ``u`` (m, n, 3) [m], ``velocity`` (m, n, 3) [m/s] (zero on quasi-static records),
+        ``temperature`` (m, n) [deg C], ``power`` (m, C) [W],
         ``iterations`` (m,), ``columns`` (dict of the steps' step-specific columns, each a list
         of m values with None for records of steps without that column).
         """
         s0 = self.initial_state
         stage, names, inc = [-1], ["initial"], [0]
         u, temp, power, its = [s0.u], [s0.temperature], [s0.crease_power], [0]
+        vel = [s0.node_velocity]
         for k, step in enumerate(self.steps):
             m = step.increments
+            vel += list(np.zeros_like(step.u_history) if step.velocity_history is None
+                        else step.velocity_history)
             stage += [k] * m
             names += [step.name] * m
             inc += list(range(1, m + 1))
@@ -137,7 +143,8 @@ class SimulationResult:
                 col = columns.setdefault(name, [None] * len(stage))
                 col[stage.index(k):stage.index(k) + step.increments] = list(values)
         return {"stage": np.array(stage), "stage_name": np.array(names), "increment": np.array(inc),
-                "u": np.array(u), "temperature": np.array(temp), "power": np.array(power),
+                "u": np.array(u), "velocity": np.array(vel), "temperature": np.array(temp),
+                "power": np.array(power),
                 "iterations": np.array(its), "columns": columns}
 
     @cached_property
@@ -237,6 +244,7 @@ class SimulationResult:
         mesh = self.model.mesh
         np.savez_compressed(out / "nodes.npz", reference_positions=mesh.nodes,
                             displacements=h["u"], positions=mesh.nodes + h["u"],
+                            velocity=h["velocity"],
                             temperature=h["temperature"], power=h["power"],
                             crease_ids=mesh.crease_ids, triangles=mesh.triangles)
         meta = {"etorigami_version": __version__, "git": _git_hash(),

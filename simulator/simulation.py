@@ -102,4 +102,5 @@ def _step_result(step: Step, outcome: StepOutcome, context: StepContext, wall) -
         temperature_history=outcome.temperature, power_history=outcome.power,
         increment_iterations=outcome.increment_iterations,
         residual_norms=list(outcome.residual_norms), reactions=reactions,
-        energies=ev.energies, wall_time=wall, settings=step.describe(), columns=outcome.columns)
+        energies=ev.energies, wall_time=wall, settings=step.describe(), columns=outcome.columns,
+        velocity_history=outcome.velocity)

@@ -87,6 +87,8 @@ class StepOutcome:
     power : (m, C) crease powers [W]
     increment_iterations : (m,) Newton iterations per increment
     residual_norms : tuple of (k,) arrays, Newton residual norms per increment [N]
+    velocity : (m, n_nodes, 3) node velocities [m/s] of time-integration steps, else None
+        (quasi-static records are at rest)
     columns : dict of (m,) arrays
         Step-specific per-increment quantities with unit-bearing names (``"stable"``,
         ``"time [s]"``, ...).
@@ -109,6 +111,7 @@ class StepOutcome:
     residual_norms: tuple = ()
     columns: dict = field(default_factory=dict)
     evaluation: object = None
+    velocity: np.ndarray | None = None
 
 
 class StepRecorder:
@@ -121,18 +124,21 @@ class StepRecorder:
         self._rows: dict[str, list] = {k: [] for k in (
             "load_factor", "u", "temperature", "power", "increment_iterations")}
         self._residuals: list = []
+        self._velocity: list = []
         self._columns: dict[str, list] = {}
 
     def __len__(self) -> int:
         return len(self._rows["load_factor"])
 
     def record(self, load_factor: float, u, temperature, power, iterations: int = 0,
-               residual_norms=(), **columns) -> None:
-        """Add one accepted increment; ``columns`` are step-specific named values."""
+               residual_norms=(), *, velocity=None, **columns) -> None:
+        """Add one accepted increment; ``velocity`` (n_nodes, 3) [m/s] for time-integration
+        steps (None: at rest); ``columns`` are step-specific named values."""
         for key, value in (("load_factor", load_factor), ("u", u), ("temperature", temperature),
                            ("power", power), ("increment_iterations", iterations)):
             self._rows[key].append(value)
         self._residuals.append(np.asarray(residual_norms, float))
+        self._velocity.append(velocity)
         for name, value in columns.items():
             self._columns.setdefault(name, [None] * (len(self) - 1)).append(value)
         for name, values in self._columns.items():
@@ -161,7 +167,14 @@ class StepRecorder:
             power=np.array(rows["power"], float).reshape(-1, *C),
             increment_iterations=np.array(rows["increment_iterations"], int),
             residual_norms=tuple(self._residuals),
-            columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation)
+            columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation,
+            velocity=self._velocities(n))
+
+    def _velocities(self, shape) -> np.ndarray | None:
+        if all(v is None for v in self._velocity):
+            return None
+        return np.array([np.zeros(shape) if v is None else np.asarray(v, float).reshape(shape)
+                         for v in self._velocity])
 
 
 class Step(ABC):

@@ -114,7 +114,8 @@ class Dynamics(Step):
             columns = {"time [s]": state.time + res.time[k],
                        **{name: float(e[k]) for name, e in energies.items()}}
             rec.record(res.time[k] / self.duration, res.u[k], state.temperature,
-                       state.crease_power, int(res.iterations[k]), **columns)
+                       state.crease_power, int(res.iterations[k]), velocity=res.v[k],
+                       **columns)
         end = res.state
         new = replace(state, u=end.u, velocity=end.v, applied_load=load,
                       crease_rest=crease_rest, spring_rest=spring_rest,

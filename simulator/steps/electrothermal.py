@@ -222,7 +222,8 @@ class ElectroThermal(Step):
             if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12):
                 rec.record(t / self.duration, mech.u, temp, powers(t), report.iterations,
                            np.concatenate(report.residual_norms) if report.residual_norms
-                           else (), **{"time [s]": state.time + t, "dt [s]": h_try,
+                           else (), velocity=mech.velocity,
+                           **{"time [s]": state.time + t, "dt [s]": h_try,
                                        **mech.energies(), **heat.energies()})
             context.report(k, k + math.ceil((self.duration - t) / h_try - 1e-9))
             if change > self.temperature_step:
