@@ -35,6 +35,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -134,6 +135,12 @@ except SystemExit:
 _T, _R = None, None
 """
 
+_WARM = """
+import simulator, design, design.cli, design.gripper, design.optimize, design.problem
+import simulator.cases
+_T, _R = None, None
+"""
+
 _IMPORT = """
 import simulator
 _T, _R = None, None
@@ -202,16 +209,22 @@ def selected_tasks(args: argparse.Namespace) -> list:
     return [t for t in TASKS if t.name in names and not (args.quick and t.heavy)]
 
 
-def run_snippet(snippet: str, tree: Path, fresh: bool = False) -> dict:
+def run_snippet(snippet: str, tree: Path, pycache: Path | None = None,
+                fresh: bool = False) -> dict:
     """Run ``snippet`` in a fresh interpreter with ``PYTHONPATH=tree``.
 
-    Returns the snippet's JSON line plus ``wall`` (wall time of the subprocess [s]). With
-    ``fresh`` the bytecode and numba caches point to new empty directories.
+    Returns the snippet's JSON line plus ``wall`` (wall time of the subprocess [s]). Bytecode
+    goes to ``pycache`` (so both trees start from written ``.pyc`` files even where
+    ``PYTHONDONTWRITEBYTECODE`` is set); with ``fresh`` the bytecode and numba caches point to
+    new empty directories instead (as right after install).
     """
     env = dict(os.environ, PYTHONPATH=str(tree), PYTHONHASHSEED="0")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     with tempfile.TemporaryDirectory(prefix="bench_versus_cache_") as cache:
         if fresh:
             env.update(PYTHONPYCACHEPREFIX=cache, NUMBA_CACHE_DIR=cache)
+        elif pycache is not None:
+            env["PYTHONPYCACHEPREFIX"] = str(pycache)
         code = textwrap.dedent(snippet) + _FOOTER
         t0 = time.perf_counter()
         proc = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env,
@@ -226,12 +239,12 @@ def run_snippet(snippet: str, tree: Path, fresh: bool = False) -> dict:
     return out
 
 
-def measure(task: Task, old: Path, new: Path, repeat: int) -> dict:
+def measure(task: Task, old: Path, new: Path, repeat: int, pycache: Path | None = None) -> dict:
     """Best-of-``repeat`` times of ``task`` on both trees, run alternately old, new, ..."""
     runs = {"old": [], "new": []}
     for _ in range(repeat):
         for side, tree, snip in (("old", old, task.old), ("new", new, task.new)):
-            out = run_snippet(snip, tree, fresh=task.fresh)
+            out = run_snippet(snip, tree, pycache, fresh=task.fresh)
             if task.outside and "error" not in out:
                 out["time"] = out["wall"]
             runs[side].append(out)
@@ -287,9 +300,6 @@ def _old_worktree(commit: str) -> Path:
     tmp = Path(tempfile.mkdtemp(prefix="etorigami_old_"))
     subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(tmp), commit],
                    check=True, capture_output=True)
-    # bytecode now, so that the first timed task does not pay for it on the old side only
-    subprocess.run([sys.executable, "-m", "compileall", "-q", str(tmp / "simulator"),
-                    str(tmp / "design")], capture_output=True)
     return tmp
 
 
@@ -300,12 +310,16 @@ def main(argv=None) -> list:
     print(f"old: {args.commit} at {old}; new: {REPO}; python {sys.version.split()[0]}; "
           f"load {os.getloadavg()[0]:.2f}", flush=True)
     rows = []
+    pycache = Path(tempfile.mkdtemp(prefix="bench_versus_pyc_"))
     try:
+        for tree in (old, REPO):        # untimed: writes the bytecode both sides then load
+            run_snippet(_WARM, tree, pycache)
         for task in tasks:
-            rows.append(measure(task, old, REPO, args.repeat))
+            rows.append(measure(task, old, REPO, args.repeat, pycache))
             r = rows[-1]
             print(f"  {task.name}: old {r['old']} s, new {r['new']} s", flush=True)
     finally:
+        shutil.rmtree(pycache, ignore_errors=True)
         if not args.old_tree and not args.keep:
             subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(old)],
                            capture_output=True)
