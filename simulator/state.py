@@ -9,7 +9,7 @@ return a new one.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,7 +20,7 @@ from .model import Model
 from .properties import initial_crease_rest
 from .thermal import ThermalModel
 
-__all__ = ["ROOM_TEMPERATURE", "SimulationState", "initial_state", "equilibrium_system",
+__all__ = ["ROOM_TEMPERATURE", "SimulationState", "at_rest", "initial_state", "equilibrium_system",
            "thermal_model"]
 
 #: Default room temperature [deg C].
@@ -66,6 +66,13 @@ class SimulationState:
     def rest_fold(self) -> np.ndarray:
         """Crease rest fold angles [rad], 0 = flat, positive towards +z."""
         return self.crease_rest - np.pi
+
+
+def at_rest(state: SimulationState, **changes) -> SimulationState:
+    """``replace(state, **changes)`` for a quasi-static step: the structure is left at rest
+    (velocity None) unless ``changes`` say otherwise."""
+    changes.setdefault("velocity", None)
+    return replace(state, **changes)
 
 
 def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:

@@ -14,7 +14,7 @@ import math
 import os
 
 __all__ = ["CLIError", "length_um", "fold_deg", "floats", "progress_bar", "add_parallel_options",
-           "executor", "kernel_backend", "succeeded", "saved_rows", "resume_message",
+           "executor", "kernel_backend", "saved_rows", "resume_message",
            "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
@@ -106,11 +106,6 @@ def kernel_backend(short: bool):
     from simulator import spring_kernel_backend
 
     return spring_kernel_backend("numpy")
-
-
-def succeeded(result) -> bool:
-    """``result.success`` (the result contract)."""
-    return bool(result.success)
 
 
 def saved_rows(path) -> int:

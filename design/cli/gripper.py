@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import time
 
-from ._common import CLIError, fold_deg, length_um, succeeded
+from ._common import CLIError, fold_deg, length_um
 
 __all__ = ["add_gripper_commands"]
 
@@ -39,7 +39,7 @@ def _gripper_evaluate(args) -> int:
     res = evaluate_gripper(design, mode=args.mode)
     out = res.to_dict()
     out["wall_time [s]"] = round(time.perf_counter() - t0, 3)
-    ok = succeeded(res)
+    ok = res.success
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return 0 if ok else 1

@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 
 from ._common import (RESIDUAL_LIMIT_DEG, add_parallel_options, executor, floats, fold_deg,
-                      progress_bar, resume_message, succeeded)
+                      progress_bar, resume_message)
 
 __all__ = ["add_optimize_command", "METHODS"]
 
@@ -58,7 +58,7 @@ def _optimize(args) -> int:
     print(f"{args.method}: {res.status} ({res.message}); best {res.objective * 1e3:.4g} mW at "
           f"{x}; {res.n_evaluations} evaluations ({res.n_computed} computed, {res.n_reused} "
           f"reused) in {res.wall_time:.1f} s" + (f"; results in {args.out}" if args.out else ""))
-    return 0 if succeeded(res) else 1
+    return 0 if res.success else 1
 
 
 def _interrupted(args) -> str:

@@ -24,7 +24,8 @@ from ..continuation import LoadPath, displacement_control, mgdcm
 from ..errors import ParameterError
 from ..model import _AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
-from .limit import at_rest, record_continuation
+from ..state import at_rest
+from .limit import record_continuation
 from .mechanical import Load
 
 __all__ = ["ArcLengthLoad", "DisplacementControl"]

@@ -26,6 +26,7 @@ from ..bimorph import crease_temperature_weights
 from ..errors import ParameterError
 from ..newton import follow_path
 from ..properties import spring_rest_angles
+from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from .limit import HeatPath, check_on_limit_point, continue_past_limit
 
@@ -111,8 +112,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                 message = (f"increment {s}/{n_inc} (crease power up to "
                            f"{1e3 * np.max(power, initial=0):.4g} mW): {path.message}")
                 return rec.finish(False, "failed", message,
-                                  replace(state, u=u, spring_rest=spring, temperature=last,
-                                          velocity=None),
+                                  at_rest(state, u=u, spring_rest=spring, temperature=last),
                                   f, evaluation)
             if not iterated:
                 break
@@ -125,9 +125,8 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         rec.record(s / n_inc, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
         context.report(s, n_inc)
-    end = replace(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
-                  crease_power=np.asarray(powers[-1], float),
-                  room_temperature=float(ambient[-1]), velocity=None)   # quasi-static: at rest
+    end = at_rest(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
+                  crease_power=np.asarray(powers[-1], float), room_temperature=float(ambient[-1]))
     return rec.finish(True, "converged", "converged", end, f, evaluation)
 
 

@@ -27,7 +27,7 @@ not depend on the increments), whose tangent ignores the shape dependence of the
 
 from __future__ import annotations
 
-from dataclasses import fields, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -35,9 +35,10 @@ from ..bimorph import crease_temperature_weights
 from ..continuation import FAST_ITERATIONS, LoadPath, mgdcm
 from ..errors import ParameterError
 from ..properties import spring_rest_angles
+from ..state import at_rest
 from .base import StepOutcome, StepRecorder
 
-__all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "at_rest", "check_on_limit_point",
+__all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "check_on_limit_point",
            "continue_past_limit", "record_continuation"]
 
 #: Allowed values of ``on_limit_point``.
@@ -49,14 +50,6 @@ PROBE_INCREMENTS = 40
 CONTINUATION_INCREMENTS = 200
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
-
-
-def at_rest(state, **changes):
-    """``replace(state, **changes)`` for a quasi-static step: a state that carries a velocity
-    (time-integration steps) is left at rest (velocity None)."""
-    if any(f.name == "velocity" for f in fields(state)):
-        changes.setdefault("velocity", None)
-    return replace(state, **changes)
 
 
 def check_on_limit_point(step) -> None:

@@ -18,7 +18,8 @@ from ..continuation import LoadPath
 from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
-from .limit import at_rest, check_on_limit_point, continue_past_limit
+from ..state import at_rest
+from .limit import check_on_limit_point, continue_past_limit
 
 __all__ = ["SelfFold", "Load", "Gravity", "node_vectors", "check_folds", "crease_targets"]
 
