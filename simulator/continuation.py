@@ -34,7 +34,7 @@ from __future__ import annotations
 import logging
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -42,7 +42,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
 from .newton import DENSE_LIMIT, NewtonOptions
-from .stability import tangent_stability
+from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
            "displacement_control"]
@@ -54,8 +54,6 @@ logger = logging.getLogger(__name__)
 #: halve after those needing at least :data:`SLOW_ITERATIONS`.
 FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
-#: A change of the negative-eigenvalue count is a bifurcation when |cos(mode, q)| is below this.
-BIFURCATION_ALIGNMENT = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,67 +114,6 @@ class LoadPath:
         return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], ev.K, q, ev)
 
 
-@dataclass(frozen=True)
-class CriticalPoint:
-    """A limit point or bifurcation located between two accepted increments.
-
-    Attributes
-    ----------
-    kind : {"limit_point", "bifurcation", "stability_change"}
-    load_factor : float
-        Estimated load factor there (parabola through three points for a limit point).
-    increment : int
-        Index (0-based) of the first accepted increment past it.
-    displacement : float or None
-        Monitored displacement there [m] (interpolated), if the path has a monitor.
-    maximum : bool
-        True for a load-factor maximum, False for a minimum (and for bifurcations).
-    """
-
-    kind: str
-    load_factor: float
-    increment: int
-    displacement: float | None = None
-    maximum: bool = False
-
-
-@dataclass(frozen=True, eq=False)
-class ContinuationResult:
-    """Outcome of :func:`mgdcm` or :func:`displacement_control`.
-
-    Attributes
-    ----------
-    success : bool
-    status : str
-        "converged", "failed" or "stopped".
-    message : str
-    u : (n_nodes, 3) displacements at the last accepted point [m]
-    load_factor : float at the last accepted point
-    iterations, cuts : int
-    history : list of (load_factor, u, iterations) per accepted point
-    residual_norms : list of arrays per accepted point [N]
-    stability : list of Stability per accepted point (empty if not computed)
-    temperatures : list of (n_nodes,) arrays or None per accepted point
-    critical_points : tuple of CriticalPoint
-    evaluation : Evaluation at the last accepted point
-    """
-
-    success: bool
-    status: str
-    message: str
-    u: np.ndarray
-    load_factor: float
-    iterations: int
-    cuts: int
-    history: list = field(default_factory=list)
-    residual_norms: list = field(default_factory=list)
-    stability: list = field(default_factory=list)
-    temperatures: list = field(default_factory=list)
-    critical_points: tuple = ()
-    evaluation: object = None
-
-
-# ---------------------------------------------------------------------------- linear algebra
 def _solve(K, B):
     """Solve K X = B (B (n,) or (n, k)); None if K is exactly singular or X not finite.
 
@@ -255,86 +192,6 @@ def _correct(path, u, lam, constraint, options, size):
             return True, u.reshape(-1, 3), lam, pt, it + 1, res, "converged"
     return False, u, lam, pt, options.max_iter, res, (
         f"no convergence in {options.max_iter} iterations (last residual {res[-1]:.3g} N)")
-
-
-# ---------------------------------------------------------------------------- bookkeeping
-class _Trace:
-    """Accepted points of a continuation, with their stability and the critical points.
-
-    The start point seeds the limit-point search (a restart exactly at a limit point turns
-    there) but is not recorded.
-    """
-
-    def __init__(self, path, monitor, stability, u0, lam0, prior=None):
-        self.path, self.monitor, self.check = path, monitor, stability
-        self.history, self.residuals, self.stab, self.temps = [], [], [], []
-        self.iterations, self.cuts, self.critical, self.align = 0, 0, [], []
-        self.points, self.arc = [], []
-        for u, lam in ([] if prior is None else [prior]) + [(u0, lam0)]:
-            self._add(np.asarray(u, float), float(lam))
-        self.offset = len(self.points)           # point k is history entry k - offset
-        self.last = None
-
-    def _add(self, u, lam):
-        du = 0.0 if not self.points else np.linalg.norm(
-            (u - self.points[-1][1]).ravel()[self.path.free])
-        self.arc.append((self.arc[-1] if self.arc else 0.0) + float(du))
-        self.points.append((lam, u))
-
-    def accept(self, u, lam, pt, its, res):
-        self._add(u, lam)
-        self.history.append((lam, u, its))
-        self.residuals.append(np.asarray(res, float))
-        self.temps.append(pt.temperature)
-        self.last = pt
-        if self.check:
-            self.stab.append(tangent_stability(pt.K))
-            self.align.append(self.stab[-1].load_alignment(pt.q))
-
-    def measure(self, u) -> float | None:
-        return None if self.monitor is None else float(self.monitor @ u.ravel())
-
-    def _locate(self) -> list:
-        """Critical points between accepted points: a limit point where the load factor passes
-        an extremum (located by a parabola through three points in arc length); where the count
-        of negative eigenvalues changes without one, a bifurcation if the critical mode is
-        orthogonal to the load derivative q (|cos| below :data:`BIFURCATION_ALIGNMENT`), else a
-        "stability_change" (e.g. heating paths, whose load-factor extremum includes the
-        thermal feedback that the mechanical tangent leaves out)."""
-        pts, out, o = self.points, [], self.offset
-        lam = np.array([p[0] for p in pts])
-        turns = [k for k in range(1, len(pts) - 1)
-                 if (lam[k] - lam[k - 1]) * (lam[k + 1] - lam[k]) < 0]
-        for k in turns:
-            s = np.array(self.arc[k - 1:k + 2]) - self.arc[k]
-            c = np.polyfit(s, lam[k - 1:k + 2], 2)
-            s_star = float(np.clip(-c[1] / (2 * c[0]), s[0], s[2])) if c[0] != 0 else 0.0
-            m = [self.measure(pts[j][1]) for j in (k - 1, k, k + 1)]
-            disp = None if m[0] is None else float(np.polyval(np.polyfit(s, m, 2), s_star))
-            out.append(CriticalPoint("limit_point", float(np.polyval(c, s_star)),
-                                     max(0, k + 1 - o if s_star > 0 else k - o), disp,
-                                     bool(lam[k] > lam[k - 1])))
-        neg = [st.negative for st in self.stab]
-        for j in range(1, len(neg)):              # history j is point j + o
-            if neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j) for k in turns):
-                a = min(self.align[j - 1], self.align[j])
-                kind = "bifurcation" if a < BIFURCATION_ALIGNMENT else "stability_change"
-                out.append(CriticalPoint(kind, 0.5 * (lam[j + o - 1] + lam[j + o]), j,
-                                         self.measure(pts[j + o][1])))
-        return sorted(out, key=lambda c: c.increment)
-
-    def result(self, success, status, message, u, lam):
-        self.critical = self._locate()
-        crit = "; ".join(f"{c.kind.replace('_', ' ')} at load factor {c.load_factor:.6g}"
-                         + ("" if c.displacement is None else
-                            f" (displacement {c.displacement * 1e6:.4g} um)")
-                         for c in self.critical)
-        if crit:
-            message = f"{message}; {crit}"
-        return ContinuationResult(success, status, message, u, float(lam), self.iterations,
-                                  self.cuts, self.history, self.residuals, self.stab,
-                                  self.temps, tuple(self.critical),
-                                  None if self.last is None else self.last.evaluation)
 
 
 def _positive(name, value, allow_none=False):
@@ -453,7 +310,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     free, size = path.free, _size(path.system)
     c_t, v_t = _monitor_vector(path, target_displacement)
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
-    trace = _Trace(path, c_t if monitor is None else np.asarray(monitor, float).ravel(),
+    trace = PathTrace(path, c_t if monitor is None else np.asarray(monitor, float).ravel(),
                    stability, u, lam, prior)
     pt = _begin(path, u, lam)
     sig = 1.0 if target_load_factor is None or target_load_factor >= lam else -1.0
@@ -576,7 +433,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
         raise ParameterError("displacement_control: the reference load does not move the "
                              "controlled displacement (c . K^-1 P = 0); it cannot be controlled "
                              "by that load. Load the controlled node along its direction.")
-    trace = _Trace(path, c, stability, u, lam)
+    trace = PathTrace(path, c, stability, u, lam)
     start = float(c @ u.ravel())
     t, dt, in_row = 0.0, 1.0 / increments, 0
     while t < 1.0 - 1e-12:
