@@ -27,7 +27,10 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
+from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 from scipy.sparse.linalg import splu
+
+from . import _thermal_jit
 
 from .assembly import StiffnessPattern
 from .elements.contact import point_triangle_distance
@@ -49,6 +52,8 @@ _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
 #: Floor of t_air relative to t_env: a triangle lying on a boundary panel would otherwise get an
 #: infinite conductance (the reference divides by zero there).
 _MIN_AIR_FRACTION = 1e-9
+#: Up to this many free nodes the structure system is solved densely (Cholesky).
+DENSE_NODES = 400
 
 
 def heat_weights() -> np.ndarray:
@@ -174,6 +179,14 @@ class ThermalModel:
         free_index[self.free_nodes] = np.arange(len(self.free_nodes))
         self._free_pattern = StiffnessPattern([tri], free_index, diagonal=self.free_nodes)
         self._check_solvable()
+        self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
+        # inputs of the compiled kernel (simulator._thermal_jit), contiguous and typed once
+        self._tri64 = np.array(tri, dtype=np.int64, order="C")         # writable copy
+        self._kt = np.ascontiguousarray(self.conductivity * self.thickness, dtype=np.float64)
+        self._cap_nodes64 = np.array(self._cap_nodes, dtype=np.int64, order="C")
+        self._min_air, self._cap_boundary, self._cap_none = (_MIN_AIR_FRACTION, _CAP_BOUNDARY,
+                                                             _CAP_NONE)
+        self.edge_lengths = np.array(self.edge_lengths, dtype=np.float64, order="C")
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
@@ -354,12 +367,79 @@ class ThermalModel:
                 or not math.isfinite(rt):
             raise ParameterError(f"q must be a finite array of shape ({n},) or ({n}, k) [W] and "
                                  "the room temperature finite.")
+        rise = np.zeros(q.shape)
+        if len(self.free_nodes):
+            rise[self.free_nodes] = self.factorized(x)(q[self.free_nodes])
+        return rt + rise
+
+    def factorized(self, x):
+        """Solver ``q_free -> rise_free`` of the free-node system at positions ``x`` [m].
+
+        The factorisation is kept for the last shape: solving again on the same positions
+        (a fixed-shape coupling, several heat inputs) reuses it.
+        """
+        x = np.asarray(x, float)
+        compiled, last = _thermal_jit.use_compiled(), self._factor_cache
+        if last is not None and last[0] == compiled and last[1].shape == x.shape \
+                and np.array_equal(last[1], x):
+            return last[2]
+        K, g_eff = self.structure_conductances(x)
+        solver = self._factorize(K, g_eff[self.free_nodes])
+        self._factor_cache = (compiled, x.copy(), solver)
+        return solver
+
+    def structure_conductances(self, x):
+        """T3 matrices (n_tri, 3, 3) [W/K] and each node's environment chain condensed into
+        one series conductance to room temperature, ``1 / sum_q (1 / g_q)`` (n,) [W/K] (0
+        where a layer has no conductance), at positions ``x`` (n, 3) [m].
+
+        Uses the compiled kernel of :mod:`simulator._thermal_jit` when the kernel backend is
+        "numba" (:func:`simulator.elements.springs.spring_kernel_backend`), else numpy.
+        """
+        x = np.asarray(x, float)
+        if _thermal_jit.use_compiled():
+            if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
+                self._conduction(x)                               # raises the usual error
+            K, _, g_eff, floored = _thermal_jit.thermal_element_data(self, x)
+            if floored:
+                logger.warning("a triangle touches a thermal boundary panel; t_air floored at "
+                               "%g m", _MIN_AIR_FRACTION * self.params.env_thickness)
+            return K, g_eff
         K, area = self._conduction(x)
         g = self.layer_conductance(x, area)
         with np.errstate(divide="ignore"):
             g_eff = np.where(np.all(g > 0, axis=1), 1 / np.sum(1 / g, axis=1), 0.0)
-        A = self._free_pattern.matrix([K, g_eff[self.free_nodes]])
-        rise = np.zeros(q.shape)
-        if len(self.free_nodes):
-            rise[self.free_nodes] = splu(A.tocsc()).solve(q[self.free_nodes])
-        return rt + rise
+        return K, g_eff
+
+    @cached_property
+    def _dense_position(self):
+        """Flat position in the dense free-node matrix of every entry given to the free
+        pattern (triangle matrices, then diagonal terms); -1 for a fixed node's entries."""
+        p = self._free_pattern
+        rows = np.repeat(np.arange(p.n_free), np.diff(p.indptr))
+        pos = np.full(len(p.keep), -1, dtype=np.int64)
+        pos[p.keep] = (rows * p.n_free + p.indices)[p.scatter]
+        keep = pos >= 0
+        return pos[keep], keep
+
+    def _factorize(self, K, g_free):
+        """Factorise the free-node system (conduction plus condensed chains); returns its
+        solver ``q_free -> rise_free``.
+
+        Up to :data:`DENSE_NODES` free nodes: dense Cholesky (the matrix is symmetric positive
+        definite; SuperLU if Cholesky fails); above: SuperLU.
+        """
+        n_free = len(g_free)
+        if n_free <= DENSE_NODES:
+            pos, keep = self._dense_position
+            flat = np.concatenate([K.ravel(), g_free])[keep]
+            dense = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
+            c, info = _potrf(dense, lower=False, clean=False, overwrite_a=True)
+            if info == 0:
+                def cholesky_solve(q_free):
+                    sol, info = _potrs(c, q_free)
+                    if info != 0:
+                        raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
+                    return sol
+                return cholesky_solve
+        return splu(self._free_pattern.matrix([K, g_free]).tocsc()).solve
