@@ -30,10 +30,10 @@ logger = logging.getLogger(__name__)
 
 #: x (n, 3), tri (m, 3), edge lengths (m, 3), k t (m,), is_boundary (m,), cap nodes (c,),
 #: t_env, tan(beta), k_env, layers, min air fraction, cap of boundary triangles, cap without
-#: boundary, then outputs Ke (m, 3, 3), area (m,), g_eff (n,); returns the number of
-#: triangles whose t_air was floored.
+#: boundary, then outputs Ke (m, 3, 3), area (m,), g_eff (n,), then zeroed work arrays dmin
+#: (n,), g (n, layers), bt (3, 3); returns the number of triangles whose t_air was floored.
 _SIGNATURE = ("i8(f8[:, ::1], i8[:, ::1], f8[:, ::1], f8[::1], b1[::1], i8[::1], f8, f8, f8, "
-              "i8, f8, f8, f8, f8[:, :, ::1], f8[::1], f8[::1])")
+              "i8, f8, f8, f8, f8[:, :, ::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
 
 _compiled = None
 _broken = False
@@ -89,19 +89,17 @@ def _point_triangle_distance(px, py, pz, t):
 
 
 def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, layers,
-            min_air, cap_boundary, cap_none, Ke, area, g_eff):
+            min_air, cap_boundary, cap_none, Ke, area, g_eff, dmin, g, bt):
     n, m = x.shape[0], tri.shape[0]
     # distance of every cap node to the nearest boundary triangle
     n_boundary = 0
     for t in range(m):
         if is_boundary[t]:
             n_boundary += 1
-    dmin = np.zeros(n)
     if n_boundary:
-        bt = np.empty((3, 3))
         for c in range(cap_nodes.shape[0]):
             p = cap_nodes[c]
-            best = np.inf
+            best = math.inf
             for t in range(m):
                 if not is_boundary[t]:
                     continue
@@ -112,7 +110,6 @@ def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, la
                 if d < best:
                     best = d
             dmin[p] = best
-    g = np.zeros((n, layers))
     floored = 0
     for t in range(m):
         i0, i1, i2 = tri[t, 0], tri[t, 1], tri[t, 2]
@@ -199,8 +196,9 @@ def thermal_element_data(model, x):
         raise RuntimeError("the compiled thermal kernel is not available; use the numpy path")
     p, m, n = model.params, len(model.mesh.triangles), len(x)
     Ke, area, g_eff = np.empty((m, 3, 3)), np.empty(m), np.empty(n)
+    work = np.zeros(n), np.zeros((n, int(p.layers))), np.zeros((3, 3))
     floored = kernel(np.require(x, np.float64, ("C", "W")), model._tri64, model.edge_lengths,
                      model._kt, model.is_boundary, model._cap_nodes64, float(p.env_thickness),
                      math.tan(p.dissipation_angle), float(p.env_conductivity), int(p.layers),
-                     model._min_air, model._cap_boundary, model._cap_none, Ke, area, g_eff)
+                     model._min_air, model._cap_boundary, model._cap_none, Ke, area, g_eff, *work)
     return Ke, area, g_eff, int(floored)
