@@ -4,35 +4,42 @@ Everything a user needs is importable from here::
 
     from design import GripperProblem, optimize, make_executor, sweep_residual_fold
 
-``import design`` costs little more than ``import simulator`` (measured 0.72 s against
-0.54 s): NLopt, cvxpy and Dask are imported only inside the functions that use them. Every
+``import design`` imports no submodule: each public name is imported from its submodule on
+first use (see :mod:`simulator._lazy`); NLopt, cvxpy, Dask, pandas and scipy.stats are
+imported only inside the functions that use them. ``design.optimize`` is the function, also
+after ``import design.optimize`` (the module stays reachable as
+``sys.modules["design.optimize"]`` and through ``from design.optimize import ...``). Every
 result object (``StageResult``, ``GripperResult``, ``LiftPowerResult``, ``Evaluation``,
-``OptimizationResult``, ``HeaterAllocation``, the rows of sweep tables) carries
-``success``, ``status`` and ``message``; a power that was not found is None (an empty cell
-in CSV tables).
+``OptimizationResult``, ``HeaterAllocation``, the rows of sweep tables) carries ``success``,
+``status`` and ``message``; a power that was not found is None (an empty cell in CSV tables).
 """
 
-from .space import DesignSpace, Variable
-from .problem import (EVALUATION_STATUSES, GRIPPER_SPACE, SU8_TG, DesignProblem, Evaluation,
-                      GripperProblem)
-from .gripper import (ARM_CREASES, BASE_CREASES, REFERENCE_NEWTON, STAGE_STATUSES,
-                      GripperDesign, GripperResult, StageResult, evaluate_gripper, gripper_model)
-from .miura import (MIURA_SPACE, LiftPowerResult, MiuraDesign, MiuraProblem, heated_creases,
-                    lift_per_power_table, lift_power, miura_model)
-from .evaluation_log import EvaluationLog, LoggedProblem
-# the function, not the submodule of the same name (bound after the submodule is loaded)
-from .optimize import METHODS, OptimizationResult, StopOptimization, optimize
-from .robustness import (CREASE_GROUPS, RobustGripperProblem, residual_fold_grid,
-                         sweep_residual_fold, with_residual_fold)
-from .heaters import (ALLOCATION_STATUSES, HeaterAllocation, allocate_heaters,
-                      fold_sensitivity, influence_matrices, linear_allocation)
-from .executors import (DaskExecutor, Executor, ExecutorError, ProcessExecutor, SerialExecutor,
-                        TaskError, executor_from_option, make_executor)
-from .executors import TaskFailure
-from .uncertainty import (SCENARIOS, Distribution, FabricationScenario, UncertainInput,
-                          rank_correlations, residual_fold_per_crease, wilson_interval)
-from .uncertainty_sweep import (GripperSampleProblem, RobustYieldProblem, summarize_yield,
-                                sweep_uncertainty)
+from simulator._lazy import attach as _attach
+
+__getattr__, __dir__ = _attach(__name__, {
+    ".space": ("DesignSpace", "Variable"),
+    ".problem": ("EVALUATION_STATUSES", "GRIPPER_SPACE", "SU8_TG", "DesignProblem", "Evaluation",
+                 "GripperProblem"),
+    ".gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
+                 "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
+                 "gripper_model"),
+    ".miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
+               "heated_creases", "lift_per_power_table", "lift_power", "miura_model"),
+    ".evaluation_log": ("EvaluationLog", "LoggedProblem"),
+    # the function, not the submodule of the same name (kept bound after the submodule loads)
+    ".optimize": ("METHODS", "OptimizationResult", "StopOptimization", "optimize"),
+    ".robustness": ("CREASE_GROUPS", "RobustGripperProblem", "residual_fold_grid",
+                    "sweep_residual_fold", "with_residual_fold"),
+    ".heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "allocate_heaters",
+                 "fold_sensitivity", "influence_matrices", "linear_allocation"),
+    ".executors": ("DaskExecutor", "Executor", "ExecutorError", "ProcessExecutor",
+                   "SerialExecutor", "TaskError", "TaskFailure", "executor_from_option",
+                   "make_executor"),
+    ".uncertainty": ("SCENARIOS", "Distribution", "FabricationScenario", "UncertainInput",
+                     "rank_correlations", "residual_fold_per_crease", "wilson_interval"),
+    ".uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem", "summarize_yield",
+                           "sweep_uncertainty"),
+})
 
 __all__ = [
     # design spaces and problems

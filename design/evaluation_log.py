@@ -25,13 +25,16 @@ import math
 import os
 import time
 from datetime import UTC, datetime
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from simulator.errors import ParameterError
 
 from .problem import Evaluation
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["EvaluationLog", "LoggedProblem", "EvaluationRun", "BudgetExhausted", "settings_hash",
            "design_key"]
@@ -351,6 +354,8 @@ class EvaluationRun:
         return self.evaluations[0] if self.evaluations else None
 
     def history(self) -> pd.DataFrame:
+        import pandas as pd
+
         return pd.DataFrame(self.rows)
 
 

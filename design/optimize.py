@@ -30,9 +30,9 @@ import math
 import os
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from simulator.errors import ParameterError
 
@@ -40,6 +40,9 @@ from .evaluation_log import (BudgetExhausted, EvaluationLog, EvaluationRun, Logg
                              settings_hash)
 from ._contract import check_outcome
 from .problem import Evaluation
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["optimize", "OptimizationResult", "StopOptimization", "METHODS"]
 
@@ -421,6 +424,8 @@ def _dispatch(run: EvaluationRun, x0, method, max_evaluations, opts):
 
 def _result(run: EvaluationRun, method, outcome, counts, t0, options) -> OptimizationResult:
     """Assemble the result from the run's best evaluation and ``(cycles, status, message)``."""
+    import pandas as pd
+
     cycles, status, message = outcome
     logged, (c0, r0) = run.logged, counts
     best = run.best()

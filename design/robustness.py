@@ -22,15 +22,18 @@ import logging
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from simulator.errors import ParameterError
 
 from . import gripper as _gr
 from .executors import SerialExecutor, TaskFailure
 from .problem import DesignProblem, Evaluation, GripperProblem
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["CREASE_GROUPS", "residual_fold_grid", "with_residual_fold",
            "sweep_residual_fold", "RobustGripperProblem", "TIMING_COLUMNS"]
@@ -223,6 +226,8 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
         (``-g``, positive when satisfied), ``simulations``, ``message``, ``wall_time [s]``.
         Everything except :data:`TIMING_COLUMNS` is the same whatever the executor.
     """
+    import pandas as pd
+
     specs = [_normalize_spec(s) for s in residual_folds]
     if not specs:
         raise ParameterError("sweep_residual_fold: no residual folds given.")

@@ -19,14 +19,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
-from scipy import special, stats
+from scipy import special
 
 from simulator.errors import ParameterError
 
 from .gripper import ARM_CREASES, BASE_CREASES
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["Distribution", "UncertainInput", "FabricationScenario", "PARAMETERS",
            "SAMPLING_METHODS", "SCENARIOS", "residual_fold_per_crease", "wilson_interval", "quantile",
@@ -222,6 +225,8 @@ class FabricationScenario:
         of ``n`` equal-probability strata of every independent uniform (the copula mixes
         correlated inputs, so they are stratified only in their group's common score).
         """
+        import pandas as pd
+
         if not (isinstance(n, (int, np.integer)) and n >= 1):
             raise ParameterError(f"sample: n = {n!r} must be a positive integer.")
         if method not in SAMPLING_METHODS:
@@ -280,6 +285,8 @@ def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple:
     """Wilson score interval ``(low, high)`` of a binomial proportion (NaN, NaN for n = 0)."""
     if n == 0:
         return (math.nan, math.nan)
+    from scipy import stats              # imported here: scipy.stats is slow to import
+
     z = float(stats.norm.ppf(0.5 + confidence / 2))
     p = successes / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
@@ -306,6 +313,9 @@ def rank_correlations(table: pd.DataFrame, inputs, output: str,
         ``input``, ``output``, ``spearman [-]``, ``low [-]``, ``high [-]`` (Fisher-z interval),
         ``n``; rho is NaN for an input that does not vary.
     """
+    import pandas as pd
+    from scipy import stats
+
     y = table[output].to_numpy(dtype=float)
     y = np.where(np.isnan(y), np.inf, y)
     n = len(y)

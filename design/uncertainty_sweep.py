@@ -16,9 +16,9 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from simulator.errors import ParameterError
 
@@ -28,6 +28,9 @@ from .robustness import _design_list, lost_evaluation
 from .space import DesignSpace, Variable
 from .uncertainty import PARAMETERS, FabricationScenario, quantile, rank_correlations, \
     wilson_interval
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["GripperSampleProblem", "sweep_uncertainty", "summarize_yield", "input_columns",
            "RobustYieldProblem"]
@@ -172,6 +175,8 @@ def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, sa
         ``works`` (both stages met and ``T <= T_limit``), powers [mW] (empty when not met),
         ``temperature [degC]``, ``message``, ``wall_time [s]``.
     """
+    import pandas as pd
+
     from .evaluation_log import EvaluationLog, design_key
 
     point = GripperSampleProblem(problem, scenario.parameters)
@@ -223,6 +228,8 @@ def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
         Per design, input and output (``total_power [mW]``, ``temperature [degC]``):
         Spearman's rho with its Fisher-z interval (:func:`rank_correlations`).
     """
+    import pandas as pd
+
     dcols = list(by) + [c for c in table.columns if c.split(" ")[0] in ("W", "La", "L1", "L2")]
     rows, sens = [], []
     for values, group in table.groupby(dcols, sort=False):

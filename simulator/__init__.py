@@ -8,40 +8,51 @@ Build a :class:`Pattern` (or take one of :mod:`simulator.example_patterns`), mak
 :class:`Model` with :func:`make_model`, run an ordered list of steps with :func:`simulate`, and
 read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_frame()``,
 ``save()``).
+
+``import simulator`` imports no submodule: each public name is imported from its submodule on
+first use (see :mod:`simulator._lazy`), so a script pays only for what it uses.
 """
 
-from . import example_patterns
+from ._lazy import attach as _attach
 from ._version import __version__
-from .bimorph import Actuators, Bimorph
-from .cases import Case, describe_cases, get_case, miura_sheet_model, single_fold_model
-from .dynamics import DynamicsOptions, DynamicsResult, MotionState, TimeIntegrator, integrate
-from .elements.springs import spring_kernel_backend
-from .errors import (ConvergenceError, EtorigamiError, FoldFormatError, ParameterError,
-                     PatternError)
-from .fold import (fold_to_model, fold_to_pattern, model_to_fold, pattern_to_fold, read_fold,
-                   read_model, result_to_fold_frames, write_fold, write_fold_frames, write_model)
-from .materials import AIR, GOLD, SILICON, SPR, SU8, SUBSTRATE, WATER, Fluid, Material
-from .mass import lumped_masses
-from .mesh import BarHingeMesh, build_mesh
-from .model import (REFERENCE_GRAVITY, STANDARD_GRAVITY, ContactParameters, Model, Supports,
-                    make_model)
-from .modes import ModesResult, natural_modes
-from .newton import NewtonOptions
-from .pattern import Pattern
-from .power_schedules import PiecewiseLinear, PowerSchedule, Ramp, Sine, SquareWave, StepPower
-from .properties import BarHingeParameters
-from .results import SimulationResult, StepResult
-from .simulation import simulate
-from .state import ROOM_TEMPERATURE, SimulationState, initial_state
-from .steps import (AmbientTemperature, Coupling, Dynamics, ElectroThermal, Gravity, Heat, Load,
-                    SelfFold, Step, StepContext, StepOutcome, StepRecorder, TransientHeat)
-from .steps import ArcLengthLoad, DisplacementControl
-from .continuation import ContinuationResult, CriticalPoint, LoadPath, displacement_control, mgdcm
-from .stability import Stability, tangent_stability
-from .thermal import ThermalParameters
-from .transient_heat import (REFERENCE_THETA, ThetaStepper, TransientHeatResult, capacity_vector,
-                             integrate_heat, theta_step)
-from .viewer import load_viewer_data, viewer_html, write_viewer
+
+__getattr__, __dir__ = _attach(__name__, {
+    ".bimorph": ("Actuators", "Bimorph"),
+    ".cases": ("Case", "describe_cases", "get_case", "miura_sheet_model", "single_fold_model"),
+    ".dynamics": ("DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator",
+                  "integrate"),
+    ".elements.springs": ("spring_kernel_backend",),
+    ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
+                "PatternError"),
+    ".fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
+              "read_fold", "read_model", "result_to_fold_frames", "write_fold",
+              "write_fold_frames", "write_model"),
+    ".materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
+                   "Material"),
+    ".mass": ("lumped_masses",),
+    ".mesh": ("BarHingeMesh", "build_mesh"),
+    ".model": ("REFERENCE_GRAVITY", "STANDARD_GRAVITY", "ContactParameters", "Model",
+               "Supports", "make_model"),
+    ".modes": ("ModesResult", "natural_modes"),
+    ".newton": ("NewtonOptions",),
+    ".pattern": ("Pattern",),
+    ".power_schedules": ("PiecewiseLinear", "PowerSchedule", "Ramp", "Sine", "SquareWave",
+                         "StepPower"),
+    ".properties": ("BarHingeParameters",),
+    ".results": ("SimulationResult", "StepResult"),
+    ".simulation": ("simulate",),
+    ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
+    ".steps": ("AmbientTemperature", "ArcLengthLoad", "Coupling", "DisplacementControl",
+               "Dynamics", "ElectroThermal", "Gravity", "Heat", "Load", "SelfFold", "Step",
+               "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
+    ".continuation": ("ContinuationResult", "CriticalPoint", "LoadPath",
+                      "displacement_control", "mgdcm"),
+    ".stability": ("Stability", "tangent_stability"),
+    ".thermal": ("ThermalParameters",),
+    ".transient_heat": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
+                        "capacity_vector", "integrate_heat", "theta_step"),
+    ".viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
+})     # example_patterns, a submodule, is imported on first access like any submodule
 
 __all__ = [
     "__version__", "example_patterns",

@@ -11,7 +11,6 @@ admissible pairs, for large ones with a k-d tree, never with a Python loop.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .mesh import BarHingeMesh
 from .model import ContactParameters
@@ -77,6 +76,8 @@ class ContactSearch:
             p, t = self.static
             index = np.arange(len(p))
         else:
+            from scipy.spatial import cKDTree  # large meshes only; slow to import
+
             tree_p, tree_t = cKDTree(xp), cKDTree(centre)
             found = tree_p.sparse_distance_matrix(tree_t, radius.max() + self.d0_max,
                                                   output_type="ndarray")

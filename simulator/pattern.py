@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ._arrays import read_only
 from .errors import PatternError
@@ -404,6 +403,8 @@ def _as_panels(panels, n_vertices) -> tuple:
 
 def _check_geometry(pattern: Pattern) -> None:
     """Unused / duplicate vertices, degenerate, non-planar and self-intersecting panels."""
+    from scipy.spatial import cKDTree          # imported here: scipy.spatial is slow to import
+
     v = pattern.vertices
     size = pattern.size
     if size <= 0:

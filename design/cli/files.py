@@ -10,9 +10,8 @@
 
 from __future__ import annotations
 
+import math
 import pathlib
-
-import numpy as np
 
 from ._common import CLIError
 
@@ -64,14 +63,14 @@ def reader_options(args) -> dict:
     ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um]."""
     out = {}
     if args.unit_scale is not None:
-        if not (np.isfinite(args.unit_scale) and args.unit_scale > 0):
+        if not (math.isfinite(args.unit_scale) and args.unit_scale > 0):
             raise CLIError(f"--unit-scale = {args.unit_scale:g} must be a positive length in "
                            "metres per file unit")
         out["unit_scale"] = args.unit_scale
     for name in ("crease_width", "crease_thickness", "panel_thickness"):
         value = getattr(args, name)
         if value is not None:
-            if not (np.isfinite(value) and value > 0):
+            if not (math.isfinite(value) and value > 0):
                 raise CLIError(f"--{name.replace('_', '-')} = {value:g} um must be > 0 um")
             out[name] = value * 1e-6
     return out
@@ -83,7 +82,7 @@ def _number(name, text, kind):
     except ValueError:
         raise CLIError(f"--set {name} expects {'an integer' if kind is int else 'a number'}, "
                        f"got {text!r}") from None
-    if not np.isfinite(value) or value < 0:
+    if (kind is float and not math.isfinite(value)) or value < 0:
         raise CLIError(f"--set {name} = {text} must be finite and >= 0")
     return value
 
@@ -122,6 +121,8 @@ def _export(args) -> int:
 
 
 def _check(args) -> int:
+    import numpy as np
+
     from simulator import Heat, read_model
 
     model, steps = read_model(args.file, **reader_options(args))

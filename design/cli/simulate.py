@@ -7,10 +7,7 @@ power ramp it stays down until the power passes a threshold, then lifts off and 
 
 from __future__ import annotations
 
-import inspect
 import time
-
-import numpy as np
 
 from simulator import __version__
 
@@ -46,6 +43,7 @@ def heating_table(result):
     Columns ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]`` (crease) and
     ``substrate_contact`` (any contact pair of the folding panel with the substrate active).
     """
+    import numpy as np
     import pandas as pd
 
     from simulator.state import equilibrium_system
@@ -67,6 +65,8 @@ def threshold_power(table) -> tuple:
     On the substrate: the first power at which the panel has left it (no contact). Otherwise
     (no gravity): the first power at which the fold is ``FOLD_RISE_DEG`` above its start.
     """
+    import numpy as np
+
     if table[CONTACT].iloc[0]:
         above, what = ~table[CONTACT].to_numpy(), "the panel leaves the substrate"
     else:
@@ -86,7 +86,7 @@ def _print_demo(case, result, table, threshold, what, wall):
     every = max(1, round((len(table) - 1) / DEMO_ROWS))
     rows = set(range(0, len(table), every)) | {len(table) - 1}
     if threshold is not None:
-        rows.add(int(np.flatnonzero(table[POWER].to_numpy() == threshold)[0]))
+        rows.add(int((table[POWER].to_numpy() == threshold).nonzero()[0][0]))
     print(f"  {'power [mW]':>10}  {'fold angle [deg]':>16}  {'temperature [degC]':>18}"
           f"  {'on substrate':>12}")
     for i in sorted(rows):
@@ -163,6 +163,8 @@ def _convert(name, text, default):
 def case_overrides(pairs, case_name) -> dict:
     """Keyword overrides of a built-in case from ``--set name=value`` pairs (checked against
     the case's parameters and their types)."""
+    import inspect
+
     from simulator.cases import CASES, get_case
 
     fn = CASES.get(case_name.replace("-", "_"))
