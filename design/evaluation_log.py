@@ -272,8 +272,21 @@ class LoggedProblem:
         ``executor.map(fn, items) -> list`` (default: serial) and logged in order."""
         return [ev for ev, _ in self.evaluate_sources(xs, executor)]
 
-    def evaluate_sources(self, xs, executor=None) -> list:
-        """Like :meth:`evaluate_many`, as ``(evaluation, reused: bool)`` pairs."""
+    def compute(self, xs, executor=None) -> list:
+        """Evaluations of ``xs`` by the problem (mapped through ``executor``), neither looked
+        up nor logged; :meth:`evaluate_sources` logs them when given them as ``computed``."""
+        if not xs:
+            return []
+        mapper = map if executor is None else executor.map
+        return list(mapper(_safe_evaluate(self.problem), [self.space.to_vector(x) for x in xs]))
+
+    def evaluate_sources(self, xs, executor=None, computed=None) -> list:
+        """Like :meth:`evaluate_many`, as ``(evaluation, reused: bool)`` pairs.
+
+        ``computed``: ``{design_key: Evaluation}`` from :meth:`compute`, used (and logged as
+        computed) instead of evaluating those designs again.
+        """
+        computed = computed or {}
         vecs = [self.space.to_vector(x) for x in xs]
         out: list = [None] * len(vecs)
         todo: dict = {}
@@ -285,10 +298,10 @@ class LoggedProblem:
             else:
                 todo.setdefault(design_key(self.space, x), []).append(i)
         if todo:
-            items = [vecs[idx[0]] for idx in todo.values()]
-            mapper = map if executor is None else executor.map
-            results = list(mapper(_safe_evaluate(self.problem), items))
-            for idx, ev in zip(todo.values(), results):
+            fresh = iter(self.compute([vecs[idx[0]] for key, idx in todo.items()
+                                       if key not in computed], executor))
+            for key, idx in todo.items():
+                ev = computed[key] if key in computed else next(fresh)
                 self.log.append(ev)
                 self.n_computed += 1
                 out[idx[0]] = (ev, False)
@@ -308,28 +321,52 @@ class EvaluationRun:
     Serves repeated designs from an in-run cache (each design is evaluated once per run),
     enforces the budget of distinct designs (``BudgetExhausted`` before a batch that would
     exceed it), records the history in order, logs progress and calls ``callback(evaluation)``
-    after each new design (after it has been logged).
+    after each new design (after it has been logged). :meth:`prefetch` computes designs ahead,
+    together on the executor, without changing any of this.
     """
 
     def __init__(self, logged: LoggedProblem, budget, callback, executor):
         self.logged, self.space, self.budget = logged, logged.space, budget
         self.callback, self.executor = callback, executor
         self.cache: dict = {}
+        self.prefetched: dict = {}
         self.evaluations: list = []
         self.rows: list = []
+
+    def _keyed(self, xs):
+        xs = [np.clip(self.space.to_vector(x), self.space.lower, self.space.upper) for x in xs]
+        return xs, [design_key(self.space, x) for x in xs]
+
+    def prefetch(self, xs) -> int:
+        """Compute the designs of ``xs`` that the run has neither seen nor logged, together
+        through the executor, and keep them aside; returns how many were computed.
+
+        A prefetched design enters the run (history, budget, log, callback) only when
+        :meth:`evaluate_many` asks for it, so the run is the one it would be without
+        prefetching; one never asked for is dropped. Nothing is computed for fewer than two
+        such designs (nothing to run side by side) or beyond the budget.
+        """
+        xs, keys = self._keyed(xs)
+        new = {k: x for k, x in zip(keys, xs) if k not in self.cache
+               and k not in self.prefetched and self.logged.log.lookup(x) is None}
+        if len(new) < 2 or (self.budget is not None
+                            and len(self.evaluations) + len(new) > self.budget):
+            return 0
+        self.prefetched.update(zip(new, self.logged.compute(list(new.values()), self.executor)))
+        return len(new)
 
     def evaluate(self, x) -> Evaluation:
         return self.evaluate_many([x])[0]
 
     def evaluate_many(self, xs) -> list:
-        xs = [np.clip(self.space.to_vector(x), self.space.lower, self.space.upper) for x in xs]
-        keys = [design_key(self.space, x) for x in xs]
+        xs, keys = self._keyed(xs)
         new = list(dict.fromkeys(k for k in keys if k not in self.cache))
         if self.budget is not None and len(self.evaluations) + len(new) > self.budget:
             raise BudgetExhausted
         if new:
             first = {k: xs[keys.index(k)] for k in new}
-            done = self.logged.evaluate_sources(list(first.values()), self.executor)
+            ahead = {k: self.prefetched.pop(k) for k in new if k in self.prefetched}
+            done = self.logged.evaluate_sources(list(first.values()), self.executor, ahead)
             for k, (ev, reused) in zip(new, done):
                 self.cache[k] = ev
                 self.evaluations.append(ev)

@@ -6,7 +6,10 @@
   is accepted when it is feasible and its objective strictly lower than the current one, and
   the move applies at once. A cycle without a move ends the search (``"converged"``), else
   after ``max_cycles`` (15) cycles (``"max_cycles"``). Candidates lie on the lattice
-  ``x0 + k step``.
+  ``x0 + k step``. With ``parallel_candidates`` both candidates of a coordinate are computed
+  side by side on the executor (:meth:`~design.evaluation_log.EvaluationRun.prefetch`) and
+  enter the run in the serial order: history, evaluations and result are the serial run's; a
+  plus candidate not needed (the minus one was accepted) is dropped.
 * NLopt derivative-free methods in normalised variables ``z in [0, 1]^n``: ``"cobyla"``
   (LN_COBYLA, constraints passed to NLopt), ``"bobyqa"``, ``"neldermead"``, ``"sbplx"``
   (constraints by an exact penalty or NLopt's AUGLAG) and ``"direct"`` (GN_DIRECT_L, global,
@@ -177,10 +180,10 @@ def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidat
                     kk[i] += d
                     if inside(kk, i):
                         cands.append((d, kk))
-                evs = run.evaluate_many([point(c) for _, c in cands]) \
-                    if parallel_candidates and len(cands) > 1 else [None] * len(cands)
-                for (d, kk), ev in zip(cands, evs):
-                    last = ev if ev is not None else run.evaluate(point(kk))
+                if parallel_candidates and len(cands) > 1:
+                    run.prefetch([point(c) for _, c in cands])   # side by side, kept aside
+                for d, kk in cands:
+                    last = run.evaluate(point(kk))
                     if last.feasible and last.objective < current.objective:
                         k, current = kk, last
                         moved.append(f"{name}{'-' if d < 0 else '+'}")
@@ -467,7 +470,8 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
         :class:`StopOptimization` to stop and get the result so far (other exceptions propagate
         after the evaluation has been logged).
     **options
-        cd: ``max_cycles`` (15), ``parallel_candidates`` (False), ``metric``
+        cd: ``max_cycles`` (15), ``parallel_candidates`` (False: compute the minus and plus
+        candidates side by side on ``executor``, same run as without), ``metric``
         ("temperature [degC]", reported per cycle). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
         (1e-6), ``xtol_abs`` (1e-6, normalised), ``ftol_abs`` (0), ``initial_step``
         (normalised; default the cd step), ``constraint_handling`` ("native" for cobyla,

@@ -20,7 +20,11 @@ structure snaps) arc length in the power carries the trial on to its final power
 (power per crease, jump of the most-moving node) is kept with the trial's state. A criterion
 met only after a snap is reported as met, with ``after a snap (...)`` in the message. Load
 control is unchanged where it converges, so trials without a failure give the same numbers as
-plain load control.
+plain load control. The bisect search's growth trials larger than its first step are the
+exception: they run plain load control, since a failure there is retried with a smaller step
+(arc length from a trial that stalled after a large jump in power can land on another branch:
+coordinate-descent design W 300, La 1200, L1 500, L2 550 um lost its grip that way, and paid
+for it with a fifth of the whole descent's Newton iterations).
 """
 
 from __future__ import annotations
@@ -61,16 +65,17 @@ class HeatingTrial:
 
 
 def heating_trial(model, creases, state, dp, increments=1, coupling="staggered",
-                  options=None) -> HeatingTrial:
+                  options=None, follow_snaps=True) -> HeatingTrial:
     """Add ``dp`` [W] to each crease of ``creases`` from ``state``, following snaps.
 
     Load control in ``increments`` increments; where it stalls, arc length in the power
-    (``Heat(..., on_limit_point="continue")``). The snap powers in :attr:`HeatingTrial.snap`
-    are those of ``creases[0]`` [mW per crease] (the stage's heated creases, whatever other
-    creases carry).
+    (``Heat(..., on_limit_point="continue")``), unless ``follow_snaps`` is False (plain load
+    control: the trial fails there). The snap powers in :attr:`HeatingTrial.snap` are those of
+    ``creases[0]`` [mW per crease] (the stage's heated creases, whatever other creases carry).
     """
     res = simulate(model, [Heat({tuple(creases): dp}, increments=increments, coupling=coupling,
-                                on_limit_point="continue")], state=state, options=options)
+                                on_limit_point="continue" if follow_snaps else "stop")],
+                   state=state, options=options)
     step = res.steps[-1] if res.steps else None
     msg = step.message if step is not None else res.message
     p0 = float(state.crease_power[model.mesh.crease_row[creases[0]]])
@@ -98,11 +103,11 @@ class HeatingStage:
         self.simulations = self.increments = 0
         self._snaps = {}                       # id(state) -> (state, snaps on the way to it)
 
-    def heat(self, state, dp, increments=1, coupling="staggered"):
+    def heat(self, state, dp, increments=1, coupling="staggered", follow_snaps=True):
         """Add ``dp`` [W] per heated crease in ``increments`` increments (snaps followed by
-        arc length); returns ``(state, ok, message)``."""
+        arc length unless ``follow_snaps`` is False); returns ``(state, ok, message)``."""
         trial = heating_trial(self.model, self.creases, state, dp, increments, coupling,
-                              self.options)
+                              self.options, follow_snaps)
         self.simulations += 1
         self.increments += trial.increments
         snaps = self.snaps(state) + ((trial.snap,) if trial.snap else ())
@@ -144,15 +149,20 @@ def bisect_search(stage, state, step, tol, cap, max_step, coupling="staggered"):
     """Grow the power step geometrically (``step`` doubling up to ``max_step``) from saved
     states until the criterion holds, then bisect the crossing to ``tol``.
 
-    Every trial restarts from the saved state below the crossing. Returns
+    Every trial restarts from the saved state below the crossing. A growth trial larger than
+    ``step`` that fails is retried with a quarter of the step (at least ``step``); such trials
+    run plain load control (``follow_snaps=False``): a limit point is passed by arc length only
+    from a trial of ``step`` (or in the bisection), whose failure ends the search. Returns
     ``(stage result, state at the smallest power found to meet the criterion)``.
     """
     lo_state, lo, dp = state, 0.0, step
     while True:                                            # grow until the criterion holds
         hi = min(lo + dp, cap)
-        trial, ok, msg = stage.heat(lo_state, hi - lo, coupling=coupling)
+        retry = dp > step                                  # a failure is retried smaller
+        trial, ok, msg = stage.heat(lo_state, hi - lo, coupling=coupling,
+                                    follow_snaps=not retry)
         if not ok:
-            if dp > step:                                  # too big a jump: retry smaller
+            if retry:                                      # too big a jump: retry smaller
                 dp = max(step, dp / 4)
                 continue
             return stage.result("failed", hi, trial, f"simulation failed at {hi * 1e3:.3g} mW: "

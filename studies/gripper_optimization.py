@@ -24,7 +24,8 @@ Method
 * Coordinate descent (``optimize(problem, "cd", max_cycles=15, parallel_candidates=True)``)
   from the paper's start W 200, La 700, L1 1000, L2 1000 um with steps 10 / 50 / 50 / 50 um;
   the minus and plus candidates of a coordinate are evaluated together on a 2-process
-  executor (the accepted move is the same as in the sequential search).
+  executor (the run, its history included, is the sequential search's; a plus candidate
+  computed while its minus one was accepted is dropped).
 * NLopt from the same start, each with its evaluation budget and default options
   (normalised variables, initial step = the CD step, constraints native for COBYLA, by an
   exact penalty otherwise): ``cobyla``, ``bobyqa``, ``neldermead``, ``sbplx`` (60

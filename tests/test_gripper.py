@@ -168,6 +168,18 @@ def test_bad_mode():
         evaluate_gripper(G2, mode="golden")
 
 
+def test_grip_of_a_design_whose_large_growth_trial_fails_is_found_by_smaller_steps():
+    """Coordinate-descent design 60 (W 300, La 1200, L1 500, L2 550 um): the grip trial from
+    1.1 to 1.5 mW per crease stalls under load control near 1.44 mW. Arc length from there
+    jumped to a branch whose arm tips open with more power (grip failed at 7.4 mW); a growth
+    trial larger than the first step is retried smaller instead, and the grip is met at
+    1.10625 mW as before snaps were followed (commit ec2be81)."""
+    res = evaluate_gripper(GripperDesign(W=300e-6, La=1200e-6, L1=500e-6, L2=550e-6))
+    assert res.success and res.message == "both stages met"
+    assert res.assembly.power_per_crease == pytest.approx(10.00625e-3, abs=1e-9)
+    assert res.grip.power_per_crease == pytest.approx(1.10625e-3, abs=1e-9)
+
+
 @pytest.mark.slow
 def test_grip_after_a_snap_is_met_where_load_control_failed():
     """Issue 9 item 5: start design with a residual fold of +45 deg (outside the paper's

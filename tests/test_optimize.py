@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from design.evaluation_log import EvaluationLog, LoggedProblem
+from design.evaluation_log import EvaluationLog, EvaluationRun, LoggedProblem, design_key
 from design.optimize import StopOptimization, optimize
 from design.problem import DesignProblem, Evaluation
 from design.space import DesignSpace, Variable
@@ -151,7 +151,59 @@ def test_cd_parallel_candidates_gives_the_sequential_result():
     cols = ["cycle", "moved", "objective", "last_candidate.temperature [degC]", "x.x [-]",
             "x.y [-]"]
     pd.testing.assert_frame_equal(par.cycles[cols], seq.cycles[cols])
-    assert 2 in ex.sizes and par.n_evaluations >= seq.n_evaluations
+    assert 2 in ex.sizes and par.n_evaluations == seq.n_evaluations
+    hist = [c for c in seq.history.columns if c != "wall_time [s]"]
+    pd.testing.assert_frame_equal(par.history[hist], seq.history[hist])
+
+
+class _Recording(Quad):
+    """Quad that records the designs it computes (serial executor: same process)."""
+
+    def __init__(self):
+        super().__init__(start=(1.5, 0.0))          # x moves down: minus candidates accepted
+        self.computed = []
+
+    def _evaluate(self, v):
+        self.computed.append((v["x"], v["y"]))
+        return super()._evaluate(v)
+
+
+def test_cd_prefetched_candidates_enter_the_run_only_when_asked_for(tmp_path):
+    """Candidates computed side by side but not needed (the minus one was accepted) are
+    neither in the history nor in the log, nor counted against the budget; a budget that
+    stops the serial run stops the parallel one at the same evaluation."""
+    seq = optimize(_Recording(), "cd")
+    prob, ex = _Recording(), CountingExecutor()
+    par = optimize(prob, "cd", executor=ex, parallel_candidates=True, out=tmp_path)
+    assert len(prob.computed) > par.n_evaluations == par.n_computed == seq.n_evaluations
+    assert par.x == seq.x and par.history["objective"].tolist() == \
+        seq.history["objective"].tolist()
+    logged = pd.read_csv(tmp_path / "evaluations.csv")
+    assert len(logged) == par.n_evaluations
+    again = optimize(_Recording(), "cd", executor=ex, parallel_candidates=True, out=tmp_path)
+    assert again.n_reused == again.n_evaluations and again.n_computed == 0
+    for budget in (3, 6):
+        a = optimize(_Recording(), "cd", max_evaluations=budget)
+        b = optimize(_Recording(), "cd", executor=ex, max_evaluations=budget,
+                     parallel_candidates=True)
+        assert (b.status, b.n_evaluations, b.x) == (a.status, a.n_evaluations, a.x)
+        assert b.history["objective"].tolist() == a.history["objective"].tolist()
+
+
+def test_run_prefetch_is_a_cache_hit_with_the_same_result_and_misses_other_designs():
+    run = EvaluationRun(LoggedProblem(Quad()), None, None, CountingExecutor())
+    assert run.prefetch([(0.0, 0.0)]) == 0                          # alone: nothing to pair
+    assert run.prefetch([(0.25, 0.0), (0.5, 0.0)]) == 2
+    assert run.evaluations == [] and run.logged.n_computed == 0
+    key = design_key(run.space, (0.5, 0.0))
+    kept = run.prefetched[key]
+    ev = run.evaluate((0.5, 0.0))                                   # hit: no computation
+    assert ev is kept and key not in run.prefetched and run.executor.sizes == [2]
+    assert ev.objective == Quad().evaluate((0.5, 0.0)).objective and run.logged.n_computed == 1
+    assert run.prefetch([(0.5, 0.0), (0.25, 0.0)]) == 0             # both known already
+    other = run.evaluate((0.75, 0.0))                               # not prefetched: computed
+    assert other.objective == Quad().evaluate((0.75, 0.0)).objective
+    assert run.executor.sizes == [2, 1] and len(run.evaluations) == 2
 
 
 def test_cd_max_evaluations_and_stop_callback():

@@ -39,7 +39,8 @@ class _Fold(HeatingStage):
 
 @pytest.fixture()
 def fake_trials(monkeypatch):
-    def trial(model, creases, state, dp, increments=1, coupling="staggered", options=None):
+    def trial(model, creases, state, dp, increments=1, coupling="staggered", options=None,
+              follow_snaps=True):
         p0 = float(state.crease_power.max())
         new = replace(state, crease_power=state.crease_power + dp)   # a new state object
         snap = "snap at 1.5 mW per crease: displacement jumps 300 um" \
@@ -78,6 +79,51 @@ def test_snaps_belong_to_the_states_they_led_to(fake_trials):
     assert len(stage.snaps(high)) == 1 and stage.snaps(higher) == stage.snaps(high)
     assert stage.snaps(low) == ()
     assert stage.after_snaps("criterion met", low) == "criterion met"
+
+
+class _Calls(_Fold):
+    """Records (dp, follow_snaps) of every trial; trials with follow_snaps=False fail when
+    they would pass the snap at 1.5 mW (plain load control)."""
+
+    def __init__(self, *a):
+        super().__init__(*a)
+        self.calls = []
+
+    def heat(self, state, dp, increments=1, coupling="staggered", follow_snaps=True):
+        self.calls.append((round(dp * 1e3, 6), follow_snaps))
+        p0 = float(state.crease_power.max())
+        if not follow_snaps and p0 < 1.5e-3 <= p0 + dp:
+            return state, False, "increment 1/1: gave up (load control)"
+        return super().heat(state, dp, increments, coupling, follow_snaps)
+
+
+def test_bisect_follows_snaps_only_where_a_failure_is_not_retried_smaller(fake_trials):
+    """Growth trials larger than ``step`` run plain load control (a failure is retried with a
+    smaller step, as before snaps were followed); the ``step`` trial and the bisection follow
+    the snap by arc length."""
+    model, start = fake_trials
+    stage = _Calls(model, BASE_CREASES)
+    (status, power, msg), _ = bisect_search(stage, start, 0.1e-3, 0.01e-3, 40e-3, 0.4e-3)
+    assert status == "met" and 2e-3 <= power < 2.01e-3 and "after a snap" in msg
+    growth = [(0.1, True), (0.2, False), (0.4, False), (0.4, False),   # 0.1, 0.3, 0.7, 1.1 mW
+              (0.4, False), (0.1, True), (0.2, False),                # 1.5 fails; 1.2, 1.4
+              (0.4, False), (0.1, True),                              # 1.8 fails; 1.5 snaps
+              (0.2, False), (0.4, False)]                             # 1.7, 2.1 met
+    assert stage.calls[:len(growth)] == growth
+    assert len(stage.calls) > len(growth)
+    assert all(follow for _, follow in stage.calls[len(growth):])     # bisection: 1.7..2.1
+
+
+def test_heating_trial_without_following_snaps_is_plain_load_control(monkeypatch):
+    """``follow_snaps=False`` runs the Heat step with ``on_limit_point="stop"``."""
+    seen = []
+    monkeypatch.setattr(ps, "simulate", lambda model, steps, **kw: seen.append(steps[0]) or
+                        simulate(model, [], state=kw["state"]))
+    model, _ = gripper_model(GripperDesign())
+    start = simulate(model, []).state
+    for follow in (True, False):
+        ps.heating_trial(model, BASE_CREASES, start, 1e-3, follow_snaps=follow)
+    assert [s.on_limit_point for s in seen] == ["continue", "stop"]
 
 
 @pytest.mark.slow
