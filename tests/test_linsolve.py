@@ -1,0 +1,146 @@
+"""Nested-dissection solves of large tangents (simulator.linsolve): agreement with spsolve,
+one ordering per sparsity pattern, and the fallbacks to SuperLU's own orderings."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from simulator import initial_state, linsolve, newton as newton_module
+from simulator.example_patterns import miura_sheet_pattern
+from simulator.model import Supports, make_model
+from simulator.newton import NewtonOptions, _solve_linear, newton
+from simulator.properties import BarHingeParameters
+from simulator.state import equilibrium_system
+
+pytest.importorskip("pymetis")
+
+
+def _sheet(cells):
+    """A flat Miura sheet clamped on panel 0 in a slightly perturbed state (the benchmark's)."""
+    model = make_model(miura_sheet_pattern(m=cells, n=cells), None, BarHingeParameters())
+    panel0 = model.mesh.panel_nodes(0)
+    model = make_model(model.mesh, Supports.nodes(panel0))
+    u = np.random.default_rng(0).normal(size=(model.mesh.n_nodes, 3)) * 1e-9
+    u[panel0] = 0
+    return model, u, initial_state(model).spring_rest
+
+
+@pytest.fixture(scope="module")
+def sheet():
+    model, u, rest = _sheet(20)                     # 12 825 free DOFs
+    system = equilibrium_system(model)
+    ev = system.evaluate(u, rest)
+    return model, system, u, rest, ev.K, -ev.f_int[system.free]
+
+
+def _minimum_degree(K, r):
+    return spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True}).solve(r)
+
+
+def test_mid_size_sheet_solve_agrees_with_spsolve(sheet):
+    *_, K, r = sheet
+    assert K.shape[0] >= linsolve.ND_LIMIT
+    du = _solve_linear(K, r)
+    ref = spla.spsolve(K.tocsc(), r)
+    assert np.linalg.norm(du - ref) <= 1e-8 * np.linalg.norm(ref)
+    assert np.linalg.norm(K @ du - r) <= 1e-13 * np.linalg.norm(r)
+    nd = linsolve.ordering_for(K)
+    assert np.array_equal(np.sort(nd.perm), np.arange(K.shape[0]))
+    # the reordered matrix is K[perm][:, perm]
+    A = sp.csc_matrix((K.data[nd.data_map], nd.indices, nd.indptr), shape=K.shape)
+    assert abs(A - K[nd.perm][:, nd.perm]).max() == 0
+
+
+def test_nested_dissection_has_less_fill_than_minimum_degree(sheet):
+    *_, K, _ = sheet
+    nd = linsolve.ordering_for(K).factorize(K)
+    mmd = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                    options={"SymmetricMode": True})
+    assert nd.L.nnz + nd.U.nnz < mmd.L.nnz + mmd.U.nnz
+
+
+def test_dofs_of_a_node_form_one_supervariable(sheet):
+    model, system, *_, K, _ = sheet
+    group = linsolve.supervariables(K.indptr, K.indices)
+    node = system.free // 3
+    assert group[-1] + 1 == len(np.unique(node))
+    assert np.array_equal(np.flatnonzero(np.diff(group)), np.flatnonzero(np.diff(node)))
+
+
+def test_ordering_is_computed_once_per_pattern(monkeypatch):
+    model, u, rest = _sheet(18)
+    system = equilibrium_system(model)
+    assert system.n_free >= linsolve.ND_LIMIT
+    calls = []
+    original = linsolve.NestedDissection.of.__func__
+
+    def counting(cls, indptr, indices):
+        calls.append(len(indptr))
+        return original(cls, indptr, indices)
+
+    monkeypatch.setattr(linsolve.NestedDissection, "of", classmethod(counting))
+    monkeypatch.setattr(linsolve, "_cache", [])
+    f_ext = np.zeros(model.mesh.n_dof)
+    res = newton(system, u, f_ext, rest, NewtonOptions(max_iter=3))
+    assert len(res.correction_norms) >= 2             # several solves ...
+    assert len(calls) == 1                            # ... one ordering
+    # a matrix with equal (not identical) index arrays finds it too
+    K = system.evaluate(u, rest).K
+    copy = sp.csr_matrix((K.data, K.indices.copy(), K.indptr.copy()), shape=K.shape)
+    assert linsolve.ordering_for(copy) is linsolve.ordering_for(K)
+    assert len(calls) == 1
+
+
+def test_small_systems_keep_the_minimum_degree_path(monkeypatch):
+    def fail(K):
+        raise AssertionError("no nested dissection below ND_LIMIT")
+
+    monkeypatch.setattr(newton_module, "ordering_for", fail)
+    model, u, rest = _sheet(5)
+    system = equilibrium_system(model)
+    ev = system.evaluate(u, rest)
+    r = -ev.f_int[system.free]
+    assert newton_module.DENSE_LIMIT < system.n_free < linsolve.ND_LIMIT
+    assert np.array_equal(_solve_linear(ev.K, r), _minimum_degree(ev.K, r))   # bitwise
+
+
+def test_without_an_ordering_the_minimum_degree_path_is_taken(sheet, monkeypatch):
+    *_, K, r = sheet
+    monkeypatch.setattr(linsolve, "_cache", [])
+    monkeypatch.setattr(linsolve, "nested_dissection_ordering", lambda indptr, indices: None)
+    assert linsolve.ordering_for(K) is None
+    assert np.array_equal(_solve_linear(K, r), _minimum_degree(K, r))
+
+
+def test_a_zero_pivot_falls_back_to_minimum_degree(sheet, monkeypatch):
+    *_, K, r = sheet
+
+    def zero_pivot(self, K, r):
+        raise RuntimeError("Factor is exactly singular")
+
+    monkeypatch.setattr(linsolve.NestedDissection, "solve", zero_pivot)
+    assert np.array_equal(_solve_linear(K, r), _minimum_degree(K, r))
+
+
+def test_an_inaccurate_symmetric_solve_falls_back_to_partial_pivoting(monkeypatch):
+    # 2x2 blocks [[e, 1], [1, e]] chained weakly: diagonal pivots of 1e-14 ruin the symmetric
+    # modes' solutions, partial pivoting is exact
+    n = 2 * 6000
+    e = 1e-14
+    main = np.full(n, e)
+    off = np.zeros(n - 1)
+    off[::2] = 1.0
+    off[1::2] = 1e-3
+    K = sp.diags([off, main, off], [-1, 0, 1], format="csr")
+    r = np.random.default_rng(1).normal(size=n)
+    monkeypatch.setattr(newton_module, "ND_LIMIT", 100)
+    monkeypatch.setattr(linsolve, "_cache", [])
+    nd = linsolve.ordering_for(K)
+    assert nd is not None
+    with np.errstate(all="ignore"):
+        bad = nd.solve(K, r)
+    assert not np.linalg.norm(K @ bad - r) <= 1e-6 * np.linalg.norm(r)
+    du = _solve_linear(K, r)
+    assert np.linalg.norm(K @ du - r) <= 1e-10 * np.linalg.norm(r)
