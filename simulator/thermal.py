@@ -417,10 +417,8 @@ class ThermalModel:
         pattern (triangle matrices, then diagonal terms); -1 for a fixed node's entries."""
         p = self._free_pattern
         rows = np.repeat(np.arange(p.n_free), np.diff(p.indptr))
-        pos = np.full(len(p.keep), -1, dtype=np.int64)
-        pos[p.keep] = (rows * p.n_free + p.indices)[p.scatter]
-        keep = pos >= 0
-        return pos[keep], keep
+        keep = p.positions < p.nnz
+        return (rows * p.n_free + p.indices)[p.positions[keep]], keep
 
     def _factorize(self, K, g_free):
         """Factorise the free-node system (conduction plus condensed chains); returns its
