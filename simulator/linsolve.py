@@ -31,6 +31,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 __all__ = ["ND_LIMIT", "NestedDissection", "ordering_for", "nested_dissection_ordering",
+           "nested_dissection_solve", "nested_dissection_factor", "PermutedLU",
            "supervariables"]
 
 logger = logging.getLogger(__name__)
@@ -136,16 +137,32 @@ class NestedDissection:
         reordered.sort_indices()
         return cls(perm, reordered.indptr, reordered.indices, reordered.data - 1)
 
-    def factorize(self, K: sp.csr_matrix):
-        """SuperLU factors of the reordered ``K`` (same pattern) in symmetric mode: no
+    def factorize(self, K) -> PermutedLU:
+        """SuperLU factors of the reordered ``K`` (of this pattern) in symmetric mode: no
         column reordering, diagonal pivots (raises RuntimeError on an exactly zero pivot)."""
+        if K.format != "csr":
+            K = K.tocsr()
+        if K.shape != (len(self.perm),) * 2 or K.nnz != len(self.data_map):
+            raise ValueError(f"matrix {K.shape} with {K.nnz} entries is not of this pattern")
         A = sp.csc_matrix((K.data[self.data_map], self.indices, self.indptr), shape=K.shape)
-        return spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                         options={"SymmetricMode": True})
+        return PermutedLU(spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                                    options={"SymmetricMode": True}), self.perm)
 
-    def solve(self, K: sp.csr_matrix, r: np.ndarray) -> np.ndarray:
+    def solve(self, K, r: np.ndarray) -> np.ndarray:
         """``K^-1 r`` through :meth:`factorize` (r (n,) or (n, k))."""
-        y = self.factorize(K).solve(np.asarray(r)[self.perm])
+        return self.factorize(K).solve(r)
+
+
+@dataclass(frozen=True, eq=False)
+class PermutedLU:
+    """SuperLU factors ``lu`` of ``K[perm][:, perm]``, solving with ``K`` itself."""
+
+    lu: spla.SuperLU
+    perm: np.ndarray
+
+    def solve(self, r: np.ndarray) -> np.ndarray:
+        """``K^-1 r`` for r (n,) or (n, k)."""
+        y = self.lu.solve(np.asarray(r)[self.perm])
         x = np.empty_like(y)
         x[self.perm] = y
         return x
@@ -182,3 +199,37 @@ def ordering_for(K) -> NestedDissection | None:
         _cache.insert(0, (indptr, indices, nd))
         del _cache[_CACHE_SIZE:]
     return nd
+
+
+def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
+    """``K^-1 r`` for a symmetric sparse ``K`` in its cached nested-dissection order, or None
+    when there is no ordering, a pivot is exactly zero or ``|K x - r| > rtol |r|`` (the caller
+    then takes another path). ``r`` is (n,) or (n, k)."""
+    nd = ordering_for(K)
+    if nd is None:
+        return None
+    try:
+        x = nd.solve(K, r)
+    except RuntimeError:
+        logger.debug("nested-dissection factorisation hit a zero pivot")
+        return None
+    if not np.linalg.norm(K @ x - r) <= rtol * np.linalg.norm(r):
+        logger.debug("nested-dissection solve inaccurate (indefinite matrix?)")
+        return None
+    return x
+
+
+def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:
+    """Factors of a symmetric sparse ``K`` in its cached nested-dissection order for repeated
+    solves, or None when there is no ordering, a pivot is exactly zero or the solve of a
+    vector of ones leaves a residual above ``rtol`` of it."""
+    nd = ordering_for(K)
+    if nd is None:
+        return None
+    try:
+        lu = nd.factorize(K)
+    except RuntimeError:
+        logger.debug("nested-dissection factorisation hit a zero pivot")
+        return None
+    b = np.ones(K.shape[0])
+    return lu if np.linalg.norm(K @ lu.solve(b) - b) <= rtol * np.linalg.norm(b) else None

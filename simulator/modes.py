@@ -33,6 +33,7 @@ import scipy.sparse.linalg as spla
 
 from ._version import __version__
 from .errors import ParameterError
+from .linsolve import ND_LIMIT, nested_dissection_factor
 from .mass import check_masses, lumped_masses
 from .model import Model
 from .state import SimulationState, equilibrium_system, initial_state
@@ -209,7 +210,11 @@ def _shift_invert(K, mf, count, scale):
 
 
 def _factorise(A):
-    """Sparse LU of a symmetric matrix: symmetric mode first, partial pivoting if inaccurate."""
+    """Sparse LU of a symmetric matrix: symmetric mode first (in nested-dissection order from
+    :data:`~simulator.linsolve.ND_LIMIT` unknowns on), partial pivoting if inaccurate."""
+    lu = nested_dissection_factor(A) if A.shape[0] >= ND_LIMIT else None
+    if lu is not None:
+        return lu
     lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                    options={"SymmetricMode": True})
     b = np.ones(A.shape[0])

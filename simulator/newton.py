@@ -21,7 +21,7 @@ import scipy.sparse.linalg as spla
 
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, ordering_for
+from .linsolve import ND_LIMIT, nested_dissection_solve
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
@@ -177,7 +177,7 @@ def _solve_linear(K, r):
                 dense = K if isinstance(K, np.ndarray) else K.toarray()
                 du = scipy.linalg.solve(dense, r, check_finite=False)
             else:
-                du = _solve_nested_dissection(K, r) if K.shape[0] >= ND_LIMIT else None
+                du = nested_dissection_solve(K, r) if K.shape[0] >= ND_LIMIT else None
                 if du is None:
                     Kc = K.tocsc()
                     du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -191,20 +191,6 @@ def _solve_linear(K, r):
 
 def _accurate(K, du, r) -> bool:
     return bool(np.linalg.norm(K @ du - r) <= 1e-6 * np.linalg.norm(r))
-
-
-def _solve_nested_dissection(K, r):
-    """``K^-1 r`` in the cached nested-dissection order, or None when there is no ordering,
-    a zero pivot or an inaccurate solution (the caller then takes the minimum-degree path)."""
-    nd = ordering_for(K)
-    if nd is None:
-        return None
-    try:
-        du = nd.solve(K, r)
-    except RuntimeError:
-        logger.debug("nested-dissection factorisation hit a zero pivot; minimum degree instead")
-        return None
-    return du if _accurate(K, du, r) else None
 
 
 def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,

@@ -35,6 +35,7 @@ from . import _thermal_jit
 from .assembly import StiffnessPattern
 from .elements.contact import point_triangle_distance
 from .errors import ParameterError, PatternError
+from .linsolve import ND_LIMIT, nested_dissection_factor
 from .materials import AIR
 from .mesh import BarHingeMesh
 
@@ -425,7 +426,8 @@ class ThermalModel:
         solver ``q_free -> rise_free``.
 
         Up to :data:`DENSE_NODES` free nodes: dense Cholesky (the matrix is symmetric positive
-        definite; SuperLU if Cholesky fails); above: SuperLU.
+        definite; SuperLU if Cholesky fails); above: SuperLU, in nested-dissection order from
+        :data:`~simulator.linsolve.ND_LIMIT` free nodes on (3-4x faster at 1e5 nodes).
         """
         n_free = len(g_free)
         if n_free <= DENSE_NODES:
@@ -440,4 +442,6 @@ class ThermalModel:
                         raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
                     return sol
                 return cholesky_solve
-        return splu(self._free_pattern.matrix([K, g_free]).tocsc()).solve
+        A = self._free_pattern.matrix([K, g_free])
+        lu = nested_dissection_factor(A) if n_free >= ND_LIMIT else None
+        return (lu if lu is not None else splu(A.tocsc())).solve

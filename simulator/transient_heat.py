@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from .errors import ParameterError
+from .linsolve import ND_LIMIT, nested_dissection_factor
 from .model import Model
 from .power_schedules import crease_power_function
 from .state import thermal_model
@@ -212,7 +213,10 @@ class ThetaStepper:
                                  f"C > 0 J/K; got K {K.shape}, C {C.shape}.")
         self.K, self.C = sp.csc_matrix(K), C
         mass = sp.diags(C / self.dt)
-        self._lu = splu((mass + self.theta * self.K).tocsc()) if len(C) else None
+        A = (mass + self.theta * self.K).tocsc()
+        # large sheets: nested-dissection order (less fill, faster solves), else COLAMD
+        lu = nested_dissection_factor(A) if len(C) >= ND_LIMIT else None
+        self._lu = lu if lu is not None else splu(A) if len(C) else None
         self._rhs = (mass - (1 - self.theta) * self.K).tocsr()
 
     def step(self, T, q_old, q_new) -> np.ndarray:

@@ -6,7 +6,9 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import initial_state, linsolve, newton as newton_module
+from simulator import initial_state, linsolve, newton as newton_module, thermal
+from simulator.cases import miura_sheet_model
+from simulator.state import thermal_model
 from simulator.example_patterns import miura_sheet_pattern
 from simulator.model import Supports, make_model
 from simulator.newton import NewtonOptions, _solve_linear, newton
@@ -55,7 +57,7 @@ def test_mid_size_sheet_solve_agrees_with_spsolve(sheet):
 
 def test_nested_dissection_has_less_fill_than_minimum_degree(sheet):
     *_, K, _ = sheet
-    nd = linsolve.ordering_for(K).factorize(K)
+    nd = linsolve.ordering_for(K).factorize(K).lu
     mmd = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                     options={"SymmetricMode": True})
     assert nd.L.nnz + nd.U.nnz < mmd.L.nnz + mmd.U.nnz
@@ -97,7 +99,7 @@ def test_small_systems_keep_the_minimum_degree_path(monkeypatch):
     def fail(K):
         raise AssertionError("no nested dissection below ND_LIMIT")
 
-    monkeypatch.setattr(newton_module, "ordering_for", fail)
+    monkeypatch.setattr(linsolve, "ordering_for", fail)
     model, u, rest = _sheet(5)
     system = equilibrium_system(model)
     ev = system.evaluate(u, rest)
@@ -144,3 +146,36 @@ def test_an_inaccurate_symmetric_solve_falls_back_to_partial_pivoting(monkeypatc
     assert not np.linalg.norm(K @ bad - r) <= 1e-6 * np.linalg.norm(r)
     du = _solve_linear(K, r)
     assert np.linalg.norm(K @ du - r) <= 1e-10 * np.linalg.norm(r)
+
+
+def test_thermal_solve_in_nested_dissection_order_agrees_with_colamd(monkeypatch):
+    model = miura_sheet_model(cells_x=6, cells_y=5)
+    tm = thermal_model(model)
+    q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
+    q2 = np.stack([q, np.roll(q, 7)], axis=1)
+    ref = tm.solve(model.mesh.nodes, q2)                 # below ND_LIMIT: COLAMD
+    used = []
+    original = linsolve.ordering_for
+
+    def spy(K):
+        used.append(K.shape)
+        return original(K)
+
+    monkeypatch.setattr(thermal, "ND_LIMIT", 100)
+    monkeypatch.setattr(linsolve, "ordering_for", spy)
+    T = tm.solve(model.mesh.nodes, q2)
+    assert used and used[0][0] >= 100
+    assert np.allclose(T, ref, rtol=1e-12, atol=0)
+
+
+def test_repeated_solves_with_nested_dissection_factors(sheet):
+    *_, K, r = sheet
+    lu = linsolve.nested_dissection_factor(K.tocsc())        # any sparse format
+    R = np.stack([r, np.roll(r, 5)], axis=1)
+    X = lu.solve(R)
+    assert np.linalg.norm(K @ X[:, 0] - r) <= 1e-13 * np.linalg.norm(r)
+    for j in range(2):
+        ref = spla.spsolve(K.tocsc(), R[:, j])
+        assert np.linalg.norm(X[:, j] - ref) <= 1e-8 * np.linalg.norm(ref)
+    with pytest.raises(ValueError, match="not of this pattern"):
+        linsolve.ordering_for(K).factorize(K[:-1, :-1])
