@@ -8,10 +8,23 @@ with a CSR pattern computed once per topology (:class:`StiffnessPattern`).
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix"]
+from .elements._springs_jit import default_backend
+
+__all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix",
+           "scatter_numpy", "JIT_ENTRIES"]
+
+logger = logging.getLogger(__name__)
+
+#: Patterns with at least this many Hessian entries sum them with a compiled loop (numba): no
+#: concatenated copy of the values, ~0.4 s less per evaluation of a 1e5-node sheet.
+JIT_ENTRIES = 2_000_000
+
+_loop = None                       # the compiled loop; False: not available
 
 
 def element_dofs(conn: np.ndarray) -> np.ndarray:
@@ -68,14 +81,52 @@ class StiffnessPattern:
         (the others are zero), e.g. the active pairs of a contact family.
         """
         if not subsets:
-            p = self.positions
+            scatter = _scatter_compiled() if len(self.positions) >= JIT_ENTRIES else None
+            data = (scatter_numpy(self.positions, values, self.nnz) if scatter is None
+                    else scatter(self.positions, values, self.nnz))
         else:
             pos = [self._family_pos[i][subsets[i]] if i in subsets else self._family_pos[i]
                    for i in range(len(values))]
-            p = np.concatenate([q.ravel() for q in pos])
-        v = np.concatenate([np.ravel(x) for x in values])
-        data = np.bincount(p, v, minlength=self.nnz + 1)[:self.nnz]
+            data = scatter_numpy(np.concatenate([q.ravel() for q in pos]), values, self.nnz)
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_free, self.n_free))
+
+
+def scatter_numpy(positions: np.ndarray, values: list, nnz: int) -> np.ndarray:
+    """CSR data (nnz,): the sum of every value at its position (``nnz``: dropped), in the order
+    given. The reference of the compiled loop."""
+    v = np.concatenate([np.ravel(x) for x in values])
+    return np.bincount(positions, v, minlength=nnz + 1)[:nnz]
+
+
+def _scatter_loop(data, positions, values):
+    for i in range(values.size):
+        data[positions[i]] += values[i]
+
+
+def _scatter_compiled():
+    """The compiled :func:`scatter_numpy` (the same sums in the same order, without the
+    concatenated copy of the values), or None without numba or with ``ETORIGAMI_JIT=0``."""
+    global _loop
+    if _loop is None:
+        _loop = False
+        if default_backend() == "numba":
+            try:
+                from numba import njit
+                _loop = njit("void(float64[::1], int64[::1], float64[::1])", cache=True)(
+                    _scatter_loop)
+            except Exception as exc:  # noqa: BLE001 - numba is an accelerator only
+                logger.warning("numba could not compile the scatter loop (%s); using numpy", exc)
+    if not _loop:
+        return None
+
+    def scatter(positions, values, nnz):
+        data, at = np.zeros(nnz + 1), 0
+        for x in values:
+            x = np.ascontiguousarray(np.ravel(x), dtype=float)
+            _loop(data, positions[at:at + x.size], x)
+            at += x.size
+        return data[:nnz]
+    return scatter
 
 
 def _reference_positions(dofs, free_index, diagonal, n_free):

@@ -88,3 +88,19 @@ def test_other_dof_layouts_take_the_reference_path():
     shuffled = np.array([1, 0, 2, 3, 4, 5])
     assert _block_positions([dofs], shuffled, None, 6) is None
     assert StiffnessPattern([dofs], shuffled).nnz == 36
+
+
+def test_compiled_scatter_equals_the_numpy_reference_bit_for_bit(monkeypatch):
+    system = CASES["partial and elastic supports"]()
+    fams = _families(system)
+    rng = np.random.default_rng(5)
+    values = [rng.normal(size=(len(d), d.shape[1], d.shape[1])) for d in fams]
+    values.append(rng.normal(size=len(system.elastic_dofs)))
+    pattern = system.pattern
+    monkeypatch.setattr(assembly, "JIT_ENTRIES", 0)
+    scatter = assembly._scatter_compiled()
+    if scatter is None:
+        pytest.skip("numba not available")
+    ref = assembly.scatter_numpy(pattern.positions, values, pattern.nnz)
+    assert np.array_equal(scatter(pattern.positions, values, pattern.nnz), ref)
+    assert np.array_equal(pattern.matrix(values).data, ref)
