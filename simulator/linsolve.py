@@ -191,9 +191,14 @@ def ordering_for(K) -> NestedDissection | None:
                     and np.array_equal(ip, indptr) and np.array_equal(ind, indices)):
                 _cache.insert(0, _cache.pop(i))
                 return nd
-    with warnings.catch_warnings():          # an ordering only changes the speed
-        warnings.simplefilter("ignore")
-        nd = NestedDissection.of(indptr, indices)
+    try:
+        with warnings.catch_warnings():      # an ordering only changes the speed
+            warnings.simplefilter("ignore")
+            nd = NestedDissection.of(indptr, indices)
+    except Exception as exc:  # noqa: BLE001 - an accelerator: SuperLU's own ordering instead
+        logger.warning("no nested-dissection ordering (%s: %s); using SuperLU's",
+                       type(exc).__name__, exc)
+        nd = None
     logger.debug("nested-dissection ordering of a %d x %d pattern", *K.shape)
     with _lock:
         _cache.insert(0, (indptr, indices, nd))

@@ -116,6 +116,21 @@ def test_without_an_ordering_the_minimum_degree_path_is_taken(sheet, monkeypatch
     assert np.array_equal(_solve_linear(K, r), _minimum_degree(K, r))
 
 
+def test_a_failing_ordering_falls_back_to_minimum_degree(sheet, monkeypatch):
+    *_, K, r = sheet
+
+    calls = []
+
+    def broken(cls, indptr, indices):
+        calls.append(1)
+        raise RuntimeError("METIS error")
+
+    monkeypatch.setattr(linsolve, "_cache", [])
+    monkeypatch.setattr(linsolve.NestedDissection, "of", classmethod(broken))
+    assert np.array_equal(_solve_linear(K, r), _minimum_degree(K, r))
+    assert linsolve.ordering_for(K) is None and len(calls) == 1     # not tried again
+
+
 def test_a_zero_pivot_falls_back_to_minimum_degree(sheet, monkeypatch):
     *_, K, r = sheet
 
