@@ -41,7 +41,8 @@ import scipy.linalg
 import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
-from .newton import DENSE_LIMIT, NewtonOptions
+from .linear_solve import DENSE_LIMIT
+from .newton import NewtonOptions
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",

@@ -12,22 +12,17 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
+from .linear_solve import DENSE_LIMIT, solve_linear as _solve_linear
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
 logger = logging.getLogger(__name__)
-
-#: Below this many free DOFs the tangent system is solved densely (faster for tiny meshes).
-DENSE_LIMIT = 150
 
 
 @dataclass(frozen=True)
@@ -158,31 +153,6 @@ class PathResult:
     evaluation: Evaluation | None = None
 
 
-def _solve_linear(K, r):
-    """Solve K du = r; returns None if K is singular or the result is not finite.
-
-    ``K`` is sparse or a dense array. Small systems are solved densely. Large ones use SuperLU in symmetric mode (symmetric
-    minimum-degree ordering, diagonal pivots: ~3x less fill than the default COLAMD on
-    bar-and-hinge meshes); if that solution is inaccurate (the tangent can be indefinite),
-    it falls back to partial pivoting with COLAMD.
-    """
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
-                dense = K if isinstance(K, np.ndarray) else K.toarray()
-                du = scipy.linalg.solve(dense, r, check_finite=False)
-            else:
-                Kc = K.tocsc()
-                du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                               options={"SymmetricMode": True}).solve(r)
-                if not (np.linalg.norm(K @ du - r) <= 1e-6 * np.linalg.norm(r)):
-                    du = spla.splu(Kc).solve(r)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
-            return None
-    return du if np.all(np.isfinite(du)) else None
-
-
 def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,
            options: NewtonOptions = NewtonOptions()) -> NewtonResult:
     """Solve ``f_int(u) = f_ext`` on the free DOFs from the start ``u0`` (n_nodes, 3).
@@ -193,13 +163,15 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
         return _reference_newton(system, u0, f_ext, spring_rest, options)
     free = system.free
     u = u0.copy().ravel()
-    size = float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    f_free = f_ext[free]
+    solve = getattr(system, "solve", None) or (lambda ev, r: _solve_linear(_tangent(ev), r))
     res_norms, cor_norms = [], []
     ref, best = None, (math.inf, None, None)
     for it in range(options.max_iter + 1):
         ev = system.evaluate(u.reshape(-1, 3), spring_rest)
-        r = (f_ext - ev.f_int)[free]
-        rn = float(np.linalg.norm(r))
+        r = f_free - ev.f_int[free]
+        rn = math.sqrt(r.dot(r))                   # = np.linalg.norm(r), less overhead
         res_norms.append(rn)
         if rn < best[0]:
             best = (rn, u.copy(), ev)
@@ -211,15 +183,15 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
                 return _newton_result(u, True, it, res_norms, cor_norms, "converged", ev)
         if it == options.max_iter:
             break
-        du = _solve_linear(ev.K, r)
+        du = solve(ev, r)
         if du is None:
             return _newton_result(u0, False, it, res_norms, cor_norms,
                                   "tangent stiffness is singular (mechanism or unsupported body?)")
-        if system.max_step is not None:
-            step = np.max(np.abs(du))
-            if step > system.max_step:
-                du *= system.max_step / step
-        dn = float(np.linalg.norm(du))
+        step = max(du.max(), -du.min())            # = max |du|
+        if system.max_step is not None and step > system.max_step:
+            du *= system.max_step / step
+            step = max(du.max(), -du.min())
+        dn = math.sqrt(du.dot(du))
         cor_norms.append(dn)
         u[free] += du
         if options.criterion == "displacement":
@@ -227,11 +199,11 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
             if dn <= max(options.atol, options.rtol * ref):
                 ev = system.evaluate(u.reshape(-1, 3), spring_rest)
                 return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
-        if np.max(np.abs(du)) <= 1e-13 * size:
+        if step <= 1e-13 * size:
             ev = system.evaluate(u.reshape(-1, 3), spring_rest)
             return _newton_result(u, True, it + 1, res_norms, cor_norms,
                                   "converged (correction at round-off level)", ev)
-    stall = options.stall_rtol * float(np.linalg.norm(f_ext[free]))
+    stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
     if best[0] <= stall:
         return _newton_result(best[1], True, options.max_iter, res_norms, cor_norms,
                               f"converged (residual stalled at {best[0]:.3g} N, at most "
@@ -249,7 +221,7 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
     while updates < options.max_iter - 1 and measure > options.atol:
         ev = system.evaluate(u.reshape(-1, 3), spring_rest)
         r = (f_ext - ev.f_int)[free]
-        du = _solve_linear(ev.K, r)
+        du = _solve_linear(_tangent(ev), r)
         if du is None:
             return _newton_result(u0, False, updates, res_norms, cor_norms,
                                   "tangent stiffness is singular (mechanism or unsupported body?)")
@@ -269,6 +241,12 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
                    f"({options.criterion} {measure:.3g} > {options.atol:.3g})")
         logger.warning(message)
     return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
+
+
+def _tangent(ev):
+    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
+    ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
+    return ev.tangent if isinstance(ev, Evaluation) else ev.K
 
 
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):
