@@ -67,15 +67,15 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
     n = order.shape[0]
     w, y, x, sgn = work[:n], work[n:2 * n], work[2 * n:3 * n], work[3 * n:4 * n]
     for j in range(n):
-        sgn[j] = 0.0                                    # column sums of |K| (in the order)
-    for j in range(n):                                  # factor, column by column
-        oj = order[j]
-        for p in range(Lp[j], Lp[j + 1]):
+        sgn[j] = 0.0                                    # column sums of |K| (in the order,
+    for j in range(n):                                  # from the lower triangle: K symmetric
+        oj = order[j]                                   # and zero outside the pattern)
+        for p in range(Lp[j], Lp[j + 1]):               # factor, column by column
             i = Li[p]
             w[i] = K[order[i], oj]
             sgn[j] += abs(w[i])
-            if i > j:                                   # K is zero outside the pattern
-                sgn[i] += abs(K[oj, order[i]])
+            if i > j:
+                sgn[i] += abs(w[i])
         for q in range(rp[j], rp[j + 1]):
             p0 = rpos[q]
             ljk = Lx[p0]

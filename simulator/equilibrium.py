@@ -167,19 +167,36 @@ class EquilibriumSystem:
                  c(self.elastic_k)) + pairs)
 
     def _evaluate_fused(self, u, spring_rest, hessian):
+        return self._fused_evaluator(spring_rest)(u, hessian)
+
+    def _fused_evaluator(self, spring_rest):
+        """u -> Evaluation by the fused kernel for fixed rest angles (arguments prepared once);
+        the numpy path if compilation failed (logged)."""
         kernel = _fused_jit.fused_kernel()
-        if kernel is None:                   # compilation failed (logged): numpy from now on
-            return self._evaluate_numpy(u, spring_rest, hessian)
-        u = np.ascontiguousarray(u, dtype=float)
+        if kernel is None:
+            return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
         nodes, first, rest = self._fused
-        f, e = np.empty(self.n_dof), np.empty(6)
-        n = self.n_free if hessian else 0
-        K = np.empty((n, n))
-        active = np.empty(len(rest[4]), np.int64)
-        n_contacts = kernel(nodes + u, u, *first, np.ascontiguousarray(spring_rest, dtype=float),
-                            *rest, hessian, f, K, e, active)
-        return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
-                          n_contacts, self.pattern, active[:n_contacts])
+        spring_rest = np.ascontiguousarray(spring_rest, dtype=float)
+        n_dof, n_free, n_pairs, pattern = self.n_dof, self.n_free, len(rest[4]), self.pattern
+
+        def evaluate(u, hessian=True):
+            u = np.ascontiguousarray(u, dtype=float)
+            f, e = np.empty(n_dof), np.empty(6)
+            n = n_free if hessian else 0
+            K = np.empty((n, n))
+            active = np.empty(n_pairs, np.int64)
+            n_contacts = kernel(nodes + u, u, *first, spring_rest, *rest, hessian, f, K, e,
+                                active)
+            return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
+                              n_contacts, pattern, active[:n_contacts])
+        return evaluate
+
+    def evaluator(self, spring_rest: np.ndarray):
+        """``evaluate(u, hessian=True)`` with the rest angles fixed: :meth:`evaluate` with less
+        overhead per call on the fused path (for Newton's loop)."""
+        if self.uses_fused:
+            return self._fused_evaluator(spring_rest)
+        return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
 
     def solve(self, ev: Evaluation, r: np.ndarray):
         """Newton correction: du (n_free,) with ``ev.K du = r`` [m], or None if the tangent is

@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -97,6 +98,10 @@ class NewtonOptions:
                                      "(max_iter >= 1).")
 
     def to_dict(self) -> dict:
+        return dict(self._as_dict)           # a copy: asdict once (every simulation records it)
+
+    @cached_property
+    def _as_dict(self) -> dict:
         return asdict(self)
 
 
@@ -165,11 +170,11 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     u = u0.copy().ravel()
     size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
     f_free = f_ext[free]
-    solve = getattr(system, "solve", None) or (lambda ev, r: _solve_linear(_tangent(ev), r))
+    evaluate, solve = _operations(system, spring_rest)
     res_norms, cor_norms = [], []
     ref, best = None, (math.inf, None, None)
     for it in range(options.max_iter + 1):
-        ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+        ev = evaluate(u.reshape(-1, 3))
         r = f_free - ev.f_int[free]
         rn = math.sqrt(r.dot(r))                   # = np.linalg.norm(r), less overhead
         res_norms.append(rn)
@@ -197,10 +202,10 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
         if options.criterion == "displacement":
             ref = dn if ref is None else ref
             if dn <= max(options.atol, options.rtol * ref):
-                ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+                ev = evaluate(u.reshape(-1, 3))
                 return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
         if step <= 1e-13 * size:
-            ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+            ev = evaluate(u.reshape(-1, 3))
             return _newton_result(u, True, it + 1, res_norms, cor_norms,
                                   "converged (correction at round-off level)", ev)
     stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
@@ -241,6 +246,16 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
                    f"({options.criterion} {measure:.3g} > {options.atol:.3g})")
         logger.warning(message)
     return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
+
+
+def _operations(system, spring_rest):
+    """``evaluate(u)`` and ``solve(ev, r)`` of a system: its own (EquilibriumSystem: the fused
+    path's prepared evaluator, the sparse solve) or the generic ones for any object with the
+    ``evaluate`` interface."""
+    evaluator, solve = getattr(system, "evaluator", None), getattr(system, "solve", None)
+    evaluate = evaluator(spring_rest) if evaluator is not None else \
+        (lambda u: system.evaluate(u, spring_rest))
+    return evaluate, solve or (lambda ev, r: _solve_linear(_tangent(ev), r))
 
 
 def _tangent(ev):

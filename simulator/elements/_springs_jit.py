@@ -7,9 +7,11 @@ few microseconds each; this loop-based version does one call (about 10 us instea
 the source: numba's compile time grows with them, not with the loop trip counts), and it is
 checked against the numpy kernel by the tests.
 
-Compiling costs about 2.9 s of CPU once per install (0.5 s importing numba, 2.4 s compiling;
-the previous array-style kernel took 5.4-6.7 s); loading it from numba's cache (next to this
-file or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. A run of one of the paper's cases
+Compiling costs about 2 s of CPU once per install (0.5 s importing numba, 0.4 s numba's own
+start-up, 1.2 s compiling; 1.6 s with the 2-D work array and nine Hessian blocks written out,
+5.4-6.7 s for the earlier array-style kernel); loading it from numba's cache (next to this file
+or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. On small models the fused kernel of
+:mod:`._fused_jit` calls the per-spring function :func:`_element` instead of this kernel. A run of one of the paper's cases
 calls the kernel 1,200-2,500 times and one gripper evaluation 870-1,650 times, too few to win
 that back; an optimisation does (15 coordinate-descent evaluations: 12.7 s of CPU compiled,
 compilation included, against 15.1 s on numpy).
