@@ -16,11 +16,14 @@ numba is imported, and the function compiled (one signature, cached), on first u
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 
-__all__ = ["cholesky_solve", "SIGNATURE"]
+__all__ = ["cholesky_solve", "SIGNATURE", "broken"]
+
+logger = logging.getLogger(__name__)
 
 #: f(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work) -> rcond (NaN if du is not finite), or
 #: -(j + 1) if the j-th pivot is not positive (K not positive definite: nothing solved);
@@ -141,21 +144,29 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
 
 
 _compiled = None
+#: Compilation failed once (logged): callers solve densely from then on.
+broken = False
 _HELPERS = {"_apply_inverse": "void(f8[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[::1])",
             "_sum_abs": "f8(f8[::1])", "_argmax_abs": "i8(f8[::1])"}
 
 
 def cholesky_solve():
-    """The compiled function (compiled, or loaded from numba's cache, on first use)."""
-    global _compiled
-    if _compiled is None:
-        from numba import njit
+    """The compiled function (compiled, or loaded from numba's cache, on first use), or None
+    if numba cannot compile it (logged once)."""
+    global _compiled, broken
+    if _compiled is None and not broken:
+        try:
+            from numba import njit
 
-        from .elements._springs_jit import HELPER_OPTIONS
+            from .elements._springs_jit import HELPER_OPTIONS
 
-        g = globals()
-        for name, sig in _HELPERS.items():
-            if not hasattr(g[name], "py_func"):
-                g[name] = njit(sig, cache=True, **HELPER_OPTIONS)(g[name])
-        _compiled = njit(SIGNATURE, cache=True)(_kernel)
+            g = globals()
+            for name, sig in _HELPERS.items():
+                if not hasattr(g[name], "py_func"):
+                    g[name] = njit(sig, cache=True, **HELPER_OPTIONS)(g[name])
+            _compiled = njit(SIGNATURE, cache=True)(_kernel)
+        except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
+            logger.warning("numba could not compile the sparse Cholesky (%s: %s); solving "
+                           "densely", type(exc).__name__, exc)
+            broken = True
     return _compiled

@@ -205,12 +205,16 @@ class EquilibriumSystem:
         A dense tangent of the fused kernel with at least :data:`SPARSE_MIN` rows is factored
         sparsely: the structure of its Cholesky factor is that of the bars, springs, supports
         and the contact pairs active so far (recomputed, rarely, when a pair becomes active
-        for the first time)."""
+        for the first time); if that factor needs more than a twentieth of dense Cholesky's
+        ~n^3/3 multiply-adds, LAPACK's dense routines are faster and solve instead."""
         K = ev.tangent
         if (not isinstance(K, np.ndarray) or ev.contact_pairs is None
                 or self.n_free < SPARSE_MIN):
             return solve_linear(K, r)
-        return self._cholesky(ev.contact_pairs).solve(K, r)
+        chol = self._cholesky(ev.contact_pairs)
+        if 20 * chol.flops > self.n_free ** 3:         # much fill: LAPACK's dense is faster
+            return solve_linear(K, r)
+        return chol.solve(K, r)
 
     def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:
         chol, covered = self._chol

@@ -150,12 +150,14 @@ class SparseCholesky:
     def solve(self, K: np.ndarray, r: np.ndarray):
         """du with K du = r (K dense C-ordered, zero outside the pattern), or None as
         :func:`solve_dense` would; K not positive definite: :func:`solve_dense`'s LU."""
+        kernel = cholesky_solve()
+        if kernel is None:                              # numba failed (logged)
+            return solve_dense(K, r)
         n, nnz = self.n, len(self.Li)
         buf = np.empty(nnz + 5 * n)                     # L values, du, work
         du = buf[nnz:nnz + n]
-        rcond = cholesky_solve()(K, np.ascontiguousarray(r, dtype=float), self.order, self.Lp,
-                                 self.Li, buf[:nnz], self.rp, self.rk, self.rpos, du,
-                                 buf[nnz + n:])
+        rcond = kernel(K, np.ascontiguousarray(r, dtype=float), self.order, self.Lp, self.Li,
+                       buf[:nnz], self.rp, self.rk, self.rpos, du, buf[nnz + n:])
         if rcond >= _EPS:                               # (NaN: du not finite)
             return du
         if rcond < 0:                                   # not positive definite

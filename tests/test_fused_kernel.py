@@ -196,6 +196,30 @@ def test_the_numpy_backend_keeps_the_reference_path():
     assert system.uses_fused
 
 
+def test_a_failed_compilation_falls_back_to_numpy(monkeypatch, caplog):
+    """numba is an accelerator: if it cannot compile, the numpy path and LAPACK take over."""
+    from simulator import _cholesky_jit
+    from simulator.elements import _fused_jit
+
+    def fail():
+        raise RuntimeError("no compiler today")
+    for module in (_fused_jit, _cholesky_jit):
+        monkeypatch.setattr(module, "_compiled", None)
+        monkeypatch.setattr(module, "broken", False)
+    monkeypatch.setattr(_fused_jit, "_compile", fail)
+    import numba
+    monkeypatch.setattr(numba, "njit", lambda *a, **k: fail())
+    system, u, rest = _miura()
+    ev = system.evaluate(u, rest)
+    assert isinstance(ev.tangent, sp.csr_matrix) and _fused_jit.broken
+    assert not system.uses_fused
+    K, r = _spd(20, 0.2, 0)
+    np.testing.assert_allclose(_structure(K).solve(K, r), scipy.linalg.solve(K, r), rtol=1e-10)
+    assert _cholesky_jit.broken
+    assert "could not compile the fused kernel" in caplog.text
+    assert "could not compile the sparse Cholesky" in caplog.text
+
+
 def test_small_models_only():
     model = make_model(miura_sheet_pattern(m=6, n=5), None)
     panel0 = model.mesh.panel_nodes(0)
