@@ -32,11 +32,9 @@ SIGNATURE = ("f8(f8[:, ::1], f8[::1], i8[::1], i8[::1], i8[::1], f8[::1], i8[::1
              "i8[::1], f8[::1], f8[::1])")
 
 
-def _apply_inverse(x, order, Lp, Li, Lx, y):
-    """x <- K^-1 x (x in K's numbering) with the factor of K[order][:, order]."""
-    n = order.shape[0]
-    for i in range(n):
-        y[i] = x[order[i]]
+def _apply_inverse(y, Lp, Li, Lx):
+    """y <- B^-1 y for B = L L^T (y in the factor's order)."""
+    n = Lp.shape[0] - 1
     for j in range(n):                                  # L z = y
         yj = y[j] / Lx[Lp[j]]
         y[j] = yj
@@ -47,8 +45,6 @@ def _apply_inverse(x, order, Lp, Li, Lx, y):
         for p in range(Lp[j] + 1, Lp[j + 1]):
             s -= Lx[p] * y[Li[p]]
         y[j] = s / Lx[Lp[j]]
-    for i in range(n):
-        x[order[i]] = y[i]
 
 
 def _sum_abs(x):
@@ -58,10 +54,12 @@ def _sum_abs(x):
     return s
 
 
-def _argmax_abs(x):
+def _argmax_abs(x, order):
+    """Position of the largest |x| (x in the factor's order), the first in K's numbering on
+    ties, as LAPACK's idamax on K."""
     j = 0
     for i in range(1, x.shape[0]):
-        if abs(x[i]) > abs(x[j]):
+        if abs(x[i]) > abs(x[j]) or (abs(x[i]) == abs(x[j]) and order[i] < order[j]):
             j = i
     return j
 
@@ -94,10 +92,11 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
     anorm = 0.0                                         # ||K||_1
     for j in range(n):
         anorm = max(anorm, sgn[j])
-    # ||K^-1||_1 estimate: LAPACK's dlacn2 (K symmetric: K^T x = K x)
+    # ||K^-1||_1 estimate: LAPACK's dlacn2 on K (symmetric: K^T x = K x), with the vectors
+    # kept in the factor's order (position i is K's unknown order[i])
     for i in range(n):
         x[i] = 1.0 / n
-    _apply_inverse(x, order, Lp, Li, Lx, y)
+    _apply_inverse(x, Lp, Li, Lx)
     if n == 1:
         est = abs(x[0])
     else:
@@ -105,14 +104,14 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
         for i in range(n):
             sgn[i] = 1.0 if x[i] >= 0 else -1.0
             x[i] = sgn[i]
-        _apply_inverse(x, order, Lp, Li, Lx, y)
-        j = _argmax_abs(x)
+        _apply_inverse(x, Lp, Li, Lx)
+        j = _argmax_abs(x, order)
         it = 2
         while True:
             for i in range(n):
                 x[i] = 0.0
             x[j] = 1.0
-            _apply_inverse(x, order, Lp, Li, Lx, y)
+            _apply_inverse(x, Lp, Li, Lx)
             est_old, est = est, _sum_abs(x)
             repeated = True
             for i in range(n):
@@ -123,18 +122,20 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
             for i in range(n):
                 sgn[i] = 1.0 if x[i] >= 0 else -1.0
                 x[i] = sgn[i]
-            _apply_inverse(x, order, Lp, Li, Lx, y)
-            j_last, j = j, _argmax_abs(x)
+            _apply_inverse(x, Lp, Li, Lx)
+            j_last, j = j, _argmax_abs(x, order)
             if x[j_last] == abs(x[j]) or it >= 5:
                 break
             it += 1
         for i in range(n):
-            x[i] = (1.0 if i % 2 == 0 else -1.0) * (1.0 + i / (n - 1.0))
-        _apply_inverse(x, order, Lp, Li, Lx, y)
+            x[i] = (1.0 if order[i] % 2 == 0 else -1.0) * (1.0 + order[i] / (n - 1.0))
+        _apply_inverse(x, Lp, Li, Lx)
         est = max(est, 2.0 * (_sum_abs(x) / (3.0 * n)))
     for i in range(n):
-        du[i] = r[i]
-    _apply_inverse(du, order, Lp, Li, Lx, y)
+        y[i] = r[order[i]]
+    _apply_inverse(y, Lp, Li, Lx)
+    for i in range(n):
+        du[order[i]] = y[i]
     for i in range(n):
         if not math.isfinite(du[i]):
             return math.nan
@@ -146,8 +147,8 @@ def _kernel(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work):
 _compiled = None
 #: Compilation failed once (logged): callers solve densely from then on.
 broken = False
-_HELPERS = {"_apply_inverse": "void(f8[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[::1])",
-            "_sum_abs": "f8(f8[::1])", "_argmax_abs": "i8(f8[::1])"}
+_HELPERS = {"_apply_inverse": "void(f8[::1], i8[::1], i8[::1], f8[::1])",
+            "_sum_abs": "f8(f8[::1])", "_argmax_abs": "i8(f8[::1], i8[::1])"}
 
 
 def cholesky_solve():
