@@ -52,9 +52,9 @@ ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_s
 class Evaluation:
     """Internal energy, force and stiffness at one configuration.
 
-    ``Evaluation(f_int, K, energies, n_contacts=0, pattern=None)``: ``K`` is the tangent as
-    assembled, CSR, a dense ndarray (then ``pattern``, the :class:`StiffnessPattern` holding
-    all its non-zeros, gives the CSR form) or None.
+    ``Evaluation(f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None)``: ``K``
+    is the tangent as assembled, CSR, a dense ndarray (then ``to_csr(K)`` gives its CSR form,
+    e.g. :meth:`EquilibriumSystem.to_csr`) or None.
 
     Attributes
     ----------
@@ -73,25 +73,25 @@ class Evaluation:
     tangent: np.ndarray | sp.csr_matrix | None
     energies: dict
     n_contacts: int
-    pattern: StiffnessPattern | None
+    to_csr: object
     contact_pairs: np.ndarray | None
 
-    def __init__(self, f_int, K, energies, n_contacts=0, pattern=None, contact_pairs=None):
-        if isinstance(K, np.ndarray) and pattern is None:
-            raise ValueError("Evaluation: a dense tangent needs the StiffnessPattern of its "
-                             "non-zeros (pattern=...) to give K as CSR.")
+    def __init__(self, f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None):
+        if isinstance(K, np.ndarray) and to_csr is None:
+            raise ValueError("Evaluation: a dense tangent needs to_csr (e.g. "
+                             "EquilibriumSystem.to_csr) to give K as CSR.")
         set_ = object.__setattr__                     # frozen: set once, here
         set_(self, "f_int", f_int)
         set_(self, "tangent", K)
         set_(self, "energies", energies)
         set_(self, "n_contacts", n_contacts)
-        set_(self, "pattern", pattern)
+        set_(self, "to_csr", to_csr)
         set_(self, "contact_pairs", contact_pairs)
 
     @cached_property
     def K(self) -> sp.csr_matrix | None:
         if isinstance(self.tangent, np.ndarray):
-            return self.pattern.from_dense(self.tangent)
+            return self.to_csr(self.tangent)
         return self.tangent
 
 
@@ -125,10 +125,7 @@ class EquilibriumSystem:
         # Small models: all of them, so that the pattern holds every entry of a dense tangent.
         small = len(self.free) <= DENSE_LIMIT
         self.contact_in_pattern = static is not None and (small or 144 * len(static) <= MERGE_LIMIT)
-        families = [self.bar_dofs, self.spr_dofs]
-        if self.contact_in_pattern:
-            families.append(element_dofs(static))
-        self.pattern = StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
+        self._n_free = int(self.free_index.max()) + 1 if self.free_index.size else 0
         self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
         self.spr_kind = self.spr_is_panel.astype(int)
         self._fused = self._fused_data() if small and (self.contact is None
@@ -138,7 +135,16 @@ class EquilibriumSystem:
 
     @property
     def n_free(self) -> int:
-        return self.pattern.n_free
+        return self._n_free
+
+    @cached_property
+    def pattern(self) -> StiffnessPattern:
+        """CSR pattern of the free-DOF tangent (built on first use: the fused path needs it
+        only when an Evaluation's ``K`` is asked for)."""
+        families = [self.bar_dofs, self.spr_dofs]
+        if self.contact_in_pattern:
+            families.append(element_dofs(self.contact.static_conn))
+        return StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
 
     @property
     def uses_fused(self) -> bool:
@@ -146,6 +152,10 @@ class EquilibriumSystem:
         backend in force, compilation not failed); it then gives a dense ``tangent``."""
         return (self._fused is not None and _springs_jit.compiled_backend()
                 and not _fused_jit.broken)
+
+    def to_csr(self, D: np.ndarray) -> sp.csr_matrix:
+        """The dense free-DOF tangent ``D`` of the fused kernel as CSR in :attr:`pattern`."""
+        return self.pattern.from_dense(D)
 
     def _fused_data(self) -> tuple:
         """Arguments of the fused kernel that depend only on the model (writeable copies, int64 /
@@ -177,7 +187,7 @@ class EquilibriumSystem:
             return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
         nodes, first, rest = self._fused
         spring_rest = np.ascontiguousarray(spring_rest, dtype=float)
-        n_dof, n_free, n_pairs, pattern = self.n_dof, self.n_free, len(rest[4]), self.pattern
+        n_dof, n_free, n_pairs, to_csr = self.n_dof, self.n_free, len(rest[4]), self.to_csr
 
         def evaluate(u, hessian=True):
             u = np.ascontiguousarray(u, dtype=float)
@@ -188,7 +198,7 @@ class EquilibriumSystem:
             n_contacts = kernel(nodes + u, u, *first, spring_rest, *rest, hessian, f, K, e,
                                 active)
             return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
-                              n_contacts, pattern, active[:n_contacts])
+                              n_contacts, to_csr, active[:n_contacts])
         return evaluate
 
     def evaluator(self, spring_rest: np.ndarray):

@@ -183,7 +183,7 @@ def test_evaluation_K_is_csr_in_the_cached_pattern():
     np.testing.assert_array_equal(ev.K.indptr, ref.K.indptr)
     np.testing.assert_array_equal(ev.K.indices, ref.K.indices)
     np.testing.assert_array_equal(ev.K.toarray(), ev.tangent)
-    with pytest.raises(ValueError, match="dense tangent needs the StiffnessPattern"):
+    with pytest.raises(ValueError, match="dense tangent needs to_csr"):
         Evaluation(ev.f_int, ev.tangent, {})
 
 
