@@ -21,6 +21,7 @@ from simulator.state import equilibrium_system
 from simulator.model import ContactParameters, Supports, make_model
 from simulator.example_patterns import gripper_pattern, miura_sheet_pattern
 from simulator.properties import BarHingeParameters
+from simulator.newton import _solve_linear
 
 
 def _time_iteration(model, u, rest, repeat):
@@ -32,7 +33,8 @@ def _time_iteration(model, u, rest, repeat):
         ev = system.evaluate(u, rest)
         r = (f_ext - ev.f_int)[system.free]
         t1 = time.perf_counter()
-        du = system.solve(ev, r)                # what Newton does (sparse or dense)
+        du = system.solve_dense_tangent(ev, r) if isinstance(ev.tangent, np.ndarray) \
+            else _solve_linear(ev.K, r)             # what Newton does
         t2 = time.perf_counter()
         assert du is not None
         t_eval.append(t1 - t0)

@@ -1,7 +1,7 @@
 """Compiled (numba) sparse Cholesky solve of a small dense-stored SPD matrix.
 
 The structure (fill-reducing order, pattern of the factor L) comes from
-:class:`simulator.linear_solve.SparseCholesky`; one call of :func:`cholesky_solve` factors
+:class:`simulator.small_solve.SparseCholesky`; one call of :func:`cholesky_solve` factors
 ``B = K[order][:, order]`` (entries gathered from the dense K, lower triangle, so any entry
 outside the pattern is ignored: the pattern must hold every non-zero of K), estimates the
 reciprocal condition number in the 1-norm as LAPACK's ``dpocon`` does (Hager-Higham, the

@@ -41,8 +41,7 @@ import scipy.linalg
 import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
-from .linear_solve import DENSE_LIMIT
-from .newton import NewtonOptions
+from .newton import DENSE_LIMIT, NewtonOptions
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",

@@ -36,7 +36,7 @@ import numpy as np
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
 from .mass import check_masses, lumped_areas, lumped_masses
-from .linear_solve import DENSE_LIMIT, solve_linear as _solve_linear
+from .newton import DENSE_LIMIT, _solve_linear
 
 __all__ = ["DynamicsOptions", "MotionState", "StepReport", "TimeIntegrator", "DynamicsResult",
            "integrate"]

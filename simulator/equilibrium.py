@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
-from .linear_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, solve_linear
+from .small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, solve_dense
 from .contact_search import ContactSearch
 from .elements import _fused_jit, _springs_jit
 from .elements.bars import bar_kernel
@@ -208,22 +208,22 @@ class EquilibriumSystem:
             return self._fused_evaluator(spring_rest)
         return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
 
-    def solve(self, ev: Evaluation, r: np.ndarray):
-        """Newton correction: du (n_free,) with ``ev.K du = r`` [m], or None if the tangent is
-        singular (see :mod:`simulator.linear_solve`).
+    def solve_dense_tangent(self, ev: Evaluation, r: np.ndarray):
+        """Newton correction for an evaluation with a dense tangent (fused kernel): du
+        (n_free,) with ``ev.tangent du = r`` [m], or None if the tangent is singular (see
+        :mod:`simulator.small_solve`).
 
-        A dense tangent of the fused kernel with at least :data:`SPARSE_MIN` rows is factored
-        sparsely: the structure of its Cholesky factor is that of the bars, springs, supports
-        and the contact pairs active so far (recomputed, rarely, when a pair becomes active
-        for the first time); if that factor needs more than a twentieth of dense Cholesky's
-        ~n^3/3 multiply-adds, LAPACK's dense routines are faster and solve instead."""
+        From :data:`SPARSE_MIN` rows the tangent is factored sparsely: the structure of its
+        Cholesky factor is that of the bars, springs, supports and the contact pairs active
+        so far (recomputed, rarely, when a pair becomes active for the first time); if that
+        factor needs more than a twentieth of dense Cholesky's ~n^3/3 multiply-adds, LAPACK's
+        dense routines are faster and solve instead, as they do below SPARSE_MIN."""
         K = ev.tangent
-        if (not isinstance(K, np.ndarray) or ev.contact_pairs is None
-                or self.n_free < SPARSE_MIN):
-            return solve_linear(K, r)
+        if ev.contact_pairs is None or self.n_free < SPARSE_MIN:
+            return solve_dense(K, r)
         chol = self._cholesky(ev.contact_pairs)
-        if 20 * chol.flops > self.n_free ** 3:         # much fill: LAPACK's dense is faster
-            return solve_linear(K, r)
+        if 20 * chol.flops > self.n_free ** 3:
+            return solve_dense(K, r)
         return chol.solve(K, r)
 
     def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:

@@ -15,7 +15,8 @@ from simulator.elements.contact import contact_kernel
 from simulator.elements.springs import spring_kernel
 from simulator.equilibrium import ENERGY_KINDS, EquilibriumSystem, Evaluation
 from simulator.example_patterns import miura_sheet_pattern
-from simulator.linear_solve import SparseCholesky, solve_dense, solve_linear
+from simulator.newton import _solve_linear as solve_linear
+from simulator.small_solve import SparseCholesky, solve_dense
 from simulator.model import ContactParameters, Supports, make_model
 from simulator.state import equilibrium_system, initial_state
 
@@ -306,7 +307,7 @@ def test_the_gripper_tangent_is_factored_sparsely():
     ev = system.evaluate(u, rest)                  # artificial contacts: an indefinite tangent
     r = -ev.f_int[system.free]
     expected = solve_dense(ev.tangent, r)
-    du = system.solve(ev, r)                       # (LU fallback, like solve_dense)
+    du = system.solve_dense_tangent(ev, r)                       # (LU fallback, like solve_dense)
     assert (du is None) == (expected is None)
     chol = system._chol[0]
     assert chol.nnz < 0.3 * system.n_free ** 2                # sparse: far below dense
@@ -314,6 +315,6 @@ def test_the_gripper_tangent_is_factored_sparsely():
     state = initial_state(system.model)                       # no contact: positive definite
     ev = system.evaluate(state.u, rest)
     r = np.random.default_rng(0).normal(size=system.n_free) * 1e-9
-    du = system.solve(ev, r)
+    du = system.solve_dense_tangent(ev, r)
     np.testing.assert_allclose(du, solve_dense(ev.tangent, r), rtol=1e-8)
     assert system._chol[0] is chol                            # structure kept

@@ -99,7 +99,7 @@ def spring_kernel_backend(name: str):
     """Use the ``"numba"`` or ``"numpy"`` kernels inside the ``with`` block.
 
     The backend selects the compiled kernels as a whole: the spring kernel and, on models of
-    at most :data:`~simulator.linear_solve.DENSE_LIMIT` free DOFs, the fused evaluation of
+    at most :data:`~simulator.small_solve.DENSE_LIMIT` free DOFs, the fused evaluation of
     :mod:`._fused_jit` (bars, springs, contact and supports in one call, dense tangent) with
     the sparse Cholesky solve of :mod:`simulator._cholesky_jit`. The default is ``"numba"``
     when numba is installed (compiled on first use, once per install: a few seconds of CPU;

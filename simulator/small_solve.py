@@ -1,70 +1,43 @@
-"""Linear solves of the tangent system ``K du = r`` for Newton's method.
+"""Solves of small tangent systems ``K du = r`` (at most :data:`DENSE_LIMIT` unknowns).
 
-* :func:`solve_linear`: any K, sparse or dense; up to :data:`~simulator.equilibrium.DENSE_LIMIT`
-  rows densely (:func:`solve_dense`), larger ones by SuperLU.
 * :func:`solve_dense`: LAPACK directly (no ``scipy.linalg.solve`` wrapper): Cholesky when K is
-  positive definite, else LU with partial pivoting.
+  positive definite, else LU with partial pivoting; :func:`simulator.newton._solve_linear`
+  uses it for every small system.
 * :class:`SparseCholesky`: the structure of a small tangent (fill-reducing order and pattern of
   the Cholesky factor, from the element connectivity) for the compiled factorisation of
   :mod:`simulator._cholesky_jit`, which reads the dense matrix of the fused kernel; bar-and-hinge
-  tangents are sparse enough (96 free DOFs of the gripper: ~1,100 non-zeros in L, ~13,000
+  tangents are sparse enough (96 free DOFs of the gripper: ~1,100 non-zeros in L, ~11,000
   multiply-adds against ~300,000 for dense Cholesky) for it to beat LAPACK's dense routines.
 
-Every solver returns None where ``scipy.linalg.solve`` under warnings-as-errors would have
-failed: K singular (a zero pivot), ill-conditioned (1-norm reciprocal condition estimate below
-machine epsilon, LAPACK's ``gecon`` / ``pocon`` or the same estimator compiled) or a result
-that is not finite; Newton then reports a singular tangent.
+Both return None where ``scipy.linalg.solve`` under warnings-as-errors would have failed:
+K singular (a zero pivot), ill-conditioned (1-norm reciprocal condition estimate below machine
+epsilon: LAPACK's ``gecon`` / ``pocon``, or the same estimator compiled) or a result that is
+not finite; Newton then reports a singular tangent.
 """
 
 from __future__ import annotations
 
 import logging
-import warnings
 
 import numpy as np
-import scipy.linalg
 import scipy.linalg.lapack as lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ._cholesky_jit import cholesky_solve
 
-__all__ = ["solve_linear", "solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT",
-           "SPARSE_MIN"]
+__all__ = ["solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT", "SPARSE_MIN"]
 
 logger = logging.getLogger(__name__)
 
-#: Up to this many rows tangents are solved densely (:func:`solve_dense`).
+#: Up to this many free DOFs tangents are dense: evaluated by the fused kernel (compiled
+#: backend) and solved densely (faster for small meshes).
 DENSE_LIMIT = 150
 #: From this many free DOFs (and up to DENSE_LIMIT) the fused path factors sparsely
 #: (:class:`SparseCholesky`); smaller systems are solved by LAPACK, as fast there, and their
 #: runs do not compile the sparse factorisation.
 SPARSE_MIN = 64
 _EPS = float(np.finfo(float).eps)
-
-
-def solve_linear(K, r):
-    """Solve K du = r; returns None if K is singular or the result is not finite.
-
-    ``K`` is sparse or a dense array. Up to :data:`DENSE_LIMIT` rows it is solved densely
-    (:func:`solve_dense`). Larger ones use SuperLU in symmetric mode (symmetric minimum-degree
-    ordering, diagonal pivots: ~3x less fill than the default COLAMD on bar-and-hinge meshes);
-    if that solution is inaccurate (the tangent can be indefinite), it falls back to partial
-    pivoting with COLAMD.
-    """
-    if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
-        return solve_dense(K if isinstance(K, np.ndarray) else K.toarray(), r)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            Kc = K.tocsc()
-            du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True}).solve(r)
-            if not (np.linalg.norm(K @ du - r) <= 1e-6 * np.linalg.norm(r)):
-                du = spla.splu(Kc).solve(r)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
-            return None
-    return du if np.all(np.isfinite(du)) else None
 
 
 def solve_dense(K: np.ndarray, r: np.ndarray, anorm: float | None = None):
