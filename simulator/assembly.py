@@ -73,6 +73,15 @@ class StiffnessPattern:
                                                       else [])
         split = np.split(flat, np.cumsum(sizes)[:-1]) if sizes else []
         self._family_pos = [p.reshape(len(d), -1) for p, d in zip(split, dofs)] + split[len(dofs):]
+        self._rows = None                    # row of every stored entry (from_dense), lazily
+
+    def from_dense(self, D: np.ndarray) -> sp.csr_matrix:
+        """CSR matrix in this pattern with the entries of the dense (n_free, n_free) ``D``
+        (which must be zero outside the pattern)."""
+        if self._rows is None:
+            self._rows = np.repeat(np.arange(self.n_free), np.diff(self.indptr))
+        return sp.csr_matrix((D[self._rows, self.indices], self.indices, self.indptr),
+                             shape=(self.n_free, self.n_free))
 
     def matrix(self, values: list[np.ndarray], subsets: dict | None = None) -> sp.csr_matrix:
         """CSR matrix from element Hessians (same order as the families) and diagonal terms.

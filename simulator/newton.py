@@ -14,6 +14,7 @@ import logging
 import math
 import warnings
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg
@@ -22,13 +23,11 @@ import scipy.sparse.linalg as spla
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
 from .linsolve import ND_LIMIT, nested_dissection_solve
+from .small_solve import DENSE_LIMIT, solve_dense
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
 logger = logging.getLogger(__name__)
-
-#: Below this many free DOFs the tangent system is solved densely (faster for tiny meshes).
-DENSE_LIMIT = 150
 
 
 @dataclass(frozen=True)
@@ -103,6 +102,10 @@ class NewtonOptions:
                                      "(max_iter >= 1).")
 
     def to_dict(self) -> dict:
+        return dict(self._as_dict)           # a copy: asdict once (every simulation records it)
+
+    @cached_property
+    def _as_dict(self) -> dict:
         return asdict(self)
 
 
@@ -162,28 +165,27 @@ class PathResult:
 def _solve_linear(K, r):
     """Solve K du = r; returns None if K is singular or the result is not finite.
 
-    ``K`` is sparse or a dense array. Small systems are solved densely. Large ones use SuperLU
-    in symmetric mode (diagonal pivots) in a fill-reducing order: from
-    :data:`~simulator.linsolve.ND_LIMIT` unknowns on, METIS nested dissection cached per
-    sparsity pattern (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails)
-    SuperLU's symmetric minimum degree (~3x less fill than the default COLAMD on
-    bar-and-hinge meshes); if that solution is inaccurate (the tangent can be indefinite),
-    it falls back to partial pivoting with COLAMD.
+    ``K`` is sparse or a dense array. Up to :data:`DENSE_LIMIT` rows it is solved densely by
+    LAPACK (:func:`~simulator.small_solve.solve_dense`). Larger ones use SuperLU in symmetric
+    mode (diagonal pivots) in a fill-reducing order: from :data:`~simulator.linsolve.ND_LIMIT`
+    unknowns on, METIS nested dissection cached per sparsity pattern
+    (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails) SuperLU's
+    symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes);
+    if that solution is inaccurate (the tangent can be indefinite), it falls back to partial
+    pivoting with COLAMD.
     """
+    if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
+        return solve_dense(K if isinstance(K, np.ndarray) else K.toarray(), r)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
-            if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
-                dense = K if isinstance(K, np.ndarray) else K.toarray()
-                du = scipy.linalg.solve(dense, r, check_finite=False)
-            else:
-                du = nested_dissection_solve(K, r) if K.shape[0] >= ND_LIMIT else None
-                if du is None:
-                    Kc = K.tocsc()
-                    du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                   options={"SymmetricMode": True}).solve(r)
-                    if not _accurate(K, du, r):
-                        du = spla.splu(Kc).solve(r)
+            du = nested_dissection_solve(K, r) if K.shape[0] >= ND_LIMIT else None
+            if du is None:
+                Kc = K.tocsc()
+                du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                               options={"SymmetricMode": True}).solve(r)
+                if not _accurate(K, du, r):
+                    du = spla.splu(Kc).solve(r)
         except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
             return None
     return du if np.all(np.isfinite(du)) else None
@@ -203,13 +205,15 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
         return _reference_newton(system, u0, f_ext, spring_rest, options)
     free = system.free
     u = u0.copy().ravel()
-    size = float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    f_free = f_ext[free]
+    evaluate, solve = _operations(system, spring_rest)
     res_norms, cor_norms = [], []
     ref, best = None, (math.inf, None, None)
     for it in range(options.max_iter + 1):
-        ev = system.evaluate(u.reshape(-1, 3), spring_rest)
-        r = (f_ext - ev.f_int)[free]
-        rn = float(np.linalg.norm(r))
+        ev = evaluate(u.reshape(-1, 3))
+        r = f_free - ev.f_int[free]
+        rn = math.sqrt(r.dot(r))                   # = np.linalg.norm(r), less overhead
         res_norms.append(rn)
         if rn < best[0]:
             best = (rn, u.copy(), ev)
@@ -221,27 +225,27 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
                 return _newton_result(u, True, it, res_norms, cor_norms, "converged", ev)
         if it == options.max_iter:
             break
-        du = _solve_linear(ev.K, r)
+        du = solve(ev, r)
         if du is None:
             return _newton_result(u0, False, it, res_norms, cor_norms,
                                   "tangent stiffness is singular (mechanism or unsupported body?)")
-        if system.max_step is not None:
-            step = np.max(np.abs(du))
-            if step > system.max_step:
-                du *= system.max_step / step
-        dn = float(np.linalg.norm(du))
+        step = max(du.max(), -du.min())            # = max |du|
+        if system.max_step is not None and step > system.max_step:
+            du *= system.max_step / step
+            step = max(du.max(), -du.min())
+        dn = math.sqrt(du.dot(du))
         cor_norms.append(dn)
         u[free] += du
         if options.criterion == "displacement":
             ref = dn if ref is None else ref
             if dn <= max(options.atol, options.rtol * ref):
-                ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+                ev = evaluate(u.reshape(-1, 3))
                 return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
-        if np.max(np.abs(du)) <= 1e-13 * size:
-            ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+        if step <= 1e-13 * size:
+            ev = evaluate(u.reshape(-1, 3))
             return _newton_result(u, True, it + 1, res_norms, cor_norms,
                                   "converged (correction at round-off level)", ev)
-    stall = options.stall_rtol * float(np.linalg.norm(f_ext[free]))
+    stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
     if best[0] <= stall:
         return _newton_result(best[1], True, options.max_iter, res_norms, cor_norms,
                               f"converged (residual stalled at {best[0]:.3g} N, at most "
@@ -259,7 +263,7 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
     while updates < options.max_iter - 1 and measure > options.atol:
         ev = system.evaluate(u.reshape(-1, 3), spring_rest)
         r = (f_ext - ev.f_int)[free]
-        du = _solve_linear(ev.K, r)
+        du = _solve_linear(_tangent(ev), r)
         if du is None:
             return _newton_result(u0, False, updates, res_norms, cor_norms,
                                   "tangent stiffness is singular (mechanism or unsupported body?)")
@@ -279,6 +283,30 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
                    f"({options.criterion} {measure:.3g} > {options.atol:.3g})")
         logger.warning(message)
     return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
+
+
+def _operations(system, spring_rest):
+    """``evaluate(u)`` and ``solve(ev, r)`` for a system: an EquilibriumSystem's prepared
+    evaluator and, for the dense tangents of its fused kernel, its sparse / dense solve
+    (:meth:`~simulator.equilibrium.EquilibriumSystem.solve_dense_tangent`); else ``evaluate``
+    and :func:`_solve_linear` (any object with the ``evaluate`` interface)."""
+    evaluator = getattr(system, "evaluator", None)
+    evaluate = evaluator(spring_rest) if evaluator is not None else \
+        (lambda u: system.evaluate(u, spring_rest))
+    dense = getattr(system, "solve_dense_tangent", None)
+
+    def solve(ev, r):
+        K = _tangent(ev)
+        if dense is not None and isinstance(K, np.ndarray):
+            return dense(ev, r)
+        return _solve_linear(K, r)
+    return evaluate, solve
+
+
+def _tangent(ev):
+    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
+    ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
+    return ev.tangent if isinstance(ev, Evaluation) else ev.K
 
 
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):

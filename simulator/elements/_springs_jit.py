@@ -2,13 +2,16 @@
 
 On small meshes (tens of springs) the numpy kernel spends its time in ~60 array calls of a
 few microseconds each; this loop-based version does one call (about 10 us instead of
-150-500 us for 20 springs). It is written with scalar arithmetic on a small work array (no
-``np.cross``, ``@`` or array temporaries), which cuts numba's compilation to 40 %, and it is
+150-500 us for 20 springs). It is written with scalar arithmetic on a small 1-D work array (no
+``np.cross``, ``@``, array temporaries or array-to-array assignments, and few array accesses in
+the source: numba's compile time grows with them, not with the loop trip counts), and it is
 checked against the numpy kernel by the tests.
 
-Compiling costs about 2.9 s of CPU once per install (0.5 s importing numba, 2.4 s compiling;
-the previous array-style kernel took 5.4-6.7 s); loading it from numba's cache (next to this
-file or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. A run of one of the paper's cases
+Compiling costs about 2 s of CPU once per install (0.5 s importing numba, 0.4 s numba's own
+start-up, 1.2 s compiling; 1.6 s with the 2-D work array and nine Hessian blocks written out,
+5.4-6.7 s for the earlier array-style kernel); loading it from numba's cache (next to this file
+or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. On small models the fused kernel of
+:mod:`._fused_jit` calls the per-spring function :func:`_element` instead of this kernel. A run of one of the paper's cases
 calls the kernel 1,200-2,500 times and one gripper evaluation 870-1,650 times, too few to win
 that back; an optimisation does (15 coordinate-descent evaluations: 12.7 s of CPU compiled,
 compilation included, against 15.1 s on numpy).
@@ -30,7 +33,8 @@ import os
 
 import numpy as np
 
-__all__ = ["AVAILABLE", "BACKENDS", "default_backend", "spring_kernel_jit", "use_compiled"]
+__all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "spring_kernel_jit",
+           "use_compiled"]
 
 logger = logging.getLogger(__name__)
 
@@ -41,110 +45,104 @@ BACKENDS = ("numba", "numpy")
 #: grad (n, 12), hess (n or 0, 12, 12); all C-contiguous float64.
 _SIGNATURE = "void(f8[:, :, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], f8[:, :, ::1])"
 _OFF = ("0", "off", "no", "false", "never", "numpy")
+#: Helpers called with constant offsets get a signature: without one numba would compile a
+#: version per distinct set of literal arguments.
+#: Helpers are called from compiled code only: no Python or C wrappers (less to compile).
+HELPER_OPTIONS = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
+_HELPER_SIGNATURES = {"_cross": "void(f8[::1], i8, i8, i8)", "_dot": "f8(f8[::1], i8, i8)"}
 
-#: (row node, column node) of the stored Hessian blocks ii, ij, ik, jj, jk, kk, lj, lk, ll.
-_BLOCK_POS = np.array([[0, 0], [0, 1], [0, 2], [1, 1], [1, 2], [2, 2], [3, 1], [3, 2], [3, 3]])
-# rows of the work array
-RIJ, RKJ, RKL, M, N, GI, GJ, GK, GL, D1, D2 = range(11)
-V = 11                             # V + 0 ... V + 9: the vectors v0 ... v9 below
+# offsets in the 1-D work array: 3-vectors, then 12-vectors (node blocks i, j, k, l)
+RIJ, RKJ, RKL, M, N, C0, C1, C3, C4 = range(0, 27, 3)
+U, S, U2, S2, DA, DB = range(27, 99, 12)
+#: Size of the work array of :func:`_element`.
+WORK = 99
 
 
-def _cross(a, b, out):
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
+def _cross(w, i, j, k):
+    """w[k:k+3] = w[i:i+3] x w[j:j+3]."""
+    w[k] = w[i + 1] * w[j + 2] - w[i + 2] * w[j + 1]
+    w[k + 1] = w[i + 2] * w[j] - w[i] * w[j + 2]
+    w[k + 2] = w[i] * w[j + 1] - w[i + 1] * w[j]
 
 
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+def _dot(w, i, j):
+    return w[i] * w[j] + w[i + 1] * w[j + 1] + w[i + 2] * w[j + 2]
 
 
 def _kernel(x, k, theta0, want_hess, energy, grad, hess):
-    w = np.empty((V + 10, 3))
-    blk = np.empty((9, 3, 3))
+    w = np.empty(WORK)
     g = np.empty(12)
+    h = np.empty((12, 12))
     for e in range(x.shape[0]):
-        for a in range(3):
-            w[RIJ, a] = x[e, 0, a] - x[e, 1, a]
-            w[RKJ, a] = x[e, 2, a] - x[e, 1, a]
-            w[RKL, a] = x[e, 2, a] - x[e, 3, a]
-        _cross(w[RIJ], w[RKJ], w[M])
-        _cross(w[RKJ], w[RKL], w[N])
-        mm = _dot(w[M], w[M])
-        nn = _dot(w[N], w[N])
-        rr = _dot(w[RKJ], w[RKJ])
-        r = math.sqrt(rr)
-        theta = math.atan2(r * _dot(w[M], w[RKL]), _dot(w[M], w[N])) % (2 * math.pi)
-        A = _dot(w[RIJ], w[RKJ]) / rr
-        B = _dot(w[RKL], w[RKJ]) / rr
-        d = theta - theta0[e]
-        d -= 2 * math.pi * math.floor(d / (2 * math.pi) + 0.5)      # periodic: see springs.py
-        moment = k[e] * d
-        energy[e] = 0.5 * moment * d
-        for a in range(3):
-            w[GI, a] = (r / mm) * w[M, a]
-            w[GL, a] = -(r / nn) * w[N, a]
-        for a in range(3):
-            w[GJ, a] = (A - 1) * w[GI, a] - B * w[GL, a]
-            w[GK, a] = (B - 1) * w[GL, a] - A * w[GI, a]
-            for node in range(4):
-                g[3 * node + a] = w[GI + node, a]
-        for p in range(12):
-            grad[e, p] = moment * g[p]
-        if want_hess:
-            _hessian(w, blk, g, A, B, r, rr, mm, nn, k[e], moment, hess[e])
+        energy[e] = _element(x[e], k[e], theta0[e], want_hess, w, g, grad[e],
+                             hess[e] if want_hess else h)
 
 
-def _hessian(w, blk, g, A, B, r, rr, mm, nn, ke, moment, h):
-    sm = r / mm**2
-    sn = r / nn**2
+def _element(x, ke, theta0, want_hess, w, g, grad, h):
+    """One spring with nodes ``x`` (4, 3): its energy; gradient into ``grad`` (12,) and, if
+    ``want_hess``, Hessian into ``h`` (12, 12); ``w`` (:data:`WORK`,) and ``g`` (12,) are
+    work arrays. Also used by the fused small-model kernel (:mod:`._fused_jit`)."""
     for a in range(3):
-        w[D1, a] = w[RKJ, a] - w[RIJ, a]
-        w[D2, a] = w[RKJ, a] - w[RKL, a]
-    _cross(w[RKJ], w[M], w[V + 0])
-    _cross(w[RIJ], w[M], w[V + 1])
-    _cross(w[D1], w[M], w[V + 2])
-    _cross(w[RKJ], w[N], w[V + 3])
-    _cross(w[RKL], w[N], w[V + 4])
-    _cross(w[D2], w[N], w[V + 5])
+        w[RIJ + a] = x[0, a] - x[1, a]
+        w[RKJ + a] = x[2, a] - x[1, a]
+        w[RKL + a] = x[2, a] - x[3, a]
+    _cross(w, RIJ, RKJ, M)
+    _cross(w, RKJ, RKL, N)
+    mm = _dot(w, M, M)
+    nn = _dot(w, N, N)
+    rr = _dot(w, RKJ, RKJ)
+    r = math.sqrt(rr)
+    theta = math.atan2(r * _dot(w, M, RKL), _dot(w, M, N)) % (2 * math.pi)
+    A = _dot(w, RIJ, RKJ) / rr
+    B = _dot(w, RKL, RKJ) / rr
+    d = theta - theta0
+    d -= 2 * math.pi * math.floor(d / (2 * math.pi) + 0.5)          # periodic: see springs.py
+    moment = ke * d
+    cm, cn = r / mm, -(r / nn)
     for a in range(3):
-        w[V + 6, a] = ((2 * A - 1) * w[RKJ, a] - w[RIJ, a]) / rr        # dA/dx_j
-        w[V + 7, a] = (w[RIJ, a] - 2 * A * w[RKJ, a]) / rr              # dA/dx_k
-        w[V + 8, a] = (2 * B * w[RKJ, a] - w[RKL, a]) / rr              # dB/dx_j
-        w[V + 9, a] = ((1 - 2 * B) * w[RKJ, a] + w[RKL, a]) / rr        # dB/dx_k
-    for a in range(3):
-        for b in range(3):
-            mr = w[M, a] * w[RKJ, b] / (mm * r)
-            nr = w[N, a] * w[RKJ, b] / (nn * r)
-            h_ii = -sm * (w[M, a] * w[V, b] + w[V, a] * w[M, b])
-            h_ik = mr + sm * (w[M, a] * w[V + 1, b] + w[V + 1, a] * w[M, b])
-            h_ij = -mr + sm * (w[M, a] * w[V + 2, b] + w[V + 2, a] * w[M, b])
-            h_ll = sn * (w[N, a] * w[V + 3, b] + w[V + 3, a] * w[N, b])
-            h_lj = nr - sn * (w[N, a] * w[V + 4, b] + w[V + 4, a] * w[N, b])
-            h_lk = -nr - sn * (w[N, a] * w[V + 5, b] + w[V + 5, a] * w[N, b])
-            blk[0, a, b] = h_ii
-            blk[1, a, b] = h_ij
-            blk[2, a, b] = h_ik
-            blk[6, a, b] = h_lj
-            blk[7, a, b] = h_lk
-            blk[8, a, b] = h_ll
-            blk[3, a, b] = (w[GI, a] * w[V + 6, b] + (A - 1) * h_ij
-                            - w[GL, a] * w[V + 8, b] - B * h_lj)
-            blk[4, a, b] = (w[GI, a] * w[V + 7, b] + (A - 1) * h_ik
-                            - w[GL, a] * w[V + 9, b] - B * h_lk)
-            blk[5, a, b] = (w[GL, a] * w[V + 9, b] + (B - 1) * h_lk
-                            - w[GI, a] * w[V + 7, b] - A * h_ik)
+        gi = cm * w[M + a]
+        gl = cn * w[N + a]
+        g[a] = gi
+        g[3 + a] = (A - 1) * gi - B * gl
+        g[6 + a] = (B - 1) * gl - A * gi
+        g[9 + a] = gl
     for p in range(12):
-        for q in range(12):
-            h[p, q] = ke * g[p] * g[q]
-    for idx in range(9):
-        p, q = _BLOCK_POS[idx, 0], _BLOCK_POS[idx, 1]
+        grad[p] = moment * g[p]
+    if want_hess:                 # see _HESSIAN_NOTE
+        sm = r / (mm * mm)
+        sn = r / (nn * nn)
+        mr = 1 / (mm * r)
+        nr = 1 / (nn * r)
+        _cross(w, RKJ, M, C0)
+        _cross(w, RIJ, M, C1)
+        _cross(w, RKJ, N, C3)
+        _cross(w, RKL, N, C4)
         for a in range(3):
-            for b in range(3):
-                val = moment * blk[idx, a, b]
-                h[3 * p + a, 3 * q + b] += val
-                if p != q:
-                    h[3 * q + b, 3 * p + a] += val
+            kj, ij, kl = w[RKJ + a], w[RIJ + a], w[RKL + a]
+            v0, v1, v3, v4 = w[C0 + a], w[C1 + a], w[C3 + a], w[C4 + a]
+            w[U + a], w[U + 3 + a], w[U + 6 + a], w[U + 9 + a] = (
+                -sm * v0, -kj * mr + sm * (v0 - v1), kj * mr + sm * v1, 0.0)
+            w[S + a], w[S + 3 + a], w[S + 6 + a], w[S + 9 + a] = -v0, v0 - v1, v1, 0.0
+            w[U2 + a], w[U2 + 3 + a], w[U2 + 6 + a], w[U2 + 9 + a] = (
+                0.0, kj * nr - sn * v4, -kj * nr - sn * (v3 - v4), sn * v3)
+            w[S2 + a], w[S2 + 3 + a], w[S2 + 6 + a], w[S2 + 9 + a] = 0.0, -v4, v4 - v3, v3
+            w[DA + a], w[DA + 3 + a], w[DA + 6 + a], w[DA + 9 + a] = (
+                kj / rr, ((2 * A - 1) * kj - ij) / rr, (ij - 2 * A * kj) / rr, 0.0)
+            w[DB + a], w[DB + 3 + a], w[DB + 6 + a], w[DB + 9 + a] = (
+                0.0, (2 * B * kj - kl) / rr, ((1 - 2 * B) * kj + kl) / rr, -kj / rr)
+        for a in range(3):
+            ma, na, gi, gl = w[M + a], w[N + a], g[a], g[9 + a]
+            for q in range(12):
+                b = q % 3
+                Gi = ma * w[U + q] + sm * w[S + q - b + a] * w[M + b]
+                Gl = na * w[U2 + q] + sn * w[S2 + q - b + a] * w[N + b]
+                dA, dB = w[DA + q], w[DB + q]
+                kg = ke * g[q]
+                h[a, q] = kg * g[a] + moment * Gi
+                h[3 + a, q] = kg * g[3 + a] + moment * ((A - 1) * Gi - B * Gl + gi * dA - gl * dB)
+                h[6 + a, q] = kg * g[6 + a] + moment * ((B - 1) * Gl - A * Gi + gl * dB - gi * dA)
+                h[9 + a, q] = kg * g[9 + a] + moment * Gl
+    return 0.5 * moment * d
 
 
 _compiled = None
@@ -155,8 +153,19 @@ backend = None
 
 def default_backend() -> str:
     """``"numba"`` if installed and not switched off by ``ETORIGAMI_JIT``, else ``"numpy"``."""
-    off = os.environ.get("ETORIGAMI_JIT", "").strip().lower() in _OFF
+    off = "ETORIGAMI_JIT" in os.environ and os.environ["ETORIGAMI_JIT"].strip().lower() in _OFF
     return "numba" if AVAILABLE and not off else "numpy"
+
+
+def jit_helpers():
+    """Replace the per-spring helpers by their numba versions (compiled on first call, cached);
+    the spring kernel and the fused kernel (:mod:`._fused_jit`) call them. Imports numba."""
+    from numba import njit
+
+    g = globals()
+    for name in ("_cross", "_dot", "_element"):
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(_HELPER_SIGNATURES.get(name), cache=True, **HELPER_OPTIONS)(g[name])
 
 
 def _compile():
@@ -166,10 +175,7 @@ def _compile():
     try:
         from numba import njit
 
-        g = globals()
-        for name in ("_cross", "_dot", "_hessian"):
-            if not hasattr(g[name], "py_func"):
-                g[name] = njit(cache=True)(g[name])
+        jit_helpers()
         _compiled = njit(_SIGNATURE, cache=True)(_kernel)       # compiles (or loads) now
         return _compiled
     except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
@@ -177,6 +183,12 @@ def _compile():
                        type(exc).__name__, exc)
         _broken = True
         return None
+
+
+def compiled_backend() -> bool:
+    """Whether the compiled backend is in force (numba selected and the spring kernel's
+    compilation not failed); nothing is imported or compiled."""
+    return not _broken and (backend or default_backend()) == "numba"
 
 
 def use_compiled() -> bool:

@@ -96,13 +96,17 @@ def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
 
 @contextlib.contextmanager
 def spring_kernel_backend(name: str):
-    """Use the ``"numba"`` or ``"numpy"`` spring kernel inside the ``with`` block.
+    """Use the ``"numba"`` or ``"numpy"`` kernels inside the ``with`` block.
 
-    The default is ``"numba"`` when numba is installed (compiled on first use: about 3 s of
-    CPU once per install, 0.7 s per process to load from numba's cache, then 10-30 us per call
-    instead of 150-500 us) unless ``ETORIGAMI_JIT=0``. ``"numpy"`` suits short runs (a few
-    thousand kernel calls, one case or one gripper evaluation). Both give the same values to
-    rounding; keep one backend for runs whose floats are compared bit for bit.
+    The backend selects the compiled kernels as a whole: the spring kernel and, on models of
+    at most :data:`~simulator.small_solve.DENSE_LIMIT` free DOFs, the fused evaluation of
+    :mod:`._fused_jit` (bars, springs, contact and supports in one call, dense tangent) with
+    the sparse Cholesky solve of :mod:`simulator._cholesky_jit`. The default is ``"numba"``
+    when numba is installed (compiled on first use, once per install: a few seconds of CPU;
+    loaded from numba's cache in well under a second per process) unless ``ETORIGAMI_JIT=0``.
+    ``"numpy"`` suits short runs (one case or one gripper evaluation), where compiling costs
+    more than it saves. Both give the same values to rounding; keep one backend for runs whose
+    floats are compared bit for bit.
     """
     if name not in _jit.BACKENDS:
         raise ParameterError(f"spring kernel backend {name!r}; use one of "
