@@ -19,12 +19,16 @@ from __future__ import annotations
 
 import logging
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from .elements import _springs_jit
 
-__all__ = ["use_compiled", "thermal_element_data"]
+__all__ = ["use_compiled", "thermal_element_data", "compile_in_background"]
 
 logger = logging.getLogger(__name__)
 
@@ -37,6 +41,10 @@ _SIGNATURE = ("i8(f8[:, ::1], i8[:, ::1], f8[:, ::1], f8[::1], b1[::1], i8[::1],
 
 _compiled = None
 _broken = False
+#: A process compiling the kernel into numba's cache (:func:`compile_in_background`), or None.
+_background = None
+#: Longest wait for that process before compiling here instead [s].
+_BACKGROUND_WAIT = 60.0
 
 
 def _point_triangle_distance(px, py, pz, t):
@@ -161,7 +169,13 @@ def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, la
 def _compile():
     """Compile (or load from numba's cache) the kernel; None if that fails (numpy from then
     on)."""
-    global _compiled, _broken
+    global _compiled, _broken, _background
+    if _background is not None:                    # let it finish: then this loads its cache
+        try:
+            _background.wait(timeout=_BACKGROUND_WAIT)
+        except subprocess.TimeoutExpired:
+            _background.kill()
+        _background = None
     try:
         from numba import njit
 
@@ -175,6 +189,38 @@ def _compile():
                        type(exc).__name__, exc)
         _broken = True
         return None
+
+
+def compile_in_background() -> bool:
+    """Compile the kernel into numba's cache in a separate process, on the other core, if it
+    is neither loaded here nor cached yet; returns whether such a process was started.
+
+    The first run after install compiles the fused mechanics kernel (about 4 s of CPU) and
+    this one (about 1 s) one after the other; the model's first evaluation starts this process
+    just before compiling the fused kernel, so that both compile side by side and
+    :func:`use_compiled` later only loads this kernel from the cache (it waits for the process
+    first). Any failure here is ignored: the kernel is then compiled in this process as usual.
+    """
+    global _background
+    if _compiled is not None or _broken or _background is not None:
+        return False
+    try:
+        from numba.core.caching import FunctionCache
+
+        if Path(FunctionCache(_kernel)._cache_file._index_path).exists():
+            return False                                # cached: loading it is quick
+        package_root = str(Path(__file__).resolve().parents[1])
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            [package_root] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+        _background = subprocess.Popen(
+            [sys.executable, "-c", "from simulator import _thermal_jit; _thermal_jit._compile()"],
+            env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL)
+        logger.info("compiling the thermal kernel in a background process")
+        return True
+    except Exception as exc:  # noqa: BLE001 - an optimisation of the first run only
+        logger.debug("no background compilation of the thermal kernel (%s)", exc)
+        return False
 
 
 def use_compiled() -> bool:

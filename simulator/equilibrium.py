@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
 from .small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, solve_dense
 from .contact_search import ContactSearch
+from . import _thermal_jit
 from .elements import _fused_jit, _springs_jit
 from .elements.bars import bar_kernel
 from .elements.contact import contact_kernel
@@ -182,6 +183,8 @@ class EquilibriumSystem:
     def _fused_evaluator(self, spring_rest):
         """u -> Evaluation by the fused kernel for fixed rest angles (arguments prepared once);
         the numpy path if compilation failed (logged)."""
+        if _fused_jit.needs_compiling() and self.model.thermal is not None:
+            _thermal_jit.compile_in_background()       # first run: both compile side by side
         kernel = _fused_jit.fused_kernel()
         if kernel is None:
             return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)

@@ -1,6 +1,8 @@
 """Compiled thermal kernel (simulator._thermal_jit) against the numpy reference path."""
 
 import logging
+import os
+import pathlib
 
 import numpy as np
 import pytest
@@ -116,3 +118,67 @@ def test_factorisation_reused_on_the_same_shape(monkeypatch):
     x[5, 2] += 1e-6
     tm.solve(x, tm.heat_vector([1e-3]))
     assert len(calls) == 2
+
+
+def test_background_compilation_fills_the_cache(tmp_path):
+    """With an empty numba cache the kernel compiles in a separate process; this process then
+    loads it from the cache (and gives the numpy path's temperatures)."""
+    import subprocess
+    import sys
+    import textwrap
+    script = textwrap.dedent("""
+        import numpy as np
+        from simulator import _thermal_jit
+        from simulator.elements.springs import spring_kernel_backend
+        from simulator.example_patterns import single_fold_pattern
+        from simulator.mesh import build_mesh
+        from simulator.thermal import ThermalModel, ThermalParameters
+        assert _thermal_jit.compile_in_background()                 # cold cache: started
+        assert not _thermal_jit.compile_in_background()             # only once
+        child = _thermal_jit._background
+        mesh = build_mesh(single_fold_pattern())
+        tm = ThermalModel(mesh, ThermalParameters(env_thickness=750e-6, env_conductivity=0.6,
+                          boundary_panels=(2,), room_temperature_nodes=(0, 3)))
+        q = tm.heat_vector([1e-3])
+        T1 = tm.solve(mesh.nodes, q)                                # waits, then loads
+        assert _thermal_jit._background is None and child.returncode == 0
+        assert _thermal_jit._compiled is not None
+        with spring_kernel_backend("numpy"):
+            T0 = tm.solve(mesh.nodes, q)
+        assert np.allclose(T1, T0, rtol=1e-12, atol=0)
+        print("ok")
+    """)
+    root = pathlib.Path(__file__).resolve().parents[1]
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
+    env.pop("ETORIGAMI_JIT", None)
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+    assert list(tmp_path.rglob("_thermal_jit._kernel-*.nbi"))                 # cache written
+    # a warm cache starts nothing
+    again = subprocess.run([sys.executable, "-c", "from simulator import _thermal_jit; "
+                            "print(_thermal_jit.compile_in_background())"], env=env,
+                           capture_output=True, text=True, timeout=120)
+    assert again.stdout.strip() == "False", again.stderr
+
+
+@pytest.mark.parametrize("with_thermal", [True, False])
+def test_first_evaluation_starts_the_background_compilation(monkeypatch, with_thermal):
+    """A model with heat transfer starts the thermal kernel's compilation just before the
+    fused kernel compiles; a purely mechanical one does not."""
+    from simulator.cases import get_case
+    from simulator.elements import _fused_jit
+    from simulator.state import equilibrium_system, initial_state
+    import dataclasses
+    model = get_case("single_fold", gravity=True).model
+    if not with_thermal:
+        model = dataclasses.replace(model, thermal=None)
+    calls = []
+    monkeypatch.setattr(_fused_jit, "needs_compiling", lambda: True)
+    monkeypatch.setattr(_thermal_jit, "compile_in_background", lambda: calls.append(1) or False)
+    system = equilibrium_system(model)
+    state = initial_state(model)
+    with spring_kernel_backend("numba"):
+        system.evaluate(state.u, state.spring_rest)
+    assert len(calls) == (1 if with_thermal else 0)

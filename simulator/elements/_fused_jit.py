@@ -370,6 +370,11 @@ def _spring_element(*args):                            # replaced by the compile
     return _springs_jit._element(*args)
 
 
+def needs_compiling() -> bool:
+    """Whether :func:`fused_kernel` has yet to compile (or load) the kernel in this process."""
+    return _compiled is None and not broken
+
+
 def fused_kernel():
     """The compiled kernel (compiling or loading it on first use), or None if compilation
     fails (logged once; :data:`broken` is then set)."""
