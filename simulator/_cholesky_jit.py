@@ -16,14 +16,12 @@ numba is imported, and the function compiled (one signature, cached), on first u
 
 from __future__ import annotations
 
-import logging
 import math
 
-import numpy as np
+from ._jit import compile_kernel
 
 __all__ = ["cholesky_solve", "SIGNATURE", "broken"]
 
-logger = logging.getLogger(__name__)
 
 #: f(K, r, order, Lp, Li, Lx, rp, rk, rpos, du, work) -> rcond (NaN if du is not finite), or
 #: -(j + 1) if the j-th pivot is not positive (K not positive definite: nothing solved);
@@ -156,18 +154,18 @@ def cholesky_solve():
     if numba cannot compile it (logged once)."""
     global _compiled, broken
     if _compiled is None and not broken:
-        try:
-            from numba import njit
-
-            from .elements._springs_jit import HELPER_OPTIONS
-
-            g = globals()
-            for name, sig in _HELPERS.items():
-                if not hasattr(g[name], "py_func"):
-                    g[name] = njit(sig, cache=True, **HELPER_OPTIONS)(g[name])
-            _compiled = njit(SIGNATURE, cache=True)(_kernel)
-        except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
-            logger.warning("numba could not compile the sparse Cholesky (%s: %s); solving "
-                           "densely", type(exc).__name__, exc)
-            broken = True
+        _compiled = compile_kernel("sparse Cholesky", _build, "solving densely")
+        broken = _compiled is None
     return _compiled
+
+
+def _build():
+    from numba import njit
+
+    from .elements._springs_jit import HELPER_OPTIONS
+
+    g = globals()
+    for name, sig in _HELPERS.items():
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(sig, cache=True, **HELPER_OPTIONS)(g[name])
+    return njit(SIGNATURE, cache=True)(_kernel)

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._jit import compile_kernel
 from .elements import _springs_jit
 
 __all__ = ["use_compiled", "thermal_element_data", "compile_in_background"]
@@ -166,6 +167,15 @@ def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, la
     return floored
 
 
+def _build():
+    from numba import njit
+
+    g = globals()
+    if not hasattr(g["_point_triangle_distance"], "py_func"):
+        g["_point_triangle_distance"] = njit(cache=True)(_point_triangle_distance)
+    return njit(_SIGNATURE, cache=True)(_kernel)
+
+
 def _compile():
     """Compile (or load from numba's cache) the kernel; None if that fails (numpy from then
     on)."""
@@ -176,19 +186,9 @@ def _compile():
         except subprocess.TimeoutExpired:
             _background.kill()
         _background = None
-    try:
-        from numba import njit
-
-        g = globals()
-        if not hasattr(g["_point_triangle_distance"], "py_func"):
-            g["_point_triangle_distance"] = njit(cache=True)(_point_triangle_distance)
-        _compiled = njit(_SIGNATURE, cache=True)(_kernel)
-        return _compiled
-    except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
-        logger.warning("numba could not compile the thermal kernel (%s: %s); using numpy",
-                       type(exc).__name__, exc)
-        _broken = True
-        return None
+    _compiled = compile_kernel("thermal kernel", _build, "using numpy")
+    _broken = _compiled is None
+    return _compiled
 
 
 def compile_in_background() -> bool:
@@ -228,8 +228,6 @@ def use_compiled() -> bool:
     compiles or loads it on the first call."""
     if _broken or (_springs_jit.backend or _springs_jit.default_backend()) != "numba":
         return False
-    if _compiled is None:
-        logger.info("compiling the thermal kernel with numba (cached after the first time)")
     return (_compiled or _compile()) is not None
 
 

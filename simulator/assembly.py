@@ -8,17 +8,16 @@ with a CSR pattern computed once per topology (:class:`StiffnessPattern`).
 
 from __future__ import annotations
 
-import logging
 
 import numpy as np
 import scipy.sparse as sp
 
+from ._jit import compile_kernel
 from .elements._springs_jit import default_backend
 
 __all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix",
            "scatter_numpy", "JIT_ENTRIES"]
 
-logger = logging.getLogger(__name__)
 
 #: Patterns with at least this many Hessian entries sum them with a compiled loop (numba): no
 #: concatenated copy of the values, ~0.4 s less per evaluation of a 1e5-node sheet.
@@ -112,6 +111,12 @@ def _scatter_loop(data, positions, values):
         data[positions[i]] += values[i]
 
 
+def _build_scatter():
+    from numba import njit
+
+    return njit("void(float64[::1], int64[::1], float64[::1])", cache=True)(_scatter_loop)
+
+
 def _scatter_compiled():
     """The compiled :func:`scatter_numpy` (the same sums in the same order, without the
     concatenated copy of the values), or None without numba or with ``ETORIGAMI_JIT=0``."""
@@ -119,12 +124,7 @@ def _scatter_compiled():
     if _loop is None:
         _loop = False
         if default_backend() == "numba":
-            try:
-                from numba import njit
-                _loop = njit("void(float64[::1], int64[::1], float64[::1])", cache=True)(
-                    _scatter_loop)
-            except Exception as exc:  # noqa: BLE001 - numba is an accelerator only
-                logger.warning("numba could not compile the scatter loop (%s); using numpy", exc)
+            _loop = compile_kernel("scatter loop", _build_scatter, "using numpy") or False
     if not _loop:
         return None
 

@@ -131,3 +131,21 @@ def test_spring_kernel_backend_selects_the_kernel(monkeypatch):
     with pytest.raises(ParameterError, match="backend 'cuda'; use one of 'numba', 'numpy'"):
         with spring_kernel_backend("cuda"):
             pass
+
+
+def test_compile_kernel_returns_the_kernel_or_none_with_one_warning(caplog):
+    """The one lazy-compilation helper of every compiled kernel."""
+    import logging
+
+    from simulator._jit import compile_kernel
+
+    def broken():
+        raise RuntimeError("no compiler today")
+    with caplog.at_level(logging.INFO, logger="simulator._jit"):
+        assert compile_kernel("test kernel", lambda: abs, "using numpy") is abs
+        assert compile_kernel("test kernel", broken, "using numpy") is None
+    warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1
+    assert warnings[0].getMessage() == ("numba could not compile the test kernel (RuntimeError: "
+                                        "no compiler today); using numpy")
+    assert "compiling the test kernel with numba" in caplog.text

@@ -34,17 +34,16 @@ file): after changing the spring element there, delete the cached ``_fused_jit*`
 
 from __future__ import annotations
 
-import logging
 import math
 
 import numpy as np
 
+from .._jit import compile_kernel
 from . import _springs_jit
 from ._springs_jit import HELPER_OPTIONS, _cross, _dot  # noqa: F401 - compiled ones at _compile
 
 __all__ = ["fused_kernel", "SIGNATURE", "broken"]
 
-logger = logging.getLogger(__name__)
 
 _EPS = 1e-12                       # as in .contact: relative floors
 _TINY = 1e-100
@@ -351,7 +350,8 @@ _HELPERS = ("_face", "_vertex_edge", "_contact_pair")
 
 
 def _compile():
-    """Compile (or load from numba's cache) the fused kernel; raises if numba fails."""
+    """Compile (or load from numba's cache) the fused kernel; raises if numba fails (see
+    :func:`simulator._jit.compile_kernel`)."""
     global _compiled
     from numba import njit
 
@@ -383,11 +383,6 @@ def fused_kernel():
         return _compiled
     if broken:
         return None
-    logger.info("compiling the fused evaluation kernel with numba (cached after the first time)")
-    try:
-        return _compile()
-    except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
-        logger.warning("numba could not compile the fused kernel (%s: %s); using numpy",
-                       type(exc).__name__, exc)
-        broken = True
-        return None
+    kernel = compile_kernel("fused kernel", _compile, "using numpy")
+    broken = kernel is None
+    return kernel

@@ -27,16 +27,16 @@ environment variable ``ETORIGAMI_JIT`` is ``0`` (``off``, ``numpy``); short comm
 from __future__ import annotations
 
 import importlib.util
-import logging
 import math
 import os
 
 import numpy as np
 
+from .._jit import compile_kernel
+
 __all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "spring_kernel_jit",
            "use_compiled"]
 
-logger = logging.getLogger(__name__)
 
 #: numba is installed (checked without importing it).
 AVAILABLE = importlib.util.find_spec("numba") is not None
@@ -168,21 +168,20 @@ def jit_helpers():
             g[name] = njit(_HELPER_SIGNATURES.get(name), cache=True, **HELPER_OPTIONS)(g[name])
 
 
+def _build():
+    from numba import njit
+
+    jit_helpers()
+    return njit(_SIGNATURE, cache=True)(_kernel)       # compiles (or loads) now
+
+
 def _compile():
     """Compile (or load from numba's cache) the kernel and its helpers; None if that fails
     (then the numpy kernel is used, and compilation is not tried again)."""
     global _compiled, _broken
-    try:
-        from numba import njit
-
-        jit_helpers()
-        _compiled = njit(_SIGNATURE, cache=True)(_kernel)       # compiles (or loads) now
-        return _compiled
-    except Exception as exc:  # noqa: BLE001 - numba is an accelerator, never a requirement
-        logger.warning("numba could not compile the spring kernel (%s: %s); using numpy",
-                       type(exc).__name__, exc)
-        _broken = True
-        return None
+    _compiled = compile_kernel("spring kernel", _build, "using numpy")
+    _broken = _compiled is None
+    return _compiled
 
 
 def compiled_backend() -> bool:
@@ -196,8 +195,6 @@ def use_compiled() -> bool:
     (compiling or loading it on the first call)."""
     if _broken or (backend or default_backend()) != "numba":
         return False
-    if _compiled is None:
-        logger.info("compiling the spring kernel with numba (cached after the first time)")
     return (_compiled or _compile()) is not None
 
 
