@@ -401,10 +401,25 @@ def _as_panels(panels, n_vertices) -> tuple:
     return tuple(out)
 
 
-def _check_geometry(pattern: Pattern) -> None:
-    """Unused / duplicate vertices, degenerate, non-planar and self-intersecting panels."""
+#: Up to this many vertices coincident ones are found by all pairwise distances (numpy), above
+#: by a k-d tree (scipy.spatial, slow to import: 0.1 s, more than the check of a small pattern).
+_PAIRWISE_VERTICES = 500
+
+
+def _coincident_pair(v: np.ndarray, tol: float) -> tuple[int, int] | None:
+    """A pair ``(i, j)``, ``i < j``, of vertices ``v`` (n, 3) at most ``tol`` apart, or None."""
+    if len(v) <= _PAIRWISE_VERTICES:
+        d2 = np.sum((v[:, None, :] - v[None, :, :]) ** 2, axis=-1)
+        i, j = np.nonzero(np.triu(d2 <= tol * tol, 1))
+        return (int(i[0]), int(j[0])) if len(i) else None
     from scipy.spatial import cKDTree          # imported here: scipy.spatial is slow to import
 
+    pairs = cKDTree(v).query_pairs(tol, output_type="ndarray")
+    return tuple(int(k) for k in sorted(pairs[0])) if len(pairs) else None
+
+
+def _check_geometry(pattern: Pattern) -> None:
+    """Unused / duplicate vertices, degenerate, non-planar and self-intersecting panels."""
     v = pattern.vertices
     size = pattern.size
     if size <= 0:
@@ -414,9 +429,9 @@ def _check_geometry(pattern: Pattern) -> None:
     if not used.all():
         raise PatternError(f"vertex {np.flatnonzero(~used)[0]} is not used by any panel; remove it "
                            "or add it to a panel.")
-    pairs = cKDTree(v).query_pairs(1e-9 * size, output_type="ndarray")
-    if len(pairs):
-        i, j = sorted(pairs[0])
+    pair = _coincident_pair(v, 1e-9 * size)
+    if pair is not None:
+        i, j = pair
         raise PatternError(f"vertices {i} and {j} coincide at {v[i].tolist()}; merge them into one "
                            "vertex and use it in both panels.")
     c, a, b, panel = pattern._fan_triangles()

@@ -237,3 +237,15 @@ def test_point_queries_reject(fold):
         fold.crease_nearest((1, 2, 3, 4))
     with pytest.raises(PatternError, match=r"no interior crease"):
         make(SQ, [(0, 1, 2, 3)]).crease_nearest((0.5, 0.5))
+
+
+@pytest.mark.parametrize("limit", [10_000, 10], ids=["pairwise", "kd_tree"])
+def test_coincident_vertices_found_alike_by_pairwise_distances_and_the_kd_tree(monkeypatch,
+                                                                                limit):
+    """Small patterns check duplicates by all pairwise distances, large ones by a k-d tree."""
+    from simulator import pattern as pattern_module
+    monkeypatch.setattr(pattern_module, "_PAIRWISE_VERTICES", limit)
+    v = np.random.default_rng(3).uniform(size=(800, 3))
+    assert pattern_module._coincident_pair(v, 1e-9) is None
+    v[700] = v[12] + 1e-10
+    assert pattern_module._coincident_pair(v, 1e-9) == (12, 700)
