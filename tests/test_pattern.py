@@ -243,7 +243,7 @@ def test_point_queries_reject(fold):
 def test_coincident_vertices_found_alike_by_pairwise_distances_and_the_kd_tree(monkeypatch,
                                                                                 limit):
     """Small patterns check duplicates by all pairwise distances, large ones by a k-d tree."""
-    from simulator import pattern as pattern_module
+    from simulator import pattern_checks as pattern_module
     monkeypatch.setattr(pattern_module, "_PAIRWISE_VERTICES", limit)
     v = np.random.default_rng(3).uniform(size=(800, 3))
     assert pattern_module._coincident_pair(v, 1e-9) is None
