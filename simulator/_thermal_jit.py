@@ -35,10 +35,10 @@ logger = logging.getLogger(__name__)
 
 #: x (n, 3), tri (m, 3), edge lengths (m, 3), k t (m,), is_boundary (m,), cap nodes (c,),
 #: t_env, tan(beta), k_env, layers, min air fraction, cap of boundary triangles, cap without
-#: boundary, then outputs Ke (m, 3, 3), area (m,), g_eff (n,), then zeroed work arrays dmin
+#: boundary, then outputs Ke (m, 3, 3), g_eff (n,), then zeroed work arrays dmin
 #: (n,), g (n, layers), bt (3, 3); returns the number of triangles whose t_air was floored.
 _SIGNATURE = ("i8(f8[:, ::1], i8[:, ::1], f8[:, ::1], f8[::1], b1[::1], i8[::1], f8, f8, f8, "
-              "i8, f8, f8, f8, f8[:, :, ::1], f8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
+              "i8, f8, f8, f8, f8[:, :, ::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])")
 
 _compiled = None
 _broken = False
@@ -98,7 +98,7 @@ def _point_triangle_distance(px, py, pz, t):
 
 
 def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, layers,
-            min_air, cap_boundary, cap_none, Ke, area, g_eff, dmin, g, bt):
+            min_air, cap_boundary, cap_none, Ke, g_eff, dmin, g, bt):
     n, m = x.shape[0], tri.shape[0]
     # distance of every cap node to the nearest boundary triangle
     n_boundary = 0
@@ -129,7 +129,6 @@ def _kernel(x, tri, edge, kt, is_boundary, cap_nodes, t_env, tan_beta, k_env, la
         l1, l2 = edge[t, 0], edge[t, 1]
         x3, y3 = l2 * math.cos(alpha), l2 * math.sin(alpha)
         a = 0.5 * l1 * y3
-        area[t] = a
         b0, b1, b2 = -y3, y3, 0.0
         c0, c1, c2 = x3 - l1, -x3, l1
         s = kt[t] / (4 * a)
@@ -185,6 +184,7 @@ def _compile():
             _background.wait(timeout=_BACKGROUND_WAIT)
         except subprocess.TimeoutExpired:
             _background.kill()
+            _background.wait()
         _background = None
     _compiled = compile_kernel("thermal kernel", _build, "using numpy")
     _broken = _compiled is None
@@ -231,18 +231,14 @@ def use_compiled() -> bool:
     return (_compiled or _compile()) is not None
 
 
-def thermal_element_data(model, x):
-    """Conduction matrices (m, 3, 3) [W/K], areas (m,) [m^2] and condensed environment
-    conductances g_eff (n,) [W/K] of :class:`~simulator.thermal.ThermalModel` ``model`` at
-    positions ``x`` (n, 3) [m], and the number of triangles whose t_air was floored."""
+def thermal_element_data(args, x):
+    """Conduction matrices (m, 3, 3) [W/K] and condensed environment conductances g_eff (n,)
+    [W/K] at positions ``x`` (n, 3) [m], and the number of triangles whose t_air was floored;
+    ``args`` are the model's arguments of the kernel (``ThermalModel._kernel_args``). Compiles
+    the kernel on first use (see :func:`use_compiled`)."""
     kernel = _compiled or _compile()
-    if kernel is None:
-        raise RuntimeError("the compiled thermal kernel is not available; use the numpy path")
-    p, m, n = model.params, len(model.mesh.triangles), len(x)
-    Ke, area, g_eff = np.empty((m, 3, 3)), np.empty(m), np.empty(n)
-    work = np.zeros(n), np.zeros((n, int(p.layers))), np.zeros((3, 3))
-    floored = kernel(np.require(x, np.float64, ("C", "W")), model._tri64, model.edge_lengths,
-                     model._kt, model.is_boundary, model._cap_nodes64, float(p.env_thickness),
-                     math.tan(p.dissipation_angle), float(p.env_conductivity), int(p.layers),
-                     model._min_air, model._cap_boundary, model._cap_none, Ke, area, g_eff, *work)
-    return Ke, area, g_eff, int(floored)
+    n, m, layers = len(x), len(args[0]), args[8]
+    Ke, g_eff = np.empty((m, 3, 3)), np.empty(n)
+    floored = kernel(np.require(x, np.float64, ("C", "W")), *args, Ke, g_eff, np.zeros(n),
+                     np.zeros((n, layers)), np.zeros((3, 3)))
+    return Ke, g_eff, int(floored)

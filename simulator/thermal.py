@@ -181,13 +181,14 @@ class ThermalModel:
         self._free_pattern = StiffnessPattern([tri], free_index, diagonal=self.free_nodes)
         self._check_solvable()
         self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
-        # inputs of the compiled kernel (simulator._thermal_jit), contiguous and typed once
-        self._tri64 = np.array(tri, dtype=np.int64, order="C")         # writable copy
-        self._kt = np.ascontiguousarray(self.conductivity * self.thickness, dtype=np.float64)
-        self._cap_nodes64 = np.array(self._cap_nodes, dtype=np.int64, order="C")
-        self._min_air, self._cap_boundary, self._cap_none = (_MIN_AIR_FRACTION, _CAP_BOUNDARY,
-                                                             _CAP_NONE)
-        self.edge_lengths = np.array(self.edge_lengths, dtype=np.float64, order="C")
+        #: k t of every triangle [W/K]
+        self._kt = self.conductivity * self.thickness
+        # the model's arguments of the compiled kernel (simulator._thermal_jit), in its order
+        self._kernel_args = (
+            np.array(tri, dtype=np.int64, order="C"), self.edge_lengths, self._kt,
+            self.is_boundary, self._cap_nodes.astype(np.int64), float(params.env_thickness),
+            math.tan(params.dissipation_angle), float(params.env_conductivity),
+            int(params.layers), _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
@@ -224,12 +225,21 @@ class ThermalModel:
         return (self.params.layers + 1) * self.mesh.n_nodes
 
     # ------------------------------------------------------------------ element data
-    def _conduction(self, x):
-        """T3 matrices (n_tri, 3, 3) [W/K] and areas A_t (n_tri,) [m^2] at positions ``x``."""
+    def _positions(self, x) -> np.ndarray:
+        """``x`` as a float array, checked to be finite and of the mesh's node shape [m]."""
         x = np.asarray(x, float)
         if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
             raise ParameterError("positions x must be a finite array of shape "
                                  f"{self.mesh.nodes.shape} [m].")
+        return x
+
+    def _warn_floored(self):
+        logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
+                       _MIN_AIR_FRACTION * self.params.env_thickness)
+
+    def _conduction(self, x):
+        """T3 matrices (n_tri, 3, 3) [W/K] and areas A_t (n_tri,) [m^2] at positions ``x``."""
+        x = self._positions(x)
         tri = self.mesh.triangles
         u, v = x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]]
         alpha = np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), np.einsum("ij,ij->i", u, v))
@@ -239,7 +249,7 @@ class ThermalModel:
         zero = np.zeros_like(l1)
         b = np.stack([-y3, y3, zero], axis=1)
         c = np.stack([x3 - l1, -x3, l1], axis=1)
-        scale = self.conductivity * self.thickness / (4 * area)
+        scale = self._kt / (4 * area)
         K = scale[:, None, None] * (b[:, :, None] * b[:, None, :] + c[:, :, None] * c[:, None, :])
         return K, area
 
@@ -283,8 +293,7 @@ class ThermalModel:
         t_env = prm.env_thickness
         t_air = np.where(t_env < (cap := self.tcap(x)), t_env, cap)
         if np.any(t_air < _MIN_AIR_FRACTION * t_env):
-            logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
-                           _MIN_AIR_FRACTION * t_env)
+            self._warn_floored()
             t_air = np.maximum(t_air, _MIN_AIR_FRACTION * t_env)
         N = prm.layers
         s = (np.arange(1, N + 1) - 0.5) / N
@@ -384,7 +393,7 @@ class ThermalModel:
         if last is not None and last[0] == compiled and last[1].shape == x.shape \
                 and np.array_equal(last[1], x):
             return last[2]
-        K, g_eff = self.structure_conductances(x)
+        K, g_eff = self._conductances(x, compiled)
         solver = self._factorize(K, g_eff[self.free_nodes])
         self._factor_cache = (compiled, x.copy(), solver)
         return solver
@@ -397,14 +406,15 @@ class ThermalModel:
         Uses the compiled kernel of :mod:`simulator._thermal_jit` when the kernel backend is
         "numba" (:func:`simulator.elements.springs.spring_kernel_backend`), else numpy.
         """
-        x = np.asarray(x, float)
-        if _thermal_jit.use_compiled():
-            if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
-                self._conduction(x)                               # raises the usual error
-            K, _, g_eff, floored = _thermal_jit.thermal_element_data(self, x)
+        return self._conductances(x, _thermal_jit.use_compiled())
+
+    def _conductances(self, x, compiled: bool):
+        """:meth:`structure_conductances` by the compiled kernel or by numpy."""
+        if compiled:
+            K, g_eff, floored = _thermal_jit.thermal_element_data(self._kernel_args,
+                                                                  self._positions(x))
             if floored:
-                logger.warning("a triangle touches a thermal boundary panel; t_air floored at "
-                               "%g m", _MIN_AIR_FRACTION * self.params.env_thickness)
+                self._warn_floored()
             return K, g_eff
         K, area = self._conduction(x)
         g = self.layer_conductance(x, area)
@@ -414,8 +424,9 @@ class ThermalModel:
 
     @cached_property
     def _dense_position(self):
-        """Flat position in the dense free-node matrix of every entry given to the free
-        pattern (triangle matrices, then diagonal terms); -1 for a fixed node's entries."""
+        """Flat positions in the dense free-node matrix of the entries given to the free pattern
+        (triangle matrices, then diagonal terms), and the mask of those kept (the others touch
+        a fixed node)."""
         p = self._free_pattern
         rows = np.repeat(np.arange(p.n_free), np.diff(p.indptr))
         keep = p.positions < p.nnz
