@@ -226,7 +226,7 @@ def compile_in_background() -> bool:
 def use_compiled() -> bool:
     """Whether the thermal model uses this kernel (the spring kernel's backend is "numba");
     compiles or loads it on the first call."""
-    if _broken or (_springs_jit.backend or _springs_jit.default_backend()) != "numba":
+    if _broken or not _springs_jit.numba_selected():
         return False
     return (_compiled or _compile()) is not None
 

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._jit import compile_kernel
-from .elements._springs_jit import default_backend
+from .elements._springs_jit import numba_selected
 
 __all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix",
            "scatter_numpy", "JIT_ENTRIES"]
@@ -119,12 +119,13 @@ def _build_scatter():
 
 def _scatter_compiled():
     """The compiled :func:`scatter_numpy` (the same sums in the same order, without the
-    concatenated copy of the values), or None without numba or with ``ETORIGAMI_JIT=0``."""
+    concatenated copy of the values), or None unless the "numba" backend is in force
+    (:func:`~simulator.elements.springs.spring_kernel_backend`, ``ETORIGAMI_JIT``)."""
     global _loop
+    if not numba_selected():
+        return None
     if _loop is None:
-        _loop = False
-        if default_backend() == "numba":
-            _loop = compile_kernel("scatter loop", _build_scatter, "using numpy") or False
+        _loop = compile_kernel("scatter loop", _build_scatter, "using numpy") or False
     if not _loop:
         return None
 

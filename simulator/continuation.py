@@ -42,6 +42,8 @@ import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
 from .newton import DENSE_LIMIT, NewtonOptions
+from .newton import _tangent as _assembled_tangent
+from .small_solve import as_dense
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
@@ -63,7 +65,7 @@ class PathPoint:
     Attributes
     ----------
     r : (n_free,) residual f_ext - f_int [N]
-    K : (n_free, n_free) tangent stiffness [N/m]
+    K : (n_free, n_free) tangent stiffness [N/m], CSR or (small models) dense
     q : (n_free,) dr/dlambda [N]
     evaluation : Evaluation
     temperature : (n_nodes,) node temperatures [deg C] or None
@@ -111,7 +113,8 @@ class LoadPath:
         if self.R is not None:   # f_int is linear in the rest angles: the difference is exact
             f1 = self.system.evaluate(u, rest + self.R, hessian=False).f_int
             q = q - (f1 - ev.f_int)[self.free]
-        return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], ev.K, q, ev)
+        return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], _assembled_tangent(ev), q,
+                         ev)
 
 
 def _solve(K, B):
@@ -124,7 +127,7 @@ def _solve(K, B):
         warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
         try:
             if K.shape[0] <= DENSE_LIMIT:
-                lu = scipy.linalg.lu_factor(K.toarray(), check_finite=False)
+                lu = scipy.linalg.lu_factor(as_dense(K), check_finite=False)
                 X = scipy.linalg.lu_solve(lu, B, check_finite=False)
             else:
                 X = spla.splu(K.tocsc()).solve(B)

@@ -36,7 +36,8 @@ import numpy as np
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
 from .mass import check_masses, lumped_areas, lumped_masses
-from .newton import DENSE_LIMIT, _solve_linear
+from .newton import DENSE_LIMIT, _solve_linear, _tangent
+from .small_solve import as_dense
 
 __all__ = ["DynamicsOptions", "MotionState", "StepReport", "TimeIntegrator", "DynamicsResult",
            "integrate"]
@@ -319,7 +320,7 @@ class TimeIntegrator:
                 return self._accept(s, dt, f_ext, rest, ev, u, v, a, power, it, norms)
             if it == o.max_iter:
                 break
-            du = _solve_linear(self._jacobian(ev.K, Kb, af, am, c_a, c_v, c_diag), -r)
+            du = _solve_linear(self._jacobian(_tangent(ev), Kb, af, am, c_a, c_v, c_diag), -r)
             if du is None:
                 return StepReport(False, "effective stiffness is singular", s, it, 0,
                                   (np.array(norms),))
@@ -334,9 +335,9 @@ class TimeIntegrator:
         on the free DOFs: dense for small systems (the same numbers as the sparse form, which
         :func:`~simulator.newton._solve_linear` would densify anyway), else CSR."""
         dense = K.shape[0] <= DENSE_LIMIT
-        J = (1 - af) * (K.toarray() if dense else K)
+        J = (1 - af) * (as_dense(K) if dense else K)
         if Kb is not None:                   # d(Kb(u) v)/du ~ c_v Kb
-            J = J + ((1 - af) * c_v) * (Kb.toarray() if dense else Kb)
+            J = J + ((1 - af) * c_v) * (as_dense(Kb) if dense else Kb)
         diagonal = J.diagonal() + (1 - am) * c_a * self.m + (1 - af) * c_v * c_diag
         if dense:
             J[np.diag_indices_from(J)] = diagonal

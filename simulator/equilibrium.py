@@ -126,17 +126,17 @@ class EquilibriumSystem:
         # Small models: all of them, so that the pattern holds every entry of a dense tangent.
         small = len(self.free) <= DENSE_LIMIT
         self.contact_in_pattern = static is not None and (small or 144 * len(static) <= MERGE_LIMIT)
-        self._n_free = int(self.free_index.max()) + 1 if self.free_index.size else 0
         self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
         self.spr_kind = self.spr_is_panel.astype(int)
         self._fused = self._fused_data() if small and (self.contact is None
                                                        or self.contact_in_pattern) else None
-        n_pairs = 0 if self.contact is None or static is None else len(static)
+        n_pairs = 0 if static is None else len(static)
         self._chol = None, np.zeros(n_pairs, bool)     # sparse Cholesky structure, pairs in it
 
     @property
     def n_free(self) -> int:
-        return self._n_free
+        """Number of free DOFs."""
+        return len(self.free)
 
     @cached_property
     def pattern(self) -> StiffnessPattern:

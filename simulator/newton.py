@@ -23,7 +23,7 @@ import scipy.sparse.linalg as spla
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
 from .linsolve import ND_LIMIT, nested_dissection_solve
-from .small_solve import DENSE_LIMIT, solve_dense
+from .small_solve import DENSE_LIMIT, as_dense, solve_dense
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
@@ -175,7 +175,7 @@ def _solve_linear(K, r):
     pivoting with COLAMD.
     """
     if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
-        return solve_dense(K if isinstance(K, np.ndarray) else K.toarray(), r)
+        return solve_dense(as_dense(K), r)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:

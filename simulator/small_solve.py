@@ -17,8 +17,6 @@ not finite; Newton then reports a singular tangent.
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 import scipy.linalg.lapack as lapack
 import scipy.sparse as sp
@@ -26,9 +24,8 @@ import scipy.sparse.linalg as spla
 
 from ._cholesky_jit import cholesky_solve
 
-__all__ = ["solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT", "SPARSE_MIN"]
-
-logger = logging.getLogger(__name__)
+__all__ = ["as_dense", "solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT",
+           "SPARSE_MIN"]
 
 #: Up to this many free DOFs tangents are dense: evaluated by the fused kernel (compiled
 #: backend) and solved densely (faster for small meshes).
@@ -40,12 +37,17 @@ SPARSE_MIN = 64
 _EPS = float(np.finfo(float).eps)
 
 
-def solve_dense(K: np.ndarray, r: np.ndarray, anorm: float | None = None):
+def as_dense(K) -> np.ndarray:
+    """``K`` as a dense array: a sparse matrix densified, an array as it is (not copied)."""
+    return K.toarray() if sp.issparse(K) else np.asarray(K)
+
+
+def solve_dense(K: np.ndarray, r: np.ndarray):
     """Solve the dense symmetric K du = r: Cholesky (upper triangle) when K is positive
     definite, else LU with partial pivoting (``scipy.linalg.solve``'s general path). None when
     K is singular, ill-conditioned (reciprocal condition estimate below machine epsilon) or
-    the result is not finite. ``anorm``: the 1-norm of K if known."""
-    anorm = lapack.dlange("1", K) if anorm is None else anorm
+    the result is not finite."""
+    anorm = lapack.dlange("1", K)
     c, info = lapack.dpotrf(K, lower=0, clean=0)
     if info == 0:
         rcond, _ = lapack.dpocon(c, anorm)

@@ -20,6 +20,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
 
+from .small_solve import as_dense
+
 __all__ = ["Stability", "tangent_stability", "DENSE_LIMIT"]
 
 #: Up to this many free DOFs the tangent is analysed with a dense symmetric eigensolver.
@@ -71,7 +73,7 @@ def tangent_stability(K, k: int = 6) -> Stability:
     if n == 0:
         return Stability(0, float("inf"), np.zeros(0))
     if n <= DENSE_LIMIT:
-        A = K.toarray() if hasattr(K, "toarray") else np.asarray(K, float)
+        A = as_dense(K)
         w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
         return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], True)
     diag = np.abs(K.diagonal())

@@ -104,3 +104,12 @@ def test_compiled_scatter_equals_the_numpy_reference_bit_for_bit(monkeypatch):
     ref = assembly.scatter_numpy(pattern.positions, values, pattern.nnz)
     assert np.array_equal(scatter(pattern.positions, values, pattern.nnz), ref)
     assert np.array_equal(pattern.matrix(values).data, ref)
+
+
+def test_scatter_loop_follows_the_kernel_backend():
+    """With the numpy backend in force the scatter loop is not used (nor numba compiled)."""
+    from simulator import assembly, spring_kernel_backend
+    with spring_kernel_backend("numpy"):
+        assert assembly._scatter_compiled() is None
+    with spring_kernel_backend("numba"):
+        assert assembly._scatter_compiled() is not None

@@ -184,16 +184,22 @@ def _compile():
     return _compiled
 
 
+def numba_selected() -> bool:
+    """Whether the backend in force is "numba" (:data:`backend`, else :func:`default_backend`);
+    the switch of every compiled kernel of the package."""
+    return (backend or default_backend()) == "numba"
+
+
 def compiled_backend() -> bool:
     """Whether the compiled backend is in force (numba selected and the spring kernel's
     compilation not failed); nothing is imported or compiled."""
-    return not _broken and (backend or default_backend()) == "numba"
+    return not _broken and numba_selected()
 
 
 def use_compiled() -> bool:
     """Whether :func:`simulator.elements.springs.spring_kernel` calls the compiled kernel
     (compiling or loading it on the first call)."""
-    if _broken or (backend or default_backend()) != "numba":
+    if _broken or not numba_selected():
         return False
     return (_compiled or _compile()) is not None
 
