@@ -148,10 +148,6 @@ class NestedDissection:
         return PermutedLU(spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
                                     options={"SymmetricMode": True}), self.perm)
 
-    def solve(self, K, r: np.ndarray) -> np.ndarray:
-        """``K^-1 r`` through :meth:`factorize` (r (n,) or (n, k))."""
-        return self.factorize(K).solve(r)
-
 
 @dataclass(frozen=True, eq=False)
 class PermutedLU:
@@ -206,18 +202,27 @@ def ordering_for(K) -> NestedDissection | None:
     return nd
 
 
-def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
-    """``K^-1 r`` for a symmetric sparse ``K`` in its cached nested-dissection order, or None
-    when there is no ordering, a pivot is exactly zero or ``|K x - r| > rtol |r|`` (the caller
-    then takes another path). ``r`` is (n,) or (n, k)."""
+def _factor(K) -> PermutedLU | None:
+    """Factors of ``K`` in its cached nested-dissection order, or None (no ordering, or an
+    exactly zero pivot)."""
     nd = ordering_for(K)
     if nd is None:
         return None
     try:
-        x = nd.solve(K, r)
+        return nd.factorize(K)
     except RuntimeError:
         logger.debug("nested-dissection factorisation hit a zero pivot")
         return None
+
+
+def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
+    """``K^-1 r`` for a symmetric sparse ``K`` in its cached nested-dissection order, or None
+    when there is no ordering, a pivot is exactly zero or ``|K x - r| > rtol |r|`` (the caller
+    then takes another path). ``r`` is (n,) or (n, k)."""
+    lu = _factor(K)
+    if lu is None:
+        return None
+    x = lu.solve(r)
     if not np.linalg.norm(K @ x - r) <= rtol * np.linalg.norm(r):
         logger.debug("nested-dissection solve inaccurate (indefinite matrix?)")
         return None
@@ -228,13 +233,8 @@ def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:
     """Factors of a symmetric sparse ``K`` in its cached nested-dissection order for repeated
     solves, or None when there is no ordering, a pivot is exactly zero or the solve of a
     vector of ones leaves a residual above ``rtol`` of it."""
-    nd = ordering_for(K)
-    if nd is None:
-        return None
-    try:
-        lu = nd.factorize(K)
-    except RuntimeError:
-        logger.debug("nested-dissection factorisation hit a zero pivot")
+    lu = _factor(K)
+    if lu is None:
         return None
     b = np.ones(K.shape[0])
     return lu if np.linalg.norm(K @ lu.solve(b) - b) <= rtol * np.linalg.norm(b) else None
