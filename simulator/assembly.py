@@ -72,15 +72,21 @@ class StiffnessPattern:
                                                       else [])
         split = np.split(flat, np.cumsum(sizes)[:-1]) if sizes else []
         self._family_pos = [p.reshape(len(d), -1) for p, d in zip(split, dofs)] + split[len(dofs):]
-        self._rows = None                    # row of every stored entry (from_dense), lazily
+        self._flat = None              # position of every stored entry in a dense matrix
 
     def from_dense(self, D: np.ndarray) -> sp.csr_matrix:
         """CSR matrix in this pattern with the entries of the dense (n_free, n_free) ``D``
         (which must be zero outside the pattern)."""
-        if self._rows is None:
-            self._rows = np.repeat(np.arange(self.n_free), np.diff(self.indptr))
-        return sp.csr_matrix((D[self._rows, self.indices], self.indices, self.indptr),
+        return sp.csr_matrix((D.reshape(-1)[self.dense_positions()], self.indices, self.indptr),
                              shape=(self.n_free, self.n_free))
+
+    def dense_positions(self) -> np.ndarray:
+        """Flat position ``row * n_free + column`` of every stored entry in a dense
+        (n_free, n_free) matrix, in CSR order (computed once)."""
+        if self._flat is None:
+            rows = np.repeat(np.arange(self.n_free), np.diff(self.indptr))
+            self._flat = rows * self.n_free + self.indices
+        return self._flat
 
     def matrix(self, values: list[np.ndarray], subsets: dict | None = None) -> sp.csr_matrix:
         """CSR matrix from element Hessians (same order as the families) and diagonal terms.

@@ -428,9 +428,8 @@ class ThermalModel:
         (triangle matrices, then diagonal terms), and the mask of those kept (the others touch
         a fixed node)."""
         p = self._free_pattern
-        rows = np.repeat(np.arange(p.n_free), np.diff(p.indptr))
         keep = p.positions < p.nnz
-        return (rows * p.n_free + p.indices)[p.positions[keep]], keep
+        return p.dense_positions()[p.positions[keep]], keep
 
     def _factorize(self, K, g_free):
         """Factorise the free-node system (conduction plus condensed chains); returns its
