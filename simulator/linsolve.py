@@ -15,6 +15,20 @@ and rejected: on bar-and-hinge tangents (stiff bars, soft hinges, indefinite at 
 benchmark states) it needs ~200 GMRES iterations at 3e3 DOFs (50x the direct solve) and
 over 1100 (minutes) at 3e4.
 
+A solution is accepted when its residual is small, ``|K x - r| <= rtol |r|``, or, for
+ill-conditioned tangents where no double-precision solution can reach that, when its
+componentwise backward error is at round-off level (:func:`accurate`). On a partly folded
+1e5-node sheet |K| |x| is 5e10 |r|: a residual of 1e-6 |r| is below the round-off of the
+product ``K x`` itself, and rejecting the (backward-stable, error 1e-14) solution sent one
+Newton iteration in ten to a partial-pivoting factorisation 15x slower and no more exact.
+
+Kept factors as preconditioners for the *next* Newton iterations (GMRES, refactorising when
+it needs a factorisation's worth of iterations) were measured and rejected: on a folding
+Miura sheet the tangent changes so much between iterations (soft hinges, geometric
+stiffness) that the old factors need 13-40 GMRES iterations, about the cost of a new
+factorisation, at 3e4 and 3e5 unknowns alike; inexact solves (Eisenstat-Walker forcing)
+doubled the Newton iterations.
+
 Without ``pymetis`` (or for a matrix it cannot order) :func:`ordering_for` returns None
 and callers keep SuperLU's own ordering.
 """
@@ -22,6 +36,7 @@ and callers keep SuperLU's own ordering.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import warnings
 from dataclasses import dataclass
@@ -32,7 +47,7 @@ import scipy.sparse.linalg as spla
 
 __all__ = ["ND_LIMIT", "NestedDissection", "ordering_for", "nested_dissection_ordering",
            "nested_dissection_solve", "nested_dissection_factor", "PermutedLU",
-           "supervariables"]
+           "supervariables", "accurate", "backward_error", "refined", "BACKWARD_ERROR_TOL"]
 
 logger = logging.getLogger(__name__)
 
@@ -42,6 +57,10 @@ ND_LIMIT = 10_000
 
 #: How many sparsity patterns keep their ordering (one per model in use, typically).
 _CACHE_SIZE = 4
+
+#: Componentwise backward error up to which :func:`accurate` accepts a solution whose
+#: residual is not small (a backward-stable solve gives ~1e-16 to 1e-14).
+BACKWARD_ERROR_TOL = 1e-12
 
 
 def supervariables(indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
@@ -217,13 +236,14 @@ def _factor(K) -> PermutedLU | None:
 
 def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
     """``K^-1 r`` for a symmetric sparse ``K`` in its cached nested-dissection order, or None
-    when there is no ordering, a pivot is exactly zero or ``|K x - r| > rtol |r|`` (the caller
-    then takes another path). ``r`` is (n,) or (n, k)."""
+    when there is no ordering, a pivot is exactly zero or the solution is not
+    :func:`accurate` even after :func:`refined` (the caller then takes another path).
+    ``r`` is (n,) or (n, k)."""
     lu = _factor(K)
     if lu is None:
         return None
-    x = lu.solve(r)
-    if not np.linalg.norm(K @ x - r) <= rtol * np.linalg.norm(r):
+    x, ok = refined(K, lu.solve, r, lu.solve(r), rtol)
+    if not ok:
         logger.debug("nested-dissection solve inaccurate (indefinite matrix?)")
         return None
     return x
@@ -231,10 +251,53 @@ def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray 
 
 def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:
     """Factors of a symmetric sparse ``K`` in its cached nested-dissection order for repeated
-    solves, or None when there is no ordering, a pivot is exactly zero or the solve of a
-    vector of ones leaves a residual above ``rtol`` of it."""
+    solves, or None when there is no ordering, a pivot is exactly zero or the solution of a
+    vector of ones is not :func:`accurate` (to ``rtol``)."""
     lu = _factor(K)
     if lu is None:
         return None
     b = np.ones(K.shape[0])
-    return lu if np.linalg.norm(K @ lu.solve(b) - b) <= rtol * np.linalg.norm(b) else None
+    return lu if accurate(K, lu.solve(b), b, rtol) else None
+
+
+def backward_error(K, x: np.ndarray, r: np.ndarray) -> float:
+    """Componentwise relative backward error of ``x`` as a solution of ``K x = r``:
+    ``max_i |K x - r|_i / (|K| |x| + |r|)_i`` (Oettli-Prager; LAPACK's ``berr``), the smallest
+    relative change of the entries of K and r for which x is exact. ``x`` and ``r`` are (n,)
+    or (n, k); the largest over columns. Infinite for a non-finite x."""
+    x = np.asarray(x)
+    if not np.all(np.isfinite(x)):
+        return math.inf
+    res = np.abs(K @ x - r)
+    scale = abs(K) @ np.abs(x) + np.abs(r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.where(scale > 0, res / scale, np.where(res > 0, math.inf, 0.0))
+    return float(q.max()) if q.size else 0.0
+
+
+def accurate(K, x: np.ndarray, r: np.ndarray, rtol: float = 1e-6) -> bool:
+    """Whether ``x`` solves ``K x = r`` as well as the data allow: a small residual,
+    ``|K x - r| <= rtol |r|`` (2-norm, per column), or a :func:`backward_error` of at most
+    :data:`BACKWARD_ERROR_TOL` (for an ill-conditioned K, whose residual cannot be small in
+    double precision). False for a non-finite x."""
+    x = np.asarray(x)
+    if not np.all(np.isfinite(x)):
+        return False
+    res = np.linalg.norm(K @ x - r, axis=0)
+    if np.all(res <= rtol * np.linalg.norm(r, axis=0)):
+        return True
+    return backward_error(K, x, r) <= BACKWARD_ERROR_TOL
+
+
+def refined(K, solve, r: np.ndarray, x: np.ndarray, rtol: float = 1e-6,
+            steps: int = 3) -> tuple[np.ndarray, bool]:
+    """``(x, ok)``: ``x`` improved by up to ``steps`` of iterative refinement with the factors
+    that produced it (``x += solve(r - K x)``) until it is :func:`accurate`; ok when it is."""
+    with np.errstate(all="ignore"):             # broken factors may overflow: then not ok
+        for _ in range(steps + 1):
+            if accurate(K, x, r, rtol):
+                return x, True
+            if not np.all(np.isfinite(x)):
+                break
+            x = x + solve(r - K @ x)
+    return x, False

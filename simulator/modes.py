@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 
 from ._version import __version__
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, nested_dissection_factor
+from .linsolve import ND_LIMIT, accurate, nested_dissection_factor
 from .mass import check_masses, lumped_masses
 from .model import Model
 from .state import SimulationState, equilibrium_system, initial_state
@@ -218,7 +218,7 @@ def _factorise(A):
     lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                    options={"SymmetricMode": True})
     b = np.ones(A.shape[0])
-    if np.linalg.norm(A @ lu.solve(b) - b) <= 1e-8 * np.linalg.norm(b):
+    if accurate(A, lu.solve(b), b, 1e-8):
         return lu
     return spla.splu(A)
 

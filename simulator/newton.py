@@ -22,7 +22,7 @@ import scipy.sparse.linalg as spla
 
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, nested_dissection_solve
+from .linsolve import ND_LIMIT, nested_dissection_solve, refined
 from .small_solve import DENSE_LIMIT, as_dense, solve_dense
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
@@ -170,9 +170,10 @@ def _solve_linear(K, r):
     mode (diagonal pivots) in a fill-reducing order: from :data:`~simulator.linsolve.ND_LIMIT`
     unknowns on, METIS nested dissection cached per sparsity pattern
     (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails) SuperLU's
-    symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes);
-    if that solution is inaccurate (the tangent can be indefinite), it falls back to partial
-    pivoting with COLAMD.
+    symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
+    A solution that is not :func:`~simulator.linsolve.accurate` (diagonal pivots on an
+    indefinite tangent) gets iterative refinement with the same factors; if that fails too,
+    the solve falls back to partial pivoting with COLAMD.
     """
     if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
         return solve_dense(as_dense(K), r)
@@ -182,17 +183,14 @@ def _solve_linear(K, r):
             du = nested_dissection_solve(K, r) if K.shape[0] >= ND_LIMIT else None
             if du is None:
                 Kc = K.tocsc()
-                du = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                               options={"SymmetricMode": True}).solve(r)
-                if not _accurate(K, du, r):
+                lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                               options={"SymmetricMode": True})
+                du, ok = refined(K, lu.solve, r, lu.solve(r))
+                if not ok:
                     du = spla.splu(Kc).solve(r)
         except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
             return None
     return du if np.all(np.isfinite(du)) else None
-
-
-def _accurate(K, du, r) -> bool:
-    return bool(np.linalg.norm(K @ du - r) <= 1e-6 * np.linalg.norm(r))
 
 
 def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,

@@ -196,3 +196,58 @@ def test_repeated_solves_with_nested_dissection_factors(sheet):
         assert np.linalg.norm(X[:, j] - ref) <= 1e-8 * np.linalg.norm(ref)
     with pytest.raises(ValueError, match="not of this pattern"):
         linsolve.ordering_for(K).factorize(K[:-1, :-1])
+
+
+def _grounded_stiff_chain(n=2000):
+    """Stiff springs (~1e10 N/m) in a chain held by one soft spring (0.375 N/m), with entries
+    exact in floating point: |K| |x| ~ 1e9 |r|, so a backward-stable solution's residual is
+    ~1e-4 |r| (the round-off of K x itself). Also the exact solution, from the spring forces
+    in extended precision: spring i carries the load on nodes 0..i."""
+    rng = np.random.default_rng(3)
+    k = np.round(1e10 * (1 + rng.random(n - 1)))
+    main = np.r_[k, 0] + np.r_[0, k]
+    main[-1] += 0.375
+    K = sp.diags([-k, main, -k], [-1, 0, 1], format="csr")
+    r = rng.normal(size=n) * 1e-3
+    load = np.cumsum(r.astype(np.longdouble))
+    exact = np.empty(n, dtype=np.longdouble)
+    exact[-1] = load[-1] / np.longdouble(0.375)
+    for i in range(n - 2, -1, -1):
+        exact[i] = exact[i + 1] + load[i] / np.longdouble(k[i])
+    return K, r, exact
+
+
+def test_backward_error_is_the_oettli_prager_measure():
+    K = sp.csr_matrix(np.array([[2.0, 0.0], [0.0, 1.0]]))
+    x, r = np.array([1.0, 1.0]), np.array([2.0, 1.001])
+    assert linsolve.backward_error(K, x, r) == pytest.approx(1e-3 / 2.001, rel=1e-12)
+    assert linsolve.backward_error(K, np.array([np.nan, 1.0]), r) == np.inf
+    assert not linsolve.accurate(K, x, r) and linsolve.accurate(K, x, r, rtol=1e-3)
+    X, R = np.column_stack([x, [1.0, 1.0]]), np.column_stack([r, [2.0, 1.0]])
+    assert linsolve.backward_error(K, X, R) == pytest.approx(1e-3 / 2.001, rel=1e-12)
+
+
+@pytest.mark.parametrize("nd_limit", [10**9, 100])
+def test_an_ill_conditioned_backward_stable_solve_is_accepted(monkeypatch, nd_limit):
+    # its residual misses 1e-6 |r| by round-off alone; a partial-pivoting factorisation
+    # (15x slower at 1e5 nodes) would be no more exact
+    K, r, exact = _grounded_stiff_chain()
+    monkeypatch.setattr(newton_module, "ND_LIMIT", nd_limit)
+    monkeypatch.setattr(linsolve, "_cache", [])
+    factorisations = []
+    original = spla.splu
+
+    def spy(A, *args, **kwargs):
+        factorisations.append(kwargs.get("permc_spec", "COLAMD"))
+        return original(A, *args, **kwargs)
+
+    monkeypatch.setattr(spla, "splu", spy)
+    du = _solve_linear(K, r)
+    assert len(factorisations) == 1 and factorisations[0] in ("MMD_AT_PLUS_A", "NATURAL")
+    assert np.linalg.norm(K @ du - r) > 1e-6 * np.linalg.norm(r)       # the residual test fails
+    assert linsolve.backward_error(K, du, r) <= 1e-15                    # but du is exact for K
+    pivoting = spla.spsolve(K.tocsc(), r)                               # partial pivoting
+
+    def error(x):
+        return float(np.linalg.norm(x - exact) / np.linalg.norm(exact))
+    assert error(du) <= max(2 * error(pivoting), 1e-12)
