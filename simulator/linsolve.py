@@ -45,9 +45,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from . import pardiso
+
 __all__ = ["ND_LIMIT", "NestedDissection", "ordering_for", "nested_dissection_ordering",
            "nested_dissection_solve", "nested_dissection_factor", "PermutedLU",
-           "supervariables", "accurate", "backward_error", "refined", "BACKWARD_ERROR_TOL"]
+           "supervariables", "accurate", "backward_error", "refined", "BACKWARD_ERROR_TOL",
+           "pardiso_solve"]
 
 logger = logging.getLogger(__name__)
 
@@ -183,42 +186,101 @@ class PermutedLU:
         return x
 
 
-_cache: list[tuple[np.ndarray, np.ndarray, NestedDissection | None]] = []
+_UNSET = object()
+
+
+@dataclass(eq=False)
+class _Pattern:
+    """A cached sparsity pattern: its METIS ordering and its PARDISO analysis, each made on
+    first use (None / False: not available for this pattern)."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    nd: object = _UNSET                  # NestedDissection | None
+    pardiso: object = _UNSET             # PardisoLDLT | False
+
+
+_cache: list[_Pattern] = []
 _lock = threading.Lock()
 
 
-def ordering_for(K) -> NestedDissection | None:
-    """The cached :class:`NestedDissection` of the pattern of a square sparse ``K``, or None.
-
-    The last few patterns are kept, matched by their index arrays (identical objects, or
-    equal ones: ~5 ms at 1e5 nodes), so the ordering of a mesh is computed once, not at every
-    Newton iteration.
-    """
+def _pattern_of(K) -> _Pattern | None:
+    """The cache entry of the pattern of a square sparse ``K`` (made on first use), or None
+    for a matrix without canonical format. The last few patterns are kept, matched by their
+    index arrays (identical objects, or equal ones: ~5 ms at 1e5 nodes)."""
     if not sp.issparse(K) or K.format != "csr":
         K = sp.csr_matrix(K)
     if not K.has_canonical_format:
         return None
     indptr, indices = K.indptr, K.indices
     with _lock:
-        for i, (ip, ind, nd) in enumerate(_cache):
+        for i, entry in enumerate(_cache):
+            ip, ind = entry.indptr, entry.indices
             if (ip is indptr and ind is indices) or (
                     len(ip) == len(indptr) and len(ind) == len(indices)
                     and np.array_equal(ip, indptr) and np.array_equal(ind, indices)):
                 _cache.insert(0, _cache.pop(i))
-                return nd
-    try:
-        with warnings.catch_warnings():      # an ordering only changes the speed
-            warnings.simplefilter("ignore")
-            nd = NestedDissection.of(indptr, indices)
-    except Exception as exc:  # noqa: BLE001 - an accelerator: SuperLU's own ordering instead
-        logger.warning("no nested-dissection ordering (%s: %s); using SuperLU's",
-                       type(exc).__name__, exc)
-        nd = None
-    logger.debug("nested-dissection ordering of a %d x %d pattern", *K.shape)
-    with _lock:
-        _cache.insert(0, (indptr, indices, nd))
+                return entry
+        entry = _Pattern(indptr, indices)
+        _cache.insert(0, entry)
         del _cache[_CACHE_SIZE:]
-    return nd
+        return entry
+
+
+def ordering_for(K) -> NestedDissection | None:
+    """The cached :class:`NestedDissection` of the pattern of a square sparse ``K``, or None.
+
+    Computed once per pattern (see :func:`_pattern_of`), not at every Newton iteration.
+    """
+    entry = _pattern_of(K)
+    if entry is None:
+        return None
+    if entry.nd is _UNSET:
+        try:
+            with warnings.catch_warnings():      # an ordering only changes the speed
+                warnings.simplefilter("ignore")
+                entry.nd = NestedDissection.of(entry.indptr, entry.indices)
+        except Exception as exc:  # noqa: BLE001 - an accelerator: SuperLU's own ordering instead
+            logger.warning("no nested-dissection ordering (%s: %s); using SuperLU's",
+                           type(exc).__name__, exc)
+            entry.nd = None
+        logger.debug("nested-dissection ordering of a %d x %d pattern", *K.shape)
+    return entry.nd
+
+
+def _pardiso_of(entry: _Pattern):
+    """The PARDISO analysis of a cached pattern (made on first use), or None."""
+    if entry.pardiso is _UNSET:
+        try:
+            entry.pardiso = pardiso.PardisoLDLT(entry.indptr, entry.indices)
+            logger.debug("PARDISO analysis of a %d-row pattern", len(entry.indptr) - 1)
+        except pardiso.PardisoError as exc:
+            logger.warning("no PARDISO analysis (%s); using SuperLU", exc)
+            entry.pardiso = False
+    return entry.pardiso or None
+
+
+def pardiso_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
+    """``K^-1 r`` for a symmetric sparse ``K`` by PARDISO (:mod:`simulator.pardiso`), its
+    analysis cached per pattern; None when PARDISO is not available, fails, or the solution
+    is not :func:`accurate` even after :func:`refined`. ``r`` is (n,) or (n, k)."""
+    if not pardiso.available():
+        return None
+    entry = _pattern_of(K)
+    handle = None if entry is None else _pardiso_of(entry)
+    if handle is None:
+        return None
+    if K.format != "csr":
+        K = K.tocsr()
+    try:
+        x, ok = handle.factor_solve(K, r, lambda solve, x: refined(K, solve, r, x, rtol))
+    except pardiso.PardisoError as exc:
+        logger.debug("PARDISO failed (%s)", exc)
+        return None
+    if not ok:
+        logger.debug("PARDISO solve inaccurate (%d perturbed pivots)", handle.perturbed_pivots)
+        return None
+    return x
 
 
 def _factor(K) -> PermutedLU | None:
@@ -235,10 +297,14 @@ def _factor(K) -> PermutedLU | None:
 
 
 def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
-    """``K^-1 r`` for a symmetric sparse ``K`` in its cached nested-dissection order, or None
+    """``K^-1 r`` for a symmetric sparse ``K`` in nested-dissection order: by PARDISO if it
+    is available (:func:`pardiso_solve`), else by SuperLU in the cached METIS order; None
     when there is no ordering, a pivot is exactly zero or the solution is not
     :func:`accurate` even after :func:`refined` (the caller then takes another path).
     ``r`` is (n,) or (n, k)."""
+    x = pardiso_solve(K, r, rtol)
+    if x is not None:
+        return x
     lu = _factor(K)
     if lu is None:
         return None

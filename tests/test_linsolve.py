@@ -1,12 +1,13 @@
-"""Nested-dissection solves of large tangents (simulator.linsolve): agreement with spsolve,
-one ordering per sparsity pattern, and the fallbacks to SuperLU's own orderings."""
+"""Nested-dissection solves of large tangents by SuperLU (simulator.linsolve): agreement with
+spsolve, one ordering per sparsity pattern, and the fallbacks to SuperLU's own orderings.
+PARDISO is switched off here; its path is tested in test_pardiso.py."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import initial_state, linsolve, newton as newton_module, thermal
+from simulator import initial_state, linsolve, newton as newton_module, pardiso, thermal
 from simulator.cases import miura_sheet_model
 from simulator.state import thermal_model
 from simulator.example_patterns import miura_sheet_pattern
@@ -15,7 +16,12 @@ from simulator.newton import NewtonOptions, _solve_linear, newton
 from simulator.properties import BarHingeParameters
 from simulator.state import equilibrium_system
 
-pytest.importorskip("pymetis")
+
+
+@pytest.fixture(autouse=True)
+def superlu_only(monkeypatch):
+    """The SuperLU paths, as on a machine without PARDISO."""
+    monkeypatch.setattr(pardiso, "_library", ())
 
 
 def _sheet(cells):

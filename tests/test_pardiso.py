@@ -1,0 +1,210 @@
+"""PARDISO solves of large symmetric tangents (simulator.pardiso via simulator.linsolve):
+agreement with SuperLU, inertia, one analysis per pattern, fallbacks, thread safety."""
+
+import gc
+import math
+import platform
+import sys
+import threading
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from simulator import initial_state, linsolve, newton as newton_module, pardiso
+from simulator.cases import miura_fold_signs
+from simulator.example_patterns import miura_vertices
+from simulator.materials import SU8
+from simulator.model import Supports, make_model
+from simulator.pattern import Pattern
+from simulator.properties import BarHingeParameters
+from simulator.newton import NewtonOptions, _solve_linear, newton
+from simulator.state import equilibrium_system
+from test_linsolve import _grounded_stiff_chain, _sheet
+
+pytestmark = pytest.mark.skipif(
+    platform.machine() not in ("x86_64", "AMD64") or sys.platform == "darwin",
+    reason="MKL (PARDISO) has wheels for Linux and Windows on x86-64 only (pyproject marker)")
+
+
+@pytest.fixture(autouse=True)
+def fresh_cache(monkeypatch):
+    monkeypatch.setattr(linsolve, "_cache", [])
+
+
+@pytest.fixture(scope="module")
+def sheet():
+    model, u, rest = _sheet(20)                     # 12 825 free DOFs, an indefinite tangent
+    system = equilibrium_system(model)
+    ev = system.evaluate(u, rest)
+    return model, system, u, rest, ev.K, -ev.f_int[system.free]
+
+
+def test_pardiso_is_installed_with_the_test_extra():
+    assert pardiso.available()
+
+
+def test_large_solve_uses_pardiso_and_agrees_with_superlu(sheet, monkeypatch):
+    *_, K, r = sheet
+    assert K.shape[0] >= linsolve.ND_LIMIT
+    orderings = []
+    monkeypatch.setattr(linsolve.NestedDissection, "of",
+                        classmethod(lambda cls, ip, ind: orderings.append(1)))
+    du = _solve_linear(K, r)
+    assert not orderings                                    # no METIS ordering of our own
+    handle = linsolve._cache[0].pardiso
+    assert isinstance(handle, pardiso.PardisoLDLT) and handle.negative_eigenvalues > 0
+    ref = spla.spsolve(K.tocsc(), r)
+    assert np.linalg.norm(du - ref) <= 1e-8 * np.linalg.norm(ref)
+    assert np.linalg.norm(K @ du - r) <= 1e-12 * np.linalg.norm(r)
+    R = np.stack([r, np.roll(r, 3)], axis=1)                # several right-hand sides
+    X = linsolve.pardiso_solve(K, R)
+    assert np.allclose(X[:, 0], du, rtol=0, atol=1e-12 * np.abs(du).max())
+    ref1 = spla.spsolve(K.tocsc(), R[:, 1])
+    assert np.linalg.norm(X[:, 1] - ref1) <= 1e-8 * np.linalg.norm(ref1)
+
+
+def test_inertia_matches_the_eigenvalues():
+    model, u, rest = _sheet(4)
+    system = equilibrium_system(model)
+    ev = system.evaluate(u, rest)
+    K = sp.csr_matrix(ev.K)
+    handle = pardiso.PardisoLDLT(K.indptr, K.indices)
+    handle.factor_solve(K, np.ones(K.shape[0]))
+    assert handle.negative_eigenvalues == int(np.sum(np.linalg.eigvalsh(K.toarray()) < 0))
+
+
+def test_one_analysis_per_pattern_over_newton_iterations(monkeypatch):
+    model, u, rest = _sheet(20)
+    system = equilibrium_system(model)
+    made = []
+    original = pardiso.PardisoLDLT.__init__
+
+    def counting(self, indptr, indices):
+        made.append(len(indptr))
+        original(self, indptr, indices)
+
+    monkeypatch.setattr(pardiso.PardisoLDLT, "__init__", counting)
+    res = newton(system, u, np.zeros(model.mesh.n_dof), rest, NewtonOptions(max_iter=3))
+    assert len(res.correction_norms) >= 2 and len(made) == 1
+
+
+def _folding_sheet(cells=20, ext=0.9, fold_deg=1.0):
+    """A partly folded Miura sheet (panel 0 clamped) whose creases fold on by ``fold_deg``
+    along their Miura directions: the model, the rest angles before and after."""
+    a = b = 1e-3
+    gamma = math.radians(60)
+    v, p = miura_vertices(a, b, gamma, cells, cells, ext=ext)
+    pattern = Pattern(v, p, crease_width=200e-6, crease_thickness=1e-6, panel_thickness=10e-6,
+                      panel_material=SU8, crease_material=SU8)
+    model = make_model(pattern, None, BarHingeParameters())
+    model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
+    mesh = model.mesh
+    sign = np.zeros(mesh.n_creases)
+    for crease, s in miura_fold_signs(a, b, gamma, cells, cells).items():
+        sign[mesh.crease_row_of(crease)] = s
+    rest = initial_state(model).spring_rest
+    rest1 = rest.copy()
+    crease = mesh.spring_crease >= 0
+    rest1[crease] += sign[mesh.spring_crease[crease]] * math.radians(fold_deg)
+    return model, rest, rest1
+
+
+def test_newton_iterates_match_the_superlu_path(monkeypatch):
+    model, _, rest1 = _folding_sheet()
+    system = equilibrium_system(model)
+    assert system.n_free >= linsolve.ND_LIMIT
+    u0, f_ext = np.zeros((model.mesh.n_nodes, 3)), np.zeros(model.mesh.n_dof)
+    fast = newton(system, u0, f_ext, rest1)
+    assert isinstance(linsolve._cache[0].pardiso, pardiso.PardisoLDLT)
+    monkeypatch.setattr(pardiso, "_library", ())
+    slow = newton(system, u0, f_ext, rest1)
+    assert fast.success and slow.success and fast.iterations == slow.iterations >= 3
+    big = slow.residual_norms > 1e-5 * slow.residual_norms[0]   # above the solves' round-off
+    assert big.sum() >= 3
+    assert np.allclose(fast.residual_norms[big], slow.residual_norms[big], rtol=1e-5, atol=0)
+    scale = np.abs(slow.u).max()
+    assert scale > 1e-6                                     # the sheet folds (metres)
+    assert np.allclose(fast.u, slow.u, rtol=0, atol=1e-9 * scale)
+
+
+def test_a_pardiso_error_falls_back_to_superlu(sheet, monkeypatch):
+    *_, K, r = sheet
+
+    def broken(self, K, r, refine=None):
+        raise pardiso.PardisoError("PARDISO phase 22 returned error -4")
+
+    monkeypatch.setattr(pardiso.PardisoLDLT, "factor_solve", broken)
+    du = _solve_linear(K, r)
+    assert linsolve._cache[0].nd is not None               # the SuperLU path ordered it
+    assert np.linalg.norm(K @ du - r) <= 1e-12 * np.linalg.norm(r)
+
+
+def test_a_pattern_without_diagonal_is_left_to_superlu(monkeypatch):
+    n = 400                                               # [[0, 1], [1, 0]] blocks
+    off = np.zeros(n - 1)
+    off[::2] = 1.0
+    K = sp.diags([off, off], [-1, 1], format="csr")
+    r = np.arange(1.0, n + 1)
+    monkeypatch.setattr(newton_module, "ND_LIMIT", 100)
+    du = _solve_linear(K, r)
+    assert linsolve._cache[0].pardiso is False
+    assert np.allclose(K @ du, r, rtol=1e-14)
+
+
+def test_an_ill_conditioned_solve_is_accepted_by_its_backward_error(monkeypatch):
+    K, r, exact = _grounded_stiff_chain()
+    monkeypatch.setattr(newton_module, "ND_LIMIT", 100)
+    du = linsolve.pardiso_solve(K, r)
+    assert du is not None
+    assert np.linalg.norm(K @ du - r) > 1e-6 * np.linalg.norm(r)      # the residual test fails
+    assert linsolve.backward_error(K, du, r) <= linsolve.BACKWARD_ERROR_TOL
+    pivoting = spla.spsolve(K.tocsc(), r)
+    err = [float(np.linalg.norm(x - exact) / np.linalg.norm(exact)) for x in (du, pivoting)]
+    assert err[0] <= max(2 * err[1], 1e-12)
+
+
+def test_concurrent_solves_of_one_pattern_are_serialised(sheet):
+    *_, K, r = sheet
+    Ks = [K, K + sp.diags(np.full(K.shape[0], 1e-3 * abs(K.diagonal()).max()), format="csr")]
+    for A in Ks:
+        A.sort_indices()
+    refs = [spla.spsolve(A.tocsc(), r) for A in Ks]
+    out = {}
+
+    def work(i):
+        for _ in range(3):
+            out.setdefault(i, []).append(linsolve.pardiso_solve(Ks[i], r))
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(linsolve._cache) == 1                        # one pattern, one handle
+    for i in (0, 1):
+        for x in out[i]:
+            assert np.linalg.norm(x - refs[i]) <= 1e-8 * np.linalg.norm(refs[i])
+
+
+def test_an_evicted_pattern_frees_pardiso_memory(sheet):
+    *_, K, r = sheet
+    linsolve.pardiso_solve(K, r)
+    handle = linsolve._cache[0].pardiso
+    freed = []
+    import weakref
+    weakref.finalize(handle, freed.append, True)
+    del handle
+    linsolve._cache.clear()
+    gc.collect()
+    assert freed == [True]
+
+
+def test_environment_variable_switches_pardiso_off(monkeypatch):
+    monkeypatch.setattr(pardiso, "_library", None)
+    monkeypatch.setenv("ETORIGAMI_PARDISO", "0")
+    assert not pardiso.available()
+    monkeypatch.setattr(pardiso, "_library", None)
+    monkeypatch.setenv("ETORIGAMI_PARDISO", "1")
+    assert pardiso.available()
