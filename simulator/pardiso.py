@@ -11,17 +11,22 @@ costs a numeric factorisation (phase 22) and a solve (phase 33). PARDISO keeps i
 inside its handle, so one handle serves one factorise-and-solve at a time (a lock), and the
 factors are not kept for later solves (callers that need that use SuperLU's).
 
-It comes with ``pip install etorigami[mkl]`` (the ``pypardiso`` package, which brings MKL;
-Linux and Windows on x86-64). Without it, or with ``ETORIGAMI_PARDISO=0`` in the
-environment, :func:`available` is False and large systems use SuperLU
-(:mod:`simulator.linsolve`).
+MKL comes with ``pip install etorigami[mkl]`` (the ``mkl`` wheel: Linux and Windows on
+x86-64); its runtime library is loaded by ctypes on the first large solve (~0.1 s), found
+next to this Python (see :func:`_mkl_candidates`; ``ETORIGAMI_MKL_RT`` names it
+explicitly). Without it, or with ``ETORIGAMI_PARDISO=0`` in the environment,
+:func:`available` is False and large systems use SuperLU (:mod:`simulator.linsolve`).
 """
 
 from __future__ import annotations
 
 import ctypes
+import ctypes.util
+import glob
 import logging
 import os
+import site
+import sys
 import threading
 import weakref
 
@@ -54,13 +59,16 @@ def _load() -> tuple:
     if os.environ.get("ETORIGAMI_PARDISO", "1").strip().lower() in ("0", "false", "no", "off"):
         logger.info("PARDISO disabled by ETORIGAMI_PARDISO")
         return ()
-    try:
-        from pypardiso import PyPardisoSolver
-        lib = PyPardisoSolver().libmkl
-    except Exception as exc:  # noqa: BLE001 - optional: not installed, or MKL not found
-        logger.info("no PARDISO (%s: %s); large systems use SuperLU. "
-                    "pip install 'etorigami[mkl]' for 5x faster solves of large models",
-                    type(exc).__name__, exc)
+    lib = None
+    for path in _mkl_candidates():
+        try:
+            lib = ctypes.CDLL(path)
+            break
+        except OSError as exc:
+            logger.debug("cannot load %s: %s", path, exc)
+    if lib is None or not hasattr(lib, "pardiso"):
+        logger.info("no MKL PARDISO found; large systems use SuperLU. "
+                    "pip install 'etorigami[mkl]' for 5x faster solves of large models")
         return ()
     f = lib.pardiso
     i32, p = ctypes.c_int32, ctypes.POINTER
@@ -68,12 +76,29 @@ def _load() -> tuple:
                   p(i32), p(i32), p(i32), p(i32), p(i32), p(i32), ctypes.c_void_p,
                   ctypes.c_void_p, p(i32)]
     f.restype = None
-    logger.debug("PARDISO from %s", getattr(lib, "_name", "MKL"))
+    logger.debug("PARDISO from %s", path)
     return (f,)
 
 
+def _mkl_candidates() -> list[str]:
+    """Paths of MKL's runtime library to try, most likely first: ``ETORIGAMI_MKL_RT``, then
+    the ``lib`` (``Library/bin`` on Windows) folders of this Python and of the user site,
+    where the ``mkl`` wheel puts it, then the system's library search."""
+    override = os.environ.get("ETORIGAMI_MKL_RT")
+    if override:
+        return [override]
+    names = ("mkl_rt*.dll",) if sys.platform == "win32" else ("libmkl_rt.so*", "libmkl_rt*.dylib")
+    found = []
+    for base in dict.fromkeys([sys.prefix, sys.base_prefix, site.USER_BASE or ""]):
+        for folder in ("lib", os.path.join("Library", "bin")):
+            for name in names:
+                found += sorted(glob.glob(os.path.join(base, folder, name)), key=len)
+    system = ctypes.util.find_library("mkl_rt")
+    return found + ([system] if system else [])
+
+
 def available() -> bool:
-    """Whether PARDISO can be used (``pypardiso`` installed, MKL found, not disabled)."""
+    """Whether PARDISO can be used (MKL installed and found, not disabled)."""
     return _pardiso() is not None
 
 
