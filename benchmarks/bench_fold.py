@@ -27,34 +27,16 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 _SNIPPET = """
-import json, math, resource, sys, time
+import json, resource, sys, time
 import numpy as np
 import simulator.newton as newton_module
-from simulator import initial_state
-from simulator.cases import miura_fold_signs
-from simulator.example_patterns import miura_vertices
-from simulator.materials import SU8
-from simulator.model import Supports, make_model
 from simulator.newton import follow_path
-from simulator.pattern import Pattern
-from simulator.properties import BarHingeParameters
 from simulator.state import equilibrium_system
+sys.path.insert(0, sys.argv[4])
+from bench_fold import folding_sheet
 cells, fold, ext = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])
-a = b = 1e-3
-gamma = math.radians(60)
-v, p = miura_vertices(a, b, gamma, cells, cells, ext=ext)
-pattern = Pattern(v, p, crease_width=200e-6, crease_thickness=1e-6, panel_thickness=10e-6,
-                  panel_material=SU8, crease_material=SU8)
-model = make_model(pattern, None, BarHingeParameters())
-model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
+model, rest, rest1 = folding_sheet(cells, ext, fold)
 mesh = model.mesh
-sign = np.zeros(mesh.n_creases)
-for crease, s in miura_fold_signs(a, b, gamma, cells, cells).items():
-    sign[mesh.crease_row_of(crease)] = s
-rest = initial_state(model).spring_rest
-rest1 = rest.copy()
-crease = mesh.spring_crease >= 0
-rest1[crease] += sign[mesh.spring_crease[crease]] * math.radians(fold)
 system = equilibrium_system(model)
 u0, f = np.zeros((mesh.n_nodes, 3)), np.zeros(mesh.n_dof)
 system.evaluate(u0, rest)                                   # warm-up (kernels, patterns)
@@ -80,9 +62,43 @@ print(json.dumps(dict(nodes=mesh.n_nodes, dofs=int(system.n_free), success=bool(
 """
 
 
+def folding_sheet(cells: int, ext: float = 0.9, fold_deg: float = 1.0):
+    """A partly folded Miura sheet (extension ``ext``, panel 0 clamped) whose creases fold on
+    by ``fold_deg`` along their Miura directions: ``(model, rest angles before, after)``."""
+    import math
+
+    import numpy as np
+
+    from simulator import initial_state
+    from simulator.cases import miura_fold_signs
+    from simulator.example_patterns import miura_vertices
+    from simulator.materials import SU8
+    from simulator.model import Supports, make_model
+    from simulator.pattern import Pattern
+    from simulator.properties import BarHingeParameters
+
+    a = b = 1e-3
+    gamma = math.radians(60)
+    v, p = miura_vertices(a, b, gamma, cells, cells, ext=ext)
+    pattern = Pattern(v, p, crease_width=200e-6, crease_thickness=1e-6, panel_thickness=10e-6,
+                      panel_material=SU8, crease_material=SU8)
+    model = make_model(pattern, None, BarHingeParameters())
+    model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
+    mesh = model.mesh
+    sign = np.zeros(mesh.n_creases)
+    for crease, s in miura_fold_signs(a, b, gamma, cells, cells).items():
+        sign[mesh.crease_row_of(crease)] = s
+    rest = initial_state(model).spring_rest
+    rest1 = rest.copy()
+    crease = mesh.spring_crease >= 0
+    rest1[crease] += sign[mesh.spring_crease[crease]] * math.radians(fold_deg)
+    return model, rest, rest1
+
+
 def run(cells: int, fold: float, ext: float, pardiso: bool) -> dict:
     env = dict(os.environ, PYTHONPATH=str(ROOT), ETORIGAMI_PARDISO="1" if pardiso else "0")
-    out = subprocess.run([sys.executable, "-c", _SNIPPET, str(cells), str(fold), str(ext)],
+    out = subprocess.run([sys.executable, "-c", _SNIPPET, str(cells), str(fold), str(ext),
+                          str(Path(__file__).resolve().parent)],
                          env=env, cwd=ROOT, capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 

@@ -2,26 +2,26 @@
 agreement with SuperLU, inertia, one analysis per pattern, fallbacks, thread safety."""
 
 import gc
-import math
+import importlib.util
 import platform
 import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import initial_state, linsolve, newton as newton_module, pardiso
-from simulator.cases import miura_fold_signs
-from simulator.example_patterns import miura_vertices
-from simulator.materials import SU8
-from simulator.model import Supports, make_model
-from simulator.pattern import Pattern
-from simulator.properties import BarHingeParameters
+from simulator import linsolve, newton as newton_module, pardiso
 from simulator.newton import NewtonOptions, _solve_linear, newton
 from simulator.state import equilibrium_system
 from test_linsolve import _grounded_stiff_chain, _sheet
+
+_spec = importlib.util.spec_from_file_location(
+    "bench_fold", Path(__file__).resolve().parents[1] / "benchmarks" / "bench_fold.py")
+bench_fold = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(bench_fold)
 
 pytestmark = pytest.mark.skipif(
     platform.machine() not in ("x86_64", "AMD64") or sys.platform == "darwin",
@@ -90,29 +90,8 @@ def test_one_analysis_per_pattern_over_newton_iterations(monkeypatch):
     assert len(res.correction_norms) >= 2 and len(made) == 1
 
 
-def _folding_sheet(cells=20, ext=0.9, fold_deg=1.0):
-    """A partly folded Miura sheet (panel 0 clamped) whose creases fold on by ``fold_deg``
-    along their Miura directions: the model, the rest angles before and after."""
-    a = b = 1e-3
-    gamma = math.radians(60)
-    v, p = miura_vertices(a, b, gamma, cells, cells, ext=ext)
-    pattern = Pattern(v, p, crease_width=200e-6, crease_thickness=1e-6, panel_thickness=10e-6,
-                      panel_material=SU8, crease_material=SU8)
-    model = make_model(pattern, None, BarHingeParameters())
-    model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
-    mesh = model.mesh
-    sign = np.zeros(mesh.n_creases)
-    for crease, s in miura_fold_signs(a, b, gamma, cells, cells).items():
-        sign[mesh.crease_row_of(crease)] = s
-    rest = initial_state(model).spring_rest
-    rest1 = rest.copy()
-    crease = mesh.spring_crease >= 0
-    rest1[crease] += sign[mesh.spring_crease[crease]] * math.radians(fold_deg)
-    return model, rest, rest1
-
-
 def test_newton_iterates_match_the_superlu_path(monkeypatch):
-    model, _, rest1 = _folding_sheet()
+    model, _, rest1 = bench_fold.folding_sheet(20)
     system = equilibrium_system(model)
     assert system.n_free >= linsolve.ND_LIMIT
     u0, f_ext = np.zeros((model.mesh.n_nodes, 3)), np.zeros(model.mesh.n_dof)
