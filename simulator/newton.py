@@ -22,7 +22,7 @@ import scipy.sparse.linalg as spla
 
 from .equilibrium import EquilibriumSystem, Evaluation
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, nested_dissection_solve, refined
+from .linsolve import ND_LIMIT, PARDISO_LIMIT, nested_dissection_solve, pardiso_solve, refined
 from .small_solve import DENSE_LIMIT, as_dense, solve_dense
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
@@ -166,9 +166,12 @@ def _solve_linear(K, r):
     """Solve K du = r; returns None if K is singular or the result is not finite.
 
     ``K`` is sparse or a dense array. Up to :data:`DENSE_LIMIT` rows it is solved densely by
-    LAPACK (:func:`~simulator.small_solve.solve_dense`). Larger ones use SuperLU in symmetric
-    mode (diagonal pivots) in a fill-reducing order: from :data:`~simulator.linsolve.ND_LIMIT`
-    unknowns on, METIS nested dissection cached per sparsity pattern
+    LAPACK (:func:`~simulator.small_solve.solve_dense`). Larger ones use MKL PARDISO when it
+    is installed (:func:`~simulator.linsolve.pardiso_solve`, from
+    :data:`~simulator.linsolve.PARDISO_LIMIT` rows), else (or if it fails) SuperLU in
+    symmetric mode (diagonal pivots) in a fill-reducing order: from
+    :data:`~simulator.linsolve.ND_LIMIT` unknowns on, METIS nested dissection cached per
+    sparsity pattern
     (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails) SuperLU's
     symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
     A solution that is not :func:`~simulator.linsolve.accurate` (diagonal pivots on an
@@ -180,7 +183,10 @@ def _solve_linear(K, r):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
-            du = nested_dissection_solve(K, r) if K.shape[0] >= ND_LIMIT else None
+            n = K.shape[0]
+            du = pardiso_solve(K, r) if n >= PARDISO_LIMIT else None
+            if du is None and n >= ND_LIMIT:
+                du = nested_dissection_solve(K, r)
             if du is None:
                 Kc = K.tocsc()
                 lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
