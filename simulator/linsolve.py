@@ -56,7 +56,7 @@ from . import pardiso
 __all__ = ["ND_LIMIT", "NestedDissection", "ordering_for", "nested_dissection_ordering",
            "nested_dissection_solve", "nested_dissection_factor", "PermutedLU",
            "supervariables", "accurate", "backward_error", "refined", "BACKWARD_ERROR_TOL",
-           "pardiso_solve", "PARDISO_LIMIT"]
+           "pardiso_solve", "PARDISO_LIMIT", "factor_symmetric", "pardiso_factor"]
 
 logger = logging.getLogger(__name__)
 
@@ -260,8 +260,14 @@ def ordering_for(K) -> NestedDissection | None:
     return entry.nd
 
 
-def _pardiso_of(entry: _Pattern):
-    """The PARDISO analysis of a cached pattern (made on first use), or None."""
+def _pardiso_for(K):
+    """The PARDISO analysis of the pattern of ``K`` (made on first use, cached with the
+    pattern), or None when PARDISO is not available or cannot take the pattern."""
+    if not pardiso.available():
+        return None
+    entry = _pattern_of(K)
+    if entry is None:
+        return None
     if entry.pardiso is _UNSET:
         try:
             entry.pardiso = pardiso.PardisoLDLT(entry.indptr, entry.indices)
@@ -276,14 +282,11 @@ def pardiso_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
     """``K^-1 r`` for a symmetric sparse ``K`` by PARDISO (:mod:`simulator.pardiso`), its
     analysis cached per pattern; None when PARDISO is not available, fails, or the solution
     is not :func:`accurate` even after :func:`refined`. ``r`` is (n,) or (n, k)."""
-    if not pardiso.available():
-        return None
-    entry = _pattern_of(K)
-    handle = None if entry is None else _pardiso_of(entry)
-    if handle is None:
-        return None
     if K.format != "csr":
         K = K.tocsr()
+    handle = _pardiso_for(K)
+    if handle is None:
+        return None
     try:
         x, ok = handle.factor_solve(K, r, lambda solve, x: refined(K, solve, r, x, rtol))
     except pardiso.PardisoError as exc:
@@ -321,6 +324,59 @@ def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray 
         logger.debug("nested-dissection solve inaccurate (indefinite matrix?)")
         return None
     return x
+
+
+def factor_symmetric(A, minimum_degree_first: bool = False):
+    """Factors of a symmetric sparse ``A`` for repeated solves: an object with ``solve(b)``,
+    b (n,) or (n, k). The one choice of factorisation for the thermal, transient-heat and
+    shift-invert matrices:
+
+    * from :data:`PARDISO_LIMIT` unknowns, PARDISO's factors when it is available (analysis
+      cached per pattern; :class:`~simulator.pardiso.PardisoFactor`);
+    * else from :data:`ND_LIMIT` unknowns, SuperLU in the cached nested-dissection order
+      (:func:`nested_dissection_factor`);
+    * else SuperLU: with ``minimum_degree_first``, symmetric mode in minimum-degree order if
+      its solution of a vector of ones is :func:`accurate`; otherwise partial pivoting in
+      COLAMD order (SuperLU's default).
+
+    Each factorisation but the last is checked by its solution of a vector of ones (to
+    1e-8, :func:`accurate`) and skipped if that fails.
+    """
+    if A.format != "csr":
+        A = A.tocsr()
+    n = A.shape[0]
+    if n >= PARDISO_LIMIT and pardiso.available():
+        factor = pardiso_factor(A)
+        if factor is not None:
+            return factor
+    if n >= ND_LIMIT:
+        lu = nested_dissection_factor(A)
+        if lu is not None:
+            return lu
+    Ac = A.tocsc()
+    if minimum_degree_first:
+        lu = spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+        b = np.ones(n)
+        if accurate(A, lu.solve(b), b, 1e-8):
+            return lu
+    return spla.splu(Ac)
+
+
+def pardiso_factor(A, rtol: float = 1e-8):
+    """PARDISO's factors of a symmetric sparse CSR ``A`` for repeated solves (analysis cached
+    per pattern), or None when PARDISO is not available, fails, or the solution of a vector
+    of ones is not :func:`accurate`."""
+    handle = _pardiso_for(A)
+    if handle is None:
+        return None
+    try:
+        factor = handle.factorize(A)
+        b = np.ones(A.shape[0])
+        return factor if accurate(A, factor.solve(b), b, rtol) else None
+    except pardiso.PardisoError as exc:
+        logger.debug("PARDISO failed (%s)", exc)
+        return None
 
 
 def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:

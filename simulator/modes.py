@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 
 from ._version import __version__
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, accurate, nested_dissection_factor
+from .linsolve import factor_symmetric
 from .mass import check_masses, lumped_masses
 from .model import Model
 from .state import SimulationState, equilibrium_system, initial_state
@@ -210,17 +210,10 @@ def _shift_invert(K, mf, count, scale):
 
 
 def _factorise(A):
-    """Sparse LU of a symmetric matrix: symmetric mode first (in nested-dissection order from
-    :data:`~simulator.linsolve.ND_LIMIT` unknowns on), partial pivoting if inaccurate."""
-    lu = nested_dissection_factor(A) if A.shape[0] >= ND_LIMIT else None
-    if lu is not None:
-        return lu
-    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
-    b = np.ones(A.shape[0])
-    if accurate(A, lu.solve(b), b, 1e-8):
-        return lu
-    return spla.splu(A)
+    """Factors of a symmetric matrix (:func:`~simulator.linsolve.factor_symmetric`: PARDISO if
+    installed; else SuperLU in symmetric mode, in nested-dissection order from
+    :data:`~simulator.linsolve.ND_LIMIT` unknowns on, partial pivoting if inaccurate)."""
+    return factor_symmetric(A, minimum_degree_first=True)
 
 
 def _rigid_modes(model, state, shapes, m) -> np.ndarray:

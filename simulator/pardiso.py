@@ -33,7 +33,7 @@ import weakref
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["available", "PardisoLDLT", "PardisoError"]
+__all__ = ["available", "PardisoLDLT", "PardisoFactor", "PardisoError"]
 
 logger = logging.getLogger(__name__)
 
@@ -120,7 +120,7 @@ class PardisoLDLT:
         upper = np.flatnonzero(indices >= rows)          # the upper triangle, row by row
         if len(np.unique(rows[indices == rows])) != n:
             raise PardisoError("a diagonal entry is missing from the pattern")
-        self.n = n
+        self.n, self.nnz = n, len(indices)
         self.upper = upper
         self.ia = np.concatenate([[0], np.cumsum(np.bincount(rows[upper], minlength=n))]
                                  ).astype(np.int32)
@@ -134,6 +134,7 @@ class PardisoLDLT:
         self.iparm[20] = 1     # Bunch-Kaufman 1x1 and 2x2 pivots
         self.iparm[34] = 1     # zero-based indices
         self._lock = threading.Lock()
+        self._owner = None                # the PardisoFactor whose matrix is factorised now
         self._f = f
         data = np.zeros(len(upper))
         self._call(11, data)                               # ordering + symbolic factorisation
@@ -151,17 +152,38 @@ class PardisoLDLT:
         ``refine(solve, x)``, if given, runs while the factors are held (``solve(v)`` applies
         them) and its result is returned instead of x. Raises :class:`PardisoError`.
         """
-        data = np.ascontiguousarray(K.data[self.upper], dtype=float)
+        data = self._data_of(K)
         with self._lock:
             self._call(22, data)                           # numeric factorisation
+            self._owner = None                             # no factor object holds these
 
             def solve(v):
-                b = np.asfortranarray(v, dtype=float)
-                x = np.zeros_like(b)
-                self._call(33, data, b, x)
-                return np.ascontiguousarray(x)
+                return self._solve_locked(data, v)
             x = solve(r)
             return x if refine is None else refine(solve, x)
+
+    def factorize(self, K: sp.csr_matrix) -> PardisoFactor:
+        """Factors of ``K`` (of this pattern, CSR) for repeated solves. They live in the
+        handle: a later factorisation of another matrix of the pattern replaces them, and a
+        solve with this object then factorises ``K`` again (correct, but slower)."""
+        factor = PardisoFactor(self, self._data_of(K))
+        with self._lock:
+            self._call(22, factor.data)
+            self._owner = factor
+        return factor
+
+    def _data_of(self, K) -> np.ndarray:
+        """The upper-triangle values of ``K`` in PARDISO's order."""
+        if K.shape != (self.n, self.n) or K.nnz != self.nnz:
+            raise ValueError(f"matrix {K.shape} with {K.nnz} entries is not of this pattern")
+        return np.ascontiguousarray(K.data[self.upper], dtype=float)
+
+    def _solve_locked(self, data: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Apply the factors held now (the caller holds the lock and has factorised data)."""
+        b = np.asfortranarray(v, dtype=float)
+        x = np.zeros_like(b)
+        self._call(33, data, b, x)
+        return np.ascontiguousarray(x)
 
     @property
     def perturbed_pivots(self) -> int:
@@ -172,6 +194,23 @@ class PardisoLDLT:
     def negative_eigenvalues(self) -> int:
         """Negative eigenvalues of the last factorised matrix (its inertia)."""
         return int(self.iparm[22])
+
+
+class PardisoFactor:
+    """Factors of one matrix, from :meth:`PardisoLDLT.factorize`: ``solve(b)`` gives
+    ``K^-1 b`` for b (n,) or (n, k), factorising again first if the handle has factorised
+    another matrix since."""
+
+    def __init__(self, handle: PardisoLDLT, data: np.ndarray):
+        self.handle, self.data = handle, data
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        h = self.handle
+        with h._lock:
+            if h._owner is not self:
+                h._call(22, self.data)
+                h._owner = self
+            return h._solve_locked(self.data, b)
 
 
 def _invoke(f, pt, iparm, phase, n, data, ia, ja, b=None, x=None) -> int:

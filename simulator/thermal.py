@@ -28,14 +28,13 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
-from scipy.sparse.linalg import splu
 
 from . import _thermal_jit
 
 from .assembly import StiffnessPattern
 from .elements.contact import point_triangle_distance
 from .errors import ParameterError, PatternError
-from .linsolve import ND_LIMIT, nested_dissection_factor
+from .linsolve import factor_symmetric
 from .materials import AIR
 from .mesh import BarHingeMesh
 
@@ -436,8 +435,9 @@ class ThermalModel:
         solver ``q_free -> rise_free``.
 
         Up to :data:`DENSE_NODES` free nodes: dense Cholesky (the matrix is symmetric positive
-        definite; SuperLU if Cholesky fails); above: SuperLU, in nested-dissection order from
-        :data:`~simulator.linsolve.ND_LIMIT` free nodes on (3-4x faster at 1e5 nodes).
+        definite; SuperLU if Cholesky fails); above:
+        :func:`~simulator.linsolve.factor_symmetric` (PARDISO if installed, else SuperLU, in
+        nested-dissection order from :data:`~simulator.linsolve.ND_LIMIT` free nodes on).
         """
         n_free = len(g_free)
         if n_free <= DENSE_NODES:
@@ -452,6 +452,4 @@ class ThermalModel:
                         raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
                     return sol
                 return cholesky_solve
-        A = self._free_pattern.matrix([K, g_free])
-        lu = nested_dissection_factor(A) if n_free >= ND_LIMIT else None
-        return (lu if lu is not None else splu(A.tocsc())).solve
+        return factor_symmetric(self._free_pattern.matrix([K, g_free])).solve

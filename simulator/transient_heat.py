@@ -28,15 +28,14 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from .errors import ParameterError
-from .linsolve import ND_LIMIT, nested_dissection_factor
+from .linsolve import factor_symmetric
 from .model import Model
 from .power_schedules import crease_power_function
 from .state import thermal_model
@@ -214,9 +213,8 @@ class ThetaStepper:
         self.K, self.C = sp.csc_matrix(K), C
         mass = sp.diags(C / self.dt)
         A = (mass + self.theta * self.K).tocsc()
-        # large sheets: nested-dissection order (less fill, faster solves), else COLAMD
-        lu = nested_dissection_factor(A) if len(C) >= ND_LIMIT else None
-        self._lu = lu if lu is not None else splu(A) if len(C) else None
+        # PARDISO if installed; else SuperLU, in nested-dissection order on large sheets
+        self._lu = factor_symmetric(A) if len(C) else None
         self._rhs = (mass - (1 - self.theta) * self.K).tocsr()
 
     def step(self, T, q_old, q_new) -> np.ndarray:

@@ -183,7 +183,7 @@ def test_thermal_solve_in_nested_dissection_order_agrees_with_colamd(monkeypatch
         used.append(K.shape)
         return original(K)
 
-    monkeypatch.setattr(thermal, "ND_LIMIT", 100)
+    monkeypatch.setattr(linsolve, "ND_LIMIT", 100)
     monkeypatch.setattr(linsolve, "ordering_for", spy)
     tm._factor_cache = None                              # factorise again
     T = tm.solve(model.mesh.nodes, q2)

@@ -187,3 +187,49 @@ def test_environment_variable_switches_pardiso_off(monkeypatch):
     monkeypatch.setattr(pardiso, "_library", None)
     monkeypatch.setenv("ETORIGAMI_PARDISO", "1")
     assert pardiso.available()
+
+
+def test_kept_factors_stay_correct_when_the_handle_factorises_another_matrix(sheet):
+    *_, K, r = sheet
+    K2 = (K + sp.diags(np.full(K.shape[0], 1e-3 * abs(K.diagonal()).max()))).tocsr()
+    K2.sort_indices()
+    f1 = linsolve.factor_symmetric(K)
+    f2 = linsolve.factor_symmetric(K2)                     # same pattern, same handle
+    assert isinstance(f1, pardiso.PardisoFactor) and f1.handle is f2.handle
+    for f, A in ((f1, K), (f2, K2), (f1, K)):               # each solve with its own matrix
+        x = f.solve(r)
+        assert np.linalg.norm(A @ x - r) <= 1e-12 * np.linalg.norm(r)
+    with pytest.raises(ValueError, match="not of this pattern"):
+        f1.handle.factorize(K[:-1, :-1].tocsr())
+
+
+def test_thermal_modes_and_transient_heat_agree_with_superlu(monkeypatch):
+    from simulator import natural_modes, thermal
+    from simulator.cases import miura_sheet_model
+    from simulator.state import thermal_model
+    from simulator.transient_heat import ThetaStepper
+
+    model = miura_sheet_model(cells_x=8, cells_y=6)
+    tm = thermal_model(model)
+    assert len(tm.free_nodes) > thermal.DENSE_NODES           # a sparse thermal solve
+    q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
+    K = sp.random(300, 300, density=0.02, random_state=1)
+    K = (K @ K.T + sp.identity(300)).tocsr()                  # a conductance-like SPD matrix
+    K.sort_indices()
+    C = np.linspace(1e-6, 2e-6, 300)
+    T0 = np.linspace(0.0, 5.0, 300)
+
+    def run():
+        linsolve._cache.clear()
+        tm._factor_cache = None
+        stepper = ThetaStepper(K, C, 1e-3)
+        return (tm.solve(model.mesh.nodes, q), natural_modes(model, count=4).frequency,
+                stepper.step(T0, np.ones(300), np.ones(300)), stepper._lu)
+
+    fast = run()
+    assert isinstance(fast[3], pardiso.PardisoFactor)
+    monkeypatch.setattr(pardiso, "_library", ())
+    slow = run()
+    assert not isinstance(slow[3], pardiso.PardisoFactor)
+    for a, b in zip(fast[:3], slow[:3]):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=0)
