@@ -253,6 +253,19 @@ def _children_ignore_sigint():
         signal.signal(signal.SIGINT, previous)
 
 
+def _start_forkserver_ignoring_sigint() -> None:
+    """Start multiprocessing's fork server (if not running yet) with SIGINT ignored.
+
+    Its children get the server's original SIGINT disposition back: started so, they ignore
+    Ctrl-C from birth, not only once the pool's initializer has run (otherwise a Ctrl-C that
+    reaches a worker still starting up prints its KeyboardInterrupt traceback). A server that
+    some other code started earlier is left as it is."""
+    from multiprocessing import forkserver
+
+    with _children_ignore_sigint():
+        forkserver.ensure_running()
+
+
 def _default_start_method() -> str:
     return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 
@@ -293,6 +306,8 @@ class ProcessExecutor(Executor):
     def _ensure_pool(self):
         if self._pool is None:
             ctx = multiprocessing.get_context(self.start_method)
+            if self.start_method == "forkserver":
+                _start_forkserver_ignoring_sigint()
             self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
                                                 initializer=_ignore_sigint)
             logger.info("process pool: %d workers (%s)", self.workers, self.start_method)

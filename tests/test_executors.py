@@ -1,7 +1,10 @@
 """Executors: ordered results, progress, clear task errors, option parsing (no simulations)."""
 
 import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -155,3 +158,43 @@ def test_worker_that_always_dies_is_reported_and_the_rest_go_on(executor):
     assert sorted(seen) == list(range(5))
     with pytest.raises(ParameterError, match="failures"):
         executor.map(slow_square, [1], failures="ignore")
+
+
+_FORKSERVER_CHILD = """
+import multiprocessing, signal, sys
+from design.executors import ProcessExecutor
+
+
+def square(v):
+    return v * v
+
+
+def report(queue):
+    queue.put(signal.getsignal(signal.SIGINT) == signal.SIG_IGN)
+
+
+if __name__ == "__main__":
+    ex = ProcessExecutor(workers=1, start_method="forkserver")
+    assert ex.map(square, [3]) == [9]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # the parent: Ctrl-C
+    ctx = multiprocessing.get_context("forkserver")
+    queue = ctx.Queue()
+    child = ctx.Process(target=report, args=(queue,))   # a child of the server, no initializer
+    child.start()
+    ignored = queue.get(timeout=60)
+    child.join()
+    ex.close()
+    print("ignored" if ignored else "handled")
+"""
+
+
+@pytest.mark.skipif("forkserver" not in __import__("multiprocessing").get_all_start_methods(),
+                    reason="no fork server on this platform")
+def test_fork_server_children_ignore_ctrl_c_from_birth(tmp_path):
+    script = tmp_path / "child.py"
+    script.write_text(_FORKSERVER_CHILD)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ignored"
