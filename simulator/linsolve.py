@@ -273,7 +273,7 @@ def _pardiso_for(K):
             entry.pardiso = pardiso.PardisoLDLT(entry.indptr, entry.indices)
             logger.debug("PARDISO analysis of a %d-row pattern", len(entry.indptr) - 1)
         except pardiso.PardisoError as exc:
-            logger.warning("no PARDISO analysis (%s); using SuperLU", exc)
+            logger.warning("no PARDISO analysis (%s); using SuperLU", str(exc))
             entry.pardiso = False
     return entry.pardiso or None
 
@@ -290,7 +290,7 @@ def pardiso_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
     try:
         x, ok = handle.factor_solve(K, r, lambda solve, x: refined(K, solve, r, x, rtol))
     except pardiso.PardisoError as exc:
-        logger.debug("PARDISO failed (%s)", exc)
+        logger.debug("PARDISO failed (%s)", str(exc))
         return None
     if not ok:
         logger.debug("PARDISO solve inaccurate (%d perturbed pivots)", handle.perturbed_pivots)
@@ -375,7 +375,7 @@ def pardiso_factor(A, rtol: float = 1e-8):
         b = np.ones(A.shape[0])
         return factor if accurate(A, factor.solve(b), b, rtol) else None
     except pardiso.PardisoError as exc:
-        logger.debug("PARDISO failed (%s)", exc)
+        logger.debug("PARDISO failed (%s)", str(exc))
         return None
 
 

@@ -136,9 +136,9 @@ class PardisoLDLT:
         self._lock = threading.Lock()
         self._owner = None                # the PardisoFactor whose matrix is factorised now
         self._f = f
-        data = np.zeros(len(upper))
-        self._call(11, data)                               # ordering + symbolic factorisation
+        # PARDISO's memory is freed with this object (and if the analysis fails)
         weakref.finalize(self, _release, f, self.pt, self.iparm, n, self.ia, self.ja)
+        self._call(11, np.zeros(len(upper)))              # ordering + symbolic factorisation
 
     def _call(self, phase: int, data: np.ndarray, b: np.ndarray | None = None,
               x: np.ndarray | None = None) -> None:

@@ -233,3 +233,21 @@ def test_thermal_modes_and_transient_heat_agree_with_superlu(monkeypatch):
     assert not isinstance(slow[3], pardiso.PardisoFactor)
     for a, b in zip(fast[:3], slow[:3]):
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=0)
+
+
+def test_a_failed_analysis_is_released_and_left_to_superlu(sheet, monkeypatch):
+    *_, K, r = sheet
+    phases = []
+    original = pardiso._invoke
+
+    def failing_analysis(f, pt, iparm, phase, *args):
+        phases.append((phase, id(pt)))
+        return -2 if phase == 11 else original(f, pt, iparm, phase, *args)   # -2: no memory
+
+    monkeypatch.setattr(pardiso, "_invoke", failing_analysis)
+    du = _solve_linear(K, r)
+    gc.collect()
+    assert linsolve._cache[0].pardiso is False
+    handle = [pt for phase, pt in phases if phase == 11]
+    assert len(handle) == 1 and (-1, handle[0]) in phases               # analysis, release
+    assert np.linalg.norm(K @ du - r) <= 1e-12 * np.linalg.norm(r)       # by SuperLU
