@@ -12,6 +12,8 @@ from simulator.errors import ParameterError
 from ._executor_base import (Executor, ExecutorError, TaskFailure, _check_failures,
                              _children_ignore_sigint, _report, _task_error)
 
+__all__ = ["DaskExecutor"]
+
 logger = logging.getLogger("design.executors")
 
 #: Dask's nannies set MALLOC_TRIM_THRESHOLD_=65536 in workers; a fixed glibc threshold also

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 from simulator.errors import EtorigamiError, ParameterError
 
+__all__ = ["Executor", "SerialExecutor", "ExecutorError", "TaskError", "TaskFailure"]
+
 _FAILURE_MODES = ("raise", "return")
 
 

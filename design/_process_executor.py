@@ -16,6 +16,8 @@ from simulator.errors import ParameterError
 from ._executor_base import (Executor, ExecutorError, _check_failures, _children_ignore_sigint,
                              _name)
 
+__all__ = ["ProcessExecutor", "MAX_RETRIES"]
+
 logger = logging.getLogger("design.executors")
 
 #: Default retries of a task whose worker process died.
