@@ -8,7 +8,7 @@ import logging
 from collections import deque
 from concurrent.futures.process import BrokenProcessPool
 
-from .executors import TaskFailure, _report, _task_error
+from ._executor_base import TaskFailure, _report, _task_error
 
 logger = logging.getLogger("design.executors")
 

@@ -36,8 +36,8 @@ from .problem import Evaluation
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["EvaluationLog", "LoggedProblem", "EvaluationRun", "BudgetExhausted", "settings_hash",
-           "design_key"]
+__all__ = ["EvaluationLog", "LoggedProblem", "EvaluationRun", "BudgetExhausted",
+           "StopOptimization", "settings_hash", "design_key"]
 
 logger = logging.getLogger(__name__)
 
@@ -313,6 +313,10 @@ class LoggedProblem:
 
 class BudgetExhausted(Exception):
     """The run's evaluation budget does not allow the next batch."""
+
+
+class StopOptimization(Exception):
+    """Raise from a ``callback`` to stop an optimisation and return its result so far."""
 
 
 class EvaluationRun:
