@@ -17,7 +17,7 @@ import numpy as np
 from .bimorph import Actuators, Bimorph
 from .errors import ParameterError
 from .simulation import simulate
-from .dynamics import DynamicsOptions
+from .dynamics_options import DynamicsOptions
 from .power_schedules import StepPower
 from .steps import ArcLengthLoad, ElectroThermal, Gravity, Heat, SelfFold
 from .materials import Material

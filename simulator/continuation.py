@@ -5,6 +5,7 @@ the path turns back (a limit point: the tangent becomes singular). Here the load
 an unknown. A *path* gives the residual ``r(u, lambda) = f_ext - f_int`` on the free DOFs, the
 tangent ``K = -dr/du`` and the load derivative ``q = dr/dlambda`` (:class:`LoadPath`: dead loads
 ``f0 + lambda P`` and spring rest angles ``rest0 + lambda R``; heating paths add temperatures).
+Paths and the corrector shared by both methods are in :mod:`simulator.load_path`.
 
 :func:`mgdcm` is the modified generalized displacement control method (digest D1):
 
@@ -33,17 +34,13 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
-from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
 from .errors import ParameterError
-from .newton import DENSE_LIMIT, NewtonOptions
-from .newton import _tangent as _assembled_tangent
-from .small_solve import as_dense
+from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
+                        _tangent)
+from .newton import NewtonOptions
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
@@ -56,145 +53,6 @@ logger = logging.getLogger(__name__)
 #: halve after those needing at least :data:`SLOW_ITERATIONS`.
 FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
-
-
-@dataclass(frozen=True, eq=False)
-class PathPoint:
-    """Residual, tangent and load derivative at (u, lambda).
-
-    Attributes
-    ----------
-    r : (n_free,) residual f_ext - f_int [N]
-    K : (n_free, n_free) tangent stiffness [N/m], CSR or (small models) dense
-    q : (n_free,) dr/dlambda [N]
-    evaluation : Evaluation
-    temperature : (n_nodes,) node temperatures [deg C] or None
-    """
-
-    r: np.ndarray
-    K: object
-    q: np.ndarray
-    evaluation: object
-    temperature: np.ndarray | None = None
-
-
-class LoadPath:
-    """Affine loading in the load factor: ``f_ext = f0 + lambda P``, ``rest = rest0 + lambda R``.
-
-    Parameters
-    ----------
-    system : EquilibriumSystem or any object with ``free`` and ``evaluate(u, rest, hessian)``
-    f0, P : (n_dof,) dead load at lambda = 0 and reference load [N]
-    rest0 : (n_springs,) spring rest angles at lambda = 0 [rad]
-    R : (n_springs,) rest-angle change per unit lambda [rad], or None
-    """
-
-    def __init__(self, system, f0, P, rest0, R=None):
-        self.system = system
-        self.free = system.free
-        self.f0, self.P = np.asarray(f0, float), np.asarray(P, float)
-        self.rest0 = np.asarray(rest0, float)
-        self.R = None if R is None or not np.any(R) else np.asarray(R, float)
-
-    def rest(self, lam: float) -> np.ndarray:
-        return self.rest0 if self.R is None else self.rest0 + lam * self.R
-
-    def f_ext(self, lam: float) -> np.ndarray:
-        return self.f0 + lam * self.P
-
-    def temperature(self, u, lam):
-        return None
-
-    def at(self, u: np.ndarray, lam: float) -> PathPoint:
-        """Residual, tangent and load derivative at displacements ``u`` (n_nodes, 3)."""
-        rest = self.rest(lam)
-        ev = self.system.evaluate(u, rest)
-        q = self.P[self.free]
-        if self.R is not None:   # f_int is linear in the rest angles: the difference is exact
-            f1 = self.system.evaluate(u, rest + self.R, hessian=False).f_int
-            q = q - (f1 - ev.f_int)[self.free]
-        return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], _assembled_tangent(ev), q,
-                         ev)
-
-
-def _solve(K, B):
-    """Solve K X = B (B (n,) or (n, k)); None if K is exactly singular or X not finite.
-
-    No ill-conditioning check: near a limit point K is nearly singular by design, and the
-    bordered corrector combines the two solutions into a well-conditioned update.
-    """
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
-        try:
-            if K.shape[0] <= DENSE_LIMIT:
-                lu = scipy.linalg.lu_factor(as_dense(K), check_finite=False)
-                X = scipy.linalg.lu_solve(lu, B, check_finite=False)
-            else:
-                X = spla.splu(K.tocsc()).solve(B)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError,
-                scipy.linalg.LinAlgWarning):
-            return None
-    return X if np.all(np.isfinite(X)) else None
-
-
-@dataclass
-class _Constraint:
-    """The extra equation of the bordered system: ``c . u_free = value`` or (c None)
-    ``lambda = value``."""
-
-    c: np.ndarray | None
-    value: float
-
-    def dlam(self, v, lam, uq, ur):
-        if self.c is None:
-            return self.value - lam
-        return (self.value - self.c @ v - self.c @ ur) / (self.c @ uq)
-
-
-def _size(system) -> float:
-    mesh = getattr(getattr(system, "model", None), "mesh", None)
-    nodes = mesh.nodes if mesh is not None else getattr(system, "nodes")
-    return float(np.max(np.ptp(nodes, axis=0)))
-
-
-def _correct(path, u, lam, constraint, options, size):
-    """Newton on (u, lambda) from a predicted point that satisfies ``constraint``.
-
-    Returns (success, u, lam, point, iterations, residual_norms, message).
-    """
-    free = path.free
-    u = u.copy().ravel()
-    res, ref, max_step = [], None, getattr(path.system, "max_step", None)
-    for it in range(options.max_iter + 1):
-        pt = path.at(u.reshape(-1, 3), lam)
-        rn = float(np.linalg.norm(pt.r))
-        res.append(rn)
-        if not math.isfinite(rn):
-            return False, u, lam, pt, it, res, "residual is not finite"
-        ref = rn if ref is None else ref
-        if options.criterion == "residual" and rn <= max(options.atol, options.rtol * ref):
-            return True, u.reshape(-1, 3), lam, pt, it, res, "converged"
-        if it == options.max_iter:
-            break
-        X = _solve(pt.K, np.column_stack([pt.q, pt.r]))
-        if X is None:
-            return False, u, lam, pt, it, res, "tangent stiffness is exactly singular"
-        dlam = constraint.dlam(u[free], lam, X[:, 0], X[:, 1])
-        du = dlam * X[:, 0] + X[:, 1]
-        if not math.isfinite(dlam):
-            return False, u, lam, pt, it, res, "constraint is degenerate (K^-1 q orthogonal to it)"
-        if max_step is not None and np.max(np.abs(du)) > max_step:
-            scale = max_step / np.max(np.abs(du))
-            du, dlam = du * scale, dlam * scale
-        u[free] += du
-        lam += dlam
-        dn = float(np.linalg.norm(du))
-        if options.criterion == "displacement" and dn <= max(options.atol, options.rtol * (
-                dn if it == 0 else ref)) or np.max(np.abs(du)) <= 1e-13 * size:
-            pt = path.at(u.reshape(-1, 3), lam)
-            return True, u.reshape(-1, 3), lam, pt, it + 1, res, "converged"
-    return False, u, lam, pt, options.max_iter, res, (
-        f"no convergence in {options.max_iter} iterations (last residual {res[-1]:.3g} N)")
 
 
 def _positive(name, value, allow_none=False):
@@ -218,28 +76,6 @@ def _monitor_vector(path, target_displacement):
 def _check_count(name, value):
     if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value >= 1):
         raise ParameterError(f"{name} = {value!r} must be a positive integer.")
-
-
-def _flat(u, free, dv):
-    """Displacements ``u`` (n_nodes, 3) plus ``dv`` on the free DOFs, as a new array."""
-    out = np.array(u, float).ravel()
-    out[free] += dv
-    return out.reshape(-1, 3)
-
-
-def _begin(path, u, lam):
-    """Let a path update per-increment data (staggered heating), then evaluate it."""
-    if hasattr(path, "begin_increment"):
-        path.begin_increment(u)
-    return path.at(u, lam)
-
-
-def _tangent(pt, lam):
-    """K^-1 q at a converged point, or a message if K is exactly singular."""
-    uhat = _solve(pt.K, pt.q)
-    if uhat is None:
-        return None, f"tangent stiffness is exactly singular at load factor {lam:.6g}"
-    return uhat, ""
 
 
 def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_increments: int = 100,
@@ -300,79 +136,153 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     callback : callable, optional
         ``callback(lam, u)`` after every accepted point; True stops (status "stopped").
     """
+    _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
+                               fast_iterations, target_load_factor)
+    run = _ArcLengthRun(path, u0, lam0, arc_length=arc_length, max_arc_length=max_arc_length,
+                        target_load_factor=target_load_factor,
+                        target_displacement=target_displacement, monitor=monitor,
+                        options=options, adapt=adapt, step_norm=step_norm,
+                        fast_iterations=fast_iterations, stability=stability,
+                        until_stable=until_stable, direction=direction, prior=prior,
+                        callback=callback)
+    return run.trace_path(max_increments)
+
+
+def _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
+                               fast_iterations, target_load_factor) -> None:
+    """:class:`ParameterError` for a setting of :func:`mgdcm` out of range."""
     _positive("arc_length", arc_length)
     _positive("max_arc_length", max_arc_length, allow_none=True)
     _positive("step_norm", step_norm, allow_none=True)
     _check_count("max_increments", max_increments)
     _check_count("fast_iterations", fast_iterations)
-    slow = max(SLOW_ITERATIONS, 2 * fast_iterations)
     if target_load_factor is not None and not math.isfinite(target_load_factor):
         raise ParameterError(f"target_load_factor = {target_load_factor!r} must be finite.")
-    max_ds = 4 * arc_length if max_arc_length is None else max(max_arc_length, arc_length)
-    min_ds = arc_length / 2 ** options.max_cuts
-    free, size = path.free, _size(path.system)
-    c_t, v_t = _monitor_vector(path, target_displacement)
-    u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
-    trace = PathTrace(path, c_t if monitor is None else np.asarray(monitor, float).ravel(),
-                   stability, u, lam, prior)
-    pt = _begin(path, u, lam)
-    sig = 1.0 if target_load_factor is None or target_load_factor >= lam else -1.0
-    ds, uhat_prev, norm1 = arc_length, None, None
-    sig0, peak, turned = sig, lam, False
-    while len(trace.history) < max_increments:
-        uhat, msg = _tangent(pt, lam)
+
+
+class _ArcLengthRun:
+    """One :func:`mgdcm` run (settings as there): the last accepted point ``(u, lam)`` with its
+    path evaluation, the arc length ``ds``, the sign of the load step, what is known about a
+    limit point passed, and the :class:`PathTrace` of the accepted points."""
+
+    def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
+                 target_displacement, monitor, options, adapt, step_norm, fast_iterations,
+                 stability, until_stable, direction, prior, callback):
+        self.path, self.options, self.arc_length = path, options, arc_length
+        self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
+        self.direction, self.callback, self.lam_t = direction, callback, target_load_factor
+        self.fast, self.slow = fast_iterations, max(SLOW_ITERATIONS, 2 * fast_iterations)
+        self.max_ds = 4 * arc_length if max_arc_length is None else max(max_arc_length,
+                                                                         arc_length)
+        self.min_ds = arc_length / 2 ** options.max_cuts
+        self.free, self.size = path.free, _size(path.system)
+        self.c_t, self.v_t = _monitor_vector(path, target_displacement)
+        self.u, self.lam = np.array(u0, float).reshape(-1, 3), float(lam0)
+        self.trace = PathTrace(path, self.c_t if monitor is None else
+                               np.asarray(monitor, float).ravel(), stability, self.u, self.lam,
+                               prior)
+        self.pt = _begin(path, self.u, self.lam)
+        self.sig = 1.0 if target_load_factor is None or target_load_factor >= self.lam else -1.0
+        self.ds, self.uhat_prev, self.norm1 = arc_length, None, None
+        self.sig0, self.peak, self.turned = self.sig, self.lam, False
+
+    def result(self, success: bool, status: str, message: str) -> ContinuationResult:
+        return self.trace.result(success, status, message, self.u, self.lam)
+
+    def trace_path(self, max_increments: int) -> ContinuationResult:
+        """Increments until the path ends or ``max_increments`` are accepted."""
+        while len(self.trace.history) < max_increments:
+            done = self.increment()
+            if done is not None:
+                return done
+        if self.lam_t is None and self.c_t is None:
+            return self.result(True, "converged", f"{max_increments} increments")
+        return self.result(False, "failed", f"target not reached in {max_increments} "
+                           f"increments (load factor {self.lam:.6g})")
+
+    def increment(self) -> ContinuationResult | None:
+        """Predict and correct one increment; accept it, or halve the arc length for a retry.
+        The result if the path ends here, else None."""
+        uhat, msg = _tangent(self.pt, self.lam)
         if uhat is None:
-            return trace.result(False, "failed", msg, u, lam)
-        if norm1 is None:
-            norm1 = float(np.linalg.norm(uhat)) if step_norm is None else step_norm / arc_length
+            return self.result(False, "failed", msg)
+        s, dlam = self.load_step(uhat)
+        end, dl, con = _predict(self.u, self.lam, dlam, uhat, self.free, self.lam_t, self.c_t,
+                                self.v_t)
+        ok, u1, lam1, pt1, its, res, msg = _correct(self.path, _flat(self.u, self.free,
+                                                                     dl * uhat),
+                                                    self.lam + dl, con, self.options, self.size)
+        self.trace.iterations += its
+        refused = self.refusal(dl, u1, lam1) if ok and not end else ""
+        if refused:
+            ok, msg = False, refused
+        if not ok:
+            return self.cut(msg)
+        return self.accept(s, uhat, u1, lam1, pt1, its, res, end)
+
+    def load_step(self, uhat: np.ndarray) -> tuple[float, float]:
+        """(sign, load-factor step) of the predictor along ``uhat = K^-1 q``: the sign flips
+        where successive tangents point into opposite half-spaces."""
+        if self.norm1 is None:
+            self.norm1 = float(np.linalg.norm(uhat)) if self.step_norm is None else \
+                self.step_norm / self.arc_length
             if not np.any(uhat):
                 raise ParameterError("mgdcm: the reference load does not act on any free DOF "
                                      "(K^-1 q = 0); load free nodes.")
-        if uhat_prev is not None:
-            s = sig * np.sign(uhat_prev @ uhat)
-        elif direction is not None:
-            s = np.sign(np.asarray(direction, float).ravel()[free] @ uhat) or sig
+        if self.uhat_prev is not None:
+            s = self.sig * np.sign(self.uhat_prev @ uhat)
+        elif self.direction is not None:
+            s = np.sign(np.asarray(self.direction, float).ravel()[self.free] @ uhat) or self.sig
         else:
-            s = sig
-        dlam = s * ds * norm1 / float(np.linalg.norm(uhat))
-        end, dl, con = _predict(u, lam, dlam, uhat, free, target_load_factor, c_t, v_t)
-        ok, u1, lam1, pt1, its, res, msg = _correct(path, _flat(u, free, dl * uhat), lam + dl,
-                                                    con, options, size)
-        trace.iterations += its
-        if ok and not end and (lam1 - lam) * dl < 0 and abs(lam1 - lam) > max(abs(dl),
-                                                                              arc_length):
-            ok, msg = False, (f"corrector reversed the load step ({dl:.3g} predicted, "
-                              f"{lam1 - lam:.3g} found: a jump to another branch)")
-        if ok and not end and _passed(u, lam, u1, lam1, target_load_factor, c_t, v_t):
-            ok, msg = False, "the corrector carried the point past the target"   # approach it
-        if not ok:
-            if ds / 2 < min_ds:
-                return trace.result(False, "failed", f"gave up at load factor {lam:.6g} after "
-                                    f"{trace.cuts} cuts (arc length {ds:.3g}): {msg}", u, lam)
-            ds, trace.cuts = ds / 2, trace.cuts + 1
-            continue
-        u, lam, sig, uhat_prev = u1, lam1, s, uhat
-        trace.accept(u, lam, pt1, its, res)
-        if callback is not None and callback(lam, u):
-            return trace.result(False, "stopped", f"stopped by callback at load factor "
-                                f"{lam:.6g}", u, lam)
+            s = self.sig
+        return s, s * self.ds * self.norm1 / float(np.linalg.norm(uhat))
+
+    def refusal(self, dl: float, u1: np.ndarray, lam1: float) -> str:
+        """Why a converged increment to ``(u1, lam1)`` is refused ("" if it is not): the
+        corrector jumped to another branch, or carried the point past the target."""
+        lam = self.lam
+        if (lam1 - lam) * dl < 0 and abs(lam1 - lam) > max(abs(dl), self.arc_length):
+            return (f"corrector reversed the load step ({dl:.3g} predicted, {lam1 - lam:.3g} "
+                    "found: a jump to another branch)")
+        if _passed(self.u, lam, u1, lam1, self.lam_t, self.c_t, self.v_t):
+            return "the corrector carried the point past the target"   # approach it
+        return ""
+
+    def cut(self, msg: str) -> ContinuationResult | None:
+        """Halve the arc length after a failed increment; the failed result below ``min_ds``."""
+        if self.ds / 2 < self.min_ds:
+            return self.result(False, "failed", f"gave up at load factor {self.lam:.6g} after "
+                               f"{self.trace.cuts} cuts (arc length {self.ds:.3g}): {msg}")
+        self.ds, self.trace.cuts = self.ds / 2, self.trace.cuts + 1
+        return None
+
+    def accept(self, s, uhat, u1, lam1, pt1, its, res, end) -> ContinuationResult | None:
+        """Take the converged point; the result if the path ends there (callback, target
+        reached, stable again), else adapt the arc length and evaluate the path there."""
+        self.u, self.lam, self.sig, self.uhat_prev = u1, lam1, s, uhat
+        self.trace.accept(u1, lam1, pt1, its, res)
+        if self.callback is not None and self.callback(lam1, u1):
+            return self.result(False, "stopped", f"stopped by callback at load factor "
+                               f"{lam1:.6g}")
         if end:
-            return trace.result(True, "converged", f"reached {end} in {len(trace.history)} "
-                                "increments", u, lam)
-        turned = turned or s != sig0
-        peak = peak if turned else lam
-        if until_stable and turned and (lam - peak) * sig0 > 0 and (
-                not trace.stab or trace.stab[-1].stable):
-            return trace.result(True, "converged", f"stable again past the limit point at load "
-                                f"factor {lam:.6g}", u, lam)
-        if adapt:
-            ds = min(2 * ds, max_ds) if its <= fast_iterations else (
-                max(ds / 2, min_ds) if its >= slow else ds)
-        pt = _begin(path, u, lam) if hasattr(path, "begin_increment") else pt1
-    if target_load_factor is None and c_t is None:
-        return trace.result(True, "converged", f"{max_increments} increments", u, lam)
-    return trace.result(False, "failed", f"target not reached in {max_increments} increments "
-                        f"(load factor {lam:.6g})", u, lam)
+            return self.result(True, "converged", f"reached {end} in "
+                               f"{len(self.trace.history)} increments")
+        if self.stable_again(s):
+            return self.result(True, "converged", f"stable again past the limit point at "
+                               f"load factor {lam1:.6g}")
+        if self.adapt:
+            self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
+                max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
+        self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
+        return None
+
+    def stable_again(self, s) -> bool:
+        """Note whether the load factor turned (sign ``s`` of the last step); True if
+        ``until_stable`` and the last point is stable beyond the load factor where it turned."""
+        self.turned = self.turned or s != self.sig0
+        self.peak = self.peak if self.turned else self.lam
+        return bool(self.until_stable and self.turned and (self.lam - self.peak) * self.sig0 > 0
+                    and (not self.trace.stab or self.trace.stab[-1].stable))
 
 
 def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):

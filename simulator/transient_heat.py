@@ -345,73 +345,128 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     callback : callable, optional
         ``callback(k, n_steps, t, temperature)`` after step k; returning True stops the run.
     """
-    if isinstance(tm, Model):
-        tm = thermal_model(tm)
-    elif not isinstance(tm, ThermalModel):
-        raise ParameterError(f"integrate_heat: give a Model with thermal parameters or a "
-                             f"ThermalModel, not {type(tm).__name__}.")
+    tm = _as_thermal_model(tm)
     t_end, dt = check_time_step(t_end, "t_end"), check_time_step(dt)
     theta = check_theta(theta)
     if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
         raise ParameterError(f"record_every = {record_every!r} must be a positive integer.")
     room = tm.params.room_temperature if room is None else float(room)
-    if isinstance(powers, Mapping):
-        powers = crease_power_function(tm.mesh, powers)
-    elif not callable(powers):
-        raise ParameterError("powers must be a mapping {crease: schedule or W} or a function "
-                             "t -> (C,) crease powers [W].")
+    powers = _power_function(tm, powers)
     shape = x if callable(x) else (lambda t, _x=np.asarray(x, float): _x)
     n_steps = max(1, math.ceil(t_end / dt * (1 - 1e-12)))
-    h = t_end / n_steps
-    n = tm.mesh.n_nodes
-    x_now = np.asarray(shape(0.0), float)
-    system = heat_system(tm, x_now)
-    stepper, assemblies = ThetaStepper(system.K, system.C, h, theta), 1
-    rise = initial_rise(tm, x_now, T0, room)
-    T = rise[system.free]
+    run = _HeatRun(tm, shape, powers, t_end / n_steps, theta, room, T0)
+    status, message, k = run.steps(t_end, n_steps, record_every, callback)
+    logger.info("integrate_heat: %s (%d steps of %g s, theta %g, %d assemblies)", status, k,
+                run.h, theta, run.assemblies)
+    return run.result(status, message, k)
 
-    def heat(p):
-        return free_heat_input(tm, free, p)
 
-    free, averaged = system.free, hasattr(powers, "mean")   # the free set never changes
-    p_new = np.asarray(powers(0.0), float)
-    q_new = heat(p_new)
-    log = {"time": [0.0], "temperature": [room + rise[:n]], "power": [p_new], "heat_in": [0.0],
-           "heat_out": [0.0], "heat_stored": [system.C @ T]}
-    e_in = e_out = 0.0
-    status, message = "converged", f"reached t = {t_end:g} s in {n_steps} steps"
-    for k in range(1, n_steps + 1):
+def _as_thermal_model(tm) -> ThermalModel:
+    """The :class:`ThermalModel` of ``tm`` (a Model gives its cached one), else an error."""
+    if isinstance(tm, Model):
+        return thermal_model(tm)
+    if not isinstance(tm, ThermalModel):
+        raise ParameterError(f"integrate_heat: give a Model with thermal parameters or a "
+                             f"ThermalModel, not {type(tm).__name__}.")
+    return tm
+
+
+def _power_function(tm: ThermalModel, powers):
+    """``powers`` as a function ``t -> (C,)`` crease powers [W] (a mapping of schedules gives one
+    with a ``mean(t0, t1)`` method), else an error."""
+    if isinstance(powers, Mapping):
+        return crease_power_function(tm.mesh, powers)
+    if not callable(powers):
+        raise ParameterError("powers must be a mapping {crease: schedule or W} or a function "
+                             "t -> (C,) crease powers [W].")
+    return powers
+
+
+class _HeatRun:
+    """State of one :func:`integrate_heat` run with time step ``h`` [s]: the operator on the
+    current shape, the rise [K] of the free unknowns, the heat sums [J] and the records."""
+
+    def __init__(self, tm: ThermalModel, shape, powers, h: float, theta: float, room, T0):
+        self.tm, self.shape, self.powers, self.h, self.theta, self.room = (tm, shape, powers, h,
+                                                                           theta, room)
+        self.x = np.asarray(shape(0.0), float)
+        self.system = heat_system(tm, self.x)
+        self.stepper, self.assemblies = ThetaStepper(self.system.K, self.system.C, h, theta), 1
+        self.rise = initial_rise(tm, self.x, T0, room)
+        self.T = self.rise[self.system.free]
+        self.free = self.system.free                          # the free set never changes
+        self.averaged = hasattr(powers, "mean")
+        p_new = np.asarray(powers(0.0), float)
+        self.q_new = self.heat(p_new)
+        self.log = {"time": [0.0], "temperature": [self.temperature()], "power": [p_new],
+                    "heat_in": [0.0], "heat_out": [0.0], "heat_stored": [self.system.C @ self.T]}
+        self.e_in = self.e_out = 0.0
+
+    def heat(self, p) -> np.ndarray:
+        """Heat input [W] of the free unknowns for the (C,) crease powers ``p`` [W]."""
+        return free_heat_input(self.tm, self.free, p)
+
+    def temperature(self) -> np.ndarray:
+        """Structure node temperatures [deg C], (n,)."""
+        return self.room + self.rise[:self.tm.mesh.n_nodes]
+
+    def steps(self, t_end, n_steps, record_every, callback) -> tuple[str, str, int]:
+        """Take the ``n_steps`` steps up to ``t_end`` [s] unless the temperature becomes
+        non-finite or the callback stops; (status, message, steps taken)."""
+        status, message = "converged", f"reached t = {t_end:g} s in {n_steps} steps"
+        for k in range(1, n_steps + 1):
+            record = k % record_every == 0 or k == n_steps
+            t1, p_new = self.advance(k, record)
+            if not np.all(np.isfinite(self.T)):
+                status, message = "failed", f"non-finite temperature at t = {t1:g} s (step {k})"
+            elif callback is not None and callback(k, n_steps, t1, self.temperature()):
+                status, message = "stopped", f"stopped by the callback at t = {t1:g} s (step {k})"
+            if record or status != "converged":
+                self.record(t1, p_new)
+            if status != "converged":
+                break
+        return status, message, k
+
+    def reassemble(self, k: int, t0: float) -> None:
+        """Re-assemble K and C (and re-factorise) if the shape at ``t0`` [s] changed (k > 1)."""
+        x_new = np.asarray(self.shape(t0), float)
+        if k > 1 and not np.array_equal(x_new, self.x):
+            self.x, self.system = x_new, heat_system(self.tm, x_new)
+            self.stepper = ThetaStepper(self.system.K, self.system.C, self.h, self.theta)
+            self.assemblies += 1
+
+    def advance(self, k: int, record: bool):
+        """Time step ``k``, from (k - 1) h to k h: the heat input over the step, the theta
+        step, the heat sums. Returns (k h [s], the (C,) powers at k h [W] or None if unused)."""
+        h, theta, powers = self.h, self.theta, self.powers
         t0, t1 = (k - 1) * h, k * h
-        x_new = np.asarray(shape(t0), float)
-        if k > 1 and not np.array_equal(x_new, x_now):
-            x_now, system = x_new, heat_system(tm, x_new)
-            stepper, assemblies = ThetaStepper(system.K, system.C, h, theta), assemblies + 1
-        record = k % record_every == 0 or k == n_steps
-        p_new = np.asarray(powers(t1), float) if record or not averaged else None
-        if averaged:                          # exact heat input per step (PWM, steps, ramps)
-            q_old = q_new = heat(powers.mean(t0, t1))
+        self.reassemble(k, t0)
+        p_new = np.asarray(powers(t1), float) if record or not self.averaged else None
+        if self.averaged:                     # exact heat input per step (PWM, steps, ramps)
+            q_old = q_new = self.heat(powers.mean(t0, t1))
         else:
-            q_old, q_new = q_new, heat(p_new)
-        T_new = stepper.step(T, q_old, q_new)
-        e_in += h * np.sum(theta * q_new + (1 - theta) * q_old)
-        e_out += h * system.outflow @ (theta * T_new + (1 - theta) * T)
-        T = T_new
-        rise[free] = T
-        if not np.all(np.isfinite(T)):
-            status, message = "failed", f"non-finite temperature at t = {t1:g} s (step {k})"
-        elif callback is not None and callback(k, n_steps, t1, room + rise[:n]):
-            status, message = "stopped", f"stopped by the callback at t = {t1:g} s (step {k})"
-        if record or status != "converged":
-            p_new = np.asarray(powers(t1), float) if p_new is None else p_new
-            for key, val in (("time", t1), ("temperature", room + rise[:n]), ("power", p_new),
-                             ("heat_in", e_in), ("heat_out", e_out),
-                             ("heat_stored", system.C @ T)):
-                log[key].append(val)
-        if status != "converged":
-            break
-    logger.info("integrate_heat: %s (%d steps of %g s, theta %g, %d assemblies)", status, k, h,
-                theta, assemblies)
-    return TransientHeatResult(
-        success=status == "converged", status=status, message=message,
-        **{key: np.array(val, float) for key, val in log.items()},
-        final_temperature=room + rise, dt=h, theta=theta, steps=k, assemblies=assemblies)
+            q_old, q_new = self.q_new, self.heat(p_new)
+        self.q_new = q_new
+        T = self.T
+        T_new = self.stepper.step(T, q_old, q_new)
+        self.e_in += h * np.sum(theta * q_new + (1 - theta) * q_old)
+        self.e_out += h * self.system.outflow @ (theta * T_new + (1 - theta) * T)
+        self.T = T_new
+        self.rise[self.free] = T_new
+        return t1, p_new
+
+    def record(self, t1: float, p_new) -> None:
+        """Append the state at ``t1`` [s] to the records (``p_new``: the powers there, or None)."""
+        p_new = np.asarray(self.powers(t1), float) if p_new is None else p_new
+        for key, val in (("time", t1), ("temperature", self.temperature()), ("power", p_new),
+                         ("heat_in", self.e_in), ("heat_out", self.e_out),
+                         ("heat_stored", self.system.C @ self.T)):
+            self.log[key].append(val)
+
+    def result(self, status: str, message: str, k: int) -> TransientHeatResult:
+        """The :class:`TransientHeatResult` after ``k`` steps."""
+        return TransientHeatResult(
+            success=status == "converged", status=status, message=message,
+            **{key: np.array(val, float) for key, val in self.log.items()},
+            final_temperature=self.room + self.rise, dt=self.h, theta=self.theta, steps=k,
+            assemblies=self.assemblies)

@@ -20,8 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..continuation import LoadPath, displacement_control, mgdcm
+from ..continuation import displacement_control, mgdcm
 from ..errors import ParameterError
+from ..load_path import LoadPath
 from ..model import _AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..state import at_rest

@@ -21,7 +21,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..dynamics import DynamicsOptions, integrate
+from ..dynamics import integrate
+from ..dynamics_options import DynamicsOptions
 from ..errors import ParameterError
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder

@@ -11,7 +11,7 @@
    of the step (:func:`~simulator.steps.heating.thermal_actuation`, the same formula as
    :class:`~simulator.steps.Heat`);
 3. mechanics: one implicit time step of the equation of motion
-   (:class:`~simulator.dynamics.TimeIntegrator`, Newton iterations and dead loads such as
+   (:class:`~simulator.generalized_alpha.TimeIntegrator`, Newton iterations and dead loads such as
    gravity kept, unlike the reference, digest D9.3 and D9.6), or with
    ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
    angles moved from the previous step's with step cutting
@@ -53,8 +53,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..dynamics import DynamicsOptions, TimeIntegrator
+from ..dynamics_options import DynamicsOptions
 from ..errors import ParameterError
+from ..generalized_alpha import TimeIntegrator
 from ..newton import follow_path
 from ..power_schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
                                check_power_mapping, describe_power_mapping)

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ParameterError
+from ..load_path import LoadPath
 from ..model import STANDARD_GRAVITY, Model, gravity_loads
-from ..continuation import LoadPath
 from ..newton import follow_path
 from ..properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
