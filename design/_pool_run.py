@@ -8,7 +8,7 @@ import logging
 from collections import deque
 from concurrent.futures.process import BrokenProcessPool
 
-from ._executor_base import TaskFailure, _report, _task_error
+from ._executor_base import TaskFailure, _report, _sigint_deferred, _task_error
 
 logger = logging.getLogger("design.executors")
 
@@ -46,15 +46,16 @@ class PoolRun:
             suspect = any(self.deaths[j] for j in self.flight.values())
             if suspect or (self.deaths[i] and self.flight):
                 return                            # a suspect runs alone
-            try:
-                fut = pool.submit(self.fn, self.items[i])
-            except BrokenProcessPool:             # a worker died since the last wait
-                if not self.flight:               # no task of ours to learn it from
-                    self.ex._discard_pool()
-                return
-            self.queue.popleft()
-            self.starts[i] += 1
-            self.flight[fut] = i
+            with _sigint_deferred():              # submit may start a worker: not halfway
+                try:
+                    fut = pool.submit(self.fn, self.items[i])
+                except BrokenProcessPool:         # a worker died since the last wait
+                    if not self.flight:           # no task of ours to learn it from
+                        self.ex._discard_pool()
+                    return
+                self.queue.popleft()
+                self.starts[i] += 1
+                self.flight[fut] = i
 
     def _collect(self, finished) -> list:
         """Record finished futures; return the indices whose worker died."""

@@ -38,7 +38,12 @@ def _interrupt_after_first_row(argv, log):
         time.sleep(0.1)
     assert proc.poll() is None, "the command ended before it could be interrupted"
     os.killpg(proc.pid, signal.SIGINT)                 # what Ctrl-C in a terminal does
-    out, err = proc.communicate(timeout=60)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:                  # something still holds the pipes:
+        os.killpg(proc.pid, signal.SIGKILL)            # leave no process behind, and say so
+        out, err = proc.communicate()
+        pytest.fail(f"processes of the command still ran 60 s after Ctrl-C; stderr: {err}")
     return proc.returncode, out, err
 
 

@@ -198,3 +198,27 @@ def test_fork_server_children_ignore_ctrl_c_from_birth(tmp_path):
                          timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ignored"
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_ctrl_c_while_a_task_is_submitted_takes_effect_after_it(monkeypatch):
+    import signal
+
+    ex = ProcessExecutor(workers=1)
+    pool = ex._ensure_pool()
+    original, seen = pool.submit, []
+
+    def interrupted_submit(fn, *args):
+        fut = original(fn, *args)                     # starts the worker
+        signal.raise_signal(signal.SIGINT)            # Ctrl-C right then
+        seen.append(list(pool._processes.values()))
+        return fut
+
+    monkeypatch.setattr(pool, "submit", interrupted_submit)
+    with pytest.raises(KeyboardInterrupt):
+        ex.map(abs, [-1, -2])
+    assert len(seen) == 1 and len(seen[0]) == 1       # the submit finished first
+    assert ex._pool is None                           # then the pool was stopped
+    for proc in seen[0]:
+        proc.join(timeout=10)
+        assert not proc.is_alive()                    # no worker left running
