@@ -146,37 +146,38 @@ def _report(on_result, progress, index, result, done, total) -> None:
 
 
 @contextlib.contextmanager
+def _sigint_handler(handler):
+    """``handler`` for SIGINT during this block, the previous one after it; nothing changes
+    outside the main thread (where Python does not allow it)."""
+    try:
+        previous = signal.signal(signal.SIGINT, handler)
+    except ValueError:                            # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
 def _sigint_deferred():
-    """A Ctrl-C during this block takes effect when the block ends (the signal is raised
-    again then, for the handler in force before).
+    """A Ctrl-C during this block takes effect when it ends (the signal is raised again then,
+    for the handler in force before).
 
     Starting a pool worker is Python code: a KeyboardInterrupt in the middle of it can leave
     a started worker that the pool does not know, so Ctrl-C does not stop it; it then keeps
     the fork server and the terminal's pipes alive."""
     caught = []
     try:
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
-    except ValueError:                            # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
+        with _sigint_handler(lambda signum, frame: caught.append(signum)):
+            yield
+    finally:                                      # also when the block raised: Ctrl-C wins
         if caught:
             signal.raise_signal(signal.SIGINT)
 
 
-@contextlib.contextmanager
 def _children_ignore_sigint():
     """Processes started in this block inherit an ignored SIGINT: Ctrl-C reaches every process
     of a terminal's foreground group, and only this one should handle it (it stops them)."""
-    try:
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:                            # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    return _sigint_handler(signal.SIG_IGN)
