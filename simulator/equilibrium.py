@@ -31,6 +31,7 @@ from .small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, so
 from .contact_search import ContactSearch
 from . import _thermal_jit
 from .elements import _fused_jit, _springs_jit
+from .elements import _bars_jit
 from .elements.bars import bar_kernel
 from .elements.contact import contact_kernel
 from .elements.springs import fold_angle_derivatives, spring_kernel
@@ -259,12 +260,14 @@ class EquilibriumSystem:
         return self._evaluate_numpy(u, spring_rest, hessian)
 
     def _evaluate_numpy(self, u, spring_rest, hessian=True) -> Evaluation:
-        """:meth:`evaluate` with the element kernels of :mod:`simulator.elements` (the
-        reference path)."""
+        """:meth:`evaluate` with the element kernels of :mod:`simulator.elements`: element
+        Hessian arrays scattered into the cached pattern (the path of models outside the fused
+        kernel; bars and springs compiled with the "numba" backend, else numpy)."""
         mesh = self.model.mesh
         x = mesh.nodes + u
         du = u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
-        eb, gb, hb = bar_kernel(self.bar_dX, du, self.bar_L0, self.bar_EA, hessian)
+        bars = _bars_jit.bar_kernel_jit if _bars_jit.use_compiled() else bar_kernel
+        eb, gb, hb = bars(self.bar_dX, du, self.bar_L0, self.bar_EA, hessian)
         es, gs, hs = spring_kernel(x[mesh.springs], self.spr_k, spring_rest, hessian)
         f = assemble_vector(self.n_dof, self.bar_dofs, gb) \
             + assemble_vector(self.n_dof, self.spr_dofs, gs)

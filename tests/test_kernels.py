@@ -149,3 +149,47 @@ def test_compile_kernel_returns_the_kernel_or_none_with_one_warning(caplog):
     assert warnings[0].getMessage() == ("numba could not compile the test kernel (RuntimeError: "
                                         "no compiler today); using numpy")
     assert "compiling the test kernel with numba" in caplog.text
+
+
+def test_compiled_bar_kernel_equals_numpy_kernel_bit_for_bit():
+    from simulator.elements import _bars_jit
+    from simulator import spring_kernel_backend
+
+    x, L0, EA = _bars(500)
+    dX = RNG.normal(size=(500, 3)) * 1e-3
+    du = (x[:, 1] - x[:, 0]) - dX
+    with spring_kernel_backend("numba"):
+        assert _bars_jit.use_compiled()
+        for hessian in (True, False):
+            fast = _bars_jit.bar_kernel_jit(dX, du, L0, EA, hessian)
+            ref = bar_kernel(dX, du, L0, EA, hessian)
+            for a, b in zip(fast, ref):
+                assert (a is None and b is None) or np.array_equal(a, b)
+
+
+def test_large_model_evaluation_takes_the_compiled_bar_kernel_with_numba(monkeypatch):
+    from simulator import spring_kernel_backend
+    from simulator.elements import _bars_jit
+    from simulator.example_patterns import miura_sheet_pattern
+    from simulator.model import Supports, make_model
+    from simulator.properties import BarHingeParameters
+    from simulator.state import equilibrium_system, initial_state
+
+    model = make_model(miura_sheet_pattern(m=4, n=4), None, BarHingeParameters())
+    model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
+    u = RNG.normal(size=(model.mesh.n_nodes, 3)) * 1e-6
+    rest = initial_state(model).spring_rest
+    calls = []
+    original = _bars_jit.bar_kernel_jit
+    monkeypatch.setattr(_bars_jit, "bar_kernel_jit", lambda *a: calls.append(1) or original(*a))
+    out = {}
+    for backend in ("numba", "numpy"):
+        with spring_kernel_backend(backend):
+            system = equilibrium_system(model)
+            assert not system.uses_fused                      # the large-model path
+            out[backend] = system.evaluate(u, rest)
+    assert calls == [1]                                       # numba only
+    f = out["numpy"].f_int                                   # springs differ by rounding
+    np.testing.assert_allclose(out["numba"].f_int, f, rtol=1e-12, atol=1e-12 * np.abs(f).max())
+    np.testing.assert_allclose(out["numba"].K.toarray(), out["numpy"].K.toarray(), rtol=1e-12,
+                               atol=1e-12 * abs(out["numpy"].K).max())
