@@ -357,8 +357,7 @@ def factor_symmetric(A, minimum_degree_first: bool = False):
     if minimum_degree_first:
         lu = spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
-        b = np.ones(n)
-        if accurate(A, lu.solve(b), b, 1e-8):
+        if _solves_ones(A, lu.solve, 1e-8):
             return lu
     return spla.splu(Ac)
 
@@ -372,8 +371,7 @@ def pardiso_factor(A, rtol: float = 1e-8):
         return None
     try:
         factor = handle.factorize(A)
-        b = np.ones(A.shape[0])
-        return factor if accurate(A, factor.solve(b), b, rtol) else None
+        return factor if _solves_ones(A, factor.solve, rtol) else None
     except pardiso.PardisoError as exc:
         logger.debug("PARDISO failed (%s)", str(exc))
         return None
@@ -384,50 +382,58 @@ def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:
     solves, or None when there is no ordering, a pivot is exactly zero or the solution of a
     vector of ones is not :func:`accurate` (to ``rtol``)."""
     lu = _factor(K)
-    if lu is None:
-        return None
-    b = np.ones(K.shape[0])
-    return lu if accurate(K, lu.solve(b), b, rtol) else None
+    return lu if lu is not None and _solves_ones(K, lu.solve, rtol) else None
 
 
-def backward_error(K, x: np.ndarray, r: np.ndarray) -> float:
+def backward_error(K, x: np.ndarray, r: np.ndarray, residual=None) -> float:
     """Componentwise relative backward error of ``x`` as a solution of ``K x = r``:
     ``max_i |K x - r|_i / (|K| |x| + |r|)_i`` (Oettli-Prager; LAPACK's ``berr``), the smallest
     relative change of the entries of K and r for which x is exact. ``x`` and ``r`` are (n,)
-    or (n, k); the largest over columns. Infinite for a non-finite x."""
+    or (n, k); the largest over columns. Infinite for a non-finite x. ``residual``, if given,
+    is ``K x - r`` already computed."""
     x = np.asarray(x)
     if not np.all(np.isfinite(x)):
         return math.inf
-    res = np.abs(K @ x - r)
+    res = np.abs(K @ x - r if residual is None else residual)
     scale = abs(K) @ np.abs(x) + np.abs(r)
     with np.errstate(divide="ignore", invalid="ignore"):
         q = np.where(scale > 0, res / scale, np.where(res > 0, math.inf, 0.0))
     return float(q.max()) if q.size else 0.0
 
 
-def accurate(K, x: np.ndarray, r: np.ndarray, rtol: float = 1e-6) -> bool:
+def accurate(K, x: np.ndarray, r: np.ndarray, rtol: float = 1e-6, residual=None) -> bool:
     """Whether ``x`` solves ``K x = r`` as well as the data allow: a small residual,
     ``|K x - r| <= rtol |r|`` (2-norm, per column), or a :func:`backward_error` of at most
     :data:`BACKWARD_ERROR_TOL` (for an ill-conditioned K, whose residual cannot be small in
-    double precision). False for a non-finite x."""
+    double precision). False for a non-finite x. ``residual``, if given, is ``K x - r``
+    already computed."""
     x = np.asarray(x)
     if not np.all(np.isfinite(x)):
         return False
-    res = np.linalg.norm(K @ x - r, axis=0)
-    if np.all(res <= rtol * np.linalg.norm(r, axis=0)):
+    residual = K @ x - r if residual is None else residual
+    if np.all(np.linalg.norm(residual, axis=0) <= rtol * np.linalg.norm(r, axis=0)):
         return True
-    return backward_error(K, x, r) <= BACKWARD_ERROR_TOL
+    return backward_error(K, x, r, residual) <= BACKWARD_ERROR_TOL
 
 
 def refined(K, solve, r: np.ndarray, x: np.ndarray, rtol: float = 1e-6,
             steps: int = 3) -> tuple[np.ndarray, bool]:
     """``(x, ok)``: ``x`` improved by up to ``steps`` of iterative refinement with the factors
-    that produced it (``x += solve(r - K x)``) until it is :func:`accurate`; ok when it is."""
+    that produced it (``x += solve(r - K x)``) until it is :func:`accurate`; ok when it is.
+    One product ``K x`` per step serves both the test and the correction."""
     with np.errstate(all="ignore"):             # broken factors may overflow: then not ok
         for _ in range(steps + 1):
-            if accurate(K, x, r, rtol):
-                return x, True
             if not np.all(np.isfinite(x)):
                 break
-            x = x + solve(r - K @ x)
+            residual = K @ x - r
+            if accurate(K, x, r, rtol, residual):
+                return x, True
+            x = x - solve(residual)
     return x, False
+
+
+def _solves_ones(A, solve, rtol: float) -> bool:
+    """Whether factors (``solve(v)`` ~ ``A^-1 v``) kept for repeated solves are
+    :func:`accurate` on a vector of ones: the check of each one before it is kept."""
+    b = np.ones(A.shape[0])
+    return accurate(A, solve(b), b, rtol)

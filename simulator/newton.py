@@ -171,9 +171,8 @@ def _solve_linear(K, r):
     :data:`~simulator.linsolve.PARDISO_LIMIT` rows), else (or if it fails) SuperLU in
     symmetric mode (diagonal pivots) in a fill-reducing order: from
     :data:`~simulator.linsolve.ND_LIMIT` unknowns on, METIS nested dissection cached per
-    sparsity pattern
-    (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails) SuperLU's
-    symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
+    sparsity pattern (:func:`~simulator.linsolve.ordering_for`), below it (or if that fails)
+    SuperLU's symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
     A solution that is not :func:`~simulator.linsolve.accurate` (diagonal pivots on an
     indefinite tangent) gets iterative refinement with the same factors; if that fails too,
     the solve falls back to partial pivoting with COLAMD.

@@ -21,11 +21,6 @@ from ._springs_jit import numba_selected
 
 __all__ = ["bar_kernel_jit", "use_compiled"]
 
-#: dX (n, 3), du (n, 3), L0 (n,), EA (n,), want_hess, energy (n,), grad (n, 6),
-#: hess (n or 0, 6, 6); all C-contiguous float64.
-_SIGNATURE = ("void(f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], "
-              "f8[:, :, ::1])")
-
 _compiled = None
 _broken = False
 
@@ -53,9 +48,16 @@ def _kernel(dX, du, L0, EA, want_hess, energy, grad, hess):
 
 
 def _build():
-    from numba import njit
+    from numba import njit, types
 
-    return njit(_SIGNATURE, cache=True)(_kernel)
+    def array(ndim, readonly=False):
+        return types.Array(types.float64, ndim, "C", readonly=readonly)
+
+    # dX (n, 3), du (n, 3), L0 (n,), EA (n,): read-only allowed (the system's arrays are), no
+    # copies; want_hess; energy (n,), grad (n, 6), hess (n or 0, 6, 6) written
+    signature = types.void(array(2, True), array(2, True), array(1, True), array(1, True),
+                           types.boolean, array(1), array(2), array(3))
+    return njit(signature, cache=True)(_kernel)
 
 
 def use_compiled() -> bool:
@@ -79,7 +81,6 @@ def bar_kernel_jit(dX, du, L0, EA, hessian: bool = True):
     n = len(dX)
     energy, grad = np.empty(n), np.empty((n, 6))
     hess = np.empty((n, 6, 6)) if hessian else np.empty((0, 6, 6))
-    # C-contiguous, writeable float64 (the signature's types; a read-only input is copied)
-    dX, du, L0, EA = (np.require(a, np.float64, ["C", "W"]) for a in (dX, du, L0, EA))
+    dX, du, L0, EA = (np.ascontiguousarray(a, dtype=np.float64) for a in (dX, du, L0, EA))
     _compiled(dX, du, L0, EA, hessian, energy, grad, hess)
     return energy, grad, (hess if hessian else None)
