@@ -19,11 +19,11 @@ import time
 
 import numpy as np
 
-from design.executors import make_executor
-from design.gripper import GripperDesign, evaluate_gripper
-from design.optimize import optimize
-from design.problem import GripperProblem
-from design.robustness import residual_fold_grid, sweep_residual_fold
+from design.core.executors import make_executor
+from design.devices.gripper import GripperDesign, evaluate_gripper
+from design.core.optimize import optimize
+from design.core.problem import GripperProblem
+from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
 
 
 def _timed(fn, repeat=1):

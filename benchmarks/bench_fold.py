@@ -7,7 +7,7 @@ SuperLU?
 Method: a Miura sheet of ``cells`` x ``cells`` cells (a = b = 1 mm, gamma = 60 deg, 10 um
 SU-8 panels, 1 um creases 200 um wide), partly folded (extension ``--ext``, 0.9), panel 0
 clamped; every crease's rest angle moves by ``--fold`` deg (1) along its Miura fold direction
-in one increment of :func:`simulator.newton.follow_path`. Each solver runs in a fresh
+in one increment of :func:`simulator.solvers.newton.follow_path`. Each solver runs in a fresh
 subprocess (``ETORIGAMI_PARDISO=1`` / ``0``) after one warm-up evaluation; printed: Newton
 iterations, time per iteration (assembly + solve), the solves' share, and the largest
 displacement (both solvers must agree).
@@ -29,8 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 _SNIPPET = """
 import json, resource, sys, time
 import numpy as np
-import simulator.newton as newton_module
-from simulator.newton import follow_path
+import simulator.solvers.newton as newton_module
+from simulator.solvers.newton import follow_path
 from simulator.state import equilibrium_system
 sys.path.insert(0, sys.argv[4])
 from bench_fold import folding_sheet
@@ -71,11 +71,11 @@ def folding_sheet(cells: int, ext: float = 0.9, fold_deg: float = 1.0):
 
     from simulator import initial_state
     from simulator.cases import miura_fold_signs
-    from simulator.example_patterns import miura_vertices
-    from simulator.materials import SU8
-    from simulator.model import Supports, make_model
-    from simulator.pattern import Pattern
-    from simulator.properties import BarHingeParameters
+    from simulator.geometry.example_patterns import miura_vertices
+    from simulator.geometry.materials import SU8
+    from simulator.model.model import Supports, make_model
+    from simulator.geometry.pattern import Pattern
+    from simulator.model.properties import BarHingeParameters
 
     a = b = 1e-3
     gamma = math.radians(60)

@@ -1,7 +1,7 @@
 """Time the 20 lowest natural modes of a flat Miura sheet of ~10^4 nodes.
 
 The sheet (``miura_sheet_pattern``, m x n cells, SU-8, panel 0 clamped) is linearised about its
-flat state; :func:`simulator.modes.natural_modes` assembles the tangent, lumps the masses and runs
+flat state; :func:`simulator.solvers.modes.natural_modes` assembles the tangent, lumps the masses and runs
 the sparse shift-invert eigen-solver. Prints the node count, DOFs, wall time and the lowest
 frequencies. Target (issue 10): under 10 s for 20 modes at 10^4 nodes.
 
@@ -13,9 +13,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from simulator.example_patterns import miura_sheet_pattern
-from simulator.model import Supports, make_model
-from simulator.modes import natural_modes
+from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator.model.model import Supports, make_model
+from simulator.solvers.modes import natural_modes
 
 
 def miura_model(cells: int):

@@ -18,10 +18,10 @@ import numpy as np
 from simulator.cases import single_fold_model
 from simulator import SelfFold, simulate
 from simulator.state import equilibrium_system
-from simulator.model import ContactParameters, Supports, make_model
-from simulator.example_patterns import gripper_pattern, miura_sheet_pattern
-from simulator.properties import BarHingeParameters
-from simulator.newton import _solve_linear
+from simulator.model.model import ContactParameters, Supports, make_model
+from simulator.geometry.example_patterns import gripper_pattern, miura_sheet_pattern
+from simulator.model.properties import BarHingeParameters
+from simulator.solvers.newton import _solve_linear
 
 
 def _time_iteration(model, u, rest, repeat):

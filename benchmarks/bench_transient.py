@@ -16,7 +16,7 @@ import numpy as np
 
 from simulator import SquareWave, get_case, integrate_heat, theta_step
 from simulator.state import thermal_model
-from simulator.transient_heat import heat_system
+from simulator.thermal.transient import heat_system
 
 
 def main(argv=None) -> None:

@@ -1,11 +1,12 @@
-"""Old against new, side by side in one run (issue 13: performance).
+"""Old against new, side by side in one run (issues 13 and 18: performance).
 
-Question: how much faster (or slower) is the current tree than commit ``ec2be81`` (main when
-issue 13 was filed), task by task, and do both give the same numbers?
+Question: how much faster (or slower) is the current tree than commit ``b25f328`` (main when
+issue 18 was filed; issue 13 compared against ``ec2be81``, pass ``--commit ec2be81`` with
+snippets of that tree's API), task by task, and do both give the same numbers?
 
 Method: a detached git worktree of the old commit is made in a temporary directory (removed at
-the end unless ``--keep``). Each task has an old and a new snippet (the old tree's API differs:
-``simulator.loading``, ``simulator.patterns``, ``simulator.solvers._solve_linear``, ...). Every
+the end unless ``--keep``). Each task has an old and a new snippet (the old tree's internal
+modules differ: ``simulator.newton._solve_linear`` before the reorganisation by physics). Every
 measurement runs in a fresh subprocess, ``sys.executable -c <snippet>``, with ``PYTHONPATH`` set
 to the old tree and to the current tree alternately (old, new, old, new, ... for ``--repeat``).
 A snippet prints one JSON line: the time of its timed part (``None`` for the start-up tasks,
@@ -46,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-OLD_COMMIT = "ec2be81"
+OLD_COMMIT = "b25f328"
 REPO = Path(__file__).resolve().parents[1]
 
 _FOOTER = """
@@ -57,7 +58,7 @@ print("@@" + _json.dumps({"time": _T, "result": _R,
 
 _GRIPPER = """
 import time
-from design.gripper import GripperDesign, evaluate_gripper
+from design import GripperDesign, evaluate_gripper
 evaluate_gripper(GripperDesign(W=250e-6, La=900e-6, L1=800e-6, L2=900e-6))   # warm-up
 t0 = time.perf_counter()
 res = evaluate_gripper(GripperDesign(), mode="bisect")
@@ -67,9 +68,7 @@ _R = [round(1e3 * res.assembly.power_per_crease, 6), round(1e3 * res.grip.power_
 
 _CD = """
 import time
-from design.gripper import GripperDesign, evaluate_gripper
-from design.optimize import optimize
-from design.problem import GripperProblem
+from design import GripperDesign, GripperProblem, evaluate_gripper, optimize
 evaluate_gripper(GripperDesign(W=250e-6, La=900e-6, L1=800e-6, L2=900e-6))   # warm-up
 t0 = time.perf_counter()
 res = optimize(GripperProblem(), "cd", max_cycles=15)
@@ -92,8 +91,7 @@ _NEWTON = """
 import time
 import numpy as np
 {imports}
-from simulator.model import Supports, make_model
-from simulator.properties import BarHingeParameters
+from simulator import BarHingeParameters, Supports, make_model
 model = make_model(miura_sheet_pattern(m={cells}, n={cells}), None, BarHingeParameters())
 panel0 = model.mesh.panel_nodes(0)
 model = make_model(model.mesh, Supports.nodes(panel0))
@@ -112,16 +110,17 @@ _R = [model.mesh.n_nodes, float("%.6e" % np.linalg.norm(du))]
 """
 
 _NEWTON_OLD = """
-from simulator.loading import equilibrium_system, initial_state
-from simulator.patterns import miura_sheet_pattern
-from simulator.solvers import _solve_linear
+from simulator import initial_state
+from simulator.state import equilibrium_system
+from simulator.example_patterns import miura_sheet_pattern
+from simulator.newton import _solve_linear
 """
 
 _NEWTON_NEW = """
 from simulator import initial_state
 from simulator.state import equilibrium_system
-from simulator.example_patterns import miura_sheet_pattern
-from simulator.newton import _solve_linear
+from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator.solvers.newton import _solve_linear
 """
 
 _VERSION = """
@@ -136,7 +135,8 @@ _T, _R = None, None
 """
 
 _WARM = """
-import simulator, design, design.cli, design.gripper, design.optimize, design.problem
+import simulator, design, design.cli
+from design import GripperDesign, GripperProblem, evaluate_gripper, optimize
 import simulator.cases
 _T, _R = None, None
 """

@@ -6,9 +6,9 @@ Everything a user needs is importable from here::
 
 ``import design`` imports no submodule: each public name is imported from its submodule on
 first use (see :mod:`simulator._lazy`); NLopt, cvxpy, Dask, pandas and scipy.stats are
-imported only inside the functions that use them. ``design.optimize`` is the function, also
-after ``import design.optimize`` (the module stays reachable as
-``sys.modules["design.optimize"]`` and through ``from design.optimize import ...``). Every
+imported only inside the functions that use them. The package has three rooms: ``core``
+(spaces, problems, evaluation logs, optimisers, executors), ``devices`` (gripper, Miura
+lifter, power searches) and ``analysis`` (robustness, uncertainty, heater allocation). Every
 result object (``StageResult``, ``GripperResult``, ``LiftPowerResult``, ``Evaluation``,
 ``OptimizationResult``, ``HeaterAllocation``, the rows of sweep tables) carries ``success``,
 ``status`` and ``message``; a power that was not found is None (an empty cell in CSV tables).
@@ -17,27 +17,26 @@ result object (``StageResult``, ``GripperResult``, ``LiftPowerResult``, ``Evalua
 from simulator._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
-    ".space": ("DesignSpace", "Variable"),
-    ".problem": ("EVALUATION_STATUSES", "GRIPPER_SPACE", "SU8_TG", "DesignProblem", "Evaluation",
+    ".core.space": ("DesignSpace", "Variable"),
+    ".core.problem": ("EVALUATION_STATUSES", "GRIPPER_SPACE", "SU8_TG", "DesignProblem", "Evaluation",
                  "GripperProblem"),
-    ".gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
+    ".devices.gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
                  "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
                  "gripper_model"),
-    ".miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
+    ".devices.miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
                "heated_creases", "lift_per_power_table", "lift_power", "miura_model"),
-    ".evaluation_log": ("EvaluationLog", "LoggedProblem"),
-    # the function, not the submodule of the same name (kept bound after the submodule loads)
-    ".optimize": ("METHODS", "OptimizationResult", "StopOptimization", "optimize"),
-    ".robustness": ("CREASE_GROUPS", "RobustGripperProblem", "residual_fold_grid",
+    ".core.evaluation_log": ("EvaluationLog", "LoggedProblem"),
+    ".core.optimize": ("METHODS", "OptimizationResult", "StopOptimization", "optimize"),
+    ".analysis.robustness": ("CREASE_GROUPS", "RobustGripperProblem", "residual_fold_grid",
                     "sweep_residual_fold", "with_residual_fold"),
-    ".heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "allocate_heaters",
+    ".analysis.heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "allocate_heaters",
                  "fold_sensitivity", "influence_matrices", "linear_allocation"),
-    ".executors": ("DaskExecutor", "Executor", "ExecutorError", "ProcessExecutor",
+    ".core.executors": ("DaskExecutor", "Executor", "ExecutorError", "ProcessExecutor",
                    "SerialExecutor", "TaskError", "TaskFailure", "executor_from_option",
                    "make_executor"),
-    ".uncertainty": ("SCENARIOS", "Distribution", "FabricationScenario", "UncertainInput",
+    ".analysis.uncertainty": ("SCENARIOS", "Distribution", "FabricationScenario", "UncertainInput",
                      "rank_correlations", "residual_fold_per_crease", "wilson_interval"),
-    ".uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem", "summarize_yield",
+    ".analysis.uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem", "summarize_yield",
                            "sweep_uncertainty"),
 })
 

@@ -11,49 +11,55 @@ read the :class:`SimulationResult` (``success``, ``status``, ``message``, ``to_f
 
 ``import simulator`` imports no submodule: each public name is imported from its submodule on
 first use (see :mod:`simulator._lazy`), so a script pays only for what it uses.
+
+The package is organised by physics: ``geometry`` (patterns, materials), ``model`` (mesh,
+properties, bimorph, masses), ``mechanics`` (element families, contact, equilibrium),
+``thermal`` (steady and transient heat, schedules), ``solvers`` (Newton, continuation,
+dynamics, stability, modes), ``linalg`` (factorisations), ``steps`` (the loading steps) and
+``io`` (FOLD files, viewer). Import public names from ``simulator`` itself.
 """
 
 from ._lazy import attach as _attach
 from ._version import __version__
 
 __getattr__, __dir__ = _attach(__name__, {
-    ".bimorph": ("Actuators", "Bimorph"),
+    ".model.bimorph": ("Actuators", "Bimorph"),
     ".cases": ("Case", "describe_cases", "get_case", "miura_sheet_model", "single_fold_model"),
-    ".dynamics": ("DynamicsResult", "integrate"),
-    ".dynamics_options": ("DynamicsOptions",),
-    ".elements.springs": ("spring_kernel_backend",),
+    ".solvers.dynamics": ("DynamicsResult", "integrate"),
+    ".solvers.dynamics_options": ("DynamicsOptions",),
+    ".mechanics.elements.springs": ("spring_kernel_backend",),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
                 "PatternError"),
-    ".fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
+    ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
-    ".generalized_alpha": ("MotionState", "TimeIntegrator"),
-    ".materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
+    ".solvers.generalized_alpha": ("MotionState", "TimeIntegrator"),
+    ".geometry.materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
                    "Material"),
-    ".mass": ("lumped_masses",),
-    ".mesh": ("BarHingeMesh", "build_mesh"),
-    ".model": ("REFERENCE_GRAVITY", "STANDARD_GRAVITY", "ContactParameters", "Model",
+    ".model.mass": ("lumped_masses",),
+    ".model.mesh": ("BarHingeMesh", "build_mesh"),
+    ".model.model": ("REFERENCE_GRAVITY", "STANDARD_GRAVITY", "ContactParameters", "Model",
                "Supports", "make_model"),
-    ".modes": ("ModesResult", "natural_modes"),
-    ".newton": ("NewtonOptions",),
-    ".pattern": ("Pattern",),
-    ".power_schedules": ("PiecewiseLinear", "PowerSchedule", "Ramp", "Sine", "SquareWave",
+    ".solvers.modes": ("ModesResult", "natural_modes"),
+    ".solvers.newton": ("NewtonOptions",),
+    ".geometry.pattern": ("Pattern",),
+    ".thermal.schedules": ("PiecewiseLinear", "PowerSchedule", "Ramp", "Sine", "SquareWave",
                          "StepPower"),
-    ".properties": ("BarHingeParameters",),
+    ".model.properties": ("BarHingeParameters",),
     ".results": ("SimulationResult", "StepResult"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
     ".steps": ("AmbientTemperature", "ArcLengthLoad", "Coupling", "DisplacementControl",
                "Dynamics", "ElectroThermal", "Gravity", "Heat", "Load", "SelfFold", "Step",
                "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
-    ".continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
-    ".load_path": ("LoadPath",),
-    ".stability": ("Stability", "tangent_stability"),
-    ".thermal": ("ThermalParameters",),
-    ".transient_heat": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
+    ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
+    ".solvers.load_path": ("LoadPath",),
+    ".solvers.stability": ("Stability", "tangent_stability"),
+    ".thermal.steady": ("ThermalParameters",),
+    ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
-    ".viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
-})     # example_patterns, a submodule, is imported on first access like any submodule
+    ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
+}, modules={"example_patterns": ".geometry.example_patterns"})
 
 __all__ = [
     "__version__", "example_patterns",

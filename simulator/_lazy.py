@@ -7,7 +7,7 @@ simulate`` imports only what :func:`simulate` needs. A package calls :func:`atta
 
 Attribute access to a submodule that is not imported yet (``simulator.thermal`` after
 ``import simulator``) imports it, as the eager package did. A public name that is also the
-name of a submodule (``design.optimize``, the function, from the module ``design.optimize``)
+name of a submodule (a function ``pkg.f`` defined in the module ``pkg.f``)
 stays bound to the public object when the submodule is imported: the import system binds the
 submodule on the package after loading it, and the package's module class turns that back
 into the public name.
@@ -33,7 +33,7 @@ class _LazyPackage(types.ModuleType):
         super().__setattr__(name, value)
 
 
-def attach(package: str, exports: dict) -> tuple:
+def attach(package: str, exports: dict, modules: dict | None = None) -> tuple:
     """``(__getattr__, __dir__)`` of the package ``package``.
 
     Parameters
@@ -42,7 +42,11 @@ def attach(package: str, exports: dict) -> tuple:
         The package's ``__name__``.
     exports : dict
         Relative submodule name (``".cases"``) -> tuple of the public names it defines.
+    modules : dict, optional
+        Public name -> relative name of a submodule that is public under that name
+        (``{"example_patterns": ".geometry.example_patterns"}``), imported on first access.
     """
+    modules = dict(modules or {})
     module = sys.modules[package]
     where = {name: sub for sub, names in exports.items() for name in names}
     if len(where) != sum(len(names) for names in exports.values()):
@@ -53,6 +57,8 @@ def attach(package: str, exports: dict) -> tuple:
     def __getattr__(name: str):
         if name in where:
             value = getattr(importlib.import_module(where[name], package), name)
+        elif name in modules:
+            value = importlib.import_module(modules[name], package)
         elif name.startswith("__"):
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         else:
@@ -61,7 +67,7 @@ def attach(package: str, exports: dict) -> tuple:
         return value
 
     def __dir__():
-        return sorted(set(module.__dict__) | set(where))
+        return sorted(set(module.__dict__) | set(where) | set(modules))
 
     return __getattr__, __dir__
 

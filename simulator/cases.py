@@ -14,21 +14,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-from .bimorph import Actuators, Bimorph
+from .model.bimorph import Actuators, Bimorph
 from .errors import ParameterError
 from .simulation import simulate
-from .dynamics_options import DynamicsOptions
-from .power_schedules import StepPower
+from .solvers.dynamics_options import DynamicsOptions
+from .thermal.schedules import StepPower
 from .steps import ArcLengthLoad, ElectroThermal, Gravity, Heat, SelfFold
-from .materials import Material
-from .mesh import build_mesh
-from .model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
-from .example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
+from .geometry.materials import Material
+from .model.mesh import build_mesh
+from .model.model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
+from .geometry.example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, roof_pattern, single_fold_pattern, strip_pattern,
                        with_substrate)
-from .properties import BarHingeParameters
-from .newton import NewtonOptions
-from .thermal import REFERENCE_BETA, ThermalParameters
+from .model.properties import BarHingeParameters
+from .solvers.newton import NewtonOptions
+from .thermal.steady import REFERENCE_BETA, ThermalParameters
 
 __all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
            "miura_fold_signs", "single_fold_model", "SINGLE_FOLD_SUPPORTS"]
@@ -170,10 +170,10 @@ def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None
     substrate : bool
         Include the substrate panel (supported) under the folding panel.
     thermal, actuators : optional
-        :class:`~simulator.thermal.ThermalParameters` and :class:`~simulator.bimorph.Actuators`,
+        :class:`~simulator.thermal.steady.ThermalParameters` and :class:`~simulator.model.bimorph.Actuators`,
         needed for heating steps.
     **pattern_kwargs
-        Geometry of :func:`~simulator.example_patterns.single_fold_pattern` (SI units).
+        Geometry of :func:`~simulator.geometry.example_patterns.single_fold_pattern` (SI units).
     """
     pattern = single_fold_pattern(substrate=substrate, **pattern_kwargs)
     supports = SINGLE_FOLD_SUPPORTS if substrate else _SINGLE_FOLD_SUPPORTS_FREE
@@ -336,7 +336,7 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
                       panel_thickness: float = 10e-6, substrate: bool = False,
                       undercut: float = 100e-6) -> Model:
     """The Miura-ori lifter's model (paper 6.2, Example03, digest 8.3): the one builder behind
-    the ``miura_lifter`` case and :func:`design.miura.miura_model`.
+    the ``miura_lifter`` case and :func:`design.devices.miura.miura_model`.
 
     A Miura sheet of ``cells_x`` x ``cells_y`` cells, clamped along its first column of panels
     (x = 0 side); every crease an actuator (gold ``t_gold`` on SU-8 ``t_su8``, the crease

@@ -2,7 +2,7 @@
 
 Every accepted increment of every loading step is a record: displacements,
 node temperatures and crease powers. Crease fold angles (panel to panel), crease
-rotations (sum over the crease's fold lines, see :mod:`simulator.geometry`) and crease
+rotations (sum over the crease's fold lines, see :mod:`simulator.mechanics.kinematics`) and crease
 temperatures are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
 table (one row per record and crease, unit-bearing column names) and
 :meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``.
@@ -19,8 +19,8 @@ from functools import cached_property
 import numpy as np
 
 from ._version import __version__
-from .bimorph import crease_temperature_weights
-from .geometry import crease_rotations, fold_angles
+from .model.bimorph import crease_temperature_weights
+from .mechanics.kinematics import crease_rotations, fold_angles
 
 __all__ = ["StepResult", "SimulationResult"]
 
@@ -157,7 +157,7 @@ class SimulationResult:
     def crease_rotation(self) -> np.ndarray:
         """(m, C) crease rotations [rad] of every record: the sum of the rotations of each
         crease's fold lines (what the bimorph drives); equals :attr:`fold_angle` (panel to
-        panel) while the panels stay flat (:func:`~simulator.geometry.crease_rotations`)."""
+        panel) while the panels stay flat (:func:`~simulator.mechanics.kinematics.crease_rotations`)."""
         mesh = self.model.mesh
         return np.array([crease_rotations(mesh, mesh.nodes + u) for u in self.history["u"]])
 

@@ -14,8 +14,8 @@ import time
 import numpy as np
 
 from .errors import ConvergenceError, ParameterError
-from .model import Model
-from .newton import NewtonOptions
+from .model.model import Model
+from .solvers.newton import NewtonOptions
 from .results import SimulationResult, StepResult
 from .state import SimulationState, initial_state
 from .steps.base import Step, StepContext, StepOutcome

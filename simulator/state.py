@@ -13,12 +13,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .elements.springs import fold_angle
-from .equilibrium import EquilibriumSystem
+from .mechanics.elements.springs import fold_angle
+from .mechanics.equilibrium import EquilibriumSystem
 from .errors import ParameterError
-from .model import Model
-from .properties import initial_crease_rest
-from .thermal import ThermalModel
+from .model.model import Model
+from .model.properties import initial_crease_rest
+from .thermal.steady import ThermalModel
 
 __all__ = ["ROOM_TEMPERATURE", "SimulationState", "at_rest", "initial_state", "equilibrium_system",
            "thermal_model"]
@@ -77,7 +77,7 @@ def at_rest(state: SimulationState, **changes) -> SimulationState:
 
 def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
     """Unloaded state: zero displacement, crease rest angles of the initial geometry (flat, pi,
-    unless the mesh starts folded: :func:`~simulator.properties.initial_crease_rest`), spring
+    unless the mesh starts folded: :func:`~simulator.model.properties.initial_crease_rest`), spring
     rest angles equal to the spring angles of the initial geometry (digest 7.1), uniform room
     temperature (from the model's thermal parameters, else 21 deg C), no heating."""
     mesh = model.mesh
@@ -107,7 +107,7 @@ _THERMAL: "weakref.WeakKeyDictionary[Model, ThermalModel]" = weakref.WeakKeyDict
 
 
 def thermal_model(model: Model) -> ThermalModel:
-    """The cached :class:`~simulator.thermal.ThermalModel` of a model (built on first use)."""
+    """The cached :class:`~simulator.thermal.steady.ThermalModel` of a model (built on first use)."""
     if model.thermal is None:
         raise ParameterError("This model has no thermal parameters: pass thermal="
                              "ThermalParameters(...) to make_model to use heating steps.")

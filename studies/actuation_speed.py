@@ -3,7 +3,7 @@
 Question
 --------
 A single gold / SU-8 crease (gravity, 150 um over a substrate, the chip a heat sink at room
-temperature, in air) and the micro-gripper (``design.gripper``) are driven by power steps.
+temperature, in air) and the micro-gripper (``design.devices.gripper``) are driven by power steps.
 How long do folding (rise) and release take, how do they scale with the power, what sets
 them - the thermal time constant or the mechanical period - and how much electrical energy
 does one actuation cost? Up to which drive frequency does a square wave still give a full
@@ -56,10 +56,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
+from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
                             _tip_distance, gripper_model)
 from simulator import Heat, SquareWave, StepPower, get_case, natural_modes, simulate
-from simulator.geometry import fold_angles
+from simulator.mechanics.kinematics import fold_angles
 from studies._common import TEMP, progress_bar, study_main
 
 NAME = "actuation_speed"
@@ -113,7 +113,7 @@ def single_crease(residual_fold_deg: float = 0.0) -> Device:
 
 
 def gripper(stage: str, base_power: float = 0.0) -> Device:
-    """The gripper (``design.gripper``) before assembly, or assembled by ``base_power`` [W]
+    """The gripper (``design.devices.gripper``) before assembly, or assembled by ``base_power`` [W]
     per base crease (static, held on) before the grip."""
     model, pre = gripper_model(GripperDesign())
     state = simulate(model, pre).state

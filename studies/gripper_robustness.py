@@ -23,7 +23,7 @@ Method
     the coordinate descent is re-run here with a small budget (``FALLBACK_CD_BUDGET``
     evaluations, ``--quick``: 3); the ``source`` column says which;
   - ``robust-optimal``: NLopt SBPLX (60 evaluations, default options: exact penalty for the
-    constraints) from the start design on :class:`~design.robustness.RobustGripperProblem`
+    constraints) from the start design on :class:`~design.analysis.robustness.RobustGripperProblem`
     over the residual folds {-20, -10, 0} deg: objective = the largest total power over the
     three, every one of them must meet both stages and the temperature limit. SBPLX is the
     best method of the study ``gripper_optimization`` (lowest power, tied with COBYLA, with
@@ -33,7 +33,7 @@ Method
     earlier version (with a 30 s time limit per evaluation), ended at W 300, La 1008,
     L1 555, L2 500 um with a worst case of 14.2 mW after 60 evaluations.
 
-* Sweep: :func:`~design.robustness.sweep_residual_fold` of the three designs at residual
+* Sweep: :func:`~design.analysis.robustness.sweep_residual_fold` of the three designs at residual
   folds -20, -15, ..., +10 deg (the same value on all four actuated creases), on a
   2-process executor.
 * ``--quick``: serial; residual folds -10 and 0 deg (also those of the robust problem),
@@ -73,9 +73,9 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design.executors import make_executor
-from design.optimize import optimize
-from design.robustness import (
+from design.core.executors import make_executor
+from design.core.optimize import optimize
+from design.analysis.robustness import (
     RobustGripperProblem,
     residual_fold_grid,
     sweep_residual_fold,

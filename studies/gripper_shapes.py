@@ -13,7 +13,7 @@ The designs and their stage powers (per heated crease, from the bisect power sea
 from ``results/gripper_optimization/gripper_optimization.csv`` (``cycles`` rows; the current
 directory's if a run wrote one, else the repository's committed one); the coordinate descent is
 not re-run. For each design below, the gripper model of
-:func:`design.gripper.gripper_model` is loaded by its pre-steps (self-weight), then heated in
+:func:`design.devices.gripper.gripper_model` is loaded by its pre-steps (self-weight), then heated in
 ``INCREMENTS`` increments with iterated thermo-mechanical coupling to the assembly power on
 the two base creases, then, with the base heat kept on, to the grip power on the two arm
 creases. The measures of the stages (base fold, distance of the arm tips) are recomputed on
@@ -51,7 +51,7 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gripper_model
 from simulator.simulation import simulate
 from simulator.steps import Heat
 from studies._common import (RESULTS, TEMP, XYZ, default_out, progress_bar, shape_from_frame,

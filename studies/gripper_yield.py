@@ -10,29 +10,29 @@ most, and does a design chosen for yield do better than the power-optimal one?
 
 Method
 ------
-* Scenario: :data:`design.uncertainty.SCENARIOS` ``["default"]``, an *assumed* fabrication
+* Scenario: :data:`design.analysis.uncertainty.SCENARIOS` ``["default"]``, an *assumed* fabrication
   spread (not measured): residual fold of each of the four actuated creases normal, mean
   -5 deg, std 4 deg, truncated to [-20, 10] deg, correlated between the creases of one
   device (Gaussian copula, rho 0.7); gold 0.2 um and SU-8 0.8 um thick, each normal with a
   5 % standard deviation, truncated at 3 std; bimorph mismatch uniform on [34, 42] ppm/K; air
   conductivity uniform on [0.024, 0.030] W/(m K).
-* Problem: the paper's gripper problem (:class:`design.problem.GripperProblem`, bisect
+* Problem: the paper's gripper problem (:class:`design.core.problem.GripperProblem`, bisect
   power search).
 * Designs: ``start`` (the paper's start), ``paper-optimal`` (the coordinate descent's final
   design of the study ``gripper_optimization``, read from its CSV; re-run with a small
   budget if the CSV is missing, see :func:`studies.gripper_robustness.paper_optimum`),
   ``robust-optimal``: NLopt SBPLX (``ROBUST_BUDGET`` evaluations) from the paper-optimal
   design on
-  :class:`design.uncertainty_sweep.RobustYieldProblem`: minimise the 90 % quantile of the
+  :class:`design.analysis.uncertainty_sweep.RobustYieldProblem`: minimise the 90 % quantile of the
   total power subject to a yield of at least 90 %, both estimated on the same
   ``ROBUST_SAMPLES`` Latin-hypercube samples for every design (common random numbers, seed
   ``SEED``; the robust problem evaluates a design's samples one after the other, so its
   budget is kept small), and ``path 1/3``, ``path 2/3``: designs on the straight line from
   the start to the robust design (yield vs design).
-* Yield sweep: :func:`design.uncertainty_sweep.sweep_uncertainty` of the five designs at
+* Yield sweep: :func:`design.analysis.uncertainty_sweep.sweep_uncertainty` of the five designs at
   ``SAMPLES`` Latin-hypercube samples (seed ``SEED + 1``, independent of the optimiser's
   samples, so the robust design's yield is not judged on the samples it was tuned on), on a
-  2-process executor; :func:`design.uncertainty_sweep.summarize_yield`: yield with its 95 %
+  2-process executor; :func:`design.analysis.uncertainty_sweep.summarize_yield`: yield with its 95 %
   Wilson interval, power quantiles, Spearman rank correlations of every input with the
   total power and the temperature (95 % Fisher-z intervals).
 * ``--quick``: serial, 3 samples, robust problem on 2 samples with 2 SBPLX evaluations.
@@ -62,10 +62,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from design.executors import make_executor
-from design.problem import GripperProblem
-from design.uncertainty import SCENARIOS
-from design.uncertainty_sweep import RobustYieldProblem, summarize_yield, sweep_uncertainty
+from design.core.executors import make_executor
+from design.core.problem import GripperProblem
+from design.analysis.uncertainty import SCENARIOS
+from design.analysis.uncertainty_sweep import RobustYieldProblem, summarize_yield, sweep_uncertainty
 from studies._common import RESULTS, progress_bar, study_main
 from studies.gripper_robustness import FALLBACK_CD_BUDGET_QUICK, _design_row, _optimize, \
     paper_optimum

@@ -86,9 +86,9 @@ import numpy as np
 import pandas as pd
 
 from simulator.cases import verification_strip
-from simulator.materials import Material
-from simulator.model import make_model
-from simulator.example_patterns import strip_pattern
+from simulator.geometry.materials import Material
+from simulator.model.model import make_model
+from simulator.geometry.example_patterns import strip_pattern
 from studies._common import progress_bar, study_main
 
 NAME = "heat_loss_calibration"

@@ -12,7 +12,7 @@ the fold angles save (double fold)?
 Method
 ------
 * Crane (``get_case("crane")``, 100 heating increments): the 17 final fold angles are the
-  targets. :func:`design.heaters.allocate_heaters` (LP about the current state through the
+  targets. :func:`design.analysis.heaters.allocate_heaters` (LP about the current state through the
   thermal influence matrices and the mechanical fold sensitivity, alternated with heating
   simulations of 50 increments, trust region on the powers, targets within 0.5 deg, every
   crease node below 1.2 T_g = 252 degC) with
@@ -21,7 +21,7 @@ Method
   - ``paper circuits``: the paper's power classes as 5 circuits (4 q: creases 1, 18;
     1.5 q: 3, 5, 14, 15; 2 q: 7, 8, 10, 12; q: 6, 9, 11, 13, 21; q / 2: 17, 19, reference
     numbering);
-  - ``flat-shape LP``: :func:`design.heaters.linear_allocation`, one LP at the flat shape,
+  - ``flat-shape LP``: :func:`design.analysis.heaters.linear_allocation`, one LP at the flat shape,
     then one heating simulation with its powers (no coupling rounds).
 
 * Double fold (``get_case("double_fold")`` at 6 mW per crease, 30 increments, gravity): its
@@ -57,7 +57,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from design.heaters import HeaterAllocation, allocate_heaters, linear_allocation
+from design.analysis.heaters import HeaterAllocation, allocate_heaters, linear_allocation
 from simulator.cases import get_case
 from simulator import Heat, simulate
 from studies._common import progress_bar, study_main

@@ -10,10 +10,10 @@ keeping the creases below 1.2 T_g (252 degC)?
 
 Method
 ------
-* Grid: :func:`~design.miura.lift_per_power_table` for the product of ``a`` in {0.5, 1.0,
+* Grid: :func:`~design.devices.miura.lift_per_power_table` for the product of ``a`` in {0.5, 1.0,
   1.5} mm, ``gamma`` in {45, 60, 75} deg and ``W`` in {100, 200, 300} um (``b`` = 1 mm and
-  the rest as :class:`~design.miura.MiuraDesign`; the values span the bounds of
-  :data:`~design.miura.MIURA_SPACE`), each design heated to 4, 8 and 12 mW per crease
+  the rest as :class:`~design.devices.miura.MiuraDesign`; the values span the bounds of
+  :data:`~design.devices.miura.MIURA_SPACE`), each design heated to 4, 8 and 12 mW per crease
   (20 staggered increments per segment, from saved states). *Lift per power* = lift of the
   free end / total power of all heated creases [um/mW]. Designs whose creases collapse in
   the mesh, and designs whose heating fails, are listed with ``success = False`` and the
@@ -24,7 +24,7 @@ Method
   active). No time limit by default (``TIME_LIMIT = None``; results must not depend on the
   machine's speed).
   Designs are spread over a 2-process executor.
-* Optimum: :class:`~design.miura.MiuraProblem` (target lift 200 um, bisect power search,
+* Optimum: :class:`~design.devices.miura.MiuraProblem` (target lift 200 um, bisect power search,
   objective = total power, constraints = size bounds and the hottest crease node below
   252 degC), as ``TimeLimitedMiuraProblem`` (no limit unless ``TIME_LIMIT`` is set),
   minimised by the paper's coordinate descent (``optimize(..., "cd",
@@ -81,8 +81,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design.executors import make_executor
-from design.miura import (
+from design.core.executors import make_executor
+from design.devices.miura import (
     MIURA_SPACE,
     MiuraDesign,
     MiuraProblem,
@@ -116,7 +116,7 @@ LPP, TMAX = "lift_per_power [um/mW]", "max_crease_temperature [degC]"
 
 @dataclass(frozen=True)
 class TimeLimitedMiuraProblem(TimeLimited, MiuraProblem):
-    """:class:`~design.miura.MiuraProblem` whose evaluations stop (fail) after ``time_limit``
+    """:class:`~design.devices.miura.MiuraProblem` whose evaluations stop (fail) after ``time_limit``
     [s]."""
 
     time_limit: float | None = TIME_LIMIT
@@ -257,7 +257,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
 
 def optimize_miura(problem, executor, budget, callback=None):
     """The coordinate descent on ``problem`` from the space's start."""
-    from design.optimize import optimize
+    from design.core.optimize import optimize
 
     return optimize(problem, "cd", executor=executor, max_evaluations=budget,
                     callback=callback, **CD_OPTIONS)

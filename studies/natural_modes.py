@@ -11,7 +11,7 @@ Method
 ------
 * Single crease: ``get_case("single_fold_step_response")`` (gravity, substrate with contact,
   the chip a heat sink, in air), self-fold to the residual fold (0 and -10 deg) and gravity;
-  gripper (``design.gripper``, reference design): self-weight, then the base circuit heated to
+  gripper (``design.devices.gripper``, reference design): self-weight, then the base circuit heated to
   28 mW per crease (assembly: the base folds past 90 deg at 26.4 mW), then with the base held
   there the arm circuit to 6 mW (grip: the tips close to 40 um; they touch above ~6.2 mW).
 * Static heating (:class:`~simulator.steps.Heat`, iterated coupling) to each power in turn,

@@ -16,7 +16,7 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from simulator.materials import SU8
+from simulator.geometry.materials import SU8
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "mark_temperature_limit", "nodal_range", "T_LIMIT"]

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from simulator import assembly
-from simulator.assembly import StiffnessPattern, _block_positions, _reference_positions
+from simulator.mechanics import assembly
+from simulator.mechanics.assembly import StiffnessPattern, _block_positions, _reference_positions
 from simulator.cases import single_fold_model
-from simulator.example_patterns import miura_sheet_pattern
-from simulator.model import Supports, make_model
+from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator.model.model import Supports, make_model
 from simulator.state import equilibrium_system
 
 
@@ -108,7 +108,8 @@ def test_compiled_scatter_equals_the_numpy_reference_bit_for_bit(monkeypatch):
 
 def test_scatter_loop_follows_the_kernel_backend():
     """With the numpy backend in force the scatter loop is not used (nor numba compiled)."""
-    from simulator import assembly, spring_kernel_backend
+    from simulator import spring_kernel_backend
+    from simulator.mechanics import assembly
     with spring_kernel_backend("numpy"):
         assert assembly._scatter_compiled() is None
     with spring_kernel_backend("numba"):

@@ -20,14 +20,14 @@ def test_task_list_covers_issue_13():
     for task in bench.TASKS:                      # every snippet reports through the footer
         assert "_T" in task.old and "_T" in task.new
     newton = {t.name: t for t in bench.TASKS}["newton_1e4"]
-    assert "simulator.solvers import _solve_linear" in newton.old
-    assert "simulator.newton import _solve_linear" in newton.new
+    assert "simulator.newton import _solve_linear" in newton.old
+    assert "simulator.solvers.newton import _solve_linear" in newton.new
     assert "m=30, n=30" in newton.new
 
 
 def test_defaults_run_everything_and_quick_drops_the_heavy_tasks():
     args = bench.parse_args([])
-    assert (args.repeat, args.quick, args.keep, args.commit) == (1, False, False, "ec2be81")
+    assert (args.repeat, args.quick, args.keep, args.commit) == (1, False, False, "b25f328")
     assert [t.name for t in bench.selected_tasks(args)] == list(bench.TASK_NAMES)
     quick = [t.name for t in bench.selected_tasks(bench.parse_args(["--quick"]))]
     assert "cd_full" not in quick and "newton_1e5" not in quick and "newton_1e4" in quick

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from simulator.bimorph import Actuators, Bimorph, crease_temperature_weights, timoshenko_curvature
+from simulator.model.bimorph import Actuators, Bimorph, crease_temperature_weights, timoshenko_curvature
 from simulator.errors import ParameterError
-from simulator.mesh import build_mesh
-from simulator.example_patterns import single_fold_pattern
+from simulator.model.mesh import build_mesh
+from simulator.geometry.example_patterns import single_fold_pattern
 
 
 def test_digest_example_value():

@@ -124,8 +124,8 @@ def test_cli_errors_speak_cli_units(argv, message, capsys):
 
 
 def test_python_entry_points_reject_fold_angles_outside_a_turn():
-    from design.gripper import GripperDesign
-    from design.problem import GripperProblem
+    from design.devices.gripper import GripperDesign
+    from design.core.problem import GripperProblem
     from simulator import ParameterError, get_case
 
     with pytest.raises(ParameterError, match=r"residual_fold_deg = 400 deg .*\(-180, 180\]"):
@@ -144,7 +144,7 @@ def test_python_entry_points_reject_fold_angles_outside_a_turn():
 def test_short_commands_use_the_numpy_kernel(monkeypatch, tmp_path, capsys):
     """No numba compilation for one case or one gripper evaluation (it would cost more than
     the run); ETORIGAMI_JIT overrides."""
-    from simulator.elements import _springs_jit
+    from simulator.mechanics.elements import _springs_jit
 
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
     used = []

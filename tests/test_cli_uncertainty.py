@@ -12,7 +12,7 @@ import pytest
 
 from design.cli import main
 from design.cli.sweep import SCENARIO_NAMES
-from design.uncertainty import SCENARIOS
+from design.analysis.uncertainty import SCENARIOS
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 

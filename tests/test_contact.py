@@ -1,4 +1,4 @@
-"""Tests of simulator.elements.contact (node-to-triangle penalty contact)."""
+"""Tests of simulator.mechanics.elements.contact (node-to-triangle penalty contact)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import minimize
 
 from fd_harness import check_kernel, relative_error
-from simulator.elements.contact import (contact_kernel, contact_potential, distance_derivatives,
+from simulator.mechanics.elements.contact import (contact_kernel, contact_potential, distance_derivatives,
                                         point_triangle_distance)
 
 D0, KE = 40e-6, 1e-4                     # contact range [m], penalty stiffness [J]

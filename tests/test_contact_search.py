@@ -2,11 +2,11 @@
 
 import numpy as np
 
-import simulator.contact_search as cs
-from simulator.contact_search import ContactSearch
-from simulator.mesh import build_mesh
-from simulator.model import ContactParameters
-from simulator.example_patterns import miura_sheet_pattern, single_fold_pattern
+import simulator.mechanics.contact_search as cs
+from simulator.mechanics.contact_search import ContactSearch
+from simulator.model.mesh import build_mesh
+from simulator.model.model import ContactParameters
+from simulator.geometry.example_patterns import miura_sheet_pattern, single_fold_pattern
 
 
 def _pairs(search, x):

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from simulator.continuation import LoadPath, displacement_control, mgdcm
-from simulator.elements.bars import bar_kernel
+from simulator.solvers.continuation import LoadPath, displacement_control, mgdcm
+from simulator.mechanics.elements.bars import bar_kernel
 from simulator.errors import ParameterError
-from simulator.stability import tangent_stability
+from simulator.solvers.stability import tangent_stability
 
 L, H, EA = 1.0, 0.2, 1e3
 L0 = np.hypot(L, H)

@@ -8,7 +8,7 @@ import pytest
 
 from simulator import get_case
 from simulator.cases import CASES
-from simulator.geometry import crease_rotations, fold_angles
+from simulator.mechanics.kinematics import crease_rotations, fold_angles
 
 
 def _rotation(p, q, w1, w2):

@@ -17,8 +17,8 @@ from simulator import (Dynamics, DynamicsOptions, Load, Material, ParameterError
                        TimeIntegrator, integrate, lumped_masses, make_model, natural_modes,
                        simulate)
 from simulator import single_fold_model
-from simulator.example_patterns import single_fold_pattern
-from simulator.geometry import fold_angles
+from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.mechanics.kinematics import fold_angles
 from simulator.state import equilibrium_system, initial_state
 
 
@@ -118,7 +118,7 @@ def test_damped_panel_decays_at_the_analytic_rate(fold, damping):
     elif damping == "stiffness":
         options = DynamicsOptions(rayleigh_beta=2 * zeta / omega)
     else:   # modal damping ratio of area-proportional damping: c phi.A phi / (2 omega)
-        from simulator.mass import lumped_areas
+        from simulator.model.mass import lumped_areas
         phi = natural_modes(fold, count=1).shapes[0]
         modal = np.sum(lumped_areas(fold.mesh)[:, None] * phi**2)
         options = DynamicsOptions(air_damping=2 * zeta * omega / modal)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from design.executors import (DaskExecutor, ExecutorError, ProcessExecutor, SerialExecutor,
+from design.core.executors import (DaskExecutor, ExecutorError, ProcessExecutor, SerialExecutor,
                               TaskError, TaskFailure, executor_from_option, make_executor)
 from simulator.errors import ParameterError
 
@@ -162,7 +162,7 @@ def test_worker_that_always_dies_is_reported_and_the_rest_go_on(executor):
 
 _FORKSERVER_CHILD = """
 import multiprocessing, signal, sys
-from design.executors import ProcessExecutor
+from design.core.executors import ProcessExecutor
 
 
 def square(v):

@@ -11,9 +11,9 @@ import pytest
 
 from simulator import (FoldFormatError, ParameterError, Pattern, fold_to_pattern,
                        pattern_to_fold, read_fold, write_fold)
-from simulator.example_patterns import (crane_pattern, gripper_pattern, miura_sheet_pattern,
+from simulator.geometry.example_patterns import (crane_pattern, gripper_pattern, miura_sheet_pattern,
                                         single_fold_pattern)
-from simulator.materials import Material
+from simulator.geometry.materials import Material
 
 NULL4 = [None] * 4
 

@@ -7,17 +7,17 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from simulator import spring_kernel_backend
-from simulator.assembly import assemble_vector, element_dofs
+from simulator.mechanics.assembly import assemble_vector, element_dofs
 from simulator.cases import get_case
-from simulator.elements import _springs_jit
-from simulator.elements.bars import bar_kernel
-from simulator.elements.contact import contact_kernel
-from simulator.elements.springs import spring_kernel
-from simulator.equilibrium import ENERGY_KINDS, EquilibriumSystem, Evaluation
-from simulator.example_patterns import miura_sheet_pattern
-from simulator.newton import _solve_linear as solve_linear
-from simulator.small_solve import SparseCholesky, solve_dense
-from simulator.model import ContactParameters, Supports, make_model
+from simulator.mechanics.elements import _springs_jit
+from simulator.mechanics.elements.bars import bar_kernel
+from simulator.mechanics.elements.contact import contact_kernel
+from simulator.mechanics.elements.springs import spring_kernel
+from simulator.mechanics.equilibrium import ENERGY_KINDS, EquilibriumSystem, Evaluation
+from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator.solvers.newton import _solve_linear as solve_linear
+from simulator.linalg.small_solve import SparseCholesky, solve_dense
+from simulator.model.model import ContactParameters, Supports, make_model
 from simulator.state import equilibrium_system, initial_state
 
 pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
@@ -27,7 +27,7 @@ def _gripper_with_contacts():
     """A gripper after its residual fold and gravity, with points of three panels placed
     inside the activation distance of other panels' triangles: on the face, beyond an edge
     and beyond a corner (all three distance zones)."""
-    from design.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, gripper_model
     from simulator.simulation import simulate
 
     model, pre = gripper_model(GripperDesign())
@@ -58,8 +58,8 @@ def _gripper_with_contacts():
 
 def _single_crease_states():
     """States of the single crease over its substrate with and without active contact."""
-    from simulator.newton import newton as real_newton
-    import simulator.newton as nw
+    from simulator.solvers.newton import newton as real_newton
+    import simulator.solvers.newton as nw
 
     seen = []
 
@@ -199,8 +199,8 @@ def test_the_numpy_backend_keeps_the_reference_path():
 
 def test_a_failed_compilation_falls_back_to_numpy(monkeypatch, caplog):
     """numba is an accelerator: if it cannot compile, the numpy path and LAPACK take over."""
-    from simulator import _cholesky_jit
-    from simulator.elements import _fused_jit
+    from simulator.linalg import _cholesky_jit
+    from simulator.mechanics.elements import _fused_jit
 
     def fail():
         raise RuntimeError("no compiler today")
@@ -266,7 +266,7 @@ def test_sparse_cholesky_solves_like_lapack(n, density):
 def test_sparse_cholesky_condition_estimate_is_lapacks():
     """The compiled dlacn2 estimate on K: the same rcond as LAPACK's dpocon (the order of
     the unknowns aside, the same algorithm) on matrices from well to badly conditioned."""
-    from simulator._cholesky_jit import cholesky_solve
+    from simulator.linalg._cholesky_jit import cholesky_solve
 
     for seed, spread in enumerate((1.0, 1e6, 1e12)):
         K, r = _spd(60, 0.06, seed)

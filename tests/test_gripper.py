@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from design.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult, evaluate_gripper,
+from design.devices.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult, evaluate_gripper,
                             gripper_model)
 from simulator.errors import ParameterError
 
@@ -134,7 +134,7 @@ def test_stage_result_contract_is_checked():
 
 
 def test_gripper_message_names_a_stage_met_after_a_snap():
-    from design.gripper import GripperResult
+    from design.devices.gripper import GripperResult
 
     plain = StageResult(True, "met", "criterion met", 9e-3, 1.6, 150.0, 160.0, 30, 30)
     snap = StageResult(True, "met", "criterion met after a snap (snap at 0.05 mW per crease: "
@@ -188,7 +188,7 @@ def test_grip_after_a_snap_is_met_where_load_control_failed():
     follows the snap of the closing arm tips by arc length (~50 s)."""
     import math
 
-    from design.gripper import ARM_CREASES, BASE_CREASES, GripperResult, _Stage
+    from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperResult, _Stage
     from simulator import Heat, simulate
 
     model, pre = gripper_model(GripperDesign(residual_fold=math.radians(45)))

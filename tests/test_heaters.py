@@ -1,11 +1,11 @@
-"""Minimum-power heater allocation (design.heaters)."""
+"""Minimum-power heater allocation (design.analysis.heaters)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from design.heaters import allocate_heaters, influence_matrices
+from design.analysis.heaters import allocate_heaters, influence_matrices
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
 from simulator import Heat, simulate
@@ -114,7 +114,7 @@ def test_bad_input_is_named(folded, kwargs, match):
 
 def test_fold_sensitivity_of_a_free_hinge_is_one():
     """Nothing resists a free hinge: its fold follows its rest angle one to one."""
-    from design.heaters import fold_sensitivity
+    from design.analysis.heaters import fold_sensitivity
     from simulator.cases import single_fold_model
     from simulator import initial_state
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from fd_harness import check_kernel
 
-from simulator.elements.bars import bar_kernel
-from simulator.elements import _springs_jit
-from simulator.elements.springs import (fold_angle, fold_angle_derivatives, spring_kernel,
+from simulator.mechanics.elements.bars import bar_kernel
+from simulator.mechanics.elements import _springs_jit
+from simulator.mechanics.elements.springs import (fold_angle, fold_angle_derivatives, spring_kernel,
                                         spring_kernel_numpy)
 
 RNG = np.random.default_rng(42)
@@ -152,7 +152,7 @@ def test_compile_kernel_returns_the_kernel_or_none_with_one_warning(caplog):
 
 
 def test_compiled_bar_kernel_equals_numpy_kernel_bit_for_bit():
-    from simulator.elements import _bars_jit
+    from simulator.mechanics.elements import _bars_jit
     from simulator import spring_kernel_backend
 
     x, L0, EA = _bars(500)
@@ -169,10 +169,10 @@ def test_compiled_bar_kernel_equals_numpy_kernel_bit_for_bit():
 
 def test_large_model_evaluation_takes_the_compiled_bar_kernel_with_numba(monkeypatch):
     from simulator import spring_kernel_backend
-    from simulator.elements import _bars_jit
-    from simulator.example_patterns import miura_sheet_pattern
-    from simulator.model import Supports, make_model
-    from simulator.properties import BarHingeParameters
+    from simulator.mechanics.elements import _bars_jit
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+    from simulator.model.model import Supports, make_model
+    from simulator.model.properties import BarHingeParameters
     from simulator.state import equilibrium_system, initial_state
 
     model = make_model(miura_sheet_pattern(m=4, n=4), None, BarHingeParameters())

@@ -1,4 +1,4 @@
-"""Nested-dissection solves of large tangents by SuperLU (simulator.linsolve): agreement with
+"""Nested-dissection solves of large tangents by SuperLU (simulator.linalg.linsolve): agreement with
 spsolve, one ordering per sparsity pattern, and the fallbacks to SuperLU's own orderings.
 PARDISO is switched off here; its path is tested in test_pardiso.py."""
 
@@ -7,13 +7,16 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import initial_state, linsolve, newton as newton_module, pardiso, thermal
+from simulator import initial_state
+from simulator.linalg import linsolve, pardiso
+from simulator.solvers import newton as newton_module
+from simulator.thermal import steady as thermal
 from simulator.cases import miura_sheet_model
 from simulator.state import thermal_model
-from simulator.example_patterns import miura_sheet_pattern
-from simulator.model import Supports, make_model
-from simulator.newton import NewtonOptions, _solve_linear, newton
-from simulator.properties import BarHingeParameters
+from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator.model.model import Supports, make_model
+from simulator.solvers.newton import NewtonOptions, _solve_linear, newton
+from simulator.model.properties import BarHingeParameters
 from simulator.state import equilibrium_system
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from simulator.mesh import BarType, SpringKind, build_mesh
-from simulator.example_patterns import (crane_pattern, double_fold_pattern, gripper_pattern,
+from simulator.model.mesh import BarType, SpringKind, build_mesh
+from simulator.geometry.example_patterns import (crane_pattern, double_fold_pattern, gripper_pattern,
                                 miura_sheet_pattern, single_fold_pattern, strip_pattern)
 
 REF = 1  # the digest is 1-based; ours is 0-based

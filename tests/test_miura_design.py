@@ -1,4 +1,4 @@
-"""Miura-ori lifter design problem (design.miura): model, lift-power search, problem, table."""
+"""Miura-ori lifter design problem (design.devices.miura): model, lift-power search, problem, table."""
 
 import math
 import pickle
@@ -6,7 +6,7 @@ import pickle
 import numpy as np
 import pytest
 
-from design.miura import (
+from design.devices.miura import (
     MIURA_SPACE,
     LiftPowerResult,
     MiuraDesign,
@@ -16,7 +16,7 @@ from design.miura import (
     lift_power,
     miura_model,
 )
-from design.problem import SU8_TG
+from design.core.problem import SU8_TG
 from simulator.cases import get_case
 from simulator.errors import ParameterError
 

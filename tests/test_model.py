@@ -5,7 +5,7 @@ import pytest
 from simulator import (REFERENCE_GRAVITY, SPR, SU8, Actuators, Bimorph, ContactParameters,
                        Material, ParameterError, Supports, ThermalParameters, build_mesh,
                        make_model)
-from simulator.example_patterns import single_fold_pattern
+from simulator.geometry.example_patterns import single_fold_pattern
 
 
 @pytest.fixture(scope="module")
@@ -50,8 +50,8 @@ def test_glass_transition_is_a_material_property():
 
 
 def test_design_problems_read_t_g_from_the_material():
-    from design.miura import MiuraProblem
-    from design.problem import GripperProblem
+    from design.devices.miura import MiuraProblem
+    from design.core.problem import GripperProblem
     assert GripperProblem().temperature_limit == pytest.approx(1.2 * SU8.glass_transition) == 252.0
     assert MiuraProblem().temperature_limit == 252.0
     assert GripperProblem(glass_transition=180.0).temperature_limit == pytest.approx(216.0)

@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 from simulator import (Gravity, ParameterError, SelfFold, Supports, initial_state, make_model,
                        natural_modes, simulate)
 from simulator import single_fold_model
-from simulator.example_patterns import miura_sheet_pattern
+from simulator.geometry.example_patterns import miura_sheet_pattern
 from studies.mode_plots import plot_mode_shape, save_mode_plots
 
 
@@ -100,7 +100,7 @@ def test_bad_inputs_are_clear_errors(fold):
 
 
 def test_shift_invert_in_nested_dissection_order_finds_the_same_modes(miura, monkeypatch):
-    from simulator import linsolve, pardiso
+    from simulator.linalg import linsolve, pardiso
 
     monkeypatch.setattr(pardiso, "_library", ())            # the SuperLU path
     ref = natural_modes(miura, count=6, method="sparse")

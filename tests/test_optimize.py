@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from design.evaluation_log import EvaluationLog, EvaluationRun, LoggedProblem, design_key
-from design.optimize import StopOptimization, optimize
-from design.problem import DesignProblem, Evaluation
-from design.space import DesignSpace, Variable
+from design.core.evaluation_log import EvaluationLog, EvaluationRun, LoggedProblem, design_key
+from design.core.optimize import StopOptimization, optimize
+from design.core.problem import DesignProblem, Evaluation
+from design.core.space import DesignSpace, Variable
 from simulator.errors import ParameterError
 
 NLOPT_METHODS = ["cobyla", "bobyqa", "neldermead", "sbplx", "direct"]
@@ -362,7 +362,7 @@ def test_bad_input_raises_parameter_error(kwargs, match):
 # ---------------------------------------------------------------- the real gripper
 @pytest.mark.slow
 def test_gripper_coordinate_descent_one_cycle(tmp_path):
-    from design.problem import GripperProblem
+    from design.core.problem import GripperProblem
 
     res = optimize(GripperProblem(), "cd", out=tmp_path, max_cycles=1)
     assert res.status in ("converged", "max_cycles") and res.success

@@ -1,4 +1,4 @@
-"""PARDISO solves of large symmetric tangents (simulator.pardiso via simulator.linsolve):
+"""PARDISO solves of large symmetric tangents (simulator.linalg.pardiso via simulator.linalg.linsolve):
 agreement with SuperLU, inertia, one analysis per pattern, fallbacks, thread safety."""
 
 import gc
@@ -13,8 +13,9 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import linsolve, newton as newton_module, pardiso
-from simulator.newton import NewtonOptions, _solve_linear, newton
+from simulator.linalg import linsolve, pardiso
+from simulator.solvers import newton as newton_module
+from simulator.solvers.newton import NewtonOptions, _solve_linear, newton
 from simulator.state import equilibrium_system
 from test_linsolve import _grounded_stiff_chain, _sheet
 
@@ -204,10 +205,11 @@ def test_kept_factors_stay_correct_when_the_handle_factorises_another_matrix(she
 
 
 def test_thermal_modes_and_transient_heat_agree_with_superlu(monkeypatch):
-    from simulator import natural_modes, thermal
+    from simulator import natural_modes
+    from simulator.thermal import steady as thermal
     from simulator.cases import miura_sheet_model
     from simulator.state import thermal_model
-    from simulator.transient_heat import ThetaStepper
+    from simulator.thermal.transient import ThetaStepper
 
     model = miura_sheet_model(cells_x=8, cells_y=6)
     tm = thermal_model(model)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from simulator.errors import PatternError
-from simulator.materials import SU8
-from simulator.pattern import Pattern
-from simulator.example_patterns import gripper_pattern, miura_sheet_pattern, single_fold_pattern
+from simulator.geometry.materials import SU8
+from simulator.geometry.pattern import Pattern
+from simulator.geometry.example_patterns import gripper_pattern, miura_sheet_pattern, single_fold_pattern
 
 SQ = [(0, 0), (1, 0), (1, 1), (0, 1)]
 PENTAGON = [(math.cos(2 * math.pi * k / 5), math.sin(2 * math.pi * k / 5)) for k in range(5)]
@@ -243,7 +243,7 @@ def test_point_queries_reject(fold):
 def test_coincident_vertices_found_alike_by_pairwise_distances_and_the_kd_tree(monkeypatch,
                                                                                 limit):
     """Small patterns check duplicates by all pairwise distances, large ones by a k-d tree."""
-    from simulator import pattern_checks as pattern_module
+    from simulator.geometry import pattern_checks as pattern_module
     monkeypatch.setattr(pattern_module, "_PAIRWISE_VERTICES", limit)
     v = np.random.default_rng(3).uniform(size=(800, 3))
     assert pattern_module._coincident_pair(v, 1e-9) is None

@@ -1,9 +1,9 @@
-"""simulator.polygons: the one polygon helper (rings, centroids, fans, vector areas, normals)."""
+"""simulator.geometry.polygons: the one polygon helper (rings, centroids, fans, vector areas, normals)."""
 
 import numpy as np
 import pytest
 
-from simulator.polygons import (area_vectors, centroids, fan_normals, rings, triangle_areas,
+from simulator.geometry.polygons import (area_vectors, centroids, fan_normals, rings, triangle_areas,
                                 unit_normals)
 
 # unit square (counter-clockwise), right triangle (clockwise), L-shape of area 3 (ccw)

@@ -1,6 +1,6 @@
 """Power searches following snaps (issue 9 item 5): the shared heating trial
-(:func:`design.power_search.heating_trial`) and the snap bookkeeping of
-:class:`design.power_search.HeatingStage` in both searches."""
+(:func:`design.devices.power_search.heating_trial`) and the snap bookkeeping of
+:class:`design.devices.power_search.HeatingStage` in both searches."""
 
 import math
 from dataclasses import replace
@@ -8,9 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import design.power_search as ps
-from design.gripper import BASE_CREASES, GripperDesign, gripper_model
-from design.power_search import HeatingStage, HeatingTrial, bisect_search, staircase_search
+import design.devices.power_search as ps
+from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design.devices.power_search import HeatingStage, HeatingTrial, bisect_search, staircase_search
 from simulator import Heat, simulate
 
 
@@ -130,7 +130,7 @@ def test_heating_trial_without_following_snaps_is_plain_load_control(monkeypatch
 def test_heating_trial_follows_the_heated_miura_snap():
     """The Miura lifter of the ``snap_through`` case (a = 0.5 mm, gamma = 45 deg, W = 300 um)
     snaps near 9.2 mW per crease (~20 s): the trial reaches 12 mW and reports the snap."""
-    from design.miura import MiuraDesign, heated_creases, miura_model
+    from design.devices.miura import MiuraDesign, heated_creases, miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
     model = miura_model(d)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from simulator.errors import ParameterError
-from simulator.mesh import build_mesh
-from simulator.example_patterns import single_fold_pattern
-from simulator.properties import BarHingeParameters, mechanical_properties, spring_rest_angles
+from simulator.model.mesh import build_mesh
+from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.model.properties import BarHingeParameters, mechanical_properties, spring_rest_angles
 
 RTOL = 1e-9  # the digest prints 10 significant digits
 

@@ -10,7 +10,7 @@ import pytest
 from simulator import (ArcLengthLoad, DisplacementControl, Gravity, Heat, Load, NewtonOptions,
                        SelfFold, get_case, simulate)
 from simulator.errors import ParameterError
-from simulator.model import gravity_loads
+from simulator.model.model import gravity_loads
 
 
 @pytest.fixture(scope="module")
@@ -186,7 +186,7 @@ def test_heat_continuation_matches_iterated_load_control():
     equilibria as load control with iterated coupling: to 1e-8 relative (the issue's bound)
     once both are converged tightly (5e-14 measured; with the default Newton tolerances the
     two differ by 1.2e-8, the tolerance, not the method)."""
-    from simulator.continuation import mgdcm
+    from simulator.solvers.continuation import mgdcm
     from simulator.steps.base import StepContext
     from simulator.steps.limit import HeatPath
 
@@ -211,7 +211,7 @@ def test_miura_power_search_reports_a_snap():
     """A Miura lifter heated past its snap in the design layer's stage: met, with the snap."""
     import math
 
-    from design.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, miura_model
+    from design.devices.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
     model = miura_model(d)

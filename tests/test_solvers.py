@@ -5,13 +5,13 @@ import pytest
 
 from simulator.cases import single_fold_model
 from simulator.errors import ConvergenceError, ParameterError
-from simulator.geometry import fold_angles
+from simulator.mechanics.kinematics import fold_angles
 from simulator import Gravity, Load, SelfFold, initial_state, simulate
 from simulator.state import equilibrium_system
-from simulator.model import Supports, gravity_loads, make_model
-from simulator.example_patterns import single_fold_pattern
-from simulator.properties import BarHingeParameters, spring_rest_angles
-from simulator.newton import NewtonOptions, newton
+from simulator.model.model import Supports, gravity_loads, make_model
+from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.model.properties import BarHingeParameters, spring_rest_angles
+from simulator.solvers.newton import NewtonOptions, newton
 
 
 @pytest.fixture(scope="module")
@@ -206,7 +206,7 @@ def test_reference_loop_applies_one_update_past_its_tolerance(free_hinge, caplog
     assert np.abs(loose.u - full.u).max() > 0.01 * np.abs(full.u).max()   # 3% off here
     atol = 1e-9
     # an iteration cap below that: accepted, but said (message and warning), never silent
-    with caplog.at_level("WARNING", logger="simulator.newton"):
+    with caplog.at_level("WARNING", logger="simulator.solvers.newton"):
         short = newton(system, state.u, f, rest,
                        NewtonOptions(atol=atol, max_iter=2, reference_loop=True))
     assert short.success and short.iterations == 1 and short.residual_norms[-1] > atol
@@ -228,7 +228,7 @@ class _StallingSystem:
         self._K = sp.identity(6, format="csr")
 
     def evaluate(self, u, spring_rest, hessian=True):
-        from simulator.equilibrium import Evaluation
+        from simulator.mechanics.equilibrium import Evaluation
 
         self.calls += 1
         f = u.ravel() + self.floor * (-1) ** self.calls

@@ -6,8 +6,8 @@ import pickle
 import numpy as np
 import pytest
 
-from design.problem import GRIPPER_SPACE, DesignProblem, Evaluation, GripperProblem
-from design.space import DesignSpace, Variable
+from design.core.problem import GRIPPER_SPACE, DesignProblem, Evaluation, GripperProblem
+from design.core.space import DesignSpace, Variable
 from simulator.errors import ParameterError
 
 

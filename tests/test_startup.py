@@ -103,7 +103,7 @@ def test_star_import_gives_all_and_only_all(package):
 def test_submodules_are_reachable_as_attributes_and_unknown_names_raise():
     out = _run("import simulator, design\n"
                "print(simulator.thermal.__name__, simulator.example_patterns.__name__,"
-               " design.heaters.__name__)\n"
+               " design.analysis.__name__)\n"
                "for p, n in ((simulator, 'no_such_name'), (design, 'no_such_name'),"
                " (simulator, '__no_such_dunder__')):\n"
                "    try:\n"
@@ -111,24 +111,24 @@ def test_submodules_are_reachable_as_attributes_and_unknown_names_raise():
                "    except AttributeError as exc:\n"
                "        print(type(exc).__name__, n in str(exc))\n")
     lines = out.split("\n")
-    assert lines[0] == "simulator.thermal simulator.example_patterns design.heaters"
+    assert lines[0] == "simulator.thermal simulator.geometry.example_patterns design.analysis"
     assert lines[1:4] == ["AttributeError True"] * 3
 
 
 @pytest.mark.parametrize("code", [
     # the function first, then the submodule
-    "from design import optimize as f\nimport design.optimize\nimport design",
+    "from design import optimize as f\nimport design.core.optimize\nimport design",
     # the submodule first (as the CLI and other design modules do), then the function
-    "import design.optimize\nfrom design import optimize as f\nimport design",
-    "from design.optimize import optimize as f\nimport design",
-    "import design\nf = design.optimize\nimport design.optimize",
+    "import design.core.optimize\nfrom design import optimize as f\nimport design",
+    "from design.core.optimize import optimize as f\nimport design",
+    "import design\nf = design.optimize\nimport design.core.optimize",
     # a sibling module importing the submodule first
-    "import design.robustness, design.uncertainty_sweep\nimport design\nf = design.optimize",
+    "import design.analysis.robustness, design.analysis.uncertainty_sweep\nimport design\nf = design.optimize",
 ])
 def test_design_optimize_is_the_function_in_any_import_order(code):
     out = _run(code + "\nimport sys, types\n"
-               "from design.optimize import optimize as g, OptimizationResult\n"
-               "m = sys.modules['design.optimize']\n"
+               "from design.core.optimize import optimize as g, OptimizationResult\n"
+               "m = sys.modules['design.core.optimize']\n"
                "print(isinstance(f, types.FunctionType), f is g, design.optimize is g,"
                " isinstance(m, types.ModuleType), m.optimize is g,"
                " design.OptimizationResult is OptimizationResult)")

@@ -9,10 +9,10 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from simulator.errors import ParameterError
-from simulator.materials import Material
-from simulator.mesh import build_mesh
-from simulator.example_patterns import single_fold_pattern, strip_pattern
-from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
+from simulator.geometry.materials import Material
+from simulator.model.mesh import build_mesh
+from simulator.geometry.example_patterns import single_fold_pattern, strip_pattern
+from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
 
 DATA = pathlib.Path(__file__).parent / "data"
 FIXED = (0, 3, 5, 6)                      # reference room-temperature nodes 1, 4, 6, 7

@@ -1,4 +1,4 @@
-"""Compiled thermal kernel (simulator._thermal_jit) against the numpy reference path."""
+"""Compiled thermal kernel (simulator.thermal._thermal_jit) against the numpy reference path."""
 
 import logging
 import os
@@ -7,12 +7,12 @@ import pathlib
 import numpy as np
 import pytest
 
-from simulator import _thermal_jit
-from simulator.elements.contact import point_triangle_distance
-from simulator.elements.springs import spring_kernel_backend
-from simulator.mesh import build_mesh
-from simulator.example_patterns import single_fold_pattern
-from simulator.thermal import ThermalModel, ThermalParameters
+from simulator.thermal import _thermal_jit
+from simulator.mechanics.elements.contact import point_triangle_distance
+from simulator.mechanics.elements.springs import spring_kernel_backend
+from simulator.model.mesh import build_mesh
+from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.thermal.steady import ThermalModel, ThermalParameters
 
 pytest.importorskip("numba")     # a test dependency (pyproject [test]); the kernel needs it
 
@@ -30,7 +30,7 @@ def _deformed(mesh, seed):
 
 
 def _gripper_state():
-    from design.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, gripper_model
     from simulator.simulation import simulate
     from simulator.state import thermal_model
     model, pre = gripper_model(GripperDesign())
@@ -97,7 +97,7 @@ def test_floored_air_warns_on_both_paths(caplog):
     temps = []
     for backend in ("numba", "numpy"):
         caplog.clear()
-        with caplog.at_level(logging.WARNING, logger="simulator.thermal"), \
+        with caplog.at_level(logging.WARNING, logger="simulator.thermal.steady"), \
                 spring_kernel_backend(backend):
             temps.append(tm.solve(x, q))
         assert "t_air floored" in caplog.text
@@ -128,11 +128,11 @@ def test_background_compilation_fills_the_cache(tmp_path):
     import textwrap
     script = textwrap.dedent("""
         import numpy as np
-        from simulator import _thermal_jit
-        from simulator.elements.springs import spring_kernel_backend
-        from simulator.example_patterns import single_fold_pattern
-        from simulator.mesh import build_mesh
-        from simulator.thermal import ThermalModel, ThermalParameters
+        from simulator.thermal import _thermal_jit
+        from simulator.mechanics.elements.springs import spring_kernel_backend
+        from simulator.geometry.example_patterns import single_fold_pattern
+        from simulator.model.mesh import build_mesh
+        from simulator.thermal.steady import ThermalModel, ThermalParameters
         assert _thermal_jit.compile_in_background()                 # cold cache: started
         assert not _thermal_jit.compile_in_background()             # only once
         child = _thermal_jit._background
@@ -157,7 +157,7 @@ def test_background_compilation_fills_the_cache(tmp_path):
     assert out.stdout.strip() == "ok"
     assert list(tmp_path.rglob("_thermal_jit._kernel-*.nbi"))                 # cache written
     # a warm cache starts nothing
-    again = subprocess.run([sys.executable, "-c", "from simulator import _thermal_jit; "
+    again = subprocess.run([sys.executable, "-c", "from simulator.thermal import _thermal_jit; "
                             "print(_thermal_jit.compile_in_background())"], env=env,
                            capture_output=True, text=True, timeout=120)
     assert again.stdout.strip() == "False", again.stderr
@@ -168,7 +168,7 @@ def test_first_evaluation_starts_the_background_compilation(monkeypatch, with_th
     """A model with heat transfer starts the thermal kernel's compilation just before the
     fused kernel compiles; a purely mechanical one does not."""
     from simulator.cases import get_case
-    from simulator.elements import _fused_jit
+    from simulator.mechanics.elements import _fused_jit
     from simulator.state import equilibrium_system, initial_state
     import dataclasses
     model = get_case("single_fold", gravity=True).model

@@ -11,13 +11,13 @@ from simulator import (AIR, WATER, Heat, Material, PiecewiseLinear, Ramp, Sine, 
                        StepPower, ThetaStepper, TransientHeat, capacity_vector, get_case,
                        integrate_heat, simulate, theta_step)
 from simulator.errors import ParameterError, PatternError
-from simulator.example_patterns import single_fold_pattern
-from simulator.mesh import build_mesh
-from simulator.pattern import Pattern
-from simulator.power_schedules import crease_power_function
+from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.model.mesh import build_mesh
+from simulator.geometry.pattern import Pattern
+from simulator.thermal.schedules import crease_power_function
 from simulator.state import thermal_model
-from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters
-from simulator.transient_heat import environment_profile, heat_system
+from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters
+from simulator.thermal.transient import environment_profile, heat_system
 
 
 # ---------------------------------------------------------------- models

@@ -13,12 +13,12 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from design.executors import ProcessExecutor, SerialExecutor, make_executor
-from design.problem import GripperProblem
-from design.robustness import residual_fold_grid, sweep_residual_fold
-from design.uncertainty import (Distribution, FabricationScenario, UncertainInput, quantile,
+from design.core.executors import ProcessExecutor, SerialExecutor, make_executor
+from design.core.problem import GripperProblem
+from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
+from design.analysis.uncertainty import (Distribution, FabricationScenario, UncertainInput, quantile,
                                 rank_correlations, residual_fold_per_crease, wilson_interval)
-from design.uncertainty_sweep import (GripperSampleProblem, RobustYieldProblem,
+from design.analysis.uncertainty_sweep import (GripperSampleProblem, RobustYieldProblem,
                                       summarize_yield, sweep_uncertainty)
 from simulator.errors import ParameterError
 

@@ -87,7 +87,7 @@ def executor(args):
     Dask's own INFO and WARNING logs (cluster start, workers killed on Ctrl-C) are shown only
     with ``--verbose``.
     """
-    from design.executors import executor_from_option
+    from ..core.executors import executor_from_option
 
     if getattr(args, "dask", None) and not getattr(args, "verbose", False):
         import distributed  # noqa: F401 - configures its loggers on import; quieten them after

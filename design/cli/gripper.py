@@ -16,8 +16,8 @@ _LENGTHS = (("W", 200.0), ("L1", 1000.0), ("L2", 1000.0), ("La", 700.0))
 
 
 def _design(args):
-    """The :class:`~design.gripper.GripperDesign` of the options, checked in CLI units."""
-    from design.gripper import GripperDesign
+    """The :class:`~design.devices.gripper.GripperDesign` of the options, checked in CLI units."""
+    from ..devices.gripper import GripperDesign
 
     si = {name: length_um(f"--{name}", getattr(args, name), field=f"GripperDesign.{name}")
           for name, _ in _LENGTHS}
@@ -32,7 +32,7 @@ def _mw(value):
 
 
 def _gripper_evaluate(args) -> int:
-    from design.gripper import evaluate_gripper
+    from ..devices.gripper import evaluate_gripper
 
     design = _design(args)
     t0 = time.perf_counter()

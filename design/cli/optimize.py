@@ -17,15 +17,15 @@ METHODS = ("cd", "cobyla", "bobyqa", "neldermead", "sbplx", "direct")
 
 
 def _problem(args):
-    from design.problem import GripperProblem
+    from ..core.problem import GripperProblem
 
     if args.target == "miura":
-        from design.miura import MiuraProblem
+        from ..devices.miura import MiuraProblem
         return MiuraProblem()
     base = GripperProblem(mode=args.mode,
                           residual_fold=fold_deg("--residual-fold", args.residual_fold))
     if args.robust:
-        from design.robustness import RobustGripperProblem
+        from ..analysis.robustness import RobustGripperProblem
         folds = [fold_deg("--robust", v, within=RESIDUAL_LIMIT_DEG)
                  for v in floats("--robust", args.robust)]
         return RobustGripperProblem(base, folds)
@@ -38,7 +38,7 @@ def _display(problem, name, value):
 
 
 def _optimize(args) -> int:
-    from design.optimize import optimize
+    from ..core.optimize import optimize
 
     problem = _problem(args)
     ex = executor(args)

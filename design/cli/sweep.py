@@ -16,7 +16,7 @@ from ._common import (RESIDUAL_LIMIT_DEG, CLIError, add_parallel_options, execut
 
 __all__ = ["add_sweep_commands", "SCENARIO_NAMES"]
 
-#: Names of :data:`design.uncertainty.SCENARIOS` (listed here so that building the parser
+#: Names of :data:`design.analysis.uncertainty.SCENARIOS` (listed here so that building the parser
 #: imports no simulator code; a test checks they agree).
 SCENARIO_NAMES = ("default", "residual-fold", "off")
 
@@ -54,8 +54,8 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
 
 
 def _sweep(args) -> int:
-    from design.problem import GripperProblem
-    from design.robustness import residual_fold_grid, sweep_residual_fold
+    from ..core.problem import GripperProblem
+    from ..analysis.robustness import residual_fold_grid, sweep_residual_fold
 
     problem = GripperProblem(mode=args.mode)
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
@@ -79,9 +79,9 @@ def _sweep(args) -> int:
 def _uncertainty(args) -> int:
     import json
 
-    from design.problem import GripperProblem
-    from design.uncertainty import SCENARIOS
-    from design.uncertainty_sweep import summarize_yield, sweep_uncertainty
+    from ..core.problem import GripperProblem
+    from ..analysis.uncertainty import SCENARIOS
+    from ..analysis.uncertainty_sweep import summarize_yield, sweep_uncertainty
 
     if args.samples < 1:
         raise CLIError(f"--samples = {args.samples} must be at least 1")
@@ -141,5 +141,5 @@ def add_sweep_commands(sub) -> None:
     un.add_argument("--method", choices=("mc", "lhs"), default="lhs",
                     help="Monte Carlo or Latin hypercube (default lhs)")
     un.add_argument("--scenario", choices=SCENARIO_NAMES, default="default",
-                    help="fabrication scenario (see design.uncertainty.SCENARIOS)")
+                    help="fabrication scenario (see design.analysis.uncertainty.SCENARIOS)")
     _add_common_options(un, _uncertainty)

@@ -52,12 +52,12 @@ class StepContext:
 
     @cached_property
     def system(self):
-        """The model's cached :class:`~simulator.equilibrium.EquilibriumSystem`."""
+        """The model's cached :class:`~simulator.mechanics.equilibrium.EquilibriumSystem`."""
         return equilibrium_system(self.model)
 
     @cached_property
     def thermal(self):
-        """The model's cached :class:`~simulator.thermal.ThermalModel` (error if it has none)."""
+        """The model's cached :class:`~simulator.thermal.steady.ThermalModel` (error if it has none)."""
         return thermal_model(self.model)
 
     def report(self, done: int, total: int) -> None:
@@ -146,7 +146,7 @@ class StepRecorder:
                 values.append(None)
 
     def add_path(self, path, temperature, power) -> None:
-        """Record every accepted increment of a :class:`~simulator.newton.PathResult`."""
+        """Record every accepted increment of a :class:`~simulator.solvers.newton.PathResult`."""
         self.iterations += path.iterations
         self.cuts += path.cuts
         for (t, u, its), res in zip(path.history, path.residual_norms):

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..continuation import displacement_control, mgdcm
+from ..solvers.continuation import displacement_control, mgdcm
 from ..errors import ParameterError
-from ..load_path import LoadPath
-from ..model import _AXES
+from ..solvers.load_path import LoadPath
+from ..model.model import _AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..state import at_rest
 from .limit import record_continuation
@@ -80,7 +80,7 @@ class ArcLengthLoad(Step):
     arc_length : float
         Load-factor increment of the first step (> 0); later predictors move the structure by
         the same displacement norm, adapted to the Newton effort (see
-        :func:`~simulator.continuation.mgdcm`).
+        :func:`~simulator.solvers.continuation.mgdcm`).
     max_increments : int
         Accepted increments at most; without a target the step ends there.
     target_load_factor : float, optional

@@ -1,7 +1,7 @@
 """Time-integration step: the structure moves under inertia (dynamics digest D4).
 
 :class:`Dynamics` integrates the equation of motion over a duration with
-:func:`~simulator.dynamics.integrate` from the state the previous step left: free vibration from
+:func:`~simulator.solvers.dynamics.integrate` from the state the previous step left: free vibration from
 initial velocities, the response to a suddenly applied (or removed) load, release from a
 displaced state, or a sudden change of crease rest angles. Unlike the reference, dead loads of
 earlier steps stay applied (digest D9.3), supported DOFs keep their displacements (D9.5) and the
@@ -21,10 +21,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..dynamics import integrate
-from ..dynamics_options import DynamicsOptions
+from ..solvers.dynamics import integrate
+from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
-from ..properties import spring_rest_angles
+from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .mechanical import check_folds, crease_targets, node_vectors
 

@@ -5,17 +5,17 @@
 ``[t, t + h]``:
 
 1. heat: one theta-method step of the transient heat equation
-   (:mod:`simulator.transient_heat`) with the conductivity and capacity assembled on the shape
+   (:mod:`simulator.thermal.transient`) with the conductivity and capacity assembled on the shape
    at the start of the step, and the exact mean crease power over the step;
 2. Timoshenko bimorph: crease rest angles from the crease temperature change since the start
    of the step (:func:`~simulator.steps.heating.thermal_actuation`, the same formula as
    :class:`~simulator.steps.Heat`);
 3. mechanics: one implicit time step of the equation of motion
-   (:class:`~simulator.generalized_alpha.TimeIntegrator`, Newton iterations and dead loads such as
+   (:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`, Newton iterations and dead loads such as
    gravity kept, unlike the reference, digest D9.3 and D9.6), or with
    ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
    angles moved from the previous step's with step cutting
-   (:func:`~simulator.newton.follow_path`).
+   (:func:`~simulator.solvers.newton.follow_path`).
 
 The coupling is staggered as in the reference: the heat step sees the shape at the start of
 the step. Re-assembling K and C and factorising costs almost as much as the mechanics (single
@@ -53,13 +53,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..dynamics_options import DynamicsOptions
+from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
-from ..generalized_alpha import TimeIntegrator
-from ..newton import follow_path
-from ..power_schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
+from ..solvers.generalized_alpha import TimeIntegrator
+from ..solvers.newton import follow_path
+from ..thermal.schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
                                check_power_mapping, describe_power_mapping)
-from ..transient_heat import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
+from ..thermal.transient import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .heating import thermal_actuation
@@ -108,7 +108,7 @@ class ElectroThermal(Step):
     ----------
     power : mapping
         Power ADDED on top of the state's crease powers, keyed by crease id or by a tuple of
-        crease ids (a heater circuit): a :class:`~simulator.power_schedules.PowerSchedule`
+        crease ids (a heater circuit): a :class:`~simulator.thermal.schedules.PowerSchedule`
         (time from the start of this step) or a constant power [W].
     duration : float
         Length of the step [s], > 0.

@@ -22,10 +22,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..bimorph import crease_temperature_weights
+from ..model.bimorph import crease_temperature_weights
 from ..errors import ParameterError
-from ..newton import follow_path
-from ..properties import spring_rest_angles
+from ..solvers.newton import follow_path
+from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from .limit import HeatPath, check_on_limit_point, continue_past_limit
@@ -45,7 +45,7 @@ def thermal_actuation(model, state):
     Returns ``rest(temp) -> (crease_rest, spring_rest)``: crease rest angles [rad] =
     ``state.crease_rest + W kappa(dT)`` with dT the 7-node crease temperature [K] of the node
     temperatures ``temp`` (n_nodes,) [deg C] minus that of ``state.temperature``, and the spring
-    rest angles they give (:func:`~simulator.properties.spring_rest_angles`).
+    rest angles they give (:func:`~simulator.model.properties.spring_rest_angles`).
     """
     mesh = model.mesh
     rot, w = _rotation_per_kelvin(model), crease_temperature_weights()

@@ -31,11 +31,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..bimorph import crease_temperature_weights
-from ..continuation import FAST_ITERATIONS, mgdcm
+from ..model.bimorph import crease_temperature_weights
+from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..load_path import LoadPath
-from ..properties import spring_rest_angles
+from ..solvers.load_path import LoadPath
+from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from .base import StepOutcome, StepRecorder
 

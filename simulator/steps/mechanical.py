@@ -1,7 +1,7 @@
 """Mechanical loading steps under load control: self-folding, dead loads, gravity.
 
 Each step drives a linear path in (external load, spring rest angles) with
-:func:`~simulator.newton.follow_path` (Newton with step cutting); loads and rest angles
+:func:`~simulator.solvers.newton.follow_path` (Newton with step cutting); loads and rest angles
 persist into later steps (digest 7.3, 7.4).
 """
 
@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ParameterError
-from ..load_path import LoadPath
-from ..model import STANDARD_GRAVITY, Model, gravity_loads
-from ..newton import follow_path
-from ..properties import spring_rest_angles
+from ..solvers.load_path import LoadPath
+from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
+from ..solvers.newton import follow_path
+from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..state import at_rest
 from .limit import check_on_limit_point, continue_past_limit

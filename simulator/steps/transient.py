@@ -1,8 +1,8 @@
 """Time-domain steps: transient heat transfer on a fixed shape (dynamics digest D5).
 
 :class:`TransientHeat` integrates the heat equation with the theta-method of
-:mod:`simulator.transient_heat` over ``duration`` seconds, with time-varying crease or circuit
-powers (:mod:`simulator.power_schedules`) added on top of the state's crease powers. The shape
+:mod:`simulator.thermal.transient` over ``duration`` seconds, with time-varying crease or circuit
+powers (:mod:`simulator.thermal.schedules`) added on top of the state's crease powers. The shape
 is the state's shape for the whole step and the crease rest angles are not updated (heat
 only; the thermo-mechanical coupling is a later step). Each record carries ``time [s]`` (the simulation clock,
 ``SimulationState.time``, continued by every time-domain step) and the energy bookkeeping since the start of the step: ``heat_in [J]``
@@ -18,8 +18,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ParameterError
-from ..power_schedules import CreasePowers, check_power_mapping, describe_power_mapping
-from ..transient_heat import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
+from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
+from ..thermal.transient import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
 from .base import Step, StepContext, StepOutcome, StepRecorder
 
 __all__ = ["TransientHeat"]
@@ -33,7 +33,7 @@ class TransientHeat(Step):
     ----------
     power : mapping
         Power ADDED on top of the state's crease powers, keyed by crease id or by a tuple of
-        crease ids (a heater circuit): a :class:`~simulator.power_schedules.PowerSchedule`
+        crease ids (a heater circuit): a :class:`~simulator.thermal.schedules.PowerSchedule`
         (time from the start of this step) or a constant power [W].
     duration : float
         Length of the step [s], > 0.
@@ -48,7 +48,7 @@ class TransientHeat(Step):
     Notes
     -----
     The start temperatures are the state's node temperatures with a quasi-steady environment
-    (:func:`~simulator.transient_heat.environment_profile`), so a steady state stays steady.
+    (:func:`~simulator.thermal.transient.environment_profile`), so a steady state stays steady.
     """
 
     power: Mapping = field(default_factory=dict)

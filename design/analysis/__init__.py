@@ -1,0 +1,2 @@
+"""Analyses of designs: robustness over residual folds, fabrication uncertainty and
+heater allocation."""

@@ -1,0 +1,2 @@
+"""The generic design core: design spaces, problems, evaluation logs, optimisers and
+executors."""

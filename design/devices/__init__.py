@@ -1,0 +1,1 @@
+"""Devices: the parametrised gripper and Miura lifter and their power searches."""

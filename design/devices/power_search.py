@@ -1,0 +1,186 @@
+"""Power searches: the smallest heating power at which a stage's criterion holds.
+
+Both strategies work on a *stage* object with three methods:
+
+* ``heat(state, dp, increments=1, coupling="staggered") -> (state, ok, message)``: add power
+  ``dp`` [W] per heated crease from a saved simulation state;
+* ``look(state) -> (measure, met, temperature, max_crease_temperature)``;
+* ``result(status, power, state, message)``: the stage's result object; ``status`` is
+  ``"met"`` (the criterion holds at ``power``), ``"not_met"`` (not below the power cap) or
+  ``"failed"`` (a heating simulation failed at ``power``).
+
+:func:`staircase_search` is the reference's search (fixed steps); :func:`bisect_search` grows
+the step and bisects the crossing, restarting trials from saved states so that nothing is
+recomputed from zero. Used by the gripper (:mod:`design.devices.gripper`) and the Miura lifter
+(:mod:`design.devices.miura`).
+
+Both stages heat through :class:`HeatingStage`: every trial is a :class:`~simulator.steps.Heat`
+step with ``on_limit_point="continue"``, so where load control stalls at a limit point (the
+structure snaps) arc length in the power carries the trial on to its final power, and the snap
+(power per crease, jump of the most-moving node) is kept with the trial's state. A criterion
+met only after a snap is reported as met, with ``after a snap (...)`` in the message. Load
+control is unchanged where it converges, so trials without a failure give the same numbers as
+plain load control. The bisect search's growth trials larger than its first step are the
+exception: they run plain load control, since a failure there is retried with a smaller step
+(arc length from a trial that stalled after a large jump in power can land on another branch:
+coordinate-descent design W 300, La 1200, L1 500, L2 550 um lost its grip that way, and paid
+for it with a fifth of the whole descent's Newton iterations).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from simulator.simulation import simulate
+from simulator.steps import Heat
+
+__all__ = ["staircase_search", "bisect_search", "HeatingTrial", "HeatingStage", "heating_trial"]
+
+#: A snap in a Heat step's message (simulator.steps.limit): load factor of the step, jump [um].
+_SNAP = re.compile(r"snap at load factor ([-+0-9.eE]+)[^:;]*: displacement jumps ([-+0-9.eE]+) um")
+
+
+@dataclass(frozen=True)
+class HeatingTrial:
+    """One heating trial of a power search.
+
+    Attributes
+    ----------
+    state : SimulationState at the end of the trial (the last converged one if it failed)
+    success : bool (the trial reached its final power)
+    message : str (the simulation's message)
+    snap : str or None
+        The snaps passed by arc length, e.g. ``"snap at 9.21 mW per crease: displacement
+        jumps 302.8 um"`` (several joined by ``"; "``); None if load control never stalled at
+        a limit point.
+    increments : int (load-controlled and arc-length increments solved)
+    """
+
+    state: object
+    success: bool
+    message: str
+    snap: str | None
+    increments: int
+
+
+def heating_trial(model, creases, state, dp, increments=1, coupling="staggered",
+                  options=None, follow_snaps=True) -> HeatingTrial:
+    """Add ``dp`` [W] to each crease of ``creases`` from ``state``, following snaps.
+
+    Load control in ``increments`` increments; where it stalls, arc length in the power
+    (``Heat(..., on_limit_point="continue")``), unless ``follow_snaps`` is False (plain load
+    control: the trial fails there). The snap powers in :attr:`HeatingTrial.snap` are those of
+    ``creases[0]`` [mW per crease] (the stage's heated creases, whatever other creases carry).
+    """
+    res = simulate(model, [Heat({tuple(creases): dp}, increments=increments, coupling=coupling,
+                                on_limit_point="continue" if follow_snaps else "stop")],
+                   state=state, options=options)
+    step = res.steps[-1] if res.steps else None
+    msg = step.message if step is not None else res.message
+    p0 = float(state.crease_power[model.mesh.crease_row[creases[0]]])
+    snaps = [f"snap at {1e3 * (p0 + float(lam) * dp):.4g} mW per crease: displacement jumps "
+             f"{float(jump):.4g} um" for lam, jump in _SNAP.findall(msg)] if res.success else []
+    return HeatingTrial(res.state, res.success, res.message, "; ".join(snaps) or None,
+                        step.increments if step is not None else 0)
+
+
+class HeatingStage:
+    """Heating trials of a power search from saved states, with the snaps on the way to each.
+
+    Subclasses add ``look(state)`` and ``result(status, power, state, message)`` (see the
+    module docstring) and may extend :meth:`heat`.
+
+    Parameters
+    ----------
+    model : Model
+    creases : tuple of int (the heated creases; each gets the trial's power)
+    options : NewtonOptions, optional
+    """
+
+    def __init__(self, model, creases, options=None):
+        self.model, self.creases, self.options = model, tuple(creases), options
+        self.simulations = self.increments = 0
+        self._snaps = {}                       # id(state) -> (state, snaps on the way to it)
+
+    def heat(self, state, dp, increments=1, coupling="staggered", follow_snaps=True):
+        """Add ``dp`` [W] per heated crease in ``increments`` increments (snaps followed by
+        arc length unless ``follow_snaps`` is False); returns ``(state, ok, message)``."""
+        trial = heating_trial(self.model, self.creases, state, dp, increments, coupling,
+                              self.options, follow_snaps)
+        self.simulations += 1
+        self.increments += trial.increments
+        snaps = self.snaps(state) + ((trial.snap,) if trial.snap else ())
+        if snaps:
+            self._snaps[id(trial.state)] = (trial.state, snaps)
+        return trial.state, trial.success, trial.message
+
+    def snaps(self, state) -> tuple:
+        """Snap notes of the trials that led from the search's start to ``state``."""
+        kept = self._snaps.get(id(state))
+        return kept[1] if kept is not None and kept[0] is state else ()
+
+    def after_snaps(self, message, state) -> str:
+        """``message`` with ``" after a snap (...)"`` if a snap led to ``state``."""
+        snaps = self.snaps(state)
+        return f"{message} after a snap ({'; '.join(snaps)})" if snaps else message
+
+
+def staircase_search(stage, state, step, cap):
+    """Add ``step`` per heated crease, one increment at a time, until the criterion holds.
+
+    Returns ``(stage result, state at the stop)``; gives up at the power ``cap`` (status
+    ``"not_met"``) or when a simulation fails (``"failed"``).
+    """
+    power = 0.0
+    while power < cap - 1e-15:
+        state, ok, msg = stage.heat(state, step)
+        power += step
+        if not ok:
+            return stage.result("failed", power, state, f"simulation failed at "
+                                                        f"{power * 1e3:.2f} mW: {msg}"), state
+        if stage.look(state)[1]:
+            return stage.result("met", power, state, "criterion met"), state
+    return stage.result("not_met", power, state, f"criterion not met below the power cap "
+                                                 f"{cap * 1e3:.3g} mW per crease"), state
+
+
+def bisect_search(stage, state, step, tol, cap, max_step, coupling="staggered"):
+    """Grow the power step geometrically (``step`` doubling up to ``max_step``) from saved
+    states until the criterion holds, then bisect the crossing to ``tol``.
+
+    Every trial restarts from the saved state below the crossing. A growth trial larger than
+    ``step`` that fails is retried with a quarter of the step (at least ``step``); such trials
+    run plain load control (``follow_snaps=False``): a limit point is passed by arc length only
+    from a trial of ``step`` (or in the bisection), whose failure ends the search. Returns
+    ``(stage result, state at the smallest power found to meet the criterion)``.
+    """
+    lo_state, lo, dp = state, 0.0, step
+    while True:                                            # grow until the criterion holds
+        hi = min(lo + dp, cap)
+        retry = dp > step                                  # a failure is retried smaller
+        trial, ok, msg = stage.heat(lo_state, hi - lo, coupling=coupling,
+                                    follow_snaps=not retry)
+        if not ok:
+            if retry:                                      # too big a jump: retry smaller
+                dp = max(step, dp / 4)
+                continue
+            return stage.result("failed", hi, trial, f"simulation failed at {hi * 1e3:.3g} mW: "
+                                                     f"{msg}"), trial
+        if stage.look(trial)[1]:
+            hi_state = trial
+            break
+        if hi >= cap - 1e-15:
+            return stage.result("not_met", hi, trial, f"criterion not met below the power cap "
+                                                      f"{cap * 1e3:.3g} mW per crease"), trial
+        lo_state, lo, dp = trial, hi, min(2 * dp, max_step)
+    while hi - lo > tol:                                   # bisect the crossing
+        mid = 0.5 * (lo + hi)
+        trial, ok, msg = stage.heat(lo_state, mid - lo, coupling=coupling)
+        if ok and stage.look(trial)[1]:
+            hi, hi_state = mid, trial
+        elif ok:
+            lo, lo_state = mid, trial
+        else:
+            break
+    return stage.result("met", hi, hi_state, "criterion met"), hi_state

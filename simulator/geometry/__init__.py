@@ -1,0 +1,2 @@
+"""Geometry of crease patterns: patterns, their checks, polygons, materials and
+example patterns."""

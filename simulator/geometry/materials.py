@@ -1,0 +1,157 @@
+"""Material data (SI units) used by patterns and models.
+
+Values are those used by the reference examples of Zhu & Filipov (2021) unless
+stated otherwise; each constant documents its source.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+from ..errors import ParameterError
+
+__all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "SILICON", "AIR", "WATER"]
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic material.
+
+    Parameters
+    ----------
+    name : str
+        Label used in reports.
+    youngs_modulus : float
+        Young's modulus E [Pa], > 0.
+    poisson_ratio : float
+        Poisson's ratio nu [-], in (-1, 0.5).
+    density : float
+        Mass density rho [kg/m^3], >= 0 (used by gravity).
+    thermal_conductivity : float
+        Thermal conductivity k [W/(m K)], >= 0.
+    specific_heat : float
+        Specific heat capacity c [J/(kg K)], >= 0 (0 = not given; transient heat transfer needs
+        it, together with ``density``).
+    glass_transition : float or None
+        Glass-transition temperature T_g [deg C], finite; None if unknown. Design problems
+        bound crease temperatures by a multiple of the crease material's T_g.
+    """
+
+    name: str
+    youngs_modulus: float
+    poisson_ratio: float = 0.3
+    density: float = 0.0
+    thermal_conductivity: float = 0.0
+    specific_heat: float = 0.0
+    glass_transition: float | None = None
+
+    def __post_init__(self):
+        checks = {
+            "youngs_modulus": (self.youngs_modulus, lambda v: v > 0, "> 0 Pa"),
+            "poisson_ratio": (self.poisson_ratio, lambda v: -1 < v < 0.5, "in (-1, 0.5)"),
+            "density": (self.density, lambda v: v >= 0, ">= 0 kg/m^3"),
+            "thermal_conductivity": (self.thermal_conductivity, lambda v: v >= 0, ">= 0 W/(m K)"),
+            "specific_heat": (self.specific_heat, lambda v: v >= 0, ">= 0 J/(kg K)"),
+        }
+        for field, (value, ok, allowed) in checks.items():
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and ok(value)):
+                raise ParameterError(
+                    f"Material {self.name!r}: {field} = {value!r} is invalid; it must be {allowed}.")
+        tg = self.glass_transition
+        if tg is not None and not (isinstance(tg, (int, float)) and math.isfinite(tg)):
+            raise ParameterError(f"Material {self.name!r}: glass_transition = {tg!r} is invalid; "
+                                 "give T_g in deg C as a finite number, or None if unknown.")
+
+    def to_dict(self) -> dict:
+        """Plain-dict view for result metadata."""
+        return asdict(self)
+
+
+#: Volumetric heat capacity rho c of SU-8 in the reference transient example [J/(m^3 K)]
+#: (04/Example01: ``creaseThermalCapacity = panelThermalCapacity = 2e6 / 1200``; digest D8).
+_SU8_RHO_C = 2e6
+
+#: SU-8 epoxy photoresist. E = 2 GPa, nu = 0.3, rho = 1200 kg/m^3 and k = 0.3 W/(m K) as in the
+#: reference examples (Zhu & Filipov 2021, Example01-04 and the gripper); c = 2e6/1200 =
+#: 1666.7 J/(kg K) from the reference transient example (dynamics digest D8). T_g = 210 deg C: the
+#: paper bounds the gripper's crease temperature by 1.2 T_g of SU-8 (section 6.3) without printing
+#: T_g; 210 deg C is the manufacturer's value for fully cross-linked SU-8 (MicroChem SU-8 2000
+#: data sheet; "above 200 deg C" in the literature), giving the 252 deg C limit used throughout.
+SU8 = Material("SU-8", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
+               thermal_conductivity=0.3, specific_heat=_SU8_RHO_C / 1200.0,
+               glass_transition=210.0)
+
+#: SPR photoresist panels of the gripper; the reference models them with SU-8 properties
+#: (including rho and c).
+SPR = Material("SPR", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
+               thermal_conductivity=0.3, specific_heat=_SU8_RHO_C / 1200.0)
+
+#: Thick substrate / anchor panels (silicon wafer with oxide) as modelled by the reference examples:
+#: mechanically the same modulus as the panels (they are fully supported), k = 1.3 W/(m K);
+#: rho = 1200 kg/m^3 and c = 2e6/1200 J/(kg K) as the reference's transient example sets for
+#: all panels (``panelThermalCapacity``; the reference then reads the conductivity instead by a
+#: slip, dynamics digest D9.2; we use the specific heat).
+SUBSTRATE = Material("substrate", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
+                     thermal_conductivity=1.3, specific_heat=_SU8_RHO_C / 1200.0)
+
+#: Gold (bimorph layer). E = 79 GPa (the reference scripts use fractions of it, digest D8);
+#: nu = 0.44, rho = 19300 kg/m^3, c = 129 J/(kg K), k = 317 W/(m K) at 300 K (Incropera et al.,
+#: Fundamentals of Heat and Mass Transfer, 6th ed., Table A.1; nu: CRC Handbook).
+GOLD = Material("gold", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0,
+                thermal_conductivity=317.0, specific_heat=129.0)
+
+#: Single-crystal silicon. E = 150 GPa and rho = 2300 kg/m^3 as in the reference micro-mirror
+#: (02/Example04, digest D10.6); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),
+#: k = 148 W/(m K) at 300 K (Incropera et al., 6th ed., Table A.1).
+SILICON = Material("silicon", youngs_modulus=150e9, poisson_ratio=0.22, density=2300.0,
+                   thermal_conductivity=148.0, specific_heat=712.0)
+
+
+@dataclass(frozen=True)
+class Fluid:
+    """Environment fluid around the structure (the heat-loss layers of the thermal model).
+
+    Parameters
+    ----------
+    name : str
+    density : float
+        rho [kg/m^3], >= 0.
+    specific_heat : float
+        c [J/(kg K)], >= 0.
+    thermal_conductivity : float
+        k [W/(m K)], >= 0.
+    """
+
+    name: str
+    density: float
+    specific_heat: float
+    thermal_conductivity: float
+
+    def __post_init__(self):
+        for field in ("density", "specific_heat", "thermal_conductivity"):
+            value = getattr(self, field)
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and math.isfinite(value) and value >= 0):
+                raise ParameterError(f"Fluid {self.name!r}: {field} = {value!r} is invalid; it "
+                                     "must be a finite number >= 0.")
+
+    def environment(self) -> dict:
+        """Keyword arguments of :class:`~simulator.thermal.steady.ThermalParameters` for this fluid,
+        e.g. ``ThermalParameters(env_thickness=1e-3, **WATER.environment())``."""
+        return {"env_conductivity": self.thermal_conductivity, "env_density": self.density,
+                "env_specific_heat": self.specific_heat}
+
+    def to_dict(self) -> dict:
+        """Plain-dict view for result metadata."""
+        return asdict(self)
+
+
+#: Air as in the reference transient example (04/Example01: ``envDensity = 1.293``,
+#: ``envThermalCapacity = 700``, ``envThermalConduct = 0.026``; dynamics digest D8). Note that
+#: the textbook isobaric specific heat of air is 1007 J/(kg K) at 300 K (Incropera Table A.4).
+AIR = Fluid("air", density=1.293, specific_heat=700.0, thermal_conductivity=0.026)
+
+#: Water at 20 deg C: k = 0.6 W/(m K) as the reference's "water-like" environment (03/Example01);
+#: rho = 998 kg/m^3, c = 4182 J/(kg K) (Incropera et al., 6th ed., Table A.6).
+WATER = Fluid("water", density=998.0, specific_heat=4182.0, thermal_conductivity=0.6)

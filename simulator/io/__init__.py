@@ -1,0 +1,1 @@
+"""Input and output: FOLD files and the self-contained HTML result viewer."""

@@ -1,0 +1,279 @@
+"""FOLD reader: a FOLD 1.0-1.2 file (key frame) to a :class:`~simulator.geometry.pattern.Pattern`.
+
+Geometry comes from ``vertices_coords`` (2-D or 3-D, scaled to metres by ``frame_unit``) and
+``faces_vertices``; ``edges_vertices`` / ``edges_assignment`` / ``edges_foldAngle`` (or the
+legacy ``edges_foldAngles``) say which edges are creases. ``F`` and ``J`` edges are not
+creases: the faces on their two sides are merged into one panel (they must be coplanar).
+Crease and panel data come from the ``etorigami:`` namespace (see ``docs/fold-format.md``).
+Every malformed file raises one :class:`~simulator.errors.FoldFormatError` whose message
+names the field and the index.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import pathlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import FoldFormatError, PatternError
+from ...geometry.materials import Material
+from ...geometry.pattern import Pattern
+from ._common import NS, array_field as _array_field, fail as _fail, index_list as _index_list
+from ._common import is_number as _is_number
+from ._data import edge_fields, geometry_pattern, metadata_fields, panel_fields
+from ._merge import merge_flat_faces
+
+__all__ = ["read_fold", "fold_to_pattern", "load_fold_json", "FoldGeometry", "UNITS", "NS"]
+
+logger = logging.getLogger(__name__)
+
+#: Metres per FOLD ``frame_unit`` (``"unit"`` needs an explicit ``unit_scale``).
+UNITS = {"in": 0.0254, "pt": 0.0254 / 72, "m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6,
+         "nm": 1e-9}
+_LETTERS = "BMVFUCJ"
+
+
+@dataclass(frozen=True, eq=False)
+class FoldGeometry:
+    """A pattern read from FOLD and the maps from file indices to pattern ids.
+
+    Attributes
+    ----------
+    pattern : Pattern
+    vertex : (n_file_vertices,) pattern vertex of each file vertex, -1 if dropped (merged away)
+    face : (n_file_faces,) panel of each file face
+    edge : (n_file_edges,) pattern edge of each file edge, -1 for edges merged away
+    data : dict
+        The parsed key frame (all fields, for the model reader).
+    """
+
+    pattern: Pattern
+    vertex: np.ndarray
+    face: np.ndarray
+    edge: np.ndarray
+    data: dict
+
+
+def load_fold_json(path) -> dict:
+    """Parse a FOLD file into a dict; invalid JSON raises FoldFormatError with the line."""
+    path = pathlib.Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise FoldFormatError(f"cannot read FOLD file {str(path)!r}: {exc.strerror}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FoldFormatError(f"FOLD file {path.name}: invalid JSON at line {exc.lineno}, column "
+                              f"{exc.colno}: {exc.msg}") from None
+    if not isinstance(data, dict):
+        raise FoldFormatError(f"FOLD file {path.name}: the top level must be a JSON object "
+                              f"{{...}}, got a {type(data).__name__}.")
+    return data
+
+
+def read_fold(path, **kwargs) -> Pattern:
+    """Read a FOLD file into a :class:`~simulator.geometry.pattern.Pattern` (keywords: see
+    :func:`fold_to_pattern`)."""
+    return fold_to_pattern(load_fold_json(path), **kwargs)
+
+
+def fold_to_pattern(data: dict, **kwargs) -> Pattern:
+    """Pattern of a parsed FOLD dict.
+
+    Parameters
+    ----------
+    data : dict
+        The FOLD key frame (top-level object).
+    unit_scale : float, optional
+        Metres per coordinate unit; required (and only allowed) when ``frame_unit`` is
+        ``"unit"`` or absent.
+    crease_width, crease_thickness, panel_thickness : float, optional
+        Values [m] for files without ``edges_etorigami:width``, ``edges_etorigami:thickness``,
+        ``faces_etorigami:thickness``.
+    material : Material, optional
+        Panel and crease material of files without ``faces_etorigami:material`` (default SU-8).
+    """
+    return parse_fold(data, **kwargs).pattern
+
+
+def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickness=None,
+               panel_thickness=None, material: Material | None = None) -> FoldGeometry:
+    """Validate a FOLD dict and build the pattern and the index maps (:class:`FoldGeometry`)."""
+    if not isinstance(data, dict):
+        raise FoldFormatError(f"FOLD data must be a dict (JSON object), got {type(data).__name__}.")
+    coords = _coords(data) * _scale(data, unit_scale)
+    faces = _faces(data, len(coords))
+    edges, letters, angles = _edges(data, len(coords), faces)
+    groups, panels = merge_flat_faces(coords, faces, edges, letters)
+    vertex, used = _compact(len(coords), faces, panels)
+    panels = [tuple(int(vertex[v]) for v in p) for p in panels]
+    face = np.empty(len(faces), int)
+    for g, members in enumerate(groups):
+        face[members] = g
+    geo = geometry_pattern(coords[used], panels, face)
+    key = {tuple(e): i for i, e in enumerate(geo.edges.tolist())}
+    edge = np.array([key.get(tuple(sorted((vertex[a], vertex[b]))), -1) if vertex[a] >= 0
+                     and vertex[b] >= 0 else -1 for a, b in edges], int).reshape(-1)
+    per_edge = edge_fields(data, geo, edge, letters, angles, crease_width, crease_thickness)
+    per_panel = panel_fields(data, groups, panel_thickness, material)
+    try:
+        pattern = Pattern(geo.vertices, geo.panels, **per_edge, **per_panel,
+                          metadata=metadata_fields(data, vertex, face, edge, groups))
+    except PatternError as exc:
+        _fail("etorigami data", str(exc))
+    return FoldGeometry(pattern, vertex, face, edge, data)
+
+
+def _compact(n_vertices: int, faces: list, panels: list):
+    """Pattern id of every file vertex (-1 if in no panel) and the used file vertices."""
+    loose = np.setdiff1d(np.arange(n_vertices), np.concatenate(faces))
+    if len(loose):
+        logger.warning("FOLD vertices_coords: vertices %s belong to no face; dropped",
+                       loose.tolist())
+    vertex = np.full(n_vertices, -1)
+    used = np.unique(np.concatenate([np.asarray(p) for p in panels]))
+    vertex[used] = np.arange(len(used))
+    return vertex, used
+
+
+def _coords(data: dict) -> np.ndarray:
+    value = data.get("vertices_coords")
+    if value is None:
+        _fail("vertices_coords", "missing required field (vertex coordinates).")
+    if not isinstance(value, list) or len(value) < 3:
+        _fail("vertices_coords", "must be a list of at least 3 coordinate lists [x, y(, z)].")
+    out = np.zeros((len(value), 3))
+    for i, c in enumerate(value):
+        if not isinstance(c, list) or len(c) not in (2, 3):
+            _fail(f"vertices_coords[{i}]", f"{c!r} must be [x, y] or [x, y, z].")
+        if not all(_is_number(x) and math.isfinite(x) for x in c):
+            _fail(f"vertices_coords[{i}]", f"{c!r} has a non-numeric or non-finite coordinate.")
+        out[i, :len(c)] = c
+    return out
+
+
+def _scale(data: dict, unit_scale) -> float:
+    unit = data.get("frame_unit", "unit")
+    if unit == "unit":
+        if unit_scale is None:
+            default = "" if "frame_unit" in data else " (the FOLD default)"
+            _fail("frame_unit", f"is {unit!r}{default}; pass unit_scale=<metres per unit> or set "
+                  f"frame_unit to one of {', '.join(UNITS)}.")
+        if not (_is_number(unit_scale) and math.isfinite(unit_scale) and unit_scale > 0):
+            raise FoldFormatError(f"unit_scale = {unit_scale!r} must be a positive number of "
+                                  "metres per unit.")
+        return float(unit_scale)
+    if unit not in UNITS:
+        _fail("frame_unit", f"{unit!r} is not a FOLD unit; use unit, {', '.join(UNITS)}.")
+    if unit_scale is not None:
+        _fail("frame_unit", f"is {unit!r}, so unit_scale is not used; drop it (it applies to "
+              "frame_unit 'unit' only).")
+    return UNITS[unit]
+
+
+def _faces(data: dict, n_vertices: int) -> list:
+    value = data.get("faces_vertices")
+    if value is None:
+        _fail("faces_vertices", "missing required field (the panels).")
+    if not isinstance(value, list) or not value:
+        _fail("faces_vertices", "must be a non-empty list of vertex-index lists.")
+    faces = []
+    for i, f in enumerate(value):
+        f = _index_list(f, f"faces_vertices[{i}]", n_vertices, -3)
+        if len(set(f)) != len(f):
+            _fail(f"faces_vertices[{i}]", f"{f} repeats a vertex (slits are not supported); "
+                  "duplicate the vertex instead.")
+        faces.append(f)
+    return faces
+
+
+def _edges(data: dict, n_vertices: int, faces: list):
+    """(edges (E, 2) file edges, letters (E,), fold angles [deg] (E,)); checks edges vs faces."""
+    sides = {}
+    for f, poly in enumerate(faces):
+        for a, b in zip(poly, poly[1:] + poly[:1]):
+            sides.setdefault((min(a, b), max(a, b)), []).append(f)
+    for (a, b), users in sides.items():
+        if len(users) > 2:
+            _fail(f"faces_vertices[{users[2]}]", f"side {a}-{b} is shared by faces {users}; an "
+                  "edge may border at most two faces.")
+    value = data.get("edges_vertices")
+    if value is None:
+        for name in ("edges_assignment", "edges_foldAngle", "edges_foldAngles"):
+            if name in data:
+                _fail("edges_vertices", f"missing, but {name} is given; edge data needs the "
+                      "edges.")
+        edges = np.array(list(sides), int).reshape(-1, 2)
+        letters = ["U" if len(sides[tuple(e)]) == 2 else "B" for e in edges.tolist()]
+        return edges, letters, [None] * len(edges)
+    if not isinstance(value, list):
+        _fail("edges_vertices", "must be a list of [u, v] vertex pairs.")
+    edges = np.array([_index_list(e, f"edges_vertices[{i}]", n_vertices, 2)
+                      for i, e in enumerate(value)], int).reshape(-1, 2)
+    seen = {}
+    for i, (a, b) in enumerate(edges.tolist()):
+        key = (min(a, b), max(a, b))
+        if a == b:
+            _fail(f"edges_vertices[{i}]", f"[{a}, {b}] joins a vertex to itself.")
+        if key in seen:
+            _fail(f"edges_vertices[{i}]", f"[{a}, {b}] repeats edge {seen[key]}.")
+        if key not in sides:
+            _fail(f"edges_vertices[{i}]", f"[{a}, {b}] is not a side of any face "
+                  "(faces_vertices and edges_vertices disagree).")
+        seen[key] = i
+    missing = [k for k in sides if k not in seen]
+    if missing:
+        f = sides[missing[0]][0]
+        _fail(f"faces_vertices[{f}]", f"side {missing[0][0]}-{missing[0][1]} is not in "
+              "edges_vertices (faces_vertices and edges_vertices disagree).")
+    letters = _assignments(data, edges, sides)
+    angles = _fold_angles(data, letters)
+    return edges, letters, angles
+
+
+def _assignments(data, edges, sides) -> list:
+    raw = _array_field(data, "edges_assignment", len(edges), "edge")
+    out = []
+    for i, (a, b) in enumerate(edges.tolist()):
+        n_faces = len(sides[(min(a, b), max(a, b))])
+        if raw is None:
+            out.append("U" if n_faces == 2 else "B")
+            continue
+        x = raw[i]
+        if not isinstance(x, str) or x.upper() not in _LETTERS or len(x) != 1:
+            _fail(f"edges_assignment[{i}]", f"{x!r} is not a FOLD assignment; use one of "
+                  f"{', '.join(_LETTERS)}.")
+        x = x.upper()
+        if n_faces == 1 and x not in "BC":
+            _fail(f"edges_assignment[{i}]", f"{x!r} is a crease on the boundary (edge {a}-{b} "
+                  "borders one face); use B, or add the face on its other side.")
+        if n_faces == 2 and x == "B":
+            _fail(f"edges_assignment[{i}]", f"'B' but edge {a}-{b} borders two faces "
+                  f"{sides[(min(a, b), max(a, b))]}; use M, V, U or F.")
+        if n_faces == 2 and x == "C":
+            _fail(f"edges_assignment[{i}]", f"cut 'C' between two faces is not supported; give "
+                  "the two faces separate vertices along the cut.")
+        out.append(x)
+    return out
+
+
+def _fold_angles(data, letters) -> list:
+    name = "edges_foldAngle" if "edges_foldAngle" in data else "edges_foldAngles"
+    raw = _array_field(data, name, len(letters), "edge")
+    if raw is None:
+        return [None] * len(letters)
+    for i, (x, letter) in enumerate(zip(raw, letters)):
+        if x is None:
+            continue
+        if not (_is_number(x) and math.isfinite(x) and abs(x) <= 180):
+            _fail(f"{name}[{i}]", f"{x!r} must be a number of degrees in [-180, 180].")
+        if (letter == "M" and x > 0) or (letter == "V" and x < 0) or \
+                (letter in "BC" and x != 0):
+            _fail(f"{name}[{i}]", f"{x!r} deg does not match assignment {letter!r} (M <= 0, "
+                  "V >= 0, B and C 0).")
+    return raw

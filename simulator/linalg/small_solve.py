@@ -1,0 +1,158 @@
+"""Solves of small tangent systems ``K du = r`` (at most :data:`DENSE_LIMIT` unknowns).
+
+* :func:`solve_dense`: LAPACK directly (no ``scipy.linalg.solve`` wrapper): Cholesky when K is
+  positive definite, else LU with partial pivoting; :func:`simulator.solvers.newton._solve_linear`
+  uses it for every small system.
+* :class:`SparseCholesky`: the structure of a small tangent (fill-reducing order and pattern of
+  the Cholesky factor, from the element connectivity) for the compiled factorisation of
+  :mod:`simulator.linalg._cholesky_jit`, which reads the dense matrix of the fused kernel; bar-and-hinge
+  tangents are sparse enough (96 free DOFs of the gripper: ~1,100 non-zeros in L, ~11,000
+  multiply-adds against ~300,000 for dense Cholesky) for it to beat LAPACK's dense routines.
+
+Both return None where ``scipy.linalg.solve`` under warnings-as-errors would have failed:
+K singular (a zero pivot), ill-conditioned (1-norm reciprocal condition estimate below machine
+epsilon: LAPACK's ``gecon`` / ``pocon``, or the same estimator compiled) or a result that is
+not finite; Newton then reports a singular tangent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg.lapack as lapack
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ._cholesky_jit import cholesky_solve
+
+__all__ = ["as_dense", "solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT",
+           "SPARSE_MIN"]
+
+#: Up to this many free DOFs tangents are dense: evaluated by the fused kernel (compiled
+#: backend) and solved densely (faster for small meshes).
+DENSE_LIMIT = 150
+#: From this many free DOFs (and up to DENSE_LIMIT) the fused path factors sparsely
+#: (:class:`SparseCholesky`); smaller systems are solved by LAPACK, as fast there, and their
+#: runs do not compile the sparse factorisation.
+SPARSE_MIN = 64
+_EPS = float(np.finfo(float).eps)
+
+
+def as_dense(K) -> np.ndarray:
+    """``K`` as a dense array: a sparse matrix densified, an array as it is (not copied)."""
+    return K.toarray() if sp.issparse(K) else np.asarray(K)
+
+
+def solve_dense(K: np.ndarray, r: np.ndarray):
+    """Solve the dense symmetric K du = r: Cholesky (upper triangle) when K is positive
+    definite, else LU with partial pivoting (``scipy.linalg.solve``'s general path). None when
+    K is singular, ill-conditioned (reciprocal condition estimate below machine epsilon) or
+    the result is not finite."""
+    anorm = lapack.dlange("1", K)
+    c, info = lapack.dpotrf(K, lower=0, clean=0)
+    if info == 0:
+        rcond, _ = lapack.dpocon(c, anorm)
+        du, info = lapack.dpotrs(c, r)
+    else:
+        return _solve_lu(K, r, anorm)
+    if info != 0 or not rcond >= _EPS:
+        return None
+    return du if np.isfinite(du).all() else None
+
+
+def _solve_lu(K, r, anorm):
+    lu, piv, info = lapack.dgetrf(K)
+    if info != 0:
+        return None
+    rcond, _ = lapack.dgecon(lu, anorm)
+    du, info = lapack.dgetrs(lu, piv, r)
+    if info != 0 or not rcond >= _EPS:
+        return None
+    return du if np.isfinite(du).all() else None
+
+
+class SparseCholesky:
+    """Structure of the Cholesky factor of a symmetric matrix with a given non-zero pattern.
+
+    Parameters
+    ----------
+    rows, cols : int arrays
+        Positions (0 .. n-1) of the structural non-zeros (either triangle or both).
+    n : int
+        Matrix size.
+
+    The order is SuperLU's symmetric minimum degree (``MMD_AT_PLUS_A``); the pattern of L
+    (column j: rows >= j, diagonal first) follows from the elimination tree. :meth:`solve`
+    factors and solves a dense matrix that is zero outside the pattern.
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
+        self.n = n
+        A = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)).tocsc()
+        A = (abs(A) + abs(A.T) + sp.identity(n, format="csc") * (2.0 * n)).tocsc()
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+        self.order = np.argsort(lu.perm_c).astype(np.int64)
+        B = A[self.order][:, self.order].tocsc()
+        columns, children = [], [[] for _ in range(n)]
+        for j in range(n):                          # symbolic factorisation (etree)
+            below = B.indices[B.indptr[j]:B.indptr[j + 1]]
+            s = set(below[below > j].tolist())
+            for c in children[j]:
+                s.update(columns[c])
+            s.discard(j)
+            columns.append(s)
+            if s:
+                children[min(s)].append(j)
+        counts = np.array([1 + len(s) for s in columns], dtype=np.int64)
+        self.Lp = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.Li = np.concatenate([[j] + sorted(s) for j, s in enumerate(columns)]).astype(np.int64)
+        # for each row j: the columns k < j with L[j, k] != 0 and the position of L[j, k]
+        below = np.ones(len(self.Li), bool)
+        below[self.Lp[:-1]] = False
+        pos = np.flatnonzero(below)
+        col = np.repeat(np.arange(n), counts)[pos]
+        row = self.Li[pos]
+        by_row = np.lexsort((col, row))
+        self.rk, self.rpos = col[by_row].astype(np.int64), pos[by_row].astype(np.int64)
+        self.rp = np.searchsorted(row[by_row], np.arange(n + 1)).astype(np.int64)
+        self.flops = int(np.sum((counts - 1) ** 2))
+
+    @property
+    def nnz(self) -> int:
+        """Stored entries of L."""
+        return len(self.Li)
+
+    def solve(self, K: np.ndarray, r: np.ndarray):
+        """du with K du = r (K dense C-ordered, zero outside the pattern), or None as
+        :func:`solve_dense` would; K not positive definite: :func:`solve_dense`'s LU."""
+        kernel = cholesky_solve()
+        if kernel is None:                              # numba failed (logged)
+            return solve_dense(K, r)
+        n, nnz = self.n, len(self.Li)
+        buf = np.empty(nnz + 5 * n)                     # L values, du, work
+        du = buf[nnz:nnz + n]
+        rcond = kernel(K, np.ascontiguousarray(r, dtype=float), self.order, self.Lp, self.Li,
+                       buf[:nnz], self.rp, self.rk, self.rpos, du, buf[nnz + n:])
+        if rcond >= _EPS:                               # (NaN: du not finite)
+            return du
+        if rcond < 0:                                   # not positive definite
+            return _solve_lu(K, r, lapack.dlange("1", K))
+        return None
+
+
+def pattern_of(dof_sets, free_index: np.ndarray, diagonal=()) -> tuple:
+    """(rows, cols) of the free-DOF entries coupled by elements with global DOFs ``dof_sets``
+    (a list of (n_el, m) arrays) and by the ``diagonal`` DOFs."""
+    rows, cols = [], []
+    for d in dof_sets:
+        if len(d):
+            f = free_index[d]
+            m = f.shape[1]
+            rows.append(np.repeat(f, m, axis=1).ravel())
+            cols.append(np.tile(f, (1, m)).ravel())
+    f = free_index[np.asarray(diagonal, dtype=int)]
+    rows.append(f)
+    cols.append(f)
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    keep = (r >= 0) & (c >= 0)
+    return r[keep], c[keep]

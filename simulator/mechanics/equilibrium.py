@@ -1,0 +1,328 @@
+"""Total potential of a model: bars + rotational springs + contact + elastic supports.
+
+:class:`EquilibriumSystem` caches everything that depends only on the model
+(element DOFs, the CSR pattern of the free-DOF stiffness, contact candidates)
+and evaluates energies, internal forces and the tangent stiffness at a given
+displacement and set of spring rest angles.
+
+Two paths compute the same numbers (to rounding):
+
+* the numpy element kernels assembled by :mod:`simulator.mechanics.assembly` (the reference, and the
+  only path for models with more than :data:`DENSE_LIMIT` free DOFs);
+* on small models, when the compiled backend is in force (numba installed, ``ETORIGAMI_JIT``
+  not off, see :func:`simulator.mechanics.elements.springs.spring_kernel_backend`), one call of the fused
+  kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the tangent straight into a
+  dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with it)
+  and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first access,
+  so every consumer of ``K`` sees a CSR matrix whichever path ran.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+
+from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
+from ..linalg.small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, solve_dense
+from .contact_search import ContactSearch
+from ..thermal import _thermal_jit
+from .elements import _fused_jit, _springs_jit
+from .elements import _bars_jit
+from .elements.bars import bar_kernel
+from .elements.contact import contact_kernel
+from .elements.springs import fold_angle_derivatives, spring_kernel
+from ..model.mesh import BarType, SpringKind
+from ..model.model import Model, _AXES
+
+__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
+
+logger = logging.getLogger(__name__)
+
+#: Merge contact pairs into the cached stiffness pattern up to this many Hessian entries.
+MERGE_LIMIT = 200_000
+
+#: Energy components reported by every evaluation [J].
+ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_stretching",
+                "contact", "elastic_support")
+
+
+@dataclass(frozen=True, eq=False, init=False)
+class Evaluation:
+    """Internal energy, force and stiffness at one configuration.
+
+    ``Evaluation(f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None)``: ``K``
+    is the tangent as assembled, CSR, a dense ndarray (then ``to_csr(K)`` gives its CSR form,
+    e.g. :meth:`EquilibriumSystem.to_csr`) or None.
+
+    Attributes
+    ----------
+    f_int : (n_dof,) internal force = gradient of the internal energy [N]
+    K : (n_free, n_free) CSR tangent stiffness on the free DOFs [N/m], or None (property:
+        converted from a dense :attr:`tangent` on first access)
+    tangent : the tangent as assembled: the CSR ``K`` or a dense (n_free, n_free) ndarray
+        (fused kernel, small models), or None
+    energies : dict of the components in :data:`ENERGY_KINDS` [J]
+    n_contacts : number of active contact pairs (d <= d0)
+    contact_pairs : (n_contacts,) int array or None
+        The active pairs as indices into ``ContactSearch.static`` (fused kernel only).
+    """
+
+    f_int: np.ndarray
+    tangent: np.ndarray | sp.csr_matrix | None
+    energies: dict
+    n_contacts: int
+    to_csr: object
+    contact_pairs: np.ndarray | None
+
+    def __init__(self, f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None):
+        if isinstance(K, np.ndarray) and to_csr is None:
+            raise ValueError("Evaluation: a dense tangent needs to_csr (e.g. "
+                             "EquilibriumSystem.to_csr) to give K as CSR.")
+        set_ = object.__setattr__                     # frozen: set once, here
+        set_(self, "f_int", f_int)
+        set_(self, "tangent", K)
+        set_(self, "energies", energies)
+        set_(self, "n_contacts", n_contacts)
+        set_(self, "to_csr", to_csr)
+        set_(self, "contact_pairs", contact_pairs)
+
+    @cached_property
+    def K(self) -> sp.csr_matrix | None:
+        if isinstance(self.tangent, np.ndarray):
+            return self.to_csr(self.tangent)
+        return self.tangent
+
+
+class EquilibriumSystem:
+    """Cached assembly data for one :class:`Model`."""
+
+    def __init__(self, model: Model):
+        mesh = model.mesh
+        self.model = model
+        self.n_dof = mesh.n_dof
+        self.free_index = model.free_index
+        self.free = np.flatnonzero(self.free_index >= 0)
+        X = mesh.nodes
+        self.size = float(np.max(np.ptp(X, axis=0))) if len(X) else 0.0   # model size [m]
+        self.bar_dofs = element_dofs(mesh.bars)
+        self.spr_dofs = element_dofs(mesh.springs)
+        self.bar_dX = X[mesh.bars[:, 1]] - X[mesh.bars[:, 0]]
+        self.bar_L0 = mesh.bar_length
+        self.bar_EA = model.properties.bar_axial_stiffness
+        self.spr_k = model.properties.spring_stiffness
+        self.bar_is_panel = np.isin(mesh.bar_type, (BarType.PANEL_EDGE, BarType.SPOKE))
+        self.spr_is_panel = mesh.spring_kind == SpringKind.PANEL
+        el = model.supports.elastic
+        self.elastic_dofs = np.array([3 * n + _AXES[d] for n, d, _ in el], dtype=int)
+        self.elastic_k = np.array([k for _, _, k in el], dtype=float)
+        self.contact = None if model.contact is None else ContactSearch(mesh, model.contact)
+        self.max_step = None if model.contact is None else model.contact.max_step
+        # Small meshes: all admissible contact pairs join the cached pattern (zero when inactive),
+        # which is cheaper than assembling and adding a second sparse matrix per iteration.
+        static = None if self.contact is None else self.contact.static_conn
+        # Small models: all of them, so that the pattern holds every entry of a dense tangent.
+        small = len(self.free) <= DENSE_LIMIT
+        self.contact_in_pattern = static is not None and (small or 144 * len(static) <= MERGE_LIMIT)
+        self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
+        self.spr_kind = self.spr_is_panel.astype(int)
+        self._fused = self._fused_data() if small and (self.contact is None
+                                                       or self.contact_in_pattern) else None
+        n_pairs = 0 if static is None else len(static)
+        self._chol = None, np.zeros(n_pairs, bool)     # sparse Cholesky structure, pairs in it
+
+    @property
+    def n_free(self) -> int:
+        """Number of free DOFs."""
+        return len(self.free)
+
+    @cached_property
+    def pattern(self) -> StiffnessPattern:
+        """CSR pattern of the free-DOF tangent (built on first use: the fused path needs it
+        only when an Evaluation's ``K`` is asked for)."""
+        families = [self.bar_dofs, self.spr_dofs]
+        if self.contact_in_pattern:
+            families.append(element_dofs(self.contact.static_conn))
+        return StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
+
+    @property
+    def uses_fused(self) -> bool:
+        """Whether :meth:`evaluate` runs the fused compiled kernel (small model, compiled
+        backend in force, compilation not failed); it then gives a dense ``tangent``."""
+        return (self._fused is not None and _springs_jit.compiled_backend()
+                and not _fused_jit.broken)
+
+    def to_csr(self, D: np.ndarray) -> sp.csr_matrix:
+        """The dense free-DOF tangent ``D`` of the fused kernel as CSR in :attr:`pattern`."""
+        return self.pattern.from_dense(D)
+
+    def _fused_data(self) -> tuple:
+        """Arguments of the fused kernel that depend only on the model (writeable copies, int64 /
+        float64, C-contiguous: its one compiled signature), in its order; the per-call ones are
+        filled in by :meth:`_evaluate_fused`."""
+        mesh, i8 = self.model.mesh, np.int64
+
+        def c(a, dtype=float):
+            return np.array(a, dtype=dtype, order="C")
+        if self.contact is None:
+            pairs = (np.zeros(0, i8), np.zeros(0, i8), np.zeros(0), np.zeros((0, 3), i8), 0.0)
+        else:
+            p, t = self.contact.static
+            pairs = (c(self.contact.points[p], i8), c(t, i8), c(self.contact.point_d0[p]),
+                     c(self.contact.tri, i8), float(self.model.contact.stiffness))
+        return (mesh.nodes, (c(mesh.bars, i8), c(self.bar_dX), c(self.bar_L0), c(self.bar_EA),
+                 c(self.bar_kind, i8), c(mesh.springs, i8), c(self.spr_k)),
+                (c(self.spr_kind, i8), c(self.free_index, i8), c(self.elastic_dofs, i8),
+                 c(self.elastic_k)) + pairs)
+
+    def _evaluate_fused(self, u, spring_rest, hessian):
+        return self._fused_evaluator(spring_rest)(u, hessian)
+
+    def _fused_evaluator(self, spring_rest):
+        """u -> Evaluation by the fused kernel for fixed rest angles (arguments prepared once);
+        the numpy path if compilation failed (logged)."""
+        if _fused_jit.needs_compiling() and self.model.thermal is not None:
+            _thermal_jit.compile_in_background()       # first run: both compile side by side
+        kernel = _fused_jit.fused_kernel()
+        if kernel is None:
+            return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
+        nodes, first, rest = self._fused
+        spring_rest = np.ascontiguousarray(spring_rest, dtype=float)
+        n_dof, n_free, n_pairs, to_csr = self.n_dof, self.n_free, len(rest[4]), self.to_csr
+
+        def evaluate(u, hessian=True):
+            u = np.ascontiguousarray(u, dtype=float)
+            f, e = np.empty(n_dof), np.empty(6)
+            n = n_free if hessian else 0
+            K = np.empty((n, n))
+            active = np.empty(n_pairs, np.int64)
+            n_contacts = kernel(nodes + u, u, *first, spring_rest, *rest, hessian, f, K, e,
+                                active)
+            return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
+                              n_contacts, to_csr, active[:n_contacts])
+        return evaluate
+
+    def evaluator(self, spring_rest: np.ndarray):
+        """``evaluate(u, hessian=True)`` with the rest angles fixed: :meth:`evaluate` with less
+        overhead per call on the fused path (for Newton's loop)."""
+        if self.uses_fused:
+            return self._fused_evaluator(spring_rest)
+        return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
+
+    def solve_dense_tangent(self, ev: Evaluation, r: np.ndarray):
+        """Newton correction for an evaluation with a dense tangent (fused kernel): du
+        (n_free,) with ``ev.tangent du = r`` [m], or None if the tangent is singular (see
+        :mod:`simulator.linalg.small_solve`).
+
+        From :data:`SPARSE_MIN` rows the tangent is factored sparsely: the structure of its
+        Cholesky factor is that of the bars, springs, supports and the contact pairs active
+        so far (recomputed, rarely, when a pair becomes active for the first time); if that
+        factor needs more than a twentieth of dense Cholesky's ~n^3/3 multiply-adds, LAPACK's
+        dense routines are faster and solve instead, as they do below SPARSE_MIN."""
+        K = ev.tangent
+        if ev.contact_pairs is None or self.n_free < SPARSE_MIN:
+            return solve_dense(K, r)
+        chol = self._cholesky(ev.contact_pairs)
+        if 20 * chol.flops > self.n_free ** 3:
+            return solve_dense(K, r)
+        return chol.solve(K, r)
+
+    def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:
+        chol, covered = self._chol
+        if chol is None or (len(pairs) and not covered[pairs].all()):
+            covered = covered.copy()
+            covered[pairs] = True
+            families = [self.bar_dofs, self.spr_dofs]
+            if covered.any():
+                families.append(element_dofs(self.contact.static_conn[covered]))
+            rows, cols = pattern_of(families, self.free_index, self.elastic_dofs)
+            chol = SparseCholesky(rows, cols, self.n_free)
+            self._chol = chol, covered
+            logger.debug("sparse Cholesky structure for %d contact pairs: %d entries in L, "
+                         "%d multiply-adds", covered.sum(), chol.nnz, chol.flops)
+        return chol
+
+    def evaluate(self, u: np.ndarray, spring_rest: np.ndarray, hessian: bool = True) -> Evaluation:
+        """Energies, internal force and (optionally) free-DOF stiffness.
+
+        Parameters
+        ----------
+        u : (n_nodes, 3) displacements from the mesh nodes [m]
+        spring_rest : (n_springs,) spring rest angles [rad]
+
+        With the fused kernel (:attr:`uses_fused`) ``tangent`` is dense; ``K`` is CSR either way.
+        """
+        if self.uses_fused:
+            return self._evaluate_fused(u, spring_rest, hessian)
+        return self._evaluate_numpy(u, spring_rest, hessian)
+
+    def _evaluate_numpy(self, u, spring_rest, hessian=True) -> Evaluation:
+        """:meth:`evaluate` with the element kernels of :mod:`simulator.mechanics.elements`: element
+        Hessian arrays scattered into the cached pattern (the path of models outside the fused
+        kernel; bars and springs compiled with the "numba" backend, else numpy)."""
+        mesh = self.model.mesh
+        x = mesh.nodes + u
+        du = u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
+        bars = _bars_jit.bar_kernel_jit if _bars_jit.use_compiled() else bar_kernel
+        eb, gb, hb = bars(self.bar_dX, du, self.bar_L0, self.bar_EA, hessian)
+        es, gs, hs = spring_kernel(x[mesh.springs], self.spr_k, spring_rest, hessian)
+        f = assemble_vector(self.n_dof, self.bar_dofs, gb) \
+            + assemble_vector(self.n_dof, self.spr_dofs, gs)
+        u_el = u.ravel()[self.elastic_dofs]
+        f[self.elastic_dofs] += self.elastic_k * u_el
+        e_bar = np.bincount(self.bar_kind, eb, minlength=2)
+        e_spr = np.bincount(self.spr_kind, es, minlength=2)
+        energies = {"crease_bending": float(e_spr[0]), "panel_bending": float(e_spr[1]),
+                    "panel_stretching": float(e_bar[1]), "crease_stretching": float(e_bar[0]),
+                    "contact": 0.0,
+                    "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2))}
+        families = [hb, hs]
+        subsets = None
+        extra = None
+        n_contacts = 0
+        if self.contact is not None:
+            if self.contact_in_pattern:        # only the active pairs' entries are scattered
+                families.append(np.zeros((0, 12, 12)))
+                subsets = {2: np.zeros(0, dtype=int)}
+            conn, d0, index = self.contact.candidates(x)
+            if len(conn):
+                ec, gc, hc = contact_kernel(x[conn], d0, self.model.contact.stiffness)
+                active = np.flatnonzero(ec > 0)
+                n_contacts = len(active)
+                if n_contacts:
+                    f += assemble_vector(self.n_dof, element_dofs(conn[active]), gc[active])
+                    energies["contact"] = float(ec[active].sum())
+                    if subsets is not None:
+                        families[2], subsets[2] = hc[active], index[active]
+                    elif hessian:
+                        extra = assemble_matrix(element_dofs(conn[active]), hc[active],
+                                                self.free_index, self.n_free)
+        K = None
+        if hessian:
+            K = self.pattern.matrix(families + [self.elastic_k], subsets)
+            if extra is not None:
+                K = K + extra
+        return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)
+
+    def material_stiffness(self, u: np.ndarray) -> sp.csr_matrix:
+        """Free-DOF stiffness without stress (geometric) terms and contact [N/m].
+
+        ``sum EA L0 g g^T`` over bars (g = d strain / d x) and ``sum k grad(theta) grad(theta)^T``
+        over springs, plus elastic supports, at displacements ``u`` (n_nodes, 3) [m]. It is
+        positive semi-definite and annihilates the rigid-body velocities of the current
+        configuration, which makes it the matrix of stiffness-proportional damping.
+        """
+        mesh = self.model.mesh
+        dx = self.bar_dX + u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
+        g = np.concatenate([-dx, dx], axis=1) / (self.bar_L0**2)[:, None]
+        hb = (self.bar_EA * self.bar_L0)[:, None, None] * (g[:, :, None] * g[:, None, :])
+        _, gs, _ = fold_angle_derivatives((mesh.nodes + u)[mesh.springs], hessian=False)
+        hs = self.spr_k[:, None, None] * (gs[:, :, None] * gs[:, None, :])
+        families, subsets = [hb, hs], None
+        if self.contact_in_pattern:
+            families.append(np.zeros((0, 12, 12)))
+            subsets = {2: np.zeros(0, dtype=int)}
+        return self.pattern.matrix(families + [self.elastic_k], subsets)

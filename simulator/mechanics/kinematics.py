@@ -1,0 +1,79 @@
+"""Geometric measures of a deformed mesh: panel normals, crease fold angles and rotations.
+
+Two measures of how far a crease has folded, both signed (> 0 towards +z) and 0 when flat:
+
+* :func:`fold_angles`, the **fold angle**: the rotation of one panel relative to the other
+  (panel-to-panel, from the panels' mean planes). It is what one sees and what the reference
+  scripts measure between panel edges.
+* :func:`crease_rotations`, the **crease rotation**: the rotation taken up by the crease itself,
+  the sum over its fold lines (edge line 1, centre line, edge line 2) of their rotations from flat.
+  It is the reference implementation's measure of a crease and what the bimorph drives (the
+  rest angles of the fold lines add up to the crease's rest-angle change).
+
+They agree when the panels stay flat; when panels bend (the crane, up to about 8 deg) the fold
+angle also contains the panels' bending near the crease.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .elements.springs import fold_angle
+from ..model.mesh import BarHingeMesh
+from ..geometry.polygons import unit_normals
+
+__all__ = ["panel_normals", "fold_angles", "crease_rotations"]
+
+#: Columns of ``BarHingeMesh.crease_springs`` on the crease's fold lines: edge1, edge2 and the
+#: two halves (A-Ctr, B-Ctr) of the centre line; the diagonals are not fold lines.
+_EDGE_LINES, _CENTRE_LINE = [0, 1], [4, 5]
+
+
+def panel_normals(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
+    """Unit normals (P, 3) of the shrunk panels at positions x (n, 3), by Newell's method.
+
+    Orientation follows the panel's corner order; the fans run from the panel's centre node.
+    """
+    s = mesh.panel_corner_start
+    return unit_normals(x[:s[-1]], np.diff(s), x[mesh.panel_center])
+
+
+def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
+    """Signed fold angle [rad] of every crease (crease-row order) at positions x (n, 3).
+
+    The fold angle is the relative rotation of the two panels of a crease about the
+    crease line, 0 when they are coplanar as in the flat reference and positive when
+    the panels fold towards +z (the side a positive rest-angle change folds to).
+    """
+    ref = panel_normals(mesh, mesh.nodes)
+    cur = panel_normals(mesh, x)
+    p1, p2 = mesh.crease_panels.T
+    # orient the first panel's normal to +z in the reference and the second one consistently
+    # with it across the crease (the shared edge run in opposite directions); for a flat
+    # reference both then point to +z, and a start shape folded past 90 deg keeps its sign
+    end = mesh.pattern.corner_vertices[mesh.crease_edge_bars]
+    s1 = np.where(ref[p1, 2] < 0, -1.0, 1.0)
+    s2 = s1 * np.where(end[:, 0] != end[:, 1], 1.0, -1.0)
+    n1, n2 = cur[p1] * s1[:, None], cur[p2] * s2[:, None]
+    n1_ref = ref[p1] * s1[:, None]
+    n11, n12 = mesh.crease_nodes[:, 0], mesh.crease_nodes[:, 1]
+    X = mesh.nodes
+    d = X[mesh.panel_center[p2]] - X[mesh.panel_center[p1]]
+    e_ref = np.cross(d, n1_ref)
+    sign = np.sign(np.einsum("ij,ij->i", X[n12] - X[n11], e_ref))
+    axis = (x[n12] - x[n11]) * sign[:, None]
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), axis), np.einsum("ij,ij->i", n1, n2))
+
+
+def crease_rotations(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
+    """Signed rotation [rad] of every crease (crease-row order) at positions x (n, 3).
+
+    The sum over the crease's three fold lines of their rotations from flat, ``theta - pi`` of
+    their springs (> 0 towards +z, as the rest-angle change); the centre line is two springs
+    (A-Ctr, B-Ctr) and counts with their mean. Equals :func:`fold_angles` while the panels stay
+    flat; see the module docstring.
+    """
+    springs = mesh.springs[mesh.crease_springs[:, _EDGE_LINES + _CENTRE_LINE]]     # (C, 4, 4)
+    rot = fold_angle(x[springs.reshape(-1, 4)]).reshape(-1, 4) - np.pi
+    return rot[:, 0] + rot[:, 1] + 0.5 * (rot[:, 2] + rot[:, 3])

@@ -1,0 +1,111 @@
+"""Timoshenko bi-material strip: curvature of a heated bimorph crease (digest 6.7-6.8).
+
+A crease made of two bonded layers (moduli E1, E2, thicknesses t1, t2) whose thermal
+expansion coefficients differ by ``delta_alpha`` bends with curvature (Timoshenko 1925)
+
+    kappa = 6 delta_alpha dT (1 + m)^2 / (h [3 (1 + m)^2 + (1 + m n)(m^2 + 1/(m n))]),
+
+with m = t1/t2, n = E1/E2, h = t1 + t2. The formula is invariant under swapping the
+layers (m, n) -> (1/m, 1/n). Across a crease of width W the rotation is kappa W; its sign
+follows ``delta_alpha`` (positive folds towards +z with the mesher's polarity).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
+
+
+def timoshenko_curvature(delta_alpha, dT, E1, t1, E2, t2):
+    """Curvature [1/m] of a bimorph for an expansion mismatch delta_alpha [1/K] and a
+    temperature rise dT [K]; layer moduli E1, E2 [Pa] and thicknesses t1, t2 [m].
+    All arguments broadcast."""
+    m = np.asarray(t1, float) / t2
+    n = np.asarray(E1, float) / E2
+    h = np.asarray(t1, float) + t2
+    return 6 * np.asarray(delta_alpha) * dT * (1 + m) ** 2 / (
+        h * (3 * (1 + m) ** 2 + (1 + m * n) * (m**2 + 1 / (m * n))))
+
+
+@dataclass(frozen=True)
+class Bimorph:
+    """The two actuator layers of a crease (e.g. gold on SU-8).
+
+    Parameters
+    ----------
+    E1, t1 : float
+        Modulus [Pa] and thickness [m] of layer 1 (gold in the paper's devices).
+    E2, t2 : float
+        Modulus [Pa] and thickness [m] of layer 2 (SU-8).
+    """
+
+    E1: float
+    t1: float
+    E2: float
+    t2: float
+
+    def __post_init__(self):
+        for name in ("E1", "t1", "E2", "t2"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ParameterError(f"Bimorph.{name} = {v!r} must be positive and finite (SI).")
+
+    def curvature(self, delta_alpha, dT):
+        """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""
+        return timoshenko_curvature(delta_alpha, dT, self.E1, self.t1, self.E2, self.t2)
+
+    def to_dict(self) -> dict:
+        return {"E1 [Pa]": self.E1, "t1 [m]": self.t1, "E2 [Pa]": self.E2, "t2 [m]": self.t2}
+
+
+@dataclass(frozen=True)
+class Actuators:
+    """Which creases are bimorph actuators, and how they bend.
+
+    Parameters
+    ----------
+    bimorph : Bimorph
+        Layer data shared by all actuated creases (as in the reference).
+    delta_alpha : mapping {crease id: delta_alpha [1/K]}
+        Signed expansion mismatch of each actuated crease (alpha_SU8 - alpha_Au = 38e-6 /K in
+        the paper; negative values fold the other way). Unlisted creases are passive.
+    """
+
+    bimorph: Bimorph
+    delta_alpha: Mapping = field(default_factory=dict)
+
+    def __post_init__(self):
+        for c, v in dict(self.delta_alpha).items():
+            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
+                raise ParameterError(f"Actuators: delta_alpha of crease {c} is {v!r}; give a "
+                                     "finite value in 1/K.")
+
+    def delta_alpha_array(self, mesh) -> np.ndarray:
+        """(C,) expansion mismatch per crease row of a mesh (0 for passive creases)."""
+        out = np.zeros(mesh.n_creases)
+        for c, v in dict(self.delta_alpha).items():
+            out[mesh.crease_row_of(c)] = float(v)
+        return out
+
+    def rotation_per_kelvin(self, mesh) -> np.ndarray:
+        """(C,) rest-angle change per kelvin of crease temperature rise [rad/K]: kappa/dT x W."""
+        width = mesh.pattern.crease_width[mesh.crease_ids]
+        return self.bimorph.curvature(self.delta_alpha_array(mesh), 1.0) * width
+
+    def to_dict(self) -> dict:
+        return {"bimorph": self.bimorph.to_dict(),
+                "delta_alpha [1/K]": {str(k): float(v) for k, v in dict(self.delta_alpha).items()}}
+
+
+def crease_temperature_weights() -> np.ndarray:
+    """Weights of the 7 crease nodes (N11, N12, N21, N22, A, B, Ctr) in the crease temperature
+    used for actuation (digest 6.7): half the mean of the 3 centre-line nodes plus half the
+    mean of the 4 edge nodes."""
+    return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 6, 1 / 6, 1 / 6])

@@ -1,0 +1,376 @@
+"""Path following through limit points: arc-length (MGDCM) and displacement control.
+
+Load control (:func:`~simulator.solvers.newton.follow_path`) prescribes the load factor and fails where
+the path turns back (a limit point: the tangent becomes singular). Here the load factor lambda is
+an unknown. A *path* gives the residual ``r(u, lambda) = f_ext - f_int`` on the free DOFs, the
+tangent ``K = -dr/du`` and the load derivative ``q = dr/dlambda`` (:class:`LoadPath`: dead loads
+``f0 + lambda P`` and spring rest angles ``rest0 + lambda R``; heating paths add temperatures).
+Paths and the corrector shared by both methods are in :mod:`simulator.solvers.load_path`.
+
+:func:`mgdcm` is the modified generalized displacement control method (digest D1):
+
+* predictor: ``u_hat = K^-1 q``; the load step ``dlambda = sig ds |u_hat_1| / |u_hat_i|`` keeps
+  the predictor's displacement norm at ``ds |u_hat_1|`` (``ds`` = arc length, the first load
+  factor increment); ``sig`` flips whenever two successive tangents point into opposite
+  half-spaces (``u_hat_{i-1} . u_hat_i < 0``), which is how limit points are passed;
+* corrector: Newton on (u, lambda) with the correction orthogonal to the predictor,
+  ``dlambda = -(u_hat . K^-1 r) / (u_hat . K^-1 q)``;
+* adaptive increments: the arc length doubles after an increment that converged in at most
+  :data:`FAST_ITERATIONS` corrections (up to ``max_arc_length``) and halves after a slow one
+  or a failure.
+
+Unlike the reference (digest D9.11): convergence uses the residual test of
+:class:`~simulator.solvers.newton.NewtonOptions`, a failed increment is retried with half the arc
+length, the arc length has a maximum, and a path can end exactly at a target load factor or a
+target displacement (the last increment is then solved with lambda, or the displacement, fixed).
+
+:func:`displacement_control` prescribes ``c . u`` (a DOF or a node's displacement along a
+direction) in equal increments with the load factor unknown (digest D2, but with the increment
+prescribed rather than derived from ``lambdaBar``, D9.12). Every accepted point carries the
+inertia of its tangent (:mod:`simulator.solvers.stability`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from ..errors import ParameterError
+from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
+                        _tangent)
+from .newton import NewtonOptions
+from .path_trace import ContinuationResult, CriticalPoint, PathTrace
+
+__all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
+           "displacement_control"]
+
+logger = logging.getLogger(__name__)
+
+#: Arc-length adaptation: double after increments converging in at most this many corrections
+#: (one more than the reference's 2: our residual test is tighter than its displacement test),
+#: halve after those needing at least :data:`SLOW_ITERATIONS`.
+FAST_ITERATIONS = 4
+SLOW_ITERATIONS = 13
+
+
+def _positive(name, value, allow_none=False):
+    if value is None and allow_none:
+        return
+    if isinstance(value, bool) or not (isinstance(value, (int, float, np.integer, np.floating))
+                                       and math.isfinite(value) and value > 0):
+        raise ParameterError(f"{name} = {value!r} must be a positive finite number.")
+
+
+def _monitor_vector(path, target_displacement):
+    """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
+    if target_displacement is None:
+        return None, None
+    c, value = target_displacement
+    c = np.asarray(c, float).ravel()
+    return c, float(value)
+
+
+# ---------------------------------------------------------------------------- the algorithms
+def _check_count(name, value):
+    if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value >= 1):
+        raise ParameterError(f"{name} = {value!r} must be a positive integer.")
+
+
+def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_increments: int = 100,
+          target_load_factor: float | None = None, target_displacement=None, monitor=None,
+          options: NewtonOptions = NewtonOptions(), adapt: bool = True,
+          max_arc_length: float | None = None, step_norm: float | None = None,
+          fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
+          until_stable: bool = False, direction=None, prior=None,
+          callback=None) -> ContinuationResult:
+    """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
+
+    Parameters
+    ----------
+    path : LoadPath (or an object with ``free``, ``system`` and ``at(u, lam)``)
+    u0 : (n_nodes, 3) start displacements [m], in equilibrium at ``lam0``
+    lam0 : float
+        Start load factor.
+    arc_length : float
+        Load-factor increment of the first step (the reference's ``lambdaBar``); every predictor
+        then moves the displacements by ``arc_length |K_0^-1 q_0|`` (times the adaptation).
+    max_increments : int
+        Accepted increments at most; without a target, the path ends there with success.
+    target_load_factor : float, optional
+        End where lambda reaches this value moving towards it (solved with lambda fixed).
+    target_displacement : (c, value), optional
+        End where ``c . u = value`` (c: (n_dof,) weights, value [m]).
+    monitor : (n_dof,) weights, optional
+        Displacement reported at critical points (default: ``c`` of the target displacement).
+    options : NewtonOptions
+        Corrector tolerances, iterations and cuts (a failed increment halves the arc length,
+        at most ``max_cuts`` times below ``arc_length``).
+    adapt : bool
+        Double the arc length after increments converging in at most ``fast_iterations``
+        corrections, halve it after those needing ``max(SLOW_ITERATIONS, 2 fast_iterations)``
+        or more.
+    max_arc_length : float, optional
+        Cap of the adapted arc length (default ``4 arc_length``).
+    step_norm : float, optional
+        Displacement norm of the first predictor [m] instead of ``arc_length |K_0^-1 q_0|``
+        (to restart near a limit point, where ``K_0^-1 q_0`` is huge); ``arc_length`` then only
+        scales the adaptation.
+    fast_iterations : int
+        See ``adapt`` (models whose Newton needs more iterations anyway raise it).
+    stability : bool
+        Compute the inertia of the tangent at every accepted point.
+    until_stable : bool
+        End (with success, message "stable again past the limit point") at the first stable
+        point after the load factor turned back, once it exceeds the load factor where it
+        turned: the snap is passed and load control can take over.
+    direction : (n_nodes, 3) array, optional
+        Displacement direction the path comes from (e.g. the last load-controlled increment):
+        the first predictor moves along it, whatever the sign of the load factor change (a
+        restart at or just past a limit point); default: towards ``target_load_factor``, else
+        increasing the load factor.
+    prior : (u, lam), optional
+        An equilibrium point before the start (e.g. an earlier load-controlled increment), so
+        that a restart at a limit point finds the turn there.
+    callback : callable, optional
+        ``callback(lam, u)`` after every accepted point; True stops (status "stopped").
+    """
+    _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
+                               fast_iterations, target_load_factor)
+    run = _ArcLengthRun(path, u0, lam0, arc_length=arc_length, max_arc_length=max_arc_length,
+                        target_load_factor=target_load_factor,
+                        target_displacement=target_displacement, monitor=monitor,
+                        options=options, adapt=adapt, step_norm=step_norm,
+                        fast_iterations=fast_iterations, stability=stability,
+                        until_stable=until_stable, direction=direction, prior=prior,
+                        callback=callback)
+    return run.trace_path(max_increments)
+
+
+def _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
+                               fast_iterations, target_load_factor) -> None:
+    """:class:`ParameterError` for a setting of :func:`mgdcm` out of range."""
+    _positive("arc_length", arc_length)
+    _positive("max_arc_length", max_arc_length, allow_none=True)
+    _positive("step_norm", step_norm, allow_none=True)
+    _check_count("max_increments", max_increments)
+    _check_count("fast_iterations", fast_iterations)
+    if target_load_factor is not None and not math.isfinite(target_load_factor):
+        raise ParameterError(f"target_load_factor = {target_load_factor!r} must be finite.")
+
+
+class _ArcLengthRun:
+    """One :func:`mgdcm` run (settings as there): the last accepted point ``(u, lam)`` with its
+    path evaluation, the arc length ``ds``, the sign of the load step, what is known about a
+    limit point passed, and the :class:`PathTrace` of the accepted points."""
+
+    def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
+                 target_displacement, monitor, options, adapt, step_norm, fast_iterations,
+                 stability, until_stable, direction, prior, callback):
+        self.path, self.options, self.arc_length = path, options, arc_length
+        self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
+        self.direction, self.callback, self.lam_t = direction, callback, target_load_factor
+        self.fast, self.slow = fast_iterations, max(SLOW_ITERATIONS, 2 * fast_iterations)
+        self.max_ds = 4 * arc_length if max_arc_length is None else max(max_arc_length,
+                                                                         arc_length)
+        self.min_ds = arc_length / 2 ** options.max_cuts
+        self.free, self.size = path.free, _size(path.system)
+        self.c_t, self.v_t = _monitor_vector(path, target_displacement)
+        self.u, self.lam = np.array(u0, float).reshape(-1, 3), float(lam0)
+        self.trace = PathTrace(path, self.c_t if monitor is None else
+                               np.asarray(monitor, float).ravel(), stability, self.u, self.lam,
+                               prior)
+        self.pt = _begin(path, self.u, self.lam)
+        self.sig = 1.0 if target_load_factor is None or target_load_factor >= self.lam else -1.0
+        self.ds, self.uhat_prev, self.norm1 = arc_length, None, None
+        self.sig0, self.peak, self.turned = self.sig, self.lam, False
+
+    def result(self, success: bool, status: str, message: str) -> ContinuationResult:
+        return self.trace.result(success, status, message, self.u, self.lam)
+
+    def trace_path(self, max_increments: int) -> ContinuationResult:
+        """Increments until the path ends or ``max_increments`` are accepted."""
+        while len(self.trace.history) < max_increments:
+            done = self.increment()
+            if done is not None:
+                return done
+        if self.lam_t is None and self.c_t is None:
+            return self.result(True, "converged", f"{max_increments} increments")
+        return self.result(False, "failed", f"target not reached in {max_increments} "
+                           f"increments (load factor {self.lam:.6g})")
+
+    def increment(self) -> ContinuationResult | None:
+        """Predict and correct one increment; accept it, or halve the arc length for a retry.
+        The result if the path ends here, else None."""
+        uhat, msg = _tangent(self.pt, self.lam)
+        if uhat is None:
+            return self.result(False, "failed", msg)
+        s, dlam = self.load_step(uhat)
+        end, dl, con = _predict(self.u, self.lam, dlam, uhat, self.free, self.lam_t, self.c_t,
+                                self.v_t)
+        ok, u1, lam1, pt1, its, res, msg = _correct(self.path, _flat(self.u, self.free,
+                                                                     dl * uhat),
+                                                    self.lam + dl, con, self.options, self.size)
+        self.trace.iterations += its
+        refused = self.refusal(dl, u1, lam1) if ok and not end else ""
+        if refused:
+            ok, msg = False, refused
+        if not ok:
+            return self.cut(msg)
+        return self.accept(s, uhat, u1, lam1, pt1, its, res, end)
+
+    def load_step(self, uhat: np.ndarray) -> tuple[float, float]:
+        """(sign, load-factor step) of the predictor along ``uhat = K^-1 q``: the sign flips
+        where successive tangents point into opposite half-spaces."""
+        if self.norm1 is None:
+            self.norm1 = float(np.linalg.norm(uhat)) if self.step_norm is None else \
+                self.step_norm / self.arc_length
+            if not np.any(uhat):
+                raise ParameterError("mgdcm: the reference load does not act on any free DOF "
+                                     "(K^-1 q = 0); load free nodes.")
+        if self.uhat_prev is not None:
+            s = self.sig * np.sign(self.uhat_prev @ uhat)
+        elif self.direction is not None:
+            s = np.sign(np.asarray(self.direction, float).ravel()[self.free] @ uhat) or self.sig
+        else:
+            s = self.sig
+        return s, s * self.ds * self.norm1 / float(np.linalg.norm(uhat))
+
+    def refusal(self, dl: float, u1: np.ndarray, lam1: float) -> str:
+        """Why a converged increment to ``(u1, lam1)`` is refused ("" if it is not): the
+        corrector jumped to another branch, or carried the point past the target."""
+        lam = self.lam
+        if (lam1 - lam) * dl < 0 and abs(lam1 - lam) > max(abs(dl), self.arc_length):
+            return (f"corrector reversed the load step ({dl:.3g} predicted, {lam1 - lam:.3g} "
+                    "found: a jump to another branch)")
+        if _passed(self.u, lam, u1, lam1, self.lam_t, self.c_t, self.v_t):
+            return "the corrector carried the point past the target"   # approach it
+        return ""
+
+    def cut(self, msg: str) -> ContinuationResult | None:
+        """Halve the arc length after a failed increment; the failed result below ``min_ds``."""
+        if self.ds / 2 < self.min_ds:
+            return self.result(False, "failed", f"gave up at load factor {self.lam:.6g} after "
+                               f"{self.trace.cuts} cuts (arc length {self.ds:.3g}): {msg}")
+        self.ds, self.trace.cuts = self.ds / 2, self.trace.cuts + 1
+        return None
+
+    def accept(self, s, uhat, u1, lam1, pt1, its, res, end) -> ContinuationResult | None:
+        """Take the converged point; the result if the path ends there (callback, target
+        reached, stable again), else adapt the arc length and evaluate the path there."""
+        self.u, self.lam, self.sig, self.uhat_prev = u1, lam1, s, uhat
+        self.trace.accept(u1, lam1, pt1, its, res)
+        if self.callback is not None and self.callback(lam1, u1):
+            return self.result(False, "stopped", f"stopped by callback at load factor "
+                               f"{lam1:.6g}")
+        if end:
+            return self.result(True, "converged", f"reached {end} in "
+                               f"{len(self.trace.history)} increments")
+        if self.stable_again(s):
+            return self.result(True, "converged", f"stable again past the limit point at "
+                               f"load factor {lam1:.6g}")
+        if self.adapt:
+            self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
+                max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
+        self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
+        return None
+
+    def stable_again(self, s) -> bool:
+        """Note whether the load factor turned (sign ``s`` of the last step); True if
+        ``until_stable`` and the last point is stable beyond the load factor where it turned."""
+        self.turned = self.turned or s != self.sig0
+        self.peak = self.peak if self.turned else self.lam
+        return bool(self.until_stable and self.turned and (self.lam - self.peak) * self.sig0 > 0
+                    and (not self.trace.stab or self.trace.stab[-1].stable))
+
+
+def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):
+    """Predictor of one increment: (what it ends at or "", its load step, its constraint)."""
+    if lam_t is not None and dlam * (lam_t - lam) > 0 and abs(dlam) >= abs(lam_t - lam):
+        return f"load factor {lam_t:.6g}", lam_t - lam, _Constraint(None, lam_t)
+    if c_t is not None:
+        m0, rate = float(c_t @ u.ravel()), float(c_t[free] @ uhat)
+        if rate != 0 and (m0 - v_t) * (m0 + dlam * rate - v_t) <= 0:
+            return f"displacement {v_t:.6g} m", (v_t - m0) / rate, _Constraint(c_t[free], v_t)
+    v = u.ravel()[free]
+    return "", dlam, _Constraint(uhat, float(uhat @ v) + dlam * float(uhat @ uhat))
+
+
+def _passed(u, lam, u1, lam1, lam_t, c_t, v_t) -> bool:
+    """True if the step from (u, lam) to (u1, lam1) crossed the target load factor or
+    displacement (it is then retried shorter, so that a predictor lands on the target)."""
+    if lam_t is not None and (lam - lam_t) * (lam1 - lam_t) < 0:
+        return True
+    return c_t is not None and (c_t @ u.ravel() - v_t) * (c_t @ u1.ravel() - v_t) < 0
+
+
+def displacement_control(path, u0, lam0: float, c, target: float, *, increments: int = 50,
+                         options: NewtonOptions = NewtonOptions(), stability: bool = True,
+                         callback=None) -> ContinuationResult:
+    """Drive ``c . u`` linearly to ``target`` [m] with the load factor unknown (digest D2).
+
+    Parameters
+    ----------
+    path : LoadPath
+        Its reference load ``P`` is scaled by the unknown load factor (for a unit force along
+        the controlled direction the load factor is the reaction [N]).
+    u0 : (n_nodes, 3) start displacements [m], in equilibrium at ``lam0``
+    c : (n_dof,) weights of the controlled displacement (zero on supported DOFs)
+    target : float
+        Final value of ``c . u`` [m].
+    increments : int
+        Equal increments of the controlled displacement; a failed one is halved (at most
+        ``options.max_cuts`` times in a row).
+
+    Raises
+    ------
+    ParameterError
+        If ``c`` weighs supported DOFs or the reference load does not move ``c . u``.
+    """
+    _check_count("increments", increments)
+    free, size = path.free, _size(path.system)
+    c = np.asarray(c, float).ravel()
+    mask = np.ones(len(c), bool)
+    mask[free] = False
+    if np.any(c[mask] != 0) or not np.any(c):
+        raise ParameterError("displacement_control: the controlled displacement must combine "
+                             "free DOFs only (it weighs a supported DOF, or nothing).")
+    if not math.isfinite(target):
+        raise ParameterError(f"displacement_control: target = {target!r} must be finite [m].")
+    cf = c[free]
+    u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
+    pt = path.at(u, lam)
+    uhat, msg = _tangent(pt, lam)
+    if uhat is not None and abs(cf @ uhat) <= 1e-12 * np.linalg.norm(cf) * np.linalg.norm(uhat):
+        raise ParameterError("displacement_control: the reference load does not move the "
+                             "controlled displacement (c . K^-1 P = 0); it cannot be controlled "
+                             "by that load. Load the controlled node along its direction.")
+    trace = PathTrace(path, c, stability, u, lam)
+    start = float(c @ u.ravel())
+    t, dt, in_row = 0.0, 1.0 / increments, 0
+    while t < 1.0 - 1e-12:
+        t_try = min(1.0, t + dt)
+        uhat, msg = _tangent(pt, lam)
+        ok = uhat is not None and cf @ uhat != 0
+        if ok:
+            value = start + t_try * (target - start)
+            dl = (value - float(c @ u.ravel())) / float(cf @ uhat)
+            ok, u1, lam1, pt1, its, res, msg = _correct(
+                path, _flat(u, free, dl * uhat), lam + dl, _Constraint(cf, value), options, size)
+            trace.iterations += its
+        if not ok:
+            if in_row >= options.max_cuts or trace.cuts >= options.max_total_cuts:
+                return trace.result(False, "failed", f"gave up at controlled displacement "
+                                    f"{float(c @ u.ravel()):.6g} m after {in_row} cuts in a "
+                                    f"row: {msg or 'turning point of the controlled DOF'}",
+                                    u, lam)
+            dt, in_row, trace.cuts = dt / 2, in_row + 1, trace.cuts + 1
+            continue
+        t, u, lam, pt = t_try, u1, lam1, pt1
+        trace.accept(u, lam, pt, its, res)
+        dt = min(1.0 / increments, 2 * dt) if in_row == 0 else dt
+        in_row = 0
+        if callback is not None and callback(lam, u):
+            return trace.result(False, "stopped", "stopped by callback", u, lam)
+    return trace.result(True, "converged", f"reached displacement {target:.6g} m", u, lam)

@@ -1,0 +1,187 @@
+"""Load paths and the corrector that the path-following methods of :mod:`simulator.solvers.continuation`
+share.
+
+A *path* gives, at a point ``(u, lambda)`` (:class:`PathPoint`), the residual ``r(u, lambda) =
+f_ext - f_int`` on the free DOFs, the tangent ``K = -dr/du`` and the load derivative ``q =
+dr/dlambda``. :class:`LoadPath` is affine in the load factor (dead loads ``f0 + lambda P``,
+spring rest angles ``rest0 + lambda R``); heating paths (:mod:`simulator.steps.limit`) add
+temperatures. The corrector (:func:`_correct`) is Newton on ``(u, lambda)`` with one extra
+equation (:class:`_Constraint`): ``c . u = value`` or ``lambda = value``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from .newton import DENSE_LIMIT
+from .newton import _tangent as _assembled_tangent
+from ..linalg.small_solve import as_dense
+
+__all__ = ["LoadPath", "PathPoint"]
+
+
+@dataclass(frozen=True, eq=False)
+class PathPoint:
+    """Residual, tangent and load derivative at (u, lambda).
+
+    Attributes
+    ----------
+    r : (n_free,) residual f_ext - f_int [N]
+    K : (n_free, n_free) tangent stiffness [N/m], CSR or (small models) dense
+    q : (n_free,) dr/dlambda [N]
+    evaluation : Evaluation
+    temperature : (n_nodes,) node temperatures [deg C] or None
+    """
+
+    r: np.ndarray
+    K: object
+    q: np.ndarray
+    evaluation: object
+    temperature: np.ndarray | None = None
+
+
+class LoadPath:
+    """Affine loading in the load factor: ``f_ext = f0 + lambda P``, ``rest = rest0 + lambda R``.
+
+    Parameters
+    ----------
+    system : EquilibriumSystem or any object with ``free`` and ``evaluate(u, rest, hessian)``
+    f0, P : (n_dof,) dead load at lambda = 0 and reference load [N]
+    rest0 : (n_springs,) spring rest angles at lambda = 0 [rad]
+    R : (n_springs,) rest-angle change per unit lambda [rad], or None
+    """
+
+    def __init__(self, system, f0, P, rest0, R=None):
+        self.system = system
+        self.free = system.free
+        self.f0, self.P = np.asarray(f0, float), np.asarray(P, float)
+        self.rest0 = np.asarray(rest0, float)
+        self.R = None if R is None or not np.any(R) else np.asarray(R, float)
+
+    def rest(self, lam: float) -> np.ndarray:
+        return self.rest0 if self.R is None else self.rest0 + lam * self.R
+
+    def f_ext(self, lam: float) -> np.ndarray:
+        return self.f0 + lam * self.P
+
+    def temperature(self, u, lam):
+        return None
+
+    def at(self, u: np.ndarray, lam: float) -> PathPoint:
+        """Residual, tangent and load derivative at displacements ``u`` (n_nodes, 3)."""
+        rest = self.rest(lam)
+        ev = self.system.evaluate(u, rest)
+        q = self.P[self.free]
+        if self.R is not None:   # f_int is linear in the rest angles: the difference is exact
+            f1 = self.system.evaluate(u, rest + self.R, hessian=False).f_int
+            q = q - (f1 - ev.f_int)[self.free]
+        return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], _assembled_tangent(ev), q,
+                         ev)
+
+
+def _solve(K, B):
+    """Solve K X = B (B (n,) or (n, k)); None if K is exactly singular or X not finite.
+
+    No ill-conditioning check: near a limit point K is nearly singular by design, and the
+    bordered corrector combines the two solutions into a well-conditioned update.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
+        try:
+            if K.shape[0] <= DENSE_LIMIT:
+                lu = scipy.linalg.lu_factor(as_dense(K), check_finite=False)
+                X = scipy.linalg.lu_solve(lu, B, check_finite=False)
+            else:
+                X = spla.splu(K.tocsc()).solve(B)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError,
+                scipy.linalg.LinAlgWarning):
+            return None
+    return X if np.all(np.isfinite(X)) else None
+
+
+@dataclass
+class _Constraint:
+    """The extra equation of the bordered system: ``c . u_free = value`` or (c None)
+    ``lambda = value``."""
+
+    c: np.ndarray | None
+    value: float
+
+    def dlam(self, v, lam, uq, ur):
+        if self.c is None:
+            return self.value - lam
+        return (self.value - self.c @ v - self.c @ ur) / (self.c @ uq)
+
+
+def _size(system) -> float:
+    mesh = getattr(getattr(system, "model", None), "mesh", None)
+    nodes = mesh.nodes if mesh is not None else getattr(system, "nodes")
+    return float(np.max(np.ptp(nodes, axis=0)))
+
+
+def _correct(path, u, lam, constraint, options, size):
+    """Newton on (u, lambda) from a predicted point that satisfies ``constraint``.
+
+    Returns (success, u, lam, point, iterations, residual_norms, message).
+    """
+    free = path.free
+    u = u.copy().ravel()
+    res, ref, max_step = [], None, getattr(path.system, "max_step", None)
+    for it in range(options.max_iter + 1):
+        pt = path.at(u.reshape(-1, 3), lam)
+        rn = float(np.linalg.norm(pt.r))
+        res.append(rn)
+        if not math.isfinite(rn):
+            return False, u, lam, pt, it, res, "residual is not finite"
+        ref = rn if ref is None else ref
+        if options.criterion == "residual" and rn <= max(options.atol, options.rtol * ref):
+            return True, u.reshape(-1, 3), lam, pt, it, res, "converged"
+        if it == options.max_iter:
+            break
+        X = _solve(pt.K, np.column_stack([pt.q, pt.r]))
+        if X is None:
+            return False, u, lam, pt, it, res, "tangent stiffness is exactly singular"
+        dlam = constraint.dlam(u[free], lam, X[:, 0], X[:, 1])
+        du = dlam * X[:, 0] + X[:, 1]
+        if not math.isfinite(dlam):
+            return False, u, lam, pt, it, res, "constraint is degenerate (K^-1 q orthogonal to it)"
+        if max_step is not None and np.max(np.abs(du)) > max_step:
+            scale = max_step / np.max(np.abs(du))
+            du, dlam = du * scale, dlam * scale
+        u[free] += du
+        lam += dlam
+        dn = float(np.linalg.norm(du))
+        if options.criterion == "displacement" and dn <= max(options.atol, options.rtol * (
+                dn if it == 0 else ref)) or np.max(np.abs(du)) <= 1e-13 * size:
+            pt = path.at(u.reshape(-1, 3), lam)
+            return True, u.reshape(-1, 3), lam, pt, it + 1, res, "converged"
+    return False, u, lam, pt, options.max_iter, res, (
+        f"no convergence in {options.max_iter} iterations (last residual {res[-1]:.3g} N)")
+
+
+def _flat(u, free, dv):
+    """Displacements ``u`` (n_nodes, 3) plus ``dv`` on the free DOFs, as a new array."""
+    out = np.array(u, float).ravel()
+    out[free] += dv
+    return out.reshape(-1, 3)
+
+
+def _begin(path, u, lam):
+    """Let a path update per-increment data (staggered heating), then evaluate it."""
+    if hasattr(path, "begin_increment"):
+        path.begin_increment(u)
+    return path.at(u, lam)
+
+
+def _tangent(pt, lam):
+    """K^-1 q at a converged point, or a message if K is exactly singular."""
+    uhat = _solve(pt.K, pt.q)
+    if uhat is None:
+        return None, f"tangent stiffness is exactly singular at load factor {lam:.6g}"
+    return uhat, ""

@@ -1,0 +1,364 @@
+"""Newton-Raphson equilibrium and path following with step cutting.
+
+:func:`newton` solves ``f_int(u) = f_ext`` on the free DOFs for fixed rest angles.
+:func:`follow_path` drives a linear path in (external load, spring rest angles)
+from a start to an end over a number of increments, halving an increment that
+fails and growing back after successes. Failures are returned as data
+(``success``, ``status``, ``message``); :class:`~simulator.errors.ConvergenceError`
+is raised only when ``NewtonOptions.raise_on_failure`` is set.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
+from ..errors import ParameterError
+from ..linalg.linsolve import ND_LIMIT, PARDISO_LIMIT, nested_dissection_solve, pardiso_solve, refined
+from ..linalg.small_solve import DENSE_LIMIT, as_dense, solve_dense
+
+__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Newton-Raphson settings.
+
+    Parameters
+    ----------
+    criterion : {"residual", "displacement"}
+        "residual": stop when the 2-norm of the free-DOF force residual [N] is at most
+        ``max(atol, rtol * |r_0|)`` (the reference's self-fold / thermal meaning);
+        "displacement": stop when the 2-norm of the Newton correction [m] is at most
+        ``max(atol, rtol * |du_0|)`` (the reference's NR loading meaning).
+    atol : float
+        Absolute tolerance in N or m (reference examples: 1e-6 to 5e-7, loose for micro-scale
+        devices whose self-weight is ~1e-8 N; the default 1e-13 N is near the round-off floor).
+    rtol : float
+        Tolerance relative to the first residual / correction of the increment.
+    max_iter : int
+        Newton iterations per increment before it counts as failed.
+    max_cuts : int
+        How many times one increment may be halved before the path gives up.
+    max_total_cuts : int
+        Halvings allowed over a whole path (so a path that keeps failing and recovering
+        always ends, with status "failed").
+    raise_on_failure : bool
+        Raise :class:`~simulator.errors.ConvergenceError` instead of returning a failed result.
+    stall_rtol : float
+        Accept a Newton solve that fails to reach ``atol``/``rtol`` when its best iterate's
+        residual is at most ``stall_rtol`` times the norm of the external load (said in the
+        message). Contact makes the residual stall near 1e-12 N in some states (a point
+        whose closest feature of a triangle switches between face and edge); 1e-3 of the
+        self-weight is far below any physical effect. 0 disables; it never applies without
+        external loads.
+    reference_loop : bool
+        Emulate the reference implementation's loop (digest 7.3), for comparisons with its
+        outputs only: the stopping measure is taken *before* the update, so one more update
+        is applied after it drops below ``atol`` (``rtol`` is ignored); at most
+        ``max_iter - 1`` updates; a loop that ends above ``atol`` is still accepted (logged
+        as a warning, and said in the message). With the reference's loose tolerances
+        (5e-7 N against ~1e-8 N of self-weight) this takes one to a few updates per increment,
+        i.e. under-converged equilibria: keep it off for real work.
+
+    Whatever the criterion, an iteration whose correction is at round-off level
+    (below 1e-13 of the model size) also counts as converged.
+    """
+
+    criterion: str = "residual"
+    atol: float = 1e-13
+    rtol: float = 1e-10
+    max_iter: int = 30
+    max_cuts: int = 10
+    max_total_cuts: int = 60
+    raise_on_failure: bool = False
+    stall_rtol: float = 1e-3
+    reference_loop: bool = False
+
+    def __post_init__(self):
+        if self.criterion not in ("residual", "displacement"):
+            raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
+                                 "'displacement'.")
+        for name in ("atol", "rtol", "stall_rtol"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be finite and >= 0.")
+        if self.atol == 0 and self.rtol == 0:
+            raise ParameterError("NewtonOptions: atol and rtol cannot both be 0.")
+        for name in ("max_iter", "max_cuts", "max_total_cuts"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and v >= (1 if name == "max_iter" else 0)):
+                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be a non-negative integer "
+                                     "(max_iter >= 1).")
+
+    def to_dict(self) -> dict:
+        return dict(self._as_dict)           # a copy: asdict once (every simulation records it)
+
+    @cached_property
+    def _as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True, eq=False)
+class NewtonResult:
+    """Outcome of one Newton solve (``success``, ``status``, ``message`` as every result)."""
+
+    u: np.ndarray
+    success: bool
+    iterations: int
+    residual_norms: np.ndarray
+    correction_norms: np.ndarray
+    message: str
+    evaluation: Evaluation | None = None
+
+    @property
+    def status(self) -> str:
+        """'converged' or 'failed'."""
+        return "converged" if self.success else "failed"
+
+
+@dataclass(frozen=True, eq=False)
+class PathResult:
+    """Outcome of a path-following solve.
+
+    Attributes
+    ----------
+    success : bool
+        True if the path reached its end.
+    status : str
+        "converged", "failed" or "stopped".
+    message : str
+    u : (n_nodes, 3) final displacements (the last converged ones on failure)
+    t : float
+        Path parameter reached, in [0, 1].
+    iterations : int
+        Total Newton iterations.
+    cuts : int
+        Number of increment halvings.
+    history : list of (t, u, iterations) per accepted increment
+    residual_norms : list of arrays, residual history of each accepted increment
+    evaluation : Evaluation at the final state
+    """
+
+    success: bool
+    status: str
+    message: str
+    u: np.ndarray
+    t: float
+    iterations: int
+    cuts: int
+    history: list = field(default_factory=list)
+    residual_norms: list = field(default_factory=list)
+    evaluation: Evaluation | None = None
+
+
+def _solve_linear(K, r):
+    """Solve K du = r; returns None if K is singular or the result is not finite.
+
+    ``K`` is sparse or a dense array. Up to :data:`DENSE_LIMIT` rows it is solved densely by
+    LAPACK (:func:`~simulator.linalg.small_solve.solve_dense`). Larger ones use MKL PARDISO when it
+    is installed (:func:`~simulator.linalg.linsolve.pardiso_solve`, from
+    :data:`~simulator.linalg.linsolve.PARDISO_LIMIT` rows), else (or if it fails) SuperLU in
+    symmetric mode (diagonal pivots) in a fill-reducing order: from
+    :data:`~simulator.linalg.linsolve.ND_LIMIT` unknowns on, METIS nested dissection cached per
+    sparsity pattern (:func:`~simulator.linalg.linsolve.ordering_for`), below it (or if that fails)
+    SuperLU's symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
+    A solution that is not :func:`~simulator.linalg.linsolve.accurate` (diagonal pivots on an
+    indefinite tangent) gets iterative refinement with the same factors; if that fails too,
+    the solve falls back to partial pivoting with COLAMD.
+    """
+    if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
+        return solve_dense(as_dense(K), r)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            n = K.shape[0]
+            du = pardiso_solve(K, r) if n >= PARDISO_LIMIT else None
+            if du is None and n >= ND_LIMIT:
+                du = nested_dissection_solve(K, r)
+            if du is None:
+                Kc = K.tocsc()
+                lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                               options={"SymmetricMode": True})
+                du, ok = refined(K, lu.solve, r, lu.solve(r))
+                if not ok:
+                    du = spla.splu(Kc).solve(r)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
+            return None
+    return du if np.all(np.isfinite(du)) else None
+
+
+def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,
+           options: NewtonOptions = NewtonOptions()) -> NewtonResult:
+    """Solve ``f_int(u) = f_ext`` on the free DOFs from the start ``u0`` (n_nodes, 3).
+
+    Fixed DOFs keep their values from ``u0``. ``f_ext`` is the (n_dof,) external load [N].
+    """
+    if options.reference_loop:
+        return _reference_newton(system, u0, f_ext, spring_rest, options)
+    free = system.free
+    u = u0.copy().ravel()
+    size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
+    f_free = f_ext[free]
+    evaluate, solve = _operations(system, spring_rest)
+    res_norms, cor_norms = [], []
+    ref, best = None, (math.inf, None, None)
+    for it in range(options.max_iter + 1):
+        ev = evaluate(u.reshape(-1, 3))
+        r = f_free - ev.f_int[free]
+        rn = math.sqrt(r.dot(r))                   # = np.linalg.norm(r), less overhead
+        res_norms.append(rn)
+        if rn < best[0]:
+            best = (rn, u.copy(), ev)
+        if not math.isfinite(rn):
+            return _newton_result(u0, False, it, res_norms, cor_norms, "residual is not finite")
+        if options.criterion == "residual":
+            ref = rn if ref is None else ref
+            if rn <= max(options.atol, options.rtol * ref):
+                return _newton_result(u, True, it, res_norms, cor_norms, "converged", ev)
+        if it == options.max_iter:
+            break
+        du = solve(ev, r)
+        if du is None:
+            return _newton_result(u0, False, it, res_norms, cor_norms,
+                                  "tangent stiffness is singular (mechanism or unsupported body?)")
+        step = max(du.max(), -du.min())            # = max |du|
+        if system.max_step is not None and step > system.max_step:
+            du *= system.max_step / step
+            step = max(du.max(), -du.min())
+        dn = math.sqrt(du.dot(du))
+        cor_norms.append(dn)
+        u[free] += du
+        if options.criterion == "displacement":
+            ref = dn if ref is None else ref
+            if dn <= max(options.atol, options.rtol * ref):
+                ev = evaluate(u.reshape(-1, 3))
+                return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
+        if step <= 1e-13 * size:
+            ev = evaluate(u.reshape(-1, 3))
+            return _newton_result(u, True, it + 1, res_norms, cor_norms,
+                                  "converged (correction at round-off level)", ev)
+    stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
+    if best[0] <= stall:
+        return _newton_result(best[1], True, options.max_iter, res_norms, cor_norms,
+                              f"converged (residual stalled at {best[0]:.3g} N, at most "
+                              f"{options.stall_rtol:g} of the load)", best[2])
+    return _newton_result(u0, False, options.max_iter, res_norms, cor_norms,
+                          f"no convergence in {options.max_iter} iterations "
+                          f"(last residual {res_norms[-1]:.3g} N)")
+
+
+def _reference_newton(system, u0, f_ext, spring_rest, options):
+    """The reference's Newton loop (digest 7.3 / 7.4); see ``NewtonOptions.reference_loop``."""
+    free = system.free
+    u = u0.copy().ravel()
+    measure, res_norms, cor_norms, updates = math.inf, [], [], 0
+    while updates < options.max_iter - 1 and measure > options.atol:
+        ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+        r = (f_ext - ev.f_int)[free]
+        du = _solve_linear(_tangent(ev), r)
+        if du is None:
+            return _newton_result(u0, False, updates, res_norms, cor_norms,
+                                  "tangent stiffness is singular (mechanism or unsupported body?)")
+        u[free] += du
+        updates += 1
+        res_norms.append(float(np.linalg.norm(r)))
+        cor_norms.append(float(np.linalg.norm(du)))
+        measure = res_norms[-1] if options.criterion == "residual" else cor_norms[-1]
+        if not math.isfinite(measure):
+            return _newton_result(u0, False, updates, res_norms, cor_norms,
+                                  "residual is not finite")
+    ev = system.evaluate(u.reshape(-1, 3), spring_rest)
+    if measure <= options.atol:
+        message = f"reference loop: {updates} updates"
+    else:
+        message = (f"reference loop: accepted unconverged after {updates} updates "
+                   f"({options.criterion} {measure:.3g} > {options.atol:.3g})")
+        logger.warning(message)
+    return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
+
+
+def _operations(system, spring_rest):
+    """``evaluate(u)`` and ``solve(ev, r)`` for a system: an EquilibriumSystem's prepared
+    evaluator and, for the dense tangents of its fused kernel, its sparse / dense solve
+    (:meth:`~simulator.mechanics.equilibrium.EquilibriumSystem.solve_dense_tangent`); else ``evaluate``
+    and :func:`_solve_linear` (any object with the ``evaluate`` interface)."""
+    evaluator = getattr(system, "evaluator", None)
+    evaluate = evaluator(spring_rest) if evaluator is not None else \
+        (lambda u: system.evaluate(u, spring_rest))
+    dense = getattr(system, "solve_dense_tangent", None)
+
+    def solve(ev, r):
+        K = _tangent(ev)
+        if dense is not None and isinstance(K, np.ndarray):
+            return dense(ev, r)
+        return _solve_linear(K, r)
+    return evaluate, solve
+
+
+def _tangent(ev):
+    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
+    ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
+    return ev.tangent if isinstance(ev, Evaluation) else ev.K
+
+
+def _newton_result(u, converged, iterations, res, cor, message, ev=None):
+    return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), success=converged,
+                        iterations=iterations, residual_norms=np.array(res),
+                        correction_norms=np.array(cor), message=message, evaluation=ev)
+
+
+def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, f_end: np.ndarray,
+                rest_start: np.ndarray, rest_end: np.ndarray, increments: int,
+                options: NewtonOptions = NewtonOptions(), callback=None) -> PathResult:
+    """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
+
+    The path is split into ``increments`` equal increments. A failed increment is halved
+    (up to ``options.max_cuts`` times in a row); after a success the increment doubles
+    again up to its nominal size. ``callback(t, u)``, if given, is called after every
+    accepted increment and may return True to stop early (status "stopped").
+    """
+    if not (isinstance(increments, (int, np.integer)) and increments >= 1):
+        raise ParameterError(f"increments = {increments!r} must be a positive integer.")
+    nominal = 1.0 / increments
+    t, dt, u = 0.0, nominal, u0.copy()
+    cuts_in_row, total_cuts, total_iter = 0, 0, 0
+    history, residuals, last_ev = [], [], None
+    while t < 1.0 - 1e-12:
+        t_try = min(1.0, t + dt)
+        res = newton(system, u, f_start + t_try * (f_end - f_start),
+                     rest_start + t_try * (rest_end - rest_start), options)
+        total_iter += res.iterations
+        if not res.success:
+            if cuts_in_row >= options.max_cuts or total_cuts >= options.max_total_cuts:
+                msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts in a row, "
+                       f"{total_cuts} in all (increment {dt:.3g}): {res.message}")
+                logger.warning(msg)
+                return PathResult(False, "failed", msg, u, t, total_iter, total_cuts, history,
+                                  residuals, last_ev)
+            dt /= 2
+            cuts_in_row += 1
+            total_cuts += 1
+            logger.debug("increment to t = %.6g failed (%s); halving to %.3g", t_try, res.message, dt)
+            continue
+        t, u, last_ev = t_try, res.u, res.evaluation
+        history.append((t, u, res.iterations))
+        residuals.append(res.residual_norms)
+        if cuts_in_row == 0:
+            dt = min(nominal, 2 * dt)
+        cuts_in_row = 0
+        if callback is not None and callback(t, u):
+            return PathResult(False, "stopped", f"stopped by callback at t = {t:.6g}", u, t,
+                              total_iter, total_cuts, history, residuals, last_ev)
+    return PathResult(True, "converged", "converged", u, 1.0, total_iter, total_cuts, history,
+                      residuals, last_ev)

@@ -1,0 +1,86 @@
+"""Stability of an equilibrium: inertia of the reduced tangent stiffness.
+
+An equilibrium is stable when the tangent stiffness on the free DOFs is positive definite. The
+number of negative eigenvalues (the Morse index) changes by one at a limit point or at a simple
+bifurcation; the two are told apart by the eigenvector of the vanishing eigenvalue: at a limit
+point it has a component along the load derivative ``q = dr/dlambda``, at a bifurcation it is
+orthogonal to it.
+
+Small systems (up to :data:`DENSE_LIMIT` free DOFs) are analysed densely (all eigenvalues, so
+the count is exact); large ones by shift-invert Lanczos (``eigsh`` near zero), which finds the
+``k`` eigenvalues closest to zero, so a count of ``k`` is a lower bound.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg as spla
+
+from ..linalg.small_solve import as_dense
+
+__all__ = ["Stability", "tangent_stability", "DENSE_LIMIT"]
+
+#: Up to this many free DOFs the tangent is analysed with a dense symmetric eigensolver.
+DENSE_LIMIT = 600
+
+
+@dataclass(frozen=True, eq=False)
+class Stability:
+    """Inertia of a reduced tangent stiffness.
+
+    Attributes
+    ----------
+    negative : int
+        Number of negative eigenvalues (a lower bound when ``exact`` is False).
+    lowest : float
+        Lowest eigenvalue [N/m].
+    mode : (n_free,) unit eigenvector of the lowest eigenvalue
+    exact : bool
+        True if all eigenvalues were computed (dense), False for the ``k`` nearest to zero.
+    """
+
+    negative: int
+    lowest: float
+    mode: np.ndarray
+    exact: bool = True
+
+    @property
+    def stable(self) -> bool:
+        """True if no eigenvalue is negative."""
+        return self.negative == 0
+
+    def load_alignment(self, q: np.ndarray) -> float:
+        """|cos| of the angle between the critical mode and the load derivative ``q``
+        (1: a limit-point mode, 0: a bifurcation mode); nan if ``q`` is zero."""
+        nq = float(np.linalg.norm(q))
+        return abs(float(self.mode @ q)) / nq if nq > 0 else float("nan")
+
+
+def tangent_stability(K, k: int = 6) -> Stability:
+    """Inertia and lowest eigenpair of the symmetric reduced tangent ``K`` (n_free, n_free).
+
+    Parameters
+    ----------
+    K : sparse or dense (n, n) symmetric matrix [N/m]
+    k : int
+        Eigenvalues computed near zero for large systems.
+    """
+    n = K.shape[0]
+    if n == 0:
+        return Stability(0, float("inf"), np.zeros(0))
+    if n <= DENSE_LIMIT:
+        A = as_dense(K)
+        w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
+        return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], True)
+    diag = np.abs(K.diagonal())
+    shift = -1e-8 * float(np.median(diag[diag > 0])) if np.any(diag > 0) else -1e-12
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        w, V = spla.eigsh(K.tocsc(), k=min(k, n - 1), sigma=shift, which="LM")
+    order = np.argsort(w)
+    w, V = w[order], V[:, order]
+    return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], False)

@@ -1,0 +1,302 @@
+"""Heating power as a function of time: step, ramp, square wave (PWM), sine, piecewise linear.
+
+Every schedule is a frozen dataclass mapping time t [s] to a power [W] >= 0, vectorised over
+``t`` (a float gives a float, an array an array of the same shape) and validated on
+construction. Schedules are applied per crease or per heater circuit with a mapping like the
+one of :class:`~simulator.steps.heating.Heat`: ``{crease id or tuple of crease ids: schedule
+or constant power [W]}``; :func:`crease_power_function` turns such a mapping into a function
+t -> (C,) crease powers for a mesh.
+
+Example::
+
+    power = {2: SquareWave(power=20e-3, period=0.1, duty=0.25), (5, 6): Ramp(10e-3, 0.05)}
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
+           "check_power_mapping", "describe_power_mapping", "crease_power_function",
+           "CreasePowers"]
+
+
+def _number(owner, name: str, value, ok=lambda v: True, allowed: str = "finite"):
+    """``value`` as a float, or :class:`ParameterError` naming the field and the allowed range."""
+    good = (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, bool) and not math.isnan(value))
+    if not (good and ok(float(value))):
+        raise ParameterError(f"{type(owner).__name__}.{name} = {value!r} is invalid; it must be "
+                             f"{allowed}.")
+    return float(value)
+
+
+def _power(owner, name, value):
+    return _number(owner, name, value, lambda v: 0 <= v < math.inf, "a finite power >= 0 W")
+
+
+def _time(owner, name, value):
+    return _number(owner, name, value, math.isfinite, "a finite time [s]")
+
+
+def _positive(owner, name, value, unit):
+    return _number(owner, name, value, lambda v: 0 < v < math.inf, f"a finite value > 0 {unit}")
+
+
+class PowerSchedule(ABC):
+    """Power [W] as a function of time [s]; subclasses implement :meth:`_values`."""
+
+    def __call__(self, t):
+        """Power [W] at time(s) ``t`` [s] (float -> float, array -> array of the same shape)."""
+        arr = np.asarray(t, float)
+        out = self._values(arr)
+        return float(out) if arr.ndim == 0 else out
+
+    @abstractmethod
+    def _values(self, t: np.ndarray) -> np.ndarray:
+        """Power [W] at the times ``t`` (any shape)."""
+
+    @abstractmethod
+    def _energy(self, t: np.ndarray) -> np.ndarray:
+        """An antiderivative of the power [J] at the times ``t`` (differences are energies)."""
+
+    def mean(self, t0, t1):
+        """Mean power [W] over ``[t0, t1]`` [s] (exact; arrays broadcast; t1 > t0)."""
+        t0, t1 = np.asarray(t0, float), np.asarray(t1, float)
+        out = (self._energy(t1) - self._energy(t0)) / (t1 - t0)
+        return float(out) if out.ndim == 0 else out
+
+    def describe(self) -> dict:
+        """JSON-able description (class name and fields, SI units; infinite times as None)."""
+        fields = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                  for k, v in asdict(self).items()}
+        return {"schedule": type(self).__name__, **fields}
+
+
+@dataclass(frozen=True)
+class StepPower(PowerSchedule):
+    """``power`` [W] for ``t_on <= t < t_off`` [s], zero otherwise (constant power by default)."""
+
+    power: float
+    t_on: float = 0.0
+    t_off: float = math.inf
+
+    def __post_init__(self):
+        object.__setattr__(self, "power", _power(self, "power", self.power))
+        object.__setattr__(self, "t_on", _time(self, "t_on", self.t_on))
+        t_on = self.t_on
+        object.__setattr__(self, "t_off", _number(self, "t_off", self.t_off, lambda v: v > t_on,
+                                                  f"a time [s] after t_on = {t_on}"))
+
+    def _values(self, t):
+        return np.where((t >= self.t_on) & (t < self.t_off), self.power, 0.0)
+
+    def _energy(self, t):
+        return self.power * (np.clip(t, self.t_on, self.t_off) - self.t_on)
+
+
+@dataclass(frozen=True)
+class Ramp(PowerSchedule):
+    """Zero before ``t_start``, linear to ``power`` [W] over ``duration`` [s], then held."""
+
+    power: float
+    duration: float
+    t_start: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "power", _power(self, "power", self.power))
+        object.__setattr__(self, "duration", _positive(self, "duration", self.duration, "s"))
+        object.__setattr__(self, "t_start", _time(self, "t_start", self.t_start))
+
+    def _values(self, t):
+        return self.power * np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
+
+    def _energy(self, t):
+        u = np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
+        held = np.maximum(t - self.t_start - self.duration, 0.0)
+        return self.power * (0.5 * self.duration * u**2 + held)
+
+
+@dataclass(frozen=True)
+class SquareWave(PowerSchedule):
+    """Pulse-width modulation: ``power`` [W] during the first ``duty`` fraction of every
+    ``period`` [s] from ``t_start`` [s] on, zero otherwise (and before ``t_start``).
+
+    ``duty`` is in (0, 1); the mean power over whole periods is ``duty * power``.
+    """
+
+    power: float
+    period: float
+    duty: float = 0.5
+    t_start: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "power", _power(self, "power", self.power))
+        object.__setattr__(self, "period", _positive(self, "period", self.period, "s"))
+        object.__setattr__(self, "duty", _number(self, "duty", self.duty, lambda v: 0 < v < 1,
+                                                 "in (0, 1) (use StepPower for 0 or 1)"))
+        object.__setattr__(self, "t_start", _time(self, "t_start", self.t_start))
+
+    def _values(self, t):
+        phase = (t - self.t_start) / self.period
+        on = (phase >= 0) & (phase - np.floor(phase) < self.duty)
+        return np.where(on, self.power, 0.0)
+
+    def _energy(self, t):
+        phase = np.maximum((t - self.t_start) / self.period, 0.0)
+        whole = np.floor(phase)
+        return self.power * self.period * (whole * self.duty + np.minimum(phase - whole, self.duty))
+
+
+@dataclass(frozen=True)
+class Sine(PowerSchedule):
+    """``offset + amplitude sin(2 pi frequency t + phase)`` [W]; ``offset`` defaults to
+    ``|amplitude|`` and must be at least that (a heater cannot cool)."""
+
+    amplitude: float
+    frequency: float
+    offset: float | None = None
+    phase: float = 0.0
+
+    def __post_init__(self):
+        a = _number(self, "amplitude", self.amplitude, math.isfinite, "a finite power [W]")
+        object.__setattr__(self, "amplitude", a)
+        object.__setattr__(self, "frequency", _positive(self, "frequency", self.frequency, "Hz"))
+        offset = abs(a) if self.offset is None else self.offset
+        object.__setattr__(self, "offset", _number(
+            self, "offset", offset, lambda v: abs(a) <= v < math.inf,
+            f"a finite power >= |amplitude| = {abs(a)} W so that the power stays >= 0"))
+        object.__setattr__(self, "phase", _number(self, "phase", self.phase, math.isfinite,
+                                                  "a finite angle [rad]"))
+
+    def _values(self, t):
+        return self.offset + self.amplitude * np.sin(2 * np.pi * self.frequency * t + self.phase)
+
+    def _energy(self, t):
+        w = 2 * np.pi * self.frequency
+        return self.offset * t - self.amplitude / w * np.cos(w * t + self.phase)
+
+
+@dataclass(frozen=True)
+class PiecewiseLinear(PowerSchedule):
+    """Linear interpolation of a table ``times`` [s] (strictly increasing) -> ``values`` [W]
+    (>= 0); held at the first value before and at the last value after the table."""
+
+    times: tuple
+    values: tuple
+
+    def __post_init__(self):
+        times, values = (np.asarray(getattr(self, k), dtype=object).ravel()
+                         for k in ("times", "values"))
+        if len(times) < 1 or len(times) != len(values):
+            raise ParameterError(f"PiecewiseLinear: times ({len(times)} entries) and values "
+                                 f"({len(values)}) must be non-empty and of equal length.")
+        t = tuple(_time(self, f"times[{k}]", v) for k, v in enumerate(times))
+        p = tuple(_power(self, f"values[{k}]", v) for k, v in enumerate(values))
+        bad = np.flatnonzero(np.diff(t) <= 0)
+        if len(bad):
+            k = int(bad[0])
+            raise ParameterError(f"PiecewiseLinear.times must be strictly increasing; times[{k}] "
+                                 f"= {t[k]} s is followed by times[{k + 1}] = {t[k + 1]} s.")
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "values", p)
+
+    def _values(self, t):
+        return np.interp(t, self.times, self.values)
+
+    def _energy(self, t):
+        tk, pk = np.array(self.times), np.array(self.values)
+        if len(tk) == 1:
+            return pk[0] * (t - tk[0])
+        ek = np.r_[0.0, np.cumsum(0.5 * (pk[1:] + pk[:-1]) * np.diff(tk))]
+        i = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, len(tk) - 2)
+        s = np.clip(t, tk[0], tk[-1]) - tk[i]
+        slope = (pk[i + 1] - pk[i]) / (tk[i + 1] - tk[i])
+        inside = ek[i] + pk[i] * s + 0.5 * slope * s**2
+        return inside + pk[0] * np.minimum(t - tk[0], 0.0) + pk[-1] * np.maximum(t - tk[-1], 0.0)
+
+
+def check_power_mapping(owner: str, power) -> dict:
+    """Validate ``{crease id or tuple of ids: PowerSchedule or constant power [W]}``.
+
+    Returns the mapping with constants turned into :class:`StepPower`; ``owner`` names the
+    caller in error messages.
+    """
+    if not isinstance(power, Mapping):
+        raise ParameterError(f"{owner}: power = {power!r} must be a mapping {{crease id or tuple "
+                             "of crease ids: PowerSchedule or watts}.")
+    out = {}
+    for key, value in power.items():
+        ids = key if isinstance(key, tuple) else (key,)
+        if not ids or any(not isinstance(c, (int, np.integer)) or isinstance(c, bool)
+                          for c in ids):
+            raise ParameterError(f"{owner}: power key {key!r} must be a crease id or a tuple of "
+                                 "crease ids (a heater circuit).")
+        if not isinstance(value, PowerSchedule):
+            if not (isinstance(value, (int, float, np.integer, np.floating))
+                    and not isinstance(value, bool) and math.isfinite(value) and value >= 0):
+                raise ParameterError(f"{owner}: power of {key!r} is {value!r}; give a "
+                                     "PowerSchedule or a constant power >= 0 W.")
+            value = StepPower(float(value))
+        out[key] = value
+    return out
+
+
+def describe_power_mapping(power) -> dict:
+    """JSON-able ``{str(key): schedule description}`` of a power mapping (constants as
+    ``{"schedule": "constant", "power [W]": value}``), for ``meta.json``."""
+    return {str(k): (v.describe() if hasattr(v, "describe") else
+                     {"schedule": "constant", "power [W]": float(v)})
+            for k, v in dict(power).items()}
+
+
+class CreasePowers:
+    """Crease powers [W] of a mesh from a mapping of schedules (see :func:`crease_power_function`).
+
+    ``powers(t)`` gives (C,) for a float t and (m, C) for m times; ``powers.mean(t0, t1)`` the
+    exact (C,) mean power over ``[t0, t1]`` [s]. ``base`` (C,) [W] is a constant power added
+    to every crease row (e.g. the powers already on before a step).
+    """
+
+    def __init__(self, mesh, power, base=None):
+        power = check_power_mapping("crease powers", power)
+        self.schedules = list(power.values())
+        self.n_creases = mesh.n_creases
+        self.base = np.zeros(mesh.n_creases) if base is None else np.asarray(base, float)
+        self.share = np.zeros((len(self.schedules), mesh.n_creases))
+        for j, key in enumerate(power):
+            for c in (key if isinstance(key, tuple) else (key,)):
+                self.share[j, mesh.crease_row_of(int(c))] += 1.0
+
+    def _combine(self, values, shape):
+        if not self.schedules:
+            return np.broadcast_to(self.base, (*shape, self.n_creases)).copy()
+        out = np.array(values).reshape(len(self.schedules), -1).T @ self.share + self.base
+        return out.reshape(*shape, self.n_creases)
+
+    def __call__(self, t):
+        t = np.asarray(t, float)
+        if not np.all(np.isfinite(t)):
+            raise ParameterError("crease powers: times must be finite [s].")
+        return self._combine([s(t.ravel()) for s in self.schedules], t.shape)
+
+    def mean(self, t0: float, t1: float) -> np.ndarray:
+        """(C,) mean crease powers [W] over ``[t0, t1]`` [s], t1 > t0."""
+        return self._combine([s.mean(t0, t1) for s in self.schedules], ())
+
+
+def crease_power_function(mesh, power) -> CreasePowers:
+    """Function t -> crease powers [W] for a mesh: (C,) for a float t, (m, C) for m times.
+
+    ``power`` maps crease ids or tuples of crease ids (a circuit: each of its creases gets the
+    schedule's value) to schedules or constant powers; creases listed twice add up. The result
+    also has ``mean(t0, t1)``, the exact mean crease powers over an interval.
+    """
+    return CreasePowers(mesh, power)

@@ -1,0 +1,455 @@
+"""Steady heat conduction in the structure with loss to layered environment chains (digest 6).
+
+Every mesh triangle (crease and panel fans) is a linear T3 conduction element built
+from its REFERENCE edge lengths and the CURRENT angle at its first node. Each node
+also owns a chain of ``N`` environment layers ending at room temperature; layer ``q``
+of a triangle's three nodes receives the conductance ``k_env A_q N / t_air`` with
+``A_q = (2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N`` (the paper's heat-loss
+area), where ``t_air = min(t_env, tcap)`` and ``tcap`` is the mean distance of the
+triangle's vertices to the thermal-boundary (substrate) panels. Unknowns of the full
+system are ordered by layer: index ``q * n + node`` (``q = 0`` is the structure).
+
+Because every chain is a series of conductances ending at room temperature,
+:meth:`ThermalModel.solve` eliminates the environment layers exactly (series sum, one
+diagonal term per node) and solves the ``n x n`` structure system;
+:meth:`ThermalModel.conductivity_matrix` gives the full ``(N + 1) n`` matrix of the
+reference for inspection and checks. Boundary triangles keep their chains (as in the
+reference); t_air is floored at 1e-9 t_env where the reference would divide by zero.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import asdict, dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
+
+from . import _thermal_jit
+
+from ..mechanics.assembly import StiffnessPattern
+from ..mechanics.elements.contact import point_triangle_distance
+from ..errors import ParameterError, PatternError
+from ..linalg.linsolve import factor_symmetric
+from ..geometry.materials import AIR
+from ..model.mesh import BarHingeMesh
+
+__all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
+
+logger = logging.getLogger(__name__)
+
+#: The reference's default dissipation angle: 20 degrees converted with pi ~ 3.14
+#: (0.348888... rad instead of 0.349066 rad; tan differs by 0.06 %). Use it to reproduce
+#: the reference's numbers; ``math.radians(20)`` is the physical value.
+REFERENCE_BETA = 20 / 180 * 3.14
+
+#: Cap value of boundary triangles themselves and of all triangles without boundary panels [m].
+_CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
+#: Floor of t_air relative to t_env: a triangle lying on a boundary panel would otherwise get an
+#: infinite conductance (the reference divides by zero there).
+_MIN_AIR_FRACTION = 1e-9
+#: Up to this many free nodes the structure system is solved densely (Cholesky).
+DENSE_NODES = 400
+
+
+def heat_weights() -> np.ndarray:
+    """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (digest 6.6), (7,)."""
+    return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 12, 1 / 12, 1 / 3])
+
+
+def _ids(value, name):
+    try:
+        ids = tuple(int(v) for v in value)
+    except (TypeError, ValueError):
+        ids = None
+    if ids is None or any(i != v or isinstance(v, bool) for i, v in zip(ids, value)):
+        raise ParameterError(f"ThermalParameters.{name} = {value!r} is invalid; it must be a "
+                             "sequence of integer (0-based) ids.")
+    return ids
+
+
+@dataclass(frozen=True)
+class ThermalParameters:
+    """Heat-transfer parameters (digest 6; SI units, temperatures in deg C).
+
+    Parameters
+    ----------
+    env_thickness : float
+        Environment thickness t_env [m] between the structure and room temperature, > 0
+        (the paper suggests 1.5 x the panel length).
+    env_conductivity : float
+        Environment conductivity k_env [W/(m K)], >= 0 (air 0.026, water ~0.6).
+    layers : int
+        Number N of environment layers per node, >= 1.
+    dissipation_angle : float
+        Heat-spreading angle beta [rad] in [0, pi/2); :data:`REFERENCE_BETA` matches the reference.
+    room_temperature : float
+        Room temperature [deg C] of the far layer and of ``room_temperature_nodes``.
+    boundary_panels : tuple of int
+        Panel ids of thermal boundaries (substrate); their distance caps t_env.
+    room_temperature_nodes : tuple of int
+        Mesh node ids whose structure temperature is held at room temperature.
+    env_density : float
+        Environment density rho_env [kg/m^3], >= 0 (transient heat only; default air as in the
+        reference transient example, :data:`~simulator.geometry.materials.AIR`).
+    env_specific_heat : float
+        Environment specific heat c_env [J/(kg K)], >= 0 (transient heat only; default air).
+    """
+
+    env_thickness: float
+    env_conductivity: float = 0.026
+    layers: int = 10
+    dissipation_angle: float = math.radians(20)
+    room_temperature: float = 21.0
+    boundary_panels: tuple = ()
+    room_temperature_nodes: tuple = ()
+    env_density: float = AIR.density
+    env_specific_heat: float = AIR.specific_heat
+
+    def __post_init__(self):
+        checks = {
+            "env_density": (lambda v: v >= 0, ">= 0 kg/m^3"),
+            "env_specific_heat": (lambda v: v >= 0, ">= 0 J/(kg K)"),
+            "env_thickness": (lambda v: v > 0, "> 0 m"),
+            "env_conductivity": (lambda v: v >= 0, ">= 0 W/(m K)"),
+            "dissipation_angle": (lambda v: 0 <= v < math.pi / 2, "in [0, pi/2) rad"),
+            "room_temperature": (lambda v: True, "a finite temperature in deg C"),
+        }
+        for name, (ok, allowed) in checks.items():
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                    and math.isfinite(v) and ok(v)):
+                raise ParameterError(f"ThermalParameters.{name} = {v!r} is invalid; it must be "
+                                     f"{allowed}.")
+        if not (isinstance(self.layers, (int, np.integer)) and not isinstance(self.layers, bool)
+                and self.layers >= 1):
+            raise ParameterError(f"ThermalParameters.layers = {self.layers!r} is invalid; it must "
+                                 "be an integer >= 1.")
+        for name in ("boundary_panels", "room_temperature_nodes"):
+            object.__setattr__(self, name, _ids(getattr(self, name), name))
+
+    def to_dict(self) -> dict:
+        """Plain-dict view for result metadata."""
+        return asdict(self)
+
+
+class ThermalModel:
+    """Conduction and environment-loss model of one mesh, with cached sparsity patterns.
+
+    Parameters
+    ----------
+    mesh : BarHingeMesh
+    params : ThermalParameters
+    """
+
+    def __init__(self, mesh: BarHingeMesh, params: ThermalParameters):
+        if not isinstance(params, ThermalParameters):
+            raise ParameterError(f"params must be ThermalParameters, got {type(params).__name__}.")
+        self.mesh, self.params = mesh, params
+        n, pat = mesh.n_nodes, mesh.pattern
+        for p in params.boundary_panels:
+            if not 0 <= p < pat.n_panels:
+                raise ParameterError(f"ThermalParameters.boundary_panels: panel {p} does not exist "
+                                     f"(the pattern has panels 0..{pat.n_panels - 1}).")
+        for v in params.room_temperature_nodes:
+            if not 0 <= v < n:
+                raise ParameterError(f"ThermalParameters.room_temperature_nodes: node {v} does not "
+                                     f"exist (the mesh has nodes 0..{n - 1}).")
+        tri = mesh.triangles
+        self.edge_lengths = mesh.bar_length[self._bar_ids(tri[:, [0, 0, 1]], tri[:, [1, 2, 2]])]
+        panel, crease = mesh.triangle_panel, mesh.triangle_crease
+        is_panel = panel >= 0
+        k_panel = np.array([m.thermal_conductivity for m in pat.panel_material])
+        #: (n_tri,) thickness t [m] and conductivity k [W/(m K)] of every triangle
+        self.thickness = np.where(is_panel, pat.panel_thickness[panel],
+                                  pat.crease_thickness[np.append(mesh.crease_ids, 0)[crease]])
+        self.conductivity = np.where(is_panel, k_panel[panel],
+                                     pat.crease_material.thermal_conductivity)
+        self.is_boundary = is_panel & np.isin(panel, params.boundary_panels)
+        self._cap_nodes = np.unique(tri[~self.is_boundary])
+        fixed = np.zeros(n, bool)
+        fixed[list(params.room_temperature_nodes)] = True
+        self.fixed_nodes = np.flatnonzero(fixed)
+        self.free_nodes = np.flatnonzero(~fixed)
+        free_index = np.full(n, -1)
+        free_index[self.free_nodes] = np.arange(len(self.free_nodes))
+        self._free_pattern = StiffnessPattern([tri], free_index, diagonal=self.free_nodes)
+        self._check_solvable()
+        self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
+        #: k t of every triangle [W/K]
+        self._kt = self.conductivity * self.thickness
+        # the model's arguments of the compiled kernel (simulator.thermal._thermal_jit), in its order
+        self._kernel_args = (
+            np.array(tri, dtype=np.int64, order="C"), self.edge_lengths, self._kt,
+            self.is_boundary, self._cap_nodes.astype(np.int64), float(params.env_thickness),
+            math.tan(params.dissipation_angle), float(params.env_conductivity),
+            int(params.layers), _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
+
+    def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
+        n = self.mesh.n_nodes
+        bars = self.mesh.bars.astype(np.int64)
+        keys = bars[:, 0] * n + bars[:, 1]
+        order = np.argsort(keys)
+        want = np.minimum(a, b).astype(np.int64) * n + np.maximum(a, b)
+        pos = np.minimum(np.searchsorted(keys, want, sorter=order), len(keys) - 1)
+        found = keys[order[pos]] == want
+        if not found.all():
+            raise PatternError("mesh triangle edge without a bar: the mesh is inconsistent.")
+        return order[pos]
+
+    def _check_solvable(self):
+        """Without environment loss, every conducting component needs a room-temperature node."""
+        if self.params.env_conductivity > 0:
+            return
+        n, tri = self.mesh.n_nodes, self.mesh.triangles
+        live = tri[self.conductivity * self.thickness > 0]
+        adj = sp.coo_matrix((np.ones(3 * len(live)), (live.ravel(), np.roll(live, 1, 1).ravel())),
+                            shape=(n, n))
+        n_comp, label = connected_components(adj, directed=False)
+        bad = np.setdiff1d(np.arange(n_comp), label[self.fixed_nodes])
+        if len(bad):
+            node = int(np.flatnonzero(label == bad[0])[0])
+            raise ParameterError(
+                f"node {node} has no heat path to room temperature (env_conductivity = 0 and no "
+                "room_temperature_nodes in its connected part): the temperatures are undefined.")
+
+    @property
+    def n_dof(self) -> int:
+        """Size (N + 1) n of the full thermal system."""
+        return (self.params.layers + 1) * self.mesh.n_nodes
+
+    # ------------------------------------------------------------------ element data
+    def _positions(self, x) -> np.ndarray:
+        """``x`` as a float array, checked to be finite and of the mesh's node shape [m]."""
+        x = np.asarray(x, float)
+        if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
+            raise ParameterError("positions x must be a finite array of shape "
+                                 f"{self.mesh.nodes.shape} [m].")
+        return x
+
+    def _warn_floored(self):
+        logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
+                       _MIN_AIR_FRACTION * self.params.env_thickness)
+
+    def _conduction(self, x):
+        """T3 matrices (n_tri, 3, 3) [W/K] and areas A_t (n_tri,) [m^2] at positions ``x``."""
+        x = self._positions(x)
+        tri = self.mesh.triangles
+        u, v = x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]]
+        alpha = np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), np.einsum("ij,ij->i", u, v))
+        l1, l2 = self.edge_lengths[:, 0], self.edge_lengths[:, 1]
+        x3, y3 = l2 * np.cos(alpha), l2 * np.sin(alpha)
+        area = 0.5 * l1 * y3
+        zero = np.zeros_like(l1)
+        b = np.stack([-y3, y3, zero], axis=1)
+        c = np.stack([x3 - l1, -x3, l1], axis=1)
+        scale = self._kt / (4 * area)
+        K = scale[:, None, None] * (b[:, :, None] * b[:, None, :] + c[:, :, None] * c[:, None, :])
+        return K, area
+
+    def triangle_areas(self, x) -> np.ndarray:
+        """Conduction areas A_t [m^2] of every triangle at positions ``x`` (n, 3) [m], (n_tri,)
+        (reference edge lengths, current angle at the first node; digest 6.2)."""
+        return self._conduction(x)[1]
+
+    def tcap(self, x) -> np.ndarray:
+        """Cap of t_env per triangle [m], (n_tri,) (digest 6.4).
+
+        Mean over the triangle's vertices of the distance to the nearest boundary-panel triangle
+        at positions ``x`` (n, 3) [m]; 1e10 for boundary triangles, 1e5 without boundary panels.
+        """
+        x = np.asarray(x, float)
+        tri = self.mesh.triangles
+        if not self.is_boundary.any():
+            return np.full(len(tri), _CAP_NONE)
+        bc = x[tri[self.is_boundary]]                                      # (m, 3, 3)
+        p = self._cap_nodes
+        d, _, _ = point_triangle_distance(np.repeat(x[p], len(bc), axis=0),
+                                          np.tile(bc, (len(p), 1, 1)))
+        dmin = np.zeros(self.mesh.n_nodes)
+        dmin[p] = d.reshape(len(p), len(bc)).min(axis=1)
+        return np.where(self.is_boundary, _CAP_BOUNDARY, dmin[tri].mean(axis=1))
+
+    def environment_geometry(self, x, area=None):
+        """Environment layer areas and thickness of every triangle (digest 6.3-6.4).
+
+        Returns
+        -------
+        a_q : (n_tri, N) array
+            Heat-loss area A_q [m^2] of layer q seen by EACH of the triangle's three nodes,
+            ``(2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N``.
+        t_air : (n_tri,) array
+            Environment thickness [m], ``min(t_env, tcap)`` (floored, see the module notes).
+        """
+        prm = self.params
+        if area is None:
+            area = self._conduction(x)[1]
+        t_env = prm.env_thickness
+        t_air = np.where(t_env < (cap := self.tcap(x)), t_env, cap)
+        if np.any(t_air < _MIN_AIR_FRACTION * t_env):
+            self._warn_floored()
+            t_air = np.maximum(t_air, _MIN_AIR_FRACTION * t_env)
+        N = prm.layers
+        s = (np.arange(1, N + 1) - 0.5) / N
+        l_sum = self.edge_lengths.sum(axis=1)
+        spread = l_sum * t_air * math.tan(prm.dissipation_angle)
+        return (2 / 3) * area[:, None] + (2 / 3) * spread[:, None] * s, t_air
+
+    def node_layer_sum(self, per_triangle) -> np.ndarray:
+        """Sum a per-triangle, per-layer quantity (n_tri, N) onto every node's chain, (n, N)."""
+        N, tri = self.params.layers, self.mesh.triangles
+        nodes = np.repeat(tri, N, axis=1).ravel()
+        layer = np.tile(np.arange(N), 3 * len(tri))
+        flat = np.bincount(nodes * N + layer, np.repeat(per_triangle, 3, axis=0).ravel(),
+                           minlength=self.mesh.n_nodes * N)
+        return flat.reshape(-1, N)
+
+    def layer_conductance(self, x, area=None) -> np.ndarray:
+        """Environment conductance of every node and layer [W/K], (n, N) (digest 6.3)."""
+        a_q, t_air = self.environment_geometry(x, area)
+        N = self.params.layers
+        return self.node_layer_sum(self.params.env_conductivity * a_q * N / t_air[:, None])
+
+    # ------------------------------------------------------------------ matrices
+    @cached_property
+    def _full_pattern(self) -> StiffnessPattern:
+        n, N = self.mesh.n_nodes, self.params.layers
+        q = np.arange(N)
+        chain = np.stack([(q * n)[None, :] + np.arange(n)[:, None],
+                          ((q + 1) * n)[None, :] + np.arange(n)[:, None]], axis=-1).reshape(-1, 2)
+        return StiffnessPattern([self.mesh.triangles, chain], np.arange(self.n_dof))
+
+    def conductivity_matrix(self, x) -> sp.csr_matrix:
+        """Full conductivity matrix [W/K], ((N + 1) n)^2, at node positions ``x`` (n, 3) [m].
+
+        Index ``q * n + node`` is layer ``q`` (0 = structure) of a node; no boundary conditions.
+        """
+        K, area = self._conduction(x)
+        g = self.layer_conductance(x, area).ravel()                         # node-major (n, N)
+        pair = g[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
+        return self._full_pattern.matrix([K, pair])
+
+    def heat_vector(self, crease_power) -> np.ndarray:
+        """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (digest 6.6).
+
+        Each crease gives 1/8 to N11, N12, N21, N22, 1/12 to A and B and 1/3 to Ctr.
+        """
+        mesh = self.mesh
+        power = np.asarray(crease_power, float)
+        if power.shape != (mesh.n_creases,) or not np.all(np.isfinite(power)):
+            raise ParameterError(f"crease_power must be a finite array of shape "
+                                 f"({mesh.n_creases},) [W], one entry per crease row; "
+                                 f"got shape {power.shape}.")
+        return np.bincount(mesh.crease_nodes.ravel(), (power[:, None] * heat_weights()).ravel(),
+                           minlength=mesh.n_nodes).astype(float)
+
+    def solve(self, x, q, room_temperature=None) -> np.ndarray:
+        """Steady structure temperatures [deg C], (n,) (or (n, k) for k heat inputs).
+
+        Parameters
+        ----------
+        x : (n, 3) array
+            Current node positions [m] (the conductivity depends on the shape).
+        q : (n,) or (n, k) array
+            Nodal heat input [W], e.g. from :meth:`heat_vector`; k columns give k independent
+            solutions from one factorisation (returned as (n, k)).
+        room_temperature : float, optional
+            Temperature [deg C] of the far layer and of the room-temperature nodes
+            (default ``params.room_temperature``).
+
+        Notes
+        -----
+        Equivalent to solving ``K_FF T_F = q_F - K_FD T_D`` on the full system (digest 6.5):
+        every row of ``K`` sums to zero, so the temperature rise solves ``K_FF dT_F = q_F``, and
+        the free environment layers of a node's chain condense exactly into one series
+        conductance ``1 / sum_q (1 / g_q)`` to room temperature.
+        """
+        rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
+        q = np.asarray(q, float)
+        n = self.mesh.n_nodes
+        if q.shape[:1] != (n,) or q.ndim > 2 or not np.all(np.isfinite(q)) \
+                or not math.isfinite(rt):
+            raise ParameterError(f"q must be a finite array of shape ({n},) or ({n}, k) [W] and "
+                                 "the room temperature finite.")
+        rise = np.zeros(q.shape)
+        if len(self.free_nodes):
+            rise[self.free_nodes] = self.factorized(x)(q[self.free_nodes])
+        return rt + rise
+
+    def factorized(self, x):
+        """Solver ``q_free -> rise_free`` of the free-node system at positions ``x`` [m].
+
+        The factorisation is kept for the last shape: solving again on the same positions
+        (a fixed-shape coupling, several heat inputs) reuses it.
+        """
+        x = np.asarray(x, float)
+        compiled, last = _thermal_jit.use_compiled(), self._factor_cache
+        if last is not None and last[0] == compiled and last[1].shape == x.shape \
+                and np.array_equal(last[1], x):
+            return last[2]
+        K, g_eff = self._conductances(x, compiled)
+        solver = self._factorize(K, g_eff[self.free_nodes])
+        self._factor_cache = (compiled, x.copy(), solver)
+        return solver
+
+    def structure_conductances(self, x):
+        """T3 matrices (n_tri, 3, 3) [W/K] and each node's environment chain condensed into
+        one series conductance to room temperature, ``1 / sum_q (1 / g_q)`` (n,) [W/K] (0
+        where a layer has no conductance), at positions ``x`` (n, 3) [m].
+
+        Uses the compiled kernel of :mod:`simulator.thermal._thermal_jit` when the kernel backend is
+        "numba" (:func:`simulator.mechanics.elements.springs.spring_kernel_backend`), else numpy.
+        """
+        return self._conductances(x, _thermal_jit.use_compiled())
+
+    def _conductances(self, x, compiled: bool):
+        """:meth:`structure_conductances` by the compiled kernel or by numpy."""
+        if compiled:
+            K, g_eff, floored = _thermal_jit.thermal_element_data(self._kernel_args,
+                                                                  self._positions(x))
+            if floored:
+                self._warn_floored()
+            return K, g_eff
+        K, area = self._conduction(x)
+        g = self.layer_conductance(x, area)
+        with np.errstate(divide="ignore"):
+            g_eff = np.where(np.all(g > 0, axis=1), 1 / np.sum(1 / g, axis=1), 0.0)
+        return K, g_eff
+
+    @cached_property
+    def _dense_position(self):
+        """Flat positions in the dense free-node matrix of the entries given to the free pattern
+        (triangle matrices, then diagonal terms), and the mask of those kept (the others touch
+        a fixed node)."""
+        p = self._free_pattern
+        keep = p.positions < p.nnz
+        return p.dense_positions()[p.positions[keep]], keep
+
+    def _factorize(self, K, g_free):
+        """Factorise the free-node system (conduction plus condensed chains); returns its
+        solver ``q_free -> rise_free``.
+
+        Up to :data:`DENSE_NODES` free nodes: dense Cholesky (the matrix is symmetric positive
+        definite; SuperLU if Cholesky fails); above:
+        :func:`~simulator.linalg.linsolve.factor_symmetric` (PARDISO if installed, else SuperLU, in
+        nested-dissection order from :data:`~simulator.linalg.linsolve.ND_LIMIT` free nodes on).
+        """
+        n_free = len(g_free)
+        if n_free <= DENSE_NODES:
+            pos, keep = self._dense_position
+            flat = np.concatenate([K.ravel(), g_free])[keep]
+            dense = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
+            c, info = _potrf(dense, lower=False, clean=False, overwrite_a=True)
+            if info == 0:
+                def cholesky_solve(q_free):
+                    sol, info = _potrs(c, q_free)
+                    if info != 0:
+                        raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
+                    return sol
+                return cholesky_solve
+        return factor_symmetric(self._free_pattern.matrix([K, g_free])).solve
