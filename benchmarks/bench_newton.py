@@ -21,7 +21,7 @@ from simulator.state import equilibrium_system
 from simulator.model.model import ContactParameters, Supports, make_model
 from simulator.geometry.example_patterns import gripper_pattern, miura_sheet_pattern
 from simulator.model.properties import BarHingeParameters
-from simulator.solvers.newton import _solve_linear
+from simulator.linalg import solve as _solve_linear
 
 
 def _time_iteration(model, u, rest, repeat):

@@ -1,7 +1,7 @@
 """Newton iteration cost against mesh size: flat Miura sheets of ~1e3, 1e4 and 1e5 nodes.
 
 One iteration = assembly of internal force and tangent on the free DOFs plus the linear
-solve (``simulator.solvers.newton._solve_linear``), on the sheet of ``benchmarks/bench_versus.py``
+solve (the ladder, ``simulator.linalg.solve``), on the sheet of ``benchmarks/bench_versus.py``
 (``miura_sheet_pattern(m=cells, n=cells)``, panel 0 clamped, random displacements ~1e-9 m).
 Every size runs in a fresh subprocess, so its peak RSS is that of one process holding one
 sheet. Prints per size: build time of the equilibrium system, the first iteration (it
@@ -35,7 +35,7 @@ from simulator import initial_state
 from simulator.state import equilibrium_system
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.model import Supports, make_model
-from simulator.solvers.newton import _solve_linear
+from simulator.linalg import solve as _solve_linear
 from simulator.model.properties import BarHingeParameters
 cells, repeat = int(sys.argv[1]), int(sys.argv[2])
 model = make_model(miura_sheet_pattern(m=cells, n=cells), None, BarHingeParameters())

@@ -6,7 +6,8 @@ snippets of that tree's API), task by task, and do both give the same numbers?
 
 Method: a detached git worktree of the old commit is made in a temporary directory (removed at
 the end unless ``--keep``). Each task has an old and a new snippet (the old tree's internal
-modules differ: ``simulator.newton._solve_linear`` before the reorganisation by physics). Every
+modules differ: ``simulator.newton._solve_linear`` before the reorganisation by physics, the
+ladder's ``simulator.linalg.solve`` after the one linear-algebra module). Every
 measurement runs in a fresh subprocess, ``sys.executable -c <snippet>``, with ``PYTHONPATH`` set
 to the old tree and to the current tree alternately (old, new, old, new, ... for ``--repeat``).
 A snippet prints one JSON line: the time of its timed part (``None`` for the start-up tasks,
@@ -120,7 +121,7 @@ _NEWTON_NEW = """
 from simulator import initial_state
 from simulator.state import equilibrium_system
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.solvers.newton import _solve_linear
+from simulator.linalg import solve as _solve_linear
 """
 
 _VERSION = """

@@ -11,9 +11,13 @@ from __future__ import annotations
 
 import logging
 
-__all__ = ["compile_kernel"]
+__all__ = ["compile_kernel", "HELPER_OPTIONS"]
 
 logger = logging.getLogger(__name__)
+
+#: numba options of helpers called from compiled code only: no Python or C wrappers (less to
+#: compile). Shared by the element kernels and the compiled linear algebra.
+HELPER_OPTIONS = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 
 
 def compile_kernel(what: str, build, instead: str):

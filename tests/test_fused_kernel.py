@@ -15,7 +15,7 @@ from simulator.mechanics.elements.contact import contact_kernel
 from simulator.mechanics.elements.springs import spring_kernel
 from simulator.mechanics.equilibrium import ENERGY_KINDS, EquilibriumSystem, Evaluation
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.solvers.newton import _solve_linear as solve_linear
+from simulator.linalg import solve as solve_linear
 from simulator.linalg.small_solve import SparseCholesky, solve_dense
 from simulator.model.model import ContactParameters, Supports, make_model
 from simulator.state import equilibrium_system, initial_state

@@ -8,14 +8,14 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from simulator import initial_state
-from simulator.linalg import linsolve, pardiso
-from simulator.solvers import newton as newton_module
+from simulator.linalg import linsolve, pardiso, thresholds
+from simulator.linalg import factorize, solve as _solve_linear
 from simulator.thermal import steady as thermal
 from simulator.cases import miura_sheet_model
 from simulator.state import thermal_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.model import Supports, make_model
-from simulator.solvers.newton import NewtonOptions, _solve_linear, newton
+from simulator.solvers.newton import NewtonOptions, newton
 from simulator.model.properties import BarHingeParameters
 from simulator.state import equilibrium_system
 
@@ -52,7 +52,7 @@ def _minimum_degree(K, r):
 
 def test_mid_size_sheet_solve_agrees_with_spsolve(sheet):
     *_, K, r = sheet
-    assert K.shape[0] >= linsolve.ND_LIMIT
+    assert K.shape[0] >= thresholds.ND_LIMIT
     du = _solve_linear(K, r)
     ref = spla.spsolve(K.tocsc(), r)
     assert np.linalg.norm(du - ref) <= 1e-8 * np.linalg.norm(ref)
@@ -83,7 +83,7 @@ def test_dofs_of_a_node_form_one_supervariable(sheet):
 def test_ordering_is_computed_once_per_pattern(monkeypatch):
     model, u, rest = _sheet(18)
     system = equilibrium_system(model)
-    assert system.n_free >= linsolve.ND_LIMIT
+    assert system.n_free >= thresholds.ND_LIMIT
     calls = []
     original = linsolve.NestedDissection.of.__func__
 
@@ -113,7 +113,7 @@ def test_small_systems_keep_the_minimum_degree_path(monkeypatch):
     system = equilibrium_system(model)
     ev = system.evaluate(u, rest)
     r = -ev.f_int[system.free]
-    assert newton_module.DENSE_LIMIT < system.n_free < linsolve.ND_LIMIT
+    assert thresholds.DENSE_LIMIT < system.n_free < thresholds.ND_LIMIT
     assert np.array_equal(_solve_linear(ev.K, r), _minimum_degree(ev.K, r))   # bitwise
 
 
@@ -161,7 +161,7 @@ def test_an_inaccurate_symmetric_solve_falls_back_to_partial_pivoting(monkeypatc
     off[1::2] = 1e-3
     K = sp.diags([off, main, off], [-1, 0, 1], format="csr")
     r = np.random.default_rng(1).normal(size=n)
-    monkeypatch.setattr(newton_module, "ND_LIMIT", 100)
+    monkeypatch.setattr(thresholds, "ND_LIMIT", 100)
     monkeypatch.setattr(linsolve, "_cache", [])
     nd = linsolve.ordering_for(K)
     assert nd is not None
@@ -175,7 +175,7 @@ def test_an_inaccurate_symmetric_solve_falls_back_to_partial_pivoting(monkeypatc
 def test_thermal_solve_in_nested_dissection_order_agrees_with_colamd(monkeypatch):
     model = miura_sheet_model(cells_x=8, cells_y=6)
     tm = thermal_model(model)
-    assert len(tm.free_nodes) > thermal.DENSE_NODES          # a sparse solve
+    assert len(tm.free_nodes) > thresholds.CONDUCTION_DENSE_LIMIT          # a sparse solve
     q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
     q2 = np.stack([q, np.roll(q, 7)], axis=1)
     ref = tm.solve(model.mesh.nodes, q2)                 # below ND_LIMIT: COLAMD
@@ -186,7 +186,7 @@ def test_thermal_solve_in_nested_dissection_order_agrees_with_colamd(monkeypatch
         used.append(K.shape)
         return original(K)
 
-    monkeypatch.setattr(linsolve, "ND_LIMIT", 100)
+    monkeypatch.setattr(thresholds, "ND_LIMIT", 100)
     monkeypatch.setattr(linsolve, "ordering_for", spy)
     tm._factor_cache = None                              # factorise again
     T = tm.solve(model.mesh.nodes, q2)
@@ -196,7 +196,8 @@ def test_thermal_solve_in_nested_dissection_order_agrees_with_colamd(monkeypatch
 
 def test_repeated_solves_with_nested_dissection_factors(sheet):
     *_, K, r = sheet
-    lu = linsolve.nested_dissection_factor(K.tocsc())        # any sparse format
+    lu = factorize(K.tocsc(), backend="superlu")             # any sparse format
+    assert lu.backend == "superlu-nd"
     R = np.stack([r, np.roll(r, 5)], axis=1)
     X = lu.solve(R)
     assert np.linalg.norm(K @ X[:, 0] - r) <= 1e-13 * np.linalg.norm(r)
@@ -241,7 +242,7 @@ def test_an_ill_conditioned_backward_stable_solve_is_accepted(monkeypatch, nd_li
     # its residual misses 1e-6 |r| by round-off alone; a partial-pivoting factorisation
     # (15x slower at 1e5 nodes) would be no more exact
     K, r, exact = _grounded_stiff_chain()
-    monkeypatch.setattr(newton_module, "ND_LIMIT", nd_limit)
+    monkeypatch.setattr(thresholds, "ND_LIMIT", nd_limit)
     monkeypatch.setattr(linsolve, "_cache", [])
     factorisations = []
     original = spla.splu

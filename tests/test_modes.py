@@ -100,15 +100,15 @@ def test_bad_inputs_are_clear_errors(fold):
 
 
 def test_shift_invert_in_nested_dissection_order_finds_the_same_modes(miura, monkeypatch):
-    from simulator.linalg import linsolve, pardiso
+    from simulator.linalg import ladder, linsolve, pardiso, thresholds
 
     monkeypatch.setattr(pardiso, "_library", ())            # the SuperLU path
     ref = natural_modes(miura, count=6, method="sparse")
     used = []
-    original = linsolve.nested_dissection_factor
-    monkeypatch.setattr(linsolve, "ND_LIMIT", 10)
-    monkeypatch.setattr(linsolve, "nested_dissection_factor",
-                        lambda A: used.append(original(A)) or used[-1])
+    original = linsolve.nd_factors
+    monkeypatch.setattr(thresholds, "ND_LIMIT", 10)
+    monkeypatch.setattr(linsolve, "nd_factors", lambda A: used.append(original(A)) or used[-1])
     nd = natural_modes(miura, count=6, method="sparse")
     assert used and used[0] is not None and nd.success
+    assert ladder.last_backend() == "superlu-nd"
     np.testing.assert_allclose(nd.frequency, ref.frequency, rtol=1e-9)

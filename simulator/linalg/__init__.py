@@ -1,2 +1,7 @@
-"""Linear algebra: the factorisation ladder (dense LAPACK, PARDISO, SuperLU with nested
-dissection) shared by every solver."""
+"""Linear algebra: the one factorisation ladder (dense LAPACK, PARDISO, SuperLU with nested
+dissection, fallbacks; :mod:`.factorize`) with its thresholds (:mod:`.thresholds`) shared by
+every solver."""
+
+from .ladder import BACKENDS, Factor, factorize, solve
+
+__all__ = ["BACKENDS", "Factor", "factorize", "solve"]

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 
-from .._jit import compile_kernel
+from .._jit import HELPER_OPTIONS, compile_kernel
 
 __all__ = ["cholesky_solve", "SIGNATURE", "broken"]
 
@@ -161,8 +161,6 @@ def cholesky_solve():
 
 def _build():
     from numba import njit
-
-    from ..mechanics.elements._springs_jit import HELPER_OPTIONS
 
     g = globals()
     for name, sig in _HELPERS.items():

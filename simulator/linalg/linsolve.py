@@ -1,10 +1,12 @@
-"""Sparse direct solves of large symmetric systems: PARDISO, or SuperLU in nested-dissection order.
+"""The sparse rungs of the factorisation ladder and its acceptance rule: PARDISO, SuperLU in
+nested-dissection order, and the backward-error test (:func:`accurate`, :func:`refined`).
 
-When MKL is installed, Newton's sparse tangents (from :data:`PARDISO_LIMIT` unknowns) are
-solved by PARDISO (:func:`pardiso_solve`, :mod:`simulator.linalg.pardiso`), whose analysis is kept
-per sparsity pattern like the METIS ordering below; it is 3-6x faster than SuperLU at every
-size measured. The rest of this module is the SuperLU path: without MKL, if PARDISO fails,
-and for the callers that keep factors for repeated solves (thermal, transient heat, modes).
+Which rung solves which system is decided in one place, :mod:`simulator.linalg.ladder`
+(thresholds in :mod:`simulator.linalg.thresholds`). When MKL is installed, sparse symmetric
+systems are solved by PARDISO (:func:`pardiso_solve`, :mod:`simulator.linalg.pardiso`), whose
+analysis is kept per sparsity pattern like the METIS ordering below; it is 3-6x faster than
+SuperLU at every size measured. The rest of this module is the SuperLU path, without MKL or if
+PARDISO fails.
 
 SuperLU's minimum-degree orderings make a fill that grows fast on large 2-D sheet meshes
 (1e5 nodes: 34e6 entries in L, 19 GFlop). METIS nested dissection on the graph of the
@@ -53,22 +55,12 @@ import scipy.sparse.linalg as spla
 
 from . import pardiso
 
-__all__ = ["ND_LIMIT", "NestedDissection", "ordering_for", "nested_dissection_ordering",
-           "nested_dissection_solve", "nested_dissection_factor", "PermutedLU",
-           "supervariables", "accurate", "backward_error", "refined", "BACKWARD_ERROR_TOL",
-           "pardiso_solve", "PARDISO_LIMIT", "factor_symmetric", "pardiso_factor"]
+__all__ = ["NestedDissection", "ordering_for", "nested_dissection_ordering",
+           "nested_dissection_solve", "nd_factors", "PermutedLU", "supervariables", "accurate",
+           "backward_error", "refined", "BACKWARD_ERROR_TOL", "pardiso_solve", "pardiso_handle",
+           "solves_ones"]
 
 logger = logging.getLogger(__name__)
-
-#: From this many unknowns on, symmetric systems are factorised in nested-dissection order
-#: (below it SuperLU's minimum degree is as fast, and results stay those of earlier versions).
-ND_LIMIT = 10_000
-
-#: From this many unknowns on, Newton's sparse tangents are solved by PARDISO when it is
-#: available (:func:`pardiso_solve`). Smaller ones are dense (``small_solve.DENSE_LIMIT``);
-#: above that PARDISO is faster than SuperLU at every size measured on Miura sheets: 3x at
-#: 441 unknowns, 4x at 3,105, 5x at 7,140, 5-6x at 3e5.
-PARDISO_LIMIT = 150
 
 #: How many sparsity patterns keep their ordering (one per model in use, typically).
 _CACHE_SIZE = 4
@@ -260,7 +252,7 @@ def ordering_for(K) -> NestedDissection | None:
     return entry.nd
 
 
-def _pardiso_for(K):
+def pardiso_handle(K):
     """The PARDISO analysis of the pattern of ``K`` (made on first use, cached with the
     pattern), or None when PARDISO is not available or cannot take the pattern."""
     if not pardiso.available():
@@ -284,7 +276,7 @@ def pardiso_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
     is not :func:`accurate` even after :func:`refined`. ``r`` is (n,) or (n, k)."""
     if K.format != "csr":
         K = K.tocsr()
-    handle = _pardiso_for(K)
+    handle = pardiso_handle(K)
     if handle is None:
         return None
     try:
@@ -298,7 +290,7 @@ def pardiso_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray | None:
     return x
 
 
-def _factor(K) -> PermutedLU | None:
+def nd_factors(K) -> PermutedLU | None:
     """Factors of ``K`` in its cached nested-dissection order, or None (no ordering, or an
     exactly zero pivot)."""
     nd = ordering_for(K)
@@ -316,7 +308,7 @@ def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray 
     order; None when there is no ordering, a pivot is exactly zero or the solution is not
     :func:`accurate` even after :func:`refined` (the caller then takes another path).
     ``r`` is (n,) or (n, k)."""
-    lu = _factor(K)
+    lu = nd_factors(K)
     if lu is None:
         return None
     x, ok = refined(K, lu.solve, r, lu.solve(r), rtol)
@@ -324,65 +316,6 @@ def nested_dissection_solve(K, r: np.ndarray, rtol: float = 1e-6) -> np.ndarray 
         logger.debug("nested-dissection solve inaccurate (indefinite matrix?)")
         return None
     return x
-
-
-def factor_symmetric(A, minimum_degree_first: bool = False):
-    """Factors of a symmetric sparse ``A`` for repeated solves: an object with ``solve(b)``,
-    b (n,) or (n, k). The one choice of factorisation for the thermal, transient-heat and
-    shift-invert matrices:
-
-    * from :data:`PARDISO_LIMIT` unknowns, PARDISO's factors when it is available (analysis
-      cached per pattern; :class:`~simulator.linalg.pardiso.PardisoFactor`);
-    * else from :data:`ND_LIMIT` unknowns, SuperLU in the cached nested-dissection order
-      (:func:`nested_dissection_factor`);
-    * else SuperLU: with ``minimum_degree_first``, symmetric mode in minimum-degree order if
-      its solution of a vector of ones is :func:`accurate`; otherwise partial pivoting in
-      COLAMD order (SuperLU's default).
-
-    Each factorisation but the last is checked by its solution of a vector of ones (to
-    1e-8, :func:`accurate`) and skipped if that fails.
-    """
-    if A.format != "csr":
-        A = A.tocsr()
-    n = A.shape[0]
-    if n >= PARDISO_LIMIT and pardiso.available():
-        factor = pardiso_factor(A)
-        if factor is not None:
-            return factor
-    if n >= ND_LIMIT:
-        lu = nested_dissection_factor(A)
-        if lu is not None:
-            return lu
-    Ac = A.tocsc()
-    if minimum_degree_first:
-        lu = spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
-        if _solves_ones(A, lu.solve, 1e-8):
-            return lu
-    return spla.splu(Ac)
-
-
-def pardiso_factor(A, rtol: float = 1e-8):
-    """PARDISO's factors of a symmetric sparse CSR ``A`` for repeated solves (analysis cached
-    per pattern), or None when PARDISO is not available, fails, or the solution of a vector
-    of ones is not :func:`accurate`."""
-    handle = _pardiso_for(A)
-    if handle is None:
-        return None
-    try:
-        factor = handle.factorize(A)
-        return factor if _solves_ones(A, factor.solve, rtol) else None
-    except pardiso.PardisoError as exc:
-        logger.debug("PARDISO failed (%s)", str(exc))
-        return None
-
-
-def nested_dissection_factor(K, rtol: float = 1e-8) -> PermutedLU | None:
-    """Factors of a symmetric sparse ``K`` in its cached nested-dissection order for repeated
-    solves, or None when there is no ordering, a pivot is exactly zero or the solution of a
-    vector of ones is not :func:`accurate` (to ``rtol``)."""
-    lu = _factor(K)
-    return lu if lu is not None and _solves_ones(K, lu.solve, rtol) else None
 
 
 def backward_error(K, x: np.ndarray, r: np.ndarray, residual=None) -> float:
@@ -432,7 +365,7 @@ def refined(K, solve, r: np.ndarray, x: np.ndarray, rtol: float = 1e-6,
     return x, False
 
 
-def _solves_ones(A, solve, rtol: float) -> bool:
+def solves_ones(A, solve, rtol: float) -> bool:
     """Whether factors (``solve(v)`` ~ ``A^-1 v``) kept for repeated solves are
     :func:`accurate` on a vector of ones: the check of each one before it is kept."""
     b = np.ones(A.shape[0])

@@ -191,6 +191,11 @@ class PardisoLDLT:
         return int(self.iparm[13])
 
     @property
+    def positive_eigenvalues(self) -> int:
+        """Positive eigenvalues of the last factorised matrix (its inertia)."""
+        return int(self.iparm[21])
+
+    @property
     def negative_eigenvalues(self) -> int:
         """Negative eigenvalues of the last factorised matrix (its inertia)."""
         return int(self.iparm[22])

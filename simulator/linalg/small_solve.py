@@ -1,15 +1,16 @@
-"""Solves of small tangent systems ``K du = r`` (at most :data:`DENSE_LIMIT` unknowns).
+"""Solves of small tangent systems ``K du = r`` (at most :data:`DENSE_LIMIT` unknowns): the dense
+rung of the factorisation ladder (:mod:`simulator.linalg.ladder`).
 
-* :func:`solve_dense`: LAPACK directly (no ``scipy.linalg.solve`` wrapper): Cholesky when K is
-  positive definite, else LU with partial pivoting; :func:`simulator.solvers.newton._solve_linear`
-  uses it for every small system.
+* :class:`DenseFactor`: LAPACK directly (no ``scipy.linalg`` wrappers): Cholesky when K is
+  positive definite, else LU with partial pivoting, with LAPACK's reciprocal condition
+  estimate; :func:`solve_dense` factors and solves once.
 * :class:`SparseCholesky`: the structure of a small tangent (fill-reducing order and pattern of
   the Cholesky factor, from the element connectivity) for the compiled factorisation of
   :mod:`simulator.linalg._cholesky_jit`, which reads the dense matrix of the fused kernel; bar-and-hinge
   tangents are sparse enough (96 free DOFs of the gripper: ~1,100 non-zeros in L, ~11,000
   multiply-adds against ~300,000 for dense Cholesky) for it to beat LAPACK's dense routines.
 
-Both return None where ``scipy.linalg.solve`` under warnings-as-errors would have failed:
+Both solves return None where ``scipy.linalg.solve`` under warnings-as-errors would have failed:
 K singular (a zero pivot), ill-conditioned (1-norm reciprocal condition estimate below machine
 epsilon: LAPACK's ``gecon`` / ``pocon``, or the same estimator compiled) or a result that is
 not finite; Newton then reports a singular tangent.
@@ -23,17 +24,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ._cholesky_jit import cholesky_solve
+from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
-__all__ = ["as_dense", "solve_dense", "SparseCholesky", "pattern_of", "DENSE_LIMIT",
-           "SPARSE_MIN"]
+__all__ = ["as_dense", "solve_dense", "checked_solve", "DenseFactor", "SparseCholesky",
+           "pattern_of",
+           "DENSE_LIMIT", "SPARSE_MIN"]
 
-#: Up to this many free DOFs tangents are dense: evaluated by the fused kernel (compiled
-#: backend) and solved densely (faster for small meshes).
-DENSE_LIMIT = 150
-#: From this many free DOFs (and up to DENSE_LIMIT) the fused path factors sparsely
-#: (:class:`SparseCholesky`); smaller systems are solved by LAPACK, as fast there, and their
-#: runs do not compile the sparse factorisation.
-SPARSE_MIN = 64
 _EPS = float(np.finfo(float).eps)
 
 
@@ -47,27 +43,55 @@ def solve_dense(K: np.ndarray, r: np.ndarray):
     definite, else LU with partial pivoting (``scipy.linalg.solve``'s general path). None when
     K is singular, ill-conditioned (reciprocal condition estimate below machine epsilon) or
     the result is not finite."""
-    anorm = lapack.dlange("1", K)
-    c, info = lapack.dpotrf(K, lower=0, clean=0)
-    if info == 0:
-        rcond, _ = lapack.dpocon(c, anorm)
-        du, info = lapack.dpotrs(c, r)
-    else:
-        return _solve_lu(K, r, anorm)
-    if info != 0 or not rcond >= _EPS:
-        return None
-    return du if np.isfinite(du).all() else None
+    return checked_solve(DenseFactor(K), r)
 
 
-def _solve_lu(K, r, anorm):
-    lu, piv, info = lapack.dgetrf(K)
-    if info != 0:
+def checked_solve(factor: DenseFactor, r: np.ndarray):
+    """``factor``'s solution of ``K du = r``, or None when K is singular, ill-conditioned
+    (reciprocal condition estimate below machine epsilon) or du is not finite."""
+    if factor.info != 0 or not factor.rcond >= _EPS:
         return None
-    rcond, _ = lapack.dgecon(lu, anorm)
-    du, info = lapack.dgetrs(lu, piv, r)
-    if info != 0 or not rcond >= _EPS:
-        return None
-    return du if np.isfinite(du).all() else None
+    du, info = factor.solve_info(r)
+    return du if info == 0 and np.isfinite(du).all() else None
+
+
+class DenseFactor:
+    """LAPACK factors of a dense square ``K``: Cholesky (upper triangle) if ``cholesky_first``
+    and K is positive definite, else LU with partial pivoting.
+
+    Attributes
+    ----------
+    method : "cholesky" or "lu"
+    info : int
+        LAPACK's ``info`` of the factorisation (> 0: an exactly zero pivot of LU).
+    rcond : float
+        1-norm reciprocal condition estimate (``pocon`` / ``gecon``); 0 when ``info != 0``.
+    """
+
+    def __init__(self, K: np.ndarray, cholesky_first: bool = True):
+        self.n = K.shape[0]
+        anorm = lapack.dlange("1", K)
+        if cholesky_first:
+            c, info = lapack.dpotrf(K, lower=0, clean=0)
+            if info == 0:
+                self.method, self.info, self._c = "cholesky", 0, c
+                self.rcond = lapack.dpocon(c, anorm)[0]
+                return
+        lu, piv, info = lapack.dgetrf(K)
+        self.method, self.info, self._c, self._piv = "lu", info, lu, piv
+        self.rcond = lapack.dgecon(lu, anorm)[0] if info == 0 else 0.0
+
+    def solve_info(self, b: np.ndarray):
+        """(``K^-1 b``, LAPACK's ``info``) for b (n,) or (n, k)."""
+        if self.method == "cholesky":
+            return lapack.dpotrs(self._c, b)
+        return lapack.dgetrs(self._c, self._piv, b)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``K^-1 b`` for b (n,) or (n, k) (not finite where K is singular)."""
+        if self.info != 0:
+            return np.full(np.shape(b), np.nan)
+        return self.solve_info(b)[0]
 
 
 class SparseCholesky:
@@ -136,7 +160,7 @@ class SparseCholesky:
         if rcond >= _EPS:                               # (NaN: du not finite)
             return du
         if rcond < 0:                                   # not positive definite
-            return _solve_lu(K, r, lapack.dlange("1", K))
+            return checked_solve(DenseFactor(K, cholesky_first=False), r)
         return None
 
 

@@ -27,7 +27,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
-from ..linalg.small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, pattern_of, solve_dense
+from ..linalg import thresholds
+from ..linalg.ladder import solve
+from ..linalg.small_solve import SparseCholesky, pattern_of
+from ..linalg.thresholds import DENSE_LIMIT
 from .contact_search import ContactSearch
 from ..thermal import _thermal_jit
 from .elements import _fused_jit, _springs_jit
@@ -217,18 +220,17 @@ class EquilibriumSystem:
         (n_free,) with ``ev.tangent du = r`` [m], or None if the tangent is singular (see
         :mod:`simulator.linalg.small_solve`).
 
-        From :data:`SPARSE_MIN` rows the tangent is factored sparsely: the structure of its
-        Cholesky factor is that of the bars, springs, supports and the contact pairs active
-        so far (recomputed, rarely, when a pair becomes active for the first time); if that
-        factor needs more than a twentieth of dense Cholesky's ~n^3/3 multiply-adds, LAPACK's
-        dense routines are faster and solve instead, as they do below SPARSE_MIN."""
-        K = ev.tangent
-        if ev.contact_pairs is None or self.n_free < SPARSE_MIN:
-            return solve_dense(K, r)
-        chol = self._cholesky(ev.contact_pairs)
-        if 20 * chol.flops > self.n_free ** 3:
-            return solve_dense(K, r)
-        return chol.solve(K, r)
+        From :data:`~simulator.linalg.thresholds.SPARSE_MIN` rows the tangent is factored
+        sparsely: the structure of its Cholesky factor is that of the bars, springs, supports
+        and the contact pairs active so far (recomputed, rarely, when a pair becomes active
+        for the first time); if that factor needs more than a twentieth of dense Cholesky's
+        ~n^3/3 multiply-adds, LAPACK's dense routines are faster and solve instead, as they do
+        below SPARSE_MIN (the choice is the dense rung of the ladder,
+        :func:`~simulator.linalg.ladder.solve`)."""
+        chol = None
+        if ev.contact_pairs is not None and self.n_free >= thresholds.SPARSE_MIN:
+            chol = self._cholesky(ev.contact_pairs)
+        return solve(ev.tangent, r, cholesky=chol)
 
     def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:
         chol, covered = self._chol

@@ -203,7 +203,7 @@ class _ArcLengthRun:
     def increment(self) -> ContinuationResult | None:
         """Predict and correct one increment; accept it, or halve the arc length for a retry.
         The result if the path ends here, else None."""
-        uhat, msg = _tangent(self.pt, self.lam)
+        uhat, msg = _tangent(self.pt, self.lam, self.options.linear_solver)
         if uhat is None:
             return self.result(False, "failed", msg)
         s, dlam = self.load_step(uhat)
@@ -341,7 +341,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     cf = c[free]
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
     pt = path.at(u, lam)
-    uhat, msg = _tangent(pt, lam)
+    uhat, msg = _tangent(pt, lam, options.linear_solver)
     if uhat is not None and abs(cf @ uhat) <= 1e-12 * np.linalg.norm(cf) * np.linalg.norm(uhat):
         raise ParameterError("displacement_control: the reference load does not move the "
                              "controlled displacement (c . K^-1 P = 0); it cannot be controlled "
@@ -351,7 +351,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     t, dt, in_row = 0.0, 1.0 / increments, 0
     while t < 1.0 - 1e-12:
         t_try = min(1.0, t + dt)
-        uhat, msg = _tangent(pt, lam)
+        uhat, msg = _tangent(pt, lam, options.linear_solver)
         ok = uhat is not None and cf @ uhat != 0
         if ok:
             value = start + t_try * (target - start)

@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from ..linalg.ladder import check_backend
 
 __all__ = ["DynamicsOptions"]
 
@@ -52,6 +53,9 @@ class DynamicsOptions:
         Newton iterations per time step.
     max_cuts : int
         How many times a time step may be halved (recursively) before the integration fails.
+    linear_solver : {"auto", "dense", "pardiso", "superlu"}
+        Backend of the effective-stiffness solves (as ``NewtonOptions.linear_solver``; see
+        :mod:`simulator.linalg.ladder`).
     """
 
     method: str = "newmark"
@@ -63,8 +67,10 @@ class DynamicsOptions:
     atol: float = 0.0
     max_iter: int = 25
     max_cuts: int = 8
+    linear_solver: str = "auto"
 
     def __post_init__(self):
+        check_backend(self.linear_solver, "DynamicsOptions.linear_solver")
         if self.method not in METHODS:
             raise ParameterError(f"DynamicsOptions.method = {self.method!r}; use one of "
                                  f"{', '.join(METHODS)}.")

@@ -37,7 +37,9 @@ from .dynamics_options import DynamicsOptions, _real
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
 from ..errors import ParameterError
 from ..model.mass import check_masses, lumped_areas, lumped_masses
-from .newton import DENSE_LIMIT, _solve_linear, _tangent
+from .newton import _tangent
+from ..linalg import thresholds
+from ..linalg.ladder import solve
 from ..linalg.small_solve import as_dense
 
 __all__ = ["MotionState", "StepReport", "TimeIntegrator"]
@@ -228,7 +230,8 @@ class TimeIntegrator:
                 return self._accept(s, dt, f_ext, rest, ev, u, v, a, power, it, norms)
             if it == o.max_iter:
                 break
-            du = _solve_linear(self._jacobian(_tangent(ev), Kb, af, am, c_a, c_v, c_diag), -r)
+            du = solve(self._jacobian(_tangent(ev), Kb, af, am, c_a, c_v, c_diag), -r,
+                       backend=o.linear_solver)
             if du is None:
                 return StepReport(False, "effective stiffness is singular", s, it, 0,
                                   (np.array(norms),))
@@ -241,8 +244,9 @@ class TimeIntegrator:
     def _jacobian(self, K, Kb, af, am, c_a, c_v, c_diag):
         """Effective stiffness ``(1 - af) (K + c_v Kb) + (1 - am) c_a M + (1 - af) c_v C_diag``
         on the free DOFs: dense for small systems (the same numbers as the sparse form, which
-        :func:`~simulator.solvers.newton._solve_linear` would densify anyway), else CSR."""
-        dense = K.shape[0] <= DENSE_LIMIT
+        the ladder, :func:`~simulator.linalg.ladder.solve`, would densify anyway), else CSR."""
+        dense = K.shape[0] <= thresholds.DENSE_LIMIT and self.options.linear_solver in (
+            "auto", "dense")
         J = (1 - af) * (as_dense(K) if dense else K)
         if Kb is not None:                   # d(Kb(u) v)/du ~ c_v Kb
             J = J + ((1 - af) * c_v) * (as_dense(Kb) if dense else Kb)

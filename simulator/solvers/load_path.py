@@ -12,16 +12,12 @@ equation (:class:`_Constraint`): ``c . u = value`` or ``lambda = value``.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
-from .newton import DENSE_LIMIT
 from .newton import _tangent as _assembled_tangent
-from ..linalg.small_solve import as_dense
+from ..linalg.ladder import solve
 
 __all__ = ["LoadPath", "PathPoint"]
 
@@ -85,24 +81,15 @@ class LoadPath:
                          ev)
 
 
-def _solve(K, B):
-    """Solve K X = B (B (n,) or (n, k)); None if K is exactly singular or X not finite.
+def _solve(K, B, backend: str = "auto"):
+    """Solve K X = B (B (n,) or (n, k)) by the factorisation ladder, the same backend as
+    Newton's (:func:`~simulator.linalg.ladder.solve`); None if K is exactly singular or X
+    is not finite.
 
     No ill-conditioning check: near a limit point K is nearly singular by design, and the
     bordered corrector combines the two solutions into a well-conditioned update.
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
-        try:
-            if K.shape[0] <= DENSE_LIMIT:
-                lu = scipy.linalg.lu_factor(as_dense(K), check_finite=False)
-                X = scipy.linalg.lu_solve(lu, B, check_finite=False)
-            else:
-                X = spla.splu(K.tocsc()).solve(B)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError,
-                scipy.linalg.LinAlgWarning):
-            return None
-    return X if np.all(np.isfinite(X)) else None
+    return solve(K, B, backend=backend, reject_ill_conditioned=False)
 
 
 @dataclass
@@ -144,7 +131,7 @@ def _correct(path, u, lam, constraint, options, size):
             return True, u.reshape(-1, 3), lam, pt, it, res, "converged"
         if it == options.max_iter:
             break
-        X = _solve(pt.K, np.column_stack([pt.q, pt.r]))
+        X = _solve(pt.K, np.column_stack([pt.q, pt.r]), options.linear_solver)
         if X is None:
             return False, u, lam, pt, it, res, "tangent stiffness is exactly singular"
         dlam = constraint.dlam(u[free], lam, X[:, 0], X[:, 1])
@@ -179,9 +166,9 @@ def _begin(path, u, lam):
     return path.at(u, lam)
 
 
-def _tangent(pt, lam):
+def _tangent(pt, lam, backend: str = "auto"):
     """K^-1 q at a converged point, or a message if K is exactly singular."""
-    uhat = _solve(pt.K, pt.q)
+    uhat = _solve(pt.K, pt.q, backend)
     if uhat is None:
         return None, f"tangent stiffness is exactly singular at load factor {lam:.6g}"
     return uhat, ""

@@ -33,7 +33,8 @@ import scipy.sparse.linalg as spla
 
 from .._version import __version__
 from ..errors import ParameterError
-from ..linalg.linsolve import factor_symmetric
+from ..linalg.ladder import check_backend, factorize
+from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 from ..model.mass import check_masses, lumped_masses
 from ..model.model import Model
 from ..state import SimulationState, equilibrium_system, initial_state
@@ -42,8 +43,6 @@ __all__ = ["ModesResult", "natural_modes"]
 
 logger = logging.getLogger(__name__)
 
-#: Up to this many free DOFs the dense solver is used with ``method="auto"``.
-DENSE_LIMIT = 600
 #: A mode whose eigenvalue magnitude is below this fraction of the stiffness scale
 #: max(K_ii / M_ii) is at the round-off level and counts as a zero (mechanism) mode; rigid-body
 #: modes are recognised by their shape. (Soft but real modes can lie only a few machine epsilons
@@ -115,7 +114,7 @@ class ModesResult:
 
 
 def natural_modes(model: Model, state: SimulationState | None = None, count: int = 10,
-                  method: str = "auto", masses=None) -> ModesResult:
+                  method: str = "auto", masses=None, linear_solver: str = "auto") -> ModesResult:
     """The ``count`` lowest natural modes of ``model`` linearised about ``state``.
 
     Parameters
@@ -131,6 +130,8 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
         :data:`DENSE_LIMIT` free DOFs.
     masses : (n_nodes,) nodal masses [kg], optional
         Default :func:`~simulator.model.mass.lumped_masses` (needs material densities).
+    linear_solver : {"auto", "dense", "pardiso", "superlu"}
+        Backend of the shift-invert factorisation (:func:`~simulator.linalg.ladder.factorize`).
 
     Returns
     -------
@@ -147,6 +148,7 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
     if method not in ("auto", "dense", "sparse"):
         raise ParameterError(f"natural_modes: method = {method!r}; use 'auto', 'dense' or "
                              "'sparse'.")
+    check_backend(linear_solver, "natural_modes: linear_solver")
     system = equilibrium_system(model)
     n_free = system.n_free
     if not (isinstance(count, (int, np.integer)) and not isinstance(count, bool)
@@ -163,7 +165,7 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
         lam, phi = scipy.linalg.eigh(K.toarray(), np.diag(mf), subset_by_index=(0, count - 1))
         status, message = "converged", "converged"
     else:
-        lam, phi, status, message = _shift_invert(K, mf, count, scale)
+        lam, phi, status, message = _shift_invert(K, mf, count, scale, linear_solver)
     shapes = np.zeros((len(lam), model.mesh.n_dof))
     shapes[:, system.free] = phi.T
     zero = (np.abs(lam) <= ZERO_TOL * scale) | _rigid_modes(model, state, shapes.reshape(
@@ -182,7 +184,7 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
                        "dense" if dense else "shift-invert", wall, model, state)
 
 
-def _shift_invert(K, mf, count, scale):
+def _shift_invert(K, mf, count, scale, linear_solver="auto"):
     """Lowest eigenpairs by shift-invert Lanczos about a small negative shift.
 
     With the diagonal mass, ``K phi = lam M phi`` is the standard symmetric problem of
@@ -192,7 +194,7 @@ def _shift_invert(K, mf, count, scale):
     """
     sigma = -1e-12 * scale     # just below the zero modes: K - sigma M is regular
     A = (K - sigma * sp.diags(mf)).tocsc()
-    lu = _factorise(A)
+    lu = _factorise(A, linear_solver)
     s = np.sqrt(mf)
     op = spla.LinearOperator(A.shape, matvec=lambda y: s * lu.solve(s * np.ravel(y)),
                              dtype=float)
@@ -209,11 +211,11 @@ def _shift_invert(K, mf, count, scale):
     return lam[order], phi[:, order], status, msg
 
 
-def _factorise(A):
-    """Factors of a symmetric matrix (:func:`~simulator.linalg.linsolve.factor_symmetric`: PARDISO if
-    installed; else SuperLU in symmetric mode, in nested-dissection order from
-    :data:`~simulator.linalg.linsolve.ND_LIMIT` unknowns on, partial pivoting if inaccurate)."""
-    return factor_symmetric(A, minimum_degree_first=True)
+def _factorise(A, linear_solver="auto"):
+    """Factors of a symmetric matrix by the ladder (:func:`~simulator.linalg.ladder.factorize`:
+    PARDISO if installed; else SuperLU in symmetric mode, in nested-dissection order from
+    :data:`~simulator.linalg.thresholds.ND_LIMIT` unknowns on, partial pivoting if inaccurate)."""
+    return factorize(A, kind="symmetric", backend=linear_solver)
 
 
 def _rigid_modes(model, state, shapes, m) -> np.ndarray:

@@ -12,18 +12,14 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from dataclasses import asdict, dataclass, field
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse.linalg as spla
 
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
 from ..errors import ParameterError
-from ..linalg.linsolve import ND_LIMIT, PARDISO_LIMIT, nested_dissection_solve, pardiso_solve, refined
-from ..linalg.small_solve import DENSE_LIMIT, as_dense, solve_dense
+from ..linalg.ladder import check_backend, solve as linear_solve
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
@@ -71,6 +67,12 @@ class NewtonOptions:
         (5e-7 N against ~1e-8 N of self-weight) this takes one to a few updates per increment,
         i.e. under-converged equilibria: keep it off for real work.
 
+    linear_solver : {"auto", "dense", "pardiso", "superlu"}
+        Backend of the tangent solves (:mod:`simulator.linalg.ladder`): "auto" is the ladder
+        (dense up to 150 free DOFs, PARDISO when MKL is installed, else SuperLU in a
+        fill-reducing order); the others force one. ``ETORIGAMI_PARDISO=0`` in the environment
+        still takes PARDISO out of "auto".
+
     Whatever the criterion, an iteration whose correction is at round-off level
     (below 1e-13 of the model size) also counts as converged.
     """
@@ -84,8 +86,10 @@ class NewtonOptions:
     raise_on_failure: bool = False
     stall_rtol: float = 1e-3
     reference_loop: bool = False
+    linear_solver: str = "auto"
 
     def __post_init__(self):
+        check_backend(self.linear_solver, "NewtonOptions.linear_solver")
         if self.criterion not in ("residual", "displacement"):
             raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
                                  "'displacement'.")
@@ -162,42 +166,6 @@ class PathResult:
     evaluation: Evaluation | None = None
 
 
-def _solve_linear(K, r):
-    """Solve K du = r; returns None if K is singular or the result is not finite.
-
-    ``K`` is sparse or a dense array. Up to :data:`DENSE_LIMIT` rows it is solved densely by
-    LAPACK (:func:`~simulator.linalg.small_solve.solve_dense`). Larger ones use MKL PARDISO when it
-    is installed (:func:`~simulator.linalg.linsolve.pardiso_solve`, from
-    :data:`~simulator.linalg.linsolve.PARDISO_LIMIT` rows), else (or if it fails) SuperLU in
-    symmetric mode (diagonal pivots) in a fill-reducing order: from
-    :data:`~simulator.linalg.linsolve.ND_LIMIT` unknowns on, METIS nested dissection cached per
-    sparsity pattern (:func:`~simulator.linalg.linsolve.ordering_for`), below it (or if that fails)
-    SuperLU's symmetric minimum degree (~3x less fill than the default COLAMD on bar-and-hinge meshes).
-    A solution that is not :func:`~simulator.linalg.linsolve.accurate` (diagonal pivots on an
-    indefinite tangent) gets iterative refinement with the same factors; if that fails too,
-    the solve falls back to partial pivoting with COLAMD.
-    """
-    if isinstance(K, np.ndarray) or K.shape[0] <= DENSE_LIMIT:
-        return solve_dense(as_dense(K), r)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            n = K.shape[0]
-            du = pardiso_solve(K, r) if n >= PARDISO_LIMIT else None
-            if du is None and n >= ND_LIMIT:
-                du = nested_dissection_solve(K, r)
-            if du is None:
-                Kc = K.tocsc()
-                lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                               options={"SymmetricMode": True})
-                du, ok = refined(K, lu.solve, r, lu.solve(r))
-                if not ok:
-                    du = spla.splu(Kc).solve(r)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
-            return None
-    return du if np.all(np.isfinite(du)) else None
-
-
 def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,
            options: NewtonOptions = NewtonOptions()) -> NewtonResult:
     """Solve ``f_int(u) = f_ext`` on the free DOFs from the start ``u0`` (n_nodes, 3).
@@ -210,7 +178,7 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     u = u0.copy().ravel()
     size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
     f_free = f_ext[free]
-    evaluate, solve = _operations(system, spring_rest)
+    evaluate, solve = _operations(system, spring_rest, options.linear_solver)
     res_norms, cor_norms = [], []
     ref, best = None, (math.inf, None, None)
     for it in range(options.max_iter + 1):
@@ -266,7 +234,7 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
     while updates < options.max_iter - 1 and measure > options.atol:
         ev = system.evaluate(u.reshape(-1, 3), spring_rest)
         r = (f_ext - ev.f_int)[free]
-        du = _solve_linear(_tangent(ev), r)
+        du = linear_solve(_tangent(ev), r, backend=options.linear_solver)
         if du is None:
             return _newton_result(u0, False, updates, res_norms, cor_norms,
                                   "tangent stiffness is singular (mechanism or unsupported body?)")
@@ -288,11 +256,13 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
     return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
 
 
-def _operations(system, spring_rest):
+def _operations(system, spring_rest, backend="auto"):
     """``evaluate(u)`` and ``solve(ev, r)`` for a system: an EquilibriumSystem's prepared
     evaluator and, for the dense tangents of its fused kernel, its sparse / dense solve
-    (:meth:`~simulator.mechanics.equilibrium.EquilibriumSystem.solve_dense_tangent`); else ``evaluate``
-    and :func:`_solve_linear` (any object with the ``evaluate`` interface)."""
+    (:meth:`~simulator.mechanics.equilibrium.EquilibriumSystem.solve_dense_tangent`); else
+    ``evaluate`` and the ladder's :func:`~simulator.linalg.ladder.solve` (any object with the
+    ``evaluate`` interface). A forced sparse ``backend`` solves the CSR form of a dense
+    tangent."""
     evaluator = getattr(system, "evaluator", None)
     evaluate = evaluator(spring_rest) if evaluator is not None else \
         (lambda u: system.evaluate(u, spring_rest))
@@ -300,9 +270,11 @@ def _operations(system, spring_rest):
 
     def solve(ev, r):
         K = _tangent(ev)
-        if dense is not None and isinstance(K, np.ndarray):
+        if isinstance(K, np.ndarray) and backend in ("pardiso", "superlu"):
+            K = ev.K
+        elif dense is not None and isinstance(K, np.ndarray):
             return dense(ev, r)
-        return _solve_linear(K, r)
+        return linear_solve(K, r, backend=backend)
     return evaluate, solve
 
 

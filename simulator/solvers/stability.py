@@ -18,14 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..linalg.ladder import factorize
 from ..linalg.small_solve import as_dense
+from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
 __all__ = ["Stability", "tangent_stability", "DENSE_LIMIT"]
 
-#: Up to this many free DOFs the tangent is analysed with a dense symmetric eigensolver.
-DENSE_LIMIT = 600
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +61,7 @@ class Stability:
         return abs(float(self.mode @ q)) / nq if nq > 0 else float("nan")
 
 
-def tangent_stability(K, k: int = 6) -> Stability:
+def tangent_stability(K, k: int = 6, linear_solver: str = "auto") -> Stability:
     """Inertia and lowest eigenpair of the symmetric reduced tangent ``K`` (n_free, n_free).
 
     Parameters
@@ -68,6 +69,9 @@ def tangent_stability(K, k: int = 6) -> Stability:
     K : sparse or dense (n, n) symmetric matrix [N/m]
     k : int
         Eigenvalues computed near zero for large systems.
+    linear_solver : {"auto", "dense", "pardiso", "superlu"}
+        Backend of the shift-invert factorisation of large systems
+        (:func:`~simulator.linalg.ladder.factorize`).
     """
     n = K.shape[0]
     if n == 0:
@@ -78,9 +82,13 @@ def tangent_stability(K, k: int = 6) -> Stability:
         return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], True)
     diag = np.abs(K.diagonal())
     shift = -1e-8 * float(np.median(diag[diag > 0])) if np.any(diag > 0) else -1e-12
+    K = sp.csr_matrix(K)
+    lu = factorize((K - shift * sp.identity(n, format="csr")).tocsr(), kind="symmetric",
+                   backend=linear_solver)
+    op = spla.LinearOperator(K.shape, matvec=lambda y: lu.solve(np.ravel(y)), dtype=float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        w, V = spla.eigsh(K.tocsc(), k=min(k, n - 1), sigma=shift, which="LM")
+        w, V = spla.eigsh(K, k=min(k, n - 1), sigma=shift, which="LM", OPinv=op)
     order = np.argsort(w)
     w, V = w[order], V[:, order]
     return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], False)

@@ -27,14 +27,14 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 
 from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
 from ..errors import ParameterError, PatternError
-from ..linalg.linsolve import factor_symmetric
+from ..linalg import thresholds
+from ..linalg.ladder import factorize
 from ..geometry.materials import AIR
 from ..model.mesh import BarHingeMesh
 
@@ -52,8 +52,6 @@ _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
 #: Floor of t_air relative to t_env: a triangle lying on a boundary panel would otherwise get an
 #: infinite conductance (the reference divides by zero there).
 _MIN_AIR_FRACTION = 1e-9
-#: Up to this many free nodes the structure system is solved densely (Cholesky).
-DENSE_NODES = 400
 
 
 def heat_weights() -> np.ndarray:
@@ -434,22 +432,18 @@ class ThermalModel:
         """Factorise the free-node system (conduction plus condensed chains); returns its
         solver ``q_free -> rise_free``.
 
-        Up to :data:`DENSE_NODES` free nodes: dense Cholesky (the matrix is symmetric positive
-        definite; SuperLU if Cholesky fails); above:
-        :func:`~simulator.linalg.linsolve.factor_symmetric` (PARDISO if installed, else SuperLU, in
-        nested-dissection order from :data:`~simulator.linalg.linsolve.ND_LIMIT` free nodes on).
+        By the factorisation ladder (:func:`~simulator.linalg.ladder.factorize`, kind
+        "spd"): up to :data:`~simulator.linalg.thresholds.CONDUCTION_DENSE_LIMIT` free nodes
+        dense Cholesky of the matrix scattered straight from the element terms (the sparse
+        rungs if it is not positive definite); above, PARDISO if installed, else SuperLU (in
+        nested-dissection order from :data:`~simulator.linalg.thresholds.ND_LIMIT` free nodes).
         """
         n_free = len(g_free)
-        if n_free <= DENSE_NODES:
+        limit = thresholds.CONDUCTION_DENSE_LIMIT
+        if n_free <= limit:
             pos, keep = self._dense_position
             flat = np.concatenate([K.ravel(), g_free])[keep]
-            dense = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
-            c, info = _potrf(dense, lower=False, clean=False, overwrite_a=True)
-            if info == 0:
-                def cholesky_solve(q_free):
-                    sol, info = _potrs(c, q_free)
-                    if info != 0:
-                        raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
-                    return sol
-                return cholesky_solve
-        return factor_symmetric(self._free_pattern.matrix([K, g_free])).solve
+            A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
+        else:
+            A = self._free_pattern.matrix([K, g_free])
+        return factorize(A, kind="spd", dense_limit=limit).solve

@@ -35,7 +35,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
-from ..linalg.linsolve import factor_symmetric
+from ..linalg import thresholds
+from ..linalg.ladder import check_backend, factorize
 from ..model.model import Model
 from .schedules import crease_power_function
 from ..state import thermal_model
@@ -202,9 +203,11 @@ class ThetaStepper:
         Time step [s], > 0.
     theta : float
         Weight of the new time level, in [1/2, 1].
+    linear_solver : {"auto", "dense", "pardiso", "superlu"}
+        Backend of the factorisation (:func:`~simulator.linalg.ladder.factorize`).
     """
 
-    def __init__(self, K, C, dt, theta=REFERENCE_THETA):
+    def __init__(self, K, C, dt, theta=REFERENCE_THETA, linear_solver="auto"):
         self.dt, self.theta = check_time_step(dt), check_theta(theta)
         C = np.asarray(C, float)
         if C.ndim != 1 or K.shape != (len(C), len(C)) or not np.all(C > 0):
@@ -213,8 +216,10 @@ class ThetaStepper:
         self.K, self.C = sp.csc_matrix(K), C
         mass = sp.diags(C / self.dt)
         A = (mass + self.theta * self.K).tocsc()
-        # PARDISO if installed; else SuperLU, in nested-dissection order on large sheets
-        self._lu = factor_symmetric(A) if len(C) else None
+        # the ladder, never dense (kept for many steps); PARDISO if installed, else SuperLU
+        self._lu = factorize(A, kind="spd", backend=check_backend(
+            linear_solver, "ThetaStepper: linear_solver"),
+            dense_limit=thresholds.TRANSIENT_DENSE_LIMIT) if len(C) else None
         self._rhs = (mass - (1 - self.theta) * self.K).tocsr()
 
     def step(self, T, q_old, q_new) -> np.ndarray:

@@ -32,7 +32,7 @@ import os
 
 import numpy as np
 
-from ..._jit import compile_kernel
+from ..._jit import HELPER_OPTIONS, compile_kernel
 
 __all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "spring_kernel_jit",
            "use_compiled"]
@@ -47,8 +47,6 @@ _SIGNATURE = "void(f8[:, :, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], f8[
 _OFF = ("0", "off", "no", "false", "never", "numpy")
 #: Helpers called with constant offsets get a signature: without one numba would compile a
 #: version per distinct set of literal arguments.
-#: Helpers are called from compiled code only: no Python or C wrappers (less to compile).
-HELPER_OPTIONS = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 _HELPER_SIGNATURES = {"_cross": "void(f8[::1], i8, i8, i8)", "_dot": "f8(f8[::1], i8, i8)"}
 
 # offsets in the 1-D work array: 3-vectors, then 12-vectors (node blocks i, j, k, l)

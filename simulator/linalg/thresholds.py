@@ -1,0 +1,44 @@
+"""Every dense / sparse size threshold of the package, each with its reason (the one place).
+
+The factorisation ladder (:func:`simulator.linalg.ladder.factorize`) reads them at call time
+(``thresholds.X``), so a test may change one with ``monkeypatch.setattr(thresholds, ...)``.
+Different consumers need different dense limits for measured reasons; they are all here.
+"""
+
+from __future__ import annotations
+
+__all__ = ["DENSE_LIMIT", "SPARSE_MIN", "PARDISO_LIMIT", "ND_LIMIT", "CONDUCTION_DENSE_LIMIT",
+           "TRANSIENT_DENSE_LIMIT", "EIGEN_DENSE_LIMIT"]
+
+#: Up to this many free DOFs mechanical tangents are dense: evaluated by the fused kernel
+#: (compiled backend) and solved densely by LAPACK or the compiled sparse Cholesky (faster
+#: for small meshes). The default dense limit of the ladder (Newton, arc length, dynamics).
+DENSE_LIMIT = 150
+
+#: From this many free DOFs (and up to :data:`DENSE_LIMIT`) the fused path factors sparsely
+#: (:class:`~simulator.linalg.small_solve.SparseCholesky`); smaller systems are solved by
+#: LAPACK, as fast there, and their runs do not compile the sparse factorisation.
+SPARSE_MIN = 64
+
+#: From this many unknowns on, sparse symmetric systems are factorised by PARDISO when it is
+#: available. Above the dense limit PARDISO is faster than SuperLU at every size measured on
+#: Miura sheets: 3x at 441 unknowns, 4x at 3,105, 5x at 7,140, 5-6x at 3e5.
+PARDISO_LIMIT = 150
+
+#: From this many unknowns on, SuperLU factorises symmetric systems in METIS nested-dissection
+#: order (below it SuperLU's minimum degree is as fast, and results stay those of earlier
+#: versions).
+ND_LIMIT = 10_000
+
+#: Up to this many free nodes the steady conduction matrix (symmetric positive definite, one
+#: unknown per node, factorised once per solve) is factorised densely by Cholesky.
+CONDUCTION_DENSE_LIMIT = 400
+
+#: Transient heat keeps one factorisation for thousands of time steps: sparse triangular
+#: solves are cheaper than dense ones at every size, so it never goes dense (0).
+TRANSIENT_DENSE_LIMIT = 0
+
+#: Up to this many free DOFs eigen-analyses (stability, natural modes) use a dense symmetric
+#: eigensolver (all eigenvalues, exact inertia); above, shift-invert Lanczos with a factor from
+#: the ladder.
+EIGEN_DENSE_LIMIT = 600
