@@ -34,7 +34,7 @@ def test_simulator_sources_import_only_downwards():
 
 
 def test_gravity_is_named_in_one_place():
-    """9.8 / 9.81 / 9.80665 m/s^2 appear only as the named constants in simulator/model.py."""
+    """9.8 / 9.81 / 9.80665 m/s^2 appear only as the named constants in simulator/model/model.py."""
     allowed = {"model.py"}
     offenders = []
     for pkg in ("simulator", "design", "studies"):
