@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from simulator import NewtonOptions, initial_state
+from simulator import NewtonOptions
 from simulator.errors import ParameterError
 from simulator.linalg import ladder, pardiso, thresholds
 from simulator.linalg import factorize, solve

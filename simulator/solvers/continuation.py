@@ -41,6 +41,7 @@ from ..errors import ParameterError
 from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
                         _tangent)
 from .newton import NewtonOptions
+from .nonlinear import march
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
@@ -348,29 +349,33 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
                              "by that load. Load the controlled node along its direction.")
     trace = PathTrace(path, c, stability, u, lam)
     start = float(c @ u.ravel())
-    t, dt, in_row = 0.0, 1.0 / increments, 0
-    while t < 1.0 - 1e-12:
-        t_try = min(1.0, t + dt)
+    state = [u, lam, pt]
+
+    def attempt(t_try):
+        u, lam, pt = state
         uhat, msg = _tangent(pt, lam, options.linear_solver)
-        ok = uhat is not None and cf @ uhat != 0
-        if ok:
-            value = start + t_try * (target - start)
-            dl = (value - float(c @ u.ravel())) / float(cf @ uhat)
-            ok, u1, lam1, pt1, its, res, msg = _correct(
-                path, _flat(u, free, dl * uhat), lam + dl, _Constraint(cf, value), options, size)
-            trace.iterations += its
-        if not ok:
-            if in_row >= options.max_cuts or trace.cuts >= options.max_total_cuts:
-                return trace.result(False, "failed", f"gave up at controlled displacement "
-                                    f"{float(c @ u.ravel()):.6g} m after {in_row} cuts in a "
-                                    f"row: {msg or 'turning point of the controlled DOF'}",
-                                    u, lam)
-            dt, in_row, trace.cuts = dt / 2, in_row + 1, trace.cuts + 1
-            continue
-        t, u, lam, pt = t_try, u1, lam1, pt1
-        trace.accept(u, lam, pt, its, res)
-        dt = min(1.0 / increments, 2 * dt) if in_row == 0 else dt
-        in_row = 0
-        if callback is not None and callback(lam, u):
-            return trace.result(False, "stopped", "stopped by callback", u, lam)
+        if uhat is None or cf @ uhat == 0:
+            return False, msg
+        value = start + t_try * (target - start)
+        dl = (value - float(c @ u.ravel())) / float(cf @ uhat)
+        ok, u1, lam1, pt1, its, res, msg = _correct(
+            path, _flat(u, free, dl * uhat), lam + dl, _Constraint(cf, value), options, size)
+        trace.iterations += its
+        return ok, (u1, lam1, pt1, its, res) if ok else msg
+
+    def accept(t, outcome):
+        u1, lam1, pt1, its, res = outcome
+        state[:] = u1, lam1, pt1
+        trace.accept(u1, lam1, pt1, its, res)
+        return callback is not None and callback(lam1, u1)
+    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
+                "displacement increment")
+    u, lam = state[0], state[1]
+    trace.cuts = run.cuts
+    if run.status == "failed":
+        return trace.result(False, "failed", f"gave up at controlled displacement "
+                            f"{float(c @ u.ravel()):.6g} m after {run.in_row} cuts in a row: "
+                            f"{run.failure or 'turning point of the controlled DOF'}", u, lam)
+    if run.status == "stopped":
+        return trace.result(False, "stopped", "stopped by callback", u, lam)
     return trace.result(True, "converged", f"reached displacement {target:.6g} m", u, lam)

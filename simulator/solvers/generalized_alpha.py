@@ -28,7 +28,6 @@ halves (bounded), with loads and rest angles interpolated linearly in time.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -41,6 +40,7 @@ from .newton import _tangent
 from ..linalg import thresholds
 from ..linalg.ladder import solve
 from ..linalg.small_solve import as_dense
+from .nonlinear import iterate
 
 __all__ = ["MotionState", "StepReport", "TimeIntegrator"]
 
@@ -210,36 +210,20 @@ class TimeIntegrator:
         if sys.max_step is not None and np.max(np.abs(step)) > sys.max_step:   # may jump
             step *= sys.max_step / np.max(np.abs(step))                         # through a panel
         u[free] = un + step
-        norms = []
-        for it in range(o.max_iter + 1):
-            ev = sys.evaluate(u.reshape(-1, 3), rest, hessian=True)
-            uf = u[free]
-            a = c_a * (uf - un - dt * vn) - (0.5 / beta - 1) * an
-            v = vn + dt * ((1 - gamma) * an + gamma * a)
-            C, c_diag, Kb = self._damping(u)        # stiffness part at the current iterate
-            inertia, damping = (1 - am) * m * a, (1 - af) * C(v)
-            r = inertia + damping + (1 - af) * ev.f_int[free] + known
-            rn = float(np.linalg.norm(r))
-            norms.append(rn)
-            if not math.isfinite(rn):
-                return StepReport(False, "residual is not finite", s, it, 0, (np.array(norms),))
-            scale = max(np.linalg.norm(inertia), np.linalg.norm(damping),
-                        np.linalg.norm(ev.f_int[free]), np.linalg.norm(f_ext[free]))
-            if rn <= max(o.atol, o.rtol * scale) or (it and np.max(np.abs(du)) <= 1e-13 * self.size):
-                power = 0.5 * (C0(vn) + C(v))        # damping force, trapezoidal mean
-                return self._accept(s, dt, f_ext, rest, ev, u, v, a, power, it, norms)
-            if it == o.max_iter:
-                break
-            du = solve(self._jacobian(_tangent(ev), Kb, af, am, c_a, c_v, c_diag), -r,
-                       backend=o.linear_solver)
-            if du is None:
-                return StepReport(False, "effective stiffness is singular", s, it, 0,
-                                  (np.array(norms),))
-            if sys.max_step is not None and np.max(np.abs(du)) > sys.max_step:
-                du *= sys.max_step / np.max(np.abs(du))
-            u[free] += du
-        return StepReport(False, f"no convergence in {o.max_iter} Newton iterations (residual "
-                          f"{norms[-1]:.3g} N)", s, o.max_iter, 0, (np.array(norms),))
+        problem = _DynamicStep(self, u, rest, (known, f_ext[free]), (un, vn, an),
+                               (am, af, beta, gamma, dt), (c_a, c_v))
+
+        def tolerance(point, first):
+            return max(o.atol, o.rtol * point.scale)
+        out = iterate(problem, max_iter=o.max_iter, atol=o.atol, rtol=o.rtol, size=self.size,
+                      max_step=sys.max_step, tolerance=tolerance, record_final=True)
+        norms = (np.array(out.residual_norms),)
+        if not out.success:
+            return StepReport(False, out.message, s, out.iterations, 0, norms)
+        p = out.point
+        power = 0.5 * (C0(vn) + p.C(p.v))        # damping force, trapezoidal mean
+        return self._accept(s, dt, f_ext, rest, p.ev, u, p.v, p.a, power, out.iterations,
+                            out.residual_norms)
 
     def _jacobian(self, K, Kb, af, am, c_a, c_v, c_diag):
         """Effective stiffness ``(1 - af) (K + c_v Kb) + (1 - am) c_a M + (1 - af) c_v C_diag``
@@ -268,3 +252,53 @@ class TimeIntegrator:
         work = float(du @ (0.5 * (s.f_ext[free] + f_ext[free])))
         return StepReport(True, "converged", new, it, 0, (np.array(norms),),
                           dissipated=float(du @ damping), external_work=work)
+
+
+@dataclass(frozen=True, eq=False)
+class _StepPoint:
+    """One evaluation of the dynamic step: the evaluation, the Newmark velocity and
+    acceleration, the damping at the iterate and the force scale of the convergence test."""
+
+    ev: Evaluation
+    v: np.ndarray
+    a: np.ndarray
+    C: object
+    c_diag: np.ndarray
+    Kb: object
+    scale: float
+
+
+class _DynamicStep:
+    """Newton's problem of one time step for :func:`~simulator.solvers.nonlinear.iterate`:
+    the generalized-alpha residual on the free DOFs with ``u_{n+1}`` unknown, corrected with
+    the effective stiffness."""
+
+    def __init__(self, integrator, u, rest, loads, start, coefficients, rates):
+        self.it, self.u, self.rest = integrator, u, rest
+        self.known, self.f_free = loads                # terms known at t_n, f_ext on the free DOFs
+        self.un, self.vn, self.an = start
+        self.am, self.af, self.beta, self.gamma, self.dt = coefficients
+        self.c_a, self.c_v = rates
+
+    def evaluate(self):
+        it, free, m = self.it, self.it.system.free, self.it.m
+        am, af, beta, gamma, dt = self.am, self.af, self.beta, self.gamma, self.dt
+        ev = it.system.evaluate(self.u.reshape(-1, 3), self.rest, hessian=True)
+        uf = self.u[free]
+        a = self.c_a * (uf - self.un - dt * self.vn) - (0.5 / beta - 1) * self.an
+        v = self.vn + dt * ((1 - gamma) * self.an + gamma * a)
+        C, c_diag, Kb = it._damping(self.u)        # stiffness part at the current iterate
+        inertia, damping = (1 - am) * m * a, (1 - af) * C(v)
+        r = inertia + damping + (1 - af) * ev.f_int[free] + self.known
+        scale = max(np.linalg.norm(inertia), np.linalg.norm(damping),
+                    np.linalg.norm(ev.f_int[free]), np.linalg.norm(self.f_free))
+        return r, _StepPoint(ev, v, a, C, c_diag, Kb, scale)
+
+    def correct(self, p, r):
+        J = self.it._jacobian(_tangent(p.ev), p.Kb, self.af, self.am, self.c_a, self.c_v,
+                              p.c_diag)
+        du = solve(J, -r, backend=self.it.options.linear_solver)
+        return "effective stiffness is singular" if du is None else du
+
+    def apply(self, du, scale):
+        self.u[self.it.system.free] += du

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .newton import _tangent as _assembled_tangent
+from .nonlinear import iterate
 from ..linalg.ladder import solve
 
 __all__ = ["LoadPath", "PathPoint"]
@@ -113,43 +114,47 @@ def _size(system) -> float:
 
 
 def _correct(path, u, lam, constraint, options, size):
-    """Newton on (u, lambda) from a predicted point that satisfies ``constraint``.
+    """Newton on (u, lambda) from a predicted point that satisfies ``constraint``
+    (:func:`~simulator.solvers.nonlinear.iterate` on the bordered system).
 
     Returns (success, u, lam, point, iterations, residual_norms, message).
     """
-    free = path.free
-    u = u.copy().ravel()
-    res, ref, max_step = [], None, getattr(path.system, "max_step", None)
-    for it in range(options.max_iter + 1):
-        pt = path.at(u.reshape(-1, 3), lam)
-        rn = float(np.linalg.norm(pt.r))
-        res.append(rn)
-        if not math.isfinite(rn):
-            return False, u, lam, pt, it, res, "residual is not finite"
-        ref = rn if ref is None else ref
-        if options.criterion == "residual" and rn <= max(options.atol, options.rtol * ref):
-            return True, u.reshape(-1, 3), lam, pt, it, res, "converged"
-        if it == options.max_iter:
-            break
-        X = _solve(pt.K, np.column_stack([pt.q, pt.r]), options.linear_solver)
+    problem = _Bordered(path, u, lam, constraint, options.linear_solver)
+    out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
+                  size=size, criterion=options.criterion,
+                  max_step=getattr(path.system, "max_step", None))
+    u = problem.u.reshape(-1, 3) if out.success else problem.u
+    message = "converged" if out.success else out.message
+    return out.success, u, problem.lam, out.point, out.iterations, out.residual_norms, message
+
+
+class _Bordered:
+    """The corrector's problem for :func:`~simulator.solvers.nonlinear.iterate`: residual of
+    the path at (u, lambda); correction from the tangent bordered by the constraint row,
+    ``du = dlam K^-1 q + K^-1 r`` with ``dlam`` from the constraint."""
+
+    def __init__(self, path, u, lam, constraint, backend):
+        self.path, self.constraint, self.backend = path, constraint, backend
+        self.u, self.lam, self.dlam = u.copy().ravel(), lam, 0.0
+
+    def evaluate(self):
+        pt = self.path.at(self.u.reshape(-1, 3), self.lam)
+        return pt.r, pt
+
+    def correct(self, pt, r):
+        X = _solve(pt.K, np.column_stack([pt.q, r]), self.backend)
         if X is None:
-            return False, u, lam, pt, it, res, "tangent stiffness is exactly singular"
-        dlam = constraint.dlam(u[free], lam, X[:, 0], X[:, 1])
-        du = dlam * X[:, 0] + X[:, 1]
+            return "tangent stiffness is exactly singular"
+        free = self.path.free
+        dlam = self.constraint.dlam(self.u[free], self.lam, X[:, 0], X[:, 1])
         if not math.isfinite(dlam):
-            return False, u, lam, pt, it, res, "constraint is degenerate (K^-1 q orthogonal to it)"
-        if max_step is not None and np.max(np.abs(du)) > max_step:
-            scale = max_step / np.max(np.abs(du))
-            du, dlam = du * scale, dlam * scale
-        u[free] += du
-        lam += dlam
-        dn = float(np.linalg.norm(du))
-        if options.criterion == "displacement" and dn <= max(options.atol, options.rtol * (
-                dn if it == 0 else ref)) or np.max(np.abs(du)) <= 1e-13 * size:
-            pt = path.at(u.reshape(-1, 3), lam)
-            return True, u.reshape(-1, 3), lam, pt, it + 1, res, "converged"
-    return False, u, lam, pt, options.max_iter, res, (
-        f"no convergence in {options.max_iter} iterations (last residual {res[-1]:.3g} N)")
+            return "constraint is degenerate (K^-1 q orthogonal to it)"
+        self.dlam = dlam
+        return dlam * X[:, 0] + X[:, 1]
+
+    def apply(self, du, scale):
+        self.u[self.path.free] += du
+        self.lam += self.dlam * scale if scale != 1.0 else self.dlam
 
 
 def _flat(u, free, dv):

@@ -20,6 +20,7 @@ import numpy as np
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
+from .nonlinear import iterate, march
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
 
@@ -179,51 +180,48 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
     f_free = f_ext[free]
     evaluate, solve = _operations(system, spring_rest, options.linear_solver)
-    res_norms, cor_norms = [], []
-    ref, best = None, (math.inf, None, None)
-    for it in range(options.max_iter + 1):
-        ev = evaluate(u.reshape(-1, 3))
-        r = f_free - ev.f_int[free]
-        rn = math.sqrt(r.dot(r))                   # = np.linalg.norm(r), less overhead
-        res_norms.append(rn)
+    problem = _LoadControl(u, free, f_free, evaluate, solve)
+    best = [math.inf, None, None]
+
+    def keep_best(rn, ev):
         if rn < best[0]:
-            best = (rn, u.copy(), ev)
-        if not math.isfinite(rn):
-            return _newton_result(u0, False, it, res_norms, cor_norms, "residual is not finite")
-        if options.criterion == "residual":
-            ref = rn if ref is None else ref
-            if rn <= max(options.atol, options.rtol * ref):
-                return _newton_result(u, True, it, res_norms, cor_norms, "converged", ev)
-        if it == options.max_iter:
-            break
-        du = solve(ev, r)
-        if du is None:
-            return _newton_result(u0, False, it, res_norms, cor_norms,
-                                  "tangent stiffness is singular (mechanism or unsupported body?)")
-        step = max(du.max(), -du.min())            # = max |du|
-        if system.max_step is not None and step > system.max_step:
-            du *= system.max_step / step
-            step = max(du.max(), -du.min())
-        dn = math.sqrt(du.dot(du))
-        cor_norms.append(dn)
-        u[free] += du
-        if options.criterion == "displacement":
-            ref = dn if ref is None else ref
-            if dn <= max(options.atol, options.rtol * ref):
-                ev = evaluate(u.reshape(-1, 3))
-                return _newton_result(u, True, it + 1, res_norms, cor_norms, "converged", ev)
-        if step <= 1e-13 * size:
-            ev = evaluate(u.reshape(-1, 3))
-            return _newton_result(u, True, it + 1, res_norms, cor_norms,
-                                  "converged (correction at round-off level)", ev)
+            best[:] = rn, problem.u.copy(), ev
+    out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
+                  size=size, criterion=options.criterion, max_step=system.max_step,
+                  on_residual=keep_best)
+    res_norms, cor_norms = out.residual_norms, out.correction_norms
+    if out.success:
+        return _newton_result(problem.u, True, out.iterations, res_norms, cor_norms,
+                              out.message, out.point)
+    if out.reason != "max_iter":
+        return _newton_result(u0, False, out.iterations, res_norms, cor_norms, out.message)
     stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
     if best[0] <= stall:
         return _newton_result(best[1], True, options.max_iter, res_norms, cor_norms,
                               f"converged (residual stalled at {best[0]:.3g} N, at most "
                               f"{options.stall_rtol:g} of the load)", best[2])
-    return _newton_result(u0, False, options.max_iter, res_norms, cor_norms,
-                          f"no convergence in {options.max_iter} iterations "
-                          f"(last residual {res_norms[-1]:.3g} N)")
+    return _newton_result(u0, False, options.max_iter, res_norms, cor_norms, out.message)
+
+
+class _LoadControl:
+    """Newton's problem of load control for :func:`~simulator.solvers.nonlinear.iterate`:
+    residual ``f_ext - f_int`` on the free DOFs, correction by the tangent."""
+
+    def __init__(self, u, free, f_free, evaluate, solve):
+        self.u, self.free, self.f_free = u, free, f_free
+        self._evaluate, self._solve = evaluate, solve
+
+    def evaluate(self):
+        ev = self._evaluate(self.u.reshape(-1, 3))
+        return self.f_free - ev.f_int[self.free], ev
+
+    def correct(self, ev, r):
+        du = self._solve(ev, r)
+        return "tangent stiffness is singular (mechanism or unsupported body?)" if du is None \
+            else du
+
+    def apply(self, du, scale):
+        self.u[self.free] += du
 
 
 def _reference_newton(system, u0, f_ext, spring_rest, options):
@@ -302,35 +300,31 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     """
     if not (isinstance(increments, (int, np.integer)) and increments >= 1):
         raise ParameterError(f"increments = {increments!r} must be a positive integer.")
-    nominal = 1.0 / increments
-    t, dt, u = 0.0, nominal, u0.copy()
-    cuts_in_row, total_cuts, total_iter = 0, 0, 0
-    history, residuals, last_ev = [], [], None
-    while t < 1.0 - 1e-12:
-        t_try = min(1.0, t + dt)
+    u, history, residuals, last_ev = u0.copy(), [], [], None
+    total_iter = 0
+
+    def attempt(t_try):
+        nonlocal total_iter
         res = newton(system, u, f_start + t_try * (f_end - f_start),
                      rest_start + t_try * (rest_end - rest_start), options)
         total_iter += res.iterations
-        if not res.success:
-            if cuts_in_row >= options.max_cuts or total_cuts >= options.max_total_cuts:
-                msg = (f"gave up at t = {t:.6g} after {cuts_in_row} step cuts in a row, "
-                       f"{total_cuts} in all (increment {dt:.3g}): {res.message}")
-                logger.warning(msg)
-                return PathResult(False, "failed", msg, u, t, total_iter, total_cuts, history,
-                                  residuals, last_ev)
-            dt /= 2
-            cuts_in_row += 1
-            total_cuts += 1
-            logger.debug("increment to t = %.6g failed (%s); halving to %.3g", t_try, res.message, dt)
-            continue
-        t, u, last_ev = t_try, res.u, res.evaluation
+        return res.success, res
+
+    def accept(t, res):
+        nonlocal u, last_ev
+        u, last_ev = res.u, res.evaluation
         history.append((t, u, res.iterations))
         residuals.append(res.residual_norms)
-        if cuts_in_row == 0:
-            dt = min(nominal, 2 * dt)
-        cuts_in_row = 0
-        if callback is not None and callback(t, u):
-            return PathResult(False, "stopped", f"stopped by callback at t = {t:.6g}", u, t,
-                              total_iter, total_cuts, history, residuals, last_ev)
-    return PathResult(True, "converged", "converged", u, 1.0, total_iter, total_cuts, history,
+        return callback is not None and callback(t, u)
+    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts)
+    if run.status == "failed":
+        msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
+               f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}")
+        logger.warning(msg)
+        return PathResult(False, "failed", msg, u, run.t, total_iter, run.cuts, history,
+                          residuals, last_ev)
+    if run.status == "stopped":
+        return PathResult(False, "stopped", f"stopped by callback at t = {run.t:.6g}", u, run.t,
+                          total_iter, run.cuts, history, residuals, last_ev)
+    return PathResult(True, "converged", "converged", u, 1.0, total_iter, run.cuts, history,
                       residuals, last_ev)

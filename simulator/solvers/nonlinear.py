@@ -1,0 +1,191 @@
+"""One Newton iteration and one cut-and-retry driver for every nonlinear solve of the package.
+
+:func:`iterate` is Newton's method on a problem that supplies its residual, its correction
+(the solve with its tangent; for arc length the bordered system with its constraint row) and
+its update; the stopping tests (residual or correction criterion, the round-off floor
+:data:`ROUND_OFF`), the step limit (``max_step``: no node moves farther in one correction,
+so contact cannot be jumped through) and the bookkeeping live here once. Load control
+(:func:`~simulator.solvers.newton.newton`), the arc-length and displacement-control corrector
+(:func:`~simulator.solvers.load_path._correct`) and the implicit dynamic step
+(:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`) use it.
+
+:func:`march` drives a path parameter ``t`` from 0 to 1 in equal increments, halving an
+increment that fails (at most ``max_cuts`` times in a row and ``max_total_cuts`` in all) and
+doubling it back towards its nominal size after an uncut success: load control
+(:func:`~simulator.solvers.newton.follow_path`) and displacement control
+(:func:`~simulator.solvers.continuation.displacement_control`) use it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ROUND_OFF", "END_TOL", "Iteration", "iterate", "limit_step", "March", "march"]
+
+logger = logging.getLogger(__name__)
+
+#: A correction whose largest entry is at most this fraction of the model size [m/m] is at
+#: round-off level: the iteration has converged whatever its criterion says.
+ROUND_OFF = 1e-13
+#: A path parameter within this of 1 has reached the end of the path.
+END_TOL = 1e-12
+
+
+def limit_step(dx: np.ndarray, max_step: float | None) -> float:
+    """Scale ``dx`` in place so that no entry exceeds ``max_step`` [m] in magnitude; the factor
+    applied (1.0 when ``max_step`` is None or not exceeded)."""
+    if max_step is None:
+        return 1.0
+    step = max(dx.max(), -dx.min()) if dx.size else 0.0       # = max |dx|
+    if step <= max_step:
+        return 1.0
+    scale = max_step / step
+    dx *= scale
+    return scale
+
+
+@dataclass
+class Iteration:
+    """Outcome of :func:`iterate`.
+
+    Attributes
+    ----------
+    success : bool
+    iterations : int
+        Corrections applied (the evaluation index at which it stopped).
+    residual_norms, correction_norms : lists of 2-norms [N], [m]
+    message : str
+        "converged", "converged (correction at round-off level)" or why it failed.
+    point : the problem's point (from ``evaluate``) at the final iterate
+    reason : str
+        "converged", "not finite" (a residual), "no correction" (``correct`` said why) or
+        "max_iter" (no convergence in ``max_iter`` corrections).
+    """
+
+    success: bool
+    iterations: int
+    residual_norms: list = field(default_factory=list)
+    correction_norms: list = field(default_factory=list)
+    message: str = ""
+    point: object = None
+    reason: str = "converged"
+
+
+def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
+            criterion: str = "residual", max_step: float | None = None,
+            tolerance=None, on_residual=None, record_final: bool = False) -> Iteration:
+    """Newton's method on ``problem`` from its current iterate.
+
+    Parameters
+    ----------
+    problem : object with
+        ``evaluate() -> (r, point)``: the residual (n,) [N] at the current iterate and whatever
+        the problem keeps of that evaluation; ``correct(point, r) -> dx``: the correction
+        (n,) [m], or a str saying why there is none (a singular tangent); ``apply(dx, scale)``:
+        add ``dx`` (already limited) to the iterate, ``scale`` being the factor the step limit
+        applied to it (for unknowns outside ``dx``, such as a load factor).
+    max_iter : int
+        Corrections at most.
+    atol, rtol : float
+        The criterion's tolerance is ``max(atol, rtol * reference)``.
+    size : float
+        Model size [m] for the round-off floor (:data:`ROUND_OFF`).
+    criterion : {"residual", "displacement"}
+        Stop on the residual norm (reference: the first one) or on the correction norm
+        (reference: the first correction).
+    max_step : float, optional
+        Largest entry of a correction [m] (:func:`limit_step`).
+    tolerance : callable, optional
+        ``tolerance(point, first_residual_norm) -> float``: the residual tolerance instead of
+        ``max(atol, rtol * first)`` (dynamics scales it by the step's force norms).
+    on_residual : callable, optional
+        ``on_residual(rn, point)`` after every evaluation (e.g. to keep the best iterate).
+    record_final : bool
+        Record the residual norm of the evaluation that follows a correction-based stop.
+    """
+    res, cor, ref = [], [], None
+    for it in range(max_iter + 1):
+        r, point = problem.evaluate()
+        rn = math.sqrt(r.dot(r))                       # = np.linalg.norm(r), less overhead
+        res.append(rn)
+        if on_residual is not None:
+            on_residual(rn, point)
+        if not math.isfinite(rn):
+            return Iteration(False, it, res, cor, "residual is not finite", point, "not finite")
+        if criterion == "residual":
+            ref = rn if ref is None else ref
+            tol = max(atol, rtol * ref) if tolerance is None else tolerance(point, ref)
+            if rn <= tol:
+                return Iteration(True, it, res, cor, "converged", point)
+        if it == max_iter:
+            break
+        dx = problem.correct(point, r)
+        if isinstance(dx, str):
+            return Iteration(False, it, res, cor, dx, point, "no correction")
+        scale = limit_step(dx, max_step)
+        problem.apply(dx, scale)
+        dn = math.sqrt(dx.dot(dx))
+        cor.append(dn)
+        message = None
+        if criterion == "displacement":
+            ref = dn if ref is None else ref
+            if dn <= max(atol, rtol * ref):
+                message = "converged"
+        if message is None and dx.size and max(dx.max(), -dx.min()) <= ROUND_OFF * size:
+            message = "converged (correction at round-off level)"
+        if message is not None:
+            r, point = problem.evaluate()
+            if record_final:
+                res.append(math.sqrt(r.dot(r)))
+            return Iteration(True, it + 1, res, cor, message, point)
+    return Iteration(False, max_iter, res, cor, f"no convergence in {max_iter} iterations "
+                     f"(last residual {res[-1]:.3g} N)", point, "max_iter")
+
+
+@dataclass
+class March:
+    """Outcome of :func:`march`: ``status`` "converged", "failed" (the last failed attempt's
+    outcome in ``failure``) or "stopped"; the parameter ``t`` reached, the increment ``dt``
+    in force, the cuts in a row at the end and in all."""
+
+    status: str
+    t: float
+    dt: float
+    in_row: int
+    cuts: int
+    failure: object = None
+
+
+def march(attempt, accept, increments: int, max_cuts: int, max_total_cuts: int,
+          what: str = "increment") -> March:
+    """Drive ``t`` from 0 to 1 in ``increments`` equal increments with step cutting.
+
+    ``attempt(t_try) -> (ok, outcome)`` tries the increment to ``t_try`` from the last
+    accepted point; ``accept(t_try, outcome) -> bool`` takes a successful one (True stops the
+    march, status "stopped"). A failed increment is halved, at most ``max_cuts`` times in a
+    row and ``max_total_cuts`` times in all (then status "failed"); after an uncut success
+    the increment doubles again, up to its nominal ``1 / increments``.
+    """
+    nominal = 1.0 / increments
+    t, dt, in_row, cuts = 0.0, nominal, 0, 0
+    while t < 1.0 - END_TOL:
+        t_try = min(1.0, t + dt)
+        ok, outcome = attempt(t_try)
+        if not ok:
+            if in_row >= max_cuts or cuts >= max_total_cuts:
+                return March("failed", t, dt, in_row, cuts, outcome)
+            dt, in_row, cuts = dt / 2, in_row + 1, cuts + 1
+            logger.debug("%s to t = %.6g failed; halving to %.3g", what, t_try, dt)
+            continue
+        t = t_try
+        stop = accept(t, outcome)
+        if in_row == 0:
+            dt = min(nominal, 2 * dt)
+        in_row = 0
+        if stop:
+            return March("stopped", t, dt, in_row, cuts)
+    return March("converged", 1.0, dt, in_row, cuts)
