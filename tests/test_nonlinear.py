@@ -8,7 +8,9 @@ import re
 import numpy as np
 import pytest
 
-from simulator.solvers.nonlinear import ROUND_OFF, iterate, limit_step, march
+from types import SimpleNamespace as NS
+
+from simulator.solvers.nonlinear import ROUND_OFF, bisect, iterate, limit_step, march
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -107,6 +109,30 @@ def test_march_gives_up_after_max_cuts_in_a_row_and_stops_on_request():
     run = march(lambda t: (False, "never"), lambda t, o: False, 1, max_cuts=10,
                 max_total_cuts=2)
     assert run.status == "failed" and run.cuts == 2
+
+
+def test_bisect_covers_the_span_with_halves_to_a_bounded_depth():
+    tried = []
+
+    def attempt(start, span):                   # spans longer than 0.25 fail
+        tried.append(span)
+        return NS(success=span[1] - span[0] <= 0.25, state=span[1], cuts=0, parts=[span])
+
+    def halves(start, span):
+        mid = 0.5 * (span[0] + span[1])
+        return (span[0], mid), (mid, span[1])
+
+    def join(first, second):
+        if second is None:
+            return NS(success=False, state=first.state, cuts=first.cuts + 1, parts=first.parts)
+        return NS(success=second.success, state=second.state,
+                  cuts=first.cuts + second.cuts + 1, parts=first.parts + second.parts)
+    out = bisect(attempt, halves, join, 0.0, (0.0, 1.0), 3)
+    assert out.success and out.cuts == 3
+    assert out.parts == [(0.0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.0)]
+    assert tried[:3] == [(0.0, 1.0), (0.0, 0.5), (0.0, 0.25)]
+    out = bisect(attempt, halves, join, 0.0, (0.0, 1.0), 1)      # too shallow
+    assert not out.success and out.cuts == 1
 
 
 def test_the_solvers_have_no_newton_loop_or_round_off_floor_of_their_own():

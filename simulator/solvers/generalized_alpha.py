@@ -40,7 +40,7 @@ from .newton import _tangent
 from ..linalg import thresholds
 from ..linalg.ladder import solve
 from ..linalg.small_solve import as_dense
-from .nonlinear import iterate
+from .nonlinear import bisect, iterate
 
 __all__ = ["MotionState", "StepReport", "TimeIntegrator"]
 
@@ -167,32 +167,23 @@ class TimeIntegrator:
         ``spring_rest`` (default: unchanged) at the end of the step.
 
         A step whose Newton solve fails is split into two halves (loads and rest angles
-        interpolated linearly), recursively up to ``options.max_cuts`` levels.
+        interpolated linearly), recursively up to ``options.max_cuts`` levels (the cut driver
+        :func:`~simulator.solvers.nonlinear.bisect`).
         """
         if not (_real(dt) and dt > 0):
             raise ParameterError(f"time step dt = {dt!r} must be a positive number of seconds.")
         f_ext = self._vector(f_ext, self.system.n_dof, "external load")
         rest = state.spring_rest if spring_rest is None else \
             self._vector(spring_rest, len(state.spring_rest), "spring rest angles")
-        return self._step(state, dt, f_ext, rest, self.options.max_cuts)
+        return bisect(self._attempt, _halves, _join, state, (dt, f_ext, rest),
+                      self.options.max_cuts)
 
-    def _step(self, state, dt, f_ext, rest, cuts_left) -> StepReport:
-        report = self._solve(state, dt, f_ext, rest)
-        if report.success or cuts_left == 0:
-            return report
-        logger.debug("time step %.3g s at t = %.6g s failed (%s); halving", dt, state.time,
-                     report.message)
-        mid_f = 0.5 * (state.f_ext + f_ext)
-        mid_rest = 0.5 * (state.spring_rest + rest)
-        first = self._step(state, dt / 2, mid_f, mid_rest, cuts_left - 1)
-        if not first.success:
-            return replace(first, cuts=first.cuts + 1)
-        second = self._step(first.state, dt / 2, f_ext, rest, cuts_left - 1)
-        return replace(second, iterations=first.iterations + second.iterations,
-                       cuts=first.cuts + second.cuts + 1,
-                       residual_norms=first.residual_norms + second.residual_norms,
-                       dissipated=first.dissipated + second.dissipated,
-                       external_work=first.external_work + second.external_work)
+    def _attempt(self, state, span) -> StepReport:
+        report = self._solve(state, *span)
+        if not report.success:
+            logger.debug("time step %.3g s at t = %.6g s failed (%s); halving", span[0],
+                         state.time, report.message)
+        return report
 
     def _solve(self, s: MotionState, dt, f_ext, rest) -> StepReport:
         """One Newton solve of the step; unknown u_{n+1}."""
@@ -302,3 +293,22 @@ class _DynamicStep:
 
     def apply(self, du, scale):
         self.u[self.it.system.free] += du
+
+
+def _halves(state: MotionState, span) -> tuple:
+    """The two halves of a time step ``(dt, f_ext, rest)`` from ``state``: loads and rest
+    angles at the middle by linear interpolation."""
+    dt, f_ext, rest = span
+    middle = (dt / 2, 0.5 * (state.f_ext + f_ext), 0.5 * (state.spring_rest + rest))
+    return middle, (dt / 2, f_ext, rest)
+
+
+def _join(first: StepReport, second: StepReport | None) -> StepReport:
+    """The report of a halved time step from its halves' (``second`` None: the first failed)."""
+    if second is None:
+        return replace(first, cuts=first.cuts + 1)
+    return replace(second, iterations=first.iterations + second.iterations,
+                   cuts=first.cuts + second.cuts + 1,
+                   residual_norms=first.residual_norms + second.residual_norms,
+                   dissipated=first.dissipated + second.dissipated,
+                   external_work=first.external_work + second.external_work)

@@ -13,7 +13,10 @@ so contact cannot be jumped through) and the bookkeeping live here once. Load co
 increment that fails (at most ``max_cuts`` times in a row and ``max_total_cuts`` in all) and
 doubling it back towards its nominal size after an uncut success: load control
 (:func:`~simulator.solvers.newton.follow_path`) and displacement control
-(:func:`~simulator.solvers.continuation.displacement_control`) use it.
+(:func:`~simulator.solvers.continuation.displacement_control`) use it. :func:`bisect` is its
+form for a span that must be covered as given (a time step of a fixed output grid): a failed
+span is split into two halves, each split again on failure, to a bounded depth; the dynamic
+step (:meth:`~simulator.solvers.generalized_alpha.TimeIntegrator.step`) uses it.
 """
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ROUND_OFF", "END_TOL", "Iteration", "iterate", "limit_step", "March", "march"]
+__all__ = ["ROUND_OFF", "END_TOL", "Iteration", "iterate", "limit_step", "March", "march",
+           "bisect"]
 
 logger = logging.getLogger(__name__)
 
@@ -189,3 +193,22 @@ def march(attempt, accept, increments: int, max_cuts: int, max_total_cuts: int,
         if stop:
             return March("stopped", t, dt, in_row, cuts)
     return March("converged", 1.0, dt, in_row, cuts)
+
+
+def bisect(attempt, halves, join, start, span, depth: int):
+    """Cover ``span`` from ``start``, halving a failed span recursively (``depth`` levels).
+
+    ``attempt(start, span) -> report`` (with ``success`` and, if it succeeded, the end
+    ``state``); ``halves(start, span) -> (first, second)`` the two half spans;
+    ``join(first, second) -> report`` the report of a split span from its halves' reports
+    (``second`` None when the first half failed). The report of ``span``.
+    """
+    report = attempt(start, span)
+    if report.success or depth == 0:
+        return report
+    first_span, second_span = halves(start, span)
+    first = bisect(attempt, halves, join, start, first_span, depth - 1)
+    if not first.success:
+        return join(first, None)
+    second = bisect(attempt, halves, join, first.state, second_span, depth - 1)
+    return join(first, second)
