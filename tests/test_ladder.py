@@ -165,3 +165,12 @@ def test_arc_length_on_a_large_sheet_uses_newtons_backend(monkeypatch):
     expected = "pardiso" if pardiso.available() else "superlu-nd"
     assert set(used["newton"]) == {expected}
     assert set(used["arc length"]) == {expected}
+
+
+def test_a_conduction_matrix_that_is_not_positive_definite_goes_to_the_sparse_rungs():
+    A = _indefinite(50, seed=1).toarray()
+    f = factorize(A, kind="spd", dense_limit=100)
+    assert f.backend != "dense"
+    b = np.ones(50)
+    assert np.linalg.norm(A @ f.solve(b) - b) <= 1e-9 * np.linalg.norm(b)
+    assert factorize(_spd(50).toarray(), kind="spd", dense_limit=100).backend == "dense"

@@ -74,8 +74,9 @@ def test_failures_are_data():
 
 def test_step_limit_scales_the_correction_and_reports_the_factor():
     dx = np.array([3.0, -6.0])
-    assert limit_step(dx, None) == 1.0 and limit_step(dx, 10.0) == 1.0
-    assert limit_step(dx, 2.0) == pytest.approx(1 / 3) and np.allclose(dx, [1.0, -2.0])
+    assert limit_step(dx, None) == (1.0, 6.0) and limit_step(dx, 10.0) == (1.0, 6.0)
+    scale, step = limit_step(dx, 2.0)
+    assert scale == pytest.approx(1 / 3) and step == 2.0 and np.allclose(dx, [1.0, -2.0])
     p = Cubic([1e3])
     out = iterate(p, max_iter=100, atol=1e-9, rtol=0.0, size=1.0, max_step=0.5)
     assert out.success

@@ -198,8 +198,9 @@ def _chosen(factor: Factor) -> Factor:
 def _dense_factor(A: np.ndarray, kind: str) -> Factor | None:
     """The dense rung's factors, or None if LU finds an exactly zero pivot (kind "spd": if
     Cholesky fails, the caller goes on to the sparse rungs)."""
-    factor = DenseFactor(A, cholesky_first=kind != "general")
-    if factor.info != 0 or (kind == "spd" and factor.method != "cholesky"):
+    factor = DenseFactor(A, cholesky_first=kind != "general", condition=False,
+                         lu_fallback=kind != "spd")   # spd: Cholesky, else the sparse rungs
+    if factor.info != 0:
         return None
     n = A.shape[0]
     if factor.method == "cholesky":

@@ -64,22 +64,33 @@ class DenseFactor:
     method : "cholesky" or "lu"
     info : int
         LAPACK's ``info`` of the factorisation (> 0: an exactly zero pivot of LU).
-    rcond : float
-        1-norm reciprocal condition estimate (``pocon`` / ``gecon``); 0 when ``info != 0``.
+    rcond : float or None
+        1-norm reciprocal condition estimate (``pocon`` / ``gecon``); 0 when ``info != 0``;
+        None without ``condition``.
+
+    With ``lu_fallback`` False a matrix that is not positive definite is not factorised (``info`` is
+    Cholesky's, > 0).
     """
 
-    def __init__(self, K: np.ndarray, cholesky_first: bool = True):
+    def __init__(self, K: np.ndarray, cholesky_first: bool = True, condition: bool = True,
+                 lu_fallback: bool = True):
         self.n = K.shape[0]
-        anorm = lapack.dlange("1", K)
+        anorm = lapack.dlange("1", K) if condition else None
+        self.rcond = None
         if cholesky_first:
             c, info = lapack.dpotrf(K, lower=0, clean=0)
             if info == 0:
                 self.method, self.info, self._c = "cholesky", 0, c
-                self.rcond = lapack.dpocon(c, anorm)[0]
+                if condition:
+                    self.rcond = lapack.dpocon(c, anorm)[0]
+                return
+            if not lu_fallback:                     # not positive definite, and no LU wanted
+                self.method, self.info, self.rcond = "cholesky", info, 0.0
                 return
         lu, piv, info = lapack.dgetrf(K)
         self.method, self.info, self._c, self._piv = "lu", info, lu, piv
-        self.rcond = lapack.dgecon(lu, anorm)[0] if info == 0 else 0.0
+        if condition:
+            self.rcond = lapack.dgecon(lu, anorm)[0] if info == 0 else 0.0
 
     def solve_info(self, b: np.ndarray):
         """(``K^-1 b``, LAPACK's ``info``) for b (n,) or (n, k)."""

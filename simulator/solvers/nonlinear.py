@@ -39,17 +39,15 @@ ROUND_OFF = 1e-13
 END_TOL = 1e-12
 
 
-def limit_step(dx: np.ndarray, max_step: float | None) -> float:
-    """Scale ``dx`` in place so that no entry exceeds ``max_step`` [m] in magnitude; the factor
-    applied (1.0 when ``max_step`` is None or not exceeded)."""
-    if max_step is None:
-        return 1.0
+def limit_step(dx: np.ndarray, max_step: float | None) -> tuple[float, float]:
+    """Scale ``dx`` in place so that no entry exceeds ``max_step`` [m] in magnitude (None: no
+    limit); ``(factor applied, max |dx| after it)``, the factor 1.0 when not exceeded."""
     step = max(dx.max(), -dx.min()) if dx.size else 0.0       # = max |dx|
-    if step <= max_step:
-        return 1.0
+    if max_step is None or step <= max_step:
+        return 1.0, step
     scale = max_step / step
     dx *= scale
-    return scale
+    return scale, max(dx.max(), -dx.min())
 
 
 @dataclass
@@ -130,7 +128,7 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
         dx = problem.correct(point, r)
         if isinstance(dx, str):
             return Iteration(False, it, res, cor, dx, point, "no correction")
-        scale = limit_step(dx, max_step)
+        scale, step = limit_step(dx, max_step)
         problem.apply(dx, scale)
         dn = math.sqrt(dx.dot(dx))
         cor.append(dn)
@@ -139,7 +137,7 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
             ref = dn if ref is None else ref
             if dn <= max(atol, rtol * ref):
                 message = "converged"
-        if message is None and dx.size and max(dx.max(), -dx.min()) <= ROUND_OFF * size:
+        if message is None and dx.size and step <= ROUND_OFF * size:
             message = "converged (correction at round-off level)"
         if message is not None:
             r, point = problem.evaluate()
