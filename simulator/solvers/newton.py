@@ -3,7 +3,9 @@
 :func:`newton` solves ``f_int(u) = f_ext`` on the free DOFs for fixed rest angles.
 :func:`follow_path` drives a linear path in (external load, spring rest angles)
 from a start to an end over a number of increments, halving an increment that
-fails and growing back after successes. Failures are returned as data
+fails and growing back after successes (the iteration and the cutting are
+:func:`~simulator.solvers.nonlinear.iterate` and :func:`~simulator.solvers.nonlinear.march`).
+Failures are returned as data
 (``success``, ``status``, ``message``); :class:`~simulator.errors.ConvergenceError`
 is raised only when ``NewtonOptions.raise_on_failure`` is set.
 """
