@@ -77,3 +77,58 @@ def test_issue_names_are_public():
         assert name in design.__all__, name
 
 
+
+
+# ------------------------------------------------ citations of docs/theory.md in the code
+# The code cites the method as "theory 4.3" (section), "theory 4" (chapter), "theory 4.3-4.4"
+# (range), "theory 6.4, 6.5" or "theory 8.6 and 8.4" (lists); docs/theory.md section 1.1.
+THEORY = ROOT / "docs" / "theory.md"
+_SOURCES = ("simulator", "design", "studies", "tests", "benchmarks")
+_NUMBER = r"\d+(?:\.\d+)?"
+_CITATION = re.compile(rf"\btheory ({_NUMBER}(?:(?:-|, | and ){_NUMBER}(?![\d.]))*)", re.I)
+_HEADING = re.compile(r"^#{2,3} (\d+(?:\.\d+)?)\.? ", re.M)
+
+
+def source_files() -> list[pathlib.Path]:
+    """Every Python and Markdown file of the source trees, plus the README."""
+    files = [ROOT / "README.md"]
+    for top in _SOURCES:
+        files += sorted(p for p in (ROOT / top).rglob("*") if p.suffix in (".py", ".md"))
+    return files
+
+
+def theory_sections() -> set[str]:
+    """Section numbers of docs/theory.md: "4" for "## 4. Heat transfer", "4.3" for "### 4.3 ..."."""
+    return set(_HEADING.findall(THEORY.read_text()))
+
+
+def cited_sections(text: str) -> list[str]:
+    """Every section number a text cites as "theory X.Y" (each end of a range, each list item)."""
+    return [n for m in _CITATION.finditer(text) for n in re.findall(_NUMBER, m.group(1))]
+
+
+def test_citation_parser():
+    text = ("(theory 4.3) theory 10; (theory 4.3-4.4), (Theory 6.4, 6.5) theory 8.6 and 8.4; "
+            "theory 6.4, 10.6: tol 5e-7 N")
+    assert cited_sections(text) == ["4.3", "10", "4.3", "4.4", "6.4", "6.5", "8.6", "8.4",
+                                    "6.4", "10.6"]
+    assert {"1.1", "4", "4.3", "10.9", "11"} <= theory_sections()
+
+
+def test_no_digest_citations_left():
+    """The code once cited a "method digest" that is not in the repository; it cites theory.md.
+
+    This file is exempt: it has to name the word it looks for."""
+    stale = [f"{p.relative_to(ROOT)}:{i}" for p in source_files() if p != pathlib.Path(__file__)
+             for i, line in enumerate(p.read_text().splitlines(), 1)
+             if re.search(r"(?<!hex)digest", line, re.I)]
+    assert stale == [], "cite docs/theory.md as 'theory X.Y' instead: " + ", ".join(stale)
+
+
+def test_theory_citations_name_existing_sections():
+    sections = theory_sections()
+    cited = {(str(p.relative_to(ROOT)), n) for p in source_files()
+             for n in cited_sections(p.read_text())}
+    assert len(cited) > 80, "the code lost its citations of docs/theory.md"
+    missing = sorted(f"{f}: theory {n}" for f, n in cited if n not in sections)
+    assert missing == [], "no such section in docs/theory.md: " + ", ".join(missing)
