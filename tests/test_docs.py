@@ -132,3 +132,51 @@ def test_theory_citations_name_existing_sections():
     assert len(cited) > 80, "the code lost its citations of docs/theory.md"
     missing = sorted(f"{f}: theory {n}" for f, n in cited if n not in sections)
     assert missing == [], "no such section in docs/theory.md: " + ", ".join(missing)
+
+
+# ------------------------------------------------ the API reference (mkdocs.yml, docs/_ext/api.py)
+def _api_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_docs_api", ROOT / "docs" / "_ext" / "api.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault(spec.name, module)            # its dataclasses need a real module
+    spec.loader.exec_module(sys.modules[spec.name])
+    return sys.modules[spec.name]
+
+
+@pytest.mark.parametrize("package", [simulator, design], ids=lambda p: p.__name__)
+def test_api_pages_document_every_public_name(package):
+    """The static reading of __init__.py that makes the API pages agrees with the runtime."""
+    import importlib
+
+    api = _api_module()
+    names = api.public_names(package.__name__)
+    assert [n.name for n in names] == package.__all__
+    for item in names:
+        defined = importlib.import_module(item.module)
+        obj = defined if item.is_module else getattr(defined, item.name)
+        assert obj is getattr(package, item.name), item
+    pages = {group: api._page(package.__name__, group, items)
+             for group, items in api._groups(package.__name__).items()}
+    intros = {f"::: {package.__name__}.{group}" for group in pages}      # subpackage docstrings
+    entries = [line for page in pages.values() for line in page.splitlines()
+               if line.startswith(f"::: {package.__name__}.") and line not in intros]
+    assert sorted(entries) == sorted(f"::: {package.__name__}.{n}" for n in package.__all__)
+
+
+def test_api_theory_anchors_are_mkdocs_slugs():
+    pytest.importorskip("markdown")
+    anchors = _api_module().theory_anchors()
+    assert anchors["4.3"] == "43-environment-chains" and anchors["4"] == "4-heat-transfer"
+    assert set(anchors) == theory_sections()
+
+
+def test_api_unknown_public_name_is_an_error(tmp_path, monkeypatch):
+    api = _api_module()
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text(
+        "__getattr__, __dir__ = _attach(__name__, {'.a': ('f',)})\n__all__ = ['f', 'g']\n")
+    monkeypatch.setattr(api, "ROOT", tmp_path)
+    with pytest.raises(RuntimeError, match="'g'.*add it there"):
+        api.public_names("pkg")

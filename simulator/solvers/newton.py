@@ -71,6 +71,8 @@ class NewtonOptions:
         (5e-7 N against ~1e-8 N of self-weight) this takes one to a few updates per increment,
         i.e. under-converged equilibria: keep it off for real work.
 
+    Notes
+    -----
     Whatever the criterion, an iteration whose correction is at round-off level
     (below 1e-13 of the model size) also counts as converged.
     """

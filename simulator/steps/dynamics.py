@@ -55,6 +55,8 @@ class Dynamics(Step):
     record_every : int
         Record every this many time steps (and the last).
 
+    Notes
+    -----
     Every record carries the columns ``time [s]`` (time of the simulation, continuing from
     earlier dynamic steps), ``kinetic_energy [J]``, ``strain_energy [J]``,
     ``dissipated_energy [J]``, ``external_work [J]`` and ``numerical_dissipation [J]`` (energies
