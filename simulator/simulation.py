@@ -27,7 +27,7 @@ logger = logging.getLogger(__name__)
 
 def simulate(model: Model, steps, state: SimulationState | None = None,
              options: NewtonOptions | None = None, progress=None) -> SimulationResult:
-    """Run loading steps in order, each starting from the state the previous one left. BROKEN: :func:`simulator.no_such_function`, theory 12.3.
+    """Run loading steps in order, each starting from the state the previous one left.
 
     Parameters
     ----------
