@@ -18,8 +18,9 @@ from simulator._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
     ".core.space": ("DesignSpace", "Variable"),
-    ".core.problem": ("EVALUATION_STATUSES", "GRIPPER_SPACE", "SU8_TG", "DesignProblem", "Evaluation",
-                 "GripperProblem"),
+    ".core.problem": ("EVALUATION_STATUSES", "DesignProblem", "Evaluation"),
+    ".devices.gripper_problem": ("GRIPPER_SPACE", "GripperProblem"),
+    ".devices.limits": ("SU8_TG",),
     ".devices.gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
                  "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
                  "gripper_model"),

@@ -441,7 +441,7 @@ def test_readme_lists_the_registered_methods():
 # ---------------------------------------------------------------- the real gripper
 @pytest.mark.slow
 def test_gripper_coordinate_descent_one_cycle(tmp_path):
-    from design.core.problem import GripperProblem
+    from design import GripperProblem
 
     res = optimize(GripperProblem(), "cd", out=tmp_path, max_cycles=1)
     assert res.status in ("converged", "max_cycles") and res.success

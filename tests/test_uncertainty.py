@@ -14,7 +14,7 @@ import pytest
 from scipy import stats
 
 from design.core.executors import ProcessExecutor, SerialExecutor, make_executor
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
 from design.analysis.uncertainty import (Distribution, FabricationScenario, UncertainInput, quantile,
                                 rank_correlations, residual_fold_per_crease, wilson_interval)

@@ -18,7 +18,7 @@ from simulator.model.model import Model
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import newton
 
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation"]
 

@@ -52,7 +52,7 @@ from simulator.solvers.newton import NewtonOptions
 from ..core._contract import check_outcome
 from ._heater_lp import (_check_targets, _heater_table, _linear_model, _solve_lp, _weights,
                          fold_sensitivity, influence_matrices, linear_allocation)
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity",
            "linear_allocation", "allocate_heaters"]

@@ -30,7 +30,8 @@ from simulator.errors import ParameterError
 
 from ..devices import gripper as _gr
 from ..core.executors import SerialExecutor, TaskFailure
-from ..core.problem import DesignProblem, Evaluation, GripperProblem
+from ..core.problem import DesignProblem, Evaluation
+from ..devices.gripper_problem import GripperProblem
 
 if TYPE_CHECKING:
     import pandas as pd

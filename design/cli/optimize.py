@@ -55,7 +55,7 @@ class _MethodsHelp(argparse.HelpFormatter):
 
 
 def _problem(args):
-    from ..core.problem import GripperProblem
+    from ..devices.gripper_problem import GripperProblem
 
     if args.target == "miura":
         from ..devices.miura import MiuraProblem

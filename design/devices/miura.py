@@ -23,7 +23,8 @@ from simulator.geometry.example_patterns import miura_sheet_pattern
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
-from ..core.problem import SU8_TG, DesignProblem
+from ..core.problem import DesignProblem
+from .limits import SU8_TG
 from ..core.space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
