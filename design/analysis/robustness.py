@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..devices import gripper as _gr
 from ..core.executors import SerialExecutor, TaskFailure

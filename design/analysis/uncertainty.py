@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import special
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..devices.gripper import ARM_CREASES, BASE_CREASES
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..core.executors import SerialExecutor, TaskFailure
 from ..core.problem import DesignProblem

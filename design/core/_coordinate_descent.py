@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 

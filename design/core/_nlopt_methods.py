@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 from .problem import Evaluation

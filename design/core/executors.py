@@ -64,7 +64,7 @@ Closing the executor closes only its client; the cluster keeps running.
 
 from __future__ import annotations
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ._dask_executor import DaskExecutor
 from ._executor_base import Executor, ExecutorError, SerialExecutor, TaskError, TaskFailure

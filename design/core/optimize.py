@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ._contract import check_outcome
 from ._coordinate_descent import _coordinate_descent
