@@ -16,7 +16,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["demo_figure", "plot_mode_shape", "plot_modes", "save_mode_plots"]
+__all__ = ["demo_figure", "plot_mode_shape", "plot_modes", "save_mode_plots", "set_3d_limits"]
 
 
 def demo_figure(table, threshold, what):
@@ -56,8 +56,9 @@ def demo_figure(table, threshold, what):
     return fig
 
 
-def _set_limits(ax, points_mm) -> None:
-    """Axis limits to the bounding box of ``points_mm`` (..., 3) with equal aspect."""
+def set_3d_limits(ax, points_mm) -> None:
+    """Axis limits of a 3-D axes to the bounding box of ``points_mm`` (..., 3) with equal
+    aspect (also used by :mod:`studies.plotting`)."""
     pts = np.asarray(points_mm).reshape(-1, 3)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = hi - lo
@@ -118,7 +119,7 @@ def plot_mode_shape(modes, mode: int = 0, scale: float | None = None, ax=None) -
     fig.colorbar(coll, ax=ax, shrink=0.6, label="modal displacement [-]")
     for axis in "xyz":
         getattr(ax, f"set_{axis}label")(f"{axis} [mm]")
-    _set_limits(ax, np.concatenate([x, x0]))
+    set_3d_limits(ax, np.concatenate([x, x0]))
     ax.set_title(_mode_title(modes, k))
     return fig
 
