@@ -418,6 +418,8 @@ def test_unknown_or_clashing_optimiser_names(toy):
         register_optimizer("toy", _random_search, description="twice")
     with pytest.raises(ParameterError, match=r"\['subplex'\] already registered"):
         register_optimizer("mine", _random_search, aliases=("subplex",), description="clash")
+    with pytest.raises(ParameterError, match="max_evaluations = True"):
+        register_optimizer("mine", _random_search, max_evaluations=True, description="-")
     with pytest.raises(ParameterError, match="must be callable"):
         register_optimizer("mine", "not a function", description="-")
     with pytest.raises(ParameterError, match="no method 'mine'"):

@@ -85,7 +85,9 @@ class Optimizer:
     max_evaluations : int or None
         Default budget of distinct evaluations (None: unlimited).
     needs_bounds : bool
-        The method works in the space's bounded (normalised) box.
+        The method works in the space's bounded (normalised) box. Every
+        :class:`~design.core.space.DesignSpace` has finite bounds, so today this is what the
+        documentation says of a method; a back end for unbounded spaces would set False.
     aliases : tuple of str
         Further accepted names.
     """
@@ -141,8 +143,8 @@ def register_optimizer(name: str, run: Callable, *, description: str, options=No
         raise ParameterError(f"register_optimizer: {others or [key]} already registered "
                              f"(methods: {', '.join(_REGISTRY)}); pass replace=True to replace "
                              "a method by its own name.")
-    if max_evaluations is not None and not (isinstance(max_evaluations, int)
-                                            and max_evaluations >= 1):
+    if max_evaluations is not None and (isinstance(max_evaluations, bool) or not (
+            isinstance(max_evaluations, int) and max_evaluations >= 1)):
         raise ParameterError(f"register_optimizer: max_evaluations = {max_evaluations!r} "
                              "must be a positive integer or None.")
     spec = Optimizer(key, run, description, MappingProxyType(dict(options or {})),
