@@ -325,7 +325,23 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
 
 # ------------------------------------------------------------------------------ Miura lifter
 def miura_fold_signs(a, b, gamma, m, n) -> dict:
-    """Fold direction (+1 / -1) of every crease of a Miura sheet, from a partly folded shape."""
+    """Fold direction (+1 / -1) of every crease of a Miura sheet, from a partly folded shape.
+
+    Parameters
+    ----------
+    a, b : float
+        Panel edge lengths [m] (as :func:`miura_sheet_model`).
+    gamma : float
+        Sector angle [rad], in (0, pi/2).
+    m, n : int
+        Cells along x and y.
+
+    Returns
+    -------
+    dict
+        Crease (edge) id of :func:`simulator.example_patterns.miura_sheet_pattern` -> +1
+        (folds towards +z) or -1 (towards -z), in the sign convention of :func:`fold_angles`.
+    """
     v, p = miura_vertices(a, b, gamma, m, n, ext=0.8)
     return fold_directions(v, p)
 

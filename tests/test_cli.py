@@ -125,7 +125,7 @@ def test_cli_errors_speak_cli_units(argv, message, capsys):
 
 def test_python_entry_points_reject_fold_angles_outside_a_turn():
     from design.devices.gripper import GripperDesign
-    from design.core.problem import GripperProblem
+    from design import GripperProblem
     from simulator import ParameterError, get_case
 
     with pytest.raises(ParameterError, match=r"residual_fold_deg = 400 deg .*\(-180, 180\]"):

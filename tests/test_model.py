@@ -51,7 +51,7 @@ def test_glass_transition_is_a_material_property():
 
 def test_design_problems_read_t_g_from_the_material():
     from design.devices.miura import MiuraProblem
-    from design.core.problem import GripperProblem
+    from design import GripperProblem
     assert GripperProblem().temperature_limit == pytest.approx(1.2 * SU8.glass_transition) == 252.0
     assert MiuraProblem().temperature_limit == 252.0
     assert GripperProblem(glass_transition=180.0).temperature_limit == pytest.approx(216.0)

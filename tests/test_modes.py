@@ -9,7 +9,7 @@ from simulator import (Gravity, ParameterError, SelfFold, Supports, initial_stat
                        natural_modes, simulate)
 from simulator import single_fold_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from studies.mode_plots import plot_mode_shape, save_mode_plots
+from design.cli._plots import plot_mode_shape, save_mode_plots
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 
 from design.core.evaluation_log import EvaluationLog, EvaluationRun, LoggedProblem, design_key
-from design.core.optimize import StopOptimization, optimize
+from design.core.optimize import (StopOptimization, get_optimizer, optimize, optimizers,
+                                  register_optimizer, unregister_optimizer)
 from design.core.problem import DesignProblem, Evaluation
 from design.core.space import DesignSpace, Variable
 from simulator.errors import ParameterError
@@ -359,10 +360,90 @@ def test_bad_input_raises_parameter_error(kwargs, match):
         optimize(Quad(), **kwargs)
 
 
+# ---------------------------------------------------------------- the registry
+def _random_search(run, x0, max_evaluations, seed=0):
+    """A toy optimiser: the start, then uniform random designs until the budget ends."""
+    rng = np.random.default_rng(seed)
+    run.evaluate(x0)
+    while True:                     # optimize() turns the exhausted budget into the status
+        run.evaluate(run.space.denormalize(rng.random(len(run.space))))
+
+
+@pytest.fixture
+def toy():
+    spec = register_optimizer("toy", _random_search, options={"seed": 0}, max_evaluations=12,
+                              aliases=("random-search",), description="uniform random search")
+    yield spec
+    unregister_optimizer("toy")
+
+
+def test_registered_optimiser_runs_through_optimize(toy, tmp_path):
+    res = optimize(Quad(), "toy", out=tmp_path)
+    assert res.method == "toy" and res.status == "max_evaluations" and res.n_evaluations == 12
+    assert "budget (12)" in res.message
+    _assert_best_feasible(res)
+    assert res.options == {"max_evaluations": 12, "seed": 0}
+    again = optimize(Quad(), "Random-Search", out=tmp_path, max_evaluations=5, seed=1)
+    assert again.n_reused == 1 and again.n_evaluations == 5      # the start design: from the log
+    assert json.loads((tmp_path / "result.json").read_text())["method"] == "toy"
+    assert not (tmp_path / "cycles.csv").exists()
+    with pytest.raises(ParameterError, match=r"Unknown option\(s\) \['xtol_rel'\] for method "
+                                             r"'toy'; options: seed"):
+        optimize(Quad(), "toy", xtol_rel=1e-3)
+
+
+def test_registry_lists_builtins_and_the_cli_offers_registered_methods(toy, capsys):
+    from design.cli import _parser, main
+
+    assert list(optimizers())[:6] == ALL_METHODS and optimizers()["toy"] is toy
+    assert get_optimizer("Coordinate_Descent").name == "cd"
+    assert get_optimizer("nelder-mead").options["constraint_handling"] == "penalty"
+    assert get_optimizer("cobyla").options["constraint_handling"] == "native"
+    assert _parser().parse_args(["optimize", "gripper", "--method", "toy"]).method == "toy"
+    with pytest.raises(SystemExit):
+        main(["optimize", "--help"])
+    assert "toy (random-search): uniform random search" in " ".join(capsys.readouterr().out.split())
+    unregister_optimizer("toy")
+    with pytest.raises(SystemExit):
+        _parser().parse_args(["optimize", "gripper", "--method", "toy"])
+    assert "invalid choice: 'toy' (choose from 'cd', 'cobyla'" in capsys.readouterr().err
+    register_optimizer("toy", _random_search, description="again")        # for the fixture
+
+
+def test_unknown_or_clashing_optimiser_names(toy):
+    with pytest.raises(ParameterError, match="Unknown optimisation method 'anneal'; use one of "
+                                             "cd, cobyla, bobyqa, neldermead, sbplx, direct, toy"):
+        optimize(Quad(), "anneal")
+    with pytest.raises(ParameterError, match=r"\['toy'\] already registered"):
+        register_optimizer("toy", _random_search, description="twice")
+    with pytest.raises(ParameterError, match=r"\['subplex'\] already registered"):
+        register_optimizer("mine", _random_search, aliases=("subplex",), description="clash")
+    with pytest.raises(ParameterError, match="max_evaluations = True"):
+        register_optimizer("mine", _random_search, max_evaluations=True, description="-")
+    with pytest.raises(ParameterError, match="must be callable"):
+        register_optimizer("mine", "not a function", description="-")
+    with pytest.raises(ParameterError, match="no method 'mine'"):
+        unregister_optimizer("mine")
+    replaced = register_optimizer("toy", _random_search, description="v2", replace=True)
+    assert optimizers()["toy"] is replaced
+    with pytest.raises(ParameterError, match="'random-search'"):       # its aliases went too
+        get_optimizer("random-search")
+
+
+def test_readme_lists_the_registered_methods():
+    """The README's CLI table names the built-in methods of the registry, in its order."""
+    import pathlib
+    import re
+
+    readme = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text()
+    listed = re.search(r"--method ((?:\w+\\?\|)+\w+)", readme).group(1).replace("\\", "")
+    assert listed.split("|") == list(optimizers())
+
+
 # ---------------------------------------------------------------- the real gripper
 @pytest.mark.slow
 def test_gripper_coordinate_descent_one_cycle(tmp_path):
-    from design.core.problem import GripperProblem
+    from design import GripperProblem
 
     res = optimize(GripperProblem(), "cd", out=tmp_path, max_cycles=1)
     assert res.status in ("converged", "max_cycles") and res.success

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from design.core.executors import SerialExecutor, make_executor
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from design.analysis.robustness import (TIMING_COLUMNS, RobustGripperProblem,
                                residual_fold_grid, sweep_residual_fold, with_residual_fold)
 from simulator.errors import ParameterError

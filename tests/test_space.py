@@ -6,7 +6,7 @@ import pickle
 import numpy as np
 import pytest
 
-from design.core.problem import GRIPPER_SPACE, DesignProblem, Evaluation, GripperProblem
+from design import GRIPPER_SPACE, DesignProblem, Evaluation, GripperProblem
 from design.core.space import DesignSpace, Variable
 from simulator.errors import ParameterError
 

@@ -159,9 +159,9 @@ def test_cd_optimum_reads_the_last_cycle():
 
 
 def test_time_limit_fails_the_evaluation_and_restores_the_handler(monkeypatch):
-    import design.core.problem
+    import design.devices.gripper_problem
 
-    monkeypatch.setattr(design.core.problem, "evaluate_gripper",     # a stalled simulation
+    monkeypatch.setattr(design.devices.gripper_problem, "evaluate_gripper",     # a stalled simulation
                         lambda *args, **kwargs: time.sleep(10))
     before = signal.getsignal(signal.SIGALRM)
     problem = TimeLimitedGripperProblem(time_limit=0.05)

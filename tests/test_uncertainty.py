@@ -14,7 +14,7 @@ import pytest
 from scipy import stats
 
 from design.core.executors import ProcessExecutor, SerialExecutor, make_executor
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
 from design.analysis.uncertainty import (Distribution, FabricationScenario, UncertainInput, quantile,
                                 rank_correlations, residual_fold_per_crease, wilson_interval)
@@ -79,6 +79,24 @@ def test_sampling_is_seeded_and_correlated_by_group(method):
     if method == "lhs":                                        # one sample per stratum
         strata = np.floor(400 * (a["delta_alpha"] - 34e-6) / 8e-6).astype(int)
         assert sorted(strata) == list(range(400))
+
+
+def test_sampling_and_statistics_are_scipys():
+    """The Latin hypercube is scipy's (seeded from the same generator), truncated normals are
+    scipy's truncnorm and the yield interval is scipy's Wilson interval."""
+    one = FabricationScenario((UncertainInput("delta_alpha", Distribution.uniform(34e-6,
+                                                                                  42e-6)),))
+    u = stats.qmc.LatinHypercube(1, rng=np.random.default_rng(5)).random(16)[:, 0]
+    np.testing.assert_allclose(one.sample(16, 5, "lhs")["delta_alpha"], 34e-6 + 8e-6 * u,
+                               rtol=1e-14)
+    p = np.linspace(0.01, 0.99, 9)
+    cut = Distribution.normal(1.0, 2.0, -0.5, 2.0)
+    np.testing.assert_allclose(cut.ppf(p), stats.truncnorm.ppf(p, -0.75, 0.5, loc=1.0,
+                                                               scale=2.0), rtol=1e-14)
+    for k, n in ((0, 7), (3, 10), (37, 64), (64, 64)):
+        ci = stats.binomtest(k, n).proportion_ci(0.9, method="wilson")
+        assert wilson_interval(k, n, 0.9) == (ci.low, ci.high)
+    assert all(math.isnan(v) for v in wilson_interval(0, 0))
 
 
 def test_statistics():

@@ -10,15 +10,17 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from simulator import Model, ParameterError, SimulationState, fold_angles, initial_state
+# Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
+# operator and the crease temperature weights for the influence matrices; a Newton re-solve
+# of the equilibrium system with moved crease rest angles for the fold sensitivities). These
+# are solver internals, not a user's API (tests/test_architecture.py lists them).
 from simulator.model.bimorph import crease_temperature_weights
-from simulator.errors import ParameterError
-from simulator.mechanics.kinematics import fold_angles
-from simulator.state import SimulationState, equilibrium_system, initial_state, thermal_model
-from simulator.model.model import Model
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import newton
+from simulator.state import equilibrium_system, thermal_model
 
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation"]
 

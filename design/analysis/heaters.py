@@ -41,18 +41,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simulator.errors import ParameterError
-from simulator.mechanics.kinematics import fold_angles
-from simulator.simulation import simulate
-from simulator.state import SimulationState, initial_state
-from simulator.steps import Heat
-from simulator.model.model import Model
-from simulator.solvers.newton import NewtonOptions
+from simulator import (Heat, Model, NewtonOptions, ParameterError, SimulationState, fold_angles,
+                       initial_state, simulate)
 
 from ..core._contract import check_outcome
 from ._heater_lp import (_check_targets, _heater_table, _linear_model, _solve_lp, _weights,
                          fold_sensitivity, influence_matrices, linear_allocation)
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity",
            "linear_allocation", "allocate_heaters"]
@@ -254,7 +249,7 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     ----------
     model : Model with thermal parameters and actuators
     targets : {crease id: fold angle [rad]}
-        Fold angle from flat (sign as :func:`simulator.mechanics.kinematics.fold_angles`) each crease must
+        Fold angle from flat (sign as :func:`simulator.fold_angles`) each crease must
         reach within ``fold_tol``; a target that needs the crease to fold against its actuation direction is a
         ParameterError.
     heaters : {name: crease id or tuple of crease ids}, optional

@@ -7,7 +7,7 @@ from __future__ import annotations
 import logging
 import os
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ._executor_base import (Executor, ExecutorError, TaskFailure, _check_failures,
                              _children_ignore_sigint, _report, _task_error)

@@ -11,7 +11,7 @@ import os
 import pickle
 import signal
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ._executor_base import (Executor, ExecutorError, _check_failures, _children_ignore_sigint,
                              _name)

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 __all__ = ["Variable", "DesignSpace"]
 

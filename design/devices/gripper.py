@@ -32,17 +32,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator.model.bimorph import Actuators, Bimorph
-from simulator.simulation import simulate
-from simulator.steps import Load, SelfFold
-from simulator.geometry.materials import SPR
-from simulator.model.mesh import build_mesh
-from simulator.model.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
-from simulator.errors import ParameterError
-from simulator.geometry.example_patterns import gripper_pattern
-from simulator.model.properties import BarHingeParameters
-from simulator.solvers.newton import NewtonOptions
-from simulator.thermal.steady import REFERENCE_BETA, ThermalParameters
+from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHingeParameters,
+                       Bimorph, ContactParameters, Load, NewtonOptions, ParameterError, SelfFold,
+                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
+                       simulate)
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
@@ -304,7 +297,7 @@ def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
 
 def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
     """The gripper model and the loading steps before heating (residual fold, gravity)."""
-    pattern = gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
+    pattern = example_patterns.gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
                               crease_thickness=design.t_gold + design.t_su8,
                               grip_range=design.grip_range, undercut=design.undercut,
                               panel_thickness=design.panel_thickness, panel_material=SPR)

@@ -14,16 +14,13 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator.cases import miura_fold_signs, miura_sheet_model
-from simulator.errors import ParameterError, PatternError
-from simulator.simulation import simulate
-from simulator.model.mesh import build_mesh
-from simulator.model.model import Model
-from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator import (Model, ParameterError, PatternError, build_mesh, example_patterns,
+                       miura_fold_signs, miura_sheet_model, simulate)
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
-from ..core.problem import SU8_TG, DesignProblem
+from ..core.problem import DesignProblem
+from .limits import SU8_TG
 from ..core.space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
@@ -93,7 +90,7 @@ class MiuraDesign:
 def _meshable(d: MiuraDesign, W: float) -> bool:
     """The flat sheet meshes with crease width ``W`` without collapsed creases or panels."""
     try:
-        mesh = build_mesh(miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
+        mesh = build_mesh(example_patterns.miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
     except PatternError:
         return False
     cn, x = mesh.crease_nodes, mesh.nodes
