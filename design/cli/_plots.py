@@ -3,7 +3,7 @@ demo's heating curve and natural mode shapes (:func:`simulator.natural_modes`).
 
 Built without pyplot (no GUI backend is selected); lengths in mm, frequencies in Hz. A mode is
 drawn as the state's shape (grey wireframe) plus the scaled mode shape, faces coloured by the
-modal displacement magnitude (the colours of :mod:`studies.plotting`).
+modal displacement magnitude (the colours of ``studies.plotting``).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def demo_figure(table, threshold, what):
 
 def set_3d_limits(ax, points_mm) -> None:
     """Axis limits of a 3-D axes to the bounding box of ``points_mm`` (..., 3) with equal
-    aspect (also used by :mod:`studies.plotting`)."""
+    aspect (also used by ``studies.plotting``)."""
     pts = np.asarray(points_mm).reshape(-1, 3)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = hi - lo
