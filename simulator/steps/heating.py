@@ -16,13 +16,13 @@ temperature and shape agree. :class:`AmbientTemperature` ramps the room temperat
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..model.bimorph import crease_temperature_weights
+from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from ..solvers.newton import follow_path
 from ..model.properties import spring_rest_angles
@@ -132,18 +132,11 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
 
 def _coupling(step) -> Coupling:
     """Validate a step's coupling fields and return them as a :class:`Coupling`."""
-    if step.coupling not in ("staggered", "iterated"):
-        raise ParameterError(f"{type(step).__name__}.coupling = {step.coupling!r}; use "
-                             "'staggered' or 'iterated'.")
-    n = step.max_coupling_iterations
-    if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
-        raise ParameterError(f"{type(step).__name__}.max_coupling_iterations = {n!r} must be a "
-                             "positive integer.")
-    if not (isinstance(step.coupling_tol, (int, float)) and math.isfinite(step.coupling_tol)
-            and step.coupling_tol > 0):
-        raise ParameterError(f"{type(step).__name__}.coupling_tol = {step.coupling_tol!r} must "
-                             "be positive [K].")
-    return Coupling(step.coupling, float(step.coupling_tol), n)
+    owner = type(step).__name__
+    mode = one_of(f"{owner}.coupling", step.coupling, ("staggered", "iterated"))
+    n = integer(f"{owner}.max_coupling_iterations", step.max_coupling_iterations)
+    tol = positive(f"{owner}.coupling_tol", step.coupling_tol, "K")
+    return Coupling(mode, tol, n)
 
 
 @dataclass(frozen=True)
@@ -182,8 +175,7 @@ class Heat(Step):
         check_on_limit_point(self)
         _coupling(self)
         for key, v in dict(self.power).items():
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
-                raise ParameterError(f"Heat: power of crease {key} is {v!r}; give watts.")
+            finite(f"Heat: power of crease {key}", v, "W")
 
     def power_array(self, mesh) -> np.ndarray:
         """(C,) power added per crease row [W]."""
@@ -243,10 +235,7 @@ class AmbientTemperature(Step):
 
     def __post_init__(self):
         check_increments(self)
-        if not (isinstance(self.target, (int, float, np.integer, np.floating))
-                and math.isfinite(self.target)):
-            raise ParameterError(f"AmbientTemperature.target = {self.target!r} must be a finite "
-                                 "temperature [deg C].")
+        finite("AmbientTemperature.target", self.target, "deg C", hint="a temperature")
 
     def run(self, context: StepContext, state) -> StepOutcome:
         s = np.arange(1, self.increments + 1) / self.increments
