@@ -114,19 +114,23 @@ def one_of(field: str, value, choices, hint: str = ""):
 def array(field: str, value, shape, unit: str = "", hint: str = "", finite_values: bool = True,
           dtype=float) -> np.ndarray:
     """``value`` as an array of ``dtype`` with ``shape`` (a tuple; ``None`` entries match any
-    length) and, with ``finite_values``, only finite entries."""
-    want = str(tuple("k" if n is None else n for n in shape)).replace("'", "")
-    unit = f" [{unit}]" if unit else ""
-    hint = f"; {hint}" if hint else ""
-    what = f"{field} must be a{' finite' if finite_values else 'n'} array of shape {want}{unit}"
+    length) and, with ``finite_values``, only finite entries. (Cheap when the value is good:
+    the message is built only on failure.)"""
     try:
         out = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError):
-        raise ParameterError(f"{what}; got {value!r:.80}{hint}.") from None
+        _array_fail(field, shape, unit, hint, finite_values, f"{value!r:.80}")
     if out.ndim != len(shape) or any(n is not None and m != n for m, n in zip(out.shape, shape)):
-        raise ParameterError(f"{what}; got shape {out.shape}{hint}.")
+        _array_fail(field, shape, unit, hint, finite_values, f"shape {out.shape}")
     if finite_values and not np.isfinite(out).all():
-        bad = np.argwhere(~np.isfinite(out))[0]
-        raise ParameterError(f"{what}; got {out[tuple(bad)]!r} at index {tuple(bad.tolist())}"
-                             f"{hint}.")
+        bad = tuple(np.argwhere(~np.isfinite(out))[0].tolist())
+        _array_fail(field, shape, unit, hint, finite_values, f"{out[bad].item()!r} at index {bad}")
     return out
+
+
+def _array_fail(field, shape, unit, hint, finite_values, got):
+    want = str(tuple("k" if n is None else n for n in shape)).replace("'", "")
+    unit = f" [{unit}]" if unit else ""
+    hint = f"; {hint}" if hint else ""
+    kind = "a finite array" if finite_values else "an array"
+    raise ParameterError(f"{field} must be {kind} of shape {want}{unit}; got {got}{hint}.")

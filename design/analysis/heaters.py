@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simulator._validate import integer, non_negative, positive
 from simulator.errors import ParameterError
 from simulator.mechanics.kinematics import fold_angles
 from simulator.simulation import simulate
@@ -350,13 +351,8 @@ def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _A
 
 
 def _check_settings(*, max_rounds, stages, band, fold_tol, max_power):
-    for name, v in (("max_rounds", max_rounds), ("stages", stages)):
-        if not (isinstance(v, int) and v >= 1):
-            raise ParameterError(f"{name} = {v!r} must be a positive integer.")
-    for name, v in (("band", band), ("fold_tol", fold_tol)):
-        if not (math.isfinite(v) and v >= (0 if name == "band" else np.finfo(float).tiny)):
-            raise ParameterError(f"{name} = {v!r} must be a "
-                                 f"{'non-negative' if name == 'band' else 'positive'} angle "
-                                 "in rad.")
-    if max_power is not None and not (math.isfinite(max_power) and max_power > 0):
-        raise ParameterError(f"max_power = {max_power!r} must be a positive power in W.")
+    integer("max_rounds", max_rounds)
+    integer("stages", stages)
+    non_negative("band", band, "rad")
+    positive("fold_tol", fold_tol, "rad")
+    positive("max_power", max_power, "W", allow_none=True)

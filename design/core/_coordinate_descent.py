@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator._validate import integer
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 
@@ -17,8 +17,7 @@ def _x_columns(space, x) -> dict:
 def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidates=False,
                         metric="temperature [degC]"):
     space = run.space
-    if not (isinstance(max_cycles, int) and max_cycles >= 1):
-        raise ParameterError(f"max_cycles = {max_cycles!r} must be a positive integer.")
+    integer("max_cycles", max_cycles)
     tol = 1e-9 * (space.upper - space.lower)
     k = np.zeros(len(space), dtype=int)
 

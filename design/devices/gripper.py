@@ -38,6 +38,7 @@ from simulator.steps import Load, SelfFold
 from simulator.geometry.materials import SPR
 from simulator.model.mesh import build_mesh
 from simulator.model.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
+from simulator._validate import one_of, positive
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import gripper_pattern
 from simulator.model.properties import BarHingeParameters
@@ -128,9 +129,8 @@ class GripperDesign:
             if name.startswith("residual_fold"):
                 if value is not None:
                     check_fold(f"GripperDesign.{name}", value)
-            elif not (math.isfinite(value) and value > 0):
-                raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, "
-                                     "finite length in metres.")
+            else:
+                positive(f"GripperDesign.{name}", value, "m")
         if self.W >= min(self.L1, self.L2, self.La):
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
@@ -408,11 +408,9 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
         Equilibrium solver settings; :data:`REFERENCE_NEWTON` emulates the reference's loose
         loop (for comparisons with its outputs only).
     """
-    if mode not in ("bisect", "staircase"):
-        raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
+    one_of("mode", mode, ("bisect", "staircase"))
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
-        if not (math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} = {v!r} must be a positive power in W.")
+        positive(name, v, "W")
     model, pre = gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
                                else _GRAVITY_INCREMENTS)
     start = simulate(model, pre, options=options)

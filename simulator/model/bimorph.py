@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import positive
 from ..errors import ParameterError
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
@@ -53,9 +54,7 @@ class Bimorph:
 
     def __post_init__(self):
         for name in ("E1", "t1", "E2", "t2"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"Bimorph.{name} = {v!r} must be positive and finite (SI).")
+            positive(f"Bimorph.{name}", getattr(self, name), "Pa" if name[0] == "E" else "m")
 
     def curvature(self, delta_alpha, dT):
         """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""

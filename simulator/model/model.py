@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 
 from .bimorph import Actuators
+from .._validate import non_negative, positive
 from ..errors import ParameterError
 from .mesh import BarHingeMesh, build_mesh
 from ..geometry.pattern import Pattern
@@ -125,10 +126,9 @@ class ContactParameters:
     max_step_fraction: float = 0.5
 
     def __post_init__(self):
-        for name in ("stiffness", "d0_corner", "d0_centre", "max_step_fraction"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"ContactParameters.{name} = {v!r} must be positive and finite.")
+        for name, unit in (("stiffness", "J"), ("d0_corner", "m"), ("d0_centre", "m"),
+                           ("max_step_fraction", "")):
+            positive(f"ContactParameters.{name}", getattr(self, name), unit)
 
     @property
     def max_step(self) -> float:
@@ -262,8 +262,7 @@ def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,
     d = np.asarray(direction, float)
     if d.shape != (3,) or not np.isfinite(d).all() or np.linalg.norm(d) == 0:
         raise ParameterError(f"gravity direction {direction!r} must be a non-zero 3-vector.")
-    if not (math.isfinite(g) and g >= 0):
-        raise ParameterError(f"gravity g = {g!r} must be a non-negative acceleration in m/s^2.")
+    non_negative("gravity g", g, "m/s^2")
     pat = mesh.pattern
     fans = mesh.triangles[mesh.fan_triangles]
     panel = mesh.triangle_panel[mesh.fan_triangles]

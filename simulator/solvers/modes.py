@@ -32,6 +32,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._version import __version__
+from .._validate import integer
 from ..errors import ParameterError
 from ..linalg.linsolve import factor_symmetric
 from ..model.mass import check_masses, lumped_masses
@@ -149,10 +150,7 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
                              "'sparse'.")
     system = equilibrium_system(model)
     n_free = system.n_free
-    if not (isinstance(count, (int, np.integer)) and not isinstance(count, bool)
-            and 1 <= count <= n_free):
-        raise ParameterError(f"natural_modes: count = {count!r} must be an integer from 1 to the "
-                             f"number of free DOFs ({n_free}).")
+    integer("natural_modes: count", count, 1, n_free, hint="at most the number of free DOFs")
     m = lumped_masses(model.mesh) if masses is None else np.asarray(masses, float)
     check_masses(model, m)
     K = system.evaluate(state.u, state.spring_rest, hessian=True).K
