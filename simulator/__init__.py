@@ -29,7 +29,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.dynamics_options": ("DynamicsOptions",),
     ".mechanics.elements.springs": ("spring_kernel_backend",),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
-                "PatternError"),
+                "PatternError", "SolverError"),
     ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
@@ -49,7 +49,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".results": ("SimulationResult", "StepResult"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
-    ".steps": ("AmbientTemperature", "ArcLengthLoad", "Coupling", "DisplacementControl",
+    ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
                "Dynamics", "ElectroThermal", "Gravity", "Heat", "Load", "SelfFold", "Step",
                "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
     ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
@@ -71,7 +71,7 @@ __all__ = [
     "REFERENCE_GRAVITY",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
-    "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
+    "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
     "initial_state", "spring_kernel_backend",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
@@ -95,4 +95,5 @@ __all__ = [
     "miura_sheet_model", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
+    "SolverError",
 ]

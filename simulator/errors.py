@@ -36,3 +36,12 @@ class ConvergenceError(EtorigamiError, RuntimeError):
     def __init__(self, message: str, result: object = None):
         super().__init__(message)
         self.result = result
+
+
+class SolverError(EtorigamiError, RuntimeError):
+    """A numerical method failed although its input was valid: a factorisation that should
+    succeed did not (LAPACK ``info != 0``), an LP found no solution, an eigensolver broke down.
+
+    Not a :class:`ValueError`: changing the arguments is not the fix. The message names the
+    method and its status.
+    """

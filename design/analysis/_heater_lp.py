@@ -11,7 +11,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from simulator.model.bimorph import crease_temperature_weights
-from simulator.errors import ParameterError
+from simulator.errors import ConvergenceError, ParameterError, SolverError
 from simulator.mechanics.kinematics import fold_angles
 from simulator.state import SimulationState, equilibrium_system, initial_state, thermal_model
 from simulator.model.model import Model
@@ -114,7 +114,8 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     def folds(rest):
         res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
         if not res.success:
-            raise ParameterError(f"fold_sensitivity: equilibrium not found ({res.message})")
+            raise ConvergenceError(f"fold_sensitivity: equilibrium not found ({res.message})",
+                                       res)
         return fold_angles(mesh, mesh.nodes + res.u)
 
     base = folds(state.crease_rest)
@@ -177,5 +178,5 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
                              - state.temperature[model.mesh.crease_nodes].ravel(),
                              _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
-        raise ParameterError(f"linear_allocation: LP not solved ({status}).")
+        raise SolverError(f"linear_allocation: LP not solved ({status}).")
     return p

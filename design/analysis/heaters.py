@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simulator._validate import integer, non_negative, positive
-from simulator.errors import ParameterError
+from simulator.errors import ConvergenceError, ParameterError
 from simulator.mechanics.kinematics import fold_angles
 from simulator.simulation import simulate
 from simulator.state import SimulationState, initial_state
@@ -219,7 +219,7 @@ class _Rounds:
         out.state = res.state
         try:
             self._linearise(res.state, previous)
-        except ParameterError as exc:
+        except (ParameterError, ConvergenceError) as exc:
             out.status, out.message = "failed", f"round {out.rounds}: {exc}"
             return False, excess
         reached = self.folds

@@ -34,7 +34,7 @@ from . import _thermal_jit
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
 from .._validate import array, finite, in_range, integer, non_negative, positive
-from ..errors import ParameterError, PatternError
+from ..errors import ParameterError, PatternError, SolverError
 from ..linalg.linsolve import factor_symmetric
 from ..geometry.materials import AIR
 from ..model.mesh import BarHingeMesh
@@ -434,7 +434,7 @@ class ThermalModel:
                 def cholesky_solve(q_free):
                     sol, info = _potrs(c, q_free)
                     if info != 0:
-                        raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
+                        raise SolverError(f"thermal solve failed (LAPACK dpotrs info {info})")
                     return sol
                 return cholesky_solve
         return factor_symmetric(self._free_pattern.matrix([K, g_free])).solve
