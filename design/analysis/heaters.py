@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simulator._result import ResultFiles
 from simulator._validate import integer, non_negative, positive
 from simulator.errors import ConvergenceError, ParameterError
 from simulator.mechanics.kinematics import fold_angles
@@ -71,7 +72,7 @@ ALLOCATION_STATUSES = ("converged", "infeasible", "failed", "max_rounds")
 
 
 @dataclass(frozen=True, eq=False)
-class HeaterAllocation:
+class HeaterAllocation(ResultFiles):
     """Outcome of :func:`allocate_heaters`.
 
     Attributes
@@ -136,6 +137,20 @@ class HeaterAllocation:
                          "target_fold [deg]": math.degrees(t) if t is not None else math.nan,
                          "fold_angle [deg]": math.degrees(a) if a is not None else math.nan})
         return pd.DataFrame(rows)
+
+    def _tables(self) -> dict:
+        import pandas as pd
+
+        return {"heaters.csv": self.to_frame(),
+                "rounds.csv": pd.DataFrame(list(self.history)) if self.history else None}
+
+    def _meta(self) -> dict:
+        return {"heaters": dict(self.heaters),
+                "rounds": self.rounds, "total_power [W]": self.total_power,
+                "max_temperature [degC]": self.max_temperature,
+                "temperature_limit [degC]": self.temperature_limit,
+                "targets [rad]": {str(k): v for k, v in self.targets.items()},
+                "achieved [rad]": {str(k): v for k, v in self.achieved.items()}}
 
 
 @dataclass

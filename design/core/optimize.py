@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from simulator._result import ResultFiles
 from simulator.errors import ParameterError
 
 from ._contract import check_outcome
@@ -64,7 +65,7 @@ _NLOPT_OPTIONS = {"xtol_rel": 1e-4, "ftol_rel": 1e-6, "xtol_abs": 1e-6, "ftol_ab
 
 
 @dataclass(frozen=True, eq=False)
-class OptimizationResult:
+class OptimizationResult(ResultFiles):
     """Outcome of :func:`optimize`.
 
     Attributes
@@ -132,6 +133,16 @@ class OptimizationResult:
         if self.best is not None:
             d.update(metrics=self.best.metrics, best_message=self.best.message)
         return clean(d)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The evaluation history, one row per evaluation (:attr:`history`)."""
+        return self.history
+
+    def _tables(self) -> dict:
+        return {"history.csv": self.history, "cycles.csv": self.cycles}
+
+    def _meta(self) -> dict:
+        return self.to_dict()
 
 
 def _resolve_method(method) -> str:

@@ -13,6 +13,7 @@ import time
 import traceback
 from dataclasses import dataclass, field
 
+from simulator._result import ResultFiles
 from simulator.errors import ParameterError
 from simulator.geometry.materials import SU8
 
@@ -45,7 +46,7 @@ EVALUATION_STATUSES = ("feasible", "infeasible", "not_met", "failed")
 
 
 @dataclass(frozen=True)
-class Evaluation:
+class Evaluation(ResultFiles):
     """One evaluated design.
 
     ``success`` means the thing asked of an evaluation was done: the objective and the
@@ -110,6 +111,11 @@ class Evaluation:
         row.update({"success": self.success, "status": self.status, "feasible": self.feasible,
                     "message": self.message, "wall_time [s]": self.wall_time})
         return row
+
+    _csv_name = "evaluation.csv"
+
+    def _row(self) -> dict:
+        return self.to_row()
 
 
 class DesignProblem:

@@ -38,6 +38,7 @@ from simulator.steps import Load, SelfFold
 from simulator.geometry.materials import SPR
 from simulator.model.mesh import build_mesh
 from simulator.model.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
+from simulator._result import ResultFiles
 from simulator._validate import one_of, positive
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import gripper_pattern
@@ -159,7 +160,7 @@ STAGE_STATUSES = ("met", "not_met", "failed", "not_attempted")
 
 
 @dataclass(frozen=True)
-class StageResult:
+class StageResult(ResultFiles):
     """Outcome of one stage's power search.
 
     Attributes
@@ -205,9 +206,18 @@ class StageResult:
                                  f"with success = {self.success}: a met stage has a power, "
                                  "an unmet one None.")
 
+    _csv_name = "stage.csv"
+
+    def _row(self) -> dict:
+        return {"success": self.success, "status": self.status, "message": self.message,
+                "power_per_crease [mW]": power_if(self.success, self.power_per_crease, 1e3),
+                "measure": self.measure, "temperature [degC]": self.temperature,
+                "max_crease_temperature [degC]": self.max_crease_temperature,
+                "simulations": self.simulations, "increments": self.increments}
+
 
 @dataclass(frozen=True)
-class GripperResult:
+class GripperResult(ResultFiles):
     """Both stages; powers per heated crease as in the paper.
 
     ``success``: both stages met; ``status``: ``"met"``, or the status of the first stage
@@ -250,6 +260,8 @@ class GripperResult:
             return "; ".join(["both stages met"] + snapped)
         bad = self.assembly if not self.assembly.success else self.grip
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
+
+    _csv_name = "gripper.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (the CLI's JSON); powers of stages whose

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from simulator.cases import miura_fold_signs, miura_sheet_model
+from simulator._result import ResultFiles
 from simulator._validate import in_range, integer, one_of, positive
 from simulator.errors import ParameterError, PatternError
 from simulator.simulation import simulate
@@ -128,7 +129,7 @@ def _lift_nodes(model: Model, design: MiuraDesign) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class LiftPowerResult:
+class LiftPowerResult(ResultFiles):
     """Outcome of :func:`lift_power`.
 
     Attributes
@@ -161,6 +162,8 @@ class LiftPowerResult:
             raise ParameterError(f"LiftPowerResult.power_per_crease = {self.power_per_crease!r}"
                                  f" with success = {self.success}: a reached target has a "
                                  "power, an unreached one None.")
+
+    _csv_name = "lift_power.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (powers None when not met)."""

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .dynamics_options import METHODS, DynamicsOptions  # noqa: F401 (METHODS: re-export)
+from .._result import ResultFiles
 from .._validate import integer, positive
 from ..mechanics.equilibrium import EquilibriumSystem
 from .generalized_alpha import MotionState, StepReport, TimeIntegrator
@@ -33,7 +34,7 @@ ENERGY_COLUMNS = ("kinetic_energy [J]", "strain_energy [J]", "dissipated_energy 
 
 
 @dataclass(frozen=True, eq=False)
-class DynamicsResult:
+class DynamicsResult(ResultFiles):
     """Time history of :func:`integrate` (record 0 = the initial state).
 
     Attributes
@@ -91,6 +92,12 @@ class DynamicsResult:
 
         return pd.DataFrame({"time [s]": self.time, **self.energies,
                              "iterations": self.iterations})
+
+    _csv_name = "dynamics.csv"
+
+    def _meta(self) -> dict:
+        return {"records": len(self.time), "end_time [s]": float(self.time[-1]),
+                "cuts": self.cuts}
 
 
 def integrate(system: EquilibriumSystem, u0, v0, duration: float, dt: float, f_ext,

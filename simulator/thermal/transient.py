@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .._result import ResultFiles
 from .._validate import in_range, integer, positive
 from ..errors import ParameterError
 from ..linalg.linsolve import factor_symmetric
@@ -239,7 +240,7 @@ def theta_step(K, C, T, q_old, q_new, dt, theta=REFERENCE_THETA) -> np.ndarray:
 
 # ------------------------------------------------------------------ integration
 @dataclass(frozen=True, eq=False)
-class TransientHeatResult:
+class TransientHeatResult(ResultFiles):
     """Temperature history of :func:`integrate_heat` (``m`` records, record 0 = start).
 
     Attributes
@@ -291,6 +292,12 @@ class TransientHeatResult:
                              "temperature [degC]": self.temperature.ravel(),
                              "heat_in [J]": rep(self.heat_in), "heat_out [J]": rep(self.heat_out),
                              "heat_stored [J]": rep(self.heat_stored)})
+
+    _csv_name = "transient_heat.csv"
+
+    def _meta(self) -> dict:
+        return {"dt [s]": self.dt, "theta": self.theta, "steps": self.steps,
+                "assemblies": self.assemblies}
 
 
 def initial_rise(tm, x, T0, room) -> np.ndarray:
