@@ -7,7 +7,6 @@ may add elastic springs to ground.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from functools import cached_property
@@ -15,7 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from .bimorph import Actuators
-from .._validate import non_negative, positive
+from .._validate import integer, non_negative, one_of, positive
 from ..errors import ParameterError
 from .mesh import BarHingeMesh, build_mesh
 from ..geometry.pattern import Pattern
@@ -52,8 +51,7 @@ class Supports:
     def __post_init__(self):
         fixed = {}
         for node, dirs in dict(self.fixed).items():
-            if not isinstance(node, (int, np.integer)) or isinstance(node, bool):
-                raise ParameterError(f"Supports: node id {node!r} must be an integer.")
+            integer("Supports: node id", node, 0)
             if not isinstance(dirs, str) or not dirs or set(dirs) - set("xyz"):
                 raise ParameterError(f"Supports: node {node} has directions {dirs!r}; use a "
                                      "non-empty subset of 'xyz'.")
@@ -66,10 +64,10 @@ class Supports:
             except (TypeError, ValueError):
                 raise ParameterError(f"Supports: elastic support {item!r} must be (node, "
                                      "direction, stiffness).") from None
-            if direction not in _AXES or not (math.isfinite(k) and k > 0):
-                raise ParameterError(f"Supports: elastic support {item!r} needs a direction in "
-                                     "'x', 'y', 'z' and a positive stiffness in N/m.")
-            elastic.append((int(node), direction, float(k)))
+            where = f"Supports: elastic support {item!r}"
+            integer(f"{where}: node", node, 0)
+            one_of(f"{where}: direction", direction, tuple(_AXES))
+            elastic.append((int(node), direction, positive(f"{where}: stiffness", k, "N/m")))
         object.__setattr__(self, "elastic", tuple(elastic))
 
     @classmethod
