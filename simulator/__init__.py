@@ -31,7 +31,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".mechanics.elements.springs": ("spring_kernel_backend",),
     ".mechanics.kinematics": ("fold_angles",),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
-                "PatternError"),
+                "PatternError", "SolverError"),
     ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
@@ -51,7 +51,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".results": ("SimulationResult", "StepResult"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
-    ".steps": ("AmbientTemperature", "ArcLengthLoad", "Coupling", "DisplacementControl",
+    ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
                "Dynamics", "ElectroThermal", "Gravity", "Heat", "Load", "SelfFold", "Step",
                "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
     ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
@@ -73,7 +73,7 @@ __all__ = [
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
-    "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
+    "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
     "initial_state", "spring_kernel_backend",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
@@ -97,4 +97,5 @@ __all__ = [
     "miura_sheet_model", "miura_fold_signs", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
+    "SolverError",
 ]

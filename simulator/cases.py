@@ -15,6 +15,7 @@ import numpy as np
 
 
 from .model.bimorph import Actuators, Bimorph
+from ._validate import integer, non_negative, positive
 from .errors import ParameterError
 from .simulation import simulate
 from .solvers.dynamics_options import DynamicsOptions
@@ -90,17 +91,13 @@ def describe_cases() -> list:
 
 
 def _power(power_mW):
-    if not (isinstance(power_mW, (int, float)) and not isinstance(power_mW, bool)
-            and math.isfinite(power_mW) and power_mW >= 0):
-        raise ParameterError(f"power_mW = {power_mW!r} must be a non-negative number of mW.")
+    non_negative("power_mW", power_mW, "mW")
     return power_mW * 1e-3
 
 
 def _check(**kw):
     for k, v in kw.items():
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                and v > 0):
-            raise ParameterError(f"{k} = {v!r} must be a positive number.")
+        positive(k, v)
 
 
 def _fold_deg(name, value):
@@ -113,9 +110,7 @@ def _fold_deg(name, value):
 
 
 def _steps_int(name, value):
-    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-        raise ParameterError(f"{name} = {value!r} must be a positive integer.")
-    return value
+    return integer(name, value)
 
 
 # ------------------------------------------------------------------------------ strip

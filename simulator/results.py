@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import json
 import pathlib
-import subprocess
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from ._result import ResultFiles, _git_hash, _jsonable
 from ._version import __version__
 from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
@@ -26,7 +26,7 @@ __all__ = ["StepResult", "SimulationResult"]
 
 
 @dataclass(frozen=True, eq=False)
-class StepResult:
+class StepResult(ResultFiles):
     """Result of one loading step.
 
     Attributes
@@ -79,6 +79,25 @@ class StepResult:
     @property
     def increments(self) -> int:
         return len(self.load_factor)
+
+    _csv_name = "step.csv"
+
+    def to_frame(self):
+        """One row per accepted increment: ``increment``, ``load_factor``, ``iterations``,
+        ``power [mW]`` (largest crease power), ``max_temperature [degC]`` (hottest node), then
+        the step-specific columns (e.g. ``time [s]``, ``stable``)."""
+        import pandas as pd
+
+        return pd.DataFrame({
+            "increment": np.arange(1, self.increments + 1), "load_factor": self.load_factor,
+            "iterations": self.increment_iterations,
+            "power [mW]": 1e3 * np.max(self.power_history, axis=1, initial=0.0),
+            "max_temperature [degC]": np.max(self.temperature_history, axis=1, initial=-np.inf),
+            **{name: list(values) for name, values in self.columns.items()}})
+
+    def _meta(self) -> dict:
+        return {"name": self.name, "increments": self.increments, "iterations": self.iterations,
+                "cuts": self.cuts, "wall_time [s]": self.wall_time, "settings": self.settings}
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,21 +277,3 @@ class SimulationResult:
                 **(metadata or {})}
         (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
         return out
-
-
-def _jsonable(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.integer, np.floating)):
-        return obj.item()
-    return str(obj)
-
-
-def _git_hash() -> str | None:
-    try:
-        here = pathlib.Path(__file__).resolve().parent
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
-                             text=True, timeout=5)
-        return out.stdout.strip() or None
-    except (OSError, subprocess.SubprocessError):
-        return None

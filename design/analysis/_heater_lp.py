@@ -10,7 +10,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from simulator import Model, ParameterError, SimulationState, fold_angles, initial_state
+from simulator import (ConvergenceError, Model, ParameterError, SimulationState, SolverError,
+                       fold_angles, initial_state)
 # Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
 # operator and the crease temperature weights for the influence matrices; a Newton re-solve
 # of the equilibrium system with moved crease rest angles for the fold sensitivities). These
@@ -116,7 +117,8 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     def folds(rest):
         res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
         if not res.success:
-            raise ParameterError(f"fold_sensitivity: equilibrium not found ({res.message})")
+            raise ConvergenceError(f"fold_sensitivity: equilibrium not found ({res.message})",
+                                       res)
         return fold_angles(mesh, mesh.nodes + res.u)
 
     base = folds(state.crease_rest)
@@ -179,5 +181,5 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
                              - state.temperature[model.mesh.crease_nodes].ravel(),
                              _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
-        raise ParameterError(f"linear_allocation: LP not solved ({status}).")
+        raise SolverError(f"linear_allocation: LP not solved ({status}).")
     return p

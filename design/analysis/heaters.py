@@ -41,8 +41,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simulator import (Heat, Model, NewtonOptions, ParameterError, SimulationState, fold_angles,
-                       initial_state, simulate)
+from simulator import (ConvergenceError, Heat, Model, NewtonOptions, ParameterError,
+                       SimulationState, fold_angles, initial_state, simulate)
+from simulator._result import ResultFiles
+from simulator._validate import integer, non_negative, positive
 
 from ..core._contract import check_outcome
 from ._heater_lp import (_check_targets, _heater_table, _linear_model, _solve_lp, _weights,
@@ -65,7 +67,7 @@ ALLOCATION_STATUSES = ("converged", "infeasible", "failed", "max_rounds")
 
 
 @dataclass(frozen=True, eq=False)
-class HeaterAllocation:
+class HeaterAllocation(ResultFiles):
     """Outcome of :func:`allocate_heaters`.
 
     Attributes
@@ -130,6 +132,20 @@ class HeaterAllocation:
                          "target_fold [deg]": math.degrees(t) if t is not None else math.nan,
                          "fold_angle [deg]": math.degrees(a) if a is not None else math.nan})
         return pd.DataFrame(rows)
+
+    def _tables(self) -> dict:
+        import pandas as pd
+
+        return {"heaters.csv": self.to_frame(),
+                "rounds.csv": pd.DataFrame(list(self.history)) if self.history else None}
+
+    def _meta(self) -> dict:
+        return {"heaters": dict(self.heaters),
+                "rounds": self.rounds, "total_power [W]": self.total_power,
+                "max_temperature [degC]": self.max_temperature,
+                "temperature_limit [degC]": self.temperature_limit,
+                "targets [rad]": {str(k): v for k, v in self.targets.items()},
+                "achieved [rad]": {str(k): v for k, v in self.achieved.items()}}
 
 
 @dataclass
@@ -213,7 +229,7 @@ class _Rounds:
         out.state = res.state
         try:
             self._linearise(res.state, previous)
-        except ParameterError as exc:
+        except (ParameterError, ConvergenceError) as exc:
             out.status, out.message = "failed", f"round {out.rounds}: {exc}"
             return False, excess
         reached = self.folds
@@ -345,13 +361,8 @@ def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _A
 
 
 def _check_settings(*, max_rounds, stages, band, fold_tol, max_power):
-    for name, v in (("max_rounds", max_rounds), ("stages", stages)):
-        if not (isinstance(v, int) and v >= 1):
-            raise ParameterError(f"{name} = {v!r} must be a positive integer.")
-    for name, v in (("band", band), ("fold_tol", fold_tol)):
-        if not (math.isfinite(v) and v >= (0 if name == "band" else np.finfo(float).tiny)):
-            raise ParameterError(f"{name} = {v!r} must be a "
-                                 f"{'non-negative' if name == 'band' else 'positive'} angle "
-                                 "in rad.")
-    if max_power is not None and not (math.isfinite(max_power) and max_power > 0):
-        raise ParameterError(f"max_power = {max_power!r} must be a positive power in W.")
+    integer("max_rounds", max_rounds)
+    integer("stages", stages)
+    non_negative("band", band, "rad")
+    positive("fold_tol", fold_tol, "rad")
+    positive("max_power", max_power, "W", allow_none=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator import ParameterError
+from simulator._validate import integer
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 
@@ -19,8 +19,7 @@ def _coordinate_descent(run: EvaluationRun, x0, max_evaluations=None, max_cycles
     """Coordinate descent from ``x0``; returns ``(status, message, cycles)`` (``cycles``: one
     row per cycle, row 0 the start). The budget ``max_evaluations`` is enforced by ``run``."""
     space = run.space
-    if not (isinstance(max_cycles, int) and max_cycles >= 1):
-        raise ParameterError(f"max_cycles = {max_cycles!r} must be a positive integer.")
+    integer("max_cycles", max_cycles)
     tol = 1e-9 * (space.upper - space.lower)
     k = np.zeros(len(space), dtype=int)
 

@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from simulator import ParameterError
+from simulator._result import ResultFiles
 
 from ._contract import check_outcome
 from ._coordinate_descent import _coordinate_descent
@@ -198,7 +199,7 @@ del _name, _algorithm, _aliases, _what
 
 
 @dataclass(frozen=True, eq=False)
-class OptimizationResult:
+class OptimizationResult(ResultFiles):
     """Outcome of :func:`optimize`.
 
     Attributes
@@ -266,6 +267,16 @@ class OptimizationResult:
         if self.best is not None:
             d.update(metrics=self.best.metrics, best_message=self.best.message)
         return clean(d)
+
+    def to_frame(self) -> pd.DataFrame:
+        """The evaluation history, one row per evaluation (:attr:`history`)."""
+        return self.history
+
+    def _tables(self) -> dict:
+        return {"history.csv": self.history, "cycles.csv": self.cycles}
+
+    def _meta(self) -> dict:
+        return self.to_dict()
 
 
 def get_optimizer(method) -> Optimizer:

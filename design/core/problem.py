@@ -17,6 +17,7 @@ import traceback
 from dataclasses import dataclass, field
 
 from simulator import ParameterError
+from simulator._result import ResultFiles
 
 from ._contract import check_outcome
 from .space import DesignSpace
@@ -32,7 +33,7 @@ EVALUATION_STATUSES = ("feasible", "infeasible", "not_met", "failed")
 
 
 @dataclass(frozen=True)
-class Evaluation:
+class Evaluation(ResultFiles):
     """One evaluated design.
 
     ``success`` means the thing asked of an evaluation was done: the objective and the
@@ -97,6 +98,11 @@ class Evaluation:
         row.update({"success": self.success, "status": self.status, "feasible": self.feasible,
                     "message": self.message, "wall_time [s]": self.wall_time})
         return row
+
+    _csv_name = "evaluation.csv"
+
+    def _row(self) -> dict:
+        return self.to_row()
 
 
 class DesignProblem:

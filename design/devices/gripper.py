@@ -36,6 +36,8 @@ from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHin
                        Bimorph, ContactParameters, Load, NewtonOptions, ParameterError, SelfFold,
                        Supports, ThermalParameters, build_mesh, example_patterns, make_model,
                        simulate)
+from simulator._result import ResultFiles
+from simulator._validate import one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
@@ -121,9 +123,8 @@ class GripperDesign:
             if name.startswith("residual_fold"):
                 if value is not None:
                     check_fold(f"GripperDesign.{name}", value)
-            elif not (math.isfinite(value) and value > 0):
-                raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, "
-                                     "finite length in metres.")
+            else:
+                positive(f"GripperDesign.{name}", value, "m")
         if self.W >= min(self.L1, self.L2, self.La):
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
@@ -152,7 +153,7 @@ STAGE_STATUSES = ("met", "not_met", "failed", "not_attempted")
 
 
 @dataclass(frozen=True)
-class StageResult:
+class StageResult(ResultFiles):
     """Outcome of one stage's power search.
 
     Attributes
@@ -198,9 +199,18 @@ class StageResult:
                                  f"with success = {self.success}: a met stage has a power, "
                                  "an unmet one None.")
 
+    _csv_name = "stage.csv"
+
+    def _row(self) -> dict:
+        return {"success": self.success, "status": self.status, "message": self.message,
+                "power_per_crease [mW]": power_if(self.success, self.power_per_crease, 1e3),
+                "measure": self.measure, "temperature [degC]": self.temperature,
+                "max_crease_temperature [degC]": self.max_crease_temperature,
+                "simulations": self.simulations, "increments": self.increments}
+
 
 @dataclass(frozen=True)
-class GripperResult:
+class GripperResult(ResultFiles):
     """Both stages; powers per heated crease as in the paper.
 
     ``success``: both stages met; ``status``: ``"met"``, or the status of the first stage
@@ -243,6 +253,8 @@ class GripperResult:
             return "; ".join(["both stages met"] + snapped)
         bad = self.assembly if not self.assembly.success else self.grip
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
+
+    _csv_name = "gripper.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (the CLI's JSON); powers of stages whose
@@ -401,11 +413,9 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
         Equilibrium solver settings; :data:`REFERENCE_NEWTON` emulates the reference's loose
         loop (for comparisons with its outputs only).
     """
-    if mode not in ("bisect", "staircase"):
-        raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
+    one_of("mode", mode, ("bisect", "staircase"))
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
-        if not (math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} = {v!r} must be a positive power in W.")
+        positive(name, v, "W")
     model, pre = gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
                                else _GRAVITY_INCREMENTS)
     start = simulate(model, pre, options=options)

@@ -16,6 +16,8 @@ import numpy as np
 
 from simulator import (Model, ParameterError, PatternError, build_mesh, example_patterns,
                        miura_fold_signs, miura_sheet_model, simulate)
+from simulator._result import ResultFiles
+from simulator._validate import in_range, integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
@@ -61,16 +63,12 @@ class MiuraDesign:
     undercut: float = 100e-6
 
     def __post_init__(self):
-        for name in ("a", "b", "W", "t_gold", "t_su8", "panel_thickness", "undercut", "gamma"):
-            v, top = getattr(self, name), math.pi / 2 if name == "gamma" else math.inf
-            if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < top):
-                raise ParameterError(f"MiuraDesign.{name} = {v!r} must be " + (
-                    "in (0, pi/2) rad (0 to 90 deg)." if name == "gamma" else
-                    "a positive, finite length in metres."))
-        for name, low in (("cells_x", 2), ("cells_y", 1)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
-                raise ParameterError(f"MiuraDesign.{name} = {v!r} must be an integer >= {low}.")
+        for name in ("a", "b", "W", "t_gold", "t_su8", "panel_thickness", "undercut"):
+            positive(f"MiuraDesign.{name}", getattr(self, name), "m")
+        in_range("MiuraDesign.gamma", self.gamma, 0, math.pi / 2, "rad", hint="(0, pi/2), i.e. "
+                 "0 to 90 deg; convert degrees with math.radians", open_low=True, open_high=True)
+        integer("MiuraDesign.cells_x", self.cells_x, 2)
+        integer("MiuraDesign.cells_y", self.cells_y, 1)
         if not isinstance(self.substrate, (bool, np.bool_)):
             raise ParameterError(f"MiuraDesign.substrate = {self.substrate!r} must be a bool.")
         if not _meshable(self, self.W):
@@ -128,7 +126,7 @@ def _lift_nodes(model: Model, design: MiuraDesign) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class LiftPowerResult:
+class LiftPowerResult(ResultFiles):
     """Outcome of :func:`lift_power`.
 
     Attributes
@@ -161,6 +159,8 @@ class LiftPowerResult:
             raise ParameterError(f"LiftPowerResult.power_per_crease = {self.power_per_crease!r}"
                                  f" with success = {self.success}: a reached target has a "
                                  "power, an unreached one None.")
+
+    _csv_name = "lift_power.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (powers None when not met)."""
@@ -219,13 +219,10 @@ def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
     LiftPowerResult
         ``success=False`` with the reason (power cap, simulation failure) if not reached.
     """
-    if mode not in ("bisect", "staircase"):
-        raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
-    for name, v in (("target_lift", target_lift), ("step", step), ("tol", tol),
-                    ("power_cap", power_cap), ("max_step", max_step)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} = {v!r} must be a positive, finite number "
-                                 f"({'m' if name == 'target_lift' else 'W per crease'}).")
+    one_of("mode", mode, ("bisect", "staircase"))
+    positive("target_lift", target_lift, "m")
+    for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
+        positive(name, v, "W per crease")
     model = miura_model(design)
     stage = _LiftStage(model, tuple(heated_creases(design)), _lift_nodes(model, design),
                        target_lift)

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from .._validate import integer, positive
 from ..errors import ParameterError
 from .materials import SU8, SUBSTRATE, Material
 from .pattern import Pattern
@@ -21,11 +22,14 @@ __all__ = ["single_fold_pattern", "strip_pattern", "double_fold_pattern", "miura
            "gripper_pattern", "crane_pattern", "roof_pattern"]
 
 
+#: Units of the pattern arguments that are not lengths [m].
+_UNITS = {"gamma": "rad", "ext": ""}
+
+
 def _positive(**kwargs):
+    """:class:`ParameterError` unless every argument is a finite number > 0 (lengths in m)."""
     for name, value in kwargs.items():
-        if not (isinstance(value, (int, float, np.floating)) and math.isfinite(value) and value > 0):
-            raise ParameterError(f"{name} = {value!r} is invalid; it must be a positive finite number "
-                                 "(SI units).")
+        positive(name, value, _UNITS.get(name, "m"))
 
 
 def single_fold_pattern(L: float = 0.5e-3, W: float = 200e-6, undercut: float = 150e-6,
@@ -98,9 +102,8 @@ def miura_vertices(a: float, b: float, gamma: float, m: int, n: int, ext: float 
     round-off (a ~1e-11 m out-of-plane wiggle of every other row at ext = 1) so that meshes
     match it to the last digit.
     """
-    if not (isinstance(m, (int, np.integer)) and isinstance(n, (int, np.integer)) and m >= 1
-            and n >= 1):
-        raise ParameterError(f"Miura cells m = {m!r}, n = {n!r} must be positive integers.")
+    integer("Miura cells m", m)
+    integer("Miura cells n", n)
     _positive(a=a, b=b, gamma=gamma, ext=ext)
     if not (ext <= 1 and gamma < math.pi / 2):
         raise ParameterError(f"Miura: need 0 < ext <= 1 and 0 < gamma < pi/2; got ext = {ext}, "

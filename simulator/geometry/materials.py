@@ -6,12 +6,15 @@ stated otherwise; each constant documents its source.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
-from ..errors import ParameterError
+from .._validate import finite, in_range, non_negative, positive
 
 __all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "SILICON", "AIR", "WATER"]
+
+
+#: Units of the non-negative material and fluid properties.
+_UNITS = {"density": "kg/m^3", "thermal_conductivity": "W/(m K)", "specific_heat": "J/(kg K)"}
 
 
 @dataclass(frozen=True)
@@ -47,21 +50,14 @@ class Material:
     glass_transition: float | None = None
 
     def __post_init__(self):
-        checks = {
-            "youngs_modulus": (self.youngs_modulus, lambda v: v > 0, "> 0 Pa"),
-            "poisson_ratio": (self.poisson_ratio, lambda v: -1 < v < 0.5, "in (-1, 0.5)"),
-            "density": (self.density, lambda v: v >= 0, ">= 0 kg/m^3"),
-            "thermal_conductivity": (self.thermal_conductivity, lambda v: v >= 0, ">= 0 W/(m K)"),
-            "specific_heat": (self.specific_heat, lambda v: v >= 0, ">= 0 J/(kg K)"),
-        }
-        for field, (value, ok, allowed) in checks.items():
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and ok(value)):
-                raise ParameterError(
-                    f"Material {self.name!r}: {field} = {value!r} is invalid; it must be {allowed}.")
-        tg = self.glass_transition
-        if tg is not None and not (isinstance(tg, (int, float)) and math.isfinite(tg)):
-            raise ParameterError(f"Material {self.name!r}: glass_transition = {tg!r} is invalid; "
-                                 "give T_g in deg C as a finite number, or None if unknown.")
+        owner = f"Material {self.name!r}"
+        positive(f"{owner}: youngs_modulus", self.youngs_modulus, "Pa")
+        in_range(f"{owner}: poisson_ratio", self.poisson_ratio, -1, 0.5, open_low=True,
+                 open_high=True)
+        for field, unit in _UNITS.items():
+            non_negative(f"{owner}: {field}", getattr(self, field), unit)
+        finite(f"{owner}: glass_transition", self.glass_transition, "deg C",
+               hint="give T_g, or None if unknown", allow_none=True)
 
     def to_dict(self) -> dict:
         """Plain-dict view for result metadata."""
@@ -130,11 +126,7 @@ class Fluid:
 
     def __post_init__(self):
         for field in ("density", "specific_heat", "thermal_conductivity"):
-            value = getattr(self, field)
-            if not (isinstance(value, (int, float)) and not isinstance(value, bool)
-                    and math.isfinite(value) and value >= 0):
-                raise ParameterError(f"Fluid {self.name!r}: {field} = {value!r} is invalid; it "
-                                     "must be a finite number >= 0.")
+            non_negative(f"Fluid {self.name!r}: {field}", getattr(self, field), _UNITS[field])
 
     def environment(self) -> dict:
         """Keyword arguments of :class:`~simulator.thermal.steady.ThermalParameters` for this fluid,

@@ -12,12 +12,12 @@ follows ``delta_alpha`` (positive folds towards +z with the mesher's polarity).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import finite, positive
 from ..errors import ParameterError
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
@@ -53,9 +53,7 @@ class Bimorph:
 
     def __post_init__(self):
         for name in ("E1", "t1", "E2", "t2"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"Bimorph.{name} = {v!r} must be positive and finite (SI).")
+            positive(f"Bimorph.{name}", getattr(self, name), "Pa" if name[0] == "E" else "m")
 
     def curvature(self, delta_alpha, dT):
         """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""
@@ -82,10 +80,11 @@ class Actuators:
     delta_alpha: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
+        if not isinstance(self.bimorph, Bimorph):
+            raise ParameterError(f"Actuators.bimorph is a {type(self.bimorph).__name__}; give "
+                                 "Bimorph(E1, t1, E2, t2) (delta_alpha is the second argument).")
         for c, v in dict(self.delta_alpha).items():
-            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
-                raise ParameterError(f"Actuators: delta_alpha of crease {c} is {v!r}; give a "
-                                     "finite value in 1/K.")
+            finite(f"Actuators: delta_alpha of crease {c}", v, "1/K")
 
     def delta_alpha_array(self, mesh) -> np.ndarray:
         """(C,) expansion mismatch per crease row of a mesh (0 for passive creases)."""

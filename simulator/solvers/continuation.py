@@ -33,10 +33,10 @@ inertia of its tangent (:mod:`simulator.solvers.stability`).
 from __future__ import annotations
 
 import logging
-import math
 
 import numpy as np
 
+from .._validate import finite, integer, positive
 from ..errors import ParameterError
 from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
                         _tangent)
@@ -55,14 +55,6 @@ FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
 
 
-def _positive(name, value, allow_none=False):
-    if value is None and allow_none:
-        return
-    if isinstance(value, bool) or not (isinstance(value, (int, float, np.integer, np.floating))
-                                       and math.isfinite(value) and value > 0):
-        raise ParameterError(f"{name} = {value!r} must be a positive finite number.")
-
-
 def _monitor_vector(path, target_displacement):
     """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
     if target_displacement is None:
@@ -73,11 +65,6 @@ def _monitor_vector(path, target_displacement):
 
 
 # ---------------------------------------------------------------------------- the algorithms
-def _check_count(name, value):
-    if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value >= 1):
-        raise ParameterError(f"{name} = {value!r} must be a positive integer.")
-
-
 def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_increments: int = 100,
           target_load_factor: float | None = None, target_displacement=None, monitor=None,
           options: NewtonOptions = NewtonOptions(), adapt: bool = True,
@@ -151,13 +138,12 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
 def _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor) -> None:
     """:class:`ParameterError` for a setting of :func:`mgdcm` out of range."""
-    _positive("arc_length", arc_length)
-    _positive("max_arc_length", max_arc_length, allow_none=True)
-    _positive("step_norm", step_norm, allow_none=True)
-    _check_count("max_increments", max_increments)
-    _check_count("fast_iterations", fast_iterations)
-    if target_load_factor is not None and not math.isfinite(target_load_factor):
-        raise ParameterError(f"target_load_factor = {target_load_factor!r} must be finite.")
+    positive("arc_length", arc_length)
+    positive("max_arc_length", max_arc_length, allow_none=True)
+    positive("step_norm", step_norm, allow_none=True)
+    integer("max_increments", max_increments)
+    integer("fast_iterations", fast_iterations)
+    finite("target_load_factor", target_load_factor, allow_none=True)
 
 
 class _ArcLengthRun:
@@ -328,7 +314,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     ParameterError
         If ``c`` weighs supported DOFs or the reference load does not move ``c . u``.
     """
-    _check_count("increments", increments)
+    integer("increments", increments)
     free, size = path.free, _size(path.system)
     c = np.asarray(c, float).ravel()
     mask = np.ones(len(c), bool)
@@ -336,8 +322,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     if np.any(c[mask] != 0) or not np.any(c):
         raise ParameterError("displacement_control: the controlled displacement must combine "
                              "free DOFs only (it weighs a supported DOF, or nothing).")
-    if not math.isfinite(target):
-        raise ParameterError(f"displacement_control: target = {target!r} must be finite [m].")
+    finite("displacement_control: target", target, "m")
     cf = c[free]
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
     pt = path.at(u, lam)

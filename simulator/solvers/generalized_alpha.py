@@ -33,7 +33,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .dynamics_options import DynamicsOptions, _real
+from .dynamics_options import DynamicsOptions
+from .._validate import positive
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
 from ..errors import ParameterError
 from ..model.mass import check_masses, lumped_areas, lumped_masses
@@ -167,8 +168,7 @@ class TimeIntegrator:
         A step whose Newton solve fails is split into two halves (loads and rest angles
         interpolated linearly), recursively up to ``options.max_cuts`` levels.
         """
-        if not (_real(dt) and dt > 0):
-            raise ParameterError(f"time step dt = {dt!r} must be a positive number of seconds.")
+        positive("time step dt", dt, "s")
         f_ext = self._vector(f_ext, self.system.n_dof, "external load")
         rest = state.spring_rest if spring_rest is None else \
             self._vector(spring_rest, len(state.spring_rest), "spring rest angles")

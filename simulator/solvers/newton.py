@@ -21,6 +21,7 @@ import scipy.linalg
 import scipy.sparse.linalg as spla
 
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
+from .._validate import integer, non_negative
 from ..errors import ParameterError
 from ..linalg.linsolve import ND_LIMIT, PARDISO_LIMIT, nested_dissection_solve, pardiso_solve, refined
 from ..linalg.small_solve import DENSE_LIMIT, as_dense, solve_dense
@@ -92,16 +93,11 @@ class NewtonOptions:
             raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
                                  "'displacement'.")
         for name in ("atol", "rtol", "stall_rtol"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be finite and >= 0.")
+            non_negative(f"NewtonOptions.{name}", getattr(self, name))
         if self.atol == 0 and self.rtol == 0:
             raise ParameterError("NewtonOptions: atol and rtol cannot both be 0.")
         for name in ("max_iter", "max_cuts", "max_total_cuts"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and v >= (1 if name == "max_iter" else 0)):
-                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be a non-negative integer "
-                                     "(max_iter >= 1).")
+            integer(f"NewtonOptions.{name}", getattr(self, name), 1 if name == "max_iter" else 0)
 
     def to_dict(self) -> dict:
         return dict(self._as_dict)           # a copy: asdict once (every simulation records it)
@@ -330,8 +326,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     again up to its nominal size. ``callback(t, u)``, if given, is called after every
     accepted increment and may return True to stop early (status "stopped").
     """
-    if not (isinstance(increments, (int, np.integer)) and increments >= 1):
-        raise ParameterError(f"increments = {increments!r} must be a positive integer.")
+    integer("increments", increments)
     nominal = 1.0 / increments
     t, dt, u = 0.0, nominal, u0.copy()
     cuts_in_row, total_cuts, total_iter = 0, 0, 0

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._result import ResultFiles
 from .stability import tangent_stability
 
 __all__ = ["CriticalPoint", "ContinuationResult", "PathTrace", "BIFURCATION_ALIGNMENT"]
@@ -45,7 +46,7 @@ class CriticalPoint:
 
 
 @dataclass(frozen=True, eq=False)
-class ContinuationResult:
+class ContinuationResult(ResultFiles):
     """Outcome of :func:`mgdcm` or :func:`displacement_control`.
 
     Attributes
@@ -78,6 +79,34 @@ class ContinuationResult:
     temperatures: list = field(default_factory=list)
     critical_points: tuple = ()
     evaluation: object = None
+
+    _csv_name = "path.csv"
+
+    def to_frame(self):
+        """One row per accepted point: ``point``, ``load_factor``, ``iterations``,
+        ``max_displacement [m]`` (largest node displacement), and when computed ``stable``,
+        ``negative_eigenvalues``, ``lowest_eigenvalue [N/m]``, ``max_temperature [degC]``."""
+        import pandas as pd
+
+        data = {"point": np.arange(1, len(self.history) + 1),
+                "load_factor": [h[0] for h in self.history],
+                "iterations": [h[2] for h in self.history],
+                "max_displacement [m]": [float(np.linalg.norm(np.reshape(h[1], (-1, 3)),
+                                                              axis=1).max(initial=0.0))
+                                         for h in self.history]}
+        if len(self.stability) == len(self.history) and self.stability:
+            data.update({"stable": [s.stable for s in self.stability],
+                         "negative_eigenvalues": [s.negative for s in self.stability],
+                         "lowest_eigenvalue [N/m]": [s.lowest for s in self.stability]})
+        if len(self.temperatures) == len(self.history) and any(
+                t is not None for t in self.temperatures):
+            data["max_temperature [degC]"] = [None if t is None else float(np.max(t))
+                                              for t in self.temperatures]
+        return pd.DataFrame(data)
+
+    def _meta(self) -> dict:
+        return {"load_factor": self.load_factor, "iterations": self.iterations,
+                "cuts": self.cuts, "critical_points": list(self.critical_points)}
 
 
 # ---------------------------------------------------------------------------- linear algebra

@@ -23,7 +23,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import ParameterError
+from .._validate import integer
 from ..state import SimulationState, equilibrium_system, thermal_model
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "check_increments",
@@ -199,6 +199,4 @@ class Step(ABC):
 
 def check_increments(step, name: str = "increments") -> None:
     """Raise :class:`ParameterError` unless ``step.<name>`` is a positive integer."""
-    n = getattr(step, name)
-    if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
-        raise ParameterError(f"{type(step).__name__}.{name} = {n!r} must be a positive integer.")
+    integer(f"{type(step).__name__}.{name}", getattr(step, name))

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..solvers.dynamics import integrate
 from ..solvers.dynamics_options import DynamicsOptions
+from .._validate import integer, positive
 from ..errors import ParameterError
 from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -73,18 +74,12 @@ class Dynamics(Step):
     name: str = "dynamics"
 
     def __post_init__(self):
-        for attr in ("duration", "dt"):
-            v = getattr(self, attr)
-            if not (isinstance(v, (int, float, np.integer, np.floating))
-                    and not isinstance(v, bool) and np.isfinite(v) and v > 0):
-                raise ParameterError(f"Dynamics.{attr} = {v!r} must be a positive number of "
-                                     "seconds.")
+        positive("Dynamics.duration", self.duration, "s")
+        positive("Dynamics.dt", self.dt, "s", hint="give the time step in seconds")
         if not isinstance(self.options, DynamicsOptions):
             raise ParameterError(f"Dynamics.options is a {type(self.options).__name__}; give "
                                  "DynamicsOptions(...).")
-        if not (isinstance(self.record_every, int) and self.record_every >= 1):
-            raise ParameterError(f"Dynamics.record_every = {self.record_every!r} must be a "
-                                 "positive integer.")
+        integer("Dynamics.record_every", self.record_every)
         check_folds(self.folds, "Dynamics")
 
     def run(self, context: StepContext, state) -> StepOutcome:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import finite
 from ..errors import ParameterError
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
@@ -229,10 +230,8 @@ class Gravity(Step):
 
     def __post_init__(self):
         check_increments(self)
-        for attr in ("g", "scale"):
-            v = getattr(self, attr)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
-                raise ParameterError(f"Gravity.{attr} = {v!r} must be a finite number.")
+        finite("Gravity.g", self.g, "m/s^2")
+        finite("Gravity.scale", self.scale)
 
     def run(self, context: StepContext, state) -> StepOutcome:
         load = Load(self.scale * gravity_loads(context.model.mesh, self.g, panels=self.panels),

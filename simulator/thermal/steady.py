@@ -33,7 +33,8 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
-from ..errors import ParameterError, PatternError
+from .._validate import array, finite, in_range, integer, non_negative, positive
+from ..errors import ParameterError, PatternError, SolverError
 from ..linalg.linsolve import factor_symmetric
 from ..geometry.materials import AIR
 from ..model.mesh import BarHingeMesh
@@ -111,24 +112,15 @@ class ThermalParameters:
     env_specific_heat: float = AIR.specific_heat
 
     def __post_init__(self):
-        checks = {
-            "env_density": (lambda v: v >= 0, ">= 0 kg/m^3"),
-            "env_specific_heat": (lambda v: v >= 0, ">= 0 J/(kg K)"),
-            "env_thickness": (lambda v: v > 0, "> 0 m"),
-            "env_conductivity": (lambda v: v >= 0, ">= 0 W/(m K)"),
-            "dissipation_angle": (lambda v: 0 <= v < math.pi / 2, "in [0, pi/2) rad"),
-            "room_temperature": (lambda v: True, "a finite temperature in deg C"),
-        }
-        for name, (ok, allowed) in checks.items():
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-                    and math.isfinite(v) and ok(v)):
-                raise ParameterError(f"ThermalParameters.{name} = {v!r} is invalid; it must be "
-                                     f"{allowed}.")
-        if not (isinstance(self.layers, (int, np.integer)) and not isinstance(self.layers, bool)
-                and self.layers >= 1):
-            raise ParameterError(f"ThermalParameters.layers = {self.layers!r} is invalid; it must "
-                                 "be an integer >= 1.")
+        owner = "ThermalParameters"
+        for name, unit in (("env_density", "kg/m^3"), ("env_specific_heat", "J/(kg K)"),
+                           ("env_conductivity", "W/(m K)")):
+            non_negative(f"{owner}.{name}", getattr(self, name), unit)
+        positive(f"{owner}.env_thickness", self.env_thickness, "m")
+        in_range(f"{owner}.dissipation_angle", self.dissipation_angle, 0, math.pi / 2, "rad",
+                 hint="the range is [0, pi/2)", open_high=True)
+        finite(f"{owner}.room_temperature", self.room_temperature, "deg C")
+        integer(f"{owner}.layers", self.layers)
         for name in ("boundary_panels", "room_temperature_nodes"):
             object.__setattr__(self, name, _ids(getattr(self, name), name))
 
@@ -226,11 +218,7 @@ class ThermalModel:
     # ------------------------------------------------------------------ element data
     def _positions(self, x) -> np.ndarray:
         """``x`` as a float array, checked to be finite and of the mesh's node shape [m]."""
-        x = np.asarray(x, float)
-        if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
-            raise ParameterError("positions x must be a finite array of shape "
-                                 f"{self.mesh.nodes.shape} [m].")
-        return x
+        return array("positions x", x, self.mesh.nodes.shape, "m")
 
     def _warn_floored(self):
         logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
@@ -340,11 +328,8 @@ class ThermalModel:
         Each crease gives 1/8 to N11, N12, N21, N22, 1/12 to A and B and 1/3 to Ctr.
         """
         mesh = self.mesh
-        power = np.asarray(crease_power, float)
-        if power.shape != (mesh.n_creases,) or not np.all(np.isfinite(power)):
-            raise ParameterError(f"crease_power must be a finite array of shape "
-                                 f"({mesh.n_creases},) [W], one entry per crease row; "
-                                 f"got shape {power.shape}.")
+        power = array("crease_power", crease_power, (mesh.n_creases,), "W",
+                      hint="one entry per crease row")
         return np.bincount(mesh.crease_nodes.ravel(), (power[:, None] * heat_weights()).ravel(),
                            minlength=mesh.n_nodes).astype(float)
 
@@ -449,7 +434,7 @@ class ThermalModel:
                 def cholesky_solve(q_free):
                     sol, info = _potrs(c, q_free)
                     if info != 0:
-                        raise ParameterError(f"thermal solve failed (LAPACK dpotrs info {info})")
+                        raise SolverError(f"thermal solve failed (LAPACK dpotrs info {info})")
                     return sol
                 return cholesky_solve
         return factor_symmetric(self._free_pattern.matrix([K, g_free])).solve
