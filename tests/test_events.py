@@ -115,7 +115,7 @@ def test_snap_under_load_control_is_an_event_with_its_jump(roof):
     # the jump: from the limit point to where the path crosses its load factor again
     lam, m = step.load_factor, step.columns["displacement [m]"]
     j = next(j for j in range(snap.increment + 1, len(lam))
-             if m[j] is not None and m[j - 1] is not None and lam[j - 1] < snap.load_factor <= lam[j])
+             if None not in (m[j - 1], m[j]) and lam[j - 1] < snap.load_factor <= lam[j])
     a = (snap.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
     assert snap.displacement + snap.jump == pytest.approx(m[j - 1] + a * (m[j] - m[j - 1]),
                                                           rel=1e-12)
@@ -210,9 +210,14 @@ def test_heated_miura_snap_is_an_event():
     snap = snaps[0]
     assert 9.0e-3 < max(snap.power_per_crease) < 9.4e-3
     assert snap.load_factor * 12e-3 == pytest.approx(max(snap.power_per_crease), rel=1e-12)
-    assert snap.jump > 50e-6 and snap.temperature_max > 100.0
+    assert snap.jump > 0 and snap.temperature_max > 100.0     # the jump's size depends on
+    # how finely the continuation resolves the snap (95 um at 30 increments today)
     assert any(e.kind == "limit_point" and e.load_factor == snap.load_factor
                for e in res.events)
+    row = res.events_frame().query("kind == 'snap'").iloc[0]
+    assert row["power [mW]"] == pytest.approx(1e3 * max(snap.power_per_crease))
+    assert row["total_power [mW]"] == pytest.approx(1e3 * snap.total_power)
+    assert row["stage"] == res.steps[0].name and row["jump [um]"] == pytest.approx(1e6 * snap.jump)
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
     model = miura_model(d)
     trial = ps.heating_trial(model, tuple(heated_creases(d)), simulate(model, []).state,
