@@ -49,6 +49,7 @@ __getattr__, __dir__ = _attach(__name__, {
                          "StepPower"),
     ".model.properties": ("BarHingeParameters",),
     ".results": ("SimulationResult", "StepResult"),
+    ".events": ("EVENT_KINDS", "Event"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
     ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
@@ -84,7 +85,8 @@ __all__ = [
     "lumped_masses", "natural_modes", "ModesResult",
     # path following through limit points
     "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
-    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability",
+    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability", "Event",
+    "EVENT_KINDS",
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases

@@ -77,10 +77,6 @@ DESIGN_SIMULATOR_INTERNALS = {
     # the demo's "panel left the substrate" flag counts the contacts of the equilibrium system
     # at each record (the element-family interface of that system is not public)
     ("design/cli/simulate.py", "simulator.state"),
-    # being rewritten to read typed event records (issue 18, item 4) on another branch;
-    # drop these two once it imports simulate and Heat from simulator
-    ("design/devices/power_search.py", "simulator.simulation"),
-    ("design/devices/power_search.py", "simulator.steps"),
 }
 
 
@@ -128,3 +124,46 @@ def test_design_core_is_generic():
                  for line, m in _imports(p)
                  if m.startswith(("design.devices", "design.analysis", "design.cli"))]
     assert offenders == []
+
+
+def _message_reads(tree) -> list:
+    """Lines where a result's ``.message`` is read as data: a membership test on it (``"x"
+    in r.message``) or a string method on it (``r.message.split(...)``)."""
+    def is_message(node):
+        return isinstance(node, ast.Attribute) and node.attr == "message"
+    lines = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare) and any(isinstance(op, (ast.In, ast.NotIn))
+                                                 for op in node.ops):
+            if any(is_message(c) for c in node.comparators):
+                lines.append(node.lineno)
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                and is_message(node.func.value):
+            lines.append(node.lineno)
+    return lines
+
+
+def test_design_reads_events_not_messages():
+    """Issue 18 item 4: the design layer reads limit points and snaps from the event records
+    (``simulator.Event``), never out of a message: no module in ``design/`` imports ``re``,
+    tests text in a ``.message`` or calls string methods on one."""
+    offenders = []
+    for path in (ROOT / "design").rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        name = path.relative_to(ROOT)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import) and any(a.name.split(".")[0] == "re"
+                                                    for a in node.names):
+                offenders.append(f"{name}:{node.lineno}: import re")
+            elif isinstance(node, ast.ImportFrom) and node.module == "re":
+                offenders.append(f"{name}:{node.lineno}: from re import")
+        offenders += [f"{name}:{k}: reads a message" for k in _message_reads(tree)]
+    assert offenders == []
+
+
+def test_message_read_check_sees_what_it_forbids():
+    """The check of :func:`test_design_reads_events_not_messages` catches both forms."""
+    code = ('ok = "after a snap" in stage.message\n'
+            'p = res.message.split("snap at ")[1]\n'
+            'fine = res.message + "!"\n')
+    assert _message_reads(ast.parse(code)) == [1, 2]

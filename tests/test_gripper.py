@@ -135,10 +135,12 @@ def test_stage_result_contract_is_checked():
 
 def test_gripper_message_names_a_stage_met_after_a_snap():
     from design.devices.gripper import GripperResult
+    from simulator import Event
 
     plain = StageResult(True, "met", "criterion met", 9e-3, 1.6, 150.0, 160.0, 30, 30)
+    event = Event("snap", 0.5, 10, 3e-5, True, power_per_crease=(5e-5,) * 4, jump=2e-7)
     snap = StageResult(True, "met", "criterion met after a snap (snap at 0.05 mW per crease: "
-                       "displacement jumps 0.2 um)", 1e-4, 4e-5, 24.0, 130.0, 1, 21)
+                       "displacement jumps 0.2 um)", 1e-4, 4e-5, 24.0, 130.0, 1, 21, (event,))
     assert GripperResult(G2, "bisect", plain, plain).message == "both stages met"
     res = GripperResult(G2, "bisect", plain, snap)
     assert res.message == ("both stages met; grip: criterion met after a snap (snap at "

@@ -180,6 +180,9 @@ class StageResult(ResultFiles):
         Heating solves (calls) used by the search.
     increments : int
         Thermal increments solved in total.
+    snaps : tuple of Event
+        The ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the stopping
+        power of a met stage (the ``" after a snap (...)"`` of the message); empty if none.
     """
 
     success: bool
@@ -191,6 +194,7 @@ class StageResult(ResultFiles):
     max_crease_temperature: float
     simulations: int
     increments: int
+    snaps: tuple = ()
 
     def __post_init__(self):
         check_outcome(self, ("met",), STAGE_STATUSES[1:])
@@ -216,7 +220,8 @@ class GripperResult(ResultFiles):
     ``success``: both stages met; ``status``: ``"met"``, or the status of the first stage
     that was not met; ``total_power``: assembly + grip power per crease [W], None unless
     both were met; ``message``: ``"both stages met"`` (followed by the stage messages of a
-    stage met after a snap), or why the first unmet stage was not met.
+    stage met after a snap, i.e. with :attr:`StageResult.snaps`), or why the first unmet stage
+    was not met.
     """
 
     design: GripperDesign
@@ -248,8 +253,7 @@ class GripperResult(ResultFiles):
     def message(self) -> str:
         if self.success:
             snapped = [f"{name}: {stage.message}" for name, stage in
-                       (("assembly", self.assembly), ("grip", self.grip))
-                       if "after a snap" in stage.message]
+                       (("assembly", self.assembly), ("grip", self.grip)) if stage.snaps]
             return "; ".join(["both stages met"] + snapped)
         bad = self.assembly if not self.assembly.success else self.grip
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
@@ -383,7 +387,8 @@ class _Stage(HeatingStage):
         if met:
             message = self.after_snaps(message, state)
         return StageResult(met, status, message, power if met else None, value, temp, tmax,
-                           self.simulations, self.increments)
+                           self.simulations, self.increments,
+                           self.snap_events(state) if met else ())
 
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",

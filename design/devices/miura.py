@@ -141,6 +141,8 @@ class LiftPowerResult(ResultFiles):
     max_crease_temperature : hottest crease node there [deg C]
     simulations : heating solves used by the search
     n_creases : heated creases
+    snaps : ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the power found
+        (the ``" after a snap (...)"`` of the message); empty if none or not met
     """
 
     success: bool
@@ -152,6 +154,7 @@ class LiftPowerResult(ResultFiles):
     max_crease_temperature: float
     simulations: int
     n_creases: int
+    snaps: tuple = ()
 
     def __post_init__(self):
         check_outcome(self, ("met",), ("not_met", "failed"))
@@ -195,7 +198,8 @@ class _LiftStage(HeatingStage):
         if met:
             message = self.after_snaps(message, state)
         return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
-                               lift, tmax, self.simulations, len(self.creases))
+                               lift, tmax, self.simulations, len(self.creases),
+                               self.snap_events(state) if met else ())
 
 
 def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,

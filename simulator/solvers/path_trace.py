@@ -15,8 +15,11 @@ import numpy as np
 from .._result import ResultFiles
 from .stability import tangent_stability
 
-__all__ = ["CriticalPoint", "ContinuationResult", "PathTrace", "BIFURCATION_ALIGNMENT"]
+__all__ = ["CriticalPoint", "ContinuationResult", "PathTrace", "BIFURCATION_ALIGNMENT",
+           "CRITICAL_KINDS"]
 
+#: Kinds of :class:`CriticalPoint`.
+CRITICAL_KINDS = ("limit_point", "bifurcation", "stability_change")
 #: A change of the negative-eigenvalue count is a bifurcation when |cos(mode, q)| is below this.
 BIFURCATION_ALIGNMENT = 0.1
 
@@ -43,6 +46,13 @@ class CriticalPoint:
     increment: int
     displacement: float | None = None
     maximum: bool = False
+
+    def describe(self) -> str:
+        """One line for a message, e.g. ``"limit point at load factor 0.42 (displacement
+        31.2 um)"``."""
+        return (f"{self.kind.replace('_', ' ')} at load factor {self.load_factor:.6g}"
+                + ("" if self.displacement is None else
+                   f" (displacement {self.displacement * 1e6:.4g} um)"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,10 +188,7 @@ class PathTrace:
 
     def result(self, success, status, message, u, lam):
         self.critical = self._locate()
-        crit = "; ".join(f"{c.kind.replace('_', ' ')} at load factor {c.load_factor:.6g}"
-                         + ("" if c.displacement is None else
-                            f" (displacement {c.displacement * 1e6:.4g} um)")
-                         for c in self.critical)
+        crit = "; ".join(c.describe() for c in self.critical)
         if crit:
             message = f"{message}; {crit}"
         return ContinuationResult(success, status, message, u, float(lam), self.iterations,
