@@ -15,7 +15,7 @@ from simulator import (ConvergenceError, Model, ParameterError, SimulationState,
 # Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
 # operator and the crease temperature weights for the influence matrices; a Newton re-solve
 # of the equilibrium system with moved crease rest angles for the fold sensitivities). These
-# are solver internals, not a user's API (tests/test_architecture.py lists them).
+# are solver internals, not a user's API (tests/unit/test_architecture.py lists them).
 from simulator.model.bimorph import crease_temperature_weights
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import newton

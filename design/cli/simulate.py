@@ -47,7 +47,7 @@ def heating_table(result):
     import pandas as pd
 
     # behind the doors on purpose: the contact count of the equilibrium system at a record
-    # (the system's element-family interface is not public; tests/test_architecture.py)
+    # (the system's element-family interface is not public; tests/unit/test_architecture.py)
     from simulator.state import equilibrium_system
 
     h = result.history

@@ -7,7 +7,7 @@ import pytest
 from simulator.cases import CASES, describe_cases, get_case
 from simulator.errors import ParameterError
 
-DATA = __import__("pathlib").Path(__file__).parent / "data"
+DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data"
 
 
 def _script_fold_deg(mesh, u):

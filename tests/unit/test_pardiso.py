@@ -20,7 +20,7 @@ from simulator.state import equilibrium_system
 from test_linsolve import _grounded_stiff_chain, _sheet
 
 _spec = importlib.util.spec_from_file_location(
-    "bench_fold", Path(__file__).resolve().parents[1] / "benchmarks" / "bench_fold.py")
+    "bench_fold", Path(__file__).resolve().parents[2] / "benchmarks" / "bench_fold.py")
 bench_fold = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(bench_fold)
 

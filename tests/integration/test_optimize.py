@@ -435,7 +435,7 @@ def test_readme_lists_the_registered_methods():
     import pathlib
     import re
 
-    readme = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text()
+    readme = (pathlib.Path(__file__).resolve().parents[2] / "README.md").read_text()
     listed = re.search(r"--method ((?:\w+\\?\|)+\w+)", readme).group(1).replace("\\", "")
     assert listed.split("|") == list(optimizers())
 

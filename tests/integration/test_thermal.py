@@ -14,7 +14,7 @@ from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern, strip_pattern
 from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
 
-DATA = pathlib.Path(__file__).parent / "data"
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
 FIXED = (0, 3, 5, 6)                      # reference room-temperature nodes 1, 4, 6, 7
 CENTRE_LINE = [8, 9, 10]                  # reference nodes 9, 10, 11 (A, B, Ctr)
 

@@ -13,7 +13,7 @@ from simulator.cases import get_case
 from studies import _common, double_fold, gripper_shapes
 from studies.plotting import T_LIMIT, mark_temperature_limit, nodal_range, plot_shape
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

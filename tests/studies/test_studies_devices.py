@@ -2,7 +2,6 @@
 re-created from the CSV alone, and the physics of the quick runs."""
 
 import ast
-import importlib
 import io
 import json
 import pathlib
@@ -15,7 +14,7 @@ from matplotlib.figure import Figure
 from simulator.cases import get_case
 from studies.single_fold import node_frame, shape_from_frame
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 STUDIES = {  # study -> figure stems
     "single_fold": ("single_fold", "single_fold_shape"),
     "double_fold": ("double_fold", "double_fold_shape"),
@@ -25,19 +24,9 @@ STUDIES = {  # study -> figure stems
 
 
 @pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    """Runs each study's ``main`` in quick mode once, on demand: name -> (module, dir, df)."""
-    cache = {}
-
-    def get(name):
-        if name not in cache:
-            module = importlib.import_module(f"studies.{name}")
-            out = tmp_path_factory.mktemp(name)
-            assert module.main(["--quick", "--out", str(out), "--no-progress"]) == out
-            cache[name] = (module, out, pd.read_csv(out / f"{name}.csv"))
-        return cache[name]
-
-    return get
+def quick(quick_study):
+    """Each study's quick run, on demand: name -> (module, dir, df) (see conftest.py)."""
+    return quick_study
 
 
 def _table(df, kind):

@@ -25,7 +25,7 @@ from studies.gripper_optimization import (
     time_limit,
 )
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 STUDIES = {  # study -> figure stems
     "gripper_optimization": ("gripper_optimization", "gripper_optimization_methods"),
     "gripper_robustness": ("gripper_robustness",),

@@ -193,7 +193,7 @@ if __name__ == "__main__":
 def test_fork_server_children_ignore_ctrl_c_from_birth(tmp_path):
     script = tmp_path / "child.py"
     script.write_text(_FORKSERVER_CHILD)
-    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2]))
     out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr

@@ -3,17 +3,13 @@
 import json
 
 import numpy as np
-import pandas as pd
 import pytest
-
-from studies import heater_allocation
 
 
 @pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("heater_allocation")
-    assert heater_allocation.main(["--quick", "--out", str(out), "--no-progress"]) == out
-    return out, pd.read_csv(out / "heater_allocation.csv")
+def quick(quick_study):
+    _, out, df = quick_study("heater_allocation")
+    return out, df
 
 
 def test_writes_csv_png_and_meta(quick):

@@ -12,10 +12,9 @@ from studies import snap_through
 
 
 @pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("snap_through")
-    assert snap_through.main(["--quick", "--out", str(out), "--no-progress"]) == out
-    return out, pd.read_csv(out / "snap_through.csv")
+def quick(quick_study):
+    _, out, df = quick_study("snap_through")
+    return out, df
 
 
 @pytest.mark.slow

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_fold.py"
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_fold.py"
 _spec = importlib.util.spec_from_file_location("bench_fold", _PATH)
 bench = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(bench)

@@ -8,7 +8,7 @@ from design.devices.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult
                             gripper_model)
 from simulator.errors import ParameterError
 
-DATA = __import__("pathlib").Path(__file__).parent / "data"
+DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data"
 G2 = GripperDesign(W=300e-6, La=1500e-6, L1=500e-6, L2=500e-6)
 
 

@@ -4,21 +4,17 @@ re-created from the CSV alone, and the physics of the quick runs."""
 import json
 
 import numpy as np
-import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
-from studies import actuation_speed, natural_modes
+from studies import actuation_speed
 
 TEXT_COLUMNS = {"table", "mode", "success", "device", "stage"}
 
 
 @pytest.fixture(scope="module", params=["actuation_speed", "natural_modes"])
-def quick(request, tmp_path_factory):
-    module = {"actuation_speed": actuation_speed, "natural_modes": natural_modes}[request.param]
-    out = tmp_path_factory.mktemp(request.param)
-    assert module.main(["--quick", "--out", str(out), "--no-progress"]) == out
-    return module, out, pd.read_csv(out / f"{module.NAME}.csv")
+def quick(request, quick_study):
+    return quick_study(request.param)
 
 
 def test_quick_main_writes_files_and_replots_from_csv(quick):

@@ -10,7 +10,7 @@ import pytest
 from design.cli import main
 from simulator import __version__
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def test_version(capsys):

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_versus.py"
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_versus.py"
 _spec = importlib.util.spec_from_file_location("bench_versus", _PATH)
 bench = importlib.util.module_from_spec(_spec)
 sys.modules.setdefault("bench_versus", bench)       # dataclasses look their module up

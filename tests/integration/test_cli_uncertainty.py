@@ -14,7 +14,7 @@ from design.cli import main
 from design.cli.sweep import SCENARIO_NAMES
 from design.analysis.uncertainty import SCENARIOS
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[2]
 
 
 def test_scenario_names_match_the_library():

@@ -148,7 +148,7 @@ def test_background_compilation_fills_the_cache(tmp_path):
         assert np.allclose(T1, T0, rtol=1e-12, atol=0)
         print("ok")
     """)
-    root = pathlib.Path(__file__).resolve().parents[1]
+    root = pathlib.Path(__file__).resolve().parents[2]
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
     env.pop("ETORIGAMI_JIT", None)
     out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,

@@ -261,7 +261,7 @@ def test_invalid_json_names_the_line(tmp_path):
 
 # ---------------------------------------------------------------------- documentation
 def test_docs_example_file_and_code_blocks_run(tmp_path, monkeypatch):
-    root = pathlib.Path(__file__).resolve().parents[1]
+    root = pathlib.Path(__file__).resolve().parents[2]
     text = (root / "docs" / "fold-format.md").read_text()
     example = json.loads((root / "docs" / "examples" / "two_panels.fold").read_text())
     blocks = re.findall(r"```(\w*)\n(.*?)```", text, flags=re.S)
