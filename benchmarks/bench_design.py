@@ -22,7 +22,7 @@ import numpy as np
 from design.core.executors import make_executor
 from design.devices.gripper import GripperDesign, evaluate_gripper
 from design.core.optimize import optimize
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
 
 

@@ -18,15 +18,17 @@ from simulator._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
     ".core.space": ("DesignSpace", "Variable"),
-    ".core.problem": ("EVALUATION_STATUSES", "GRIPPER_SPACE", "SU8_TG", "DesignProblem", "Evaluation",
-                 "GripperProblem"),
+    ".core.problem": ("EVALUATION_STATUSES", "DesignProblem", "Evaluation"),
+    ".devices.gripper_problem": ("GRIPPER_SPACE", "GripperProblem"),
+    ".devices.limits": ("SU8_TG",),
     ".devices.gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
                  "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
                  "gripper_model"),
     ".devices.miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
                "heated_creases", "lift_per_power_table", "lift_power", "miura_model"),
     ".core.evaluation_log": ("EvaluationLog", "LoggedProblem"),
-    ".core.optimize": ("METHODS", "OptimizationResult", "StopOptimization", "optimize"),
+    ".core.optimize": ("OptimizationResult", "Optimizer", "StopOptimization", "get_optimizer",
+                       "optimize", "optimizers", "register_optimizer", "unregister_optimizer"),
     ".analysis.robustness": ("CREASE_GROUPS", "RobustGripperProblem", "residual_fold_grid",
                     "sweep_residual_fold", "with_residual_fold"),
     ".analysis.heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "allocate_heaters",
@@ -51,7 +53,8 @@ __all__ = [
     "MiuraDesign", "MiuraProblem", "MIURA_SPACE", "LiftPowerResult", "miura_model",
     "heated_creases", "lift_power", "lift_per_power_table",
     # optimisation and evaluation logs
-    "optimize", "OptimizationResult", "StopOptimization", "METHODS", "EvaluationLog",
+    "optimize", "OptimizationResult", "StopOptimization", "Optimizer", "optimizers",
+    "get_optimizer", "register_optimizer", "unregister_optimizer", "EvaluationLog",
     "LoggedProblem",
     # robustness
     "residual_fold_grid", "with_residual_fold", "sweep_residual_fold",

@@ -24,12 +24,14 @@ from ._version import __version__
 
 __getattr__, __dir__ = _attach(__name__, {
     ".model.bimorph": ("Actuators", "Bimorph"),
-    ".cases": ("Case", "describe_cases", "get_case", "miura_sheet_model", "single_fold_model"),
+    ".cases": ("Case", "describe_cases", "get_case", "miura_fold_signs", "miura_sheet_model",
+               "single_fold_model"),
     ".solvers.dynamics": ("DynamicsResult", "integrate"),
     ".solvers.dynamics_options": ("DynamicsOptions",),
     ".mechanics.elements.springs": ("spring_kernel_backend",),
+    ".mechanics.kinematics": ("fold_angles",),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
-                "PatternError"),
+                "PatternError", "SolverError"),
     ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
@@ -47,15 +49,16 @@ __getattr__, __dir__ = _attach(__name__, {
                          "StepPower"),
     ".model.properties": ("BarHingeParameters",),
     ".results": ("SimulationResult", "StepResult"),
+    ".events": ("EVENT_KINDS", "Event"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
-    ".steps": ("AmbientTemperature", "ArcLengthLoad", "Coupling", "DisplacementControl",
+    ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
                "Dynamics", "ElectroThermal", "Gravity", "Heat", "Load", "SelfFold", "Step",
                "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
     ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
-    ".thermal.steady": ("ThermalParameters",),
+    ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
@@ -68,10 +71,10 @@ __all__ = [
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
-    "REFERENCE_GRAVITY",
+    "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
-    "AmbientTemperature", "Coupling", "simulate", "NewtonOptions", "SimulationState",
+    "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
     "initial_state", "spring_kernel_backend",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
@@ -82,7 +85,8 @@ __all__ = [
     "lumped_masses", "natural_modes", "ModesResult",
     # path following through limit points
     "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
-    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability",
+    "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability", "Event",
+    "EVENT_KINDS",
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases
@@ -92,7 +96,8 @@ __all__ = [
     # FOLD files
     "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
     "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
-    "miura_sheet_model", "single_fold_model",
+    "miura_sheet_model", "miura_fold_signs", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
+    "SolverError",
 ]

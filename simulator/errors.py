@@ -1,8 +1,11 @@
 """Exception hierarchy of etorigami.
 
-Every error raised on bad user input derives from :class:`EtorigamiError` and
-(for input errors) from :class:`ValueError`, so callers can catch either.
-Messages name the offending item, the value given and how to fix it.
+Every error of the toolkit derives from :class:`EtorigamiError`. Bad user input raises a
+:class:`ParameterError` (or :class:`PatternError`, :class:`FoldFormatError`), also a
+:class:`ValueError`, whose message names the offending item, the value given and how to fix it
+(see :mod:`simulator._validate`). A numerical method that fails on valid input raises a
+:class:`SolverError` or, on request, a :class:`ConvergenceError` (both :class:`RuntimeError`):
+changing the arguments is not the fix there.
 """
 
 from __future__ import annotations
@@ -36,3 +39,12 @@ class ConvergenceError(EtorigamiError, RuntimeError):
     def __init__(self, message: str, result: object = None):
         super().__init__(message)
         self.result = result
+
+
+class SolverError(EtorigamiError, RuntimeError):
+    """A numerical method failed although its input was valid: a factorisation that should
+    succeed did not (LAPACK ``info != 0``), an LP found no solution, an eigensolver broke down.
+
+    Not a :class:`ValueError`: changing the arguments is not the fix. The message names the
+    method and its status.
+    """

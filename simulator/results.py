@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import json
 import pathlib
-import subprocess
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from ._result import ResultFiles, _git_hash, _jsonable
 from ._version import __version__
 from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
@@ -26,7 +26,7 @@ __all__ = ["StepResult", "SimulationResult"]
 
 
 @dataclass(frozen=True, eq=False)
-class StepResult:
+class StepResult(ResultFiles):
     """Result of one loading step.
 
     Attributes
@@ -54,6 +54,8 @@ class StepResult:
     columns : dict of (m,) arrays
         Step-specific per-increment quantities (e.g. ``stable``, ``time [s]``).
     velocity_history : (m, n_nodes, 3) node velocities [m/s], or None (quasi-static step)
+    events : tuple of Event
+        Limit points, bifurcations and snaps on the step's path (:mod:`simulator.events`).
     """
 
     name: str
@@ -75,10 +77,30 @@ class StepResult:
     settings: dict = field(default_factory=dict)
     columns: dict = field(default_factory=dict)
     velocity_history: np.ndarray | None = None
+    events: tuple = ()
 
     @property
     def increments(self) -> int:
         return len(self.load_factor)
+
+    _csv_name = "step.csv"
+
+    def to_frame(self):
+        """One row per accepted increment: ``increment``, ``load_factor``, ``iterations``,
+        ``power [mW]`` (largest crease power), ``max_temperature [degC]`` (hottest node), then
+        the step-specific columns (e.g. ``time [s]``, ``stable``)."""
+        import pandas as pd
+
+        return pd.DataFrame({
+            "increment": np.arange(1, self.increments + 1), "load_factor": self.load_factor,
+            "iterations": self.increment_iterations,
+            "power [mW]": 1e3 * np.max(self.power_history, axis=1, initial=0.0),
+            "max_temperature [degC]": np.max(self.temperature_history, axis=1, initial=-np.inf),
+            **{name: list(values) for name, values in self.columns.items()}})
+
+    def _meta(self) -> dict:
+        return {"name": self.name, "increments": self.increments, "iterations": self.iterations,
+                "cuts": self.cuts, "wall_time [s]": self.wall_time, "settings": self.settings}
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,6 +132,12 @@ class SimulationResult:
     def message(self) -> str:
         bad = [s for s in self.steps if not s.success]
         return "all steps converged" if not bad else f"step {bad[0].name!r}: {bad[0].message}"
+
+    @property
+    def events(self) -> tuple:
+        """Events of all steps in order (:class:`~simulator.events.Event`; ``step_index``
+        says whose)."""
+        return tuple(e for s in self.steps for e in s.events)
 
     # ------------------------------------------------------------------ history
     @cached_property
@@ -206,9 +234,11 @@ class SimulationResult:
         or None if no step has them.
 
         Columns: ``step`` (record index), ``stage``, ``increment``, ``load_factor``,
-        ``power [mW]`` (largest crease power), then the step columns with metres shown in um
-        (``displacement [um]``), e.g. ``stable``, ``negative_eigenvalues``,
-        ``lowest_eigenvalue [N/m]``, ``reaction [N]``; values a row lacks are empty.
+        ``power [mW]`` (largest crease power), ``event`` (the kinds of the events just
+        before the row, e.g. ``"limit_point; snap"``, see :meth:`events_frame`), then the step
+        columns with metres shown in um (``displacement [um]``), e.g. ``stable``,
+        ``negative_eigenvalues``, ``lowest_eigenvalue [N/m]``, ``reaction [N]``; values a row
+        lacks are empty.
         """
         import pandas as pd
 
@@ -216,9 +246,15 @@ class SimulationResult:
         for step in self.steps:
             m = step.increments
             if step.columns:
+                event = [None] * m
+                for e in step.events:
+                    if e.increment is not None:
+                        k = e.increment
+                        event[k] = e.kind if event[k] is None else f"{event[k]}; {e.kind}"
                 data = {"step": np.arange(record, record + m), "stage": [step.name] * m,
                         "increment": np.arange(1, m + 1), "load_factor": step.load_factor,
-                        "power [mW]": 1e3 * step.power_history.max(axis=1, initial=0.0)}
+                        "power [mW]": 1e3 * step.power_history.max(axis=1, initial=0.0),
+                        "event": event}
                 for name, values in step.columns.items():
                     if name.endswith(" [m]"):
                         name = name[:-4] + " [um]"
@@ -228,9 +264,36 @@ class SimulationResult:
             record += m
         return pd.concat(frames, ignore_index=True) if frames else None
 
+    def events_frame(self):
+        """Events of all steps (:attr:`events`), one row each (no rows if there are none).
+
+        Columns: ``step`` (record index of the first record past the event, as in
+        :meth:`to_frame` and :meth:`path_frame`; empty if none was recorded past it),
+        ``stage`` (step name), ``increment`` (of the step, from 1), ``kind``,
+        ``load_factor``, ``power [mW]`` (largest crease power), ``total_power [mW]``,
+        ``displacement [um]`` (of the monitored ``node``), ``node``, ``jump [um]`` (snaps),
+        ``temperature_max [degC]``, ``message``.
+        """
+        import pandas as pd
+
+        first = np.cumsum([1] + [s.increments for s in self.steps])   # record of increment 0
+        um = lambda v: None if v is None else 1e6 * v  # noqa: E731
+        rows = [{"step": None if e.increment is None else int(first[k] + e.increment),
+                 "stage": s.name, "increment": None if e.increment is None else e.increment + 1,
+                 "kind": e.kind, "load_factor": e.load_factor,
+                 "power [mW]": 1e3 * max(e.power_per_crease, default=0.0),
+                 "total_power [mW]": 1e3 * e.total_power,
+                 "displacement [um]": um(e.displacement), "node": e.node,
+                 "jump [um]": um(e.jump), "temperature_max [degC]": e.temperature_max,
+                 "message": e.message} for k, s in enumerate(self.steps) for e in s.events]
+        return pd.DataFrame(rows, columns=list(_EVENT_COLUMNS)).astype(
+            {"step": "Int64", "increment": "Int64", "node": "Int64", "load_factor": float,
+             "displacement [um]": float, "jump [um]": float, "temperature_max [degC]": float})
+
     def save(self, directory, metadata: dict | None = None) -> pathlib.Path:
-        """Write ``creases.csv``, ``nodes.npz``, ``meta.json`` and, when a step followed a path
-        (:meth:`path_frame`), ``path.csv`` into ``directory``.
+        """Write ``creases.csv``, ``nodes.npz``, ``meta.json`` (with the :attr:`events`, crease
+        powers keyed by crease id) and, when a step followed a path (:meth:`path_frame`),
+        ``path.csv`` into ``directory``.
 
         ``metadata`` (e.g. the case name and its parameters) is added to ``meta.json``.
         """
@@ -255,24 +318,12 @@ class SimulationResult:
                            "increments": s.increments, "iterations": s.iterations,
                            "cuts": s.cuts, "wall_time [s]": s.wall_time, **s.settings}
                           for s in self.steps],
+                "events": [e.to_dict(mesh.crease_ids) for e in self.events],
                 **(metadata or {})}
         (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
         return out
 
 
-def _jsonable(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.integer, np.floating)):
-        return obj.item()
-    return str(obj)
-
-
-def _git_hash() -> str | None:
-    try:
-        here = pathlib.Path(__file__).resolve().parent
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
-                             text=True, timeout=5)
-        return out.stdout.strip() or None
-    except (OSError, subprocess.SubprocessError):
-        return None
+_EVENT_COLUMNS = ("step", "stage", "increment", "kind", "load_factor", "power [mW]",
+                  "total_power [mW]", "displacement [um]", "node", "jump [um]",
+                  "temperature_max [degC]", "message")

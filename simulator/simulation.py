@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -59,7 +60,8 @@ def simulate(model: Model, steps, state: SimulationState | None = None,
         if not isinstance(outcome, StepOutcome):
             raise TypeError(f"{type(step).__name__}.run returned {type(outcome).__name__}; a "
                             "step must return a StepOutcome (use StepRecorder.finish).")
-        results.append(_step_result(step, outcome, context, time.perf_counter() - t0))
+        results.append(_step_result(step, outcome, context, time.perf_counter() - t0,
+                                    len(results)))
         state = outcome.state
         logger.info("step %s: %s, %d increments, %d Newton iterations, %d cuts", step.name,
                     outcome.status, len(outcome.load_factor), outcome.iterations, outcome.cuts)
@@ -90,7 +92,10 @@ def _check_inputs(model, steps, state, options) -> None:
                              "NewtonOptions(...).")
 
 
-def _step_result(step: Step, outcome: StepOutcome, context: StepContext, wall) -> StepResult:
+def _step_result(step: Step, outcome: StepOutcome, context: StepContext, wall,
+                 index: int) -> StepResult:
+    """The StepResult of ``outcome``: reactions and energies at its end, its events named by
+    the step (``step.name`` at position ``index``)."""
     state, system = outcome.state, context.system
     ev = outcome.evaluation or system.evaluate(state.u, state.spring_rest, hessian=False)
     fixed = system.free_index < 0
@@ -103,4 +108,5 @@ def _step_result(step: Step, outcome: StepOutcome, context: StepContext, wall) -
         increment_iterations=outcome.increment_iterations,
         residual_norms=list(outcome.residual_norms), reactions=reactions,
         energies=ev.energies, wall_time=wall, settings=step.describe(), columns=outcome.columns,
-        velocity_history=outcome.velocity)
+        velocity_history=outcome.velocity,
+        events=tuple(replace(e, step=step.name, step_index=index) for e in outcome.events))

@@ -13,7 +13,7 @@ are at least as good from the same start and under the same constraints?
 
 Method
 ------
-* Problem: :class:`~design.core.problem.GripperProblem` (bisect power search, objective = assembly
+* Problem: :class:`~design.GripperProblem` (bisect power search, objective = assembly
   + grip power per heated crease, constraints = normalised size bounds and the temperature
   limit), as :class:`TimeLimitedGripperProblem` with no time limit (``TIME_LIMIT = None``:
   a limit would make the results depend on the machine's speed). Every evaluation ends on
@@ -80,7 +80,7 @@ import pandas as pd
 
 from design.core.executors import make_executor
 from design.core.optimize import optimize
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from studies._common import (EvaluationTimeout, TimeLimited, progress_bar, study_main,
                              time_limit)
 
@@ -112,7 +112,7 @@ POWER, ASM, GRIP, TEMP = ("total_power [mW]", "assembly_power [mW]", "grip_power
 
 @dataclass(frozen=True)
 class TimeLimitedGripperProblem(TimeLimited, GripperProblem):
-    """:class:`~design.core.problem.GripperProblem` whose evaluations stop (fail) after
+    """:class:`~design.GripperProblem` whose evaluations stop (fail) after
     ``time_limit`` [s]."""
 
     time_limit: float | None = TIME_LIMIT

@@ -16,7 +16,7 @@ Method
   device (Gaussian copula, rho 0.7); gold 0.2 um and SU-8 0.8 um thick, each normal with a
   5 % standard deviation, truncated at 3 std; bimorph mismatch uniform on [34, 42] ppm/K; air
   conductivity uniform on [0.024, 0.030] W/(m K).
-* Problem: the paper's gripper problem (:class:`design.core.problem.GripperProblem`, bisect
+* Problem: the paper's gripper problem (:class:`design.GripperProblem`, bisect
   power search).
 * Designs: ``start`` (the paper's start), ``paper-optimal`` (the coordinate descent's final
   design of the study ``gripper_optimization``, read from its CSV; re-run with a small
@@ -63,7 +63,7 @@ import numpy as np
 import pandas as pd
 
 from design.core.executors import make_executor
-from design.core.problem import GripperProblem
+from design import GripperProblem
 from design.analysis.uncertainty import SCENARIOS
 from design.analysis.uncertainty_sweep import RobustYieldProblem, summarize_yield, sweep_uncertainty
 from studies._common import RESULTS, progress_bar, study_main

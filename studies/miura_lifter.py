@@ -12,7 +12,7 @@ Method
 ``get_case("miura_lifter", cells_x=4, cells_y=2, substrate=s)`` for s = False / True: the
 first column of panels is clamped (and the substrate panel, 100 um below the sheet, is fixed
 and is a room-temperature thermal boundary); every crease ramps to 9 mW in 250 staggered
-thermo-mechanical increments. The lift is measured as in ``tests/test_cases.py``: the mean z
+thermo-mechanical increments. The lift is measured as in ``tests/integration/test_cases.py``: the mean z
 of the sheet's corner nodes at the largest x (the free right edge) minus its initial value.
 The normalised power is the crease power over its final value (9 mW), as in the paper's
 figure. ``--quick`` uses 30 increments.

@@ -16,7 +16,8 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from simulator.geometry.materials import SU8
+from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
+from simulator import SU8
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "mark_temperature_limit", "nodal_range", "T_LIMIT"]
@@ -46,20 +47,6 @@ def _temperature_norm(temperature) -> Normalize:
         mid = (hi + lo) / 2
         lo, hi = mid - 0.5, mid + 0.5
     return Normalize(lo, hi)
-
-
-def _set_limits(ax, points_mm) -> None:
-    """Axis limits to the bounding box of ``points_mm`` (..., 3) with equal aspect."""
-    pts = np.asarray(points_mm).reshape(-1, 3)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    span = hi - lo
-    span = np.maximum(span, 0.02 * span.max() if span.max() > 0 else 1.0)  # flat: keep z visible
-    mid = (hi + lo) / 2
-    lo, hi = mid - span / 2, mid + span / 2
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
-    ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(span)
 
 
 def _title(result, record: int) -> str:
@@ -161,7 +148,7 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
         ax.add_collection3d(Poly3DCollection(x0[mesh.triangles], facecolors="none",
                                              edgecolors="0.5", linewidths=0.4, linestyles="--"))
         points.append(x0)
-    _set_limits(ax, np.concatenate(points))
+    set_3d_limits(ax, np.concatenate(points))
     ax.set_title(_title(result, record))
     return fig
 
@@ -331,7 +318,7 @@ def animate(result, path, every=1, fps=10) -> pathlib.Path:
                             array=temp[0], cmap=CMAP, norm=_temperature_norm(h["temperature"]))
     ax.add_collection3d(coll)
     _temperature_colorbar(fig, ax, coll)
-    _set_limits(ax, x_all)
+    set_3d_limits(ax, x_all)
 
     def update(k):
         coll.set_verts(x_all[k][mesh.triangles])

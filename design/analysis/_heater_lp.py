@@ -10,15 +10,18 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from simulator import (ConvergenceError, Model, ParameterError, SimulationState, SolverError,
+                       fold_angles, initial_state)
+# Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
+# operator and the crease temperature weights for the influence matrices; a Newton re-solve
+# of the equilibrium system with moved crease rest angles for the fold sensitivities). These
+# are solver internals, not a user's API (tests/unit/test_architecture.py lists them).
 from simulator.model.bimorph import crease_temperature_weights
-from simulator.errors import ParameterError
-from simulator.mechanics.kinematics import fold_angles
-from simulator.state import SimulationState, equilibrium_system, initial_state, thermal_model
-from simulator.model.model import Model
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import newton
+from simulator.state import equilibrium_system, thermal_model
 
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation"]
 
@@ -114,7 +117,8 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     def folds(rest):
         res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
         if not res.success:
-            raise ParameterError(f"fold_sensitivity: equilibrium not found ({res.message})")
+            raise ConvergenceError(f"fold_sensitivity: equilibrium not found ({res.message})",
+                                       res)
         return fold_angles(mesh, mesh.nodes + res.u)
 
     base = folds(state.crease_rest)
@@ -177,5 +181,5 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
                              - state.temperature[model.mesh.crease_nodes].ravel(),
                              _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
-        raise ParameterError(f"linear_allocation: LP not solved ({status}).")
+        raise SolverError(f"linear_allocation: LP not solved ({status}).")
     return p

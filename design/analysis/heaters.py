@@ -1,9 +1,9 @@
 """Minimum-power heater allocation: which power on which heater folds the creases as asked.
 
 For a fixed shape the steady temperatures are linear in the heater powers ``p`` [W]: the
-actuation temperature rise of every crease (the 7-node weighted mean, digest 6.7) is ``G p``
+actuation temperature rise of every crease (the 7-node weighted mean, theory 5.1) is ``G p``
 and the rise of every crease node is ``H p``, with ``G`` and ``H`` from one factorisation of
-the condensed conductivity (:meth:`ThermalModel.solve` with one column per heater). The
+the condensed conductivity (:meth:`~simulator.thermal.steady.ThermalModel.solve` with one column per heater). The
 rest-angle change is ``r * (G p)`` (Timoshenko, linear in the rise), and near an equilibrium
 the fold angles answer to the rest angles through the sensitivity ``S = d fold / d rest``
 (one Newton solve per actuated crease: creases around a vertex move together). So, about the
@@ -41,18 +41,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simulator.errors import ParameterError
-from simulator.mechanics.kinematics import fold_angles
-from simulator.simulation import simulate
-from simulator.state import SimulationState, initial_state
-from simulator.steps import Heat
-from simulator.model.model import Model
-from simulator.solvers.newton import NewtonOptions
+from simulator import (ConvergenceError, Heat, Model, NewtonOptions, ParameterError,
+                       SimulationState, fold_angles, initial_state, simulate)
+from simulator._result import ResultFiles
+from simulator._validate import integer, non_negative, positive
 
 from ..core._contract import check_outcome
 from ._heater_lp import (_check_targets, _heater_table, _linear_model, _solve_lp, _weights,
                          fold_sensitivity, influence_matrices, linear_allocation)
-from ..core.problem import SU8_TG
+from ..devices.limits import SU8_TG
 
 __all__ = ["HeaterAllocation", "ALLOCATION_STATUSES", "influence_matrices", "fold_sensitivity",
            "linear_allocation", "allocate_heaters"]
@@ -70,7 +67,7 @@ ALLOCATION_STATUSES = ("converged", "infeasible", "failed", "max_rounds")
 
 
 @dataclass(frozen=True, eq=False)
-class HeaterAllocation:
+class HeaterAllocation(ResultFiles):
     """Outcome of :func:`allocate_heaters`.
 
     Attributes
@@ -135,6 +132,20 @@ class HeaterAllocation:
                          "target_fold [deg]": math.degrees(t) if t is not None else math.nan,
                          "fold_angle [deg]": math.degrees(a) if a is not None else math.nan})
         return pd.DataFrame(rows)
+
+    def _tables(self) -> dict:
+        import pandas as pd
+
+        return {"heaters.csv": self.to_frame(),
+                "rounds.csv": pd.DataFrame(list(self.history)) if self.history else None}
+
+    def _meta(self) -> dict:
+        return {"heaters": dict(self.heaters),
+                "rounds": self.rounds, "total_power [W]": self.total_power,
+                "max_temperature [degC]": self.max_temperature,
+                "temperature_limit [degC]": self.temperature_limit,
+                "targets [rad]": {str(k): v for k, v in self.targets.items()},
+                "achieved [rad]": {str(k): v for k, v in self.achieved.items()}}
 
 
 @dataclass
@@ -218,7 +229,7 @@ class _Rounds:
         out.state = res.state
         try:
             self._linearise(res.state, previous)
-        except ParameterError as exc:
+        except (ParameterError, ConvergenceError) as exc:
             out.status, out.message = "failed", f"round {out.rounds}: {exc}"
             return False, excess
         reached = self.folds
@@ -254,7 +265,7 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     ----------
     model : Model with thermal parameters and actuators
     targets : {crease id: fold angle [rad]}
-        Fold angle from flat (sign as :func:`simulator.mechanics.kinematics.fold_angles`) each crease must
+        Fold angle from flat (sign as :func:`simulator.fold_angles`) each crease must
         reach within ``fold_tol``; a target that needs the crease to fold against its actuation direction is a
         ParameterError.
     heaters : {name: crease id or tuple of crease ids}, optional
@@ -350,13 +361,8 @@ def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _A
 
 
 def _check_settings(*, max_rounds, stages, band, fold_tol, max_power):
-    for name, v in (("max_rounds", max_rounds), ("stages", stages)):
-        if not (isinstance(v, int) and v >= 1):
-            raise ParameterError(f"{name} = {v!r} must be a positive integer.")
-    for name, v in (("band", band), ("fold_tol", fold_tol)):
-        if not (math.isfinite(v) and v >= (0 if name == "band" else np.finfo(float).tiny)):
-            raise ParameterError(f"{name} = {v!r} must be a "
-                                 f"{'non-negative' if name == 'band' else 'positive'} angle "
-                                 "in rad.")
-    if max_power is not None and not (math.isfinite(max_power) and max_power > 0):
-        raise ParameterError(f"max_power = {max_power!r} must be a positive power in W.")
+    integer("max_rounds", max_rounds)
+    integer("stages", stages)
+    non_negative("band", band, "rad")
+    positive("fold_tol", fold_tol, "rad")
+    positive("max_power", max_power, "W", allow_none=True)

@@ -26,11 +26,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..devices import gripper as _gr
 from ..core.executors import SerialExecutor, TaskFailure
-from ..core.problem import DesignProblem, Evaluation, GripperProblem
+from ..core.problem import DesignProblem, Evaluation
+from ..devices.gripper_problem import GripperProblem
 
 if TYPE_CHECKING:
     import pandas as pd

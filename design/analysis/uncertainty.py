@@ -6,11 +6,12 @@ thicknesses, the bimorph mismatch, the air's conductivity) with a :class:`Distri
 (fixed, normal, truncated normal, uniform) and an optional correlation group. Inputs of one
 group are correlated through a Gaussian copula with equal correlation ``rho`` (e.g. the four
 creases' residual folds of one wafer). :meth:`FabricationScenario.sample` draws a table by
-Monte Carlo (``"mc"``) or Latin hypercube (``"lhs"``) from a seed: the same seed gives the same
-table, bit for bit (the sampling runs in the calling process, never in workers).
+Monte Carlo (``"mc"``) or Latin hypercube (``"lhs"``, :class:`scipy.stats.qmc.LatinHypercube`)
+from a seed: the same seed gives the same table, bit for bit (the sampling runs in the calling
+process, never in workers). Truncated normals are :data:`scipy.stats.truncnorm`.
 
 Statistics of a sample table: :func:`wilson_interval` (the yield's binomial confidence
-interval), :func:`quantile` (of powers, unmet samples counted as infinite) and
+interval, :func:`scipy.stats.binomtest`), :func:`quantile` (of powers, unmet samples counted as infinite) and
 :func:`rank_correlations` (Spearman's rho of each input with an output, with a Fisher-z
 confidence interval, standard error ``1.06 / sqrt(n - 3)``; Fieller, Hartley and Pearson 1957).
 """
@@ -24,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import special
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..devices.gripper import ARM_CREASES, BASE_CREASES
 
@@ -56,7 +57,8 @@ _U_EPS = 1e-12
 
 @dataclass(frozen=True)
 class Distribution:
-    """A one-dimensional distribution, sampled through its inverse CDF.
+    """A one-dimensional distribution, sampled through its inverse CDF (a normal through
+    :data:`scipy.stats.truncnorm`, truncated or not).
 
     Parameters
     ----------
@@ -113,8 +115,10 @@ class Distribution:
             return np.full(u.shape, self.loc)
         if self.kind == "uniform":
             return self.low + u * (self.high - self.low)
-        a, b = (special.ndtr((v - self.loc) / self.scale) for v in (self.low, self.high))
-        return np.clip(self.loc + self.scale * special.ndtri(a + u * (b - a)), self.low,
+        from scipy import stats              # imported here: scipy.stats is slow to import
+
+        a, b = ((v - self.loc) / self.scale for v in (self.low, self.high))
+        return np.clip(stats.truncnorm.ppf(u, a, b, loc=self.loc, scale=self.scale), self.low,
                        self.high)
 
     def describe(self) -> str:
@@ -221,8 +225,9 @@ class FabricationScenario:
     def sample(self, n: int, seed: int, method: str = "lhs") -> pd.DataFrame:
         """``n`` samples (rows) of the parameters (columns, SI), reproducible from ``seed``.
 
-        Monte Carlo draws independent uniforms; the Latin hypercube puts one point in each
-        of ``n`` equal-probability strata of every independent uniform (the copula mixes
+        Monte Carlo draws independent uniforms; the Latin hypercube
+        (:class:`scipy.stats.qmc.LatinHypercube`, scrambled, seeded by the same generator)
+        puts one point in each of ``n`` equal-probability strata of every independent uniform (the copula mixes
         correlated inputs, so they are stratified only in their group's common score).
         """
         import pandas as pd
@@ -237,8 +242,9 @@ class FabricationScenario:
         if method == "mc":
             u = rng.random((n, d))
         else:
-            strata = np.argsort(rng.random((d, n)), axis=1).T
-            u = (strata + rng.random((n, d))) / n
+            from scipy.stats import qmc
+
+            u = qmc.LatinHypercube(d, rng=rng).random(n)
         z = special.ndtri(np.clip(u, _U_EPS, 1 - _U_EPS))
         common = dict(zip(groups, z[:, len(self.inputs):].T))
         cols = {}
@@ -282,17 +288,17 @@ SCENARIOS = {
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple:
-    """Wilson score interval ``(low, high)`` of a binomial proportion (NaN, NaN for n = 0)."""
+    """Wilson score interval ``(low, high)`` of a binomial proportion (NaN, NaN for n = 0).
+
+    ``scipy.stats.binomtest(successes, n).proportion_ci(confidence, method="wilson")``: the
+    low end is 0 when ``successes`` is 0 and the high end 1 when it is ``n``.
+    """
     if n == 0:
         return (math.nan, math.nan)
     from scipy import stats              # imported here: scipy.stats is slow to import
 
-    z = float(stats.norm.ppf(0.5 + confidence / 2))
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (0.0 if successes == 0 else max(0.0, centre - half),
-            1.0 if successes == n else min(1.0, centre + half))
+    ci = stats.binomtest(int(successes), int(n)).proportion_ci(confidence, method="wilson")
+    return (float(ci.low), float(ci.high))
 
 
 def quantile(values, q: float) -> float:

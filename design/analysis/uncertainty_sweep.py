@@ -20,10 +20,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ..core.executors import SerialExecutor, TaskFailure
-from ..core.problem import DesignProblem, GripperProblem
+from ..core.problem import DesignProblem
+from ..devices.gripper_problem import GripperProblem
 from .robustness import _design_list, lost_evaluation
 from ..core.space import DesignSpace, Variable
 from .uncertainty import PARAMETERS, FabricationScenario, quantile, rank_correlations, \

@@ -27,8 +27,7 @@ import logging
 import signal
 import sys
 
-from simulator import __version__
-from simulator.errors import EtorigamiError
+from simulator import EtorigamiError, __version__
 
 from ._common import EXIT_INTERRUPTED, CLIError, kernel_backend
 from .files import add_file_commands

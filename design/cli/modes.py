@@ -33,8 +33,7 @@ def _modes(args) -> int:
     out = pathlib.Path(args.out)
     modes.save(out)
     if not args.no_plots:
-        # The CLI is the top layer: it may use the studies' plotting modules.
-        from studies.mode_plots import save_mode_plots
+        from ._plots import save_mode_plots
 
         save_mode_plots(modes, out, count=min(args.count, 6))
     frame = modes.to_frame()

@@ -6,18 +6,56 @@ same command run again reuses them (an interrupted run resumes where it stopped)
 
 from __future__ import annotations
 
+import argparse
 import os
+
+from simulator import EtorigamiError
 
 from ._common import (RESIDUAL_LIMIT_DEG, add_parallel_options, executor, floats, fold_deg,
                       progress_bar, resume_message)
 
-__all__ = ["add_optimize_command", "METHODS"]
+__all__ = ["add_optimize_command"]
 
-METHODS = ("cd", "cobyla", "bobyqa", "neldermead", "sbplx", "direct")
+
+class _Methods:
+    """The ``--method`` choices: the optimiser registry (:func:`design.optimizers`), read
+    when argparse checks a value or prints the help, so building the parser imports no
+    optimiser (``etorigami --version`` stays light) and a registered method is a choice."""
+
+    def __iter__(self):
+        from ..core.optimize import optimizers
+
+        return iter(optimizers())
+
+    def __contains__(self, name) -> bool:
+        from ..core.optimize import get_optimizer
+
+        try:
+            get_optimizer(name)
+        except EtorigamiError:
+            return False
+        return True
+
+    @staticmethod
+    def help() -> str:
+        """The methods, each with its aliases and description."""
+        from ..core.optimize import optimizers
+
+        return "; ".join(f"{name}{' (' + ', '.join(o.aliases) + ')' if o.aliases else ''}: "
+                         f"{o.description}" for name, o in optimizers().items())
+
+
+class _MethodsHelp(argparse.HelpFormatter):
+    """Fills ``%(methods)s`` of the ``--method`` help from the registry when printed."""
+
+    def _get_help_string(self, action):
+        text = super()._get_help_string(action)
+        return text.replace("%(methods)s", _Methods.help()) if isinstance(
+            action.choices, _Methods) else text
 
 
 def _problem(args):
-    from ..core.problem import GripperProblem
+    from ..devices.gripper_problem import GripperProblem
 
     if args.target == "miura":
         from ..devices.miura import MiuraProblem
@@ -38,12 +76,12 @@ def _display(problem, name, value):
 
 
 def _optimize(args) -> int:
-    from ..core.optimize import optimize
+    from ..core.optimize import get_optimizer, optimize
 
     problem = _problem(args)
     ex = executor(args)
-    options = {"parallel_candidates": True} if args.method == "cd" and (
-        args.parallel or args.dask) else {}
+    options = {"parallel_candidates": True} if (args.parallel or args.dask) and (
+        "parallel_candidates" in get_optimizer(args.method).options) else {}
     try:
         with progress_bar(desc=f"{args.target} {args.method}", disable=args.quiet) as bar:
             def callback(evaluation):
@@ -67,9 +105,11 @@ def _interrupted(args) -> str:
 
 def add_optimize_command(sub) -> None:
     """Register ``optimize`` on an argparse subparsers object."""
-    opt = sub.add_parser("optimize", help="minimise the power of a gripper or Miura design")
+    opt = sub.add_parser("optimize", help="minimise the power of a gripper or Miura design",
+                         formatter_class=_MethodsHelp)
     opt.add_argument("target", choices=("gripper", "miura"))
-    opt.add_argument("--method", choices=METHODS, default="cd")
+    opt.add_argument("--method", choices=_Methods(), default="cd", metavar="METHOD",
+                     help="optimiser (default cd), one of the registered methods: %(methods)s")
     opt.add_argument("--out", metavar="DIR", help="folder for the evaluation log (resumable) "
                                                   "and results")
     opt.add_argument("--max-evaluations", type=int, default=None, metavar="N")

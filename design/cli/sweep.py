@@ -54,7 +54,7 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
 
 
 def _sweep(args) -> int:
-    from ..core.problem import GripperProblem
+    from ..devices.gripper_problem import GripperProblem
     from ..analysis.robustness import residual_fold_grid, sweep_residual_fold
 
     problem = GripperProblem(mode=args.mode)
@@ -79,7 +79,7 @@ def _sweep(args) -> int:
 def _uncertainty(args) -> int:
     import json
 
-    from ..core.problem import GripperProblem
+    from ..devices.gripper_problem import GripperProblem
     from ..analysis.uncertainty import SCENARIOS
     from ..analysis.uncertainty_sweep import summarize_yield, sweep_uncertainty
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 __all__ = ["check_outcome", "power_if"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator._validate import integer
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 
@@ -14,11 +14,12 @@ def _x_columns(space, x) -> dict:
     return {f"x.{v.name} [{v.unit}]": float(u) for v, u in zip(space.variables, x)}
 
 
-def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidates=False,
-                        metric="temperature [degC]"):
+def _coordinate_descent(run: EvaluationRun, x0, max_evaluations=None, max_cycles=15,
+                        parallel_candidates=False, metric="temperature [degC]"):
+    """Coordinate descent from ``x0``; returns ``(status, message, cycles)`` (``cycles``: one
+    row per cycle, row 0 the start). The budget ``max_evaluations`` is enforced by ``run``."""
     space = run.space
-    if not (isinstance(max_cycles, int) and max_cycles >= 1):
-        raise ParameterError(f"max_cycles = {max_cycles!r} must be a positive integer.")
+    integer("max_cycles", max_cycles)
     tol = 1e-9 * (space.upper - space.lower)
     k = np.zeros(len(space), dtype=int)
 
@@ -40,7 +41,7 @@ def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidat
     try:
         current = run.evaluate(point(k))
     except BudgetExhausted:  # pragma: no cover - budget >= 1 is enforced
-        return [], "max_evaluations", "no evaluation allowed"
+        return "max_evaluations", "no evaluation allowed", []
     cycles.append(row(0, [], None))
     for cycle in range(1, max_cycles + 1):
         moved, last = [], None
@@ -63,13 +64,13 @@ def _coordinate_descent(run: EvaluationRun, x0, max_cycles=15, parallel_candidat
         except (BudgetExhausted, StopOptimization) as exc:
             cycles.append(row(cycle, moved, last, complete=False))
             if isinstance(exc, StopOptimization):
-                return cycles, "stopped", f"stopped by the callback in cycle {cycle}: {exc}"
-            return cycles, "max_evaluations", (f"evaluation budget ({run.budget}) exhausted in "
-                                               f"cycle {cycle}")
+                return "stopped", f"stopped by the callback in cycle {cycle}: {exc}", cycles
+            return "max_evaluations", (f"evaluation budget ({run.budget}) exhausted in "
+                                       f"cycle {cycle}"), cycles
         cycles.append(row(cycle, moved, last))
         if not moved:
             status = "converged"
             break
     msg = (f"no coordinate moved in cycle {len(cycles) - 1}" if status == "converged" else
            f"cycle limit ({max_cycles}) reached; the last cycle still moved")
-    return cycles, status, msg
+    return status, msg, cycles

@@ -7,7 +7,8 @@ from __future__ import annotations
 import logging
 import os
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
+from simulator._validate import integer
 
 from ._executor_base import (Executor, ExecutorError, TaskFailure, _check_failures,
                              _children_ignore_sigint, _report, _task_error)
@@ -36,6 +37,8 @@ class DaskExecutor(Executor):
     timeout : float
         Seconds to wait for the scheduler.
 
+    Notes
+    -----
     Dask serialises ``fn`` with cloudpickle and so also accepts lambdas; keep to top-level
     callables anyway, so that the same code runs with every executor.
     """
@@ -50,8 +53,7 @@ class DaskExecutor(Executor):
         if not isinstance(address, str) or not address:
             raise ParameterError(f"DaskExecutor: address = {address!r}; give a scheduler address "
                                  "like 'tcp://host:8786' or 'local'.")
-        if workers is not None and not (isinstance(workers, int) and workers >= 1):
-            raise ParameterError(f"DaskExecutor: workers = {workers!r} must be a positive integer.")
+        integer("DaskExecutor: workers", workers, allow_none=True)
         self.address, self._cluster = address, None
         if address == "local":
             n = workers or os.cpu_count() or 1

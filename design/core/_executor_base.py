@@ -10,7 +10,7 @@ import signal
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
-from simulator.errors import EtorigamiError, ParameterError
+from simulator import EtorigamiError, ParameterError
 
 __all__ = ["Executor", "SerialExecutor", "ExecutorError", "TaskError", "TaskFailure"]
 

@@ -1,20 +1,23 @@
 """The NLopt back end of :func:`design.core.optimize.optimize` (private): derivative-free NLopt
-methods in normalised variables, with callbacks that never let an exception escape into NLopt
-(see :mod:`design.core.optimize`). NLopt itself is imported only when a run starts."""
+algorithms in normalised variables, with callbacks that never let an exception escape into
+NLopt (see :mod:`design.core.optimize`, whose registry names the algorithms: a new NLopt
+method is one :func:`~design.core.optimize.register_optimizer` call with
+:func:`nlopt_backend`). NLopt itself is imported only when a run starts."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 from .problem import Evaluation
 
-_NLOPT = {"cobyla": "LN_COBYLA", "bobyqa": "LN_BOBYQA", "neldermead": "LN_NELDERMEAD",
-          "sbplx": "LN_SBPLX", "direct": "GN_DIRECT_L"}
+#: NLopt algorithms that take inequality constraints themselves (``constraint_handling="native"``).
+_NATIVE_CONSTRAINTS = ("LN_COBYLA",)
 
 
 def _nlopt_codes(nlopt):
@@ -26,14 +29,19 @@ def _nlopt_codes(nlopt):
             nlopt.MAXTIME_REACHED: ("max_time", "time limit reached")}
 
 
-def _nlopt_initial_step(space, method, o) -> np.ndarray:
-    """Check the NLopt options of ``method`` and return the normalised initial step."""
+def _global(algorithm: str) -> bool:
+    """A global NLopt algorithm (``GN_*``): no initial step, constraints only by penalty."""
+    return algorithm.startswith("GN_")
+
+
+def _nlopt_initial_step(space, algorithm, o) -> np.ndarray:
+    """Check the NLopt options of ``algorithm`` and return the normalised initial step."""
     handling = o["constraint_handling"]
-    allowed = {"cobyla": ("native", "penalty"), "direct": ("penalty",)}.get(
-        method, ("penalty", "auglag"))
+    allowed = (("native", "penalty") if algorithm in _NATIVE_CONSTRAINTS else
+               ("penalty",) if _global(algorithm) else ("penalty", "auglag"))
     if handling not in allowed:
         raise ParameterError(f"constraint_handling = {handling!r} is not available for "
-                             f"{method!r}; use one of {allowed}.")
+                             f"{algorithm}; use one of {allowed}.")
     for key in ("xtol_rel", "ftol_rel", "xtol_abs", "ftol_abs", "penalty"):
         if not (isinstance(o[key], (int, float)) and o[key] >= 0):
             raise ParameterError(f"{key} = {o[key]!r} must be a non-negative number.")
@@ -113,9 +121,9 @@ class _NloptCallbacks:
         self._guarded(fill, lambda: result.__setitem__(slice(None), 1.0))
 
 
-def _nlopt_optimizers(nlopt, method, n, handling, step, max_evaluations, o):
+def _nlopt_optimizers(nlopt, algorithm, n, handling, step, max_evaluations, o):
     """NLopt optimizer (and AUGLAG's local one) with bounds, tolerances and budgets set."""
-    alg = getattr(nlopt, _NLOPT[method])
+    alg = getattr(nlopt, algorithm)
     opt = nlopt.opt(nlopt.AUGLAG if handling == "auglag" else alg, n)
     local = nlopt.opt(alg, n) if handling == "auglag" else None
     for p in filter(None, (opt, local)):
@@ -125,7 +133,7 @@ def _nlopt_optimizers(nlopt, method, n, handling, step, max_evaluations, o):
         p.set_xtol_abs(o["xtol_abs"])
         p.set_ftol_rel(o["ftol_rel"])
         p.set_ftol_abs(o["ftol_abs"])
-        if method != "direct":
+        if not _global(algorithm):
             p.set_initial_step(step)
     if local is not None:
         opt.set_local_optimizer(local)
@@ -164,17 +172,18 @@ def _callback_status(exc, status, msg):
     return status, msg
 
 
-def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
-    """Run NLopt ``method`` in normalised variables; return ``(None, status, message)``."""
+def _run_nlopt(run: EvaluationRun, x0, max_evaluations, *, algorithm, **o):
+    """Run NLopt ``algorithm`` (e.g. ``"LN_COBYLA"``) in normalised variables; return
+    ``(status, message)``."""
     import nlopt
 
     space, n = run.space, len(run.space)
     handling = o["constraint_handling"]
-    step = _nlopt_initial_step(space, method, o)
+    step = _nlopt_initial_step(space, algorithm, o)
     bounds = {f"{v}_{s}" for v in space.names for s in ("lower", "upper")}
     names = _nlopt_constraint_names(run, x0, handling, bounds)
     callbacks = _NloptCallbacks(run, names, bounds, handling == "penalty", o)
-    opt, local = _nlopt_optimizers(nlopt, method, n, handling, step, max_evaluations, o)
+    opt, local = _nlopt_optimizers(nlopt, algorithm, n, handling, step, max_evaluations, o)
     callbacks.opt = opt
     opt.set_min_objective(callbacks.objective)
     m = 1 if names is None else len(names)
@@ -182,4 +191,12 @@ def _run_nlopt(run: EvaluationRun, x0, method, max_evaluations, **o):
         opt.add_inequality_mconstraint(callbacks.constraints, np.zeros(m))
     status, msg = _nlopt_status(nlopt, opt, space.normalize(x0))
     status, msg = _callback_status(callbacks.exc, status, msg)
-    return None, status, f"{_NLOPT[method]}" + (" (AUGLAG)" if local else "") + f": {msg}"
+    return status, f"{algorithm}" + (" (AUGLAG)" if local else "") + f": {msg}"
+
+
+def nlopt_backend(algorithm: str):
+    """The optimiser back end running NLopt's ``algorithm`` (a name of the ``nlopt`` module,
+    e.g. ``"LN_COBYLA"``): ``backend(run, x0, max_evaluations, **options)``."""
+    backend = functools.partial(_run_nlopt, algorithm=algorithm)
+    functools.update_wrapper(backend, _run_nlopt)
+    return backend

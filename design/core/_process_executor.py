@@ -11,7 +11,8 @@ import os
 import pickle
 import signal
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
+from simulator._validate import integer
 
 from ._executor_base import (Executor, ExecutorError, _check_failures, _children_ignore_sigint,
                              _name)
@@ -69,6 +70,8 @@ class ProcessExecutor(Executor):
         Default ``forkserver`` where available, else ``spawn`` (never ``fork``: unsafe with
         threads). Workers start on the first ``map`` and are reused until ``close``.
 
+    Notes
+    -----
     Workers inherit the environment: on many cores, set ``OPENBLAS_NUM_THREADS=1`` (as Dask
     does in its workers) to avoid oversubscribing BLAS threads.
     """
@@ -78,9 +81,7 @@ class ProcessExecutor(Executor):
     def __init__(self, workers: int | None = None, start_method: str | None = None,
                  max_retries: int = MAX_RETRIES):
         workers = (os.cpu_count() or 1) if workers is None else workers
-        if not (isinstance(workers, int) and workers >= 1):
-            raise ParameterError(f"ProcessExecutor: workers = {workers!r} must be a positive "
-                                 "integer (or None for all cores).")
+        integer("ProcessExecutor: workers", workers, hint="or None for all cores")
         start_method = start_method or _default_start_method()
         if start_method not in ("forkserver", "spawn"):
             raise ParameterError(f"ProcessExecutor: start_method = {start_method!r}; use "

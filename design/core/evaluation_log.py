@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from .problem import Evaluation
 

@@ -52,9 +52,7 @@ about 2.4 times slower; before starting the workers, unset it in the Dask config
 
 Then, on the client::
 
-    from design.core.executors import DaskExecutor
-    from design.core.problem import GripperProblem
-    from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
+    from design import DaskExecutor, GripperProblem, residual_fold_grid, sweep_residual_fold
 
     with DaskExecutor("tcp://scheduler:8786") as ex:
         table = sweep_residual_fold(GripperProblem(), designs,
@@ -66,7 +64,7 @@ Closing the executor closes only its client; the cluster keeps running.
 
 from __future__ import annotations
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
 
 from ._dask_executor import DaskExecutor
 from ._executor_base import Executor, ExecutorError, SerialExecutor, TaskError, TaskFailure

@@ -1,7 +1,12 @@
-"""Optimisers behind one entry point: ``optimize(problem, method, ...)``.
+"""Optimisers behind one entry point: ``optimize(problem, method, ...)``, and their registry.
+
+Every method is one entry of a registry (:func:`register_optimizer`, listed by
+:func:`optimizers`): its back end, description, option defaults, default budget and aliases.
+:func:`optimize`, the ``etorigami optimize --method`` choices and the documentation read
+the registry, so a new optimiser is one :func:`register_optimizer` call. The built-in ones:
 
 * ``"cd"`` (``"coordinate_descent"``): the paper's fixed-step coordinate descent (method
-  digest 8.7, GripperOptimization.m) with correct bound checks. Coordinates in space order;
+  theory 10.6, GripperOptimization.m) with correct bound checks. Coordinates in space order;
   for each, the minus candidate (if inside the bounds), then the plus candidate; a candidate
   is accepted when it is feasible and its objective strictly lower than the current one, and
   the move applies at once. A cycle without a move ends the search (``"converged"``), else
@@ -32,39 +37,169 @@ import logging
 import math
 import os
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
+from simulator._result import ResultFiles
 
 from ._contract import check_outcome
 from ._coordinate_descent import _coordinate_descent
-from ._nlopt_methods import _NLOPT, _run_nlopt
-from .evaluation_log import (EvaluationLog, EvaluationRun, LoggedProblem, StopOptimization,
-                             settings_hash)
+from ._nlopt_methods import nlopt_backend
+from .evaluation_log import (BudgetExhausted, EvaluationLog, EvaluationRun, LoggedProblem,
+                             StopOptimization, settings_hash)
 from .problem import Evaluation
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["optimize", "OptimizationResult", "StopOptimization", "METHODS"]
+__all__ = ["optimize", "OptimizationResult", "StopOptimization", "Optimizer",
+           "register_optimizer", "unregister_optimizer", "optimizers", "get_optimizer"]
 
 logger = logging.getLogger(__name__)
 
-_ALIASES = {"coordinate_descent": "cd", "nelder-mead": "neldermead", "nelder_mead": "neldermead",
-            "subplex": "sbplx", "direct_l": "direct"}
-#: Accepted method names (aliases included).
-METHODS = ("cd",) + tuple(_NLOPT) + tuple(_ALIASES)
-_CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": False, "metric": "temperature [degC]"}
+
+@dataclass(frozen=True)
+class Optimizer:
+    """A registered optimisation method (see :func:`register_optimizer`).
+
+    Attributes
+    ----------
+    name : str
+        Canonical name (lower case), as given to :func:`optimize`.
+    run : callable
+        ``run(evaluation_run, x0, max_evaluations, **options) -> (status, message)`` or
+        ``(status, message, cycles)``: minimises from ``x0`` (SI vector inside the bounds) by
+        calling ``evaluation_run.evaluate(x)`` / ``evaluate_many(xs)`` (each returns an
+        :class:`~design.core.problem.Evaluation`; ``evaluation_run.space`` is the design
+        space). The run keeps the history, the budget and the best design;
+        ``BudgetExhausted`` and :class:`StopOptimization` raised by an evaluation may be left
+        to :func:`optimize`. ``cycles``: rows (dicts) written to ``cycles.csv``.
+    description : str
+        One line for the CLI help and the documentation.
+    options : mapping
+        Option names and defaults; any other option is an error.
+    max_evaluations : int or None
+        Default budget of distinct evaluations (None: unlimited).
+    needs_bounds : bool
+        The method works in the space's bounded (normalised) box. Every
+        :class:`~design.core.space.DesignSpace` has finite bounds, so today this is what the
+        documentation says of a method; a back end for unbounded spaces would set False.
+    aliases : tuple of str
+        Further accepted names.
+    """
+
+    name: str
+    run: Callable
+    description: str
+    options: Mapping = field(default_factory=dict)
+    max_evaluations: int | None = None
+    needs_bounds: bool = True
+    aliases: tuple = ()
+
+
+_REGISTRY: dict = {}      # canonical name -> Optimizer, in registration order
+_ALIASES: dict = {}       # alias -> canonical name
+
+
+def register_optimizer(name: str, run: Callable, *, description: str, options=None,
+                       max_evaluations: int | None = None, needs_bounds: bool = True,
+                       aliases=(), replace: bool = False) -> Optimizer:
+    """Make ``run`` available as ``optimize(problem, name)`` and ``--method name``.
+
+    Parameters
+    ----------
+    name : str
+        Method name (case-insensitive).
+    run : callable
+        The back end, see :attr:`Optimizer.run`.
+    description : str
+        One line for the CLI help and the documentation.
+    options : mapping, optional
+        Option names and their defaults (the method's ``**options`` of :func:`optimize`).
+    max_evaluations : int, optional
+        Default budget (None: unlimited).
+    needs_bounds : bool
+    aliases : sequence of str
+    replace : bool
+        Allow replacing a registered method of the same name.
+
+    Returns
+    -------
+    Optimizer
+    """
+    if not callable(run):
+        raise ParameterError(f"register_optimizer: run = {run!r} must be callable.")
+    names = [name, *aliases]
+    if not all(isinstance(n, str) and n.strip() for n in names):
+        raise ParameterError(f"register_optimizer: names {names!r} must be non-empty strings.")
+    key, aliases = name.lower(), tuple(a.lower() for a in aliases)
+    owner = {**{n: n for n in _REGISTRY}, **_ALIASES}           # every taken name -> method
+    others = [n for n in (key, *aliases) if owner.get(n, key) != key]
+    if others or (key in _REGISTRY and not replace):
+        raise ParameterError(f"register_optimizer: {others or [key]} already registered "
+                             f"(methods: {', '.join(_REGISTRY)}); pass replace=True to replace "
+                             "a method by its own name.")
+    if max_evaluations is not None and (isinstance(max_evaluations, bool) or not (
+            isinstance(max_evaluations, int) and max_evaluations >= 1)):
+        raise ParameterError(f"register_optimizer: max_evaluations = {max_evaluations!r} "
+                             "must be a positive integer or None.")
+    spec = Optimizer(key, run, description, MappingProxyType(dict(options or {})),
+                     max_evaluations, bool(needs_bounds), aliases)
+    unregister_optimizer(key, missing_ok=True)
+    _REGISTRY[key] = spec
+    _ALIASES.update(dict.fromkeys(spec.aliases, key))
+    return spec
+
+
+def unregister_optimizer(name: str, missing_ok: bool = False) -> None:
+    """Remove a registered method (and its aliases)."""
+    spec = _REGISTRY.pop(str(name).lower(), None)
+    if spec is None and not missing_ok:
+        raise ParameterError(f"unregister_optimizer: no method {name!r}; registered: "
+                             f"{', '.join(_REGISTRY)}.")
+    for alias in () if spec is None else spec.aliases:
+        _ALIASES.pop(alias, None)
+
+
+def optimizers() -> Mapping:
+    """The registered methods: a read-only mapping canonical name -> :class:`Optimizer`, in
+    registration order."""
+    return MappingProxyType(dict(_REGISTRY))
+
+
 _NLOPT_OPTIONS = {"xtol_rel": 1e-4, "ftol_rel": 1e-6, "xtol_abs": 1e-6, "ftol_abs": 0.0,
-                  "initial_step": None, "constraint_handling": None, "penalty": 100.0,
+                  "initial_step": None, "constraint_handling": "penalty", "penalty": 100.0,
                   "failure_value": None, "max_time": None}
+
+# The built-in methods: the one list of them (CLI choices, documentation and tests read it).
+register_optimizer(
+    "cd", _coordinate_descent, aliases=("coordinate_descent",),
+    options={"max_cycles": 15, "parallel_candidates": False, "metric": "temperature [degC]"},
+    description="the paper's fixed-step coordinate descent on the lattice x0 + k step "
+                "(deterministic, feasible moves only)")
+for _name, _algorithm, _aliases, _what in (
+        ("cobyla", "LN_COBYLA", (), "local, linear approximations; constraints passed to NLopt"),
+        ("bobyqa", "LN_BOBYQA", (), "local, quadratic models; constraints by penalty or AUGLAG"),
+        ("neldermead", "LN_NELDERMEAD", ("nelder-mead", "nelder_mead"),
+         "local simplex; constraints by penalty or AUGLAG"),
+        ("sbplx", "LN_SBPLX", ("subplex",),
+         "local, Nelder-Mead on subspaces; constraints by penalty or AUGLAG"),
+        ("direct", "GN_DIRECT_L", ("direct_l",), "global, dividing rectangles; penalty")):
+    register_optimizer(
+        _name, nlopt_backend(_algorithm), aliases=_aliases, max_evaluations=60,
+        options={**_NLOPT_OPTIONS,
+                 "constraint_handling": "native" if _name == "cobyla" else "penalty"},
+        description=f"NLopt {_algorithm}: {_what}")
+del _name, _algorithm, _aliases, _what
 
 
 @dataclass(frozen=True, eq=False)
-class OptimizationResult:
+class OptimizationResult(ResultFiles):
     """Outcome of :func:`optimize`.
 
     Attributes
@@ -133,27 +268,39 @@ class OptimizationResult:
             d.update(metrics=self.best.metrics, best_message=self.best.message)
         return clean(d)
 
+    def to_frame(self) -> pd.DataFrame:
+        """The evaluation history, one row per evaluation (:attr:`history`)."""
+        return self.history
 
-def _resolve_method(method) -> str:
-    """Canonical name of an optimisation ``method`` (aliases resolved)."""
-    if not isinstance(method, str) or method.lower() not in METHODS:
+    def _tables(self) -> dict:
+        return {"history.csv": self.history, "cycles.csv": self.cycles}
+
+    def _meta(self) -> dict:
+        return self.to_dict()
+
+
+def get_optimizer(method) -> Optimizer:
+    """The registered optimiser called ``method`` (case-insensitive, or one of its aliases);
+    an unknown name is a :class:`~simulator.errors.ParameterError` listing the registered
+    ones."""
+    key = method.lower() if isinstance(method, str) else None
+    spec = _REGISTRY.get(_ALIASES.get(key, key))
+    if spec is None:
+        aliases = f" (aliases: {', '.join(_ALIASES)})" if _ALIASES else ""
         raise ParameterError(f"Unknown optimisation method {method!r}; use one of "
-                             f"{', '.join(METHODS)}.")
-    return _ALIASES.get(method.lower(), method.lower())
+                             f"{', '.join(_REGISTRY)}{aliases}.")
+    return spec
 
 
-def _resolve_options(method, options, max_evaluations):
-    """Check ``options`` and the budget of ``method``; return them with defaults filled in."""
-    defaults = _CD_OPTIONS if method == "cd" else _NLOPT_OPTIONS
-    unknown = sorted(set(options) - set(defaults))
+def _resolve_options(spec: Optimizer, options, max_evaluations):
+    """Check ``options`` and the budget of ``spec``; return them with defaults filled in."""
+    unknown = sorted(set(options) - set(spec.options))
     if unknown:
-        raise ParameterError(f"Unknown option(s) {unknown} for method {method!r}; options: "
-                             f"{', '.join(defaults)}.")
-    opts = {**defaults, **options}
-    if method != "cd" and opts["constraint_handling"] is None:
-        opts["constraint_handling"] = "native" if method == "cobyla" else "penalty"
-    if max_evaluations is None and method != "cd":
-        max_evaluations = 60
+        raise ParameterError(f"Unknown option(s) {unknown} for method {spec.name!r}; options: "
+                             f"{', '.join(spec.options) or 'none'}.")
+    opts = {**spec.options, **options}
+    if max_evaluations is None:
+        max_evaluations = spec.max_evaluations
     if max_evaluations is not None and not (isinstance(max_evaluations, (int, np.integer))
                                             and max_evaluations >= 1):
         raise ParameterError(f"max_evaluations = {max_evaluations!r} must be a positive integer.")
@@ -178,14 +325,15 @@ def _logged_problem(problem, out) -> LoggedProblem:
     return LoggedProblem(problem, EvaluationLog(path, problem))
 
 
-def _dispatch(run: EvaluationRun, x0, method, max_evaluations, opts):
-    """Run ``method``; return ``(cycles, status, message)``."""
+def _dispatch(run: EvaluationRun, x0, spec: Optimizer, max_evaluations, opts):
+    """Run the back end of ``spec``; return ``(cycles, status, message)``."""
     try:
-        if method == "cd":
-            return _coordinate_descent(run, x0, **opts)
-        return _run_nlopt(run, x0, method, max_evaluations, **opts)
+        status, message, *cycles = spec.run(run, x0, max_evaluations, **opts)
     except StopOptimization as exc:
         return None, "stopped", f"stopped by the callback: {exc}"
+    except BudgetExhausted:
+        return None, "max_evaluations", f"evaluation budget ({max_evaluations}) exhausted"
+    return (cycles[0] if cycles else None), status, message
 
 
 def _result(run: EvaluationRun, method, outcome, counts, t0, options) -> OptimizationResult:
@@ -216,8 +364,9 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     problem : DesignProblem or LoggedProblem
         Has ``space``, ``evaluate(x) -> Evaluation`` and ``settings()``.
     method : str
-        ``"cd"``/``"coordinate_descent"``, ``"cobyla"``, ``"bobyqa"``, ``"neldermead"``,
-        ``"sbplx"`` or ``"direct"``.
+        A registered method (:func:`optimizers`) or alias: built in ``"cd"``
+        (``"coordinate_descent"``), ``"cobyla"``, ``"bobyqa"``, ``"neldermead"``, ``"sbplx"``,
+        ``"direct"``; more by :func:`register_optimizer`.
     x0 : mapping or sequence, optional
         Start design (SI); the space's start values by default. Must lie inside the bounds.
     out : path, optional
@@ -226,14 +375,14 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     executor : object, optional
         ``executor.map(fn, items) -> list`` (ordered); used by cd's ``parallel_candidates``.
     max_evaluations : int, optional
-        Budget of distinct evaluations of the run (reused ones included): cd unlimited,
-        NLopt 60 by default.
+        Budget of distinct evaluations of the run (reused ones included); default the
+        method's (:attr:`Optimizer.max_evaluations`): cd unlimited, NLopt 60.
     callback : callable, optional
         ``callback(evaluation)`` after each new evaluation of the run; raise
         :class:`StopOptimization` to stop and get the result so far (other exceptions propagate
         after the evaluation has been logged).
     **options
-        cd: ``max_cycles`` (15), ``parallel_candidates`` (False: compute the minus and plus
+        The method's options (:attr:`Optimizer.options`; others are an error). cd: ``max_cycles`` (15), ``parallel_candidates`` (False: compute the minus and plus
         candidates side by side on ``executor``, same run as without), ``metric``
         ("temperature [degC]", reported per cycle). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
         (1e-6), ``xtol_abs`` (1e-6, normalised), ``ftol_abs`` (0), ``initial_step``
@@ -248,13 +397,14 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     OptimizationResult
     """
     t0 = time.perf_counter()
-    method = _resolve_method(method)
-    opts, max_evaluations = _resolve_options(method, options, max_evaluations)
+    spec = get_optimizer(method)
+    opts, max_evaluations = _resolve_options(spec, options, max_evaluations)
     x0 = _start_design(problem, x0)
     logged = _logged_problem(problem, out)
     counts = (logged.n_computed, logged.n_reused)
     run = EvaluationRun(logged, max_evaluations, callback, executor)
-    outcome = _dispatch(run, x0, method, max_evaluations, opts)
+    outcome = _dispatch(run, x0, spec, max_evaluations, opts)
+    method = spec.name
     result = _result(run, method, outcome, counts, t0,
                      options={"max_evaluations": max_evaluations, **opts})
     logger.info("%s: %s (%s) after %d evaluations (%d computed, %d reused): objective %.6g",

@@ -1,5 +1,8 @@
 """Design problems: ``evaluate(x) -> Evaluation`` with objective, constraints g <= 0, metrics.
 
+Generic: the devices' problems (:class:`~design.devices.gripper_problem.GripperProblem`,
+:class:`~design.devices.miura.MiuraProblem`) subclass :class:`DesignProblem`.
+
 A simulator failure or any exception inside a problem's evaluation becomes an unsuccessful
 :class:`Evaluation` (``success=False``, status ``"failed"``) with a message; it never
 propagates into an optimiser. Problems are plain picklable objects so that process pools and Dask workers can evaluate them.
@@ -13,30 +16,15 @@ import time
 import traceback
 from dataclasses import dataclass, field
 
-from simulator.errors import ParameterError
-from simulator.geometry.materials import SU8
+from simulator import ParameterError
+from simulator._result import ResultFiles
 
 from ._contract import check_outcome
-from ..devices.gripper import GripperDesign, check_fold, evaluate_gripper
-from .space import DesignSpace, Variable
+from .space import DesignSpace
 
-__all__ = ["Evaluation", "DesignProblem", "GripperProblem", "GRIPPER_SPACE", "SU8_TG",
-           "EVALUATION_STATUSES"]
+__all__ = ["Evaluation", "DesignProblem", "EVALUATION_STATUSES"]
 
 logger = logging.getLogger(__name__)
-
-#: Glass transition temperature [deg C] of SU-8, the crease polymer of the paper's devices, read
-#: from the material (:data:`simulator.geometry.materials.SU8`, 210 deg C); problems take it as default.
-SU8_TG = SU8.glass_transition
-
-#: The paper's gripper design space (section 6.3 and digest 8.7): bounds, steps, start.
-GRIPPER_SPACE = DesignSpace([
-    Variable("W", 100e-6, 300e-6, 10e-6, 200e-6),
-    Variable("La", 500e-6, 1500e-6, 50e-6, 700e-6),
-    Variable("L1", 500e-6, 1500e-6, 50e-6, 1000e-6),
-    Variable("L2", 500e-6, 1500e-6, 50e-6, 1000e-6),
-])
-
 
 #: Status words of an evaluation: success (objective and constraints computed) is
 #: "feasible" or "infeasible"; a failure is "not_met" (the problem's criterion was never met,
@@ -45,7 +33,7 @@ EVALUATION_STATUSES = ("feasible", "infeasible", "not_met", "failed")
 
 
 @dataclass(frozen=True)
-class Evaluation:
+class Evaluation(ResultFiles):
     """One evaluated design.
 
     ``success`` means the thing asked of an evaluation was done: the objective and the
@@ -111,6 +99,11 @@ class Evaluation:
                     "message": self.message, "wall_time [s]": self.wall_time})
         return row
 
+    _csv_name = "evaluation.csv"
+
+    def _row(self) -> dict:
+        return self.to_row()
+
 
 class DesignProblem:
     """Base class: subclasses set ``space`` and implement :meth:`_evaluate`.
@@ -149,93 +142,3 @@ class DesignProblem:
     def settings(self) -> dict:
         """Everything that defines the problem besides x (for logs and cache keys)."""
         return {"problem": self.name}
-
-
-@dataclass(frozen=True)
-class GripperProblem(DesignProblem):
-    """Minimise the gripper's assembly + grip power per crease (paper section 6.3).
-
-    Objective: ``total_power`` [W]. Constraints (g <= 0): the normalised size bounds and the
-    crease temperature limit ``(T - T_limit) / T_limit`` with ``T_limit = 1.2 T_g``; ``T`` is
-    the reference's measure (centre-line mean of the heated creases at the stopping power,
-    larger of the two stages) or, with ``temperature_measure="crease_max"``, the hottest crease
-    node. A design whose criterion is never met below the power cap is a failed evaluation.
-
-    Parameters
-    ----------
-    mode : {"bisect", "staircase"}
-    residual_fold : float
-        Residual fold of the actuated creases [rad].
-    residual_fold_groups : tuple of (group, rad) pairs
-        Residual folds of crease groups ``"base"`` / ``"arm"`` overriding ``residual_fold``.
-    glass_transition : float
-        T_g of the crease polymer [deg C]; default ``SU8.glass_transition`` (210).
-    temperature_factor : float
-        Allowed multiple of T_g (1.2).
-    base : GripperDesign
-        Values of everything that is not a design variable.
-    """
-
-    mode: str = "bisect"
-    residual_fold: float = 0.0
-    residual_fold_groups: tuple = ()
-    glass_transition: float = SU8_TG
-    temperature_factor: float = 1.2
-    temperature_measure: str = "centre_line"
-    power_cap: float = 40e-3
-    base: GripperDesign = GripperDesign()
-    space: DesignSpace = field(default=GRIPPER_SPACE, compare=False)
-    name: str = "gripper"
-
-    def __post_init__(self):
-        if self.temperature_measure not in ("centre_line", "crease_max"):
-            raise ParameterError(f"temperature_measure = {self.temperature_measure!r}; use "
-                                 "'centre_line' or 'crease_max'.")
-        if self.mode not in ("bisect", "staircase"):
-            raise ParameterError(f"mode = {self.mode!r}; use 'bisect' or 'staircase'.")
-        groups = dict(self.residual_fold_groups)
-        if set(groups) - {"base", "arm"}:
-            raise ParameterError(f"residual_fold_groups {groups!r}: groups are 'base' and 'arm'.")
-        check_fold("GripperProblem.residual_fold", self.residual_fold)
-        for group, value in groups.items():
-            check_fold(f"GripperProblem.residual_fold_groups[{group!r}]", value)
-        object.__setattr__(self, "residual_fold_groups", tuple(sorted(groups.items())))
-
-    def group_folds(self) -> dict:
-        """Residual fold [rad] of each crease group."""
-        given = dict(self.residual_fold_groups)
-        return {g: float(given.get(g, self.residual_fold)) for g in ("base", "arm")}
-
-    @property
-    def temperature_limit(self) -> float:
-        return self.temperature_factor * self.glass_transition
-
-    def design(self, values: dict) -> GripperDesign:
-        from dataclasses import replace
-        folds = self.group_folds()
-        return replace(self.base, residual_fold=self.residual_fold,
-                       residual_fold_base=folds["base"], residual_fold_arm=folds["arm"], **values)
-
-    def _evaluate(self, values):
-        res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap)
-        d = res.to_dict()
-        temp = res.max_temperature if self.temperature_measure == "centre_line" \
-            else d["max_crease_temperature [degC]"]
-        constraints = dict(self.space.bound_margins(values))
-        constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
-        metrics = {k: v for k, v in d.items()
-                   if not k.endswith("[m]") and not k.startswith("residual_fold")
-                   and k not in ("success", "status", "message", "mode")}
-        metrics["temperature [degC]"] = temp
-        return (res.total_power, constraints, metrics, None if res.success else res.status,
-                res.message)
-
-    def settings(self) -> dict:
-        folds = self.group_folds()
-        return {"problem": self.name, "mode": self.mode,
-                "residual_fold [rad]": (folds["base"] if folds["base"] == folds["arm"]
-                                        else folds),
-                "T_limit [degC]": self.temperature_limit,
-                "temperature_measure": self.temperature_measure,
-                "power_cap [W]": self.power_cap, "base": self.base.to_dict(),
-                "space": self.space.to_dicts()}

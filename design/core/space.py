@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator.errors import ParameterError
+from simulator import ParameterError
+from simulator._validate import finite, positive
 
 __all__ = ["Variable", "DesignSpace"]
 
@@ -43,15 +43,12 @@ class Variable:
     display_unit: str = "um"
 
     def __post_init__(self):
-        for f in ("lower", "upper", "step", "start"):
-            v = getattr(self, f)
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ParameterError(f"Variable {self.name!r}: {f} = {v!r} must be a finite number.")
+        for f in ("lower", "upper", "start"):
+            finite(f"Variable {self.name!r}: {f}", getattr(self, f))
+        positive(f"Variable {self.name!r}: step", self.step)
         if not self.lower < self.upper:
             raise ParameterError(f"Variable {self.name!r}: lower = {self.lower!r} must be below "
                                  f"upper = {self.upper!r}.")
-        if not self.step > 0:
-            raise ParameterError(f"Variable {self.name!r}: step = {self.step!r} must be positive.")
         if not self.lower <= self.start <= self.upper:
             raise ParameterError(f"Variable {self.name!r}: start = {self.start!r} is outside "
                                  f"[{self.lower!r}, {self.upper!r}].")

@@ -1,4 +1,4 @@
-"""Origami micro-gripper of the paper's section 6.3 (method digest 8.7).
+"""Origami micro-gripper of the paper's section 6.3 (theory 10.6).
 
 Four foldable panels on two heater circuits: the base creases fold the base panels up to
 assemble the gripper (stage 1, "assembly": base fold past 90 deg), then, with the base heat
@@ -32,17 +32,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator.model.bimorph import Actuators, Bimorph
-from simulator.simulation import simulate
-from simulator.steps import Load, SelfFold
-from simulator.geometry.materials import SPR
-from simulator.model.mesh import build_mesh
-from simulator.model.model import REFERENCE_GRAVITY, ContactParameters, Supports, make_model
-from simulator.errors import ParameterError
-from simulator.geometry.example_patterns import gripper_pattern
-from simulator.model.properties import BarHingeParameters
-from simulator.solvers.newton import NewtonOptions
-from simulator.thermal.steady import REFERENCE_BETA, ThermalParameters
+from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHingeParameters,
+                       Bimorph, ContactParameters, Load, NewtonOptions, ParameterError, SelfFold,
+                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
+                       simulate)
+from simulator._result import ResultFiles
+from simulator._validate import one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
@@ -60,7 +55,7 @@ ARM_CREASES = (3, 9)
 #: designs) and 4 cost a fifth of the time.
 _GRAVITY_INCREMENTS = 4
 _REFERENCE_GRAVITY_INCREMENTS = 80
-#: The reference script's solver settings (digest 7.3, 8.7: tol 5e-7 N, iterMax 30, its loop),
+#: The reference script's solver settings (theory 6.4, 10.6: tol 5e-7 N, iterMax 30, its loop),
 #: for comparisons with its outputs; its equilibria are under-converged.
 REFERENCE_NEWTON = NewtonOptions(atol=5e-7, max_iter=30, reference_loop=True)
 
@@ -128,9 +123,8 @@ class GripperDesign:
             if name.startswith("residual_fold"):
                 if value is not None:
                     check_fold(f"GripperDesign.{name}", value)
-            elif not (math.isfinite(value) and value > 0):
-                raise ParameterError(f"GripperDesign.{name} = {value!r} must be a positive, "
-                                     "finite length in metres.")
+            else:
+                positive(f"GripperDesign.{name}", value, "m")
         if self.W >= min(self.L1, self.L2, self.La):
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
@@ -159,7 +153,7 @@ STAGE_STATUSES = ("met", "not_met", "failed", "not_attempted")
 
 
 @dataclass(frozen=True)
-class StageResult:
+class StageResult(ResultFiles):
     """Outcome of one stage's power search.
 
     Attributes
@@ -186,6 +180,9 @@ class StageResult:
         Heating solves (calls) used by the search.
     increments : int
         Thermal increments solved in total.
+    snaps : tuple of Event
+        The ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the stopping
+        power of a met stage (the ``" after a snap (...)"`` of the message); empty if none.
     """
 
     success: bool
@@ -197,6 +194,7 @@ class StageResult:
     max_crease_temperature: float
     simulations: int
     increments: int
+    snaps: tuple = ()
 
     def __post_init__(self):
         check_outcome(self, ("met",), STAGE_STATUSES[1:])
@@ -205,15 +203,25 @@ class StageResult:
                                  f"with success = {self.success}: a met stage has a power, "
                                  "an unmet one None.")
 
+    _csv_name = "stage.csv"
+
+    def _row(self) -> dict:
+        return {"success": self.success, "status": self.status, "message": self.message,
+                "power_per_crease [mW]": power_if(self.success, self.power_per_crease, 1e3),
+                "measure": self.measure, "temperature [degC]": self.temperature,
+                "max_crease_temperature [degC]": self.max_crease_temperature,
+                "simulations": self.simulations, "increments": self.increments}
+
 
 @dataclass(frozen=True)
-class GripperResult:
+class GripperResult(ResultFiles):
     """Both stages; powers per heated crease as in the paper.
 
     ``success``: both stages met; ``status``: ``"met"``, or the status of the first stage
     that was not met; ``total_power``: assembly + grip power per crease [W], None unless
     both were met; ``message``: ``"both stages met"`` (followed by the stage messages of a
-    stage met after a snap), or why the first unmet stage was not met.
+    stage met after a snap, i.e. with :attr:`StageResult.snaps`), or why the first unmet stage
+    was not met.
     """
 
     design: GripperDesign
@@ -245,11 +253,12 @@ class GripperResult:
     def message(self) -> str:
         if self.success:
             snapped = [f"{name}: {stage.message}" for name, stage in
-                       (("assembly", self.assembly), ("grip", self.grip))
-                       if "after a snap" in stage.message]
+                       (("assembly", self.assembly), ("grip", self.grip)) if stage.snaps]
             return "; ".join(["both stages met"] + snapped)
         bad = self.assembly if not self.assembly.success else self.grip
         return ("assembly: " if bad is self.assembly else "grip: ") + bad.message
+
+    _csv_name = "gripper.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (the CLI's JSON); powers of stages whose
@@ -277,7 +286,7 @@ _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivit
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
-    """The reference's post-meshing node moves (digest 8.7), 1-based ids in the comments."""
+    """The reference's post-meshing node moves (theory 10.6), 1-based ids in the comments."""
     w = design.W
     x = nodes.copy()
     moves = {(13, 14): (-w / 2, 0), (19, 16): (w / 2, 0), (6, 7): (0, -w / 2),
@@ -290,7 +299,7 @@ def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
 
 
 def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
-    """The reference's hand-lumped self-weight [N] (digest 8.7): 1/6 per corner, 2/6 per centre."""
+    """The reference's hand-lumped self-weight [N] (theory 10.6): 1/6 per corner, 2/6 per centre."""
     rho, t = SPR.density, design.panel_thickness
     base = design.L1 * design.L2 * t * rho * REFERENCE_GRAVITY / 6
     arm = 0.75 * design.L1 * design.La * t * rho * REFERENCE_GRAVITY / 6
@@ -304,7 +313,7 @@ def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
 
 def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
     """The gripper model and the loading steps before heating (residual fold, gravity)."""
-    pattern = gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
+    pattern = example_patterns.gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
                               crease_thickness=design.t_gold + design.t_su8,
                               grip_range=design.grip_range, undercut=design.undercut,
                               panel_thickness=design.panel_thickness, panel_material=SPR)
@@ -378,14 +387,15 @@ class _Stage(HeatingStage):
         if met:
             message = self.after_snaps(message, state)
         return StageResult(met, status, message, power if met else None, value, temp, tmax,
-                           self.simulations, self.increments)
+                           self.simulations, self.increments,
+                           self.snap_events(state) if met else ())
 
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",
                      step: float = 0.1e-3, tol: float = 0.01e-3, power_cap: float = 40e-3,
                      max_step: float = 0.4e-3, callback=None,
                      options: NewtonOptions = NewtonOptions()) -> GripperResult:
-    """Power per heated crease needed to assemble, then grip (digest 8.7).
+    """Power per heated crease needed to assemble, then grip (theory 10.6).
 
     Parameters
     ----------
@@ -408,11 +418,9 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
         Equilibrium solver settings; :data:`REFERENCE_NEWTON` emulates the reference's loose
         loop (for comparisons with its outputs only).
     """
-    if mode not in ("bisect", "staircase"):
-        raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
+    one_of("mode", mode, ("bisect", "staircase"))
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
-        if not (math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} = {v!r} must be a positive power in W.")
+        positive(name, v, "W")
     model, pre = gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
                                else _GRAVITY_INCREMENTS)
     start = simulate(model, pre, options=options)

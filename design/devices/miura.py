@@ -14,16 +14,15 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator.cases import miura_fold_signs, miura_sheet_model
-from simulator.errors import ParameterError, PatternError
-from simulator.simulation import simulate
-from simulator.model.mesh import build_mesh
-from simulator.model.model import Model
-from simulator.geometry.example_patterns import miura_sheet_pattern
+from simulator import (Model, ParameterError, PatternError, build_mesh, example_patterns,
+                       miura_fold_signs, miura_sheet_model, simulate)
+from simulator._result import ResultFiles
+from simulator._validate import in_range, integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
-from ..core.problem import SU8_TG, DesignProblem
+from ..core.problem import DesignProblem
+from .limits import SU8_TG
 from ..core.space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
@@ -64,16 +63,12 @@ class MiuraDesign:
     undercut: float = 100e-6
 
     def __post_init__(self):
-        for name in ("a", "b", "W", "t_gold", "t_su8", "panel_thickness", "undercut", "gamma"):
-            v, top = getattr(self, name), math.pi / 2 if name == "gamma" else math.inf
-            if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < top):
-                raise ParameterError(f"MiuraDesign.{name} = {v!r} must be " + (
-                    "in (0, pi/2) rad (0 to 90 deg)." if name == "gamma" else
-                    "a positive, finite length in metres."))
-        for name, low in (("cells_x", 2), ("cells_y", 1)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
-                raise ParameterError(f"MiuraDesign.{name} = {v!r} must be an integer >= {low}.")
+        for name in ("a", "b", "W", "t_gold", "t_su8", "panel_thickness", "undercut"):
+            positive(f"MiuraDesign.{name}", getattr(self, name), "m")
+        in_range("MiuraDesign.gamma", self.gamma, 0, math.pi / 2, "rad", hint="(0, pi/2), i.e. "
+                 "0 to 90 deg; convert degrees with math.radians", open_low=True, open_high=True)
+        integer("MiuraDesign.cells_x", self.cells_x, 2)
+        integer("MiuraDesign.cells_y", self.cells_y, 1)
         if not isinstance(self.substrate, (bool, np.bool_)):
             raise ParameterError(f"MiuraDesign.substrate = {self.substrate!r} must be a bool.")
         if not _meshable(self, self.W):
@@ -93,7 +88,7 @@ class MiuraDesign:
 def _meshable(d: MiuraDesign, W: float) -> bool:
     """The flat sheet meshes with crease width ``W`` without collapsed creases or panels."""
     try:
-        mesh = build_mesh(miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
+        mesh = build_mesh(example_patterns.miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
     except PatternError:
         return False
     cn, x = mesh.crease_nodes, mesh.nodes
@@ -131,7 +126,7 @@ def _lift_nodes(model: Model, design: MiuraDesign) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class LiftPowerResult:
+class LiftPowerResult(ResultFiles):
     """Outcome of :func:`lift_power`.
 
     Attributes
@@ -146,6 +141,8 @@ class LiftPowerResult:
     max_crease_temperature : hottest crease node there [deg C]
     simulations : heating solves used by the search
     n_creases : heated creases
+    snaps : ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the power found
+        (the ``" after a snap (...)"`` of the message); empty if none or not met
     """
 
     success: bool
@@ -157,6 +154,7 @@ class LiftPowerResult:
     max_crease_temperature: float
     simulations: int
     n_creases: int
+    snaps: tuple = ()
 
     def __post_init__(self):
         check_outcome(self, ("met",), ("not_met", "failed"))
@@ -164,6 +162,8 @@ class LiftPowerResult:
             raise ParameterError(f"LiftPowerResult.power_per_crease = {self.power_per_crease!r}"
                                  f" with success = {self.success}: a reached target has a "
                                  "power, an unreached one None.")
+
+    _csv_name = "lift_power.csv"
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (powers None when not met)."""
@@ -198,7 +198,8 @@ class _LiftStage(HeatingStage):
         if met:
             message = self.after_snaps(message, state)
         return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
-                               lift, tmax, self.simulations, len(self.creases))
+                               lift, tmax, self.simulations, len(self.creases),
+                               self.snap_events(state) if met else ())
 
 
 def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
@@ -222,13 +223,10 @@ def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
     LiftPowerResult
         ``success=False`` with the reason (power cap, simulation failure) if not reached.
     """
-    if mode not in ("bisect", "staircase"):
-        raise ParameterError(f"mode = {mode!r}; use 'bisect' or 'staircase'.")
-    for name, v in (("target_lift", target_lift), ("step", step), ("tol", tol),
-                    ("power_cap", power_cap), ("max_step", max_step)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ParameterError(f"{name} = {v!r} must be a positive, finite number "
-                                 f"({'m' if name == 'target_lift' else 'W per crease'}).")
+    one_of("mode", mode, ("bisect", "staircase"))
+    positive("target_lift", target_lift, "m")
+    for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
+        positive(name, v, "W per crease")
     model = miura_model(design)
     stage = _LiftStage(model, tuple(heated_creases(design)), _lift_nodes(model, design),
                        target_lift)

@@ -17,8 +17,10 @@ recomputed from zero. Used by the gripper (:mod:`design.devices.gripper`) and th
 Both stages heat through :class:`HeatingStage`: every trial is a :class:`~simulator.steps.Heat`
 step with ``on_limit_point="continue"``, so where load control stalls at a limit point (the
 structure snaps) arc length in the power carries the trial on to its final power, and the snap
-(power per crease, jump of the most-moving node) is kept with the trial's state. A criterion
-met only after a snap is reported as met, with ``after a snap (...)`` in the message. Load
+(power per crease, jump of the most-moving node) is kept with the trial's state: the step's
+``"snap"`` :class:`~simulator.events.Event` records, read as data (never parsed from a
+message). A criterion met only after a snap is reported as met, with ``after a snap (...)``
+in the message and the snap events on the stage's result. Load
 control is unchanged where it converges, so trials without a failure give the same numbers as
 plain load control. The bisect search's growth trials larger than its first step are the
 exception: they run plain load control, since a failure there is retried with a smaller step
@@ -29,16 +31,11 @@ for it with a fifth of the whole descent's Newton iterations).
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
-from simulator.simulation import simulate
-from simulator.steps import Heat
+from simulator import Heat, simulate
 
 __all__ = ["staircase_search", "bisect_search", "HeatingTrial", "HeatingStage", "heating_trial"]
-
-#: A snap in a Heat step's message (simulator.steps.limit): load factor of the step, jump [um].
-_SNAP = re.compile(r"snap at load factor ([-+0-9.eE]+)[^:;]*: displacement jumps ([-+0-9.eE]+) um")
 
 
 @dataclass(frozen=True)
@@ -55,6 +52,8 @@ class HeatingTrial:
         jumps 302.8 um"`` (several joined by ``"; "``); None if load control never stalled at
         a limit point.
     increments : int (load-controlled and arc-length increments solved)
+    snaps : tuple of Event
+        The ``"snap"`` events of the trial's Heat step (``snap`` in words); empty if none.
     """
 
     state: object
@@ -62,6 +61,7 @@ class HeatingTrial:
     message: str
     snap: str | None
     increments: int
+    snaps: tuple = ()
 
 
 def heating_trial(model, creases, state, dp, increments=1, coupling="staggered",
@@ -77,12 +77,13 @@ def heating_trial(model, creases, state, dp, increments=1, coupling="staggered",
                                 on_limit_point="continue" if follow_snaps else "stop")],
                    state=state, options=options)
     step = res.steps[-1] if res.steps else None
-    msg = step.message if step is not None else res.message
-    p0 = float(state.crease_power[model.mesh.crease_row[creases[0]]])
-    snaps = [f"snap at {1e3 * (p0 + float(lam) * dp):.4g} mW per crease: displacement jumps "
-             f"{float(jump):.4g} um" for lam, jump in _SNAP.findall(msg)] if res.success else []
-    return HeatingTrial(res.state, res.success, res.message, "; ".join(snaps) or None,
-                        step.increments if step is not None else 0)
+    snaps = tuple(e for e in step.events if e.kind == "snap") \
+        if res.success and step is not None else ()
+    row = model.mesh.crease_row[creases[0]]
+    text = "; ".join(f"snap at {1e3 * e.power_per_crease[row]:.4g} mW per crease: displacement "
+                     f"jumps {1e6 * e.jump:.4g} um" for e in snaps)
+    return HeatingTrial(res.state, res.success, res.message, text or None,
+                        step.increments if step is not None else 0, snaps)
 
 
 class HeatingStage:
@@ -101,7 +102,7 @@ class HeatingStage:
     def __init__(self, model, creases, options=None):
         self.model, self.creases, self.options = model, tuple(creases), options
         self.simulations = self.increments = 0
-        self._snaps = {}                       # id(state) -> (state, snaps on the way to it)
+        self._snaps = {}       # id(state) -> (state, snap notes, snap events on the way to it)
 
     def heat(self, state, dp, increments=1, coupling="staggered", follow_snaps=True):
         """Add ``dp`` [W] per heated crease in ``increments`` increments (snaps followed by
@@ -112,13 +113,22 @@ class HeatingStage:
         self.increments += trial.increments
         snaps = self.snaps(state) + ((trial.snap,) if trial.snap else ())
         if snaps:
-            self._snaps[id(trial.state)] = (trial.state, snaps)
+            self._snaps[id(trial.state)] = (trial.state, snaps,
+                                            self.snap_events(state) + trial.snaps)
         return trial.state, trial.success, trial.message
+
+    def _kept(self, state) -> tuple:
+        kept = self._snaps.get(id(state))
+        return kept if kept is not None and kept[0] is state else (state, (), ())
 
     def snaps(self, state) -> tuple:
         """Snap notes of the trials that led from the search's start to ``state``."""
-        kept = self._snaps.get(id(state))
-        return kept[1] if kept is not None and kept[0] is state else ()
+        return self._kept(state)[1]
+
+    def snap_events(self, state) -> tuple:
+        """``"snap"`` :class:`~simulator.events.Event` records of the trials that led from the
+        search's start to ``state`` (their ``load_factor`` is that of their own trial)."""
+        return self._kept(state)[2]
 
     def after_snaps(self, message, state) -> str:
         """``message`` with ``" after a snap (...)"`` if a snap led to ``state``."""

@@ -6,12 +6,15 @@ stated otherwise; each constant documents its source.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
-from ..errors import ParameterError
+from .._validate import finite, in_range, non_negative, positive
 
 __all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "SILICON", "AIR", "WATER"]
+
+
+#: Units of the non-negative material and fluid properties.
+_UNITS = {"density": "kg/m^3", "thermal_conductivity": "W/(m K)", "specific_heat": "J/(kg K)"}
 
 
 @dataclass(frozen=True)
@@ -47,21 +50,14 @@ class Material:
     glass_transition: float | None = None
 
     def __post_init__(self):
-        checks = {
-            "youngs_modulus": (self.youngs_modulus, lambda v: v > 0, "> 0 Pa"),
-            "poisson_ratio": (self.poisson_ratio, lambda v: -1 < v < 0.5, "in (-1, 0.5)"),
-            "density": (self.density, lambda v: v >= 0, ">= 0 kg/m^3"),
-            "thermal_conductivity": (self.thermal_conductivity, lambda v: v >= 0, ">= 0 W/(m K)"),
-            "specific_heat": (self.specific_heat, lambda v: v >= 0, ">= 0 J/(kg K)"),
-        }
-        for field, (value, ok, allowed) in checks.items():
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and ok(value)):
-                raise ParameterError(
-                    f"Material {self.name!r}: {field} = {value!r} is invalid; it must be {allowed}.")
-        tg = self.glass_transition
-        if tg is not None and not (isinstance(tg, (int, float)) and math.isfinite(tg)):
-            raise ParameterError(f"Material {self.name!r}: glass_transition = {tg!r} is invalid; "
-                                 "give T_g in deg C as a finite number, or None if unknown.")
+        owner = f"Material {self.name!r}"
+        positive(f"{owner}: youngs_modulus", self.youngs_modulus, "Pa")
+        in_range(f"{owner}: poisson_ratio", self.poisson_ratio, -1, 0.5, open_low=True,
+                 open_high=True)
+        for field, unit in _UNITS.items():
+            non_negative(f"{owner}: {field}", getattr(self, field), unit)
+        finite(f"{owner}: glass_transition", self.glass_transition, "deg C",
+               hint="give T_g, or None if unknown", allow_none=True)
 
     def to_dict(self) -> dict:
         """Plain-dict view for result metadata."""
@@ -69,12 +65,12 @@ class Material:
 
 
 #: Volumetric heat capacity rho c of SU-8 in the reference transient example [J/(m^3 K)]
-#: (04/Example01: ``creaseThermalCapacity = panelThermalCapacity = 2e6 / 1200``; digest D8).
+#: (04/Example01: ``creaseThermalCapacity = panelThermalCapacity = 2e6 / 1200``; theory 10.8).
 _SU8_RHO_C = 2e6
 
 #: SU-8 epoxy photoresist. E = 2 GPa, nu = 0.3, rho = 1200 kg/m^3 and k = 0.3 W/(m K) as in the
 #: reference examples (Zhu & Filipov 2021, Example01-04 and the gripper); c = 2e6/1200 =
-#: 1666.7 J/(kg K) from the reference transient example (dynamics digest D8). T_g = 210 deg C: the
+#: 1666.7 J/(kg K) from the reference transient example (theory 10.8). T_g = 210 deg C: the
 #: paper bounds the gripper's crease temperature by 1.2 T_g of SU-8 (section 6.3) without printing
 #: T_g; 210 deg C is the manufacturer's value for fully cross-linked SU-8 (MicroChem SU-8 2000
 #: data sheet; "above 200 deg C" in the literature), giving the 252 deg C limit used throughout.
@@ -91,18 +87,18 @@ SPR = Material("SPR", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
 #: mechanically the same modulus as the panels (they are fully supported), k = 1.3 W/(m K);
 #: rho = 1200 kg/m^3 and c = 2e6/1200 J/(kg K) as the reference's transient example sets for
 #: all panels (``panelThermalCapacity``; the reference then reads the conductivity instead by a
-#: slip, dynamics digest D9.2; we use the specific heat).
+#: slip, theory 7.2; we use the specific heat).
 SUBSTRATE = Material("substrate", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
                      thermal_conductivity=1.3, specific_heat=_SU8_RHO_C / 1200.0)
 
-#: Gold (bimorph layer). E = 79 GPa (the reference scripts use fractions of it, digest D8);
+#: Gold (bimorph layer). E = 79 GPa (the reference scripts use fractions of it, theory 10.8);
 #: nu = 0.44, rho = 19300 kg/m^3, c = 129 J/(kg K), k = 317 W/(m K) at 300 K (Incropera et al.,
 #: Fundamentals of Heat and Mass Transfer, 6th ed., Table A.1; nu: CRC Handbook).
 GOLD = Material("gold", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0,
                 thermal_conductivity=317.0, specific_heat=129.0)
 
 #: Single-crystal silicon. E = 150 GPa and rho = 2300 kg/m^3 as in the reference micro-mirror
-#: (02/Example04, digest D10.6); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),
+#: (02/Example04, theory 10.9); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),
 #: k = 148 W/(m K) at 300 K (Incropera et al., 6th ed., Table A.1).
 SILICON = Material("silicon", youngs_modulus=150e9, poisson_ratio=0.22, density=2300.0,
                    thermal_conductivity=148.0, specific_heat=712.0)
@@ -130,11 +126,7 @@ class Fluid:
 
     def __post_init__(self):
         for field in ("density", "specific_heat", "thermal_conductivity"):
-            value = getattr(self, field)
-            if not (isinstance(value, (int, float)) and not isinstance(value, bool)
-                    and math.isfinite(value) and value >= 0):
-                raise ParameterError(f"Fluid {self.name!r}: {field} = {value!r} is invalid; it "
-                                     "must be a finite number >= 0.")
+            non_negative(f"Fluid {self.name!r}: {field}", getattr(self, field), _UNITS[field])
 
     def environment(self) -> dict:
         """Keyword arguments of :class:`~simulator.thermal.steady.ThermalParameters` for this fluid,
@@ -148,7 +140,7 @@ class Fluid:
 
 
 #: Air as in the reference transient example (04/Example01: ``envDensity = 1.293``,
-#: ``envThermalCapacity = 700``, ``envThermalConduct = 0.026``; dynamics digest D8). Note that
+#: ``envThermalCapacity = 700``, ``envThermalConduct = 0.026``; theory 10.8). Note that
 #: the textbook isobaric specific heat of air is 1007 J/(kg K) at 300 K (Incropera Table A.4).
 AIR = Fluid("air", density=1.293, specific_heat=700.0, thermal_conductivity=0.026)
 

@@ -23,6 +23,7 @@ import scipy.linalg.lapack as lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
 from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
@@ -99,10 +100,15 @@ class DenseFactor:
         return lapack.dgetrs(self._c, self._piv, b)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """``K^-1 b`` for b (n,) or (n, k) (not finite where K is singular)."""
+        """``K^-1 b`` for b (n,) or (n, k) (not finite where K is singular); raises
+        :class:`~simulator.errors.SolverError` if LAPACK's solve fails."""
         if self.info != 0:
             return np.full(np.shape(b), np.nan)
-        return self.solve_info(b)[0]
+        x, info = self.solve_info(b)
+        if info != 0:
+            routine = "dpotrs" if self.method == "cholesky" else "dgetrs"
+            raise SolverError(f"dense {self.method} solve failed (LAPACK {routine} info {info})")
+        return x
 
 
 class SparseCholesky:

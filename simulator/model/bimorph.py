@@ -1,4 +1,4 @@
-"""Timoshenko bi-material strip: curvature of a heated bimorph crease (digest 6.7-6.8).
+"""Timoshenko bi-material strip: curvature of a heated bimorph crease (theory 5.1-5.3).
 
 A crease made of two bonded layers (moduli E1, E2, thicknesses t1, t2) whose thermal
 expansion coefficients differ by ``delta_alpha`` bends with curvature (Timoshenko 1925)
@@ -12,12 +12,12 @@ follows ``delta_alpha`` (positive folds towards +z with the mesher's polarity).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import finite, positive
 from ..errors import ParameterError
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
@@ -53,9 +53,7 @@ class Bimorph:
 
     def __post_init__(self):
         for name in ("E1", "t1", "E2", "t2"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"Bimorph.{name} = {v!r} must be positive and finite (SI).")
+            positive(f"Bimorph.{name}", getattr(self, name), "Pa" if name[0] == "E" else "m")
 
     def curvature(self, delta_alpha, dT):
         """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""
@@ -82,10 +80,11 @@ class Actuators:
     delta_alpha: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
+        if not isinstance(self.bimorph, Bimorph):
+            raise ParameterError(f"Actuators.bimorph is a {type(self.bimorph).__name__}; give "
+                                 "Bimorph(E1, t1, E2, t2) (delta_alpha is the second argument).")
         for c, v in dict(self.delta_alpha).items():
-            if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v)):
-                raise ParameterError(f"Actuators: delta_alpha of crease {c} is {v!r}; give a "
-                                     "finite value in 1/K.")
+            finite(f"Actuators: delta_alpha of crease {c}", v, "1/K")
 
     def delta_alpha_array(self, mesh) -> np.ndarray:
         """(C,) expansion mismatch per crease row of a mesh (0 for passive creases)."""
@@ -106,6 +105,6 @@ class Actuators:
 
 def crease_temperature_weights() -> np.ndarray:
     """Weights of the 7 crease nodes (N11, N12, N21, N22, A, B, Ctr) in the crease temperature
-    used for actuation (digest 6.7): half the mean of the 3 centre-line nodes plus half the
+    used for actuation (theory 5.1): half the mean of the 3 centre-line nodes plus half the
     mean of the 4 edge nodes."""
     return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 6, 1 / 6, 1 / 6])

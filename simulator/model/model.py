@@ -7,7 +7,6 @@ may add elastic springs to ground.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from functools import cached_property
@@ -15,6 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from .bimorph import Actuators
+from .._validate import integer, non_negative, one_of, positive
 from ..errors import ParameterError
 from .mesh import BarHingeMesh, build_mesh
 from ..geometry.pattern import Pattern
@@ -51,8 +51,7 @@ class Supports:
     def __post_init__(self):
         fixed = {}
         for node, dirs in dict(self.fixed).items():
-            if not isinstance(node, (int, np.integer)) or isinstance(node, bool):
-                raise ParameterError(f"Supports: node id {node!r} must be an integer.")
+            integer("Supports: node id", node, 0)
             if not isinstance(dirs, str) or not dirs or set(dirs) - set("xyz"):
                 raise ParameterError(f"Supports: node {node} has directions {dirs!r}; use a "
                                      "non-empty subset of 'xyz'.")
@@ -65,10 +64,10 @@ class Supports:
             except (TypeError, ValueError):
                 raise ParameterError(f"Supports: elastic support {item!r} must be (node, "
                                      "direction, stiffness).") from None
-            if direction not in _AXES or not (math.isfinite(k) and k > 0):
-                raise ParameterError(f"Supports: elastic support {item!r} needs a direction in "
-                                     "'x', 'y', 'z' and a positive stiffness in N/m.")
-            elastic.append((int(node), direction, float(k)))
+            where = f"Supports: elastic support {item!r}"
+            integer(f"{where}: node", node, 0)
+            one_of(f"{where}: direction", direction, tuple(_AXES))
+            elastic.append((int(node), direction, positive(f"{where}: stiffness", k, "N/m")))
         object.__setattr__(self, "elastic", tuple(elastic))
 
     @classmethod
@@ -104,7 +103,7 @@ def _check_node(node: int, n_nodes: int) -> None:
 
 @dataclass(frozen=True)
 class ContactParameters:
-    """Node-to-panel penalty contact (digest 5; Zhu & Filipov 2019).
+    """Node-to-panel penalty contact (theory 3.5; Zhu & Filipov 2019).
 
     Parameters
     ----------
@@ -125,10 +124,9 @@ class ContactParameters:
     max_step_fraction: float = 0.5
 
     def __post_init__(self):
-        for name in ("stiffness", "d0_corner", "d0_centre", "max_step_fraction"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"ContactParameters.{name} = {v!r} must be positive and finite.")
+        for name, unit in (("stiffness", "J"), ("d0_corner", "m"), ("d0_centre", "m"),
+                           ("max_step_fraction", "")):
+            positive(f"ContactParameters.{name}", getattr(self, name), unit)
 
     @property
     def max_step(self) -> float:
@@ -262,8 +260,7 @@ def gravity_loads(mesh: BarHingeMesh, g: float = STANDARD_GRAVITY,
     d = np.asarray(direction, float)
     if d.shape != (3,) or not np.isfinite(d).all() or np.linalg.norm(d) == 0:
         raise ParameterError(f"gravity direction {direction!r} must be a non-zero 3-vector.")
-    if not (math.isfinite(g) and g >= 0):
-        raise ParameterError(f"gravity g = {g!r} must be a non-negative acceleration in m/s^2.")
+    non_negative("gravity g", g, "m/s^2")
     pat = mesh.pattern
     fans = mesh.triangles[mesh.fan_triangles]
     panel = mesh.triangle_panel[mesh.fan_triangles]

@@ -1,4 +1,4 @@
-"""Bar areas, moduli and spring stiffnesses of a bar-and-hinge mesh (method digest 2).
+"""Bar areas, moduli and spring stiffnesses of a bar-and-hinge mesh (theory 3.4).
 
 Crease bars and springs follow the compliant-crease model (Zhu & Filipov 2020): the three
 fold lines of a crease (its two edges and its centre line) each carry a stiffness
@@ -9,13 +9,13 @@ preserve their in-plane stiffness and spoke springs for bending.
 
 from __future__ import annotations
 
-import math
 import weakref
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from ..mechanics.elements.springs import fold_angle
+from .._validate import in_range, positive
 from ..errors import ParameterError
 from ..mechanics.kinematics import fold_angles
 from .mesh import BarHingeMesh, BarType, SpringKind
@@ -51,14 +51,10 @@ class BarHingeParameters:
     centre_line_share: float = 0.5
 
     def __post_init__(self):
-        if not (math.isfinite(self.diagonal_rate) and self.diagonal_rate > 0):
-            raise ParameterError(f"diagonal_rate = {self.diagonal_rate!r} must be positive.")
-        w = self.panel_bending_width
-        if w is not None and not (math.isfinite(w) and w > 0):
-            raise ParameterError(f"panel_bending_width = {w!r} must be a positive length in metres "
-                                 "or None (mean crease width).")
-        if not 0 <= self.centre_line_share <= 1:
-            raise ParameterError(f"centre_line_share = {self.centre_line_share!r} must lie in [0, 1].")
+        positive("BarHingeParameters.diagonal_rate", self.diagonal_rate)
+        positive("BarHingeParameters.panel_bending_width", self.panel_bending_width, "m",
+                 hint="or None for the mean crease width", allow_none=True)
+        in_range("BarHingeParameters.centre_line_share", self.centre_line_share, 0, 1)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -87,7 +83,7 @@ class MechanicalProperties:
 
 def mechanical_properties(mesh: BarHingeMesh,
                           params: BarHingeParameters = BarHingeParameters()) -> MechanicalProperties:
-    """Compute bar areas, moduli and spring stiffnesses (digest section 2), vectorised."""
+    """Compute bar areas, moduli and spring stiffnesses (theory 3.4), vectorised."""
     pat = mesh.pattern
     L0 = mesh.bar_length
     area = np.zeros(len(mesh.bars))
@@ -138,7 +134,7 @@ def mechanical_properties(mesh: BarHingeMesh,
 
 def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
                        params: BarHingeParameters = BarHingeParameters()) -> np.ndarray:
-    """Spring rest angles for given crease rest angles (digest 2 and 7.3).
+    """Spring rest angles for given crease rest angles (theory 3.4).
 
     Parameters
     ----------

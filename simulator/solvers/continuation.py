@@ -7,7 +7,7 @@ tangent ``K = -dr/du`` and the load derivative ``q = dr/dlambda`` (:class:`LoadP
 ``f0 + lambda P`` and spring rest angles ``rest0 + lambda R``; heating paths add temperatures).
 Paths and the corrector shared by both methods are in :mod:`simulator.solvers.load_path`.
 
-:func:`mgdcm` is the modified generalized displacement control method (digest D1):
+:func:`mgdcm` is the modified generalized displacement control method (theory 6.8):
 
 * predictor: ``u_hat = K^-1 q``; the load step ``dlambda = sig ds |u_hat_1| / |u_hat_i|`` keeps
   the predictor's displacement norm at ``ds |u_hat_1|`` (``ds`` = arc length, the first load
@@ -19,24 +19,24 @@ Paths and the corrector shared by both methods are in :mod:`simulator.solvers.lo
   :data:`FAST_ITERATIONS` corrections (up to ``max_arc_length``) and halves after a slow one
   or a failure.
 
-Unlike the reference (digest D9.11): convergence uses the residual test of
+Unlike the reference (theory 6.8): convergence uses the residual test of
 :class:`~simulator.solvers.newton.NewtonOptions`, a failed increment is retried with half the arc
 length, the arc length has a maximum, and a path can end exactly at a target load factor or a
 target displacement (the last increment is then solved with lambda, or the displacement, fixed).
 
 :func:`displacement_control` prescribes ``c . u`` (a DOF or a node's displacement along a
-direction) in equal increments with the load factor unknown (digest D2, but with the increment
-prescribed rather than derived from ``lambdaBar``, D9.12). Every accepted point carries the
+direction) in equal increments with the load factor unknown (theory 6.9; the increment is
+prescribed rather than derived from ``lambdaBar``). Every accepted point carries the
 inertia of its tangent (:mod:`simulator.solvers.stability`).
 """
 
 from __future__ import annotations
 
 import logging
-import math
 
 import numpy as np
 
+from .._validate import finite, integer, positive
 from ..errors import ParameterError
 from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
                         _tangent)
@@ -56,14 +56,6 @@ FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
 
 
-def _positive(name, value, allow_none=False):
-    if value is None and allow_none:
-        return
-    if isinstance(value, bool) or not (isinstance(value, (int, float, np.integer, np.floating))
-                                       and math.isfinite(value) and value > 0):
-        raise ParameterError(f"{name} = {value!r} must be a positive finite number.")
-
-
 def _monitor_vector(path, target_displacement):
     """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
     if target_displacement is None:
@@ -74,11 +66,6 @@ def _monitor_vector(path, target_displacement):
 
 
 # ---------------------------------------------------------------------------- the algorithms
-def _check_count(name, value):
-    if isinstance(value, bool) or not (isinstance(value, (int, np.integer)) and value >= 1):
-        raise ParameterError(f"{name} = {value!r} must be a positive integer.")
-
-
 def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_increments: int = 100,
           target_load_factor: float | None = None, target_displacement=None, monitor=None,
           options: NewtonOptions = NewtonOptions(), adapt: bool = True,
@@ -152,13 +139,12 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
 def _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor) -> None:
     """:class:`ParameterError` for a setting of :func:`mgdcm` out of range."""
-    _positive("arc_length", arc_length)
-    _positive("max_arc_length", max_arc_length, allow_none=True)
-    _positive("step_norm", step_norm, allow_none=True)
-    _check_count("max_increments", max_increments)
-    _check_count("fast_iterations", fast_iterations)
-    if target_load_factor is not None and not math.isfinite(target_load_factor):
-        raise ParameterError(f"target_load_factor = {target_load_factor!r} must be finite.")
+    positive("arc_length", arc_length)
+    positive("max_arc_length", max_arc_length, allow_none=True)
+    positive("step_norm", step_norm, allow_none=True)
+    integer("max_increments", max_increments)
+    integer("fast_iterations", fast_iterations)
+    finite("target_load_factor", target_load_factor, allow_none=True)
 
 
 class _ArcLengthRun:
@@ -309,7 +295,7 @@ def _passed(u, lam, u1, lam1, lam_t, c_t, v_t) -> bool:
 def displacement_control(path, u0, lam0: float, c, target: float, *, increments: int = 50,
                          options: NewtonOptions = NewtonOptions(), stability: bool = True,
                          callback=None) -> ContinuationResult:
-    """Drive ``c . u`` linearly to ``target`` [m] with the load factor unknown (digest D2).
+    """Drive ``c . u`` linearly to ``target`` [m] with the load factor unknown (theory 6.9).
 
     Parameters
     ----------
@@ -329,7 +315,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     ParameterError
         If ``c`` weighs supported DOFs or the reference load does not move ``c . u``.
     """
-    _check_count("increments", increments)
+    integer("increments", increments)
     free, size = path.free, _size(path.system)
     c = np.asarray(c, float).ravel()
     mask = np.ones(len(c), bool)
@@ -337,8 +323,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     if np.any(c[mask] != 0) or not np.any(c):
         raise ParameterError("displacement_control: the controlled displacement must combine "
                              "free DOFs only (it weighs a supported DOF, or nothing).")
-    if not math.isfinite(target):
-        raise ParameterError(f"displacement_control: target = {target!r} must be finite [m].")
+    finite("displacement_control: target", target, "m")
     cf = c[free]
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
     pt = path.at(u, lam)

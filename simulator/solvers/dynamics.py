@@ -1,4 +1,4 @@
-"""Implicit nonlinear time integration of the bar-and-hinge mechanics (dynamics digest D4).
+"""Implicit nonlinear time integration of the bar-and-hinge mechanics (theory 8.2).
 
 :func:`integrate` runs a whole integration and returns its time history with the energy
 bookkeeping (:class:`DynamicsResult`: kinetic, strain, dissipated energy, external work and the
@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .dynamics_options import METHODS, DynamicsOptions, _real  # noqa: F401 (METHODS: re-export)
+from .dynamics_options import METHODS, DynamicsOptions  # noqa: F401 (METHODS: re-export)
+from .._result import ResultFiles
+from .._validate import integer, positive
 from ..mechanics.equilibrium import EquilibriumSystem
-from ..errors import ParameterError
 from .generalized_alpha import MotionState, StepReport, TimeIntegrator
 
 __all__ = ["DynamicsOptions", "MotionState", "StepReport", "TimeIntegrator", "DynamicsResult",
@@ -33,7 +34,7 @@ ENERGY_COLUMNS = ("kinetic_energy [J]", "strain_energy [J]", "dissipated_energy 
 
 
 @dataclass(frozen=True, eq=False)
-class DynamicsResult:
+class DynamicsResult(ResultFiles):
     """Time history of :func:`integrate` (record 0 = the initial state).
 
     Attributes
@@ -92,6 +93,12 @@ class DynamicsResult:
         return pd.DataFrame({"time [s]": self.time, **self.energies,
                              "iterations": self.iterations})
 
+    _csv_name = "dynamics.csv"
+
+    def _meta(self) -> dict:
+        return {"records": len(self.time), "end_time [s]": float(self.time[-1]),
+                "cuts": self.cuts}
+
 
 def integrate(system: EquilibriumSystem, u0, v0, duration: float, dt: float, f_ext,
               spring_rest, options: DynamicsOptions = DynamicsOptions(), masses=None,
@@ -121,8 +128,7 @@ def integrate(system: EquilibriumSystem, u0, v0, duration: float, dt: float, f_e
         :class:`~simulator.errors.ParameterError` on bad input.
     """
     n_steps, last_dt = _step_count(duration, dt)
-    if not (isinstance(record_every, int) and record_every >= 1):
-        raise ParameterError(f"record_every = {record_every!r} must be a positive integer.")
+    integer("record_every", record_every)
     load = f_ext if callable(f_ext) else (lambda t, f=np.asarray(f_ext, float).ravel(): f)
     rest = spring_rest if callable(spring_rest) else \
         (lambda t, r=np.asarray(spring_rest, float): r)
@@ -164,9 +170,7 @@ def _row(integ, s: MotionState, dissipated, work, iterations):
 
 def _step_count(duration, dt) -> tuple[int, float]:
     """Number of steps and the length of the last one (shortened to end at ``duration``)."""
-    if not (_real(dt) and dt > 0):
-        raise ParameterError(f"time step dt = {dt!r} must be a positive number of seconds.")
-    if not (_real(duration) and duration > 0):
-        raise ParameterError(f"duration = {duration!r} must be a positive number of seconds.")
+    positive("time step dt", dt, "s")
+    positive("duration", duration, "s")
     n = max(1, math.ceil(duration / dt * (1 - 1e-12)))
     return n, duration - (n - 1) * dt

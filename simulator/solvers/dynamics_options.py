@@ -3,11 +3,9 @@ coefficients, Rayleigh and air damping, Newton tolerances and step cutting."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
-import numpy as np
-
+from .._validate import in_range, integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend
 
@@ -36,7 +34,7 @@ class DynamicsOptions:
     rayleigh_beta : float
         Stiffness-proportional damping beta [s] (damping ratio beta omega / 2) on the material
         stiffness at the current configuration. Default 0. (The reference's defaults are
-        alpha = beta = 1e-4, which over-damps modes above a few kHz, digest D9.8.) A small beta,
+        alpha = beta = 1e-4, which over-damps modes above a few kHz, theory 8.3.) A small beta,
         or a dissipative method, calms the stiff crease-node modes that a sudden rest-angle
         change excites (the crease's centre line takes half of it, its edge lines a quarter
         each, so about 1/9 of the released energy goes into an S-shaped crease mode).
@@ -71,24 +69,16 @@ class DynamicsOptions:
 
     def __post_init__(self):
         check_backend(self.linear_solver, "DynamicsOptions.linear_solver")
-        if self.method not in METHODS:
-            raise ParameterError(f"DynamicsOptions.method = {self.method!r}; use one of "
-                                 f"{', '.join(METHODS)}.")
+        one_of("DynamicsOptions.method", self.method, METHODS)
         lo = 0.5 if self.method == "hht" else 0.0
-        if not (_real(self.rho_inf) and lo <= self.rho_inf <= 1):
-            raise ParameterError(f"DynamicsOptions.rho_inf = {self.rho_inf!r} must lie in "
-                                 f"[{lo:g}, 1] for method {self.method!r}.")
-        for name in ("rayleigh_alpha", "rayleigh_beta", "air_damping", "rtol", "atol"):
-            v = getattr(self, name)
-            if not (_real(v) and v >= 0):
-                raise ParameterError(f"DynamicsOptions.{name} = {v!r} must be finite and >= 0.")
+        in_range("DynamicsOptions.rho_inf", self.rho_inf, lo, 1,
+                 hint=f"the range for method {self.method!r}")
+        for name, unit in _UNITS.items():
+            non_negative(f"DynamicsOptions.{name}", getattr(self, name), unit)
         if self.rtol == 0 and self.atol == 0:
             raise ParameterError("DynamicsOptions: rtol and atol cannot both be 0.")
-        for name, least in (("max_iter", 1), ("max_cuts", 0)):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and not isinstance(v, bool) and v >= least):
-                raise ParameterError(f"DynamicsOptions.{name} = {v!r} must be an integer >= "
-                                     f"{least}.")
+        integer("DynamicsOptions.max_iter", self.max_iter)
+        integer("DynamicsOptions.max_cuts", self.max_cuts, 0)
 
     @property
     def coefficients(self) -> tuple[float, float, float, float]:
@@ -107,8 +97,7 @@ class DynamicsOptions:
         return asdict(self)
 
 
-def _real(v) -> bool:
-    """True if ``v`` is a finite real number (not a bool)."""
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) \
-        and math.isfinite(v)
+#: Units of the non-negative settings (rtol is relative; atol is a force [N]).
+_UNITS = {"rayleigh_alpha": "1/s", "rayleigh_beta": "s", "air_damping": "N s/m^3", "rtol": "",
+          "atol": "N"}
 

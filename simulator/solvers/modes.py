@@ -1,4 +1,4 @@
-"""Natural frequencies and mode shapes about any state (dynamics digest D6).
+"""Natural frequencies and mode shapes about any state (theory 9).
 
 The structure is linearised about a state (flat, self-folded, heated, under gravity, in
 contact): ``K`` is the tangent stiffness at its displacements and spring rest angles (stress
@@ -20,7 +20,6 @@ a negative eigenvalue means the state is unstable, and its "frequency" is report
 
 from __future__ import annotations
 
-import json
 import logging
 import pathlib
 import time
@@ -31,7 +30,8 @@ import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._version import __version__
+from .._result import ResultFiles
+from .._validate import integer
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, factorize
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
@@ -51,7 +51,7 @@ ZERO_TOL = float(np.finfo(float).eps)
 
 
 @dataclass(frozen=True, eq=False)
-class ModesResult:
+class ModesResult(ResultFiles):
     """Natural modes of a model about a state (``k`` modes, ascending eigenvalue).
 
     Attributes
@@ -95,21 +95,20 @@ class ModesResult:
                              "eigenvalue [rad^2/s^2]": self.eigenvalue,
                              "zero_mode": self.zero_mode})
 
+    _csv_name = "modes.csv"
+
+    def _meta(self) -> dict:
+        return {"solver": self.solver, "count": self.count, "wall_time [s]": self.wall_time,
+                "total_mass [kg]": float(self.masses.sum()), "model": self.model.to_dict()}
+
     def save(self, directory, metadata: dict | None = None) -> pathlib.Path:
         """Write ``modes.csv``, ``modes.npz`` (shapes, reference nodes, displacements of the
         state, triangles) and ``meta.json`` into ``directory``."""
-        out = pathlib.Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        self.to_frame().to_csv(out / "modes.csv", index=False)
+        out = super().save(directory, metadata)
         mesh = self.model.mesh
         np.savez_compressed(out / "modes.npz", shapes=self.shapes, frequency=self.frequency,
                             reference_positions=mesh.nodes, displacements=self.state.u,
                             triangles=mesh.triangles, masses=self.masses)
-        meta = {"etorigami_version": __version__, "status": self.status,
-                "message": self.message, "solver": self.solver, "count": self.count,
-                "wall_time [s]": self.wall_time, "total_mass [kg]": float(self.masses.sum()),
-                "model": self.model.to_dict(), **(metadata or {})}
-        (out / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
         return out
 
 
@@ -151,10 +150,7 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
     check_backend(linear_solver, "natural_modes: linear_solver")
     system = equilibrium_system(model)
     n_free = system.n_free
-    if not (isinstance(count, (int, np.integer)) and not isinstance(count, bool)
-            and 1 <= count <= n_free):
-        raise ParameterError(f"natural_modes: count = {count!r} must be an integer from 1 to the "
-                             f"number of free DOFs ({n_free}).")
+    integer("natural_modes: count", count, 1, n_free, hint="at most the number of free DOFs")
     m = lumped_masses(model.mesh) if masses is None else np.asarray(masses, float)
     check_masses(model, m)
     K = system.evaluate(state.u, state.spring_rest, hessian=True).K

@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
+from .._validate import integer, non_negative
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
 from .nonlinear import iterate, march
@@ -62,7 +63,7 @@ class NewtonOptions:
         self-weight is far below any physical effect. 0 disables; it never applies without
         external loads.
     reference_loop : bool
-        Emulate the reference implementation's loop (digest 7.3), for comparisons with its
+        Emulate the reference implementation's loop (theory 6.4), for comparisons with its
         outputs only: the stopping measure is taken *before* the update, so one more update
         is applied after it drops below ``atol`` (``rtol`` is ignored); at most
         ``max_iter - 1`` updates; a loop that ends above ``atol`` is still accepted (logged
@@ -76,6 +77,8 @@ class NewtonOptions:
         fill-reducing order); the others force one. ``ETORIGAMI_PARDISO=0`` in the environment
         still takes PARDISO out of "auto".
 
+    Notes
+    -----
     Whatever the criterion, an iteration whose correction is at round-off level
     (below 1e-13 of the model size) also counts as converged.
     """
@@ -97,16 +100,11 @@ class NewtonOptions:
             raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
                                  "'displacement'.")
         for name in ("atol", "rtol", "stall_rtol"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be finite and >= 0.")
+            non_negative(f"NewtonOptions.{name}", getattr(self, name))
         if self.atol == 0 and self.rtol == 0:
             raise ParameterError("NewtonOptions: atol and rtol cannot both be 0.")
         for name in ("max_iter", "max_cuts", "max_total_cuts"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and v >= (1 if name == "max_iter" else 0)):
-                raise ParameterError(f"NewtonOptions.{name} = {v!r} must be a non-negative integer "
-                                     "(max_iter >= 1).")
+            integer(f"NewtonOptions.{name}", getattr(self, name), 1 if name == "max_iter" else 0)
 
     def to_dict(self) -> dict:
         return dict(self._as_dict)           # a copy: asdict once (every simulation records it)
@@ -227,7 +225,7 @@ class _LoadControl:
 
 
 def _reference_newton(system, u0, f_ext, spring_rest, options):
-    """The reference's Newton loop (digest 7.3 / 7.4); see ``NewtonOptions.reference_loop``."""
+    """The reference's Newton loop (theory 6.4 and 6.5); see ``NewtonOptions.reference_loop``."""
     free = system.free
     u = u0.copy().ravel()
     measure, res_norms, cor_norms, updates = math.inf, [], [], 0
@@ -300,8 +298,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     again up to its nominal size. ``callback(t, u)``, if given, is called after every
     accepted increment and may return True to stop early (status "stopped").
     """
-    if not (isinstance(increments, (int, np.integer)) and increments >= 1):
-        raise ParameterError(f"increments = {increments!r} must be a positive integer.")
+    integer("increments", increments)
     u, history, residuals, last_ev = u0.copy(), [], [], None
     total_iter = 0
 

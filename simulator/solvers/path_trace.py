@@ -12,10 +12,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._result import ResultFiles
 from .stability import tangent_stability
 
-__all__ = ["CriticalPoint", "ContinuationResult", "PathTrace", "BIFURCATION_ALIGNMENT"]
+__all__ = ["CriticalPoint", "ContinuationResult", "PathTrace", "BIFURCATION_ALIGNMENT",
+           "CRITICAL_KINDS"]
 
+#: Kinds of :class:`CriticalPoint`.
+CRITICAL_KINDS = ("limit_point", "bifurcation", "stability_change")
 #: A change of the negative-eigenvalue count is a bifurcation when |cos(mode, q)| is below this.
 BIFURCATION_ALIGNMENT = 0.1
 
@@ -43,9 +47,16 @@ class CriticalPoint:
     displacement: float | None = None
     maximum: bool = False
 
+    def describe(self) -> str:
+        """One line for a message, e.g. ``"limit point at load factor 0.42 (displacement
+        31.2 um)"``."""
+        return (f"{self.kind.replace('_', ' ')} at load factor {self.load_factor:.6g}"
+                + ("" if self.displacement is None else
+                   f" (displacement {self.displacement * 1e6:.4g} um)"))
+
 
 @dataclass(frozen=True, eq=False)
-class ContinuationResult:
+class ContinuationResult(ResultFiles):
     """Outcome of :func:`mgdcm` or :func:`displacement_control`.
 
     Attributes
@@ -78,6 +89,34 @@ class ContinuationResult:
     temperatures: list = field(default_factory=list)
     critical_points: tuple = ()
     evaluation: object = None
+
+    _csv_name = "path.csv"
+
+    def to_frame(self):
+        """One row per accepted point: ``point``, ``load_factor``, ``iterations``,
+        ``max_displacement [m]`` (largest node displacement), and when computed ``stable``,
+        ``negative_eigenvalues``, ``lowest_eigenvalue [N/m]``, ``max_temperature [degC]``."""
+        import pandas as pd
+
+        data = {"point": np.arange(1, len(self.history) + 1),
+                "load_factor": [h[0] for h in self.history],
+                "iterations": [h[2] for h in self.history],
+                "max_displacement [m]": [float(np.linalg.norm(np.reshape(h[1], (-1, 3)),
+                                                              axis=1).max(initial=0.0))
+                                         for h in self.history]}
+        if len(self.stability) == len(self.history) and self.stability:
+            data.update({"stable": [s.stable for s in self.stability],
+                         "negative_eigenvalues": [s.negative for s in self.stability],
+                         "lowest_eigenvalue [N/m]": [s.lowest for s in self.stability]})
+        if len(self.temperatures) == len(self.history) and any(
+                t is not None for t in self.temperatures):
+            data["max_temperature [degC]"] = [None if t is None else float(np.max(t))
+                                              for t in self.temperatures]
+        return pd.DataFrame(data)
+
+    def _meta(self) -> dict:
+        return {"load_factor": self.load_factor, "iterations": self.iterations,
+                "cuts": self.cuts, "critical_points": list(self.critical_points)}
 
 
 # ---------------------------------------------------------------------------- linear algebra
@@ -149,10 +188,7 @@ class PathTrace:
 
     def result(self, success, status, message, u, lam):
         self.critical = self._locate()
-        crit = "; ".join(f"{c.kind.replace('_', ' ')} at load factor {c.load_factor:.6g}"
-                         + ("" if c.displacement is None else
-                            f" (displacement {c.displacement * 1e6:.4g} um)")
-                         for c in self.critical)
+        crit = "; ".join(c.describe() for c in self.critical)
         if crit:
             message = f"{message}; {crit}"
         return ContinuationResult(success, status, message, u, float(lam), self.iterations,

@@ -21,6 +21,7 @@ import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._result import ResultFiles
 from ..linalg.ladder import factorize
 from ..linalg.small_solve import as_dense
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
@@ -30,8 +31,12 @@ __all__ = ["Stability", "tangent_stability", "DENSE_LIMIT"]
 
 
 @dataclass(frozen=True, eq=False)
-class Stability:
+class Stability(ResultFiles):
     """Inertia of a reduced tangent stiffness.
+
+    Like every result it has ``success`` (True: the eigenvalues were computed; a failing
+    eigensolver raises instead), ``status`` ("stable" or "unstable"), ``message``,
+    ``to_frame()`` (one row) and ``save(directory)``.
 
     Attributes
     ----------
@@ -53,6 +58,26 @@ class Stability:
     def stable(self) -> bool:
         """True if no eigenvalue is negative."""
         return self.negative == 0
+
+    @property
+    def success(self) -> bool:
+        return True
+
+    @property
+    def status(self) -> str:
+        return "stable" if self.stable else "unstable"
+
+    @property
+    def message(self) -> str:
+        bound = "" if self.exact else "at least "
+        return (f"{bound}{self.negative} negative eigenvalue(s); lowest eigenvalue "
+                f"{self.lowest:.6g} N/m")
+
+    _csv_name = "stability.csv"
+
+    def _row(self) -> dict:
+        return {"stable": self.stable, "negative_eigenvalues": self.negative,
+                "lowest_eigenvalue [N/m]": self.lowest, "exact": self.exact}
 
     def load_alignment(self, q: np.ndarray) -> float:
         """|cos| of the angle between the critical mode and the load derivative ``q``

@@ -4,11 +4,11 @@ from .base import Step, StepContext, StepOutcome, StepRecorder
 from .dynamics import Dynamics
 from .continuation import ArcLengthLoad, DisplacementControl
 from .electrothermal import ElectroThermal
-from .heating import AmbientTemperature, Coupling, Heat, coupled_increments
+from .heating import AmbientTemperature, Heat, coupled_increments
 from .mechanical import Gravity, Load, SelfFold
 from .transient import TransientHeat
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity",
-           "Heat", "AmbientTemperature", "Coupling", "coupled_increments", "TransientHeat",
+           "Heat", "AmbientTemperature", "coupled_increments", "TransientHeat",
            "Dynamics", "ArcLengthLoad", "DisplacementControl",
            "ElectroThermal"]

@@ -23,7 +23,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import ParameterError
+from .._validate import integer
 from ..state import SimulationState, equilibrium_system, thermal_model
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "check_increments",
@@ -94,6 +94,9 @@ class StepOutcome:
         ``"time [s]"``, ...).
     evaluation : Evaluation or None
         Equilibrium evaluation at the end state, if the step has it.
+    events : tuple of Event
+        Limit points, bifurcations and snaps on the step's path (:mod:`simulator.events`),
+        in path order (a snap after the limit point it starts at).
     """
 
     success: bool
@@ -112,10 +115,15 @@ class StepOutcome:
     columns: dict = field(default_factory=dict)
     evaluation: object = None
     velocity: np.ndarray | None = None
+    events: tuple = ()
 
 
 class StepRecorder:
-    """Collects the records of a running step and builds its :class:`StepOutcome`."""
+    """Collects the records of a running step and builds its :class:`StepOutcome`.
+
+    ``events`` is the list of :class:`~simulator.events.Event` records found so far (their
+    ``increment`` indexes the records of this recorder).
+    """
 
     def __init__(self, state: SimulationState):
         self.start = state
@@ -126,6 +134,7 @@ class StepRecorder:
         self._residuals: list = []
         self._velocity: list = []
         self._columns: dict[str, list] = {}
+        self.events: list = []
 
     def __len__(self) -> int:
         return len(self._rows["load_factor"])
@@ -168,7 +177,8 @@ class StepRecorder:
             increment_iterations=np.array(rows["increment_iterations"], int),
             residual_norms=tuple(self._residuals),
             columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation,
-            velocity=self._velocities(n))
+            velocity=self._velocities(n), events=tuple(sorted(  # along the path (stable)
+                self.events, key=lambda e: (e.increment is None, e.increment or 0))))
 
     def _velocities(self, shape) -> np.ndarray | None:
         if all(v is None for v in self._velocity):
@@ -199,6 +209,4 @@ class Step(ABC):
 
 def check_increments(step, name: str = "increments") -> None:
     """Raise :class:`ParameterError` unless ``step.<name>`` is a positive integer."""
-    n = getattr(step, name)
-    if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
-        raise ParameterError(f"{type(step).__name__}.{name} = {n!r} must be a positive integer.")
+    integer(f"{type(step).__name__}.{name}", getattr(step, name))

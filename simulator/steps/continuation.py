@@ -15,12 +15,12 @@ displacement).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..solvers.continuation import displacement_control, mgdcm
+from .._validate import finite, positive
 from ..errors import ParameterError
 from ..solvers.load_path import LoadPath
 from ..model.model import _AXES
@@ -106,17 +106,11 @@ class ArcLengthLoad(Step):
     def __post_init__(self):
         check_increments(self, "max_increments")
         for attr in ("arc_length", "max_arc_length"):
-            v = getattr(self, attr)
-            if v is None and attr == "max_arc_length":
-                continue
-            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v)
-                                           and v > 0):
-                raise ParameterError(f"ArcLengthLoad.{attr} = {v!r} must be a positive number "
-                                     "(a load-factor increment).")
-        for attr in ("target_load_factor", "target_displacement"):
-            v = getattr(self, attr)
-            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ParameterError(f"ArcLengthLoad.{attr} = {v!r} must be a finite number.")
+            positive(f"ArcLengthLoad.{attr}", getattr(self, attr), hint="a load-factor "
+                     "increment", allow_none=attr == "max_arc_length")
+        finite("ArcLengthLoad.target_load_factor", self.target_load_factor, allow_none=True)
+        finite("ArcLengthLoad.target_displacement", self.target_displacement, "m",
+               allow_none=True)
         if self.forces is None:
             raise ParameterError("ArcLengthLoad: give forces, e.g. {node: (0, 0, -1e-6)} [N].")
         if self.monitor is not None:
@@ -169,7 +163,7 @@ def _progress(context, total):
 
 @dataclass(frozen=True)
 class DisplacementControl(Step):
-    """Drive a node's displacement along a direction to ``target`` [m] (digest D2).
+    """Drive a node's displacement along a direction to ``target`` [m] (theory 6.9).
 
     The load factor multiplies a reference load (default a unit force at the node along the
     direction, so that the load factor is the reaction force [N]); it is an unknown, so the
@@ -197,10 +191,7 @@ class DisplacementControl(Step):
     def __post_init__(self):
         check_increments(self)
         _direction(self.direction, "DisplacementControl")
-        if isinstance(self.target, bool) or not (isinstance(self.target, (int, float))
-                                                 and math.isfinite(self.target)):
-            raise ParameterError(f"DisplacementControl.target = {self.target!r} must be a "
-                                 "finite displacement [m].")
+        finite("DisplacementControl.target", self.target, "m", hint="a displacement")
 
     def run(self, context: StepContext, state) -> StepOutcome:
         model = context.model

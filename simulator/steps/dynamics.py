@@ -1,10 +1,10 @@
-"""Time-integration step: the structure moves under inertia (dynamics digest D4).
+"""Time-integration step: the structure moves under inertia (theory 8.2).
 
 :class:`Dynamics` integrates the equation of motion over a duration with
 :func:`~simulator.solvers.dynamics.integrate` from the state the previous step left: free vibration from
 initial velocities, the response to a suddenly applied (or removed) load, release from a
 displaced state, or a sudden change of crease rest angles. Unlike the reference, dead loads of
-earlier steps stay applied (digest D9.3), supported DOFs keep their displacements (D9.5) and the
+earlier steps stay applied, supported DOFs keep their displacements (theory 8.6) and the
 velocities carry over to a following dynamic step (``SimulationState.velocity``).
 
 Choosing the scheme: the default (undamped average acceleration) is right for free vibration
@@ -23,6 +23,7 @@ import numpy as np
 
 from ..solvers.dynamics import integrate
 from ..solvers.dynamics_options import DynamicsOptions
+from .._validate import integer, positive
 from ..errors import ParameterError
 from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -55,6 +56,8 @@ class Dynamics(Step):
     record_every : int
         Record every this many time steps (and the last).
 
+    Notes
+    -----
     Every record carries the columns ``time [s]`` (time of the simulation, continuing from
     earlier dynamic steps), ``kinetic_energy [J]``, ``strain_energy [J]``,
     ``dissipated_energy [J]``, ``external_work [J]`` and ``numerical_dissipation [J]`` (energies
@@ -71,18 +74,12 @@ class Dynamics(Step):
     name: str = "dynamics"
 
     def __post_init__(self):
-        for attr in ("duration", "dt"):
-            v = getattr(self, attr)
-            if not (isinstance(v, (int, float, np.integer, np.floating))
-                    and not isinstance(v, bool) and np.isfinite(v) and v > 0):
-                raise ParameterError(f"Dynamics.{attr} = {v!r} must be a positive number of "
-                                     "seconds.")
+        positive("Dynamics.duration", self.duration, "s")
+        positive("Dynamics.dt", self.dt, "s", hint="give the time step in seconds")
         if not isinstance(self.options, DynamicsOptions):
             raise ParameterError(f"Dynamics.options is a {type(self.options).__name__}; give "
                                  "DynamicsOptions(...).")
-        if not (isinstance(self.record_every, int) and self.record_every >= 1):
-            raise ParameterError(f"Dynamics.record_every = {self.record_every!r} must be a "
-                                 "positive integer.")
+        integer("Dynamics.record_every", self.record_every)
         check_folds(self.folds, "Dynamics")
 
     def run(self, context: StepContext, state) -> StepOutcome:

@@ -1,7 +1,7 @@
 """Coupled electro-thermal dynamics: heat and motion advanced together per time step.
 
 :class:`ElectroThermal` is the time-domain version of the paper's three-step loop
-(:func:`~simulator.steps.heating.coupled_increments`, dynamics digest D5.4). Per time step
+(:func:`~simulator.steps.heating.coupled_increments`, theory 8.5). Per time step
 ``[t, t + h]``:
 
 1. heat: one theta-method step of the transient heat equation
@@ -12,7 +12,7 @@
    :class:`~simulator.steps.Heat`);
 3. mechanics: one implicit time step of the equation of motion
    (:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`, Newton iterations and dead loads such as
-   gravity kept, unlike the reference, digest D9.3 and D9.6), or with
+   gravity kept, unlike the reference, theory 8.6 and 8.4), or with
    ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
    angles moved from the previous step's with step cutting
    (:func:`~simulator.solvers.newton.follow_path`).
@@ -53,6 +53,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._validate import integer, non_negative, one_of, positive
 from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
 from ..solvers.generalized_alpha import TimeIntegrator
@@ -94,10 +95,6 @@ def _next_switch(schedules, t: float) -> float:
         later = [x for x in times if x > t * (1 + 1e-12) + 1e-15]
         best = min([best, *later])
     return best
-
-
-def _positive_or_none(owner, name, value):
-    return None if value is None else check_time_step(value, f"{owner}.{name}")
 
 
 @dataclass(frozen=True)
@@ -155,10 +152,10 @@ class ElectroThermal(Step):
     def __post_init__(self):
         owner = type(self).__name__
         check_power_mapping(owner, self.power)
-        check_time_step(self.duration, f"{owner}.duration")
+        positive(f"{owner}.duration", self.duration, "s")
         dt = check_time_step(self.dt, f"{owner}.dt")
-        lo = _positive_or_none(owner, "dt_min", self.dt_min)
-        hi = _positive_or_none(owner, "dt_max", self.dt_max)
+        lo = positive(f"{owner}.dt_min", self.dt_min, "s", allow_none=True)
+        hi = positive(f"{owner}.dt_max", self.dt_max, "s", allow_none=True)
         lo, hi = dt if lo is None else lo, dt if hi is None else hi
         if not lo <= hi:
             raise ParameterError(f"{owner}: dt_min = {lo!r} s > dt_max = {hi!r} s; give "
@@ -166,21 +163,14 @@ class ElectroThermal(Step):
         if not lo <= dt <= hi:
             raise ParameterError(f"{owner}: dt = {dt!r} s lies outside [dt_min, dt_max] = "
                                  f"[{lo!r}, {hi!r}] s.")
-        if self.mechanics not in MECHANICS:
-            raise ParameterError(f"{owner}.mechanics = {self.mechanics!r}; use "
-                                 f"{' or '.join(map(repr, MECHANICS))}.")
+        one_of(f"{owner}.mechanics", self.mechanics, MECHANICS)
         check_theta(self.theta)
         if not isinstance(self.options, DynamicsOptions):
             raise ParameterError(f"{owner}.options is a {type(self.options).__name__}; give "
                                  "DynamicsOptions(...).")
-        check_time_step(self.temperature_step, f"{owner}.temperature_step [K]")
-        tol = self.shape_tol
-        if not (isinstance(tol, (int, float, np.integer, np.floating)) and
-                not isinstance(tol, bool) and math.isfinite(tol) and tol >= 0):
-            raise ParameterError(f"{owner}.shape_tol = {tol!r} must be a finite length >= 0 m.")
-        n = self.record_every
-        if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
-            raise ParameterError(f"{owner}.record_every = {n!r} must be a positive integer.")
+        positive(f"{owner}.temperature_step", self.temperature_step, "K")
+        non_negative(f"{owner}.shape_tol", self.shape_tol, "m")
+        integer(f"{owner}.record_every", self.record_every)
 
     @property
     def bounds(self) -> tuple[float, float]:

@@ -1,6 +1,6 @@
 """Electro-thermal loading steps: the paper's three-step loop per heating increment.
 
-For every increment of a :class:`Heat` step (digest 7.5):
+For every increment of a :class:`Heat` step (theory 6.6):
 
 1. heat transfer: node temperatures for the current crease powers, with the conductivity
    assembled on the current shape (so folding changes heat loss);
@@ -11,18 +11,18 @@ For every increment of a :class:`Heat` step (digest 7.5):
 ``coupling="staggered"`` (default, the reference's behaviour) uses the shape of the previous
 increment in step 1; ``coupling="iterated"`` repeats steps 1-3 within the increment until
 temperature and shape agree. :class:`AmbientTemperature` ramps the room temperature instead
-(digest 7.7).
+(theory 6.7).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..model.bimorph import crease_temperature_weights
+from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from ..solvers.newton import follow_path
 from ..model.properties import spring_rest_angles
@@ -30,7 +30,7 @@ from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from .limit import HeatPath, check_on_limit_point, continue_past_limit
 
-__all__ = ["Heat", "AmbientTemperature", "Coupling", "coupled_increments"]
+__all__ = ["Heat", "AmbientTemperature", "coupled_increments"]
 
 
 def _rotation_per_kelvin(model) -> np.ndarray:
@@ -40,7 +40,7 @@ def _rotation_per_kelvin(model) -> np.ndarray:
 
 
 def thermal_actuation(model, state):
-    """Timoshenko bimorph actuation measured from the start of a step (digest 7.5, step 2).
+    """Timoshenko bimorph actuation measured from the start of a step (theory 6.6, step 2).
 
     Returns ``rest(temp) -> (crease_rest, spring_rest)``: crease rest angles [rad] =
     ``state.crease_rest + W kappa(dT)`` with dT the 7-node crease temperature [K] of the node
@@ -58,8 +58,10 @@ def thermal_actuation(model, state):
 
 
 @dataclass(frozen=True)
-class Coupling:
-    """How heat and shape are coupled within an increment.
+class _Coupling:
+    """How heat and shape are coupled within an increment (internal: :class:`Heat` takes these
+    settings as its own fields ``coupling``, ``coupling_tol`` and ``max_coupling_iterations``,
+    which is what FOLD model files store; ``fixed_shape`` is :class:`AmbientTemperature`'s).
 
     Parameters
     ----------
@@ -81,8 +83,8 @@ class Coupling:
 
 
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
-                       coupling: Coupling = Coupling()) -> StepOutcome:
-    """The paper's three-step loop over increments s = 1..S (digest 7.5).
+                       coupling: _Coupling = _Coupling()) -> StepOutcome:
+    """The paper's three-step loop over increments s = 1..S (theory 6.6).
 
     Per increment: node temperatures for crease powers ``powers[s]`` (S, C) [W] and room
     temperature ``ambient[s]`` [deg C] on the current shape; crease rest angles from the
@@ -130,25 +132,20 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     return rec.finish(True, "converged", "converged", end, f, evaluation)
 
 
-def _coupling(step) -> Coupling:
-    """Validate a step's coupling fields and return them as a :class:`Coupling`."""
-    if step.coupling not in ("staggered", "iterated"):
-        raise ParameterError(f"{type(step).__name__}.coupling = {step.coupling!r}; use "
-                             "'staggered' or 'iterated'.")
-    n = step.max_coupling_iterations
-    if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
-        raise ParameterError(f"{type(step).__name__}.max_coupling_iterations = {n!r} must be a "
-                             "positive integer.")
-    if not (isinstance(step.coupling_tol, (int, float)) and math.isfinite(step.coupling_tol)
-            and step.coupling_tol > 0):
-        raise ParameterError(f"{type(step).__name__}.coupling_tol = {step.coupling_tol!r} must "
-                             "be positive [K].")
-    return Coupling(step.coupling, float(step.coupling_tol), n)
+def _coupling(step) -> _Coupling:
+    """Validate a step's coupling fields and return them as a :class:`_Coupling`."""
+    owner = type(step).__name__
+    mode = one_of(f"{owner}.coupling", step.coupling, ("staggered", "iterated"),
+                  hint="the tolerance and iteration limit are the fields coupling_tol and "
+                  "max_coupling_iterations")
+    n = integer(f"{owner}.max_coupling_iterations", step.max_coupling_iterations)
+    tol = positive(f"{owner}.coupling_tol", step.coupling_tol, "K")
+    return _Coupling(mode, tol, n)
 
 
 @dataclass(frozen=True)
 class Heat(Step):
-    """Ramp crease heating powers linearly over ``increments`` (digest 7.5).
+    """Ramp crease heating powers linearly over ``increments`` (theory 6.6).
 
     Parameters
     ----------
@@ -158,10 +155,13 @@ class Heat(Step):
     increments : int
         Heating increments (each solves temperature, rest angles and equilibrium).
     coupling : {"staggered", "iterated"}
-        See :class:`Coupling`.
+        "staggered" (the reference's behaviour): the temperatures of an increment are solved on
+        the previous increment's shape; "iterated": heat, rest angles and equilibrium are
+        repeated within the increment until the temperatures agree within ``coupling_tol``.
     coupling_tol : float
-        Temperature agreement [K] that ends the "iterated" loop of an increment.
+        Temperature agreement [K] that ends the "iterated" loop of an increment, > 0.
     max_coupling_iterations : int
+        Coupling iterations per increment ("iterated" only), >= 1.
     on_limit_point : {"stop", "continue"}
         When the heated structure reaches a limit point (it snaps): end with status
         "limit_point" (default), or continue by arc length in the power (temperatures on the
@@ -182,8 +182,7 @@ class Heat(Step):
         check_on_limit_point(self)
         _coupling(self)
         for key, v in dict(self.power).items():
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
-                raise ParameterError(f"Heat: power of crease {key} is {v!r}; give watts.")
+            finite(f"Heat: power of crease {key}", v, "W")
 
     def power_array(self, mesh) -> np.ndarray:
         """(C,) power added per crease row [W]."""
@@ -231,7 +230,7 @@ class Heat(Step):
 
 @dataclass(frozen=True)
 class AmbientTemperature(Step):
-    """Ramp the room temperature to ``target`` [deg C] with the heating unchanged (digest 7.7).
+    """Ramp the room temperature to ``target`` [deg C] with the heating unchanged (theory 6.7).
 
     The conductivity is assembled once on the shape at the start of the step, as in the
     reference.
@@ -243,16 +242,13 @@ class AmbientTemperature(Step):
 
     def __post_init__(self):
         check_increments(self)
-        if not (isinstance(self.target, (int, float, np.integer, np.floating))
-                and math.isfinite(self.target)):
-            raise ParameterError(f"AmbientTemperature.target = {self.target!r} must be a finite "
-                                 "temperature [deg C].")
+        finite("AmbientTemperature.target", self.target, "deg C", hint="a temperature")
 
     def run(self, context: StepContext, state) -> StepOutcome:
         s = np.arange(1, self.increments + 1) / self.increments
         ambient = state.room_temperature + s * (self.target - state.room_temperature)
         powers = np.repeat(state.crease_power[None], self.increments, axis=0)
-        return coupled_increments(context, state, powers, ambient, Coupling(fixed_shape=True))
+        return coupled_increments(context, state, powers, ambient, _Coupling(fixed_shape=True))
 
     def describe(self) -> dict:
         return {"target [degC]": self.target, "increments": self.increments}

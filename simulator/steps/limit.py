@@ -7,12 +7,14 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
 
 * ``on_limit_point="stop"`` (default): a short arc-length probe from the last converged state;
   if it passes a load-factor maximum the step ends with status ``"limit_point"`` and the load
-  factor and displacement there in the message, otherwise (and when the step failed in its
-  first increment) the failure is unchanged;
+  factor and displacement there in the message and in a ``"limit_point"`` event, otherwise
+  (and when the step failed in its first increment) the failure is unchanged;
 * ``on_limit_point="continue"``: the step carries on by arc length (MGDCM) with its path
   parameter as the unknown load factor until it reaches 1 on a stable branch, recording the
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
-  power for heating, and the jump of the most-moving node's displacement).
+  power for heating, and the jump of the most-moving node's displacement), and so do the
+  step's events (:class:`~simulator.events.Event`: the critical points of the arc-length
+  stretches, and a ``"snap"`` per snap).
 
 Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
 temperatures are affine in lambda (the heat problem is linear in the power), which gives the
@@ -37,6 +39,7 @@ from ..errors import ParameterError
 from ..solvers.load_path import LoadPath
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
+from ..events import event_at, monitored_node
 from .base import StepOutcome, StepRecorder
 
 __all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "check_on_limit_point",
@@ -63,11 +66,15 @@ def check_on_limit_point(step) -> None:
 
 def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=None,
                         extra=None) -> None:
-    """Record every accepted point of a ContinuationResult with its stability columns.
+    """Record every accepted point of a ContinuationResult with its stability columns, and
+    its critical points as events (:class:`~simulator.events.Event`).
 
     ``powers(lam)`` gives the crease powers of a point (default ``power``); ``extra(lam)`` more
     named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none).
     """
+    node, offset = monitored_node(c), len(rec)
+    rec.events += [event_at(p, res, power if powers is None else powers(p.load_factor),
+                            temperature, offset, node) for p in res.critical_points]
     rec.iterations += res.iterations
     rec.cuts += res.cuts
     for k, ((lam, u, its), norms) in enumerate(zip(res.history, res.residual_norms)):
@@ -164,8 +171,8 @@ def _motion_monitor(start, outcome) -> np.ndarray:
 
 
 def _snaps(res, c) -> list:
-    """[(load factor, displacement before, after)] of every snap: a limit point where the path
-    turned back, and the point where it crosses that load factor again moving forward."""
+    """[(critical point, displacement after)] of every snap: a limit point (maximum) where the
+    path turned back, and the point where it crosses that load factor again moving forward."""
     lam = np.array([h[0] for h in res.history])
     m = np.array([float(c @ h[1].ravel()) for h in res.history])
     out, used = [], set()
@@ -177,7 +184,7 @@ def _snaps(res, c) -> list:
             if lam[j - 1] < p.load_factor <= lam[j]:
                 if j not in used:        # wiggles near one maximum land on the same segment
                     a = (p.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
-                    out.append((p.load_factor, p.displacement, m[j - 1] + a * (m[j] - m[j - 1])))
+                    out.append((p, m[j - 1] + a * (m[j] - m[j - 1])))
                     used.add(j)
                 break
     return out
@@ -224,7 +231,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         state = end_state(res.u, res.load_factor) if res.history else current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else 0.0
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
-                     f"{res.message}" + _snap_text(res, c, powers))
+                     f"{res.message}" + _snap_text(rec, res, c, powers))
         if not res.success or res.load_factor >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
                               state.applied_load.ravel(), res.evaluation)
@@ -278,14 +285,27 @@ def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcom
         f", displacement {p.displacement * 1e6:.4g} um of the most-moving node"
     if powers is not None:
         where = f" ({1e3 * np.max(powers(p.load_factor)):.4g} mW per crease){where}"
-    msg = (f"limit point at load factor {p.load_factor:.6g}{where}: load control cannot pass "
-           f"it (on_limit_point='continue' follows the path by arc length); {outcome.message}")
-    return replace(outcome, status="limit_point", message=msg)
+    what = f"limit point at load factor {p.load_factor:.6g}{where}"
+    msg = (f"{what}: load control cannot pass it (on_limit_point='continue' follows the path by "
+           f"arc length); {outcome.message}")
+    event = event_at(p, res, outcome.state.crease_power if powers is None else
+                     powers(p.load_factor), outcome.state.temperature, None,
+                     monitored_node(c), message=what)
+    return replace(outcome, status="limit_point", message=msg,
+                   events=outcome.events + (event,))
 
 
-def _snap_text(res, c, powers) -> str:
-    return "".join(
-        f"; snap at load factor {lam:.6g}"
-        + ("" if powers is None else f" ({1e3 * np.max(powers(lam)):.4g} mW per crease)")
-        + f": displacement jumps {1e6 * (after - before):.4g} um"
-        for lam, before, after in _snaps(res, c))
+def _snap_text(rec: StepRecorder, res, c, powers) -> str:
+    """The snaps of ``res`` (just recorded in ``rec`` by :func:`record_continuation`) for the
+    step's message; adds their events to ``rec``, each a copy of its limit point's event."""
+    limits = rec.events[len(rec.events) - len(res.critical_points):]
+    text = []
+    for p, after in _snaps(res, c):
+        lam, before = p.load_factor, p.displacement
+        text.append(f"snap at load factor {lam:.6g}"
+                    + ("" if powers is None else f" ({1e3 * np.max(powers(lam)):.4g} mW per "
+                                                 "crease)")
+                    + f": displacement jumps {1e6 * (after - before):.4g} um")
+        rec.events.append(replace(limits[res.critical_points.index(p)], kind="snap",
+                                  jump=after - before, message=text[-1]))
+    return "".join(f"; {t}" for t in text)

@@ -2,7 +2,7 @@
 
 Each step drives a linear path in (external load, spring rest angles) with
 :func:`~simulator.solvers.newton.follow_path` (Newton with step cutting); loads and rest angles
-persist into later steps (digest 7.3, 7.4).
+persist into later steps (theory 6.4, 6.5).
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import finite
 from ..errors import ParameterError
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
@@ -96,7 +97,7 @@ def _resume(context, mid, lam, f_end, rest_end, increments, end_state) -> StepOu
 
 @dataclass(frozen=True)
 class SelfFold(Step):
-    """Drive crease rest angles linearly to target fold angles (digest 7.3).
+    """Drive crease rest angles linearly to target fold angles (theory 6.4).
 
     Parameters
     ----------
@@ -152,7 +153,7 @@ class SelfFold(Step):
 
 @dataclass(frozen=True)
 class Load(Step):
-    """Add dead loads linearly over the step; they stay applied in later steps (digest 7.4).
+    """Add dead loads linearly over the step; they stay applied in later steps (theory 6.5).
 
     Parameters
     ----------
@@ -229,10 +230,8 @@ class Gravity(Step):
 
     def __post_init__(self):
         check_increments(self)
-        for attr in ("g", "scale"):
-            v = getattr(self, attr)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and np.isfinite(v)):
-                raise ParameterError(f"Gravity.{attr} = {v!r} must be a finite number.")
+        finite("Gravity.g", self.g, "m/s^2")
+        finite("Gravity.scale", self.scale)
 
     def run(self, context: StepContext, state) -> StepOutcome:
         load = Load(self.scale * gravity_loads(context.model.mesh, self.g, panels=self.panels),

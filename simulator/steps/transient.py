@@ -1,4 +1,4 @@
-"""Time-domain steps: transient heat transfer on a fixed shape (dynamics digest D5).
+"""Time-domain steps: transient heat transfer on a fixed shape (theory 8.1).
 
 :class:`TransientHeat` integrates the heat equation with the theta-method of
 :mod:`simulator.thermal.transient` over ``duration`` seconds, with time-varying crease or circuit
@@ -15,9 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
-import numpy as np
-
-from ..errors import ParameterError
+from .._validate import integer, positive
 from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
 from ..thermal.transient import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -60,13 +58,10 @@ class TransientHeat(Step):
 
     def __post_init__(self):
         check_power_mapping("TransientHeat", self.power)
-        check_time_step(self.duration, "TransientHeat.duration")
+        positive("TransientHeat.duration", self.duration, "s")
         check_time_step(self.dt, "TransientHeat.dt")
         check_theta(self.theta)
-        n = self.record_every
-        if not (isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1):
-            raise ParameterError(f"TransientHeat.record_every = {n!r} must be a positive "
-                                 "integer.")
+        integer("TransientHeat.record_every", self.record_every)
 
     def run(self, context: StepContext, state) -> StepOutcome:
         mesh, tm = context.model.mesh, context.thermal

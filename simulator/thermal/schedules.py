@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .._validate import finite, non_negative, number, positive
 from ..errors import ParameterError
 
 __all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
@@ -28,26 +29,22 @@ __all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "Piecewis
            "CreasePowers"]
 
 
-def _number(owner, name: str, value, ok=lambda v: True, allowed: str = "finite"):
+def _number(owner, name: str, value, ok=math.isfinite, allowed: str = "a finite number",
+            unit: str = ""):
     """``value`` as a float, or :class:`ParameterError` naming the field and the allowed range."""
-    good = (isinstance(value, (int, float, np.integer, np.floating))
-            and not isinstance(value, bool) and not math.isnan(value))
-    if not (good and ok(float(value))):
-        raise ParameterError(f"{type(owner).__name__}.{name} = {value!r} is invalid; it must be "
-                             f"{allowed}.")
-    return float(value)
+    return number(f"{type(owner).__name__}.{name}", value, ok, allowed, unit)
 
 
 def _power(owner, name, value):
-    return _number(owner, name, value, lambda v: 0 <= v < math.inf, "a finite power >= 0 W")
+    return non_negative(f"{type(owner).__name__}.{name}", value, "W")
 
 
 def _time(owner, name, value):
-    return _number(owner, name, value, math.isfinite, "a finite time [s]")
+    return finite(f"{type(owner).__name__}.{name}", value, "s")
 
 
 def _positive(owner, name, value, unit):
-    return _number(owner, name, value, lambda v: 0 < v < math.inf, f"a finite value > 0 {unit}")
+    return positive(f"{type(owner).__name__}.{name}", value, unit)
 
 
 class PowerSchedule(ABC):
@@ -93,7 +90,7 @@ class StepPower(PowerSchedule):
         object.__setattr__(self, "t_on", _time(self, "t_on", self.t_on))
         t_on = self.t_on
         object.__setattr__(self, "t_off", _number(self, "t_off", self.t_off, lambda v: v > t_on,
-                                                  f"a time [s] after t_on = {t_on}"))
+                                                  f"a time after t_on = {t_on}", "s"))
 
     def _values(self, t):
         return np.where((t >= self.t_on) & (t < self.t_off), self.power, 0.0)
@@ -166,15 +163,14 @@ class Sine(PowerSchedule):
     phase: float = 0.0
 
     def __post_init__(self):
-        a = _number(self, "amplitude", self.amplitude, math.isfinite, "a finite power [W]")
+        a = finite(f"{type(self).__name__}.amplitude", self.amplitude, "W")
         object.__setattr__(self, "amplitude", a)
         object.__setattr__(self, "frequency", _positive(self, "frequency", self.frequency, "Hz"))
         offset = abs(a) if self.offset is None else self.offset
         object.__setattr__(self, "offset", _number(
             self, "offset", offset, lambda v: abs(a) <= v < math.inf,
             f"a finite power >= |amplitude| = {abs(a)} W so that the power stays >= 0"))
-        object.__setattr__(self, "phase", _number(self, "phase", self.phase, math.isfinite,
-                                                  "a finite angle [rad]"))
+        object.__setattr__(self, "phase", _number(self, "phase", self.phase, unit="rad"))
 
     def _values(self, t):
         return self.offset + self.amplitude * np.sin(2 * np.pi * self.frequency * t + self.phase)
@@ -240,11 +236,9 @@ def check_power_mapping(owner: str, power) -> dict:
             raise ParameterError(f"{owner}: power key {key!r} must be a crease id or a tuple of "
                                  "crease ids (a heater circuit).")
         if not isinstance(value, PowerSchedule):
-            if not (isinstance(value, (int, float, np.integer, np.floating))
-                    and not isinstance(value, bool) and math.isfinite(value) and value >= 0):
-                raise ParameterError(f"{owner}: power of {key!r} is {value!r}; give a "
-                                     "PowerSchedule or a constant power >= 0 W.")
-            value = StepPower(float(value))
+            value = StepPower(number(f"{owner}: power of {key!r}", value,
+                                     lambda v: 0 <= v < math.inf,
+                                     "a PowerSchedule or a constant power >= 0", "W"))
         out[key] = value
     return out
 

@@ -1,4 +1,4 @@
-"""Steady heat conduction in the structure with loss to layered environment chains (digest 6).
+"""Steady heat conduction in the structure with loss to layered environment chains (theory 4).
 
 Every mesh triangle (crease and panel fans) is a linear T3 conduction element built
 from its REFERENCE edge lengths and the CURRENT angle at its first node. Each node
@@ -32,6 +32,7 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
+from .._validate import array, finite, in_range, integer, non_negative, positive
 from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
@@ -55,7 +56,7 @@ _MIN_AIR_FRACTION = 1e-9
 
 
 def heat_weights() -> np.ndarray:
-    """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (digest 6.6), (7,)."""
+    """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (theory 4.6), (7,)."""
     return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 12, 1 / 12, 1 / 3])
 
 
@@ -72,7 +73,7 @@ def _ids(value, name):
 
 @dataclass(frozen=True)
 class ThermalParameters:
-    """Heat-transfer parameters (digest 6; SI units, temperatures in deg C).
+    """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     Parameters
     ----------
@@ -109,24 +110,15 @@ class ThermalParameters:
     env_specific_heat: float = AIR.specific_heat
 
     def __post_init__(self):
-        checks = {
-            "env_density": (lambda v: v >= 0, ">= 0 kg/m^3"),
-            "env_specific_heat": (lambda v: v >= 0, ">= 0 J/(kg K)"),
-            "env_thickness": (lambda v: v > 0, "> 0 m"),
-            "env_conductivity": (lambda v: v >= 0, ">= 0 W/(m K)"),
-            "dissipation_angle": (lambda v: 0 <= v < math.pi / 2, "in [0, pi/2) rad"),
-            "room_temperature": (lambda v: True, "a finite temperature in deg C"),
-        }
-        for name, (ok, allowed) in checks.items():
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-                    and math.isfinite(v) and ok(v)):
-                raise ParameterError(f"ThermalParameters.{name} = {v!r} is invalid; it must be "
-                                     f"{allowed}.")
-        if not (isinstance(self.layers, (int, np.integer)) and not isinstance(self.layers, bool)
-                and self.layers >= 1):
-            raise ParameterError(f"ThermalParameters.layers = {self.layers!r} is invalid; it must "
-                                 "be an integer >= 1.")
+        owner = "ThermalParameters"
+        for name, unit in (("env_density", "kg/m^3"), ("env_specific_heat", "J/(kg K)"),
+                           ("env_conductivity", "W/(m K)")):
+            non_negative(f"{owner}.{name}", getattr(self, name), unit)
+        positive(f"{owner}.env_thickness", self.env_thickness, "m")
+        in_range(f"{owner}.dissipation_angle", self.dissipation_angle, 0, math.pi / 2, "rad",
+                 hint="the range is [0, pi/2)", open_high=True)
+        finite(f"{owner}.room_temperature", self.room_temperature, "deg C")
+        integer(f"{owner}.layers", self.layers)
         for name in ("boundary_panels", "room_temperature_nodes"):
             object.__setattr__(self, name, _ids(getattr(self, name), name))
 
@@ -224,11 +216,7 @@ class ThermalModel:
     # ------------------------------------------------------------------ element data
     def _positions(self, x) -> np.ndarray:
         """``x`` as a float array, checked to be finite and of the mesh's node shape [m]."""
-        x = np.asarray(x, float)
-        if x.shape != self.mesh.nodes.shape or not np.all(np.isfinite(x)):
-            raise ParameterError("positions x must be a finite array of shape "
-                                 f"{self.mesh.nodes.shape} [m].")
-        return x
+        return array("positions x", x, self.mesh.nodes.shape, "m")
 
     def _warn_floored(self):
         logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
@@ -252,11 +240,11 @@ class ThermalModel:
 
     def triangle_areas(self, x) -> np.ndarray:
         """Conduction areas A_t [m^2] of every triangle at positions ``x`` (n, 3) [m], (n_tri,)
-        (reference edge lengths, current angle at the first node; digest 6.2)."""
+        (reference edge lengths, current angle at the first node; theory 4.2)."""
         return self._conduction(x)[1]
 
     def tcap(self, x) -> np.ndarray:
-        """Cap of t_env per triangle [m], (n_tri,) (digest 6.4).
+        """Cap of t_env per triangle [m], (n_tri,) (theory 4.4).
 
         Mean over the triangle's vertices of the distance to the nearest boundary-panel triangle
         at positions ``x`` (n, 3) [m]; 1e10 for boundary triangles, 1e5 without boundary panels.
@@ -274,7 +262,7 @@ class ThermalModel:
         return np.where(self.is_boundary, _CAP_BOUNDARY, dmin[tri].mean(axis=1))
 
     def environment_geometry(self, x, area=None):
-        """Environment layer areas and thickness of every triangle (digest 6.3-6.4).
+        """Environment layer areas and thickness of every triangle (theory 4.3-4.4).
 
         Returns
         -------
@@ -308,7 +296,7 @@ class ThermalModel:
         return flat.reshape(-1, N)
 
     def layer_conductance(self, x, area=None) -> np.ndarray:
-        """Environment conductance of every node and layer [W/K], (n, N) (digest 6.3)."""
+        """Environment conductance of every node and layer [W/K], (n, N) (theory 4.3)."""
         a_q, t_air = self.environment_geometry(x, area)
         N = self.params.layers
         return self.node_layer_sum(self.params.env_conductivity * a_q * N / t_air[:, None])
@@ -333,16 +321,13 @@ class ThermalModel:
         return self._full_pattern.matrix([K, pair])
 
     def heat_vector(self, crease_power) -> np.ndarray:
-        """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (digest 6.6).
+        """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (theory 4.6).
 
         Each crease gives 1/8 to N11, N12, N21, N22, 1/12 to A and B and 1/3 to Ctr.
         """
         mesh = self.mesh
-        power = np.asarray(crease_power, float)
-        if power.shape != (mesh.n_creases,) or not np.all(np.isfinite(power)):
-            raise ParameterError(f"crease_power must be a finite array of shape "
-                                 f"({mesh.n_creases},) [W], one entry per crease row; "
-                                 f"got shape {power.shape}.")
+        power = array("crease_power", crease_power, (mesh.n_creases,), "W",
+                      hint="one entry per crease row")
         return np.bincount(mesh.crease_nodes.ravel(), (power[:, None] * heat_weights()).ravel(),
                            minlength=mesh.n_nodes).astype(float)
 
@@ -362,7 +347,7 @@ class ThermalModel:
 
         Notes
         -----
-        Equivalent to solving ``K_FF T_F = q_F - K_FD T_D`` on the full system (digest 6.5):
+        Equivalent to solving ``K_FF T_F = q_F - K_FD T_D`` on the full system (theory 4.5):
         every row of ``K`` sums to zero, so the temperature rise solves ``K_FF dT_F = q_F``, and
         the free environment layers of a node's chain condense exactly into one series
         conductance ``1 / sum_q (1 / g_q)`` to room temperature.

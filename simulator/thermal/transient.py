@@ -1,14 +1,14 @@
-"""Transient heat transfer: lumped heat capacity and a theta-method in time (dynamics digest D5).
+"""Transient heat transfer: lumped heat capacity and a theta-method in time (theory 8.1).
 
 The unknowns are those of the steady model (:mod:`simulator.thermal.steady`): the structure nodes and
 the ``N`` environment layers of every node, index ``q * n + node``. The capacity matrix is
-diagonal (lumped, digest D5.1) and uses the same volumes as the conductivity:
+diagonal (lumped, theory 7.2) and uses the same volumes as the conductivity:
 
 * solid: ``rho c t A_t / 3`` to each vertex of a triangle (material of its panel, or the crease
   material; unlike the reference, panels use their specific heat, not their conductivity,
-  digest D9.2);
+  theory 7.2);
 * environment: layer segment ``q`` of a vertex holds ``rho_env c_env A_q t_air / N``, half on
-  each of its two end copies (``A_q``, ``t_air`` as in the conductance, digest 6.3-6.4).
+  each of its two end copies (``A_q``, ``t_air`` as in the conductance, theory 4.3-4.4).
 
 Room-temperature nodes and the far layer ``N`` are Dirichlet nodes at room temperature; the
 free unknowns are integrated as temperature rises ``dT`` with the theta-method
@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .._result import ResultFiles
+from .._validate import in_range, integer, positive
 from ..errors import ParameterError
 from ..linalg import thresholds
 from ..linalg.ladder import check_backend, factorize
@@ -48,27 +50,20 @@ __all__ = ["REFERENCE_THETA", "capacity_vector", "HeatSystem", "heat_system", "T
 
 logger = logging.getLogger(__name__)
 
-#: Weight of the new time level used by the reference (``Solver_DynamicsThermal``, digest D5.4).
+#: Weight of the new time level used by the reference (``Solver_DynamicsThermal``, theory 8.5).
 REFERENCE_THETA = 2 / 3
 
 
 def check_time_step(dt, name: str = "dt") -> float:
-    """``dt`` [s] as a float, or :class:`ParameterError` unless finite and > 0."""
-    if not (isinstance(dt, (int, float, np.integer, np.floating)) and not isinstance(dt, bool)
-            and math.isfinite(dt) and dt > 0):
-        raise ParameterError(f"{name} = {dt!r} is invalid; the time step must be a finite "
-                             "number of seconds > 0.")
-    return float(dt)
+    """``dt`` [s] as a float, or :class:`ParameterError` unless finite and > 0 (the message
+    calls ``name`` a time step: use :func:`~simulator._validate.positive` for durations)."""
+    return positive(name, dt, "s", hint="give the time step in seconds")
 
 
 def check_theta(theta) -> float:
     """``theta`` as a float, or :class:`ParameterError` unless in [1/2, 1]."""
-    if not (isinstance(theta, (int, float, np.integer, np.floating))
-            and not isinstance(theta, bool) and 0.5 <= theta <= 1):
-        raise ParameterError(f"theta = {theta!r} is invalid; use a value in [0.5, 1] (0.5 "
-                             f"Crank-Nicolson, 1 backward Euler, {REFERENCE_THETA:.4g} the "
-                             "reference's).")
-    return float(theta)
+    return in_range("theta", theta, 0.5, 1, hint=f"0.5 Crank-Nicolson, 1 backward Euler, "
+                    f"{REFERENCE_THETA:.4g} the reference's")
 
 
 # ------------------------------------------------------------------ capacity
@@ -94,7 +89,7 @@ def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
 def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     """Lumped heat capacity [J/K] of every unknown, ((N + 1) n,), at positions ``x`` (n, 3) [m].
 
-    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (digest D5.1). With
+    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (theory 7.2). With
     ``env_conductivity = 0`` the environment is not in thermal contact and holds no heat.
     """
     prm, mesh = tm.params, tm.mesh
@@ -250,7 +245,7 @@ def theta_step(K, C, T, q_old, q_new, dt, theta=REFERENCE_THETA) -> np.ndarray:
 
 # ------------------------------------------------------------------ integration
 @dataclass(frozen=True, eq=False)
-class TransientHeatResult:
+class TransientHeatResult(ResultFiles):
     """Temperature history of :func:`integrate_heat` (``m`` records, record 0 = start).
 
     Attributes
@@ -303,6 +298,12 @@ class TransientHeatResult:
                              "heat_in [J]": rep(self.heat_in), "heat_out [J]": rep(self.heat_out),
                              "heat_stored [J]": rep(self.heat_stored)})
 
+    _csv_name = "transient_heat.csv"
+
+    def _meta(self) -> dict:
+        return {"dt [s]": self.dt, "theta": self.theta, "steps": self.steps,
+                "assemblies": self.assemblies}
+
 
 def initial_rise(tm, x, T0, room) -> np.ndarray:
     """Start rise [K] of every unknown, ((N + 1) n,), from temperatures ``T0`` [deg C] of the
@@ -351,10 +352,9 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
         ``callback(k, n_steps, t, temperature)`` after step k; returning True stops the run.
     """
     tm = _as_thermal_model(tm)
-    t_end, dt = check_time_step(t_end, "t_end"), check_time_step(dt)
+    t_end, dt = positive("t_end", t_end, "s"), check_time_step(dt)
     theta = check_theta(theta)
-    if not (isinstance(record_every, (int, np.integer)) and record_every >= 1):
-        raise ParameterError(f"record_every = {record_every!r} must be a positive integer.")
+    integer("record_every", record_every)
     room = tm.params.room_temperature if room is None else float(room)
     powers = _power_function(tm, powers)
     shape = x if callable(x) else (lambda t, _x=np.asarray(x, float): _x)

@@ -15,6 +15,7 @@ import pathlib
 import numpy as np
 
 from ..._version import __version__
+from ..._validate import integer
 from ...errors import ParameterError
 from ...geometry.pattern import Pattern
 from ._common import NS
@@ -96,8 +97,7 @@ def result_to_fold_frames(result, every: int = 1) -> dict:
     node positions, node temperatures [deg C] and per-crease fold angles [rad], rotations
     since the initial record [rad], temperatures [deg C] and powers [W] under ``etorigami:``.
     """
-    if not (isinstance(every, int) and not isinstance(every, bool) and every >= 1):
-        raise ParameterError(f"every = {every!r} must be a positive integer (frame stride).")
+    integer("every", every, hint="the frame stride")
     mesh = result.model.mesh
     h = result.history
     m = len(h["stage"])

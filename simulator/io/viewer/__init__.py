@@ -24,6 +24,7 @@ from importlib import resources
 
 import numpy as np
 
+from ..._validate import integer
 from ...errors import ParameterError
 
 __all__ = ["write_viewer", "viewer_html", "load_viewer_data"]
@@ -163,8 +164,7 @@ def viewer_html(data: dict, max_bytes: int = MAX_DATA_BYTES) -> str:
     max_bytes : int
         Budget for the encoded per-record data [bytes]; records are thinned evenly beyond it.
     """
-    if not (isinstance(max_bytes, int) and max_bytes > 0):
-        raise ParameterError(f"max_bytes = {max_bytes!r} must be a positive integer of bytes.")
+    integer("max_bytes", max_bytes, hint="a budget in bytes")
     assets = resources.files(__name__)
     page = assets.joinpath("viewer.html").read_text(encoding="utf-8")
     script = assets.joinpath("viewer.js").read_text(encoding="utf-8")

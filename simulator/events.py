@@ -1,0 +1,148 @@
+"""Events of a loading step as data: limit points, bifurcations and snaps.
+
+A path-following step (:class:`~simulator.steps.ArcLengthLoad`,
+:class:`~simulator.steps.DisplacementControl`) and a load-controlled step continued past a limit
+point (``on_limit_point="continue"`` of :class:`~simulator.steps.Heat`,
+:class:`~simulator.steps.Load`, :class:`~simulator.steps.SelfFold`) record what happened on
+their path as :class:`Event` records, next to the human-readable message: the
+:class:`~simulator.solvers.path_trace.CriticalPoint` located by the continuation (limit point,
+bifurcation, stability change) with what the step knows there (crease powers, the monitored
+node, its hottest temperature), and for a snap the jump load control makes. A step stopped at a
+limit point (``on_limit_point="stop"``) records the limit point its probe found. The events are
+on :attr:`StepResult.events <simulator.results.StepResult.events>` and
+:attr:`SimulationResult.events <simulator.results.SimulationResult.events>`, in
+``meta.json`` and in :meth:`~simulator.results.SimulationResult.events_frame`; code reads them,
+never the messages.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ParameterError
+from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
+
+__all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node"]
+
+#: Kinds of :class:`Event`: those of a critical point, and ``"snap"``.
+EVENT_KINDS = CRITICAL_KINDS + ("snap",)
+
+
+@dataclass(frozen=True)
+class Event(CriticalPoint):
+    """A critical point of a step's path, located on the step's records (SI units).
+
+    Attributes
+    ----------
+    kind : {"limit_point", "bifurcation", "stability_change", "snap"}
+        A ``"snap"`` starts at a load-factor maximum (a ``"limit_point"`` event of the same
+        step at the same load factor) and ends where the path crosses that load factor again
+        moving forward: the jump load control would make there.
+    load_factor : float
+        The step's path parameter there (0 at its start, 1 at its end; the load factor of an
+        :class:`~simulator.steps.ArcLengthLoad` or :class:`~simulator.steps.DisplacementControl`).
+    increment : int or None
+        Index (0-based) into the step's records (``StepResult.load_factor``, ``u_history``) of
+        the first accepted increment past the event; None if none was recorded past it (the
+        probe of a step stopped at a limit point).
+    displacement : float or None
+        Displacement of the monitored node ``node`` there [m], from the mesh position, along a
+        direction: the controlled or monitored one of a path-following step; for a
+        load-controlled step continued past a limit point, the node that moved most in the
+        step, along its motion (interpolated at a limit point).
+    maximum : bool
+        True at a load-factor maximum (and for a snap).
+    power_per_crease : tuple of float
+        Crease powers there [W], in crease-row order (as ``state.crease_power`` and the columns
+        of ``StepResult.power_history``; ``mesh.crease_ids`` gives the crease of each).
+    jump : float or None
+        Snap only: change of ``displacement`` from the limit point to where the path crosses its
+        load factor again [m].
+    temperature_max : float or None
+        Hottest node at the accepted point just past the event (at the last converged state for
+        an unrecorded event) [deg C].
+    node : int or None
+        Node whose displacement ``displacement`` is.
+    step : str or None
+        Name of the step (set by :func:`~simulator.simulation.simulate`).
+    step_index : int or None
+        Position of the step in the simulation (0-based, set by
+        :func:`~simulator.simulation.simulate`).
+    message : str
+        The event in words, as it appears in the step's message.
+    """
+
+    increment: int | None = None
+    power_per_crease: tuple = ()
+    jump: float | None = None
+    temperature_max: float | None = None
+    node: int | None = None
+    step: str | None = None
+    step_index: int | None = None
+    message: str = ""
+
+    def __post_init__(self):
+        if self.kind not in EVENT_KINDS:
+            raise ParameterError(f"Event.kind = {self.kind!r}; use one of {EVENT_KINDS}.")
+        if not (isinstance(self.load_factor, (int, float, np.number))
+                and math.isfinite(self.load_factor)):
+            raise ParameterError(f"Event.load_factor = {self.load_factor!r} must be a finite "
+                                 "number.")
+        object.__setattr__(self, "power_per_crease",
+                           tuple(float(p) for p in np.ravel(self.power_per_crease)))
+
+    @property
+    def total_power(self) -> float:
+        """Sum of the crease powers there [W]."""
+        return float(sum(self.power_per_crease))
+
+    def to_dict(self, crease_ids=None) -> dict:
+        """JSON-able record, units in the keys; crease powers keyed by crease id if
+        ``crease_ids`` (C,) is given (``mesh.crease_ids``), else a list in crease-row order."""
+        p = self.power_per_crease
+        return {"kind": self.kind, "step": self.step, "step_index": self.step_index,
+                "increment": self.increment, "load_factor": self.load_factor,
+                "maximum": self.maximum,
+                "power_per_crease [W]": list(p) if crease_ids is None else
+                {str(int(c)): v for c, v in zip(crease_ids, p)},
+                "total_power [W]": self.total_power, "displacement [m]": self.displacement,
+                "node": self.node, "jump [m]": self.jump,
+                "temperature_max [degC]": self.temperature_max, "message": self.message}
+
+
+def event_at(point: CriticalPoint, path, power, temperature, offset: int | None = 0,
+             node: int | None = None, **fields) -> Event:
+    """The :class:`Event` of a critical point of a continuation run.
+
+    Parameters
+    ----------
+    point : CriticalPoint of ``path``
+    path : ContinuationResult (its ``temperatures`` give ``temperature_max``)
+    power : (C,) crease powers there [W]
+    temperature : (n_nodes,) node temperatures [deg C] where ``path`` has none
+    offset : int or None
+        Records of the step before the first point of ``path`` (None: ``path`` is not
+        recorded, the event has no increment).
+    node : int, optional (see :attr:`Event.node`)
+    **fields : more :class:`Event` fields (``kind``, ``jump``, ``message``, ...)
+    """
+    k = point.increment
+    temps = getattr(path, "temperatures", None) or []
+    t = temps[k] if 0 <= k < len(temps) and temps[k] is not None else temperature
+    values = {"kind": point.kind, "load_factor": point.load_factor,
+              "increment": None if offset is None else offset + k,
+              "displacement": point.displacement, "maximum": point.maximum,
+              "power_per_crease": power, "temperature_max": float(np.max(t)), "node": node,
+              "message": point.describe(), **fields}
+    return Event(**values)
+
+
+def monitored_node(c) -> int | None:
+    """Node of a displacement measure ``c`` (n_dof,) weighing one node's DOFs, else None."""
+    if c is None:
+        return None
+    nodes = np.unique(np.flatnonzero(np.asarray(c).ravel()) // 3)
+    return int(nodes[0]) if len(nodes) == 1 else None
