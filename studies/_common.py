@@ -24,7 +24,7 @@ import pandas as pd
 from simulator import __version__
 from simulator.cases import get_case
 
-__all__ = ["RESULTS", "default_out", "study_main", "replot", "progress_bar", "write_outputs", "node_frame",
+__all__ = ["RESULTS", "QUICK_RESULTS", "default_out", "refusal", "run_was_quick", "study_main", "replot", "progress_bar", "write_outputs", "node_frame",
            "shape_from_frame", "heating_records", "run_case", "XYZ", "TEMP",
            "time_limit", "EvaluationTimeout", "TimeLimited"]
 
@@ -33,10 +33,54 @@ __all__ = ["RESULTS", "default_out", "study_main", "replot", "progress_bar", "wr
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "results"
 
 
-def default_out(name: str) -> pathlib.Path:
+#: Folder (of the current directory) that ``--quick`` runs write into by default: not
+#: ``results/``, so a quick run never overwrites full results; git-ignored.
+QUICK_RESULTS = "results-quick"
+
+
+def default_out(name: str, quick: bool = False) -> pathlib.Path:
     """Default output folder of a study: ``./results/<name>`` of the current directory
-    (never the installed package's folder)."""
-    return pathlib.Path.cwd() / "results" / name
+    (never the installed package's folder), or ``./results-quick/<name>`` for a quick run."""
+    return pathlib.Path.cwd() / (QUICK_RESULTS if quick else "results") / name
+
+
+def _as_json(value):
+    """``value`` as ``meta.json`` stores it (so settings compare like they read back)."""
+    return json.loads(json.dumps(value, default=str))
+
+
+def refusal(out: pathlib.Path, name: str, settings: dict) -> str | None:
+    """Why ``out`` must not receive this run's results, or None if it may.
+
+    ``out`` is refused when its ``meta.json`` records another study or other ``settings``
+    (quick and full runs differ), or cannot be read: writing there would mix files of
+    different runs. A folder without ``meta.json`` is accepted.
+    """
+    meta_path = pathlib.Path(out) / "meta.json"
+    if not meta_path.is_file():
+        return None
+    try:
+        meta = json.loads(meta_path.read_text())
+        study, old = meta.get("study"), meta.get("settings")
+    except (OSError, ValueError, AttributeError) as exc:
+        return f"{meta_path} cannot be read ({exc.__class__.__name__})"
+    if study != name:
+        return f"{out} holds results of the study {study!r}, not {name!r}"
+    if old != _as_json(settings):
+        return (f"{out} holds results of other settings ({json.dumps(old)} there, "
+                f"{json.dumps(_as_json(settings))} now)")
+    return None
+
+
+def run_was_quick(out: pathlib.Path, default: bool = False) -> bool:
+    """Whether the results in ``out`` come from a ``--quick`` run (its ``meta.json``);
+    ``default`` when there is no readable ``meta.json``."""
+    try:
+        return bool(json.loads((pathlib.Path(out) / "meta.json").read_text())["settings"]["quick"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return default
+
+
 #: Column names of node tables (positions in um, temperatures in deg C).
 XYZ = ["x [um]", "y [um]", "z [um]"]
 TEMP = "temperature [degC]"
@@ -53,60 +97,91 @@ def progress_bar(iterable, enabled: bool = True, **kwargs):
 
 def write_outputs(out: pathlib.Path, name: str, frame, figures: dict, settings: dict,
                   wall_time: float) -> None:
-    """Write ``<name>.csv``, one PNG per figure and ``meta.json`` into ``out``."""
+    """Write ``<name>.csv``, one PNG per figure and ``meta.json`` into ``out``.
+
+    ``settings["quick"]`` true (a ``--quick`` run) stamps every figure as a quick run
+    (:func:`studies.plotting.save_figure`); ``meta.json`` records the settings.
+    """
     from studies.plotting import save_figure
 
+    quick = bool(settings.get("quick", False))
     out.mkdir(parents=True, exist_ok=True)
     frame.to_csv(out / f"{name}.csv", index=False)
     for fig_name, fig in figures.items():
-        save_figure(fig, out / f"{fig_name}.png")
+        save_figure(fig, out / f"{fig_name}.png", quick=quick)
     meta = {"study": name, "etorigami_version": __version__, "settings": settings,
             "rows": len(frame), "wall_time [s]": round(wall_time, 3)}
     (out / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
 
 
-def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
-    """Command line of a study: ``--quick``, ``--out DIR``, ``--no-progress``,
-    ``--figures-only``.
-
-    ``plot(df)`` may return one Figure or a dict {file stem: Figure}. ``--figures-only``
-    re-creates the figures from ``<out>/<name>.csv`` without running the study (the CSV and
-    ``meta.json`` are left as they are).
-    """
+def _parser(name: str, doc: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=f"python -m studies.{name}",
                                      description=doc.strip().splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="coarse, fast version (for tests)")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"coarse, fast version (for tests): written to ./{QUICK_RESULTS}/"
+                             f"{name} (not ./results) unless --out is given; its figures are "
+                             "stamped as a quick run")
     parser.add_argument("--out", type=pathlib.Path, default=None,
-                        help=f"output folder (default ./results/{name} of the current directory)")
+                        help=f"output folder (default ./results/{name} of the current "
+                             f"directory, ./{QUICK_RESULTS}/{name} with --quick)")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="write into OUT even if its meta.json records another study or "
+                             "other settings (quick and full runs differ); without it such a "
+                             "folder is refused (exit 2) before the study runs")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--figures-only", action="store_true",
                         help=f"only re-draw the figures from OUT/{name}.csv")
+    return parser
+
+
+def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
+    """Command line of a study: ``--quick``, ``--out DIR``, ``--overwrite``,
+    ``--no-progress``, ``--figures-only``.
+
+    ``plot(df)`` may return one Figure or a dict {file stem: Figure}. ``--figures-only``
+    re-creates the figures from ``<out>/<name>.csv`` without running the study (the CSV and
+    ``meta.json`` are left as they are). A ``--quick`` run goes to ``./results-quick/<name>``
+    by default, so it never overwrites full results. An output folder holding results of
+    another study or other settings is refused (one line, exit 2) unless ``--overwrite``.
+    """
+    parser = _parser(name, doc)
     args = parser.parse_args(argv)
-    args.out = default_out(name) if args.out is None else args.out
+    args.out = default_out(name, args.quick) if args.out is None else args.out
     logging.basicConfig(level=logging.WARNING)
     if args.figures_only:
-        return replot(name, plot, args.out)
+        return replot(name, plot, args.out, quick=args.quick)
+    settings = {"quick": args.quick}
+    reason = None if args.overwrite else refusal(args.out, name, settings)
+    if reason:
+        parser.exit(2, f"{parser.prog}: error: {reason}; choose another --out or pass "
+                       "--overwrite.\n")
     t0 = time.perf_counter()
     frame = run(quick=args.quick, progress=not args.no_progress)
     figs = plot(frame)
     figs = figs if isinstance(figs, dict) else {name: figs}
-    write_outputs(args.out, name, frame, figs, {"quick": args.quick},
-                  time.perf_counter() - t0)
-    print(f"{name}: {len(frame)} rows written to {args.out} in {time.perf_counter() - t0:.1f} s")
+    write_outputs(args.out, name, frame, figs, settings, time.perf_counter() - t0)
+    kind = " (quick run: coarse settings, not the published results)" if args.quick else ""
+    print(f"{name}: {len(frame)} rows written to {args.out} in "
+          f"{time.perf_counter() - t0:.1f} s{kind}")
     return args.out
 
 
-def replot(name: str, plot, out: pathlib.Path) -> pathlib.Path:
-    """Re-create a study's figures from ``out/<name>.csv`` (written by an earlier run)."""
+def replot(name: str, plot, out: pathlib.Path, quick: bool = False) -> pathlib.Path:
+    """Re-create a study's figures from ``out/<name>.csv`` (written by an earlier run).
+
+    The figures are stamped as a quick run when ``out/meta.json`` says the results come
+    from one (``quick`` when there is no ``meta.json``).
+    """
     from studies.plotting import save_figure
 
     csv = pathlib.Path(out) / f"{name}.csv"
     if not csv.is_file():
         raise SystemExit(f"--figures-only needs {csv}; run the study first (without it).")
+    quick = run_was_quick(out, default=quick)
     figs = plot(pd.read_csv(csv))
     figs = figs if isinstance(figs, dict) else {name: figs}
     for fig_name, fig in figs.items():
-        save_figure(fig, pathlib.Path(out) / f"{fig_name}.png")
+        save_figure(fig, pathlib.Path(out) / f"{fig_name}.png", quick=quick)
     print(f"{name}: {len(figs)} figure(s) re-drawn in {out}")
     return pathlib.Path(out)
 

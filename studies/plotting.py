@@ -14,13 +14,15 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
 from simulator import SU8
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
-           "save_figure", "mark_temperature_limit", "nodal_range", "T_LIMIT"]
+           "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",
+           "T_LIMIT"]
 
 CMAP = "plasma"
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
@@ -280,7 +282,7 @@ def plot_temperature_vs_power(frame_or_result, creases=None, ax=None) -> Figure:
 
 
 # ----------------------------------------------------------------------------- files
-def animate(result, path, every=1, fps=10) -> pathlib.Path:
+def animate(result, path, every=1, fps=10, quick=False) -> pathlib.Path:
     """Write a GIF of the deformed, temperature-coloured shape over the whole history.
 
     Colour limits and axis limits are fixed over the run (all temperatures, bounding box
@@ -295,6 +297,8 @@ def animate(result, path, every=1, fps=10) -> pathlib.Path:
         Use every ``every``-th record (the last record is always included).
     fps : float
         Frames per second.
+    quick : bool
+        The result comes from a ``--quick`` run: stamp every frame (:func:`stamp_quick`).
 
     Returns
     -------
@@ -319,6 +323,8 @@ def animate(result, path, every=1, fps=10) -> pathlib.Path:
     ax.add_collection3d(coll)
     _temperature_colorbar(fig, ax, coll)
     set_3d_limits(ax, x_all)
+    if quick:
+        stamp_quick(fig)
 
     def update(k):
         coll.set_verts(x_all[k][mesh.triangles])
@@ -333,7 +339,27 @@ def animate(result, path, every=1, fps=10) -> pathlib.Path:
     return path
 
 
-def save_figure(fig, path, dpi=150) -> pathlib.Path:
+#: Text of the stamp on the figures of a ``--quick`` study run (:func:`stamp_quick`).
+QUICK_STAMP = "quick run: coarse settings,\nnot the published figure"
+_STAMP_GID = "quick-stamp"
+_STAMP_HEIGHT = 0.32   # [inch] strip kept free for the stamp under the axes
+
+
+def stamp_quick(fig) -> None:
+    """Mark ``fig`` as the figure of a quick run: :data:`QUICK_STAMP` in its bottom-left
+    corner, in a strip that a constrained layout keeps free of the axes (so the stamp never
+    covers data). Calling it again changes nothing."""
+    if any(t.get_gid() == _STAMP_GID for t in fig.texts):
+        return
+    engine = fig.get_layout_engine()
+    if isinstance(engine, ConstrainedLayoutEngine):
+        strip = min(_STAMP_HEIGHT / fig.get_figheight(), 0.2)
+        engine.set(rect=(0.0, strip, 1.0, 1.0 - strip))
+    fig.text(0.005, 0.005, QUICK_STAMP, ha="left", va="bottom", fontsize="x-small",
+             color="darkred", fontweight="bold", gid=_STAMP_GID)
+
+
+def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     """Save a figure (PNG unless ``path`` has another suffix), creating the parent folder.
 
     Parameters
@@ -341,6 +367,8 @@ def save_figure(fig, path, dpi=150) -> pathlib.Path:
     fig : matplotlib.figure.Figure
     path : str or pathlib.Path
     dpi : float
+    quick : bool
+        The figure comes from a ``--quick`` run: stamp it as such (:func:`stamp_quick`).
 
     Returns
     -------
@@ -351,5 +379,7 @@ def save_figure(fig, path, dpi=150) -> pathlib.Path:
     if not path.suffix:
         path = path.with_suffix(".png")
     path.parent.mkdir(parents=True, exist_ok=True)
+    if quick:
+        stamp_quick(fig)
     fig.savefig(path, dpi=dpi)
     return path

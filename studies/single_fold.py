@@ -56,7 +56,7 @@ import pandas as pd
 
 from simulator.cases import get_case
 from studies._common import (TEMP, heating_records, node_frame, run_case,
-                             shape_from_frame, study_main)
+                             run_was_quick, shape_from_frame, study_main)
 
 NAME = "single_fold"
 REFERENCE = pathlib.Path(__file__).resolve().parent / "reference" / "single_fold_res0.csv"
@@ -208,16 +208,19 @@ def plot(df: pd.DataFrame) -> dict:
     return {NAME: fig, f"{NAME}_shape": shape}
 
 
-def animation(df: pd.DataFrame, path) -> pathlib.Path:
-    """GIF of the -10 deg run's heating stage from the ``nodes`` rows of the table."""
+def animation(df: pd.DataFrame, path, quick: bool = False) -> pathlib.Path:
+    """GIF of the -10 deg run's heating stage from the ``nodes`` rows of the table
+    (stamped as a quick run if ``quick``)."""
     from studies.plotting import animate
 
-    return animate(shape_from_frame(df[df["table"] == "nodes"], _mesh()), path, every=1, fps=8)
+    return animate(shape_from_frame(df[df["table"] == "nodes"], _mesh()), path, every=1, fps=8,
+                   quick=quick)
 
 
 def main(argv=None):
     out = study_main(NAME, __doc__, run, plot, argv)
-    animation(pd.read_csv(out / f"{NAME}.csv"), out / f"{NAME}_-10deg.gif")
+    animation(pd.read_csv(out / f"{NAME}.csv"), out / f"{NAME}_-10deg.gif",
+              quick=run_was_quick(out))
     return out
 
 
