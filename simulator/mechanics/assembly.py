@@ -307,7 +307,7 @@ class FamilyAssembly:
         for fam, v in zip(self.families, values):
             names = fam.energy_kinds
             if len(names) == 1:
-                parts = (np.sum(v.energy),)
+                parts = (v.energy.sum() if len(v.energy) else 0.0,)
             else:
                 labels = fam.labels if v.elements is None else fam.labels[v.elements]
                 parts = np.bincount(labels, v.energy, minlength=len(names))

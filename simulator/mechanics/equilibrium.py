@@ -138,6 +138,7 @@ class EquilibriumSystem:
         self.families = tuple(check_family(f, self.n_dof)
                               for f in [*model_families(model, self), *extra_families])
         self.assembly = FamilyAssembly(self.families, self.free_index)
+        self._changing = [i for i, f in enumerate(self.families) if f.changing]
         self._alias_builtin_families()
         fusable = all(type(f) in FUSED_FAMILIES for f in self.families)
         self._fused = self._fused_data() if small and fusable and (
@@ -287,7 +288,7 @@ class EquilibriumSystem:
         c = Configuration(u, self.model.mesh.nodes + u, spring_rest)
         values = [f.evaluate(c, hessian) for f in self.families]
         a = self.assembly
-        n_changing = sum(len(v.energy) for f, v in zip(self.families, values) if f.changing)
+        n_changing = sum(len(values[i].energy) for i in self._changing)
         return Evaluation(f_int=a.vector(values), K=a.matrix(values) if hessian else None,
                           energies=a.energies(values, ENERGY_KINDS), n_contacts=n_changing)
 

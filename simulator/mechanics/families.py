@@ -43,7 +43,7 @@ displacements (zero Hessian), which the solvers scale by the load factor (theory
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -61,9 +61,9 @@ __all__ = ["Configuration", "FamilyValues", "ElementFamily", "BarFamily", "Sprin
            "model_families", "check_family"]
 
 
-@dataclass(frozen=True, eq=False)
-class Configuration:
-    """What a family may read at one evaluation.
+class Configuration(NamedTuple):
+    """What a family may read at one evaluation (a named tuple: cheap to make at every
+    evaluation).
 
     Attributes
     ----------
@@ -78,9 +78,8 @@ class Configuration:
     spring_rest: np.ndarray | None = None
 
 
-@dataclass(frozen=True, eq=False)
-class FamilyValues:
-    """What a family's ``evaluate`` returns for the elements it evaluated.
+class FamilyValues(NamedTuple):
+    """What a family's ``evaluate`` returns for the elements it evaluated (a named tuple).
 
     Attributes
     ----------
@@ -99,6 +98,21 @@ class FamilyValues:
     hess: np.ndarray | None
     elements: np.ndarray | None = None
     dofs: np.ndarray | None = None
+
+
+def _nothing(m: int, elements: bool = False, dofs: bool = False) -> FamilyValues:
+    """Values of no element of an m-DOF family (read-only arrays, shared)."""
+    arrays = [np.zeros(0), np.zeros((0, m)), np.zeros((0, m, m)),
+              np.zeros(0, dtype=int) if elements else None,
+              np.zeros((0, m), dtype=int) if dofs else None]
+    for a in arrays:
+        if a is not None:
+            a.flags.writeable = False
+    return FamilyValues(*arrays)
+
+
+_NO_PAIR, _NO_PAIR_IN_PATTERN, _NO_SUPPORT = _nothing(12, False, True), _nothing(12, True, True), \
+    _nothing(1)
 
 
 @runtime_checkable
@@ -191,9 +205,7 @@ class ContactFamily:
                 return FamilyValues(ec[active], gc[active], hc[active],
                                     None if self.dofs is None else index[active],
                                     element_dofs(conn[active]))
-        return FamilyValues(np.zeros(0), np.zeros((0, 12)), np.zeros((0, 12, 12)),
-                            None if self.dofs is None else np.zeros(0, dtype=int),
-                            np.zeros((0, 12), dtype=int))
+        return _NO_PAIR if self.dofs is None else _NO_PAIR_IN_PATTERN
 
     def material_hessian(self, c: Configuration) -> None:
         return None
@@ -212,6 +224,8 @@ class SupportFamily:
     labels: ClassVar[None] = None
 
     def evaluate(self, c: Configuration, hessian: bool = True) -> FamilyValues:
+        if not len(self.k):
+            return _NO_SUPPORT
         u = c.u.ravel()[self.dofs[:, 0]]
         return FamilyValues(0.5 * self.k * u**2, (self.k * u)[:, None],
                             self.k[:, None, None] if hessian else None)
