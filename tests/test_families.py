@@ -222,6 +222,8 @@ def test_the_fused_kernel_is_chosen_only_for_its_own_families():
     assert system.uses_fused
     toy = _toys(model.mesh, np.random.default_rng(0))[0]
     assert not EquilibriumSystem(model, extra_families=[toy]).uses_fused
+    twice = EquilibriumSystem(model, extra_families=[system.families[2]])   # supports twice
+    assert not twice.uses_fused
 
 
 def test_malformed_families_are_refused_with_the_attribute_named():
@@ -275,3 +277,17 @@ def test_built_in_families_sum_in_the_order_of_the_fused_kernel():
     K = system.pattern.matrix([vb.hess, vs.hess, vc.hess, system.elastic_k], {2: vc.elements})
     np.testing.assert_array_equal(ev.K.data, K.data)
     assert ev.energies["contact"] == vc.energy.sum() and ev.n_contacts == len(vc.energy)
+
+
+def test_the_compiled_scatter_takes_the_generic_path_values(monkeypatch):
+    """Large patterns sum with the compiled loop (numba backend): the values of every family,
+    empty ones included (no elastic supports, no active contact), give the numpy sums."""
+    from simulator.mechanics import assembly
+    model = _sheet(lambda mesh: Supports.nodes(mesh.panel_nodes(0)))
+    system = EquilibriumSystem(model, extra_families=_toys(model.mesh, np.random.default_rng(6)))
+    u = np.random.default_rng(7).normal(size=model.mesh.nodes.shape) * 1e-6
+    rest = initial_state(model).spring_rest
+    ref = system.evaluate(u, rest).K
+    monkeypatch.setattr(assembly, "JIT_ENTRIES", 0)
+    K = system.evaluate(u, rest).K
+    np.testing.assert_array_equal(K.data, ref.data)

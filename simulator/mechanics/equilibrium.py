@@ -38,8 +38,8 @@ from ..linalg.small_solve import DENSE_LIMIT, SPARSE_MIN, SparseCholesky, patter
 from .contact_search import ContactSearch
 from ..thermal import _thermal_jit
 from .elements import _fused_jit, _springs_jit
-from .families import (FUSED_FAMILIES, Configuration, FamilyValues, SupportFamily, check_family,
-                       model_families)
+from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, SpringFamily,
+                       SupportFamily, check_family, model_families)
 from ..model.model import Model
 
 __all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
@@ -140,7 +140,8 @@ class EquilibriumSystem:
         self.assembly = FamilyAssembly(self.families, self.free_index)
         self._changing = [i for i, f in enumerate(self.families) if f.changing]
         self._alias_builtin_families()
-        fusable = all(type(f) in FUSED_FAMILIES for f in self.families)
+        types = [type(f) for f in self.families]      # the fused kernel's own, once each
+        fusable = all(t in FUSED_FAMILIES for t in types) and len(set(types)) == len(types)
         self._fused = self._fused_data() if small and fusable and (
             self.contact is None or self.contact_in_pattern) else None
         n_pairs = 0 if static is None else len(static)
@@ -148,9 +149,11 @@ class EquilibriumSystem:
 
     def _alias_builtin_families(self):
         """The arrays of the built-in families under the names the fused kernel and the
-        sparse Cholesky structure read."""
-        bars, springs = self.families[0], self.families[1]
-        supports = next(f for f in self.families if isinstance(f, SupportFamily))
+        sparse Cholesky structure read (the first family of each built-in type)."""
+        first = {}
+        for f in self.families:
+            first.setdefault(type(f), f)
+        bars, springs, supports = first[BarFamily], first[SpringFamily], first[SupportFamily]
         self.bar_dofs, self.spr_dofs = bars.dofs, springs.dofs
         self.bar_dX, self.bar_L0, self.bar_EA = bars.dX, bars.L0, bars.EA
         self.spr_k = springs.k

@@ -101,14 +101,10 @@ class FamilyValues(NamedTuple):
 
 
 def _nothing(m: int, elements: bool = False, dofs: bool = False) -> FamilyValues:
-    """Values of no element of an m-DOF family (read-only arrays, shared)."""
-    arrays = [np.zeros(0), np.zeros((0, m)), np.zeros((0, m, m)),
-              np.zeros(0, dtype=int) if elements else None,
-              np.zeros((0, m), dtype=int) if dofs else None]
-    for a in arrays:
-        if a is not None:
-            a.flags.writeable = False
-    return FamilyValues(*arrays)
+    """Values of no element of an m-DOF family (empty arrays, shared: nothing to write)."""
+    return FamilyValues(np.zeros(0), np.zeros((0, m)), np.zeros((0, m, m)),
+                        np.zeros(0, dtype=int) if elements else None,
+                        np.zeros((0, m), dtype=int) if dofs else None)
 
 
 _NO_PAIR, _NO_PAIR_IN_PATTERN, _NO_SUPPORT = _nothing(12, False, True), _nothing(12, True, True), \
