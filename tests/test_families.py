@@ -220,6 +220,7 @@ def test_the_fused_kernel_is_chosen_only_for_its_own_families():
     assert [type(f) for f in system.families] == [BarFamily, SpringFamily, SupportFamily,
                                                   ContactFamily]
     assert system.uses_fused
+    assert all(check_family(f, model.mesh.n_dof) is f for f in system.families)
     toy = _toys(model.mesh, np.random.default_rng(0))[0]
     assert not EquilibriumSystem(model, extra_families=[toy]).uses_fused
     twice = EquilibriumSystem(model, extra_families=[system.families[2]])   # supports twice

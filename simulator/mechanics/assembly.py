@@ -266,19 +266,26 @@ class FamilyAssembly:
         self.free_index = free_index
         self.n_dof = len(free_index)
         self.n_free = int(free_index.max()) + 1 if free_index.size else 0
-        given = [i for i, f in enumerate(self.families) if f.dofs is not None]
-        self._blocks = [i for i in given if self.families[i].dofs.shape[1] != 1]
-        self._diagonal = [i for i in given if self.families[i].dofs.shape[1] == 1]
-        self._apart = [i for i, f in enumerate(self.families) if f.dofs is None]
+
+    @cached_property
+    def _layout(self) -> tuple:
+        """Indices of the families in the pattern (node elements), on its diagonal (one DOF
+        per element) and assembled apart (no DOFs), found on first use."""
+        dofs = [f.dofs for f in self.families]
+        given = [i for i, d in enumerate(dofs) if d is not None]
+        return ([i for i in given if dofs[i].shape[1] != 1],
+                [i for i in given if dofs[i].shape[1] == 1],
+                [i for i, d in enumerate(dofs) if d is None])
 
     @cached_property
     def pattern(self) -> StiffnessPattern:
         """CSR pattern of the free-DOF tangent (built on first use)."""
-        diagonal = None
-        if self._diagonal:
-            diagonal = np.concatenate([self.families[i].dofs[:, 0] for i in self._diagonal])
-        return StiffnessPattern([self.families[i].dofs for i in self._blocks], self.free_index,
-                                diagonal=diagonal)
+        blocks, diagonal, _ = self._layout
+        diag = None
+        if diagonal:
+            diag = np.concatenate([self.families[i].dofs[:, 0] for i in diagonal])
+        return StiffnessPattern([self.families[i].dofs for i in blocks], self.free_index,
+                                diagonal=diag)
 
     def _dofs(self, i: int, v) -> np.ndarray:
         if v.dofs is not None:
@@ -318,8 +325,9 @@ class FamilyAssembly:
     def matrix(self, values: list) -> sp.csr_matrix:
         """Free-DOF CSR tangent [N/m] from the Hessians of ``values`` (one FamilyValues per
         family, or None for a family that adds nothing this time)."""
+        blocks, diagonal, apart = self._layout
         hess, subsets = [], {}
-        for i in self._blocks:
+        for i in blocks:
             v = values[i]
             if v is None or v.hess is None:          # no element: an empty subset
                 m = self.families[i].dofs.shape[1]
@@ -329,12 +337,12 @@ class FamilyAssembly:
             if v.elements is not None:
                 subsets[len(hess)] = v.elements
             hess.append(v.hess)
-        if self._diagonal:
+        if diagonal:
             diag = [np.zeros(len(self.families[i].dofs)) if values[i] is None
-                    or values[i].hess is None else values[i].hess for i in self._diagonal]
+                    or values[i].hess is None else values[i].hess for i in diagonal]
             hess.append(diag[0] if len(diag) == 1 else np.concatenate([np.ravel(d) for d in diag]))
         K = self.pattern.matrix(hess, subsets or None)
-        for i in self._apart:
+        for i in apart:
             v = values[i]
             if v is not None and v.hess is not None and len(v.hess):
                 K = K + assemble_matrix(v.dofs, v.hess, self.free_index, self.n_free)

@@ -135,8 +135,8 @@ class EquilibriumSystem:
         # Small models: all of them, so that the pattern holds every entry of a dense tangent.
         small = len(self.free) <= DENSE_LIMIT
         self.contact_in_pattern = static is not None and (small or 144 * len(static) <= MERGE_LIMIT)
-        self.families = tuple(check_family(f, self.n_dof)
-                              for f in [*model_families(model, self), *extra_families])
+        extra = [check_family(f, self.n_dof) for f in extra_families]
+        self.families = (*model_families(model, self), *extra)
         self.assembly = FamilyAssembly(self.families, self.free_index)
         self._changing = [i for i, f in enumerate(self.families) if f.changing]
         self._alias_builtin_families()

@@ -43,6 +43,7 @@ displacements (zero Hessian), which the solvers scale by the load factor (theory
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
@@ -181,16 +182,22 @@ class SpringFamily:
 class ContactFamily:
     """Node-to-triangle penalty contact (theory sections 3.5-3.7): the candidates of ``search``
     (a :class:`~simulator.mechanics.contact_search.ContactSearch`) at every evaluation, of which
-    the pairs with positive energy are active. ``dofs``: all admissible pairs (small meshes:
-    they join the cached pattern, zero when inactive) or None (assembled apart)."""
+    the pairs with positive energy are active. ``in_pattern``: all admissible pairs join the
+    cached pattern, zero when inactive (small meshes), else they are assembled apart."""
 
     search: object
     stiffness: float
-    dofs: np.ndarray | None
+    in_pattern: bool
     name: ClassVar[str] = "contact"
     changing: ClassVar[bool] = True
     energy_kinds: ClassVar[tuple] = ("contact",)
     labels: ClassVar[None] = None
+
+    @cached_property
+    def dofs(self) -> np.ndarray | None:
+        """DOFs (m, 12) of all admissible pairs if they join the pattern, else None (made on
+        first use: the fused kernel never asks)."""
+        return element_dofs(self.search.static_conn) if self.in_pattern else None
 
     def evaluate(self, c: Configuration, hessian: bool = True) -> FamilyValues:
         conn, d0, index = self.search.candidates(c.x)
@@ -199,9 +206,9 @@ class ContactFamily:
             active = np.flatnonzero(ec > 0)
             if len(active):
                 return FamilyValues(ec[active], gc[active], hc[active],
-                                    None if self.dofs is None else index[active],
+                                    index[active] if self.in_pattern else None,
                                     element_dofs(conn[active]))
-        return _NO_PAIR if self.dofs is None else _NO_PAIR_IN_PATTERN
+        return _NO_PAIR_IN_PATTERN if self.in_pattern else _NO_PAIR
 
     def material_hessian(self, c: Configuration) -> None:
         return None
@@ -248,8 +255,7 @@ def _springs(model, system) -> SpringFamily:
 def _contact(model, system) -> ContactFamily | None:
     if system.contact is None:
         return None
-    dofs = element_dofs(system.contact.static_conn) if system.contact_in_pattern else None
-    return ContactFamily(system.contact, model.contact.stiffness, dofs)
+    return ContactFamily(system.contact, model.contact.stiffness, system.contact_in_pattern)
 
 
 def _supports(model, system) -> SupportFamily:
@@ -274,13 +280,15 @@ def model_families(model, system) -> list:
     return [f for f in found if f is not None]
 
 
+_MEMBERS = ("name", "dofs", "changing", "energy_kinds", "labels", "evaluate", "material_hessian")
+
+
 def check_family(family, n_dof: int):
     """``family`` if it follows :class:`ElementFamily` on a model of ``n_dof`` DOFs, else a
     :class:`~simulator.errors.ParameterError` naming the attribute and the fix."""
     what = f"element family {getattr(family, 'name', type(family).__name__)!r}"
-    if not isinstance(family, ElementFamily):
-        missing = [a for a in ("name", "dofs", "changing", "energy_kinds", "labels", "evaluate",
-                               "material_hessian") if not hasattr(family, a)]
+    missing = [a for a in _MEMBERS if not hasattr(family, a)]
+    if missing:
         raise ParameterError(f"{what} lacks {', '.join(missing)}: an element family needs "
                              "the attributes of simulator.mechanics.families.ElementFamily.")
     kinds = family.energy_kinds
