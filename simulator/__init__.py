@@ -30,6 +30,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.dynamics_options": ("DynamicsOptions",),
     ".mechanics.elements.springs": ("spring_kernel_backend",),
     ".mechanics.kinematics": ("fold_angles",),
+    ".mechanics.equilibrium": ("EquilibriumSystem",),
+    ".mechanics.families": ("Configuration", "ElementFamily", "FamilyValues"),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
                 "PatternError", "SolverError"),
     ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
@@ -76,6 +78,8 @@ __all__ = [
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
     "initial_state", "spring_kernel_backend",
+    # element families (a new element type) and the system that assembles them
+    "EquilibriumSystem", "ElementFamily", "FamilyValues", "Configuration",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",

@@ -1,2 +1,2 @@
-"""Mechanics: element families (bars, springs, contact), contact search, assembly,
-the equilibrium system and the fold-angle measures of a deformed mesh."""
+"""Mechanics: element families (bars, springs, contact, supports; the protocol in ``families``),
+their kernels, contact search, generic assembly, the equilibrium system and fold-angle measures."""

@@ -4,10 +4,13 @@ Element families give node connectivities ``(n_el, k)``; their kernels return
 gradients ``(n_el, 3k)`` and Hessians ``(n_el, 3k, 3k)`` in node-major DOF
 order. Vectors are assembled with ``np.bincount``; matrices on the free DOFs
 with a CSR pattern computed once per topology (:class:`StiffnessPattern`).
+:class:`FamilyAssembly` does both for a list of element families
+(:mod:`simulator.mechanics.families`, docs/theory.md#310-element-families-and-assembly).
 """
 
 from __future__ import annotations
 
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -16,7 +19,7 @@ from .._jit import compile_kernel
 from .elements._springs_jit import numba_selected
 
 __all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix",
-           "scatter_numpy", "JIT_ENTRIES"]
+           "FamilyAssembly", "scatter_numpy", "JIT_ENTRIES"]
 
 
 #: Patterns with at least this many Hessian entries sum them with a compiled loop (numba): no
@@ -240,3 +243,108 @@ def assemble_matrix(dofs: np.ndarray, hess: np.ndarray, free_index: np.ndarray,
     c = free_index[np.tile(dofs, (1, m)).ravel()]
     keep = (r >= 0) & (c >= 0)
     return sp.csr_matrix((hess.ravel()[keep], (r[keep], c[keep])), shape=(n_free, n_free))
+
+
+class FamilyAssembly:
+    """One generic assembly for a list of element families
+    (:class:`~simulator.mechanics.families.ElementFamily`).
+
+    Parameters
+    ----------
+    families : sequence of element families, in summation order
+    free_index : (n_dof,) int array
+        Reduced index of every DOF, -1 for fixed DOFs.
+
+    The cached :attr:`pattern` holds the DOFs of every family that gives them: families of
+    node elements in their order, then the one-DOF families as its diagonal terms. Changing
+    families without DOFs (contact on large meshes) are assembled apart at every evaluation
+    and added. Forces are summed family by family in the given order.
+    """
+
+    def __init__(self, families, free_index: np.ndarray):
+        self.families = tuple(families)
+        self.free_index = free_index
+        self.n_dof = len(free_index)
+        self.n_free = int(free_index.max()) + 1 if free_index.size else 0
+
+    @cached_property
+    def _layout(self) -> tuple:
+        """Indices of the families in the pattern (node elements), on its diagonal (one DOF
+        per element) and assembled apart (no DOFs), found on first use."""
+        dofs = [f.dofs for f in self.families]
+        given = [i for i, d in enumerate(dofs) if d is not None]
+        return ([i for i in given if dofs[i].shape[1] != 1],
+                [i for i in given if dofs[i].shape[1] == 1],
+                [i for i, d in enumerate(dofs) if d is None])
+
+    @cached_property
+    def pattern(self) -> StiffnessPattern:
+        """CSR pattern of the free-DOF tangent (built on first use)."""
+        blocks, diagonal, _ = self._layout
+        diag = None
+        if diagonal:
+            diag = np.concatenate([self.families[i].dofs[:, 0] for i in diagonal])
+        return StiffnessPattern([self.families[i].dofs for i in blocks], self.free_index,
+                                diagonal=diag)
+
+    def _dofs(self, i: int, v) -> np.ndarray:
+        if v.dofs is not None:
+            return v.dofs
+        d = self.families[i].dofs
+        return d if v.elements is None else d[v.elements]
+
+    def vector(self, values: list) -> np.ndarray:
+        """Internal force (n_dof,) [N]: the gradients of ``values`` (one
+        :class:`~simulator.mechanics.families.FamilyValues` per family) summed family by family."""
+        f = None
+        for i, v in enumerate(values):
+            if f is not None and not len(v.grad):
+                continue
+            g = assemble_vector(self.n_dof, self._dofs(i, v), v.grad)
+            if f is None:
+                f = g
+            else:
+                f += g
+        return np.zeros(self.n_dof) if f is None else f
+
+    def energies(self, values: list, kinds=()) -> dict:
+        """Energy per kind [J]: ``kinds`` first (zero unless a family gives them), then any
+        other kind of the families; families with several kinds split by their labels."""
+        out = dict.fromkeys(kinds, 0.0)
+        for fam, v in zip(self.families, values):
+            names = fam.energy_kinds
+            if len(names) == 1:
+                parts = (v.energy.sum() if len(v.energy) else 0.0,)
+            else:
+                labels = fam.labels if v.elements is None else fam.labels[v.elements]
+                parts = np.bincount(labels, v.energy, minlength=len(names))
+            for name, e in zip(names, parts):
+                out[name] = out.get(name, 0.0) + float(e)
+        return out
+
+    def matrix(self, values: list) -> sp.csr_matrix:
+        """Free-DOF CSR tangent [N/m] from the Hessians of ``values`` (one FamilyValues per
+        family, or None for a family that adds nothing this time)."""
+        blocks, diagonal, apart = self._layout
+        hess, subsets = [], {}
+        for i in blocks:
+            v = values[i]
+            if v is None or v.hess is None:          # no element: an empty subset
+                m = self.families[i].dofs.shape[1]
+                subsets[len(hess)] = np.zeros(0, dtype=int)
+                hess.append(np.zeros((0, m, m)))
+                continue
+            if v.elements is not None:
+                subsets[len(hess)] = v.elements
+            hess.append(v.hess)
+        if diagonal:
+            diag = [np.zeros(len(self.families[i].dofs)) if values[i] is None
+                    or values[i].hess is None else values[i].hess for i in diagonal]
+            hess.append(diag[0] if len(diag) == 1 else np.concatenate([np.ravel(d) for d in diag]))
+        K = self.pattern.matrix(hess, subsets or None)
+        for i in apart:
+            v = values[i]
+            if v is not None and v.hess is not None and len(v.hess):
+                K = K + assemble_matrix(v.dofs, v.hess, self.free_index, self.n_free)
+        return K
+

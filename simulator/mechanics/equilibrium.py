@@ -1,20 +1,27 @@
-"""Total potential of a model: bars + rotational springs + contact + elastic supports.
+"""Total potential of a model: the sum of its element families.
 
-:class:`EquilibriumSystem` caches everything that depends only on the model
-(element DOFs, the CSR pattern of the free-DOF stiffness, contact candidates)
-and evaluates energies, internal forces and the tangent stiffness at a given
+:class:`EquilibriumSystem` caches everything that depends only on the model (the element
+families of :mod:`simulator.mechanics.families`: bars, rotational springs, contact, elastic
+supports, plus any ``extra_families``; the CSR pattern of the free-DOF stiffness; contact
+candidates) and evaluates energies, internal forces and the tangent stiffness at a given
 displacement and set of spring rest angles.
 
 Two paths compute the same numbers (to rounding):
 
-* the numpy element kernels assembled by :mod:`simulator.mechanics.assembly` (the reference, and the
-  only path for models with more than :data:`DENSE_LIMIT` free DOFs);
-* on small models, when the compiled backend is in force (numba installed, ``ETORIGAMI_JIT``
-  not off, see :func:`simulator.mechanics.elements.springs.spring_kernel_backend`), one call of the fused
-  kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the tangent straight into a
-  dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with it)
-  and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first access,
-  so every consumer of ``K`` sees a CSR matrix whichever path ran.
+* the generic path: every family's vectorised kernel, assembled by
+  :class:`simulator.mechanics.assembly.FamilyAssembly` (the reference, the path of models with
+  more than :data:`DENSE_LIMIT` free DOFs and of models with families the fused kernel does
+  not know);
+* an accelerator on small models whose families are exactly those of
+  :data:`~simulator.mechanics.families.FUSED_FAMILIES`, when the compiled backend is in force
+  (numba installed, ``ETORIGAMI_JIT`` not off, see
+  :func:`simulator.mechanics.elements.springs.spring_kernel_backend`): one call of the fused
+  kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the tangent straight
+  into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
+  it) and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first
+  access, so every consumer of ``K`` sees a CSR matrix whichever path ran.
+
+See docs/theory.md#310-element-families-and-assembly.
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from .assembly import StiffnessPattern, assemble_matrix, assemble_vector, element_dofs
+from .assembly import FamilyAssembly, StiffnessPattern, element_dofs
 from ..linalg import thresholds
 from ..linalg.ladder import solve
 from ..linalg.small_solve import SparseCholesky, pattern_of
@@ -34,12 +41,9 @@ from ..linalg.thresholds import DENSE_LIMIT
 from .contact_search import ContactSearch
 from ..thermal import _thermal_jit
 from .elements import _fused_jit, _springs_jit
-from .elements import _bars_jit
-from .elements.bars import bar_kernel
-from .elements.contact import contact_kernel
-from .elements.springs import fold_angle_derivatives, spring_kernel
-from ..model.mesh import BarType, SpringKind
-from ..model.model import Model, _AXES
+from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, SpringFamily,
+                       SupportFamily, check_family, model_families)
+from ..model.model import Model
 
 __all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
 
@@ -48,7 +52,8 @@ logger = logging.getLogger(__name__)
 #: Merge contact pairs into the cached stiffness pattern up to this many Hessian entries.
 MERGE_LIMIT = 200_000
 
-#: Energy components reported by every evaluation [J].
+#: Energy components reported by every evaluation [J] (those of the built-in families; extra
+#: families add their own kinds after these).
 ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_stretching",
                 "contact", "elastic_support")
 
@@ -101,9 +106,23 @@ class Evaluation:
 
 
 class EquilibriumSystem:
-    """Cached assembly data for one :class:`Model`."""
+    """Cached assembly data for one :class:`Model`.
 
-    def __init__(self, model: Model):
+    Parameters
+    ----------
+    model : Model
+    extra_families : sequence of element families, optional
+        Families beyond those the model describes (:data:`~.families.FAMILY_BUILDERS`),
+        assembled after them (see :mod:`simulator.mechanics.families`). With any, the generic
+        path runs (the fused kernel knows only its own families).
+
+    Attributes
+    ----------
+    families : tuple of the element families, in summation order
+    assembly : the :class:`~simulator.mechanics.assembly.FamilyAssembly` of them
+    """
+
+    def __init__(self, model: Model, extra_families=()):
         mesh = model.mesh
         self.model = model
         self.n_dof = mesh.n_dof
@@ -111,17 +130,6 @@ class EquilibriumSystem:
         self.free = np.flatnonzero(self.free_index >= 0)
         X = mesh.nodes
         self.size = float(np.max(np.ptp(X, axis=0))) if len(X) else 0.0   # model size [m]
-        self.bar_dofs = element_dofs(mesh.bars)
-        self.spr_dofs = element_dofs(mesh.springs)
-        self.bar_dX = X[mesh.bars[:, 1]] - X[mesh.bars[:, 0]]
-        self.bar_L0 = mesh.bar_length
-        self.bar_EA = model.properties.bar_axial_stiffness
-        self.spr_k = model.properties.spring_stiffness
-        self.bar_is_panel = np.isin(mesh.bar_type, (BarType.PANEL_EDGE, BarType.SPOKE))
-        self.spr_is_panel = mesh.spring_kind == SpringKind.PANEL
-        el = model.supports.elastic
-        self.elastic_dofs = np.array([3 * n + _AXES[d] for n, d, _ in el], dtype=int)
-        self.elastic_k = np.array([k for _, _, k in el], dtype=float)
         self.contact = None if model.contact is None else ContactSearch(mesh, model.contact)
         self.max_step = None if model.contact is None else model.contact.max_step
         # Small meshes: all admissible contact pairs join the cached pattern (zero when inactive),
@@ -130,26 +138,42 @@ class EquilibriumSystem:
         # Small models: all of them, so that the pattern holds every entry of a dense tangent.
         small = len(self.free) <= DENSE_LIMIT
         self.contact_in_pattern = static is not None and (small or 144 * len(static) <= MERGE_LIMIT)
-        self.bar_kind = self.bar_is_panel.astype(int)        # 0 crease, 1 panel
-        self.spr_kind = self.spr_is_panel.astype(int)
-        self._fused = self._fused_data() if small and (self.contact is None
-                                                       or self.contact_in_pattern) else None
+        extra = [check_family(f, self.n_dof) for f in extra_families]
+        self.families = (*model_families(model, self), *extra)
+        self.assembly = FamilyAssembly(self.families, self.free_index)
+        self._changing = [i for i, f in enumerate(self.families) if f.changing]
+        self._alias_builtin_families()
+        types = [type(f) for f in self.families]      # the fused kernel's own, once each
+        fusable = all(t in FUSED_FAMILIES for t in types) and len(set(types)) == len(types)
+        self._fused = self._fused_data() if small and fusable and (
+            self.contact is None or self.contact_in_pattern) else None
         n_pairs = 0 if static is None else len(static)
         self._chol = None, np.zeros(n_pairs, bool)     # sparse Cholesky structure, pairs in it
+
+    def _alias_builtin_families(self):
+        """The arrays of the built-in families under the names the fused kernel and the
+        sparse Cholesky structure read (the first family of each built-in type)."""
+        first = {}
+        for f in self.families:
+            first.setdefault(type(f), f)
+        bars, springs, supports = first[BarFamily], first[SpringFamily], first[SupportFamily]
+        self.bar_dofs, self.spr_dofs = bars.dofs, springs.dofs
+        self.bar_dX, self.bar_L0, self.bar_EA = bars.dX, bars.L0, bars.EA
+        self.spr_k = springs.k
+        self.bar_kind, self.spr_kind = bars.labels, springs.labels   # 0 crease, 1 panel
+        self.bar_is_panel, self.spr_is_panel = bars.labels == 1, springs.labels == 1
+        self.elastic_dofs, self.elastic_k = supports.dofs[:, 0], supports.k
 
     @property
     def n_free(self) -> int:
         """Number of free DOFs."""
         return len(self.free)
 
-    @cached_property
+    @property
     def pattern(self) -> StiffnessPattern:
         """CSR pattern of the free-DOF tangent (built on first use: the fused path needs it
         only when an Evaluation's ``K`` is asked for)."""
-        families = [self.bar_dofs, self.spr_dofs]
-        if self.contact_in_pattern:
-            families.append(element_dofs(self.contact.static_conn))
-        return StiffnessPattern(families, self.free_index, diagonal=self.elastic_dofs)
+        return self.assembly.pattern
 
     @property
     def uses_fused(self) -> bool:
@@ -262,69 +286,27 @@ class EquilibriumSystem:
         return self._evaluate_numpy(u, spring_rest, hessian)
 
     def _evaluate_numpy(self, u, spring_rest, hessian=True) -> Evaluation:
-        """:meth:`evaluate` with the element kernels of :mod:`simulator.mechanics.elements`: element
-        Hessian arrays scattered into the cached pattern (the path of models outside the fused
-        kernel; bars and springs compiled with the "numba" backend, else numpy)."""
-        mesh = self.model.mesh
-        x = mesh.nodes + u
-        du = u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
-        bars = _bars_jit.bar_kernel_jit if _bars_jit.use_compiled() else bar_kernel
-        eb, gb, hb = bars(self.bar_dX, du, self.bar_L0, self.bar_EA, hessian)
-        es, gs, hs = spring_kernel(x[mesh.springs], self.spr_k, spring_rest, hessian)
-        f = assemble_vector(self.n_dof, self.bar_dofs, gb) \
-            + assemble_vector(self.n_dof, self.spr_dofs, gs)
-        u_el = u.ravel()[self.elastic_dofs]
-        f[self.elastic_dofs] += self.elastic_k * u_el
-        e_bar = np.bincount(self.bar_kind, eb, minlength=2)
-        e_spr = np.bincount(self.spr_kind, es, minlength=2)
-        energies = {"crease_bending": float(e_spr[0]), "panel_bending": float(e_spr[1]),
-                    "panel_stretching": float(e_bar[1]), "crease_stretching": float(e_bar[0]),
-                    "contact": 0.0,
-                    "elastic_support": float(0.5 * np.sum(self.elastic_k * u_el**2))}
-        families = [hb, hs]
-        subsets = None
-        extra = None
-        n_contacts = 0
-        if self.contact is not None:
-            if self.contact_in_pattern:        # only the active pairs' entries are scattered
-                families.append(np.zeros((0, 12, 12)))
-                subsets = {2: np.zeros(0, dtype=int)}
-            conn, d0, index = self.contact.candidates(x)
-            if len(conn):
-                ec, gc, hc = contact_kernel(x[conn], d0, self.model.contact.stiffness)
-                active = np.flatnonzero(ec > 0)
-                n_contacts = len(active)
-                if n_contacts:
-                    f += assemble_vector(self.n_dof, element_dofs(conn[active]), gc[active])
-                    energies["contact"] = float(ec[active].sum())
-                    if subsets is not None:
-                        families[2], subsets[2] = hc[active], index[active]
-                    elif hessian:
-                        extra = assemble_matrix(element_dofs(conn[active]), hc[active],
-                                                self.free_index, self.n_free)
-        K = None
-        if hessian:
-            K = self.pattern.matrix(families + [self.elastic_k], subsets)
-            if extra is not None:
-                K = K + extra
-        return Evaluation(f_int=f, K=K, energies=energies, n_contacts=n_contacts)
+        """:meth:`evaluate` by the generic path: every family's kernel, then
+        :class:`~simulator.mechanics.assembly.FamilyAssembly` (element Hessians scattered into
+        the cached pattern; the path of models outside the fused kernel; bars and springs
+        compiled with the "numba" backend, else numpy)."""
+        c = Configuration(u, self.model.mesh.nodes + u, spring_rest)
+        values = [f.evaluate(c, hessian) for f in self.families]
+        a = self.assembly
+        n_changing = sum(len(values[i].energy) for i in self._changing)
+        return Evaluation(f_int=a.vector(values), K=a.matrix(values) if hessian else None,
+                          energies=a.energies(values, ENERGY_KINDS), n_contacts=n_changing)
 
     def material_stiffness(self, u: np.ndarray) -> sp.csr_matrix:
         """Free-DOF stiffness without stress (geometric) terms and contact [N/m].
 
         ``sum EA L0 g g^T`` over bars (g = d strain / d x) and ``sum k grad(theta) grad(theta)^T``
-        over springs, plus elastic supports, at displacements ``u`` (n_nodes, 3) [m]. It is
-        positive semi-definite and annihilates the rigid-body velocities of the current
-        configuration, which makes it the matrix of stiffness-proportional damping.
+        over springs, plus elastic supports, at displacements ``u`` (n_nodes, 3) [m] (each
+        family's ``material_hessian``). It is positive semi-definite and annihilates the
+        rigid-body velocities of the current configuration, which makes it the matrix of
+        stiffness-proportional damping.
         """
-        mesh = self.model.mesh
-        dx = self.bar_dX + u[mesh.bars[:, 1]] - u[mesh.bars[:, 0]]
-        g = np.concatenate([-dx, dx], axis=1) / (self.bar_L0**2)[:, None]
-        hb = (self.bar_EA * self.bar_L0)[:, None, None] * (g[:, :, None] * g[:, None, :])
-        _, gs, _ = fold_angle_derivatives((mesh.nodes + u)[mesh.springs], hessian=False)
-        hs = self.spr_k[:, None, None] * (gs[:, :, None] * gs[:, None, :])
-        families, subsets = [hb, hs], None
-        if self.contact_in_pattern:
-            families.append(np.zeros((0, 12, 12)))
-            subsets = {2: np.zeros(0, dtype=int)}
-        return self.pattern.matrix(families + [self.elastic_k], subsets)
+        c = Configuration(u, self.model.mesh.nodes + u)
+        hess = [f.material_hessian(c) for f in self.families]
+        return self.assembly.matrix([None if h is None else FamilyValues(None, None, h)
+                                     for h in hess])

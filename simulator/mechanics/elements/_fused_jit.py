@@ -6,7 +6,10 @@ the active contact pairs, and the tangent stiffness on the free DOFs written str
 DENSE (n_free, n_free) matrix: no per-element Hessian arrays, no CSR, no candidate arrays. The
 numpy kernels (:mod:`.bars`, :mod:`.springs`, :mod:`.contact`,
 :mod:`simulator.mechanics.contact_search`) stay the reference: the formulas below are theirs, written
-with scalar arithmetic, and the tests compare the two paths.
+with scalar arithmetic, and the tests compare the two paths. It is an accelerator, not the
+structure: the system chooses it only when the model's element families are exactly the four
+it knows (:data:`simulator.mechanics.families.FUSED_FAMILIES`); any other family sends the
+model through the generic assembly of :mod:`simulator.mechanics.assembly`.
 
 * bars: :func:`simulator.mechanics.elements.bars.bar_kernel`, same operations in the same order (the
   strain of a stiff bar cancels strongly, so it is worth the same floats);
