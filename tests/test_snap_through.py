@@ -220,3 +220,43 @@ def test_miura_power_search_reports_a_snap():
     assert ok
     res = stage.result("met", 12e-3, state, "criterion met")
     assert res.success and "after a snap" in res.message and "mW per crease" in res.message
+
+
+def _heated_miura_snap(increments):
+    """Heat MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) to 12 mW per crease in
+    ``increments``: (result, [(snap power [mW], jump [um])])."""
+    import math
+    import re
+
+    from design.miura import MiuraDesign, heated_creases, miura_model
+
+    d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
+    model = miura_model(d)
+    res = simulate(model, [Heat({tuple(heated_creases(d)): 12e-3}, increments=increments,
+                                on_limit_point="continue")], state=simulate(model, []).state)
+    snaps = [(float(p), float(j)) for p, j in re.findall(
+        r"\(([\d.]+) mW per crease\): displacement jumps ([-\d.e+]+) um", res.steps[0].message)]
+    return res, snaps
+
+
+#: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
+#: same snap. Not met yet: near 11.0 mW per crease (load factor ~0.92) the coupled path has a
+#: second fold whose branch turns back to negative powers, so arc length cannot pass it and
+#: success depends on whether staggered load control happens to jump across (see the report
+#: of branch ``cont``).
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="second fold near 11 mW not passed for every count")
+def test_heated_miura_snap_does_not_depend_on_increments():
+    """Success, 12 mW and the main snap (largest jump) at 30, 60, 120 and 240 increments:
+    power within 12 mW / 240 (the finest increment) and jump within 10 um (about the most
+    moving node's travel per increment at 240 increments, 1.9 mm / 183)."""
+    main = []
+    for n in (30, 60, 120, 240):
+        res, snaps = _heated_miura_snap(n)
+        assert res.success, (n, res.message)
+        assert res.state.crease_power.max() == pytest.approx(12e-3)
+        assert snaps, (n, res.message)
+        main.append(max(snaps, key=lambda s: s[1]))
+    powers, jumps = np.array(main).T
+    assert np.ptp(powers) <= 12.0 / 240 and 9.0 < powers.min() and powers.max() < 9.4
+    assert np.ptp(jumps) <= 10.0

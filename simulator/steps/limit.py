@@ -34,7 +34,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..solvers.load_path import LoadPath
+from ..solvers.load_path import LoadPath, _Constraint, _correct, _size
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from .base import StepOutcome, StepRecorder
@@ -49,6 +49,14 @@ LIMIT_POINT_ACTIONS = ("stop", "continue")
 PROBE_INCREMENTS = 40
 #: Arc-length increments at most per snap with on_limit_point="continue".
 CONTINUATION_INCREMENTS = 200
+#: Arc length of the continuation in load-factor units: the first predictor moves the
+#: displacements as far as the load-controlled part would over this load factor (the step's
+#: own increments play no part, so the traced snap does not depend on them).
+ARC_LOAD_STEP = 0.01
+#: Near a limit point the continuation's arc length is at most ARC_LOAD_STEP / RESOLVE
+#: (:func:`~simulator.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
+#: are located at that resolution.
+RESOLVE = 8
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -217,8 +225,9 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     rec = StepRecorder(start)
     _replay(rec, outcome)
     notes, current, c = [], outcome, _motion_monitor(start, outcome)
+    origin = (start.u, 0.0)                 # where the load control of ``current`` began
     for _ in range(MAX_SNAPS):
-        res = _arc(context, start, current, path, increments, c, until_stable=True)
+        res = _arc(context, origin, current, path, increments, c, until_stable=True)
         record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
                             powers=powers)
         state = end_state(res.u, res.load_factor) if res.history else current.state
@@ -228,7 +237,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         if not res.success or res.load_factor >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
                               state.applied_load.ravel(), res.evaluation)
-        current = resume(state, res.load_factor)
+        current, origin = resume(state, res.load_factor), (state.u, res.load_factor)
         _replay(rec, current)
         if current.success or current.status == "stopped":
             notes.append(f"load control from load factor {res.load_factor:.6g}: "
@@ -239,17 +248,35 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                       current.state, current.f_ext, current.evaluation)
 
 
-def _arc(context, start, outcome, path, increments, c, until_stable):
-    """MGDCM from the last state of a failed load-controlled outcome towards load factor 1."""
-    lam0 = float(outcome.load_factor[-1]) if len(outcome.load_factor) else 0.0
+def _arc(context, origin, outcome, path, increments, c, until_stable):
+    """MGDCM from the last state of a failed load-controlled outcome towards load factor 1;
+    ``origin`` = (u, load factor) where that load control began (the step's start, or where
+    it resumed after a snap).
+
+    The arc length does not depend on the step's ``increments``: the first predictor moves
+    the displacements by the mean rate of the load-controlled part since ``origin``
+    (displacement per unit load factor) times :data:`ARC_LOAD_STEP`, and the adaptation
+    works from there, so every increment count traces the snap with the same resolution.
+    """
     n = len(outcome.u)
-    # first predictor: the mean displacement per load-controlled increment, along the recent
-    # motion (the last increments before a failure can be vanishingly small)
-    step = float(np.linalg.norm((outcome.state.u - start.u).ravel()[path.free])) / max(n, 1)
-    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else (start.u, 0.0)
+    lam0 = float(outcome.load_factor[-1]) if n else float(origin[1])
+    # the mean rate since ``origin`` (not since the step's start: after a snap the resumed
+    # increments would carry the whole motion), along the recent motion (the last increments
+    # before a failure can be vanishingly small)
+    span = lam0 - float(origin[1])
+    moved = float(np.linalg.norm((outcome.state.u - origin[0]).ravel()[path.free]))
+    step = moved / span * ARC_LOAD_STEP if span > 0 else 0.0
+    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else origin
     recent = outcome.state.u - prior[0]
     if not np.any(recent):
-        prior, recent = (start.u, 0.0), outcome.state.u - start.u
+        prior, recent = origin, outcome.state.u - origin[0]
+    u0 = outcome.state.u
+    if getattr(path, "iterated", False):
+        # load control with staggered coupling lags behind the coupled path that arc length
+        # follows: start from the coupled equilibrium at lam0 (a start off the path would
+        # make the first increments turn, a limit point that is not there)
+        u0, lam0, projected = _on_path(context, path, u0, lam0, recent)
+        prior = None if projected else prior
     its = outcome.increment_iterations
     fast = max(FAST_ITERATIONS, int(np.median(its))) if len(its) else FAST_ITERATIONS
     lams = [lam0]
@@ -258,18 +285,34 @@ def _arc(context, start, outcome, path, increments, c, until_stable):
         lams.append(lam)
         return len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0
 
-    return mgdcm(path, outcome.state.u, lam0, arc_length=1.0 / increments,
+    return mgdcm(path, u0, lam0, arc_length=ARC_LOAD_STEP,
                  max_increments=CONTINUATION_INCREMENTS if until_stable else PROBE_INCREMENTS,
                  target_load_factor=1.0, monitor=c, options=context.options,
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
-                 direction=recent, prior=prior, callback=None if until_stable else turned)
+                 direction=recent, prior=prior, callback=None if until_stable else turned,
+                 resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None)
+
+
+def _on_path(context, path, u, lam, direction):
+    """``(u, lam, moved)``: ``(u, lam)`` corrected onto ``path`` with the displacement along
+    ``direction`` (n_nodes, 3) held (near a limit point, where lambda fixed would be
+    singular), moved True, if it is not in equilibrium there and the correction converges;
+    else unchanged."""
+    c = np.asarray(direction, float).ravel()[path.free]
+    if not np.any(c):
+        return u, lam, False
+    c = c / np.linalg.norm(c)
+    held = _Constraint(c, float(c @ np.asarray(u, float).ravel()[path.free]))
+    ok, u1, lam1, _, its, _, _ = _correct(path, u, lam, held, context.options,
+                                          _size(path.system))
+    return (u1, float(lam1), True) if ok and its > 0 else (u, lam, False)
 
 
 def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
     """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
     c = _motion_monitor(start, outcome)
-    res = _arc(context, start, outcome, path, increments, c, until_stable=False)
+    res = _arc(context, (start.u, 0.0), outcome, path, increments, c, until_stable=False)
     limits = [p for p in res.critical_points if p.kind == "limit_point"]
     if not limits:
         return outcome
