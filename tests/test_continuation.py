@@ -178,7 +178,7 @@ def test_load_derivative_exact_when_the_rest_change_crosses_the_spring_kink():
     rest angle past the kink of the spring law at theta0 +- pi (issue 18: the unit-lambda
     secant was wrong there, and the arc-length corrector converged linearly)."""
     from simulator import get_case
-    from simulator.equilibrium import EquilibriumSystem
+    from simulator.mechanics.equilibrium import EquilibriumSystem
 
     model = get_case("single_fold").model
     system = EquilibriumSystem(model)

@@ -228,7 +228,7 @@ def _heated_miura_snap(increments):
     import math
     import re
 
-    from design.miura import MiuraDesign, heated_creases, miura_model
+    from design import MiuraDesign, heated_creases, miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
     model = miura_model(d)

@@ -54,7 +54,7 @@ CONTINUATION_INCREMENTS = 200
 #: own increments play no part, so the traced snap does not depend on them).
 ARC_LOAD_STEP = 0.01
 #: Near a limit point the continuation's arc length is at most ARC_LOAD_STEP / RESOLVE
-#: (:func:`~simulator.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
+#: (:func:`~simulator.solvers.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
 #: are located at that resolution.
 RESOLVE = 8
 #: Load-control failures (snaps) passed by arc length at most within one step.
