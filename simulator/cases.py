@@ -1,4 +1,4 @@
-"""Ready-made cases of the paper (Zhu & Filipov 2021), defaults from the method digest 8.
+"""Ready-made cases of the paper (Zhu & Filipov 2021), defaults from theory 10.
 
 Every case is a function returning a :class:`Case` (model + loading steps) and accepts
 keyword overrides; units are in the parameter names or listed in ``CASES[name].units``.
@@ -123,7 +123,7 @@ def _steps_int(name, value):
 def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1: float = 1.0,
                        L2: float = 1.0, tc: float = 0.001, tp: float = 0.01,
                        beta_deg: float = 20.0, t_env: float = 3.0, layers: int = 10) -> Case:
-    """Verification strip (digest 8.8): heat Q = 10 W L tc on one crease, non-dimensional.
+    """Verification strip (theory 10.7): heat Q = 10 W L tc on one crease, non-dimensional.
 
     ``variant="within"``: conduction only (k = 1, no environment); ``"loss"``: k = 0.3 with
     heat loss to an environment (k_env = 0.026, beta converted with 3.14 as the reference).
@@ -150,7 +150,7 @@ def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1
 
 
 # ------------------------------------------------------------------------------ single fold
-#: Supports of the reference single fold (digest 8.1), 0-based nodes: anchor edge and substrate.
+#: Supports of the reference single fold (theory 10.1), 0-based nodes: anchor edge and substrate.
 SINGLE_FOLD_SUPPORTS = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz", 8: "xyz", 9: "xyz",
                                  10: "xyz", 11: "xyz"})
 #: The same without the substrate panel (nodes 8-11).
@@ -159,7 +159,7 @@ _SINGLE_FOLD_SUPPORTS_FREE = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz"})
 
 def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None, actuators=None,
                       **pattern_kwargs) -> Model:
-    """Model of the reference single fold (Example01, digest 8.1): the one builder of the
+    """Model of the reference single fold (Example01, theory 10.1): the one builder of the
     single-fold cases, the demo and the tests.
 
     Parameters
@@ -211,7 +211,7 @@ def single_fold(residual_fold_deg: float = 0.0, gravity: bool = False, thermal_s
                 power_mW: float = 100.0, env_conductivity: float = 0.6,
                 crease_width: float = 200e-6, env_thickness: float = 750e-6,
                 coupling: str = "staggered") -> Case:
-    """Single crease over a substrate heated to power_mW (reference Example01, digest 8.1).
+    """Single crease over a substrate heated to power_mW (reference Example01, theory 10.1).
 
     Defaults are exactly the reference's: residual fold 0, gravity off, k_env = 0.6 (water-like),
     500 increments to 100 mW. The paper's threshold study uses gravity=True and a negative
@@ -233,7 +233,7 @@ def single_fold_prefolded(residual_fold_deg: float = 55.0, gravity: bool = False
                           thermal_steps: int = 500, power_mW: float = 10.0,
                           env_conductivity: float = 0.026, crease_width: float = 300e-6,
                           env_thickness: float = 750e-6, coupling: str = "staggered") -> Case:
-    """Pre-folded single crease that unfolds when heated (reference Example08, digest 8.6)."""
+    """Pre-folded single crease that unfolds when heated (reference Example08, theory 10.5)."""
     params = {k: v for k, v in locals().items()}
     case = _single_fold_case(
         "single_fold_prefolded", residual_fold_deg=residual_fold_deg, gravity=gravity,
@@ -335,7 +335,7 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
                       t_gold: float = 0.2e-6, t_su8: float = 0.8e-6,
                       panel_thickness: float = 10e-6, substrate: bool = False,
                       undercut: float = 100e-6) -> Model:
-    """The Miura-ori lifter's model (paper 6.2, Example03, digest 8.3): the one builder behind
+    """The Miura-ori lifter's model (paper 6.2, Example03, theory 10.3): the one builder behind
     the ``miura_lifter`` case and :func:`design.devices.miura.miura_model`.
 
     A Miura sheet of ``cells_x`` x ``cells_y`` cells, clamped along its first column of panels
@@ -387,7 +387,7 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     """Miura-ori lifter (paper 6.2): left end clamped (first column of panels), right end lifts
     when all creases are heated; optionally over a substrate that cools the creases near it.
 
-    Geometry and actuators of Example03 (digest 8.3): 10 um panels, 1 um creases, gold 0.2 um
+    Geometry and actuators of Example03 (theory 10.3): 10 um panels, 1 um creases, gold 0.2 um
     on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions
     (:func:`miura_sheet_model`).
     ``on_limit_point="continue"`` follows a snap of the sheet by arc length in the power.

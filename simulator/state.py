@@ -2,7 +2,7 @@
 
 :class:`SimulationState` holds everything a later step needs to continue: displacements,
 accumulated dead loads, crease and spring rest angles, node temperatures, crease powers and the
-room temperature (the reference's controller list, digest 7.1). Steps never mutate a state; they
+room temperature (the reference's controller list, theory 6.1). Steps never mutate a state; they
 return a new one.
 """
 
@@ -78,7 +78,7 @@ def at_rest(state: SimulationState, **changes) -> SimulationState:
 def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
     """Unloaded state: zero displacement, crease rest angles of the initial geometry (flat, pi,
     unless the mesh starts folded: :func:`~simulator.model.properties.initial_crease_rest`), spring
-    rest angles equal to the spring angles of the initial geometry (digest 7.1), uniform room
+    rest angles equal to the spring angles of the initial geometry (theory 6.1), uniform room
     temperature (from the model's thermal parameters, else 21 deg C), no heating."""
     mesh = model.mesh
     if room_temperature is None:

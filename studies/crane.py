@@ -10,7 +10,7 @@ much less?
 
 Method
 ------
-``get_case("crane", deactivated=d)`` for d = False / True (reference Example04, digest 8.4):
+``get_case("crane", deactivated=d)`` for d = False / True (reference Example04, theory 10.4):
 every crease gets a multiple of the base power q (q, 1.5 q, 2 q, 4 q or q / 2 depending on
 the crease) ramped to q = 4 mW in 500 staggered thermo-mechanical increments. The base power
 ``base_power [mW]`` of a record is the power of reference crease 6 (which gets q in both

@@ -9,7 +9,7 @@ large is the difference in temperature and fold angle over the power ramp?
 
 Method
 ------
-``get_case("double_fold")`` with its defaults (reference Example02, digest 8.2): self-fold to
+``get_case("double_fold")`` with its defaults (reference Example02, theory 10.2): self-fold to
 the residual fold 0, gravity at 0.9 x the panel weight with substrate contact, then both
 creases ramp together to 10 mW each in 250 staggered thermo-mechanical increments.
 Fold 1 is crease 2 (anchor - panel 1, reference crease 3), fold 2 is crease 5 (panel 1 -

@@ -107,7 +107,7 @@ def gripper_states(design: GripperDesign, assembly_power: float, grip_power: flo
 
 
 def _measures(x) -> tuple:
-    """(base fold [deg], arm tip distance [um]) of node positions ``x`` [m] (digest 8.7)."""
+    """(base fold [deg], arm tip distance [um]) of node positions ``x`` [m] (theory 10.6)."""
     a, b = x[1] - x[0], x[5] - x[4]
     cos = float(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1, 1))
     fold = float(np.sign(x[0, 2] - x[5, 2])) * math.degrees(math.acos(cos))

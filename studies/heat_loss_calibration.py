@@ -11,7 +11,7 @@ with the structure material (SU-8, Si, Au) in air and in water at the calibrated
 
 Method
 ------
-``simulator.cases.verification_strip(variant="loss")`` (digest 8.8): two panels (L1 = L2 = L = 1,
+``simulator.cases.verification_strip(variant="loss")`` (theory 10.7): two panels (L1 = L2 = L = 1,
 t_p = 0.01) and one crease (width W, t_c = 0.001), the four far corners held at RT = 0, heat
 Q = 10 W L t_c on the crease; structure k = 0.3 (SU-8), environment k_env = 0.026 (air); every
 node owns a chain of N environment layers over t_env with the spreading angle beta, converted

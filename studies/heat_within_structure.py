@@ -10,7 +10,7 @@ Fig. 5 d-f)?
 
 Method
 ------
-*Bar-and-hinge side.* ``simulator.cases.verification_strip(variant="within")`` (digest 8.8): two
+*Bar-and-hinge side.* ``simulator.cases.verification_strip(variant="within")`` (theory 10.7): two
 panels of lengths L1, L2 and thickness t_p joined by one crease of width W, length L and
 thickness t_c; k = 1 everywhere, no environment (k_env = 0), the four far corners held at
 RT = 0, heat Q = q''' W L t_c with q''' = 10 on the crease (distributed 1/8 to the four edge

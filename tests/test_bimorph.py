@@ -9,11 +9,11 @@ from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 
 
-def test_digest_example_value():
+def test_single_fold_curvature_value():
     """Ex01 layers: kappa/dT = 113.79 1/(m K), d_theta/dT = 0.022759 rad/K for W = 200 um."""
     b = Bimorph(E1=39.5e9, t1=0.1e-6, E2=2e9, t2=0.4e-6)
     k = b.curvature(38e-6, 1.0)
-    assert 113.79 <= k < 113.80                   # digest prints it truncated: 113.79
+    assert 113.79 <= k < 113.80                   # printed truncated: 113.79 (theory 5.2)
     assert k * 200e-6 == pytest.approx(0.022759, abs=5e-7)
     act = Actuators(b, {2: 38e-6})
     assert act.rotation_per_kelvin(build_mesh(single_fold_pattern()))[0] == pytest.approx(k * 200e-6)

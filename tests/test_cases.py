@@ -74,7 +74,7 @@ def test_single_fold_crease_rotation_is_its_fold_angle(single_fold_run):
               0.02402365018882519, 0.06174596255237099, 0.06174596255237101, 0.06815471201284226,
               0.003863605381535196, 0.003863605381535197]),
 ])
-def test_verification_strips_digest_6_10(variant, expected):
+def test_verification_strips_reference_values(variant, expected):
     res = get_case("verification_strip", variant=variant).run()
     assert res.success
     np.testing.assert_allclose(res.state.temperature, expected, rtol=1e-9, atol=1e-15)

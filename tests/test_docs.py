@@ -77,3 +77,106 @@ def test_issue_names_are_public():
         assert name in design.__all__, name
 
 
+
+
+# ------------------------------------------------ citations of docs/theory.md in the code
+# The code cites the method as "theory 4.3" (section), "theory 4" (chapter), "theory 4.3-4.4"
+# (range), "theory 6.4, 6.5" or "theory 8.6 and 8.4" (lists); docs/theory.md section 1.1.
+THEORY = ROOT / "docs" / "theory.md"
+_SOURCES = ("simulator", "design", "studies", "tests", "benchmarks")
+_NUMBER = r"\d+(?:\.\d+)?"
+_CITATION = re.compile(rf"\btheory ({_NUMBER}(?:(?:-|, | and ){_NUMBER}(?![\d.]))*)", re.I)
+_HEADING = re.compile(r"^#{2,3} (\d+(?:\.\d+)?)\.? ", re.M)
+
+
+def source_files() -> list[pathlib.Path]:
+    """Every Python and Markdown file of the source trees, plus the README."""
+    files = [ROOT / "README.md"]
+    for top in _SOURCES:
+        files += sorted(p for p in (ROOT / top).rglob("*") if p.suffix in (".py", ".md"))
+    return files
+
+
+def theory_sections() -> set[str]:
+    """Section numbers of docs/theory.md: "4" for "## 4. Heat transfer", "4.3" for "### 4.3 ..."."""
+    return set(_HEADING.findall(THEORY.read_text()))
+
+
+def cited_sections(text: str) -> list[str]:
+    """Every section number a text cites as "theory X.Y" (each end of a range, each list item)."""
+    return [n for m in _CITATION.finditer(text) for n in re.findall(_NUMBER, m.group(1))]
+
+
+def test_citation_parser():
+    text = ("(theory 4.3) theory 10; (theory 4.3-4.4), (Theory 6.4, 6.5) theory 8.6 and 8.4; "
+            "theory 6.4, 10.6: tol 5e-7 N")
+    assert cited_sections(text) == ["4.3", "10", "4.3", "4.4", "6.4", "6.5", "8.6", "8.4",
+                                    "6.4", "10.6"]
+    assert {"1.1", "4", "4.3", "10.9", "11"} <= theory_sections()
+
+
+def test_no_digest_citations_left():
+    """The code once cited a "method digest" that is not in the repository; it cites theory.md.
+
+    This file is exempt: it has to name the word it looks for."""
+    stale = [f"{p.relative_to(ROOT)}:{i}" for p in source_files() if p != pathlib.Path(__file__)
+             for i, line in enumerate(p.read_text().splitlines(), 1)
+             if re.search(r"(?<!hex)digest", line, re.I)]
+    assert stale == [], "cite docs/theory.md as 'theory X.Y' instead: " + ", ".join(stale)
+
+
+def test_theory_citations_name_existing_sections():
+    sections = theory_sections()
+    cited = {(str(p.relative_to(ROOT)), n) for p in source_files()
+             for n in cited_sections(p.read_text())}
+    assert len(cited) > 80, "the code lost its citations of docs/theory.md"
+    missing = sorted(f"{f}: theory {n}" for f, n in cited if n not in sections)
+    assert missing == [], "no such section in docs/theory.md: " + ", ".join(missing)
+
+
+# ------------------------------------------------ the API reference (mkdocs.yml, docs/_ext/api.py)
+def _api_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_docs_api", ROOT / "docs" / "_ext" / "api.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault(spec.name, module)            # its dataclasses need a real module
+    spec.loader.exec_module(sys.modules[spec.name])
+    return sys.modules[spec.name]
+
+
+@pytest.mark.parametrize("package", [simulator, design], ids=lambda p: p.__name__)
+def test_api_pages_document_every_public_name(package):
+    """The static reading of __init__.py that makes the API pages agrees with the runtime."""
+    import importlib
+
+    api = _api_module()
+    names = api.public_names(package.__name__)
+    assert [n.name for n in names] == package.__all__
+    for item in names:
+        defined = importlib.import_module(item.module)
+        obj = defined if item.is_module else getattr(defined, item.name)
+        assert obj is getattr(package, item.name), item
+    pages = {group: api._page(package.__name__, group, items)
+             for group, items in api._groups(package.__name__).items()}
+    intros = {f"::: {package.__name__}.{group}" for group in pages}      # subpackage docstrings
+    entries = [line for page in pages.values() for line in page.splitlines()
+               if line.startswith(f"::: {package.__name__}.") and line not in intros]
+    assert sorted(entries) == sorted(f"::: {package.__name__}.{n}" for n in package.__all__)
+
+
+def test_api_theory_anchors_are_mkdocs_slugs():
+    pytest.importorskip("markdown")
+    anchors = _api_module().theory_anchors()
+    assert anchors["4.3"] == "43-environment-chains" and anchors["4"] == "4-heat-transfer"
+    assert set(anchors) == theory_sections()
+
+
+def test_api_unknown_public_name_is_an_error(tmp_path, monkeypatch):
+    api = _api_module()
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text(
+        "__getattr__, __dir__ = _attach(__name__, {'.a': ('f',)})\n__all__ = ['f', 'g']\n")
+    monkeypatch.setattr(api, "ROOT", tmp_path)
+    with pytest.raises(RuntimeError, match="'g'.*add it there"):
+        api.public_names("pkg")

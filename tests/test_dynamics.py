@@ -66,7 +66,7 @@ def crossings(t, x):
 
 # ------------------------------------------------------------------------------ masses
 def test_lumped_masses_match_the_reference_single_fold():
-    """Digest D3.1 (Octave run): L = 1 mm, W = 400 um, t_p = 500/21/500 um, t_c = 1 um."""
+    """Theory 7.1 (reference, Octave): L = 1 mm, W = 400 um, t_p = 500/21/500 um, t_c = 1 um."""
     pattern = single_fold_pattern(L=1e-3, W=400e-6, panel_thickness=21e-6,
                                   anchor_thickness=500e-6, crease_thickness=1e-6)
     m = lumped_masses(make_model(pattern).mesh)

@@ -1,4 +1,4 @@
-"""Gripper evaluation against the reference implementation (digest 8.7, reference data G2)."""
+"""Gripper evaluation against the reference implementation (theory 10.6, reference data G2)."""
 
 import numpy as np
 import pandas as pd
@@ -71,7 +71,7 @@ def test_reference_loop_explains_the_g2_trace_deviation():
     Emulating that loop (``REFERENCE_NEWTON``) brings the assembly fold within 0.0013 rad of
     the reference (0.0105 fully converged) and gives the irregular grip steps of its data
     (reference 67-87 um per call, ours fully converged 70-76 um). What remains comes from the
-    reference's inexact contact Hessians (digest 5.6), which steer its under-converged
+    reference's inexact contact Hessians (theory 3.7), which steer its under-converged
     iterates wherever contact is active (two pairs during part of the run).
     """
     trace = []
@@ -150,7 +150,7 @@ def test_model_matches_reference_setup():
     model, pre = gripper_model(GripperDesign())
     mesh = model.mesh
     assert (mesh.n_nodes, len(mesh.bars)) == (42, 88)
-    # node edits move geometry but keep the meshed bar lengths (digest pitfall 3)
+    # node edits move geometry but keep the meshed bar lengths (theory 2.2)
     assert not np.allclose(mesh.nodes[13], mesh.pattern.vertices[9] * 0)  # edited nodes exist
     assert sum(abs(p.forces[:, 2].sum()) for p in pre if hasattr(p, "forces")) > 0
 

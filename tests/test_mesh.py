@@ -1,4 +1,4 @@
-"""Mesh numbering, coordinates and element maps against the method digest (section 1.3)."""
+"""Mesh numbering, coordinates and element maps against theory 2.2 and 2.3."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ from simulator.model.mesh import BarType, SpringKind, build_mesh
 from simulator.geometry.example_patterns import (crane_pattern, double_fold_pattern, gripper_pattern,
                                 miura_sheet_pattern, single_fold_pattern, strip_pattern)
 
-REF = 1  # the digest is 1-based; ours is 0-based
+REF = 1  # the reference is 1-based (theory 1.2); ours is 0-based
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Pattern input: edge / crease numbering (method digest 1.2), addressing and input validation."""
+"""Pattern input: edge / crease numbering (theory 2.1), addressing and input validation."""
 
 import dataclasses
 import math
@@ -34,7 +34,7 @@ def refold(fold, **kw):
 
 # ---------------------------------------------------------------------- numbering (positive)
 def test_single_fold_edges_and_creases(fold):
-    # reference crease 3 = our edge 2 (digest 1.2)
+    # reference crease 3 = our edge 2 (theory 2.1)
     assert fold.edges.tolist() == [[0, 3], [0, 1], [1, 4], [3, 4], [1, 2], [2, 5], [4, 5],
                                    [6, 8], [6, 7], [7, 9], [8, 9]]
     assert fold.creases.tolist() == [2]

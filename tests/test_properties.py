@@ -1,4 +1,4 @@
-"""Bar areas and spring stiffnesses against the digest's single-fold values (section 2)."""
+"""Bar areas and spring stiffnesses against the reference's single-fold values (theory 3.4)."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.model.properties import BarHingeParameters, mechanical_properties, spring_rest_angles
 
-RTOL = 1e-9  # the digest prints 10 significant digits
+RTOL = 1e-9  # the reference values are printed to 10 significant digits
 
 
 @pytest.fixture(scope="module")

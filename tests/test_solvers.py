@@ -46,7 +46,7 @@ def test_cantilever_under_gravity_deflects_down_with_weight_reaction():
 
 
 def test_gravity_lumping_matches_reference_quad_rule():
-    """Corners get 1/6 and the centre 2/6 of a rectangular panel's weight (digest 8.1)."""
+    """Corners get 1/6 and the centre 2/6 of a rectangular panel's weight (theory 10.1)."""
     mesh = single_fold_model(contact=False, substrate=False).mesh
     f = gravity_loads(mesh, 9.8, panels=[1])[:, 2]
     w = 1200 * 21e-6 * 0.25e-6 * 9.8
@@ -187,7 +187,7 @@ def test_total_cut_budget_ends_a_struggling_path(free_hinge):
 
 
 def test_reference_loop_applies_one_update_past_its_tolerance(free_hinge, caplog):
-    """Digest 7.3: the measure is taken before the update, so the loop stops one update late."""
+    """Theory 6.4: the measure is taken before the update, so the loop stops one update late."""
     system = equilibrium_system(free_hinge)
     state = initial_state(free_hinge)
     rest = spring_rest_angles(free_hinge.mesh, np.array([np.pi + np.radians(2)]))

@@ -1,4 +1,4 @@
-"""Heat transfer (digest 6): reference verification numbers, physics checks and error paths."""
+"""Heat transfer (theory 4): reference verification numbers, physics checks and error paths."""
 
 import csv
 import math
@@ -49,7 +49,7 @@ def single_fold(boundary=(2,), **kw):
     return mesh, ThermalModel(mesh, prm)
 
 
-# ---------------------------------------------------------------- reference numbers (digest 6.10)
+# ---------------------------------------------------------------- reference numbers (theory 10.7)
 def test_verification01_full_vector():
     tm, q = verification01()
     T = tm.solve(tm.mesh.nodes, q)
@@ -109,7 +109,7 @@ def test_single_fold_first_increment_matches_reference():
 
 # ---------------------------------------------------------------- physics
 def _full_solve(tm, x, q, rt):
-    """Reference solve on the full (N+1)n system: K_FF T_F = q_F - K_FD T_D (digest 6.5)."""
+    """Reference solve on the full (N+1)n system: K_FF T_F = q_F - K_FD T_D (theory 4.5)."""
     K = tm.conductivity_matrix(x).tocsr()
     n, N = tm.mesh.n_nodes, tm.params.layers
     fixed = np.zeros(tm.n_dof, bool)

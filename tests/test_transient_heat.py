@@ -1,4 +1,4 @@
-"""Transient heat transfer (dynamics digest D5): capacity, theta-method, schedules, step, errors."""
+"""Transient heat transfer (theory 8.1): capacity, theta-method, schedules, step, errors."""
 
 import dataclasses
 import math
@@ -22,8 +22,8 @@ from simulator.thermal.transient import environment_profile, heat_system
 
 # ---------------------------------------------------------------- models
 def reference_04_model(room_temperature=0.0):
-    """The model of the reference's 04/Example01 (digest D10.7). Its capacity uses the panel
-    CONDUCTIVITY as specific heat (digest D9.2), reproduced here with c = k numerically."""
+    """The model of the reference's 04/Example01 (theory 10.9). Its capacity uses the panel
+    CONDUCTIVITY as specific heat (theory 7.2), reproduced here with c = k numerically."""
     sub = Material("sub", 2e9, density=1200.0, thermal_conductivity=1.3, specific_heat=1.3)
     pan = Material("pan", 2e9, density=1200.0, thermal_conductivity=0.3, specific_heat=0.3)
     crease = Material("crease", 2e9, density=1200.0, thermal_conductivity=0.3,
@@ -54,7 +54,7 @@ def long_strip(panels=30, W=0.1, k=1.0, rho=1.0, c=1.0, t=0.01, width=0.5):
                                                 room_temperature_nodes=ends))
 
 
-# ---------------------------------------------------------------- capacity (digest D5.1)
+# ---------------------------------------------------------------- capacity (theory 7.2)
 def test_capacity_matches_reference_example():
     tm = reference_04_model()
     n = tm.mesh.n_nodes
@@ -118,7 +118,7 @@ def test_theta_step_reuses_the_factorisation_and_matches_the_stepper():
 
 
 def test_first_steps_match_reference_transient():
-    """04/Example01 with RT = 0 (digest D10.7): T of Ctr after steps 1 and 2 of 2 us at 20 mW
+    """04/Example01 with RT = 0 (theory 10.9): T of Ctr after steps 1 and 2 of 2 us at 20 mW
     (the shape has not moved yet; later steps differ by the reference's mechanical coupling)."""
     tm = reference_04_model()
     r = integrate_heat(tm, tm.mesh.nodes, {2: 20e-3}, 4e-6, 2e-6)

@@ -1,9 +1,9 @@
 """Minimum-power heater allocation: which power on which heater folds the creases as asked.
 
 For a fixed shape the steady temperatures are linear in the heater powers ``p`` [W]: the
-actuation temperature rise of every crease (the 7-node weighted mean, digest 6.7) is ``G p``
+actuation temperature rise of every crease (the 7-node weighted mean, theory 5.1) is ``G p``
 and the rise of every crease node is ``H p``, with ``G`` and ``H`` from one factorisation of
-the condensed conductivity (:meth:`ThermalModel.solve` with one column per heater). The
+the condensed conductivity (:meth:`~simulator.thermal.steady.ThermalModel.solve` with one column per heater). The
 rest-angle change is ``r * (G p)`` (Timoshenko, linear in the rise), and near an equilibrium
 the fold angles answer to the rest angles through the sensitivity ``S = d fold / d rest``
 (one Newton solve per actuated crease: creases around a vertex move together). So, about the

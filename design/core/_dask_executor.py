@@ -36,6 +36,8 @@ class DaskExecutor(Executor):
     timeout : float
         Seconds to wait for the scheduler.
 
+    Notes
+    -----
     Dask serialises ``fn`` with cloudpickle and so also accepts lambdas; keep to top-level
     callables anyway, so that the same code runs with every executor.
     """

@@ -69,6 +69,8 @@ class ProcessExecutor(Executor):
         Default ``forkserver`` where available, else ``spawn`` (never ``fork``: unsafe with
         threads). Workers start on the first ``map`` and are reused until ``close``.
 
+    Notes
+    -----
     Workers inherit the environment: on many cores, set ``OPENBLAS_NUM_THREADS=1`` (as Dask
     does in its workers) to avoid oversubscribing BLAS threads.
     """

@@ -1,7 +1,7 @@
 """Optimisers behind one entry point: ``optimize(problem, method, ...)``.
 
 * ``"cd"`` (``"coordinate_descent"``): the paper's fixed-step coordinate descent (method
-  digest 8.7, GripperOptimization.m) with correct bound checks. Coordinates in space order;
+  theory 10.6, GripperOptimization.m) with correct bound checks. Coordinates in space order;
   for each, the minus candidate (if inside the bounds), then the plus candidate; a candidate
   is accepted when it is feasible and its objective strictly lower than the current one, and
   the move applies at once. A cycle without a move ends the search (``"converged"``), else

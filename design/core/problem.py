@@ -29,7 +29,7 @@ logger = logging.getLogger(__name__)
 #: from the material (:data:`simulator.geometry.materials.SU8`, 210 deg C); problems take it as default.
 SU8_TG = SU8.glass_transition
 
-#: The paper's gripper design space (section 6.3 and digest 8.7): bounds, steps, start.
+#: The paper's gripper design space (section 6.3 and theory 10.6): bounds, steps, start.
 GRIPPER_SPACE = DesignSpace([
     Variable("W", 100e-6, 300e-6, 10e-6, 200e-6),
     Variable("La", 500e-6, 1500e-6, 50e-6, 700e-6),

@@ -1,4 +1,4 @@
-"""Origami micro-gripper of the paper's section 6.3 (method digest 8.7).
+"""Origami micro-gripper of the paper's section 6.3 (theory 10.6).
 
 Four foldable panels on two heater circuits: the base creases fold the base panels up to
 assemble the gripper (stage 1, "assembly": base fold past 90 deg), then, with the base heat
@@ -60,7 +60,7 @@ ARM_CREASES = (3, 9)
 #: designs) and 4 cost a fifth of the time.
 _GRAVITY_INCREMENTS = 4
 _REFERENCE_GRAVITY_INCREMENTS = 80
-#: The reference script's solver settings (digest 7.3, 8.7: tol 5e-7 N, iterMax 30, its loop),
+#: The reference script's solver settings (theory 6.4, 10.6: tol 5e-7 N, iterMax 30, its loop),
 #: for comparisons with its outputs; its equilibria are under-converged.
 REFERENCE_NEWTON = NewtonOptions(atol=5e-7, max_iter=30, reference_loop=True)
 
@@ -277,7 +277,7 @@ _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivit
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
-    """The reference's post-meshing node moves (digest 8.7), 1-based ids in the comments."""
+    """The reference's post-meshing node moves (theory 10.6), 1-based ids in the comments."""
     w = design.W
     x = nodes.copy()
     moves = {(13, 14): (-w / 2, 0), (19, 16): (w / 2, 0), (6, 7): (0, -w / 2),
@@ -290,7 +290,7 @@ def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
 
 
 def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
-    """The reference's hand-lumped self-weight [N] (digest 8.7): 1/6 per corner, 2/6 per centre."""
+    """The reference's hand-lumped self-weight [N] (theory 10.6): 1/6 per corner, 2/6 per centre."""
     rho, t = SPR.density, design.panel_thickness
     base = design.L1 * design.L2 * t * rho * REFERENCE_GRAVITY / 6
     arm = 0.75 * design.L1 * design.La * t * rho * REFERENCE_GRAVITY / 6
@@ -385,7 +385,7 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
                      step: float = 0.1e-3, tol: float = 0.01e-3, power_cap: float = 40e-3,
                      max_step: float = 0.4e-3, callback=None,
                      options: NewtonOptions = NewtonOptions()) -> GripperResult:
-    """Power per heated crease needed to assemble, then grip (digest 8.7).
+    """Power per heated crease needed to assemble, then grip (theory 10.6).
 
     Parameters
     ----------

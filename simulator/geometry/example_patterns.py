@@ -1,7 +1,7 @@
 """Pattern generators for the paper's examples (geometry only, SI units).
 
 Each function returns a :class:`~simulator.geometry.pattern.Pattern` whose vertex and
-panel order is that of the reference scripts (method digest section 8), so that
+panel order is that of the reference scripts (theory 10), so that
 crease and node numbers match the reference (0-based = reference id - 1).
 """
 
@@ -33,7 +33,7 @@ def single_fold_pattern(L: float = 0.5e-3, W: float = 200e-6, undercut: float = 
                         crease_thickness: float = 0.5e-6, substrate: bool = True,
                         panel_material: Material = SU8, substrate_material: Material = SUBSTRATE,
                         ) -> Pattern:
-    """Single crease between a thick anchor panel and a thin folding panel (digest 8.1).
+    """Single crease between a thick anchor panel and a thin folding panel (theory 10.1).
 
     Panels: 0 anchor (thickness ``anchor_thickness``), 1 folding panel, 2 substrate
     ``undercut`` below (when ``substrate``). The crease is edge 2 (reference crease 3).
@@ -59,7 +59,7 @@ def single_fold_pattern(L: float = 0.5e-3, W: float = 200e-6, undercut: float = 
 def strip_pattern(W: float = 0.4, L: float = 1.0, L1: float = 1.0, L2: float = 1.0,
                   crease_thickness: float = 0.001, panel_thickness: float = 0.01,
                   material: Material = SU8) -> Pattern:
-    """Two panels joined by one crease, no substrate: the verification strip (digest 8.8).
+    """Two panels joined by one crease, no substrate: the verification strip (theory 10.7).
 
     Non-dimensional by default (the reference verification uses unit lengths).
     """
@@ -76,7 +76,7 @@ def double_fold_pattern(L: float = 450e-6, W: float = 200e-6, undercut: float = 
                         panel_thickness: float = 21e-6, anchor_thickness: float = 500e-6,
                         crease_thickness: float = 1.1e-6, panel_material: Material = SU8,
                         substrate_material: Material = SUBSTRATE) -> Pattern:
-    """Anchor + two folding panels over a substrate (digest 8.2); creases are edges 2 and 5."""
+    """Anchor + two folding panels over a substrate (theory 10.2); creases are edges 2 and 5."""
     _positive(L=L, W=W, undercut=undercut, panel_thickness=panel_thickness,
               anchor_thickness=anchor_thickness, crease_thickness=crease_thickness)
     uc = undercut
@@ -126,7 +126,7 @@ def miura_vertices(a: float, b: float, gamma: float, m: int, n: int, ext: float 
 def miura_sheet_pattern(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radians(60),
                         m: int = 2, n: int = 2, W: float = 200e-6, crease_thickness: float = 1e-6,
                         panel_thickness: float = 10e-6, material: Material = SU8) -> Pattern:
-    """Flat Miura-ori sheet of m x n cells (digest 9.1; 2 x 2 cells of Example03 by default).
+    """Flat Miura-ori sheet of m x n cells (theory 10.3; 2 x 2 cells of Example03 by default).
 
     ``a`` is the panel side along y, ``b`` the zig-zag side at sector angle ``gamma`` [rad].
     """
@@ -140,7 +140,7 @@ def gripper_pattern(w: float = 200e-6, la: float = 700e-6, l1: float = 1000e-6, 
                     undercut: float = 150e-6, panel_thickness: float = 5e-6,
                     substrate_thickness: float = 500e-6, panel_material: Material = SU8,
                     substrate_material: Material = SUBSTRATE) -> Pattern:
-    """Origami micro-gripper of the paper's section 6.3 (digest 8.7), before node edits.
+    """Origami micro-gripper of the paper's section 6.3 (theory 10.6), before node edits.
 
     Panels: 0 left base, 1 central panel, 2 right base, 3 left arm, 4 right arm, 5 substrate.
     Creases: 2 left base hinge, 3 left arm hinge, 5 right base hinge, 9 right arm hinge.
@@ -164,7 +164,7 @@ def gripper_pattern(w: float = 200e-6, la: float = 700e-6, l1: float = 1000e-6, 
 
 def crane_pattern(a: float = 1e-3, W: float = 100e-6, crease_thickness: float = 1e-6,
                   panel_thickness: float = 10e-6, material: Material = SU8) -> Pattern:
-    """Origami crane pattern of the paper's section 6.1 (digest 8.4): 14 panels, 17 creases."""
+    """Origami crane pattern of the paper's section 6.1 (theory 10.4): 14 panels, 17 creases."""
     _positive(a=a, W=W, crease_thickness=crease_thickness, panel_thickness=panel_thickness)
     v = a * np.array([(-3.2, 0), (-0.7, 0), (0, 0), (0.8, 0), (2.3, 0), (3.4, 0), (-1.1, 1),
                       (1.1, 1), (2.6, 0.5), (0, 4), (-1.1, -1), (1.1, -1), (2.6, -0.5), (0, -4)])

@@ -69,12 +69,12 @@ class Material:
 
 
 #: Volumetric heat capacity rho c of SU-8 in the reference transient example [J/(m^3 K)]
-#: (04/Example01: ``creaseThermalCapacity = panelThermalCapacity = 2e6 / 1200``; digest D8).
+#: (04/Example01: ``creaseThermalCapacity = panelThermalCapacity = 2e6 / 1200``; theory 10.8).
 _SU8_RHO_C = 2e6
 
 #: SU-8 epoxy photoresist. E = 2 GPa, nu = 0.3, rho = 1200 kg/m^3 and k = 0.3 W/(m K) as in the
 #: reference examples (Zhu & Filipov 2021, Example01-04 and the gripper); c = 2e6/1200 =
-#: 1666.7 J/(kg K) from the reference transient example (dynamics digest D8). T_g = 210 deg C: the
+#: 1666.7 J/(kg K) from the reference transient example (theory 10.8). T_g = 210 deg C: the
 #: paper bounds the gripper's crease temperature by 1.2 T_g of SU-8 (section 6.3) without printing
 #: T_g; 210 deg C is the manufacturer's value for fully cross-linked SU-8 (MicroChem SU-8 2000
 #: data sheet; "above 200 deg C" in the literature), giving the 252 deg C limit used throughout.
@@ -91,18 +91,18 @@ SPR = Material("SPR", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
 #: mechanically the same modulus as the panels (they are fully supported), k = 1.3 W/(m K);
 #: rho = 1200 kg/m^3 and c = 2e6/1200 J/(kg K) as the reference's transient example sets for
 #: all panels (``panelThermalCapacity``; the reference then reads the conductivity instead by a
-#: slip, dynamics digest D9.2; we use the specific heat).
+#: slip, theory 7.2; we use the specific heat).
 SUBSTRATE = Material("substrate", youngs_modulus=2e9, poisson_ratio=0.3, density=1200.0,
                      thermal_conductivity=1.3, specific_heat=_SU8_RHO_C / 1200.0)
 
-#: Gold (bimorph layer). E = 79 GPa (the reference scripts use fractions of it, digest D8);
+#: Gold (bimorph layer). E = 79 GPa (the reference scripts use fractions of it, theory 10.8);
 #: nu = 0.44, rho = 19300 kg/m^3, c = 129 J/(kg K), k = 317 W/(m K) at 300 K (Incropera et al.,
 #: Fundamentals of Heat and Mass Transfer, 6th ed., Table A.1; nu: CRC Handbook).
 GOLD = Material("gold", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0,
                 thermal_conductivity=317.0, specific_heat=129.0)
 
 #: Single-crystal silicon. E = 150 GPa and rho = 2300 kg/m^3 as in the reference micro-mirror
-#: (02/Example04, digest D10.6); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),
+#: (02/Example04, theory 10.9); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),
 #: k = 148 W/(m K) at 300 K (Incropera et al., 6th ed., Table A.1).
 SILICON = Material("silicon", youngs_modulus=150e9, poisson_ratio=0.22, density=2300.0,
                    thermal_conductivity=148.0, specific_heat=712.0)
@@ -148,7 +148,7 @@ class Fluid:
 
 
 #: Air as in the reference transient example (04/Example01: ``envDensity = 1.293``,
-#: ``envThermalCapacity = 700``, ``envThermalConduct = 0.026``; dynamics digest D8). Note that
+#: ``envThermalCapacity = 700``, ``envThermalConduct = 0.026``; theory 10.8). Note that
 #: the textbook isobaric specific heat of air is 1007 J/(kg K) at 300 K (Incropera Table A.4).
 AIR = Fluid("air", density=1.293, specific_heat=700.0, thermal_conductivity=0.026)
 

@@ -2,7 +2,7 @@
 
 A :class:`Pattern` is the user-facing description of an origami sheet before
 meshing. Creases are the edges shared by two panels. Edges are numbered in the
-reference implementation's first-seen order (method digest 1.2): for every
+reference implementation's first-seen order (theory 2.1): for every
 panel ``C_1..C_N`` in order, visit ``(C_1, C_N)``, then ``(C_1, C_2)``, ...,
 ``(C_{N-1}, C_N)``; an edge gets the next id when first seen. Edge ids are
 0-based (reference id - 1); the ids of interior edges are the crease ids.
@@ -107,7 +107,7 @@ class Pattern:
 
     # ------------------------------------------------------------------ topology
     def _enumerate_edges(self):
-        """Number edges in first-seen order (digest 1.2), vectorised over all corners."""
+        """Number edges in first-seen order (theory 2.1), vectorised over all corners."""
         n_v = len(self.vertices)
         sizes = np.array([len(p) for p in self.panels])
         flat = np.concatenate(self.panels)

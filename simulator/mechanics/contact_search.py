@@ -1,4 +1,4 @@
-"""Contact candidate search (method digest 5.1), vectorised.
+"""Contact candidate search (theory 3.5), vectorised.
 
 Contact points are the panel corner nodes and panel centres; contact surfaces are
 the panel fan triangles. A point never touches its own panel, and a corner node

@@ -1,4 +1,4 @@
-"""Timoshenko bi-material strip: curvature of a heated bimorph crease (digest 6.7-6.8).
+"""Timoshenko bi-material strip: curvature of a heated bimorph crease (theory 5.1-5.3).
 
 A crease made of two bonded layers (moduli E1, E2, thicknesses t1, t2) whose thermal
 expansion coefficients differ by ``delta_alpha`` bends with curvature (Timoshenko 1925)
@@ -106,6 +106,6 @@ class Actuators:
 
 def crease_temperature_weights() -> np.ndarray:
     """Weights of the 7 crease nodes (N11, N12, N21, N22, A, B, Ctr) in the crease temperature
-    used for actuation (digest 6.7): half the mean of the 3 centre-line nodes plus half the
+    used for actuation (theory 5.1): half the mean of the 3 centre-line nodes plus half the
     mean of the 4 edge nodes."""
     return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 6, 1 / 6, 1 / 6])

@@ -1,4 +1,4 @@
-"""Lumped nodal masses and areas of a bar-and-hinge mesh (dynamics digest D3.1).
+"""Lumped nodal masses and areas of a bar-and-hinge mesh (theory 7.1).
 
 Every triangle of the mesh carries the mass ``rho t A`` of the sheet it covers, with ``A`` its
 area in the reference (undeformed) configuration:
@@ -11,7 +11,7 @@ area in the reference (undeformed) configuration:
 
 Panel and crease masses are conserved exactly. There is no rotational inertia: the mass matrix
 is ``diag(m_1, m_1, m_1, m_2, ...)``. (The reference sends the 2/3 share of one fan triangle to a
-corner by an index slip, digest D9.14; this port does not.)
+corner by an index slip, theory 7.1; this port does not.)
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def _triangle_areas(mesh: BarHingeMesh) -> np.ndarray:
 
 
 def _lump(mesh: BarHingeMesh, panel_weight: np.ndarray, crease_weight: np.ndarray) -> np.ndarray:
-    """Lump ``weight * area`` of every triangle onto its nodes by the digest's rule.
+    """Lump ``weight * area`` of every triangle onto its nodes by the rule of theory 7.1.
 
     ``panel_weight`` (P,) and ``crease_weight`` (C,) are per-area weights of the panels and
     creases (e.g. rho t in kg/m^2); returns (n_nodes,).

@@ -1,4 +1,4 @@
-"""Compliant-crease bar-and-hinge mesh (method digest 1.3).
+"""Compliant-crease bar-and-hinge mesh (theory 2.2).
 
 Every panel is shrunk away from its creases by half the crease width; each
 interior crease gets three nodes (A, B, Ctr), six triangles and ten bars;
@@ -50,7 +50,7 @@ class NodeKind:
 
 # Crease-local node slots: 0 N11, 1 N12, 2 N21, 3 N22, 4 A, 5 B, 6 Ctr.
 _N11, _N12, _N21, _N22, _A, _B, _CTR = range(7)
-#: The ten crease bars (node slots) and their types, digest 1.3 Pass B table.
+#: The ten crease bars (node slots) and their types, the slot table of theory 2.2.
 _CREASE_BARS = np.array([[_N11, _A], [_N11, _CTR], [_N12, _CTR], [_N12, _B], [_A, _CTR],
                          [_B, _CTR], [_N21, _A], [_N21, _CTR], [_N22, _CTR], [_N22, _B]])
 _CREASE_BAR_TYPES = np.array([2, 3, 3, 2, 4, 4, 2, 3, 3, 2])
@@ -80,7 +80,7 @@ class BarHingeMesh:
     bar_type : (nb,) :class:`BarType`
     bar_crease : (nb,) edge id of panel-edge bars and of crease bars with a spring, else -1
     bar_panel : (nb,) panel of panel-edge bars and spokes, -1 for crease bars
-    bar_length : (nb,) stored reference lengths [m] (never recomputed, digest pitfall 3)
+    bar_length : (nb,) stored reference lengths [m] (never recomputed, theory 2.2)
     springs : (ns, 4) nodes (i, j, k, l) of the rotational springs, axis j-k; crease springs after
         the polarity fix (a fold towards +z increases their angle above pi)
     spring_bar : (ns,) bar carrying each spring
@@ -89,7 +89,7 @@ class BarHingeMesh:
     triangle_panel, triangle_crease : (nt,) owner panel / crease row, -1 where not applicable
     crease_ids : (C,) edge ids of the interior creases
     crease_nodes : (C, 7) nodes N11, N12, N21, N22, A, B, Ctr
-    crease_bars : (C, 10) the ten crease bars (digest order)
+    crease_bars : (C, 10) the ten crease bars (slot order of theory 2.2)
     crease_edge_bars : (C, 2) the two shrunk panel edges (edge1 of the earlier panel, edge2)
     crease_springs : (C, 8) springs in the reference ``creaseRef`` order: edge1, edge2,
         N11-Ctr, N12-Ctr, A-Ctr, B-Ctr, N21-Ctr, N22-Ctr
@@ -180,7 +180,7 @@ class BarHingeMesh:
     def with_nodes(self, nodes) -> "BarHingeMesh":
         """A copy with moved reference nodes but the SAME stored bar lengths.
 
-        Reproduces the reference's post-meshing node edits (gripper, digest 8.7):
+        Reproduces the reference's post-meshing node edits (gripper, theory 10.6):
         bars then carry the originally meshed reference lengths.
         """
         nodes = np.array(nodes, dtype=float)          # a copy: the caller's array stays theirs
@@ -190,7 +190,7 @@ class BarHingeMesh:
 
 
 def build_mesh(pattern: Pattern) -> BarHingeMesh:
-    """Mesh a pattern with compliant creases (digest 1.3, ``mesh2D3D = 2``)."""
+    """Mesh a pattern with compliant creases (theory 2.2, ``mesh2D3D = 2``)."""
     if not isinstance(pattern, Pattern):
         raise PatternError(f"build_mesh expects a Pattern, got {type(pattern).__name__}.")
     sizes = pattern.corner_sizes

@@ -104,7 +104,7 @@ def _check_node(node: int, n_nodes: int) -> None:
 
 @dataclass(frozen=True)
 class ContactParameters:
-    """Node-to-panel penalty contact (digest 5; Zhu & Filipov 2019).
+    """Node-to-panel penalty contact (theory 3.5; Zhu & Filipov 2019).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Bar areas, moduli and spring stiffnesses of a bar-and-hinge mesh (method digest 2).
+"""Bar areas, moduli and spring stiffnesses of a bar-and-hinge mesh (theory 3.4).
 
 Crease bars and springs follow the compliant-crease model (Zhu & Filipov 2020): the three
 fold lines of a crease (its two edges and its centre line) each carry a stiffness
@@ -87,7 +87,7 @@ class MechanicalProperties:
 
 def mechanical_properties(mesh: BarHingeMesh,
                           params: BarHingeParameters = BarHingeParameters()) -> MechanicalProperties:
-    """Compute bar areas, moduli and spring stiffnesses (digest section 2), vectorised."""
+    """Compute bar areas, moduli and spring stiffnesses (theory 3.4), vectorised."""
     pat = mesh.pattern
     L0 = mesh.bar_length
     area = np.zeros(len(mesh.bars))
@@ -138,7 +138,7 @@ def mechanical_properties(mesh: BarHingeMesh,
 
 def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
                        params: BarHingeParameters = BarHingeParameters()) -> np.ndarray:
-    """Spring rest angles for given crease rest angles (digest 2 and 7.3).
+    """Spring rest angles for given crease rest angles (theory 3.4).
 
     Parameters
     ----------

@@ -7,7 +7,7 @@ tangent ``K = -dr/du`` and the load derivative ``q = dr/dlambda`` (:class:`LoadP
 ``f0 + lambda P`` and spring rest angles ``rest0 + lambda R``; heating paths add temperatures).
 Paths and the corrector shared by both methods are in :mod:`simulator.solvers.load_path`.
 
-:func:`mgdcm` is the modified generalized displacement control method (digest D1):
+:func:`mgdcm` is the modified generalized displacement control method (theory 6.8):
 
 * predictor: ``u_hat = K^-1 q``; the load step ``dlambda = sig ds |u_hat_1| / |u_hat_i|`` keeps
   the predictor's displacement norm at ``ds |u_hat_1|`` (``ds`` = arc length, the first load
@@ -19,14 +19,14 @@ Paths and the corrector shared by both methods are in :mod:`simulator.solvers.lo
   :data:`FAST_ITERATIONS` corrections (up to ``max_arc_length``) and halves after a slow one
   or a failure.
 
-Unlike the reference (digest D9.11): convergence uses the residual test of
+Unlike the reference (theory 6.8): convergence uses the residual test of
 :class:`~simulator.solvers.newton.NewtonOptions`, a failed increment is retried with half the arc
 length, the arc length has a maximum, and a path can end exactly at a target load factor or a
 target displacement (the last increment is then solved with lambda, or the displacement, fixed).
 
 :func:`displacement_control` prescribes ``c . u`` (a DOF or a node's displacement along a
-direction) in equal increments with the load factor unknown (digest D2, but with the increment
-prescribed rather than derived from ``lambdaBar``, D9.12). Every accepted point carries the
+direction) in equal increments with the load factor unknown (theory 6.9; the increment is
+prescribed rather than derived from ``lambdaBar``). Every accepted point carries the
 inertia of its tangent (:mod:`simulator.solvers.stability`).
 """
 
@@ -342,7 +342,7 @@ def _passed(u, lam, u1, lam1, lam_t, c_t, v_t) -> bool:
 def displacement_control(path, u0, lam0: float, c, target: float, *, increments: int = 50,
                          options: NewtonOptions = NewtonOptions(), stability: bool = True,
                          callback=None) -> ContinuationResult:
-    """Drive ``c . u`` linearly to ``target`` [m] with the load factor unknown (digest D2).
+    """Drive ``c . u`` linearly to ``target`` [m] with the load factor unknown (theory 6.9).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Implicit nonlinear time integration of the bar-and-hinge mechanics (dynamics digest D4).
+"""Implicit nonlinear time integration of the bar-and-hinge mechanics (theory 8.2).
 
 :func:`integrate` runs a whole integration and returns its time history with the energy
 bookkeeping (:class:`DynamicsResult`: kinetic, strain, dissipated energy, external work and the

@@ -35,7 +35,7 @@ class DynamicsOptions:
     rayleigh_beta : float
         Stiffness-proportional damping beta [s] (damping ratio beta omega / 2) on the material
         stiffness at the current configuration. Default 0. (The reference's defaults are
-        alpha = beta = 1e-4, which over-damps modes above a few kHz, digest D9.8.) A small beta,
+        alpha = beta = 1e-4, which over-damps modes above a few kHz, theory 8.3.) A small beta,
         or a dissipative method, calms the stiff crease-node modes that a sudden rest-angle
         change excites (the crease's centre line takes half of it, its edge lines a quarter
         each, so about 1/9 of the released energy goes into an S-shaped crease mode).

@@ -1,4 +1,4 @@
-"""One implicit time step of the bar-and-hinge mechanics: generalized-alpha and Newton (digest D4).
+"""One implicit time step of the bar-and-hinge mechanics: generalized-alpha and Newton (theory 8.2).
 
 Equation of motion on the free DOFs (supports eliminated as in statics)::
 
@@ -10,7 +10,7 @@ and elastic supports, and a damping matrix ``C = alpha M + beta K_mat(u) + diag(
 of the stiffness at the current configuration
 (:meth:`~simulator.mechanics.equilibrium.EquilibriumSystem.material_stiffness`: no stress or contact terms),
 so it is positive semi-definite and never damps rigid-body rotations. The reference uses the full
-tangent at the start of each step instead (digest D9.8); with the stiff crease bars that lagged
+tangent at the start of each step instead (theory 8.3); with the stiff crease bars that lagged
 matrix damps a rotating panel spuriously (0.7 % of its energy per period at 1e-3 rad and 100
 steps per period, against 2e-6 here). One time step is the generalized-alpha family (Chung & Hulbert 1993)::
 
@@ -20,7 +20,7 @@ with Newmark's update of u and v. ``method="newmark"`` is the constant average a
 (am = af = 0, beta = 1/4, gamma = 1/2: the reference's scheme, non-dissipative, energy-conserving
 for linear systems); ``"hht"`` and ``"generalized_alpha"`` damp the high-frequency (stiff bar,
 contact chatter) modes with spectral radius ``rho_inf`` at infinite frequency while staying
-second-order accurate. Unlike the reference (one linear solve per step, digest D9.6), every step
+second-order accurate. Unlike the reference (one linear solve per step, theory 8.4), every step
 is solved by Newton's method on the effective residual; a step that does not converge is cut in
 halves (bounded), with loads and rest angles interpolated linearly in time.
 """

@@ -1,4 +1,4 @@
-"""Natural frequencies and mode shapes about any state (dynamics digest D6).
+"""Natural frequencies and mode shapes about any state (theory 9).
 
 The structure is linearised about a state (flat, self-folded, heated, under gravity, in
 contact): ``K`` is the tangent stiffness at its displacements and spring rest angles (stress

@@ -63,7 +63,7 @@ class NewtonOptions:
         self-weight is far below any physical effect. 0 disables; it never applies without
         external loads.
     reference_loop : bool
-        Emulate the reference implementation's loop (digest 7.3), for comparisons with its
+        Emulate the reference implementation's loop (theory 6.4), for comparisons with its
         outputs only: the stopping measure is taken *before* the update, so one more update
         is applied after it drops below ``atol`` (``rtol`` is ignored); at most
         ``max_iter - 1`` updates; a loop that ends above ``atol`` is still accepted (logged
@@ -71,6 +71,8 @@ class NewtonOptions:
         (5e-7 N against ~1e-8 N of self-weight) this takes one to a few updates per increment,
         i.e. under-converged equilibria: keep it off for real work.
 
+    Notes
+    -----
     Whatever the criterion, an iteration whose correction is at round-off level
     (below 1e-13 of the model size) also counts as converged.
     """
@@ -259,7 +261,7 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
 
 
 def _reference_newton(system, u0, f_ext, spring_rest, options):
-    """The reference's Newton loop (digest 7.3 / 7.4); see ``NewtonOptions.reference_loop``."""
+    """The reference's Newton loop (theory 6.4 and 6.5); see ``NewtonOptions.reference_loop``."""
     free = system.free
     u = u0.copy().ravel()
     measure, res_norms, cor_norms, updates = math.inf, [], [], 0

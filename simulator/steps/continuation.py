@@ -169,7 +169,7 @@ def _progress(context, total):
 
 @dataclass(frozen=True)
 class DisplacementControl(Step):
-    """Drive a node's displacement along a direction to ``target`` [m] (digest D2).
+    """Drive a node's displacement along a direction to ``target`` [m] (theory 6.9).
 
     The load factor multiplies a reference load (default a unit force at the node along the
     direction, so that the load factor is the reaction force [N]); it is an unknown, so the

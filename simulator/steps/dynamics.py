@@ -1,10 +1,10 @@
-"""Time-integration step: the structure moves under inertia (dynamics digest D4).
+"""Time-integration step: the structure moves under inertia (theory 8.2).
 
 :class:`Dynamics` integrates the equation of motion over a duration with
 :func:`~simulator.solvers.dynamics.integrate` from the state the previous step left: free vibration from
 initial velocities, the response to a suddenly applied (or removed) load, release from a
 displaced state, or a sudden change of crease rest angles. Unlike the reference, dead loads of
-earlier steps stay applied (digest D9.3), supported DOFs keep their displacements (D9.5) and the
+earlier steps stay applied, supported DOFs keep their displacements (theory 8.6) and the
 velocities carry over to a following dynamic step (``SimulationState.velocity``).
 
 Choosing the scheme: the default (undamped average acceleration) is right for free vibration
@@ -55,6 +55,8 @@ class Dynamics(Step):
     record_every : int
         Record every this many time steps (and the last).
 
+    Notes
+    -----
     Every record carries the columns ``time [s]`` (time of the simulation, continuing from
     earlier dynamic steps), ``kinetic_energy [J]``, ``strain_energy [J]``,
     ``dissipated_energy [J]``, ``external_work [J]`` and ``numerical_dissipation [J]`` (energies

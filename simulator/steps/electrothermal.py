@@ -1,7 +1,7 @@
 """Coupled electro-thermal dynamics: heat and motion advanced together per time step.
 
 :class:`ElectroThermal` is the time-domain version of the paper's three-step loop
-(:func:`~simulator.steps.heating.coupled_increments`, dynamics digest D5.4). Per time step
+(:func:`~simulator.steps.heating.coupled_increments`, theory 8.5). Per time step
 ``[t, t + h]``:
 
 1. heat: one theta-method step of the transient heat equation
@@ -12,7 +12,7 @@
    :class:`~simulator.steps.Heat`);
 3. mechanics: one implicit time step of the equation of motion
    (:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`, Newton iterations and dead loads such as
-   gravity kept, unlike the reference, digest D9.3 and D9.6), or with
+   gravity kept, unlike the reference, theory 8.6 and 8.4), or with
    ``mechanics="quasi_static"`` an equilibrium solve by Newton (inertia neglected), the rest
    angles moved from the previous step's with step cutting
    (:func:`~simulator.solvers.newton.follow_path`).

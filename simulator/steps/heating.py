@@ -1,6 +1,6 @@
 """Electro-thermal loading steps: the paper's three-step loop per heating increment.
 
-For every increment of a :class:`Heat` step (digest 7.5):
+For every increment of a :class:`Heat` step (theory 6.6):
 
 1. heat transfer: node temperatures for the current crease powers, with the conductivity
    assembled on the current shape (so folding changes heat loss);
@@ -11,7 +11,7 @@ For every increment of a :class:`Heat` step (digest 7.5):
 ``coupling="staggered"`` (default, the reference's behaviour) uses the shape of the previous
 increment in step 1; ``coupling="iterated"`` repeats steps 1-3 within the increment until
 temperature and shape agree. :class:`AmbientTemperature` ramps the room temperature instead
-(digest 7.7).
+(theory 6.7).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ def _rotation_per_kelvin(model) -> np.ndarray:
 
 
 def thermal_actuation(model, state):
-    """Timoshenko bimorph actuation measured from the start of a step (digest 7.5, step 2).
+    """Timoshenko bimorph actuation measured from the start of a step (theory 6.6, step 2).
 
     Returns ``rest(temp) -> (crease_rest, spring_rest)``: crease rest angles [rad] =
     ``state.crease_rest + W kappa(dT)`` with dT the 7-node crease temperature [K] of the node
@@ -82,7 +82,7 @@ class Coupling:
 
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
                        coupling: Coupling = Coupling()) -> StepOutcome:
-    """The paper's three-step loop over increments s = 1..S (digest 7.5).
+    """The paper's three-step loop over increments s = 1..S (theory 6.6).
 
     Per increment: node temperatures for crease powers ``powers[s]`` (S, C) [W] and room
     temperature ``ambient[s]`` [deg C] on the current shape; crease rest angles from the
@@ -148,7 +148,7 @@ def _coupling(step) -> Coupling:
 
 @dataclass(frozen=True)
 class Heat(Step):
-    """Ramp crease heating powers linearly over ``increments`` (digest 7.5).
+    """Ramp crease heating powers linearly over ``increments`` (theory 6.6).
 
     Parameters
     ----------
@@ -233,7 +233,7 @@ class Heat(Step):
 
 @dataclass(frozen=True)
 class AmbientTemperature(Step):
-    """Ramp the room temperature to ``target`` [deg C] with the heating unchanged (digest 7.7).
+    """Ramp the room temperature to ``target`` [deg C] with the heating unchanged (theory 6.7).
 
     The conductivity is assembled once on the shape at the start of the step, as in the
     reference.

@@ -2,7 +2,7 @@
 
 Each step drives a linear path in (external load, spring rest angles) with
 :func:`~simulator.solvers.newton.follow_path` (Newton with step cutting); loads and rest angles
-persist into later steps (digest 7.3, 7.4).
+persist into later steps (theory 6.4, 6.5).
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def _resume(context, mid, lam, f_end, rest_end, increments, end_state) -> StepOu
 
 @dataclass(frozen=True)
 class SelfFold(Step):
-    """Drive crease rest angles linearly to target fold angles (digest 7.3).
+    """Drive crease rest angles linearly to target fold angles (theory 6.4).
 
     Parameters
     ----------
@@ -152,7 +152,7 @@ class SelfFold(Step):
 
 @dataclass(frozen=True)
 class Load(Step):
-    """Add dead loads linearly over the step; they stay applied in later steps (digest 7.4).
+    """Add dead loads linearly over the step; they stay applied in later steps (theory 6.5).
 
     Parameters
     ----------

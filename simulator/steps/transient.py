@@ -1,4 +1,4 @@
-"""Time-domain steps: transient heat transfer on a fixed shape (dynamics digest D5).
+"""Time-domain steps: transient heat transfer on a fixed shape (theory 8.1).
 
 :class:`TransientHeat` integrates the heat equation with the theta-method of
 :mod:`simulator.thermal.transient` over ``duration`` seconds, with time-varying crease or circuit

@@ -1,4 +1,4 @@
-"""Steady heat conduction in the structure with loss to layered environment chains (digest 6).
+"""Steady heat conduction in the structure with loss to layered environment chains (theory 4).
 
 Every mesh triangle (crease and panel fans) is a linear T3 conduction element built
 from its REFERENCE edge lengths and the CURRENT angle at its first node. Each node
@@ -57,7 +57,7 @@ DENSE_NODES = 400
 
 
 def heat_weights() -> np.ndarray:
-    """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (digest 6.6), (7,)."""
+    """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (theory 4.6), (7,)."""
     return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 12, 1 / 12, 1 / 3])
 
 
@@ -74,7 +74,7 @@ def _ids(value, name):
 
 @dataclass(frozen=True)
 class ThermalParameters:
-    """Heat-transfer parameters (digest 6; SI units, temperatures in deg C).
+    """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     Parameters
     ----------
@@ -254,11 +254,11 @@ class ThermalModel:
 
     def triangle_areas(self, x) -> np.ndarray:
         """Conduction areas A_t [m^2] of every triangle at positions ``x`` (n, 3) [m], (n_tri,)
-        (reference edge lengths, current angle at the first node; digest 6.2)."""
+        (reference edge lengths, current angle at the first node; theory 4.2)."""
         return self._conduction(x)[1]
 
     def tcap(self, x) -> np.ndarray:
-        """Cap of t_env per triangle [m], (n_tri,) (digest 6.4).
+        """Cap of t_env per triangle [m], (n_tri,) (theory 4.4).
 
         Mean over the triangle's vertices of the distance to the nearest boundary-panel triangle
         at positions ``x`` (n, 3) [m]; 1e10 for boundary triangles, 1e5 without boundary panels.
@@ -276,7 +276,7 @@ class ThermalModel:
         return np.where(self.is_boundary, _CAP_BOUNDARY, dmin[tri].mean(axis=1))
 
     def environment_geometry(self, x, area=None):
-        """Environment layer areas and thickness of every triangle (digest 6.3-6.4).
+        """Environment layer areas and thickness of every triangle (theory 4.3-4.4).
 
         Returns
         -------
@@ -310,7 +310,7 @@ class ThermalModel:
         return flat.reshape(-1, N)
 
     def layer_conductance(self, x, area=None) -> np.ndarray:
-        """Environment conductance of every node and layer [W/K], (n, N) (digest 6.3)."""
+        """Environment conductance of every node and layer [W/K], (n, N) (theory 4.3)."""
         a_q, t_air = self.environment_geometry(x, area)
         N = self.params.layers
         return self.node_layer_sum(self.params.env_conductivity * a_q * N / t_air[:, None])
@@ -335,7 +335,7 @@ class ThermalModel:
         return self._full_pattern.matrix([K, pair])
 
     def heat_vector(self, crease_power) -> np.ndarray:
-        """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (digest 6.6).
+        """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (theory 4.6).
 
         Each crease gives 1/8 to N11, N12, N21, N22, 1/12 to A and B and 1/3 to Ctr.
         """
@@ -364,7 +364,7 @@ class ThermalModel:
 
         Notes
         -----
-        Equivalent to solving ``K_FF T_F = q_F - K_FD T_D`` on the full system (digest 6.5):
+        Equivalent to solving ``K_FF T_F = q_F - K_FD T_D`` on the full system (theory 4.5):
         every row of ``K`` sums to zero, so the temperature rise solves ``K_FF dT_F = q_F``, and
         the free environment layers of a node's chain condense exactly into one series
         conductance ``1 / sum_q (1 / g_q)`` to room temperature.

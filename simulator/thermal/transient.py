@@ -1,14 +1,14 @@
-"""Transient heat transfer: lumped heat capacity and a theta-method in time (dynamics digest D5).
+"""Transient heat transfer: lumped heat capacity and a theta-method in time (theory 8.1).
 
 The unknowns are those of the steady model (:mod:`simulator.thermal.steady`): the structure nodes and
 the ``N`` environment layers of every node, index ``q * n + node``. The capacity matrix is
-diagonal (lumped, digest D5.1) and uses the same volumes as the conductivity:
+diagonal (lumped, theory 7.2) and uses the same volumes as the conductivity:
 
 * solid: ``rho c t A_t / 3`` to each vertex of a triangle (material of its panel, or the crease
   material; unlike the reference, panels use their specific heat, not their conductivity,
-  digest D9.2);
+  theory 7.2);
 * environment: layer segment ``q`` of a vertex holds ``rho_env c_env A_q t_air / N``, half on
-  each of its two end copies (``A_q``, ``t_air`` as in the conductance, digest 6.3-6.4).
+  each of its two end copies (``A_q``, ``t_air`` as in the conductance, theory 4.3-4.4).
 
 Room-temperature nodes and the far layer ``N`` are Dirichlet nodes at room temperature; the
 free unknowns are integrated as temperature rises ``dT`` with the theta-method
@@ -47,7 +47,7 @@ __all__ = ["REFERENCE_THETA", "capacity_vector", "HeatSystem", "heat_system", "T
 
 logger = logging.getLogger(__name__)
 
-#: Weight of the new time level used by the reference (``Solver_DynamicsThermal``, digest D5.4).
+#: Weight of the new time level used by the reference (``Solver_DynamicsThermal``, theory 8.5).
 REFERENCE_THETA = 2 / 3
 
 
@@ -93,7 +93,7 @@ def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
 def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     """Lumped heat capacity [J/K] of every unknown, ((N + 1) n,), at positions ``x`` (n, 3) [m].
 
-    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (digest D5.1). With
+    Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (theory 7.2). With
     ``env_conductivity = 0`` the environment is not in thermal contact and holds no heat.
     """
     prm, mesh = tm.params, tm.mesh

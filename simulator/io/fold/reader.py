@@ -89,6 +89,9 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
     ----------
     data : dict
         The FOLD key frame (top-level object).
+
+    Other Parameters
+    ----------------
     unit_scale : float, optional
         Metres per coordinate unit; required (and only allowed) when ``frame_unit`` is
         ``"unit"`` or absent.

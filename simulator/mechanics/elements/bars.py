@@ -1,4 +1,4 @@
-"""Bar element: Green-Lagrange strain, linear material (method digest 3).
+"""Bar element: Green-Lagrange strain, linear material (theory 3.2).
 
 For a bar from node a to node b with reference vector ``dX = X_b - X_a``, current
 vector ``dx``, stored reference length ``L0`` and axial stiffness ``EA``:

@@ -1,4 +1,4 @@
-"""Four-node rotational spring (method digest 4; Liu & Paulino 2017).
+"""Four-node rotational spring (theory 3.3; Liu & Paulino 2017).
 
 Nodes (i, j, k, l), axis j-k. The fold angle theta lies in [0, 2 pi) with pi =
 flat; with the mesher's polarity convention theta > pi means folded towards +z.
@@ -44,7 +44,7 @@ def _angle(m, n, r_kl, r_kj):
 def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
     """Fold angle, its gradient (n, 12) and Hessian (n, 12, 12) [rad/m, rad/m^2].
 
-    Gradient and Hessian are the closed forms of Liu & Paulino (digest 4.3-4.4).
+    Gradient and Hessian are the closed forms of Liu & Paulino (theory 3.3).
     """
     r_ij, r_kj, r_kl = x[:, 0] - x[:, 1], x[:, 2] - x[:, 1], x[:, 2] - x[:, 3]
     m, n = cross(r_ij, r_kj), cross(r_kj, r_kl)
@@ -61,7 +61,7 @@ def fold_angle_derivatives(x: np.ndarray, hessian: bool = True):
     if not hessian:
         return theta, grad, None
 
-    # six "sym" terms of digest 4.4 in two batched operations
+    # six "sym" terms of theory 3.3 in two batched operations
     cm = cross(np.stack([r_kj, r_ij, r_kj - r_ij], axis=1), m[:, None, :])      # (n, 3, 3)
     cn = cross(np.stack([r_kj, r_kl, r_kj - r_kl], axis=1), n[:, None, :])
     om = _outer(m[:, None, :], cm)
