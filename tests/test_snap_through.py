@@ -1,6 +1,7 @@
 """Snap-through of a bar-and-hinge model: the ``snap_through`` case, path-following steps,
 load-control limit-point handling, agreement with load control, bad inputs."""
 
+import functools
 import json
 
 import numpy as np
@@ -164,6 +165,27 @@ def test_gravity_unchanged_by_limit_point_machinery():
     assert res.success and res.steps[0].columns == {}
 
 
+def test_lost_peak_is_the_highest_point_of_a_failed_run_past_a_maximum():
+    """The continuation jumps on from the highest accepted point of a failed arc-length run
+    that passed a load-factor maximum; not after a success, a run that never turned, or one
+    that never rose above where it started."""
+    from types import SimpleNamespace as NS
+
+    from simulator.solvers.path_trace import CriticalPoint
+    from simulator.steps.limit import _lost_peak
+
+    u = np.zeros((1, 3))
+    history = [(lam, u, 3) for lam in (0.90, 0.91, 0.918, 0.915, 0.912)]
+    top = CriticalPoint("limit_point", 0.9182, 3, None, maximum=True)
+    failed = NS(status="failed", history=history, critical_points=[top])
+    assert _lost_peak(failed, 0.89) == 2
+    assert _lost_peak(failed, 0.92) is None                  # no progress past the start
+    assert _lost_peak(NS(status="converged", history=history, critical_points=[top]),
+                      0.89) is None
+    assert _lost_peak(NS(status="failed", history=history, critical_points=[
+        CriticalPoint("limit_point", 0.9, 1, None, maximum=False)]), 0.89) is None
+
+
 @pytest.mark.slow
 def test_heated_miura_passes_its_snap():
     """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease."""
@@ -172,9 +194,14 @@ def test_heated_miura_passes_its_snap():
     assert res.success, res.message
     step = res.steps[0]
     assert step.power_history[-1].max() == pytest.approx(12e-3)
-    assert step.message.count("snap at load factor") == 1
-    lam = float(step.message.split("snap at load factor ")[1].split(" ")[0])
+    # the main snap first; a second, small one (4 um near 11.93 mW: a limit point of the
+    # coupled path found at 30, 60 and 240 increments) may follow
+    snaps = step.message.split("snap at load factor ")[1:]
+    assert 1 <= len(snaps) <= 2
+    lam = float(snaps[0].split(" ")[0])
     assert 9.0e-3 < 12e-3 * lam < 9.4e-3                       # the snap power
+    jumps = [float(t.split("displacement jumps ")[1].split(" ")[0]) for t in snaps]
+    assert jumps[0] == max(jumps)
     stable = step.columns["stable"]
     assert any(v is False or v == False for v in stable)      # noqa: E712 (object array)
     stop = simulate(case.model, [Heat(dict(case.steps[0].power), increments=60)])
@@ -222,9 +249,10 @@ def test_miura_power_search_reports_a_snap():
     assert res.success and "after a snap" in res.message and "mW per crease" in res.message
 
 
+@functools.lru_cache(maxsize=None)
 def _heated_miura_snap(increments):
     """Heat MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) to 12 mW per crease in
-    ``increments``: (result, [(snap power [mW], jump [um])])."""
+    ``increments``: (result, [(snap power [mW], jump [um])]) (cached: two tests read it)."""
     import math
     import re
 
@@ -239,17 +267,9 @@ def _heated_miura_snap(increments):
     return res, snaps
 
 
-#: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
-#: same snap. Not met yet: near 11.0 mW per crease (load factor ~0.92) the coupled path has a
-#: second fold whose branch turns back to negative powers, so arc length cannot pass it and
-#: success depends on whether staggered load control happens to jump across (see the report
-#: of branch ``cont``).
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="second fold near 11 mW not passed for every count")
-def test_heated_miura_snap_does_not_depend_on_increments():
-    """Success, 12 mW and the main snap (largest jump) at 30, 60, 120 and 240 increments:
-    power within 12 mW / 240 (the finest increment) and jump within 10 um (about the most
-    moving node's travel per increment at 240 increments, 1.9 mm / 183)."""
+def _main_snaps():
+    """The main snap (largest jump) at 30, 60, 120 and 240 increments, after checking that
+    each run reached 12 mW with success."""
     main = []
     for n in (30, 60, 120, 240):
         res, snaps = _heated_miura_snap(n)
@@ -257,6 +277,28 @@ def test_heated_miura_snap_does_not_depend_on_increments():
         assert res.state.crease_power.max() == pytest.approx(12e-3)
         assert snaps, (n, res.message)
         main.append(max(snaps, key=lambda s: s[1]))
-    powers, jumps = np.array(main).T
+    return np.array(main).T
+
+
+#: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
+#: same snap. Near 11.0 mW per crease (load factor ~0.92) the coupled path has a second fold
+#: from which arc length can follow a branch that turns back (and stall in contact chatter on
+#: it: 60 increments): the continuation then jumps on by load control from the highest point
+#: it reached.
+@pytest.mark.slow
+def test_heated_miura_snap_does_not_depend_on_increments():
+    """Success, 12 mW and the main snap's power at 30, 60, 120 and 240 increments: within
+    12 mW / 240 (the finest increment) of each other (9.216-9.218 mW measured)."""
+    powers, _ = _main_snaps()
     assert np.ptp(powers) <= 12.0 / 240 and 9.0 < powers.min() and powers.max() < 9.4
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the jump at 60 increments is 35 um, 47-50 um at 30, "
+                   "120, 240: its arc length passes the symmetry-breaking bifurcation at load "
+                   "factor 0.7674 without seeing it and follows another branch")
+def test_heated_miura_snap_jump_does_not_depend_on_increments():
+    """The main snap's jump within 10 um (about the most moving node's travel per increment
+    at 240 increments, 1.9 mm / 183) at 30, 60, 120 and 240 increments."""
+    _, jumps = _main_snaps()
     assert np.ptp(jumps) <= 10.0

@@ -12,7 +12,9 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
 * ``on_limit_point="continue"``: the step carries on by arc length (MGDCM) with its path
   parameter as the unknown load factor until it reaches 1 on a stable branch, recording the
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
-  power for heating, and the jump of the most-moving node's displacement).
+  power for heating, and the jump of the most-moving node's displacement). If arc length fails
+  after the load factor turned back, load control resumes from the highest point reached
+  (a jump across that fold).
 
 Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
 temperatures are affine in lambda (the heat problem is linear in the power), which gives the
@@ -215,7 +217,10 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
 
     With "continue", arc length takes over from the last converged state until the path is
     stable again beyond the snap (or reaches the end), then load control resumes; this repeats
-    for up to :data:`MAX_SNAPS` failures.
+    for up to :data:`MAX_SNAPS` failures. Where arc length fails after the load factor turned
+    back (a branch that falls away from the step's end, or a corrector stalled in contact
+    chatter on it), load control resumes from the highest point it reached and jumps across
+    as a snap would (message "jump from load factor ...").
     """
     if outcome.success or outcome.status == "stopped":
         return outcome
@@ -231,17 +236,22 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
                             powers=powers)
         state = end_state(res.u, res.load_factor) if res.history else current.state
-        lam0 = float(current.load_factor[-1]) if len(current.load_factor) else 0.0
+        lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
                      f"{res.message}" + _snap_text(res, c, powers))
-        if not res.success or res.load_factor >= 1.0 - 1e-12:
+        lam1, k = res.load_factor, _lost_peak(res, lam0) if not res.success else None
+        if k is not None:       # the path turned back and was lost: jump on from its peak
+            lam1, u1 = float(res.history[k][0]), res.history[k][1]
+            path.at(u1, lam1)                      # (a heating path: temperatures there)
+            state = end_state(u1, lam1)
+            notes.append(f"jump from load factor {lam1:.6g}")
+        elif not res.success or res.load_factor >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
                               state.applied_load.ravel(), res.evaluation)
-        current, origin = resume(state, res.load_factor), (state.u, res.load_factor)
+        current, origin = resume(state, lam1), (state.u, lam1)
         _replay(rec, current)
         if current.success or current.status == "stopped":
-            notes.append(f"load control from load factor {res.load_factor:.6g}: "
-                         f"{current.message}")
+            notes.append(f"load control from load factor {lam1:.6g}: {current.message}")
             return rec.finish(current.success, current.status, "; ".join(notes),
                               current.state, current.f_ext, current.evaluation)
     return rec.finish(False, "failed", "; ".join(notes) + f"; more than {MAX_SNAPS} snaps",
@@ -292,6 +302,17 @@ def _arc(context, origin, outcome, path, increments, c, until_stable):
                  stability=until_stable, until_stable=until_stable,
                  direction=recent, prior=prior, callback=None if until_stable else turned,
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None)
+
+
+def _lost_peak(res, lam0):
+    """Index of the highest accepted point of a failed arc-length run that passed a
+    load-factor maximum above ``lam0``, or None."""
+    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
+                                         for p in res.critical_points):
+        return None
+    lam = np.array([h[0] for h in res.history])
+    k = int(np.argmax(lam))
+    return k if lam[k] > lam0 else None
 
 
 def _on_path(context, path, u, lam, direction):
