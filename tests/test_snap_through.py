@@ -194,14 +194,9 @@ def test_heated_miura_passes_its_snap():
     assert res.success, res.message
     step = res.steps[0]
     assert step.power_history[-1].max() == pytest.approx(12e-3)
-    # the main snap first; a second, small one (4 um near 11.93 mW: a limit point of the
-    # coupled path found at 30, 60 and 240 increments) may follow
-    snaps = step.message.split("snap at load factor ")[1:]
-    assert 1 <= len(snaps) <= 2
-    lam = float(snaps[0].split(" ")[0])
+    assert step.message.count("snap at load factor") == 1
+    lam = float(step.message.split("snap at load factor ")[1].split(" ")[0])
     assert 9.0e-3 < 12e-3 * lam < 9.4e-3                       # the snap power
-    jumps = [float(t.split("displacement jumps ")[1].split(" ")[0]) for t in snaps]
-    assert jumps[0] == max(jumps)
     stable = step.columns["stable"]
     assert any(v is False or v == False for v in stable)      # noqa: E712 (object array)
     stop = simulate(case.model, [Heat(dict(case.steps[0].power), increments=60)])
@@ -280,11 +275,21 @@ def _main_snaps():
     return np.array(main).T
 
 
+def test_heated_miura_reaches_12_mw_at_120_increments():
+    """Issue 18: at 120 increments (main: arc length gave up at 11.92 mW) the heated Miura
+    reaches 12 mW with success, past its snap at 9.2 mW (~15-25 s)."""
+    res, snaps = _heated_miura_snap(120)
+    assert res.success, res.message
+    assert res.state.crease_power.max() == pytest.approx(12e-3)
+    power, jump = max(snaps, key=lambda s: s[1])
+    assert 9.0 < power < 9.4 and jump > 0
+
+
 #: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
 #: same snap. Near 11.0 mW per crease (load factor ~0.92) the coupled path has a second fold
 #: from which arc length can follow a branch that turns back (and stall in contact chatter on
-#: it: 60 increments): the continuation then jumps on by load control from the highest point
-#: it reached.
+#: it: 60 increments): the continuation then jumps from the highest point it reached to the
+#: equilibrium that damped Newton on the energy finds just above it, and load control goes on.
 @pytest.mark.slow
 def test_heated_miura_snap_does_not_depend_on_increments():
     """Success, 12 mW and the main snap's power at 30, 60, 120 and 240 increments: within
@@ -302,3 +307,34 @@ def test_heated_miura_snap_jump_does_not_depend_on_increments():
     at 240 increments, 1.9 mm / 183) at 30, 60, 120 and 240 increments."""
     _, jumps = _main_snaps()
     assert np.ptp(jumps) <= 10.0
+
+
+def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
+    """Just past the roof's first limit point, damped Newton on the potential energy from
+    the limit point lands on the stable far branch: the arc-length trace's equilibrium at
+    that load factor there."""
+    from simulator.solvers.load_path import LoadPath
+    from simulator.solvers.stability import tangent_stability
+    from simulator.steps.base import StepContext
+    from simulator.steps.limit import _descend
+    from simulator.state import equilibrium_system
+
+    case, res = roof
+    step = res.steps[0]
+    lams = step.load_factor
+    top = int(np.argmax(np.diff(lams) < 0))
+    model, start = case.model, res.initial_state
+    P = np.zeros((model.mesh.n_nodes, 3))
+    for n, f in case.steps[0].forces.items():
+        P[n] += f
+    system = StepContext(model, NewtonOptions()).system
+    path = LoadPath(system, start.applied_load.ravel(), P.ravel(), start.spring_rest)
+    lam = 1.01 * float(lams[top])
+    u = _descend(path, step.u_history[top], lam, NewtonOptions())
+    assert u is not None
+    assert tangent_stability(path.at(u, lam).K).stable
+    stable = step.columns["stable"]
+    far = [k for k in range(top + 1, len(lams)) if stable[k] is not None and bool(stable[k])
+           and lams[k - 1] < lam <= lams[k]]
+    assert far
+    assert np.max(np.abs(u - step.u_history[far[0]])) < 0.1 * np.max(np.abs(u))

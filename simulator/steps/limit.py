@@ -13,8 +13,9 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   parameter as the unknown load factor until it reaches 1 on a stable branch, recording the
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
   power for heating, and the jump of the most-moving node's displacement). If arc length fails
-  after the load factor turned back, load control resumes from the highest point reached
-  (a jump across that fold).
+  after the load factor turned back, the step jumps from the highest point reached to the
+  equilibrium just above it that damped Newton on the potential energy finds (where the snap
+  lands), and load control resumes there.
 
 Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
 temperatures are affine in lambda (the heat problem is linear in the power), which gives the
@@ -32,7 +33,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import scipy.linalg
 
+from ..linalg.small_solve import as_dense
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
@@ -59,6 +62,9 @@ ARC_LOAD_STEP = 0.01
 #: (:func:`~simulator.solvers.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
 #: are located at that resolution.
 RESOLVE = 8
+#: Free DOFs at most of the (dense) energy descent that lands a jump past a lost fold; larger
+#: models resume load control from the fold instead.
+DESCENT_DOF_LIMIT = 3000
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -219,8 +225,10 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     stable again beyond the snap (or reaches the end), then load control resumes; this repeats
     for up to :data:`MAX_SNAPS` failures. Where arc length fails after the load factor turned
     back (a branch that falls away from the step's end, or a corrector stalled in contact
-    chatter on it), load control resumes from the highest point it reached and jumps across
-    as a snap would (message "jump from load factor ...").
+    chatter on it), the step jumps from the highest point it reached to the equilibrium at
+    ``ARC_LOAD_STEP / RESOLVE`` above it that :func:`_descend` finds (or, failing that, resumes
+    load control from that point), then load control resumes (message "jump from load factor
+    ...", the load factor where it resumed).
     """
     if outcome.success or outcome.status == "stopped":
         return outcome
@@ -242,6 +250,9 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         lam1, k = res.load_factor, _lost_peak(res, lam0) if not res.success else None
         if k is not None:       # the path turned back and was lost: jump on from its peak
             lam1, u1 = float(res.history[k][0]), res.history[k][1]
+            landed = _descend(path, u1, lam1 + ARC_LOAD_STEP / RESOLVE, context.options)
+            if landed is not None:
+                lam1, u1 = lam1 + ARC_LOAD_STEP / RESOLVE, landed
             path.at(u1, lam1)                      # (a heating path: temperatures there)
             state = end_state(u1, lam1)
             notes.append(f"jump from load factor {lam1:.6g}")
@@ -313,6 +324,62 @@ def _lost_peak(res, lam0):
     lam = np.array([h[0] for h in res.history])
     k = int(np.argmax(lam))
     return k if lam[k] > lam0 else None
+
+
+def _descend(path, u, lam, options, max_iter=300):
+    """The equilibrium at ``lam`` that damped Newton on the potential energy reaches from
+    ``u`` (the temperatures held on the shape ``u``): where a snap lands, without dynamics;
+    polished on ``path`` with the load factor fixed. None if it does not get there (or the
+    model has more than :data:`DESCENT_DOF_LIMIT` free DOFs).
+
+    Levenberg-Marquardt: steps ``(K + mu I)^-1 r`` accepted where the energy decreases
+    (``mu`` / 3, else ``mu`` * 4), so indefinite tangents past a fold are passed downhill
+    and the steps become Newton's near the minimum.
+    """
+    system, free = path.system, path.free
+    if len(free) > DESCENT_DOF_LIMIT:
+        return None
+    path.at(u, lam)                             # a heating path: temperatures on this shape
+    rest, f = path.rest(lam), path.f_ext(lam)
+
+    def energy(v):
+        ev = system.evaluate(v.reshape(-1, 3), rest)
+        return sum(ev.energies.values()) - float(f @ v), ev
+
+    v = np.array(u, float).ravel()
+    e, ev = energy(v)
+    eye = np.eye(len(free))
+    mu, step, size = None, getattr(system, "max_step", None), _size(system)
+    for _ in range(max_iter):
+        g, K = (ev.f_int - f)[free], as_dense(ev.K)
+        mu = 1e-6 * float(np.mean(np.abs(np.diag(K)))) if mu is None else mu
+        while mu < 1e30:
+            try:
+                dv = -scipy.linalg.cho_solve(scipy.linalg.cho_factor(K + mu * eye,
+                                                                     check_finite=False), g)
+            except np.linalg.LinAlgError:
+                mu *= 4
+                continue
+            if step is not None and np.max(np.abs(dv)) > step:
+                dv *= step / np.max(np.abs(dv))
+            if np.max(np.abs(dv)) <= 1e-9 * size:  # (undamped by then: Newton's steps)
+                break
+            w = v.copy()
+            w[free] += dv
+            e1, ev1 = energy(w)
+            if e1 < e:
+                v, e, ev, mu = w, e1, ev1, mu / 3
+                break
+            mu *= 4
+        else:
+            return None
+        if np.max(np.abs(dv)) <= 1e-9 * size:
+            break
+    else:
+        return None
+    ok, u1, _, _, _, _, _ = _correct(path, v.reshape(-1, 3), lam, _Constraint(None, lam),
+                                     options, size)
+    return u1 if ok else None
 
 
 def _on_path(context, path, u, lam, direction):
