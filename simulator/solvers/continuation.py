@@ -72,7 +72,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           max_arc_length: float | None = None, step_norm: float | None = None,
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
           until_stable: bool = False, direction=None, prior=None,
-          callback=None) -> ContinuationResult:
+          callback=None, resolution: float | None = None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
     Parameters
@@ -123,16 +123,26 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         that a restart at a limit point finds the turn there.
     callback : callable, optional
         ``callback(lam, u)`` after every accepted point; True stops (status "stopped").
+    resolution : float, optional
+        Arc length (in the units of ``arc_length``) that resolves a limit point: at the first
+        accepted point where the load factor turns back or the tangent has more negative
+        eigenvalues than at the point before (with ``stability``), the increment is redone
+        from the point before with at most this arc length, which from then on caps the
+        adaptation wherever the load factor is within ``resolution`` of that point's (around
+        the limit point, and where the path crosses its load factor again). So the limit
+        point (and a snap's jump) is located at this resolution, whatever the arc length the
+        path arrived with. Default: no cap.
     """
     _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor)
+    positive("resolution", resolution, allow_none=True)
     run = _ArcLengthRun(path, u0, lam0, arc_length=arc_length, max_arc_length=max_arc_length,
                         target_load_factor=target_load_factor,
                         target_displacement=target_displacement, monitor=monitor,
                         options=options, adapt=adapt, step_norm=step_norm,
                         fast_iterations=fast_iterations, stability=stability,
                         until_stable=until_stable, direction=direction, prior=prior,
-                        callback=callback)
+                        callback=callback, resolution=resolution)
     return run.trace_path(max_increments)
 
 
@@ -154,8 +164,9 @@ class _ArcLengthRun:
 
     def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
                  target_displacement, monitor, options, adapt, step_norm, fast_iterations,
-                 stability, until_stable, direction, prior, callback):
+                 stability, until_stable, direction, prior, callback, resolution=None):
         self.path, self.options, self.arc_length = path, options, arc_length
+        self.resolution, self.fine = resolution, False
         self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
         self.direction, self.callback, self.lam_t = direction, callback, target_load_factor
         self.fast, self.slow = fast_iterations, max(SLOW_ITERATIONS, 2 * fast_iterations)
@@ -246,8 +257,13 @@ class _ArcLengthRun:
     def accept(self, s, uhat, u1, lam1, pt1, its, res, end) -> ContinuationResult | None:
         """Take the converged point; the result if the path ends there (callback, target
         reached, stable again), else adapt the arc length and evaluate the path there."""
+        back = (self.u, self.lam, self.sig, self.uhat_prev, self.pt)
         self.u, self.lam, self.sig, self.uhat_prev = u1, lam1, s, uhat
         self.trace.accept(u1, lam1, pt1, its, res)
+        if self.refine(s, back[2], end):      # redo it shorter from the point before
+            self.trace.pop()
+            self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
+            return None
         if self.callback is not None and self.callback(lam1, u1):
             return self.result(False, "stopped", f"stopped by callback at load factor "
                                f"{lam1:.6g}")
@@ -260,8 +276,26 @@ class _ArcLengthRun:
         if self.adapt:
             self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
                 max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
+        if self.fine and abs(lam1 - self.lam_fine) <= self.resolution:
+            self.ds = min(self.ds, self.resolution)
         self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
         return None
+
+    def refine(self, s, sig_before, end) -> bool:
+        """True if the point just accepted is the first near a limit point (the load factor
+        turned, or the tangent lost stability) and was reached with an arc length above
+        ``resolution``: it is then redone from the point before with that arc length."""
+        if self.resolution is None or self.fine or end:
+            return False
+        stab = self.trace.stab
+        lost = bool(stab) and stab[-1].negative > (stab[-2].negative if len(stab) > 1 else 0)
+        if s == sig_before and not lost:
+            return False
+        self.fine, self.lam_fine = True, self.trace.points[-2][0]
+        if self.ds <= self.resolution:
+            return False
+        self.ds = self.resolution
+        return True
 
     def stable_again(self, s) -> bool:
         """Note whether the load factor turned (sign ``s`` of the last step); True if

@@ -22,6 +22,11 @@ from ..linalg.ladder import solve
 
 __all__ = ["LoadPath", "PathPoint"]
 
+#: Largest rest-angle change [rad] of the difference that gives ``q`` (:meth:`LoadPath.at`):
+#: small against the half turn between a spring's rest angle and its kink, large enough that
+#: the difference keeps ~15 digits.
+REST_PROBE = 0.1
+
 
 @dataclass(frozen=True, eq=False)
 class PathPoint:
@@ -75,9 +80,15 @@ class LoadPath:
         rest = self.rest(lam)
         ev = self.system.evaluate(u, rest)
         q = self.P[self.free]
-        if self.R is not None:   # f_int is linear in the rest angles: the difference is exact
-            f1 = self.system.evaluate(u, rest + self.R, hessian=False).f_int
-            q = q - (f1 - ev.f_int)[self.free]
+        if self.R is not None:
+            # f_int is linear in the rest angles only between the kinks of the spring law at
+            # theta0 +- pi (the deviation is taken modulo 2 pi): a difference over the whole
+            # R (a unit load factor, e.g. a whole heating step) can cross one and give a
+            # wrong q (the corrector then converges linearly, or not at all), so the
+            # difference is taken over a rest change of at most REST_PROBE rad, exact there
+            h = min(1.0, REST_PROBE / float(np.max(np.abs(self.R))))
+            f1 = self.system.evaluate(u, rest + h * self.R, hessian=False).f_int
+            q = q - (f1 - ev.f_int)[self.free] / h
         return PathPoint((self.f_ext(lam) - ev.f_int)[self.free], _assembled_tangent(ev), q,
                          ev)
 

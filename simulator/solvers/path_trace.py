@@ -154,6 +154,14 @@ class PathTrace:
             self.stab.append(tangent_stability(pt.K))
             self.align.append(self.stab[-1].load_alignment(pt.q))
 
+    def pop(self):
+        """Forget the last accepted point (its Newton iterations stay counted)."""
+        for seq in (self.history, self.residuals, self.temps, self.points, self.arc):
+            seq.pop()
+        if self.check:
+            self.stab.pop()
+            self.align.pop()
+
     def measure(self, u) -> float | None:
         return None if self.monitor is None else float(self.monitor @ u.ravel())
 

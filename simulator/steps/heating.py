@@ -208,8 +208,10 @@ class Heat(Step):
         outcome = coupled_increments(context, state, powers, ambient, _coupling(self))
         if outcome.success:
             return outcome
-        path = HeatPath(context, state, dP, _rotation_per_kelvin(context.model),
-                        iterated=self.coupling == "iterated")
+        # arc length traces the coupled equilibria (temperatures on the current shape) with
+        # either coupling: staggered temperatures would lag by one arc-length increment,
+        # whose size the continuation chooses, and the snap found would depend on it
+        path = HeatPath(context, state, dP, _rotation_per_kelvin(context.model), iterated=True)
 
         def resume(mid, lam):
             n = max(1, round((1 - lam) * self.increments))

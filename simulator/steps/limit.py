@@ -14,7 +14,10 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
   power for heating, and the jump of the most-moving node's displacement), and so do the
   step's events (:class:`~simulator.events.Event`: the critical points of the arc-length
-  stretches, and a ``"snap"`` per snap).
+  stretches, and a ``"snap"`` per snap). If arc length fails after the load factor turned
+  back, the step jumps from the highest point reached to the equilibrium just above it that
+  damped Newton on the potential energy finds (where the snap lands), and load control
+  resumes there.
 
 Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
 temperatures are affine in lambda (the heat problem is linear in the power), which gives the
@@ -33,10 +36,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..linalg.ladder import factorize
+from ..linalg.small_solve import as_dense
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..solvers.load_path import LoadPath
+from ..solvers.load_path import LoadPath, _Constraint, _correct, _size
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from ..events import event_at, monitored_node
@@ -52,6 +57,17 @@ LIMIT_POINT_ACTIONS = ("stop", "continue")
 PROBE_INCREMENTS = 40
 #: Arc-length increments at most per snap with on_limit_point="continue".
 CONTINUATION_INCREMENTS = 200
+#: Arc length of the continuation in load-factor units: the first predictor moves the
+#: displacements as far as the load-controlled part would over this load factor (the step's
+#: own increments play no part, so the traced snap does not depend on them).
+ARC_LOAD_STEP = 0.01
+#: Near a limit point the continuation's arc length is at most ARC_LOAD_STEP / RESOLVE
+#: (:func:`~simulator.solvers.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
+#: are located at that resolution.
+RESOLVE = 8
+#: Free DOFs at most of the (dense) energy descent that lands a jump past a lost fold; larger
+#: models resume load control from the fold instead.
+DESCENT_DOF_LIMIT = 3000
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -214,7 +230,12 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
 
     With "continue", arc length takes over from the last converged state until the path is
     stable again beyond the snap (or reaches the end), then load control resumes; this repeats
-    for up to :data:`MAX_SNAPS` failures.
+    for up to :data:`MAX_SNAPS` failures. Where arc length fails after the load factor turned
+    back (a branch that falls away from the step's end, or a corrector stalled in contact
+    chatter on it), the step jumps from the highest point it reached to the equilibrium at
+    ``ARC_LOAD_STEP / RESOLVE`` above it that :func:`_descend` finds (or, failing that, resumes
+    load control from that point), then load control resumes (message "jump from load factor
+    ...", the load factor where it resumed).
     """
     if outcome.success or outcome.status == "stopped":
         return outcome
@@ -224,39 +245,66 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     rec = StepRecorder(start)
     _replay(rec, outcome)
     notes, current, c = [], outcome, _motion_monitor(start, outcome)
+    origin = (start.u, 0.0)                 # where the load control of ``current`` began
     for _ in range(MAX_SNAPS):
-        res = _arc(context, start, current, path, increments, c, until_stable=True)
+        res = _arc(context, origin, current, path, increments, c, until_stable=True)
         record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
                             powers=powers)
         state = end_state(res.u, res.load_factor) if res.history else current.state
-        lam0 = float(current.load_factor[-1]) if len(current.load_factor) else 0.0
+        lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
                      f"{res.message}" + _snap_text(rec, res, c, powers))
-        if not res.success or res.load_factor >= 1.0 - 1e-12:
+        lam1, k = res.load_factor, _lost_peak(res, lam0) if not res.success else None
+        if k is not None:       # the path turned back and was lost: jump on from its peak
+            lam1, u1 = float(res.history[k][0]), res.history[k][1]
+            landed = _descend(path, u1, lam1 + ARC_LOAD_STEP / RESOLVE, context.options)
+            if landed is not None:
+                lam1, u1 = lam1 + ARC_LOAD_STEP / RESOLVE, landed
+            path.at(u1, lam1)                      # (a heating path: temperatures there)
+            state = end_state(u1, lam1)
+            notes.append(f"jump from load factor {lam1:.6g}")
+        elif not res.success or res.load_factor >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
                               state.applied_load.ravel(), res.evaluation)
-        current = resume(state, res.load_factor)
+        current, origin = resume(state, lam1), (state.u, lam1)
         _replay(rec, current)
         if current.success or current.status == "stopped":
-            notes.append(f"load control from load factor {res.load_factor:.6g}: "
-                         f"{current.message}")
+            notes.append(f"load control from load factor {lam1:.6g}: {current.message}")
             return rec.finish(current.success, current.status, "; ".join(notes),
                               current.state, current.f_ext, current.evaluation)
     return rec.finish(False, "failed", "; ".join(notes) + f"; more than {MAX_SNAPS} snaps",
                       current.state, current.f_ext, current.evaluation)
 
 
-def _arc(context, start, outcome, path, increments, c, until_stable):
-    """MGDCM from the last state of a failed load-controlled outcome towards load factor 1."""
-    lam0 = float(outcome.load_factor[-1]) if len(outcome.load_factor) else 0.0
+def _arc(context, origin, outcome, path, increments, c, until_stable):
+    """MGDCM from the last state of a failed load-controlled outcome towards load factor 1;
+    ``origin`` = (u, load factor) where that load control began (the step's start, or where
+    it resumed after a snap).
+
+    The arc length does not depend on the step's ``increments``: the first predictor moves
+    the displacements by the mean rate of the load-controlled part since ``origin``
+    (displacement per unit load factor) times :data:`ARC_LOAD_STEP`, and the adaptation
+    works from there, so every increment count traces the snap with the same resolution.
+    """
     n = len(outcome.u)
-    # first predictor: the mean displacement per load-controlled increment, along the recent
-    # motion (the last increments before a failure can be vanishingly small)
-    step = float(np.linalg.norm((outcome.state.u - start.u).ravel()[path.free])) / max(n, 1)
-    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else (start.u, 0.0)
+    lam0 = float(outcome.load_factor[-1]) if n else float(origin[1])
+    # the mean rate since ``origin`` (not since the step's start: after a snap the resumed
+    # increments would carry the whole motion), along the recent motion (the last increments
+    # before a failure can be vanishingly small)
+    span = lam0 - float(origin[1])
+    moved = float(np.linalg.norm((outcome.state.u - origin[0]).ravel()[path.free]))
+    step = moved / span * ARC_LOAD_STEP if span > 0 else 0.0
+    prior = (outcome.u[-4], float(outcome.load_factor[-4])) if n >= 4 else origin
     recent = outcome.state.u - prior[0]
     if not np.any(recent):
-        prior, recent = (start.u, 0.0), outcome.state.u - start.u
+        prior, recent = origin, outcome.state.u - origin[0]
+    u0 = outcome.state.u
+    if getattr(path, "iterated", False):
+        # load control with staggered coupling lags behind the coupled path that arc length
+        # follows: start from the coupled equilibrium at lam0 (a start off the path would
+        # make the first increments turn, a limit point that is not there)
+        u0, lam0, projected = _on_path(context, path, u0, lam0, recent)
+        prior = None if projected else prior
     its = outcome.increment_iterations
     fast = max(FAST_ITERATIONS, int(np.median(its))) if len(its) else FAST_ITERATIONS
     lams = [lam0]
@@ -265,18 +313,100 @@ def _arc(context, start, outcome, path, increments, c, until_stable):
         lams.append(lam)
         return len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0
 
-    return mgdcm(path, outcome.state.u, lam0, arc_length=1.0 / increments,
+    return mgdcm(path, u0, lam0, arc_length=ARC_LOAD_STEP,
                  max_increments=CONTINUATION_INCREMENTS if until_stable else PROBE_INCREMENTS,
                  target_load_factor=1.0, monitor=c, options=context.options,
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
-                 direction=recent, prior=prior, callback=None if until_stable else turned)
+                 direction=recent, prior=prior, callback=None if until_stable else turned,
+                 resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None)
+
+
+def _lost_peak(res, lam0):
+    """Index of the highest accepted point of a failed arc-length run that passed a
+    load-factor maximum above ``lam0``, or None."""
+    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
+                                         for p in res.critical_points):
+        return None
+    lam = np.array([h[0] for h in res.history])
+    k = int(np.argmax(lam))
+    return k if lam[k] > lam0 else None
+
+
+def _descend(path, u, lam, options, max_iter=300):
+    """The equilibrium at ``lam`` that damped Newton on the potential energy reaches from
+    ``u`` (the temperatures held on the shape ``u``): where a snap lands, without dynamics;
+    polished on ``path`` with the load factor fixed. None if it does not get there (or the
+    model has more than :data:`DESCENT_DOF_LIMIT` free DOFs).
+
+    Levenberg-Marquardt: steps ``(K + mu I)^-1 r`` accepted where the energy decreases
+    (``mu`` / 3, else ``mu`` * 4), so indefinite tangents past a fold are passed downhill
+    and the steps become Newton's near the minimum.
+    """
+    system, free = path.system, path.free
+    if len(free) > DESCENT_DOF_LIMIT:
+        return None
+    path.at(u, lam)                             # a heating path: temperatures on this shape
+    rest, f = path.rest(lam), path.f_ext(lam)
+
+    def energy(v):
+        ev = system.evaluate(v.reshape(-1, 3), rest)
+        return sum(ev.energies.values()) - float(f @ v), ev
+
+    v = np.array(u, float).ravel()
+    e, ev = energy(v)
+    eye = np.eye(len(free))
+    mu, step, size = None, getattr(system, "max_step", None), _size(system)
+    for _ in range(max_iter):
+        g, K = (ev.f_int - f)[free], as_dense(ev.K)
+        mu = 1e-6 * float(np.mean(np.abs(np.diag(K)))) if mu is None else mu
+        while mu < 1e30:
+            try:
+                dv = -factorize(K + mu * eye, kind="spd", backend="dense").solve(g)
+            except np.linalg.LinAlgError:                   # not positive definite yet
+                mu *= 4
+                continue
+            if step is not None and np.max(np.abs(dv)) > step:
+                dv *= step / np.max(np.abs(dv))
+            if np.max(np.abs(dv)) <= 1e-9 * size:  # (undamped by then: Newton's steps)
+                break
+            w = v.copy()
+            w[free] += dv
+            e1, ev1 = energy(w)
+            if e1 < e:
+                v, e, ev, mu = w, e1, ev1, mu / 3
+                break
+            mu *= 4
+        else:
+            return None
+        if np.max(np.abs(dv)) <= 1e-9 * size:
+            break
+    else:
+        return None
+    ok, u1, _, _, _, _, _ = _correct(path, v.reshape(-1, 3), lam, _Constraint(None, lam),
+                                     options, size)
+    return u1 if ok else None
+
+
+def _on_path(context, path, u, lam, direction):
+    """``(u, lam, moved)``: ``(u, lam)`` corrected onto ``path`` with the displacement along
+    ``direction`` (n_nodes, 3) held (near a limit point, where lambda fixed would be
+    singular), moved True, if it is not in equilibrium there and the correction converges;
+    else unchanged."""
+    c = np.asarray(direction, float).ravel()[path.free]
+    if not np.any(c):
+        return u, lam, False
+    c = c / np.linalg.norm(c)
+    held = _Constraint(c, float(c @ np.asarray(u, float).ravel()[path.free]))
+    ok, u1, lam1, _, its, _, _ = _correct(path, u, lam, held, context.options,
+                                          _size(path.system))
+    return (u1, float(lam1), True) if ok and its > 0 else (u, lam, False)
 
 
 def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
     """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
     c = _motion_monitor(start, outcome)
-    res = _arc(context, start, outcome, path, increments, c, until_stable=False)
+    res = _arc(context, (start.u, 0.0), outcome, path, increments, c, until_stable=False)
     limits = [p for p in res.critical_points if p.kind == "limit_point"]
     if not limits:
         return outcome

@@ -171,3 +171,22 @@ def test_bifurcation_located_on_the_primary_path():
     # lateral stiffness k - N / L with N = EA eps (1 + eps) ... zero at N ~ 1 N
     assert res.critical_points[0].load_factor == pytest.approx(1.0, abs=0.06)
     assert res.stability[0].stable and not res.stability[-1].stable
+
+
+def test_load_derivative_exact_when_the_rest_change_crosses_the_spring_kink():
+    """q = dr/dlambda of a rest-angle path whose unit change R (here 4 rad) would carry the
+    rest angle past the kink of the spring law at theta0 +- pi (issue 18: the unit-lambda
+    secant was wrong there, and the arc-length corrector converged linearly)."""
+    from simulator import get_case
+    from simulator.mechanics.equilibrium import EquilibriumSystem
+
+    model = get_case("single_fold").model
+    system = EquilibriumSystem(model)
+    rest0 = np.full(model.mesh.springs.shape[0], np.pi)
+    path = LoadPath(system, np.zeros(model.mesh.n_dof), np.zeros(model.mesh.n_dof), rest0,
+                    np.full(rest0.shape, 4.0))
+    u = np.zeros((model.mesh.n_nodes, 3))
+    pt = path.at(u, 0.1)
+    h = 1e-6
+    fd = (path.at(u, 0.1 + h).r - path.at(u, 0.1 - h).r) / (2 * h)
+    assert np.linalg.norm(fd - pt.q) <= 1e-6 * np.linalg.norm(pt.q)

@@ -1,6 +1,7 @@
 """Snap-through of a bar-and-hinge model: the ``snap_through`` case, path-following steps,
 load-control limit-point handling, agreement with load control, bad inputs."""
 
+import functools
 import json
 
 import numpy as np
@@ -164,6 +165,27 @@ def test_gravity_unchanged_by_limit_point_machinery():
     assert res.success and res.steps[0].columns == {}
 
 
+def test_lost_peak_is_the_highest_point_of_a_failed_run_past_a_maximum():
+    """The continuation jumps on from the highest accepted point of a failed arc-length run
+    that passed a load-factor maximum; not after a success, a run that never turned, or one
+    that never rose above where it started."""
+    from types import SimpleNamespace as NS
+
+    from simulator.solvers.path_trace import CriticalPoint
+    from simulator.steps.limit import _lost_peak
+
+    u = np.zeros((1, 3))
+    history = [(lam, u, 3) for lam in (0.90, 0.91, 0.918, 0.915, 0.912)]
+    top = CriticalPoint("limit_point", 0.9182, 3, None, maximum=True)
+    failed = NS(status="failed", history=history, critical_points=[top])
+    assert _lost_peak(failed, 0.89) == 2
+    assert _lost_peak(failed, 0.92) is None                  # no progress past the start
+    assert _lost_peak(NS(status="converged", history=history, critical_points=[top]),
+                      0.89) is None
+    assert _lost_peak(NS(status="failed", history=history, critical_points=[
+        CriticalPoint("limit_point", 0.9, 1, None, maximum=False)]), 0.89) is None
+
+
 @pytest.mark.slow
 def test_heated_miura_passes_its_snap():
     """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease."""
@@ -220,3 +242,99 @@ def test_miura_power_search_reports_a_snap():
     assert ok
     res = stage.result("met", 12e-3, state, "criterion met")
     assert res.success and "after a snap" in res.message and "mW per crease" in res.message
+
+
+@functools.lru_cache(maxsize=None)
+def _heated_miura_snap(increments):
+    """Heat MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) to 12 mW per crease in
+    ``increments``: (result, [(snap power [mW], jump [um])]) (cached: two tests read it)."""
+    import math
+    import re
+
+    from design import MiuraDesign, heated_creases, miura_model
+
+    d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
+    model = miura_model(d)
+    res = simulate(model, [Heat({tuple(heated_creases(d)): 12e-3}, increments=increments,
+                                on_limit_point="continue")], state=simulate(model, []).state)
+    snaps = [(float(p), float(j)) for p, j in re.findall(
+        r"\(([\d.]+) mW per crease\): displacement jumps ([-\d.e+]+) um", res.steps[0].message)]
+    return res, snaps
+
+
+def _main_snaps():
+    """The main snap (largest jump) at 30, 60, 120 and 240 increments, after checking that
+    each run reached 12 mW with success."""
+    main = []
+    for n in (30, 60, 120, 240):
+        res, snaps = _heated_miura_snap(n)
+        assert res.success, (n, res.message)
+        assert res.state.crease_power.max() == pytest.approx(12e-3)
+        assert snaps, (n, res.message)
+        main.append(max(snaps, key=lambda s: s[1]))
+    return np.array(main).T
+
+
+def test_heated_miura_reaches_12_mw_at_120_increments():
+    """Issue 18: at 120 increments (main: arc length gave up at 11.92 mW) the heated Miura
+    reaches 12 mW with success, past its snap at 9.2 mW (~15-25 s)."""
+    res, snaps = _heated_miura_snap(120)
+    assert res.success, res.message
+    assert res.state.crease_power.max() == pytest.approx(12e-3)
+    power, jump = max(snaps, key=lambda s: s[1])
+    assert 9.0 < power < 9.4 and jump > 0
+
+
+#: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
+#: same snap. Near 11.0 mW per crease (load factor ~0.92) the coupled path has a second fold
+#: from which arc length can follow a branch that turns back (and stall in contact chatter on
+#: it: 60 increments): the continuation then jumps from the highest point it reached to the
+#: equilibrium that damped Newton on the energy finds just above it, and load control goes on.
+@pytest.mark.slow
+def test_heated_miura_snap_does_not_depend_on_increments():
+    """Success, 12 mW and the main snap's power at 30, 60, 120 and 240 increments: within
+    12 mW / 240 (the finest increment) of each other (9.216-9.218 mW measured)."""
+    powers, _ = _main_snaps()
+    assert np.ptp(powers) <= 12.0 / 240 and 9.0 < powers.min() and powers.max() < 9.4
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the jump at 60 increments is 35 um, 47-50 um at 30, "
+                   "120, 240: its arc length passes the symmetry-breaking bifurcation at load "
+                   "factor 0.7674 without seeing it and follows another branch")
+def test_heated_miura_snap_jump_does_not_depend_on_increments():
+    """The main snap's jump within 10 um (about the most moving node's travel per increment
+    at 240 increments, 1.9 mm / 183) at 30, 60, 120 and 240 increments."""
+    _, jumps = _main_snaps()
+    assert np.ptp(jumps) <= 10.0
+
+
+def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
+    """Just past the roof's first limit point, damped Newton on the potential energy from
+    the limit point lands on the stable far branch: the arc-length trace's equilibrium at
+    that load factor there."""
+    from simulator.solvers.load_path import LoadPath
+    from simulator.solvers.stability import tangent_stability
+    from simulator.steps.base import StepContext
+    from simulator.steps.limit import _descend
+    from simulator.state import equilibrium_system
+
+    case, res = roof
+    step = res.steps[0]
+    lams = step.load_factor
+    top = int(np.argmax(np.diff(lams) < 0))
+    model, start = case.model, res.initial_state
+    P = np.zeros((model.mesh.n_nodes, 3))
+    for n, f in case.steps[0].forces.items():
+        P[n] += f
+    system = StepContext(model, NewtonOptions()).system
+    path = LoadPath(system, start.applied_load.ravel(), P.ravel(), start.spring_rest)
+    lam = 1.01 * float(lams[top])
+    u = _descend(path, step.u_history[top], lam, NewtonOptions())
+    assert u is not None
+    assert tangent_stability(path.at(u, lam).K).stable
+    stable = step.columns["stable"]
+    far = [k for k in range(top + 1, len(lams)) if stable[k] is not None and bool(stable[k])
+           and lams[k - 1] < lam <= lams[k]]
+    assert far
+    assert np.max(np.abs(u - step.u_history[far[0]])) < 0.1 * np.max(np.abs(u))
