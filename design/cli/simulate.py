@@ -7,12 +7,14 @@ power ramp it stays down until the power passes a threshold, then lifts off and 
 
 from __future__ import annotations
 
+import sys
 import time
 
 from simulator import __version__
 
 from ._common import fold_deg, progress_bar
 from .case_params import case_overrides, cli_unit, to_cli
+from .precheck import check_heating
 
 __all__ = ["add_simulate_commands", "case_overrides", "demo_run", "heating_table",
            "threshold_power"]
@@ -148,6 +150,9 @@ def _run(args) -> int:
         case = get_case(args.case, **case_overrides(args.set, args.case))
         name, model, steps = case.name, case.model, case.steps
         meta = {"case": case.name, "parameters": case.parameters}
+    warning = check_heating(model, steps, name)
+    if warning:
+        print(warning, file=sys.stderr, flush=True)
     t0 = time.perf_counter()
     with progress_bar(desc=name, unit="inc", disable=args.quiet) as bar:
         def progress(done, total):
