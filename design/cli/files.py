@@ -170,7 +170,8 @@ def add_file_commands(sub) -> None:
     export = sub.add_parser("export", help="write a built-in case as a FOLD model file")
     export.add_argument("case", help="case name, e.g. crane (see 'etorigami cases')")
     export.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a case parameter (repeatable)")
+                        help="override a case parameter in the CLI unit 'etorigami cases' "
+                        "lists (lengths um, powers mW; repeatable)")
     export.add_argument("--format", choices=["fold"], default="fold", help="file format")
     export.add_argument("--out", required=True, metavar="FILE", help="output file (.fold)")
     export.set_defaults(func=_export, short=True, out_kind="file")
