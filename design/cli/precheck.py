@@ -31,15 +31,17 @@ def estimate_crease_temperature(model, steps) -> np.ndarray | None:
     of ``steps`` end at, from one steady solve on the unfolded shape; None if the run heats
     nothing by ``Heat`` steps or the model has no thermal parameters."""
     from simulator import Heat
+    # behind the doors, as the heater LP: the steady thermal operator and the crease
+    # temperature weights (tests/unit/test_architecture.py)
     from simulator.model.bimorph import crease_temperature_weights
-    from simulator.thermal.steady import ThermalModel
+    from simulator.state import thermal_model
 
     heats = [s for s in steps if isinstance(s, Heat)]
     if not heats or model.thermal is None:
         return None
     mesh = model.mesh
     power = sum(s.power_array(mesh) for s in heats)
-    thermal = ThermalModel(mesh, model.thermal)
+    thermal = thermal_model(model)
     temperature = thermal.solve(mesh.nodes, thermal.heat_vector(power))
     return temperature[mesh.crease_nodes] @ crease_temperature_weights()
 
