@@ -8,16 +8,10 @@ so this is an estimate; the run reports the real temperatures.
 
 from __future__ import annotations
 
-import logging
-
-import numpy as np
-
 from ._common import CLIError
 
 __all__ = ["estimate_crease_temperature", "check_heating", "ABSURD_TEMPERATURE_C",
            "TG_FACTOR"]
-
-logger = logging.getLogger(__name__)
 
 #: Estimated crease temperature [degC] above which a run is refused: beyond any material of
 #: these devices (SU-8 decomposes near 380 degC, gold melts at 1064 degC).
@@ -26,10 +20,11 @@ ABSURD_TEMPERATURE_C = 1000.0
 TG_FACTOR = 1.2
 
 
-def estimate_crease_temperature(model, steps) -> np.ndarray | None:
+def estimate_crease_temperature(model, steps):
     """(C,) crease temperatures [degC] (7-node weighted mean) at the power the ``Heat`` steps
     of ``steps`` end at, from one steady solve on the unfolded shape; None if the run heats
-    nothing by ``Heat`` steps or the model has no thermal parameters."""
+    nothing by ``Heat`` steps or the model has no thermal parameters (numpy is imported here,
+    so that ``etorigami --version`` stays light)."""
     from simulator import Heat
     # behind the doors, as the heater LP: the steady thermal operator and the crease
     # temperature weights (tests/unit/test_architecture.py)
@@ -49,6 +44,8 @@ def estimate_crease_temperature(model, steps) -> np.ndarray | None:
 def check_heating(model, steps, what: str) -> str | None:
     """Refuse (``CLIError``) a run whose estimated hottest crease exceeds
     :data:`ABSURD_TEMPERATURE_C`; return a warning line if it exceeds 1.2 T_g, else None."""
+    import numpy as np
+
     temps = estimate_crease_temperature(model, steps)
     if temps is None or not len(temps):
         return None
