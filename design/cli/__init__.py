@@ -14,7 +14,10 @@ never imports it. One module per command group:
 * :mod:`.sweep`: ``etorigami sweep residual-fold`` and ``etorigami sweep uncertainty``
   (resumable; a dead worker costs only its own points).
 
-Options are in um, mW and degrees. A usage error ends with one line on stderr and exit status
+Options are in um, mW, degrees and seconds, ``--set`` of a case included (the unit table of
+:mod:`.case_params`); a length of implausible magnitude (0.0002 um) or a power above 10 W is
+refused with a hint. ``--out`` is checked before any work (an existing file where a folder is
+expected, a folder that cannot be made or written). A usage error ends with one line on stderr and exit status
 2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.
 Short commands (demo, run, gripper evaluate) use the numpy spring kernel, long ones the
 compiled one (see :func:`simulator.spring_kernel_backend`).
@@ -29,7 +32,7 @@ import sys
 
 from simulator import EtorigamiError, __version__
 
-from ._common import EXIT_INTERRUPTED, CLIError, kernel_backend
+from ._common import EXIT_INTERRUPTED, CLIError, check_output, kernel_backend
 from .files import add_file_commands
 from .gripper import add_gripper_commands
 from .modes import add_modes_command
@@ -77,6 +80,7 @@ def main(argv=None) -> int:
         parser.print_help()
         return 0
     try:
+        check_output("--out", getattr(args, "out", None), getattr(args, "out_kind", "dir"))
         with kernel_backend(short=getattr(args, "short", False)):
             return args.func(args)
     except KeyboardInterrupt:

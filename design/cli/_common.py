@@ -12,15 +12,24 @@ import csv
 import logging
 import math
 import os
+import pathlib
+import tempfile
 
-__all__ = ["CLIError", "length_um", "fold_deg", "floats", "progress_bar", "add_parallel_options",
-           "executor", "kernel_backend", "saved_rows", "resume_message",
-           "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG"]
+__all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
+           "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
+           "check_output", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
+           "MAX_POWER_MW"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
 RESIDUAL_LIMIT_DEG = 90.0
 #: Exit status of a command ended by Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
+#: Plausible lengths at the CLI [um]: outside, a length was most likely typed in another unit
+#: (0.0002 for 200 um typed in metres, 200000 for 200 um typed in nm).
+PLAUSIBLE_LENGTH_UM = (0.01, 1e5)
+#: Largest power the CLI accepts on one crease (or per crease) [mW]: the paper's creases fold
+#: at 1-100 mW; 10 W would melt any of them, so a larger value is a typo, not a request.
+MAX_POWER_MW = 1e4
 
 
 class CLIError(Exception):
@@ -28,12 +37,31 @@ class CLIError(Exception):
 
 
 def length_um(flag: str, value: float, *, minimum: float = 0.0, field: str = "") -> float:
-    """Check a length given in um (``> minimum``) and return it in metres; ``field`` names the
-    library parameter it sets (shown in the error)."""
+    """Check a length given in um (``> minimum``, and within :data:`PLAUSIBLE_LENGTH_UM`) and
+    return it in metres; ``field`` names the library parameter it sets (shown in the error).
+
+    An implausible magnitude is refused with the likely intended value, e.g. ``--W = 0.0002 um
+    is implausible: did you mean 200 um? (lengths are in um)``.
+    """
+    where = f" ({field})" if field else ""
+    low, high = PLAUSIBLE_LENGTH_UM
     if not (math.isfinite(value) and value > minimum):
-        where = f" ({field})" if field else ""
-        raise CLIError(f"{flag} = {value:g} um must be > {minimum:g} um{where}")
-    return value * 1e-6
+        raise CLIError(f"{flag} = {value:g} um must be > {minimum:g} um{where} (lengths are in "
+                       f"um, plausible {low:g} to {high:g} um)")
+    if not low <= value <= high:
+        guess, typed = (value * 1e6, "m") if value < low else (value / 1e3, "nm")
+        hint = f"did you mean {guess:g} um? " if low <= guess <= high else ""
+        raise CLIError(f"{flag} = {value:g} um is implausible{where}: {hint}(lengths are in "
+                       f"um, not {typed}; plausible {low:g} to {high:g} um)")
+    return value / 1e6
+
+
+def power_mw(flag: str, value: float, *, per: str = "per crease") -> float:
+    """Check a power given in mW (0 to :data:`MAX_POWER_MW`) and return it in W."""
+    if not (math.isfinite(value) and 0.0 <= value <= MAX_POWER_MW):
+        raise CLIError(f"{flag} = {value:g} mW is outside the plausible range 0 to "
+                       f"{MAX_POWER_MW:g} mW {per} (the creases fold at 1-100 mW)")
+    return value / 1e3
 
 
 def fold_deg(flag: str, value: float, *, within: float | None = None) -> float:
@@ -127,3 +155,48 @@ def resume_message(log, what: str = "evaluations") -> str:
     n = saved_rows(log)
     noun = what if n != 1 else what[:-1]
     return f"interrupted: {n} {noun} saved in {log}; run the same command again to resume"
+
+
+def _can_write_in(folder: pathlib.Path) -> bool:
+    """True if files can be made in ``folder``, or in its nearest existing ancestor when it does
+    not exist yet (probed by making and removing a temporary folder: ``os.access`` says yes to
+    root even on /proc)."""
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        return False
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".etorigami-probe-", dir=folder))
+    except OSError:
+        return False
+    return True
+
+
+def check_output(flag: str, path, kind: str = "dir") -> None:
+    """Refuse an output path that cannot be written, before any work.
+
+    Parameters
+    ----------
+    flag : str
+        The option, e.g. ``--out`` (named in the error).
+    path : str or path-like or None
+        The path given (None: nothing to check).
+    kind : {"dir", "file"}
+        A folder to create or reuse, or a file to create or replace.
+
+    Raises
+    ------
+    CLIError
+        If a folder is an existing file, a file is an existing folder, or the path's folder
+        cannot be created or written.
+    """
+    if path is None:
+        return
+    p = pathlib.Path(path)
+    if kind == "dir" and p.exists() and not p.is_dir():
+        raise CLIError(f"{flag} {p} is an existing file; give a folder (new or existing)")
+    if kind == "file" and p.is_dir():
+        raise CLIError(f"{flag} {p} is a folder; give a file name")
+    if not _can_write_in(p if kind == "dir" else p.parent):
+        raise CLIError(f"{flag} {p} cannot be written (its folder cannot be created or is not "
+                       "writable); give another path")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import pathlib
 
-from ._common import CLIError
+from ._common import CLIError, length_um, power_mw
 
 __all__ = ["add_file_commands", "add_reader_options", "fold_case", "is_fold_file",
            "reader_options"]
@@ -49,8 +49,8 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
         elif name.startswith("power."):
             crease = _number(name, name[len("power."):], int)
             k = heats[-1]
-            steps[k] = _replace(steps[k], power=_set_power(steps[k].power, crease,
-                                                           1e-3 * _number(name, text, float)))
+            watts = power_mw(f"--set {name}", _number(name, text, float))
+            steps[k] = _replace(steps[k], power=_set_power(steps[k].power, crease, watts))
         else:
             raise CLIError(f"--set {name}: a FOLD model takes power.<crease id>=mW or "
                            "thermal_steps=N")
@@ -70,9 +70,7 @@ def reader_options(args) -> dict:
     for name in ("crease_width", "crease_thickness", "panel_thickness"):
         value = getattr(args, name)
         if value is not None:
-            if not (math.isfinite(value) and value > 0):
-                raise CLIError(f"--{name.replace('_', '-')} = {value:g} um must be > 0 um")
-            out[name] = value * 1e-6
+            out[name] = length_um(f"--{name.replace('_', '-')}", value)
     return out
 
 
@@ -172,10 +170,11 @@ def add_file_commands(sub) -> None:
     export = sub.add_parser("export", help="write a built-in case as a FOLD model file")
     export.add_argument("case", help="case name, e.g. crane (see 'etorigami cases')")
     export.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a case parameter (repeatable)")
+                        help="override a case parameter in the CLI unit 'etorigami cases' "
+                        "lists (lengths um, powers mW; repeatable)")
     export.add_argument("--format", choices=["fold"], default="fold", help="file format")
     export.add_argument("--out", required=True, metavar="FILE", help="output file (.fold)")
-    export.set_defaults(func=_export, short=True)
+    export.set_defaults(func=_export, short=True, out_kind="file")
 
     check = sub.add_parser("check", help="validate a FOLD file and print its summary")
     check.add_argument("file", help="FOLD file")
@@ -186,4 +185,4 @@ def add_file_commands(sub) -> None:
     view.add_argument("result_dir", help="folder written by 'etorigami run' (creases.csv, "
                                          "nodes.npz, meta.json)")
     view.add_argument("--out", metavar="FILE", help="HTML file (default RESULT_DIR/viewer.html)")
-    view.set_defaults(func=_view, short=True)
+    view.set_defaults(func=_view, short=True, out_kind="file")

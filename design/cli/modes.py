@@ -48,7 +48,8 @@ def add_modes_command(sub) -> None:
     p = sub.add_parser("modes", help="natural frequencies and mode shapes of a case")
     p.add_argument("case", help="case name (see 'etorigami cases')")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
-                   help="override a case parameter (repeatable)")
+                   help="override a case parameter in the CLI unit 'etorigami cases' "
+                        "lists (lengths um, powers mW; repeatable)")
     p.add_argument("--count", type=int, default=10, help="number of modes (default 10)")
     p.add_argument("--at", choices=["flat", "end"], default="end",
                    help="linearise about the flat state or the end of the case's loading "

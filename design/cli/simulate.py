@@ -7,13 +7,17 @@ power ramp it stays down until the power passes a threshold, then lifts off and 
 
 from __future__ import annotations
 
+import sys
 import time
 
 from simulator import __version__
 
-from ._common import CLIError, fold_deg, progress_bar
+from ._common import fold_deg, progress_bar
+from .case_params import case_overrides, cli_unit, to_cli
+from .precheck import check_heating
 
-__all__ = ["add_simulate_commands", "demo_run", "heating_table", "threshold_power"]
+__all__ = ["add_simulate_commands", "case_overrides", "demo_run", "heating_table",
+           "threshold_power"]
 
 #: The demo's heating ramp: power at its end [mW] and thermal increments (2.5 mW each).
 DEMO_POWER_MW = 100.0
@@ -127,62 +131,11 @@ def _cases(args) -> int:
 
     for name, doc, params in describe_cases():
         print(f"{name.replace('_', '-')}: {doc}")
-        for pname, default, unit in params:
-            unit = f" [{unit}]" if unit and unit != "-" else ""
-            print(f"    {pname} = {default!r}{unit}")
+        for pname, default, si_unit in params:
+            unit = cli_unit(si_unit).name
+            unit = f" [{unit}]" if unit else ""
+            print(f"    {pname} = {to_cli(default, si_unit)!r}{unit}")
     return 0
-
-
-def _parse_value(text: str):
-    low = text.strip().lower()
-    if low in ("true", "yes", "on"):
-        return True
-    if low in ("false", "no", "off"):
-        return False
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
-
-
-def _convert(name, text, default):
-    value = _parse_value(text)
-    if isinstance(default, bool):
-        if not isinstance(value, bool):
-            raise CLIError(f"{name} expects true or false, got {text!r}")
-    elif isinstance(default, int):
-        if not isinstance(value, int) or isinstance(value, bool):
-            raise CLIError(f"{name} expects an integer, got {text!r}")
-    elif isinstance(default, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise CLIError(f"{name} expects a number, got {text!r}")
-        value = float(value)
-    return value
-
-
-def case_overrides(pairs, case_name) -> dict:
-    """Keyword overrides of a built-in case from ``--set name=value`` pairs (checked against
-    the case's parameters and their types)."""
-    from simulator import describe_cases, get_case
-
-    cases = {name: {p: default for p, default, _ in params}
-             for name, _, params in describe_cases()}
-    params = cases.get(case_name.replace("-", "_"))
-    if params is None:
-        get_case(case_name)                     # raises the unknown-case error
-    out = {}
-    for pair in pairs or []:
-        if "=" not in pair:
-            raise CLIError(f"--set expects name=value, got {pair!r}")
-        name, text = pair.split("=", 1)
-        name = name.strip().replace("-", "_")
-        if name not in params:
-            raise CLIError(f"case {case_name!r} has no parameter {name!r}; "
-                           f"parameters: {', '.join(params)}")
-        out[name] = _convert(name, text, params[name])
-    return out
 
 
 def _run(args) -> int:
@@ -197,6 +150,9 @@ def _run(args) -> int:
         case = get_case(args.case, **case_overrides(args.set, args.case))
         name, model, steps = case.name, case.model, case.steps
         meta = {"case": case.name, "parameters": case.parameters}
+    warning = check_heating(model, steps, name)
+    if warning:
+        print(warning, file=sys.stderr, flush=True)
     t0 = time.perf_counter()
     with progress_bar(desc=name, unit="inc", disable=args.quiet) as bar:
         def progress(done, total):
@@ -242,8 +198,9 @@ def add_simulate_commands(sub) -> None:
                      help="case name, e.g. single-fold (see 'etorigami cases'), or a FOLD model "
                           "file (see 'etorigami export')")
     run.add_argument("--set", action="append", metavar="NAME=VALUE",
-                     help="override a case parameter in the unit 'etorigami cases' lists "
-                          "(repeatable), e.g. --set gravity=true; for a FOLD file "
+                     help="override a case parameter in the CLI unit 'etorigami cases' lists "
+                          "(lengths um, powers mW, angles deg, times s; repeatable), e.g. "
+                          "--set crease_width=200 --set gravity=true; for a FOLD file "
                           "power.<crease id>=mW or thermal_steps=N")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
