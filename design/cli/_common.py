@@ -13,7 +13,6 @@ import logging
 import math
 import os
 import pathlib
-import tempfile
 
 __all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
            "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
@@ -166,6 +165,8 @@ def _can_write_in(folder: pathlib.Path) -> bool:
     if not folder.is_dir():
         return False
     try:
+        import tempfile
+
         os.rmdir(tempfile.mkdtemp(prefix=".etorigami-probe-", dir=folder))
     except OSError:
         return False

@@ -105,7 +105,7 @@ def _set_power(power, crease: int, watts: float) -> dict:
 def _export(args) -> int:
     from simulator import get_case, write_model
 
-    from .simulate import case_overrides
+    from .case_params import case_overrides
 
     case = get_case(args.case, **case_overrides(args.set, args.case))
     out = pathlib.Path(args.out)

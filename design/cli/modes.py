@@ -18,7 +18,7 @@ __all__ = ["add_modes_command"]
 def _modes(args) -> int:
     from simulator import get_case, natural_modes
 
-    from .simulate import case_overrides
+    from .case_params import case_overrides
 
     if args.count < 1:
         raise CLIError(f"--count = {args.count} must be a positive integer")

@@ -13,10 +13,8 @@ import time
 from simulator import __version__
 
 from ._common import fold_deg, progress_bar
-from .case_params import case_overrides, cli_unit, to_cli
-from .precheck import check_heating
 
-__all__ = ["add_simulate_commands", "case_overrides", "demo_run", "heating_table",
+__all__ = ["add_simulate_commands", "demo_run", "heating_table",
            "threshold_power"]
 
 #: The demo's heating ramp: power at its end [mW] and thermal increments (2.5 mW each).
@@ -129,6 +127,8 @@ def _demo(args) -> int:
 def _cases(args) -> int:
     from simulator import describe_cases
 
+    from .case_params import cli_unit, to_cli
+
     for name, doc, params in describe_cases():
         print(f"{name.replace('_', '-')}: {doc}")
         for pname, default, si_unit in params:
@@ -141,7 +141,9 @@ def _cases(args) -> int:
 def _run(args) -> int:
     from simulator import get_case, simulate
 
+    from .case_params import case_overrides
     from .files import fold_case, is_fold_file, reader_options
+    from .precheck import check_heating
 
     if is_fold_file(args.case):
         name, model, steps, params = fold_case(args.case, args.set, reader_options(args))
