@@ -102,17 +102,16 @@ def _checked(name: str, value: float, unit: CLIUnit) -> float:
 
 
 def _parse_value(text: str):
+    """A ``--set`` value: the words true/yes/on and false/no/off, else a number or the text
+    as a CSV cell of an evaluation log is read."""
+    from ..core.evaluation_log import _parse
+
     low = text.strip().lower()
     if low in ("true", "yes", "on"):
         return True
     if low in ("false", "no", "off"):
         return False
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
+    return _parse(text)
 
 
 def _convert(name, text, default, si_unit):
