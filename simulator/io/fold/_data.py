@@ -22,7 +22,7 @@ OWN_FIELDS = {"vertices_coords", "faces_vertices", "edges_vertices", "edges_assi
               "edges_foldAngle", "edges_foldAngles", "frame_unit", "file_spec", "file_creator",
               "file_frames", "edges_faces", "faces_edges", "vertices_vertices",
               "vertices_faces", "vertices_edges", "edges_lengths", "faceOrders", "edgeOrders",
-              "faces_faces", "edges_edges"}
+              "faces_faces", "edges_edges", "file_frames", "frame_inherit", "frame_parent"}
 
 
 _PATTERN_MESSAGE = [(re.compile(r"^vertices (\d+) and (\d+)"), "vertices_coords", 2),
@@ -142,10 +142,10 @@ def _materials(data) -> dict:
 
 
 # ---------------------------------------------------------------------- metadata
-def metadata_fields(data, vertex, face, edge, groups) -> dict:
+def metadata_fields(data, vertex, face, edge, groups, merged_edges: bool = False) -> dict:
     """Fields of other namespaces and FOLD metadata, re-indexed to the pattern."""
     out = {}
-    merged = any(len(g) > 1 for g in groups)
+    merged = any(len(g) > 1 for g in groups) or merged_edges
     for key, value in data.items():
         if key in OWN_FIELDS or key.startswith(NS) or f"_{NS}" in key:
             continue
