@@ -84,8 +84,8 @@ def _apply_overrides(path, steps, overrides, names, params) -> list:
             watts = power_mw(f"--set {name}", _number(name, text, float))
             steps[k] = _replace(steps[k], power=_set_power(steps[k].power, creases, watts))
         else:
-            raise CLIError(f"--set {name}: a FOLD model takes power.<crease id or heater>=mW "
-                           "or thermal_steps=N")
+            raise CLIError(f"--set {name}: a FOLD model takes power.<crease id>=mW, "
+                           "power.<heater name>=mW or thermal_steps=N")
         params[name] = text
     return steps
 

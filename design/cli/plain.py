@@ -53,8 +53,9 @@ def frame_option(text):
 
 
 def is_plain(data: dict) -> bool:
-    """True for a FOLD dict without any ``etorigami:`` field (a pattern drawn in an editor)."""
-    return not any(_NS in k for k in data)
+    """True for a FOLD dict that is not a model file: no ``etorigami:steps`` (a pattern drawn
+    in an editor, perhaps with some ``etorigami:`` crease or panel data)."""
+    return not data.get(f"{_NS}steps")
 
 
 def heater_names(geo) -> dict:
@@ -119,7 +120,7 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     if heating.heat is None or heating.power is None:
         missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
                                   ("--power MW", heating.power)) if v is None]
-        raise CLIError(f"{path} is a plain crease pattern (no etorigami: fields); heating it "
+        raise CLIError(f"{path} is a plain crease pattern (no etorigami: steps); heating it "
                        f"needs {' and '.join(missing)}")
     heated = select_creases(heating.heat, geo)
     watts = power_mw("--power", heating.power)
@@ -151,7 +152,7 @@ def check_plain(args, data: dict, options: dict) -> int:
     letters = pattern.edge_assignment[pattern.creases]
     fold = np.degrees(start_fold_angles(pattern)[pattern.creases])
     size = np.ptp(pattern.vertices, axis=0) * 1e6
-    print(f"{args.file}: valid FOLD crease pattern (no etorigami: fields)")
+    print(f"{args.file}: valid FOLD crease pattern (no etorigami: model or steps)")
     print(f"  vertices {pattern.n_vertices}, panels {pattern.n_panels}, creases "
           f"{len(pattern.creases)} ({sum(letters == 'M')} M, {sum(letters == 'V')} V, "
           f"{sum(letters == 'U')} U), size {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} um"
