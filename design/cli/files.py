@@ -34,8 +34,7 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
     step on that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the
     increments of its heating steps.
     """
-    from simulator import read_model
-    from simulator.io.fold.reader import load_fold_json, parse_fold
+    from simulator import load_fold_json, parse_fold, read_model
 
     from .plain import heater_names, is_plain, plain_case
 
@@ -165,9 +164,7 @@ def _export(args) -> int:
 def _check(args) -> int:
     import numpy as np
 
-    from simulator import Heat, read_model
-
-    from simulator.io.fold.reader import load_fold_json
+    from simulator import Heat, load_fold_json, read_model
 
     from .plain import check_plain, is_plain
 

@@ -23,11 +23,10 @@ _NS = "etorigami:"
 def add_plain_options(parser, heating: bool = True) -> None:
     """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
     ``--heat``, ``--power``, ``--fix-panel``."""
-    from simulator.model.stack import STACKS
-
-    parser.add_argument("--stack", default="su8-au", choices=sorted(STACKS),
+    parser.add_argument("--stack", default="su8-au", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
-                             "(default su8-au, the paper's SU-8/Au bimorph)")
+                             "(default su8-au, the paper's SU-8/Au bimorph; see "
+                             "simulator.STACKS)")
     parser.add_argument("--frame", metavar="INDEX|CLASS",
                         help="FOLD frame to read: an index (0 = key frame) or creasePattern / "
                              "foldedForm")
@@ -108,9 +107,7 @@ def stack_reader_options(stack, options: dict) -> dict:
 
 def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     """``(model, steps, parameters)`` of a plain pattern heated from the flags."""
-    from simulator import Heat
-    from simulator.io.fold.reader import parse_fold
-    from simulator.model.stack import get_stack, stack_model
+    from simulator import Heat, get_stack, parse_fold, stack_model
 
     stack = get_stack(heating.stack)
     print(f"layer stack {stack.summary()}")
@@ -135,10 +132,7 @@ def check_plain(args, data: dict, options: dict) -> int:
     """``check`` of a plain pattern: geometry summary, then what a run needs, in CLI flags."""
     import numpy as np
 
-    from simulator.geometry.orientation import start_fold_angles
-    from simulator.io.fold.reader import parse_fold
-    from simulator.model.mesh import build_mesh
-    from simulator.model.stack import get_stack
+    from simulator import build_mesh, get_stack, parse_fold, start_fold_angles
 
     stack = get_stack(args.stack)
     needs = []

@@ -29,7 +29,8 @@ from ._frames import select_frame
 from ._merge import merge_flat_faces
 from ._planar import faces_from_edges, lay_in_xy, merge_straight, plane_normal
 
-__all__ = ["read_fold", "fold_to_pattern", "load_fold_json", "FoldGeometry", "UNITS", "NS"]
+__all__ = ["read_fold", "fold_to_pattern", "parse_fold", "load_fold_json", "FoldGeometry",
+           "check_crease_model", "UNITS", "NS"]
 
 logger = logging.getLogger(__name__)
 
