@@ -168,10 +168,11 @@ def _check(args) -> int:
 
     from .plain import check_plain, is_plain
 
+    options = reader_options(args)                   # flags first: they need no file
     data = load_fold_json(args.file)
     if is_plain(data):
-        return check_plain(args, data, reader_options(args))
-    model, steps = read_model(args.file, **reader_options(args))
+        return check_plain(args, data, options)
+    model, steps = read_model(args.file, **options)
     mesh, pattern = model.mesh, model.mesh.pattern
     heated = sorted({int(c) for s in steps if isinstance(s, Heat) for k in dict(s.power)
                      for c in (k if isinstance(k, tuple) else (k,))})

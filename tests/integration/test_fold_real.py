@@ -304,3 +304,12 @@ def test_every_file_runs_or_is_refused_in_one_line(path):
         assert "\n" not in str(info.value) and "singular" not in str(info.value)
         return
     heated(data, increments=2)
+
+
+def test_creases_folded_against_their_assignment_are_reported():
+    data = load("zigzag_folded.fold")
+    i = data["edges_assignment"].index("M")
+    data["edges_assignment"][i], data["edges_foldAngle"][i] = "V", 120.0
+    notes = geometry(data).notes
+    assert len(notes) == 1 and "folded against their assignment" in notes[0]
+    assert geometry(load("zigzag_folded.fold")).notes == ()

@@ -169,7 +169,21 @@ def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickne
                           metadata=metadata_fields(data, vertex, face, edge, groups, merged))
     except PatternError as exc:
         _fail("etorigami data", str(exc))
+    _note_sign_mismatch(pattern, notes)
     return FoldGeometry(pattern, vertex, face, edge, data, tuple(notes))
+
+
+def _note_sign_mismatch(pattern: Pattern, notes: list) -> None:
+    """Report folded creases whose start fold disagrees with their assignment / fold angle."""
+    from ...geometry.orientation import start_fold_angles
+
+    c = pattern.creases
+    start, design = start_fold_angles(pattern)[c], pattern.edge_fold_angle[c]
+    bad = c[(np.abs(start) > 1e-6) & (start * design < 0)]
+    if len(bad):
+        notes.append(f"creases {bad.tolist()} are folded against their assignment in the start "
+                     "shape (the geometry decides the mechanics)")
+        logger.warning("FOLD: %s", notes[-1])
 
 
 def check_crease_model(crease_model, crease_width, data=None, edge=None) -> None:
