@@ -34,13 +34,16 @@ __getattr__, __dir__ = _attach(__name__, {
     ".mechanics.families": ("Configuration", "ElementFamily", "FamilyValues"),
     ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
                 "PatternError", "SolverError"),
-    ".io.fold": ("fold_to_model", "fold_to_pattern", "model_to_fold", "pattern_to_fold",
+    ".io.fold": ("FoldGeometry", "fold_to_model", "fold_to_pattern", "load_fold_json",
+                 "model_to_fold", "parse_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
     ".solvers.generalized_alpha": ("MotionState", "TimeIntegrator"),
     ".geometry.materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
                    "Material"),
     ".model.mass": ("lumped_masses",),
+    ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model"),
+    ".geometry.orientation": ("start_fold_angles",),
     ".model.mesh": ("BarHingeMesh", "build_mesh"),
     ".model.model": ("REFERENCE_GRAVITY", "STANDARD_GRAVITY", "ContactParameters", "Model",
                "Supports", "make_model"),
@@ -74,6 +77,8 @@ __all__ = [
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
+    # plain crease patterns: layer stacks and fold signs of a start shape
+    "LayerStack", "STACKS", "get_stack", "stack_model", "start_fold_angles",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
@@ -100,6 +105,7 @@ __all__ = [
     # FOLD files
     "read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "read_model", "write_model",
     "fold_to_model", "model_to_fold", "write_fold_frames", "result_to_fold_frames",
+    "parse_fold", "load_fold_json", "FoldGeometry",
     "miura_sheet_model", "miura_fold_signs", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",

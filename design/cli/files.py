@@ -3,7 +3,8 @@
 * ``etorigami export CASE [--set ...] --format fold --out FILE``: a built-in case as a FOLD model
   file (pattern, materials, supports, thermal model, actuators and loading steps under the
   ``etorigami:`` namespace) that ``etorigami run FILE`` runs back to the same result;
-* ``etorigami check FILE``: validate a FOLD file and print its summary;
+* ``etorigami check FILE``: validate a FOLD file and print its summary (for a plain crease
+  pattern, also what a run still needs, in flags: :mod:`.plain`);
 * ``etorigami view RESULT_DIR [--out FILE.html]``: one self-contained HTML page with the
   folded shape in 3-D over the run.
 """
@@ -25,16 +26,38 @@ def is_fold_file(name: str) -> bool:
 
 
 def fold_case(path: str, overrides: list | None, options: dict | None = None):
-    """``(name, model, steps, parameters)`` of a FOLD model file with ``--set`` overrides.
+    """``(name, model, steps, parameters)`` of a FOLD file with ``--set`` overrides.
 
-    Overrides: ``power.<crease id>=MW`` sets the power added by the file's last heating step on
-    that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the increments
-    of its heating steps.
+    A model file runs its own steps; a plain crease pattern (no ``etorigami:`` fields), or any
+    file given ``--heat``, is heated from the flags with a layer stack (:mod:`.plain`).
+    Overrides: ``power.<crease id or heater name>=MW`` sets the power added by the last heating
+    step on that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the
+    increments of its heating steps.
     """
-    from simulator import Heat, read_model
+    from simulator import load_fold_json, parse_fold, read_model
 
-    model, steps = read_model(path, **(options or {}))
-    steps, params = list(steps), {}
+    from .plain import heater_names, is_plain, plain_case
+
+    options = dict(options or {})
+    heating = options.pop("_heating", None)
+    data = load_fold_json(path)
+    geo = None
+    if heating is not None and (heating.heat is not None or is_plain(data)):
+        model, steps, params, geo = plain_case(path, data, options, heating)
+    else:
+        model, steps = read_model(path, **options)
+        params = {}
+    names = {}
+    if any(not o.partition("=")[0].strip()[len("power."):].isdigit()
+           for o in overrides or [] if o.strip().startswith("power.")):
+        names = heater_names(geo or parse_fold(data, **options))
+    steps = _apply_overrides(path, list(steps), overrides, names, params)
+    return pathlib.Path(path).stem, model, tuple(steps), params
+
+
+def _apply_overrides(path, steps, overrides, names, params) -> list:
+    from simulator import Heat
+
     for pair in overrides or []:
         name, sep, text = pair.partition("=")
         if not sep:
@@ -42,25 +65,37 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
         name = name.strip()
         heats = [k for k, s in enumerate(steps) if isinstance(s, Heat)]
         if not heats:
-            raise CLIError(f"{path} has no heating step; --set {name} needs one")
+            raise CLIError(f"{path} has no heating step; --set {name} needs one (a plain "
+                           "pattern is heated with --heat and --power)")
         if name == "thermal_steps":
             n = _number(name, text, int)
             steps = [_replace(s, increments=n) if isinstance(s, Heat) else s for s in steps]
         elif name.startswith("power."):
-            crease = _number(name, name[len("power."):], int)
+            key = name[len("power."):]
+            if key.isdigit():
+                creases = (int(key),)
+            elif key in names:
+                creases = names[key]
+            else:
+                raise CLIError(f"--set {name}: {key!r} is neither a crease id nor a heater name "
+                               f"of the file (heaters: {', '.join(names) or 'none'})")
             k = heats[-1]
             watts = power_mw(f"--set {name}", _number(name, text, float))
-            steps[k] = _replace(steps[k], power=_set_power(steps[k].power, crease, watts))
+            steps[k] = _replace(steps[k], power=_set_power(steps[k].power, creases, watts))
         else:
-            raise CLIError(f"--set {name}: a FOLD model takes power.<crease id>=mW or "
-                           "thermal_steps=N")
+            raise CLIError(f"--set {name}: a FOLD model takes power.<crease id>=mW, "
+                           "power.<heater name>=mW or thermal_steps=N")
         params[name] = text
-    return pathlib.Path(path).stem, model, tuple(steps), params
+    return steps
 
 
 def reader_options(args) -> dict:
-    """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale`` and the
-    ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um]."""
+    """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale``, the
+    ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um],
+    ``--frame``, ``--lay-flat`` and ``--keep-collinear`` (and, under ``_heating``, the flags
+    that heat a plain pattern)."""
+    from .plain import frame_option
+
     out = {}
     if args.unit_scale is not None:
         if not (math.isfinite(args.unit_scale) and args.unit_scale > 0):
@@ -71,6 +106,14 @@ def reader_options(args) -> dict:
         value = getattr(args, name)
         if value is not None:
             out[name] = length_um(f"--{name.replace('_', '-')}", value)
+    if getattr(args, "frame", None) is not None:
+        out["frame"] = frame_option(args.frame)
+    if getattr(args, "lay_flat", False):
+        out["lay_flat"] = True
+    if getattr(args, "keep_collinear", False):
+        out["merge_collinear"] = False
+    if hasattr(args, "heat"):
+        out["_heating"] = args
     return out
 
 
@@ -91,13 +134,13 @@ def _replace(step, **changes):
     return replace(step, **changes)
 
 
-def _set_power(power, crease: int, watts: float) -> dict:
+def _set_power(power, creases: tuple, watts: float) -> dict:
     out = dict(power)
     for key in out:
-        if crease in (key if isinstance(key, tuple) else (key,)):
+        if set(creases) & set(key if isinstance(key, tuple) else (key,)):
             out[key] = watts
             return out
-    out[crease] = watts
+    out[creases[0] if len(creases) == 1 else creases] = watts
     return out
 
 
@@ -121,9 +164,15 @@ def _export(args) -> int:
 def _check(args) -> int:
     import numpy as np
 
-    from simulator import Heat, read_model
+    from simulator import Heat, load_fold_json, read_model
 
-    model, steps = read_model(args.file, **reader_options(args))
+    from .plain import check_plain, is_plain
+
+    options = reader_options(args)                   # flags first: they need no file
+    data = load_fold_json(args.file)
+    if is_plain(data):
+        return check_plain(args, data, options)
+    model, steps = read_model(args.file, **options)
     mesh, pattern = model.mesh, model.mesh.pattern
     heated = sorted({int(c) for s in steps if isinstance(s, Heat) for k in dict(s.power)
                      for c in (k if isinstance(k, tuple) else (k,))})
@@ -154,8 +203,12 @@ def _view(args) -> int:
     return 0
 
 
-def add_reader_options(parser) -> None:
-    """Options for FOLD files drawn in an editor (no etorigami: fields)."""
+def add_reader_options(parser, heating: bool = True) -> None:
+    """Options for FOLD files drawn in an editor (no etorigami: fields); ``heating`` adds the
+    flags that heat a plain pattern (``run``)."""
+    from .plain import add_plain_options
+
+    add_plain_options(parser, heating)
     parser.add_argument("--unit-scale", type=float, metavar="METRES",
                         help="metres per length unit of a FOLD file whose frame_unit is 'unit' "
                              "(e.g. 1e-3 for millimetres)")
@@ -178,7 +231,7 @@ def add_file_commands(sub) -> None:
 
     check = sub.add_parser("check", help="validate a FOLD file and print its summary")
     check.add_argument("file", help="FOLD file")
-    add_reader_options(check)
+    add_reader_options(check, heating=False)
     check.set_defaults(func=_check, short=True)
 
     view = sub.add_parser("view", help="write a self-contained HTML 3-D viewer of a result")

@@ -165,6 +165,15 @@ class Pattern:
         return read_only(np.flatnonzero(self.is_crease))
 
     @cached_property
+    def panel_orientation(self) -> np.ndarray:
+        """+1 / -1 per panel: the factor turning its winding normal into the sheet's top side
+        (:func:`~simulator.geometry.orientation.panel_orientation`); fold angles are positive
+        towards the top (valley)."""
+        from .orientation import panel_orientation
+
+        return read_only(panel_orientation(self))
+
+    @cached_property
     def corner_sizes(self) -> np.ndarray:
         """Number of corners of each panel, shape (n_panels,)."""
         return read_only([len(p) for p in self.panels])

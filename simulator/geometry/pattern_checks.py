@@ -3,6 +3,7 @@ coincident vertices, degenerate, non-planar and self-intersecting panels."""
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -14,6 +15,8 @@ if TYPE_CHECKING:
     from .pattern import Pattern
 
 __all__ = ["check_geometry"]
+
+logger = logging.getLogger(__name__)
 
 #: Up to this many vertices coincident ones are found by all pairwise distances (numpy), above
 #: by a k-d tree (scipy.spatial, slow to import: 0.1 s, more than the check of a small pattern).
@@ -32,6 +35,12 @@ def _coincident_pair(v: np.ndarray, tol: float) -> tuple[int, int] | None:
     return tuple(int(k) for k in sorted(pairs[0])) if len(pairs) else None
 
 
+def _folded(v: np.ndarray, size: float) -> bool:
+    """True if the vertices do not lie in one plane (a folded start shape)."""
+    c = v - v.mean(axis=0)
+    return bool(np.linalg.svd(c, compute_uv=False)[-1] > 1e-9 * size * np.sqrt(len(v)))
+
+
 def check_geometry(pattern: Pattern) -> None:
     """Unused / duplicate vertices, degenerate, non-planar and self-intersecting panels."""
     v = pattern.vertices
@@ -44,10 +53,15 @@ def check_geometry(pattern: Pattern) -> None:
         raise PatternError(f"vertex {np.flatnonzero(~used)[0]} is not used by any panel; remove it "
                            "or add it to a panel.")
     pair = _coincident_pair(v, 1e-9 * size)
-    if pair is not None:
+    if pair is not None and _folded(v, size):
+        # a folded form: distinct paper points may touch in space (contact handles them); only
+        # the vertices the panels share are one point of the paper
+        logger.info("vertices %d and %d coincide in the folded start shape; kept distinct",
+                    *pair)
+    elif pair is not None:
         i, j = pair
         raise PatternError(f"vertices {i} and {j} coincide at {v[i].tolist()}; merge them into one "
-                           "vertex and use it in both panels.")
+                           "vertex and use it in both panels" + _folded_flat_note(pattern) + ".")
     c, a, b, panel = pattern._fan_triangles()
     sizes = pattern.corner_sizes
     starts = np.cumsum(sizes) - sizes
@@ -77,6 +91,19 @@ def check_geometry(pattern: Pattern) -> None:
     bad = np.flatnonzero((np.minimum.reduceat(angle, starts) <= 0) | (np.abs(total - 2 * np.pi) > 1e-6))
     if len(bad):
         _raise_self_intersecting(pattern, bad[0])
+
+
+def _folded_flat_note(pattern: Pattern) -> str:
+    """For a flat-folded start shape (creases at +-180 deg), the creases that cause it."""
+    from .orientation import folded_flat_creases
+
+    flat = folded_flat_creases(pattern)
+    if not len(flat):
+        return ""
+    return (f"; or, if the sheet is folded flat: crease(s) {flat.tolist()} (vertices "
+            f"{pattern.edges[flat].tolist()}) are at +-180 deg, and a compliant crease needs an "
+            "open start shape: start from the crease pattern (FOLD: the creasePattern frame, "
+            "with the folded frame's angles as targets) or open these creases below 180 deg")
 
 
 def _raise_self_intersecting(pattern: Pattern, i: int) -> None:

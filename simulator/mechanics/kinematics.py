@@ -20,7 +20,7 @@ import numpy as np
 
 from .elements.springs import fold_angle
 from ..model.mesh import BarHingeMesh
-from ..geometry.polygons import unit_normals
+from ..geometry.polygons import rings, unit_normals
 
 __all__ = ["panel_normals", "fold_angles", "crease_rotations"]
 
@@ -43,25 +43,19 @@ def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
 
     The fold angle is the relative rotation of the two panels of a crease about the
     crease line, 0 when they are coplanar as in the flat reference and positive when
-    the panels fold towards +z (the side a positive rest-angle change folds to).
+    the panels fold towards the sheet's top side (+z for a flat pattern in the x-y plane; see
+    :mod:`simulator.geometry.orientation`), the side a positive rest-angle change folds to.
     """
-    ref = panel_normals(mesh, mesh.nodes)
     cur = panel_normals(mesh, x)
     p1, p2 = mesh.crease_panels.T
-    # orient the first panel's normal to +z in the reference and the second one consistently
-    # with it across the crease (the shared edge run in opposite directions); for a flat
-    # reference both then point to +z, and a start shape folded past 90 deg keeps its sign
-    end = mesh.pattern.corner_vertices[mesh.crease_edge_bars]
-    s1 = np.where(ref[p1, 2] < 0, -1.0, 1.0)
-    s2 = s1 * np.where(end[:, 0] != end[:, 1], 1.0, -1.0)
-    n1, n2 = cur[p1] * s1[:, None], cur[p2] * s2[:, None]
-    n1_ref = ref[p1] * s1[:, None]
-    n11, n12 = mesh.crease_nodes[:, 0], mesh.crease_nodes[:, 1]
-    X = mesh.nodes
-    d = X[mesh.panel_center[p2]] - X[mesh.panel_center[p1]]
-    e_ref = np.cross(d, n1_ref)
-    sign = np.sign(np.einsum("ij,ij->i", X[n12] - X[n11], e_ref))
-    axis = (x[n12] - x[n11]) * sign[:, None]
+    # the panels' top sides (Pattern.panel_orientation: consistent across every crease and
+    # independent of where the sheet sits in space); the axis is the crease side as panel 2
+    # runs it along its top side, so a fold towards panel 1's top side is positive
+    top = mesh.pattern.panel_orientation
+    n1, n2 = cur[p1] * top[p1, None], cur[p2] * top[p2, None]
+    q1 = mesh.crease_edge_bars[:, 0]                 # edge bar q ends at corner node q
+    prev = rings(np.diff(mesh.panel_corner_start)).prev[q1]
+    axis = (x[prev] - x[q1]) * top[p1, None]
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
     return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), axis), np.einsum("ij,ij->i", n1, n2))
 

@@ -227,7 +227,7 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     crease_bars = S + 10 * np.arange(C)[:, None] + np.arange(10)
 
     springs, spring_bar, spring_kind, crease_springs = _springs(
-        nodes, cn, pair, centre[corner_panel], prev, nxt, crease_bars)
+        nodes, cn, pair, centre[corner_panel], prev, nxt, crease_bars, _crease_up(pattern))
 
     triangles = np.vstack([cn[:, _CREASE_TRIANGLES].reshape(-1, 3), fans])
     node_kind = np.r_[np.full(S, NodeKind.CORNER), np.full(3 * C, NodeKind.CREASE),
@@ -247,6 +247,7 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
         crease_triangles=np.arange(6 * C).reshape(C, 6),
         crease_panels=corner_panel[pair], panel_center=centre,
         panel_corner_start=np.r_[0, np.cumsum(sizes)])
+    _check_quality(mesh)
     logger.debug("meshed %d panels, %d creases: %d nodes, %d bars, %d springs, %d triangles",
                  P, C, len(nodes), len(bars), len(springs), len(triangles))
     return mesh
@@ -275,10 +276,11 @@ def _crease_nodes(pattern: Pattern, corners: np.ndarray, edge_bars: np.ndarray):
     return pair, cn, np.stack([pos_a, pos_b, pos_c], axis=1).reshape(-1, 3)
 
 
-def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars):
+def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars, up):
     """Pass D: every spring (i, j, k, l), its bar and kind, sorted by bar; crease maps.
 
-    ``corner_centre`` (S,) is the centre node of each corner's panel.
+    ``corner_centre`` (S,) is the centre node of each corner's panel, ``up`` (C, 3) the top
+    side of every crease (:func:`_crease_up`).
     """
     S, C = len(prev), len(cn)
     edge_spr = np.vstack([
@@ -293,7 +295,8 @@ def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars):
     # The polarity fix applies to crease springs only: the reference keeps panel springs as
     # (p_{j+1}, p_j, centre, p_{j-1}); their rest angle is the initial angle, so it is immaterial.
     is_crease_spr = spr_kind != SpringKind.PANEL
-    spr_nodes[is_crease_spr] = _polarity_fix(nodes, spr_nodes[is_crease_spr])
+    spr_nodes[is_crease_spr] = _polarity_fix(nodes, spr_nodes[is_crease_spr],
+                                             np.vstack([up, up, np.repeat(up, 6, axis=0)]))
     o = np.argsort(spr_bar, kind="stable")
     slot = np.empty(len(o), int)
     slot[o] = np.arange(len(o))
@@ -303,7 +306,12 @@ def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars):
 
 
 def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.ndarray:
-    """Pass A: move every panel corner W/2 away from its adjacent creases."""
+    """Pass A: move every panel corner W/2 away from its adjacent creases.
+
+    A straight corner (its two sides collinear: a vertex in the middle of a crease line, a
+    T-junction) moves W/2 straight into the panel, so that the crease side stays a line at W/2
+    from the crease; the reference's rule (an offset along the other side) has no offset there.
+    """
     X = pattern.vertices[pattern.corner_vertices]
     e_in = pattern.corner_edges
     e_out = e_in[nxt]
@@ -324,28 +332,129 @@ def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.n
     out[crease_in & ~crease_out] += shift_in[crease_in & ~crease_out]
     out[crease_out & ~crease_in] += shift_out[crease_out & ~crease_in]
     out[both] += (w_out[:, None] / 2 * u_in + w_in[:, None] / 2 * u_out)[both]
+    straight = (sin < 1e-6) & (np.einsum("ij,ij->i", u_in, u_out) < 0) & (crease_in | crease_out)
+    if straight.any():
+        normal = area_vectors(X, pattern.corner_sizes)[rings(pattern.corner_sizes).owner]
+        inward = np.cross(normal, u_out)
+        inward /= np.linalg.norm(inward, axis=1, keepdims=True)
+        w = (np.where(crease_in, w_in, 0) + np.where(crease_out, w_out, 0)) \
+            / np.maximum(crease_in.astype(int) + crease_out, 1)
+        out[straight] = X[straight] + (w / 2)[straight, None] * inward[straight]
     return out
 
 
-def _polarity_fix(nodes: np.ndarray, springs: np.ndarray) -> np.ndarray:
-    """Swap i and l where the z component of (X_j - X_i) x (X_k - X_j) is positive."""
+def _crease_up(pattern: Pattern) -> np.ndarray:
+    """Top side (C, 3) of every crease: the sum of its two panels' top-side unit normals.
+
+    For a flat pattern in the x-y plane this is exactly (0, 0, 2), and the polarity fix is the
+    reference's (the z component); for a folded start shape it follows the sheet, so a rigid
+    rotation or a mirror image of the shape gives the same springs. A crease folded flat
+    (+-180 deg, the two normals opposite) has no top side and is refused, named.
+    """
+    area = area_vectors(pattern.vertices[pattern.corner_vertices], pattern.corner_sizes)
+    top = area / np.linalg.norm(area, axis=1, keepdims=True) * pattern.panel_orientation[:, None]
+    p = pattern.edge_panels[pattern.creases]
+    up = top[p[:, 0]] + top[p[:, 1]]
+    flat = np.flatnonzero(np.linalg.norm(up, axis=1) < 2e-3)        # |fold| > ~179.9 deg
+    if len(flat):
+        ids = pattern.creases[flat].tolist()
+        raise PatternError(
+            f"crease(s) {ids} are folded flat (+-180 deg) in the start shape; a compliant crease "
+            "needs an open start shape: start from the crease pattern (FOLD: the creasePattern "
+            "frame, with the folded frame's angles as targets) or open these creases below "
+            "180 deg.")
+    return up
+
+
+def _polarity_fix(nodes: np.ndarray, springs: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Swap i and l where (X_j - X_i) x (X_k - X_j) points to the top side ``up`` (n, 3)."""
     xi, xj, xk = nodes[springs[:, 0]], nodes[springs[:, 1]], nodes[springs[:, 2]]
-    z = np.cross(xj - xi, xk - xj)[:, 2]
+    z = np.einsum("ij,ij->i", np.cross(xj - xi, xk - xj), up)
     out = springs.copy()
     flip = z > 0
     out[flip, 0], out[flip, 3] = springs[flip, 3], springs[flip, 0]
     return out
 
 
-def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray) -> None:
-    """Crease widths must leave every shrunk panel with positive area and the same orientation."""
+def _shrunk_ok(pattern: Pattern, X: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(P,) True where the shrunk panel keeps its orientation and stays inside the panel."""
     sizes = pattern.corner_sizes
     ring = rings(sizes)
     fan = fan_normals(corners, sizes)
-    normal0 = 2 * area_vectors(pattern.vertices[pattern.corner_vertices], sizes)
+    normal0 = 2 * area_vectors(X, sizes)
     ok = (np.einsum("ij,ij->i", fan, normal0[ring.owner])
           > 1e-8 * np.einsum("ij,ij->i", normal0, normal0)[ring.owner])
-    bad = np.flatnonzero(~np.logical_and.reduceat(ok, ring.first))
-    if len(bad):
-        raise PatternError(f"panel {bad[0]} vanishes or turns inside out after shrinking by half "
-                           "the crease widths; reduce the widths of its creases or enlarge the panel.")
+    # every shrunk corner in one of the original panel's fan triangles (centre, C_j, C_j+1)
+    o = centroids(X, sizes)
+    point = np.repeat(np.arange(len(X)), sizes[ring.owner])             # corner of each pair
+    start = np.repeat(ring.first[ring.owner], sizes[ring.owner])
+    fan_of = start + (np.arange(len(point)) - np.repeat(np.cumsum(sizes[ring.owner])
+                                                        - sizes[ring.owner], sizes[ring.owner]))
+    c, a, b = o[ring.owner[fan_of]], X[fan_of], X[ring.nxt[fan_of]]
+    n = np.cross(a - c, b - c)
+    nn = np.maximum(np.einsum("ij,ij->i", n, n), 1e-300)
+    y = corners[point] - c
+    wa = np.einsum("ij,ij->i", np.cross(y, b - c), n) / nn
+    wb = np.einsum("ij,ij->i", np.cross(a - c, y), n) / nn
+    tol = 1e-9
+    inside = np.zeros(len(X), bool)
+    np.logical_or.at(inside, point, (wa >= -tol) & (wb >= -tol) & (wa + wb <= 1 + tol))
+    return np.logical_and.reduceat(ok & inside, ring.first)
+
+
+def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray) -> None:
+    """Crease widths must leave every shrunk panel with positive area, the same orientation,
+    and its corners inside the panel; the message gives the widths that would fit."""
+    X = pattern.vertices[pattern.corner_vertices]
+    ok = _shrunk_ok(pattern, X, corners)
+    if ok.all():
+        return
+    p = int(np.flatnonzero(~ok)[0])
+    lo, hi = 0.0, 1.0                  # the corner shifts are linear in the widths
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _shrunk_ok(pattern, X, X + mid * (corners - X))[p] else (lo, mid)
+    edges = np.unique(pattern.corner_edges[rings(pattern.corner_sizes).owner == p])
+    ids = [int(e) for e in edges if pattern.is_crease[e]]
+    w = pattern.crease_width[ids]
+    raise PatternError(
+        f"panel {p} vanishes, turns inside out or has corners outside itself after shrinking by "
+        f"half the crease widths: its creases {ids} are {_um(w)} um wide, at most about "
+        f"{_um(0.99 * lo * w)} um fit (panel {p} is {_um(np.ptp(X[rings(pattern.corner_sizes).owner == p], axis=0).max())} um across); "
+        "reduce the widths of its creases or enlarge the panel.")
+
+
+def _um(x) -> str:
+    x = np.atleast_1d(np.asarray(x, float)) * 1e6
+    return "/".join(f"{v:.4g}" for v in np.unique(np.round(x, 6)))
+
+
+def _check_quality(mesh: BarHingeMesh) -> None:
+    """No zero-length bar and no zero-area triangle reaches a solver: name the faulty place."""
+    x, size = mesh.nodes, mesh.pattern.size
+    length = np.linalg.norm(x[mesh.bars[:, 1]] - x[mesh.bars[:, 0]], axis=1)
+    t = mesh.triangles
+    area2 = np.linalg.norm(np.cross(x[t[:, 1]] - x[t[:, 0]], x[t[:, 2]] - x[t[:, 0]]), axis=1)
+    side = np.max([np.linalg.norm(x[t[:, i]] - x[t[:, (i + 1) % 3]], axis=1) for i in range(3)],
+                  axis=0)
+    bad_bar = np.flatnonzero(length <= 1e-9 * size)
+    bad_tri = np.flatnonzero(area2 <= 1e-9 * side**2)
+    if not len(bad_bar) and not len(bad_tri):
+        return
+    if len(bad_tri):
+        k, what = int(bad_tri[0]), "a zero-area triangle"
+        crease, panel = int(mesh.triangle_crease[k]), int(mesh.triangle_panel[k])
+    else:
+        k, what = int(bad_bar[0]), "a zero-length bar"
+        panel = int(mesh.bar_panel[k])
+        rows = np.flatnonzero((mesh.crease_bars == k).any(axis=1))
+        crease = int(rows[0]) if len(rows) else -1
+    pat = mesh.pattern
+    if crease >= 0:
+        e = int(mesh.crease_ids[crease])
+        where = f"crease {e} (vertices {pat.edges[e].tolist()})"
+    else:
+        where = f"panel {panel} (vertices {list(pat.panels[panel])})"
+    raise PatternError(f"mesh quality: {where} has {what}; its corners coincide or lie on a "
+                       "line (a vertex in the middle of a crease line meshed without room, or "
+                       "creases meeting at a zero angle); fix these vertices.")

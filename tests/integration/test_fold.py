@@ -185,7 +185,10 @@ def _delete(key):
 
 MALFORMED = [   # (id, edit of the valid two-panel file, expected message)
     ("missing coords", _delete("vertices_coords"), r"vertices_coords: missing required"),
-    ("missing faces", _delete("faces_vertices"), r"faces_vertices: missing required"),
+    # faces are derived from the edges of a flat file (issue 20); without edges they are missing
+    ("missing faces", lambda d: (d.pop("faces_vertices"), d.pop("edges_vertices"),
+                                 d.pop("edges_assignment"), d.pop("edges_foldAngle", None)),
+     r"faces_vertices: missing required"),
     ("coordinate text", _set(("vertices_coords", 2), [2, "a"]),
      r"vertices_coords\[2\].*non-numeric"),
     ("coordinate nan", _set(("vertices_coords", 1), [1, math.nan]),

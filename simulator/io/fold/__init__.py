@@ -11,9 +11,10 @@ The format, with every ``etorigami:`` field, its unit and default, is in
 """
 
 from .model_file import fold_to_model, model_to_fold, read_model, write_model
-from .reader import fold_to_pattern, load_fold_json, read_fold
+from .reader import FoldGeometry, fold_to_pattern, load_fold_json, parse_fold, read_fold
 from .writer import pattern_to_fold, result_to_fold_frames, write_fold, write_fold_frames
 
 __all__ = ["read_fold", "write_fold", "fold_to_pattern", "pattern_to_fold", "load_fold_json",
+           "parse_fold", "FoldGeometry",
            "read_model", "write_model", "fold_to_model", "model_to_fold", "write_fold_frames",
            "result_to_fold_frames"]

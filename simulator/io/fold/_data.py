@@ -22,7 +22,7 @@ OWN_FIELDS = {"vertices_coords", "faces_vertices", "edges_vertices", "edges_assi
               "edges_foldAngle", "edges_foldAngles", "frame_unit", "file_spec", "file_creator",
               "file_frames", "edges_faces", "faces_edges", "vertices_vertices",
               "vertices_faces", "vertices_edges", "edges_lengths", "faceOrders", "edgeOrders",
-              "faces_faces", "edges_edges"}
+              "faces_faces", "edges_edges", "file_frames", "frame_inherit", "frame_parent"}
 
 
 _PATTERN_MESSAGE = [(re.compile(r"^vertices (\d+) and (\d+)"), "vertices_coords", 2),
@@ -70,7 +70,8 @@ def _crease_values(data, field, geo, edge, default, key) -> np.ndarray:
     if raw is None:
         if default is None:
             _fail(field, f"missing: give the {key.replace('_', ' ')} of every crease [m] in the "
-                  f"file or pass {key}=... to the reader.")
+                  f"file or pass {key}=... to the reader (CLI: --{key.replace('_', '-')} UM or "
+                  "--stack NAME).")
         return np.full(geo.n_edges, float(default))
     out = np.zeros(geo.n_edges)
     for i, e in enumerate(edge):
@@ -103,7 +104,8 @@ def panel_fields(data, groups, panel_thickness, material) -> dict:
     for g, t in enumerate(thick):
         if t is None:
             _fail(f"faces_{NS}thickness", "missing: give every face a thickness [m] in the file "
-                  "or pass panel_thickness=... to the reader.")
+                  "or pass panel_thickness=... to the reader (CLI: --panel-thickness UM or "
+                  "--stack NAME).")
         if not (_is_number(t) and math.isfinite(t) and t > 0):
             _fail(f"faces_{NS}thickness[{groups[g][0]}]", f"{t!r} must be a positive length in "
                   "metres.")
@@ -142,10 +144,10 @@ def _materials(data) -> dict:
 
 
 # ---------------------------------------------------------------------- metadata
-def metadata_fields(data, vertex, face, edge, groups) -> dict:
+def metadata_fields(data, vertex, face, edge, groups, merged_edges: bool = False) -> dict:
     """Fields of other namespaces and FOLD metadata, re-indexed to the pattern."""
     out = {}
-    merged = any(len(g) > 1 for g in groups)
+    merged = any(len(g) > 1 for g in groups) or merged_edges
     for key, value in data.items():
         if key in OWN_FIELDS or key.startswith(NS) or f"_{NS}" in key:
             continue

@@ -147,6 +147,7 @@ def fold_to_model(data: dict, **kwargs):
     """``(model, steps)`` of a parsed FOLD dict; missing model fields take defaults (no
     supports, no contact, no thermal parameters, no actuators, no steps)."""
     geo = parse_fold(data, **kwargs)
+    data = geo.data                                   # the chosen frame
     mesh = build_mesh(geo.pattern)
     nodes = data.get(f"{NS}mesh_nodes")
     if nodes is not None:

@@ -19,15 +19,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import FoldFormatError, PatternError
+from ...errors import FoldFormatError, ParameterError, PatternError
 from ...geometry.materials import Material
 from ...geometry.pattern import Pattern
 from ._common import NS, array_field as _array_field, fail as _fail, index_list as _index_list
 from ._common import is_number as _is_number
-from ._data import edge_fields, geometry_pattern, metadata_fields, panel_fields
+from ._data import OWN_FIELDS, edge_fields, geometry_pattern, metadata_fields, panel_fields
+from ._frames import select_frame
 from ._merge import merge_flat_faces
+from ._planar import faces_from_edges, lay_in_xy, merge_straight, plane_normal
 
-__all__ = ["read_fold", "fold_to_pattern", "load_fold_json", "FoldGeometry", "UNITS", "NS"]
+__all__ = ["read_fold", "fold_to_pattern", "parse_fold", "load_fold_json", "FoldGeometry",
+           "check_crease_model", "UNITS", "NS"]
 
 logger = logging.getLogger(__name__)
 
@@ -48,7 +51,10 @@ class FoldGeometry:
     face : (n_file_faces,) panel of each file face
     edge : (n_file_edges,) pattern edge of each file edge, -1 for edges merged away
     data : dict
-        The parsed key frame (all fields, for the model reader).
+        The parsed frame (all fields, for the model reader).
+    notes : tuple of str
+        What the reader repaired or recognised (derived faces, merged vertices, a sheet in
+        another plane), for summaries.
     """
 
     pattern: Pattern
@@ -56,6 +62,7 @@ class FoldGeometry:
     face: np.ndarray
     edge: np.ndarray
     data: dict
+    notes: tuple = ()
 
 
 def load_fold_json(path) -> dict:
@@ -100,19 +107,49 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
         ``faces_etorigami:thickness``.
     material : Material, optional
         Panel and crease material of files without ``faces_etorigami:material`` (default SU-8).
+    frame : int or str, optional
+        The frame to read: an index (0 = the key frame, k = ``file_frames[k - 1]``) or a class,
+        ``"creasePattern"`` or ``"foldedForm"``; default the key frame.
+    merge_collinear : bool
+        Merge away vertices in the middle of a straight crease line (two alike creases,
+        collinear), default True; T-junctions are meshed with straight corners.
+    lay_flat : bool
+        Rotate a flat sheet that lies in another plane (e.g. x-z) into x-y.
+    crease_model : {"compliant", "sharp"}
+        Compliant creases with a width (default); ``"sharp"`` (concentrated hinges) is refused
+        with a ParameterError until its model builder is wired.
     """
     return parse_fold(data, **kwargs).pattern
 
 
 def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickness=None,
-               panel_thickness=None, material: Material | None = None) -> FoldGeometry:
+               panel_thickness=None, material: Material | None = None, frame=None,
+               merge_collinear: bool = True, lay_flat: bool = False,
+               crease_model: str = "compliant") -> FoldGeometry:
     """Validate a FOLD dict and build the pattern and the index maps (:class:`FoldGeometry`)."""
     if not isinstance(data, dict):
         raise FoldFormatError(f"FOLD data must be a dict (JSON object), got {type(data).__name__}.")
+    check_crease_model(crease_model, crease_width)
+    data = select_frame(data, frame)
+    notes = []
     coords = _coords(data) * _scale(data, unit_scale)
+    coords = _plane(coords, lay_flat, notes)
+    if data.get("faces_vertices") is None and data.get("edges_vertices") is not None:
+        raw = _index_pairs(data, len(coords))
+        data = {**data, "faces_vertices": faces_from_edges(coords, raw)}
+        notes.append(f"faces derived from the planar graph ({len(data['faces_vertices'])} faces; "
+                     "the file has no faces_vertices)")
     faces = _faces(data, len(coords))
     edges, letters, angles = _edges(data, len(coords), faces)
     groups, panels = merge_flat_faces(coords, faces, edges, letters)
+    alias = [None] * len(edges)
+    if merge_collinear:
+        before = len(set(np.concatenate(panels).tolist()))
+        panels, alias = merge_straight(coords, panels, edges, letters,
+                                       lambda i, j: _alike(data, letters, angles, i, j))
+        dropped = before - len(set(np.concatenate(panels).tolist()))
+        if dropped:
+            notes.append(f"{dropped} vertices in the middle of straight crease lines merged away")
     vertex, used = _compact(len(coords), faces, panels)
     panels = [tuple(int(vertex[v]) for v in p) for p in panels]
     face = np.empty(len(faces), int)
@@ -120,16 +157,88 @@ def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickne
         face[members] = g
     geo = geometry_pattern(coords[used], panels, face)
     key = {tuple(e): i for i, e in enumerate(geo.edges.tolist())}
+    ends = [alias[i] or (a, b) for i, (a, b) in enumerate(edges.tolist())]
     edge = np.array([key.get(tuple(sorted((vertex[a], vertex[b]))), -1) if vertex[a] >= 0
-                     and vertex[b] >= 0 else -1 for a, b in edges], int).reshape(-1)
+                     and vertex[b] >= 0 else -1 for a, b in ends], int).reshape(-1)
+    check_crease_model(crease_model, crease_width, data, edge)
     per_edge = edge_fields(data, geo, edge, letters, angles, crease_width, crease_thickness)
     per_panel = panel_fields(data, groups, panel_thickness, material)
+    merged = any(a is not None for a in alias)
     try:
         pattern = Pattern(geo.vertices, geo.panels, **per_edge, **per_panel,
-                          metadata=metadata_fields(data, vertex, face, edge, groups))
+                          metadata=metadata_fields(data, vertex, face, edge, groups, merged))
     except PatternError as exc:
         _fail("etorigami data", str(exc))
-    return FoldGeometry(pattern, vertex, face, edge, data)
+    _note_sign_mismatch(pattern, notes)
+    return FoldGeometry(pattern, vertex, face, edge, data, tuple(notes))
+
+
+def _note_sign_mismatch(pattern: Pattern, notes: list) -> None:
+    """Report folded creases whose start fold disagrees with their assignment / fold angle."""
+    from ...geometry.orientation import start_fold_angles
+
+    c = pattern.creases
+    start, design = start_fold_angles(pattern)[c], pattern.edge_fold_angle[c]
+    bad = c[(np.abs(start) > 1e-6) & (start * design < 0)]
+    if len(bad):
+        notes.append(f"creases {bad.tolist()} are folded against their assignment in the start "
+                     "shape (the geometry decides the mechanics)")
+        logger.warning("FOLD: %s", notes[-1])
+
+
+def check_crease_model(crease_model, crease_width, data=None, edge=None) -> None:
+    """The crease model hook: ``"compliant"`` (crease widths, this reader) or ``"sharp"``
+    (concentrated hinges, width 0), which is routed to its own model builder once wired.
+
+    A width of 0 in ``edges_etorigami:width`` or ``crease_width=0`` asks for sharp creases.
+    """
+    if crease_model not in ("compliant", "sharp"):
+        raise ParameterError(f"crease_model = {crease_model!r}; use 'compliant' (creases with a "
+                             "width) or 'sharp' (concentrated hinges).")
+    sharp = crease_model == "sharp" or (crease_width is not None and _is_number(crease_width)
+                                        and crease_width == 0)
+    if data is not None and not sharp:
+        widths = data.get(f"edges_{NS}width")
+        sharp = isinstance(widths, list) and any(
+            _is_number(w) and w == 0 and e >= 0 for w, e in zip(widths, edge))
+    if sharp:
+        raise ParameterError("sharp creases (crease_model='sharp' or crease width 0) need the "
+                             "concentrated-hinge model, which this reader cannot build yet; give "
+                             "the creases a positive width (compliant creases).")
+
+
+def _alike(data, letters, angles, i, j) -> bool:
+    """True if file edges i and j carry the same assignment, fold angle and per-edge data."""
+    if letters[i] != letters[j] or angles[i] != angles[j]:
+        return False
+    for key, value in data.items():
+        if key.startswith("edges_") and key not in OWN_FIELDS and isinstance(value, list) \
+                and len(value) > max(i, j) and value[i] != value[j]:
+            return False
+    return True
+
+
+def _plane(coords, lay_flat: bool, notes: list):
+    """Flat coordinates in a plane other than x-y: reported, and laid in x-y on request."""
+    n = plane_normal(coords)
+    if n is None or abs(abs(n[2]) - 1) < 1e-9:
+        return coords
+    if lay_flat:
+        notes.append(f"flat sheet in the plane with normal {np.round(n, 6).tolist()} laid in x-y")
+        return lay_in_xy(coords)
+    notes.append(f"flat sheet standing in the plane with normal {np.round(n, 6).tolist()} (not "
+                 "x-y; e.g. an Origami Simulator export, y up): it is simulated standing, "
+                 "lay_flat=True (CLI --lay-flat) lays it in x-y")
+    logger.warning("FOLD: %s", notes[-1])
+    return coords
+
+
+def _index_pairs(data, n_vertices) -> np.ndarray:
+    value = data.get("edges_vertices")
+    if not isinstance(value, list):
+        _fail("edges_vertices", "must be a list of [u, v] vertex pairs.")
+    return np.array([_index_list(e, f"edges_vertices[{i}]", n_vertices, 2)
+                     for i, e in enumerate(value)], int).reshape(-1, 2)
 
 
 def _compact(n_vertices: int, faces: list, panels: list):

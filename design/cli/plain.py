@@ -1,0 +1,164 @@
+"""Plain crease patterns at the command line: ``check`` and ``run`` of a FOLD file drawn in an
+editor, with no ``etorigami:`` fields.
+
+A named layer stack (:data:`simulator.STACKS`, default ``su8-au``, the paper's SU-8/Au bimorph)
+supplies the physical parameters the file lacks; ``--crease-width`` / ``--crease-thickness`` /
+``--panel-thickness`` [um] override it. ``run FILE.fold --heat all|M|V|IDS|NAMES --power MW``
+makes the chosen creases actuators folding in their assigned directions, clamps one panel
+(``--fix-panel``, default the central one) and heats them in ``--thermal-steps`` increments.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ._common import CLIError, length_um, power_mw
+
+__all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
+           "heater_names"]
+
+_NS = "etorigami:"
+
+
+def add_plain_options(parser, heating: bool = True) -> None:
+    """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
+    ``--heat``, ``--power``, ``--fix-panel``."""
+    parser.add_argument("--stack", default="su8-au", metavar="NAME",
+                        help="layer stack giving a plain pattern's physical parameters "
+                             "(default su8-au, the paper's SU-8/Au bimorph; see "
+                             "simulator.STACKS)")
+    parser.add_argument("--frame", metavar="INDEX|CLASS",
+                        help="FOLD frame to read: an index (0 = key frame) or creasePattern / "
+                             "foldedForm")
+    parser.add_argument("--lay-flat", action="store_true",
+                        help="lay a flat sheet drawn in another plane (e.g. x-z) in x-y")
+    parser.add_argument("--keep-collinear", action="store_true",
+                        help="keep vertices in the middle of straight crease lines")
+    if heating:
+        parser.add_argument("--heat", metavar="WHICH",
+                            help="creases to heat in a plain pattern: all, M, V, crease ids "
+                                 "'3,5' or heater names from the file")
+        parser.add_argument("--power", type=float, metavar="MW",
+                            help="power per heated crease [mW]")
+        parser.add_argument("--fix-panel", type=int, metavar="ID",
+                            help="clamped panel (default: the panel nearest the centre)")
+
+
+def frame_option(text):
+    """``--frame`` value: an int index or a class name."""
+    if text is None:
+        return None
+    return int(text) if text.strip().lstrip("-").isdigit() else text
+
+
+def is_plain(data: dict) -> bool:
+    """True for a FOLD dict that is not a model file: no ``etorigami:steps`` (a pattern drawn
+    in an editor, perhaps with some ``etorigami:`` crease or panel data)."""
+    return not data.get(f"{_NS}steps")
+
+
+def heater_names(geo) -> dict:
+    """{heater name: crease ids} from ``edges_etorigami:heater`` of a parsed FOLD file."""
+    out = {}
+    names = geo.data.get(f"edges_{_NS}heater")
+    for i, name in enumerate(names if isinstance(names, list) else ()):
+        e = int(geo.edge[i])
+        if isinstance(name, str) and e >= 0 and geo.pattern.is_crease[e]:
+            out.setdefault(name, []).append(e)
+    return {k: tuple(sorted(v)) for k, v in out.items()}
+
+
+def select_creases(spec: str, geo) -> list:
+    """Crease ids of ``--heat``: all, M, V (or M,V), ids, heater names (comma separated)."""
+    pattern = geo.pattern
+    creases = pattern.creases.tolist()
+    letters = pattern.edge_assignment
+    names = heater_names(geo)
+    out = []
+    for word in (w.strip() for w in spec.split(",") if w.strip()):
+        if word.lower() == "all":
+            out += creases
+        elif word.upper() in ("M", "V", "U"):
+            out += [c for c in creases if letters[c] == word.upper()]
+        elif word.isdigit():
+            if int(word) not in creases:
+                raise CLIError(f"--heat {spec}: {word} is not a crease; creases are {creases}")
+            out.append(int(word))
+        elif word in names:
+            out += list(names[word])
+        else:
+            raise CLIError(f"--heat {spec}: {word!r} is not all, M, V, a crease id or a heater "
+                           f"name (heaters: {', '.join(names) or 'none'})")
+    out = sorted(set(out))
+    if not out:
+        raise CLIError(f"--heat {spec} selects no crease (the pattern has {len(creases)} "
+                       f"creases: {sum(letters[c] == 'M' for c in creases)} M, "
+                       f"{sum(letters[c] == 'V' for c in creases)} V)")
+    return out
+
+
+def stack_reader_options(stack, options: dict) -> dict:
+    """Reader keywords: the stack's crease / panel values unless the flags give them."""
+    out = {"crease_width": stack.crease_width, "crease_thickness": stack.crease_thickness,
+           "panel_thickness": stack.panel_thickness}
+    out.update(options)
+    return out
+
+
+def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
+    """``(model, steps, parameters)`` of a plain pattern heated from the flags."""
+    from simulator import Heat, get_stack, parse_fold, stack_model
+
+    stack = get_stack(heating.stack)
+    print(f"layer stack {stack.summary()}")
+    geo = parse_fold(data, **stack_reader_options(stack, options))
+    for note in geo.notes:
+        print(f"  note: {note}")
+    if heating.heat is None or heating.power is None:
+        missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
+                                  ("--power MW", heating.power)) if v is None]
+        raise CLIError(f"{path} is a plain crease pattern (no etorigami: steps); heating it "
+                       f"needs {' and '.join(missing)}")
+    heated = select_creases(heating.heat, geo)
+    watts = power_mw("--power", heating.power)
+    model = stack_model(geo.pattern, stack, heated, heating.fix_panel)
+    steps = (Heat({c: watts for c in heated}, increments=200),)
+    params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,
+              "heated_creases": heated}
+    return model, steps, params, geo
+
+
+def check_plain(args, data: dict, options: dict) -> int:
+    """``check`` of a plain pattern: geometry summary, then what a run needs, in CLI flags."""
+    import numpy as np
+
+    from simulator import build_mesh, get_stack, parse_fold, start_fold_angles
+
+    stack = get_stack(args.stack)
+    needs = []
+    unit = data.get("frame_unit", "unit")
+    if unit == "unit" and "unit_scale" not in options:
+        needs.append("--unit-scale METRES (frame_unit is 'unit': metres per file unit)")
+        options = {**options, "unit_scale": 1e-3}
+    geo = parse_fold(data, **stack_reader_options(stack, options))
+    pattern = geo.pattern
+    mesh = build_mesh(pattern)
+    letters = pattern.edge_assignment[pattern.creases]
+    fold = np.degrees(start_fold_angles(pattern)[pattern.creases])
+    size = np.ptp(pattern.vertices, axis=0) * 1e6
+    print(f"{args.file}: valid FOLD crease pattern (no etorigami: model or steps)")
+    print(f"  vertices {pattern.n_vertices}, panels {pattern.n_panels}, creases "
+          f"{len(pattern.creases)} ({sum(letters == 'M')} M, {sum(letters == 'V')} V, "
+          f"{sum(letters == 'U')} U), size {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} um"
+          + (" (provisional 1 mm per unit)" if needs else ""))
+    shape = "flat" if not len(fold) or np.abs(fold).max() < 1e-6 else \
+        f"folded, start fold angles {fold.min():.1f} to {fold.max():.1f} deg"
+    print(f"  start shape: {shape}")
+    for note in geo.notes:
+        print(f"  note: {note}")
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
+          f"(checked with crease width {pattern.crease_width[pattern.creases].min() * 1e6:g} um)")
+    print(f"  physical parameters from layer stack {stack.summary()}")
+    print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]))
+    print(f"  e.g. etorigami run {args.file} --heat all --power 2 --out DIR")
+    return 0

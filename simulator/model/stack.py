@@ -1,0 +1,143 @@
+"""Named layer stacks: the physical parameters a plain crease pattern lacks.
+
+A crease pattern drawn in an editor gives geometry and fold directions only. A
+:class:`LayerStack` supplies the rest (crease width, the bimorph's two layers, panel thickness,
+the air around it), so that :func:`stack_model` turns any pattern into a heatable model: every
+chosen crease becomes an actuator that folds in its assigned direction (M / V, or the sign of
+its start fold for U), one panel is clamped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..geometry.pattern import Pattern
+from ..thermal.steady import REFERENCE_BETA, ThermalParameters
+from .bimorph import Actuators, Bimorph
+from .mesh import build_mesh
+from .model import Model, Supports, make_model
+from .properties import BarHingeParameters
+
+__all__ = ["LayerStack", "STACKS", "get_stack", "stack_model", "actuation_signs"]
+
+
+@dataclass(frozen=True)
+class LayerStack:
+    """Layers and surroundings of an electro-thermal origami sheet (SI units).
+
+    Attributes
+    ----------
+    name, description : str
+    crease_width : float
+        Crease width W [m].
+    t_active, E_active : float
+        Thickness [m] and Young's modulus [Pa] of the active (metal) layer.
+    t_passive, E_passive : float
+        Thickness [m] and Young's modulus [Pa] of the passive (polymer) layer.
+    delta_alpha : float
+        Expansion mismatch |alpha_passive - alpha_active| [1/K].
+    panel_thickness : float
+        Panel thickness [m].
+    env_thickness, env_conductivity : float
+        Air layer thickness [m] and conductivity [W/(m K)] of the heat loss.
+    """
+
+    name: str
+    description: str
+    crease_width: float
+    t_active: float
+    E_active: float
+    t_passive: float
+    E_passive: float
+    delta_alpha: float
+    panel_thickness: float
+    env_thickness: float = 1e-3
+    env_conductivity: float = 0.026
+
+    def __post_init__(self):
+        for key, value in asdict(self).items():
+            if key not in ("name", "description") and not (np.isfinite(value) and value > 0):
+                raise ParameterError(f"LayerStack {self.name!r}: {key} = {value!r} must be a "
+                                     "positive number (SI units).")
+
+    @property
+    def crease_thickness(self) -> float:
+        """Crease thickness [m]: both layers."""
+        return self.t_active + self.t_passive
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def summary(self) -> str:
+        """One line in CLI units (um, GPa, 1/K, W/(m K))."""
+        return (f"{self.name}: {self.description}; crease width {self.crease_width * 1e6:g} um, "
+                f"active layer {self.t_active * 1e6:g} um at {self.E_active / 1e9:g} GPa, "
+                f"passive layer {self.t_passive * 1e6:g} um at {self.E_passive / 1e9:g} GPa, "
+                f"delta_alpha {self.delta_alpha:g} /K, panels {self.panel_thickness * 1e6:g} um, "
+                f"air {self.env_thickness * 1e6:g} um at {self.env_conductivity:g} W/(m K)")
+
+
+#: The paper's SU-8 / gold bimorph (Zhu & Filipov; the Miura lifter, Example03: gold 0.2 um at
+#: 50 GPa on SU-8 0.8 um at 2 GPa, delta_alpha 50e-6 /K, 200 um creases, 10 um SU-8 panels).
+STACKS = {"su8-au": LayerStack("su8-au", "SU-8/Au bimorph of the paper (Miura lifter, "
+                               "Example03)", crease_width=200e-6, t_active=0.2e-6,
+                               E_active=50e9, t_passive=0.8e-6, E_passive=2e9,
+                               delta_alpha=50e-6, panel_thickness=10e-6)}
+
+
+def get_stack(name: str) -> LayerStack:
+    """The named stack of :data:`STACKS`; an unknown name lists the known ones."""
+    if name not in STACKS:
+        raise ParameterError(f"layer stack {name!r} is unknown; known: {', '.join(STACKS)}.")
+    return STACKS[name]
+
+
+def actuation_signs(pattern: Pattern) -> np.ndarray:
+    """(n_edges,) +1 / -1: the direction each crease should fold (V / M, else the sign of its
+    design or start fold angle, else valley); 0 on boundary edges."""
+    from ..geometry.orientation import start_fold_angles
+
+    design = np.sign(pattern.edge_fold_angle)
+    start = np.sign(start_fold_angles(pattern))
+    sign = np.where(design != 0, design, np.where(start != 0, start, 1.0))
+    return np.where(pattern.is_crease, sign, 0.0)
+
+
+def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
+                fixed_panel: int | None = None) -> Model:
+    """A heatable model of a pattern with a layer stack.
+
+    Parameters
+    ----------
+    pattern : Pattern
+        With the stack's (or the user's) crease widths and thicknesses.
+    stack : LayerStack
+    heated : sequence of int
+        Crease ids that are actuators (each folds in its :func:`actuation_signs` direction).
+    fixed_panel : int, optional
+        The clamped panel; default the panel whose centroid is nearest the pattern's centre.
+    """
+    if not isinstance(stack, LayerStack):
+        raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
+    heated = [pattern.check_crease(c, "heated crease") for c in heated]
+    if not heated:
+        raise ParameterError("no crease to heat: give at least one crease id.")
+    mesh = build_mesh(pattern)
+    if fixed_panel is None:
+        centres = np.array([pattern.vertices[list(p)].mean(axis=0) for p in pattern.panels])
+        fixed_panel = int(np.argmin(np.linalg.norm(centres - pattern.vertices.mean(axis=0),
+                                                   axis=1)))
+    fixed_panel = pattern.check_panel(fixed_panel, "fixed panel")
+    sign = actuation_signs(pattern)
+    actuators = Actuators(Bimorph(E1=stack.E_active, t1=stack.t_active, E2=stack.E_passive,
+                                  t2=stack.t_passive),
+                          {c: stack.delta_alpha * float(sign[c]) for c in heated})
+    thermal = ThermalParameters(env_thickness=stack.env_thickness,
+                                env_conductivity=stack.env_conductivity,
+                                dissipation_angle=REFERENCE_BETA)
+    supports = Supports({int(i): "xyz" for i in mesh.panel_nodes(fixed_panel)})
+    return make_model(mesh, supports, BarHingeParameters(), thermal=thermal, actuators=actuators)

@@ -1,0 +1,90 @@
+"""Plain crease patterns at the CLI (issue 20): check without physical parameters, run from
+flags alone with a layer stack, heater names, one-line refusals."""
+
+import json
+import pathlib
+
+import pandas as pd
+import pytest
+
+from design.cli import main
+
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"
+MIURA = str(DATA / "miura_3x3_plain.fold")
+
+
+def test_check_of_a_plain_pattern_says_all_that_a_run_needs_in_flags(capsys):
+    assert main(["check", MIURA]) == 0
+    out = capsys.readouterr().out
+    assert "valid FOLD crease pattern" in out
+    assert "creases 12 (6 M, 6 V, 0 U)" in out and "start shape: flat" in out
+    assert "layer stack su8-au" in out and "0.2 um at 50 GPa" in out
+    assert "a run needs: --heat all|M|V|IDS; --power MW" in out
+
+
+def test_check_of_a_unit_less_pattern_asks_for_the_unit_scale_too(tmp_path, capsys):
+    data = json.loads(pathlib.Path(MIURA).read_text())
+    del data["frame_unit"]
+    path = tmp_path / "p.fold"
+    path.write_text(json.dumps(data))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "--unit-scale METRES" in out and "--power MW" in out
+
+
+def test_drawn_miura_runs_a_heating_simulation_from_flags_alone(tmp_path, capsys):
+    out_dir = tmp_path / "run"
+    assert main(["run", MIURA, "--heat", "all", "--power", "2", "--set", "thermal_steps=20",
+                 "--out", str(out_dir), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "layer stack su8-au" in out and "converged" in out
+    table = pd.read_csv(out_dir / "creases.csv")
+    last = table[table["step"] == table["step"].max()]
+    assert len(last.drop_duplicates("crease")) == 12
+    assert last["fold_angle [deg]"].abs().max() > 5
+    meta = json.loads((out_dir / "meta.json").read_text())
+    assert meta["overrides"]["stack"] == "su8-au"
+
+
+def test_heat_selects_valleys_and_ids(tmp_path, capsys):
+    assert main(["run", MIURA, "--heat", "V", "--power", "1", "--set", "thermal_steps=5",
+                 "--out", str(tmp_path / "v"), "-q"]) == 0
+    meta = json.loads((tmp_path / "v" / "meta.json").read_text())
+    assert len(meta["overrides"]["heated_creases"]) == 6
+    assert main(["run", MIURA, "--heat", "99", "--power", "1", "--out",
+                 str(tmp_path / "x"), "-q"]) == 2
+    assert "99 is not a crease" in capsys.readouterr().err
+
+
+def test_heater_names_from_the_file(tmp_path, capsys):
+    data = json.loads(pathlib.Path(MIURA).read_text())
+    letters = data["edges_assignment"]
+    data["edges_etorigami:heater"] = ["valleys" if a == "V" else None for a in letters]
+    path = tmp_path / "named.fold"
+    path.write_text(json.dumps(data))
+    assert main(["run", str(path), "--heat", "valleys", "--power", "1", "--set",
+                 "power.valleys=3", "--set", "thermal_steps=5", "--out", str(tmp_path / "r"),
+                 "-q"]) == 0
+    table = pd.read_csv(tmp_path / "r" / "creases.csv")
+    assert table["power [mW]"].max() == pytest.approx(3.0)
+    assert main(["run", str(path), "--heat", "valleys", "--power", "1", "--set",
+                 "power.nope=3", "--out", str(tmp_path / "s"), "-q"]) == 2
+    assert "heaters: valleys" in capsys.readouterr().err
+
+
+def test_run_of_a_plain_pattern_without_power_is_one_line(tmp_path, capsys):
+    assert main(["run", MIURA, "--out", str(tmp_path / "r"), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "needs --heat all|M|V|IDS and --power MW" in err
+
+
+@pytest.mark.parametrize("path", sorted(DATA.glob("*.fold")), ids=lambda p: p.name)
+def test_check_of_every_file_is_a_summary_or_one_line(path, capsys):
+    code = main(["check", str(path)])
+    out, err = capsys.readouterr()
+    assert code in (0, 2) and "Traceback" not in out + err
+    if code == 2:
+        assert len(err.strip().splitlines()) == 1 and path.name in ("fully_folded.fold",
+                                                                      "crease_too_wide.fold")
+    else:
+        assert "valid FOLD" in out
