@@ -58,8 +58,8 @@ from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
 from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
-from ..thermal.schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
-                               check_power_mapping, describe_power_mapping)
+from ..schedules import next_switch
+from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
 from ..thermal.transient import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
@@ -75,26 +75,6 @@ EASY_ITERATIONS = 8
 #: With ``shape_tol > 0`` the heat matrices are still re-assembled after this many steps if the
 #: shape changed at all, so a settled shape is eventually assembled exactly (no lasting bias).
 REFRESH_STEPS = 16
-
-
-def _next_switch(schedules, t: float) -> float:
-    """Earliest time after ``t`` [s] at which a schedule's power jumps or kinks (inf if none):
-    the on / off times of StepPower and SquareWave, the table times of PiecewiseLinear."""
-    best = math.inf
-    for s in schedules:
-        if isinstance(s, StepPower):
-            times = (s.t_on, s.t_off)
-        elif isinstance(s, PiecewiseLinear):
-            times = s.times
-        elif isinstance(s, SquareWave):
-            k = max(0.0, math.floor((t - s.t_start) / s.period))
-            start = s.t_start + k * s.period
-            times = (start, start + s.duty * s.period, start + s.period)
-        else:
-            continue
-        later = [x for x in times if x > t * (1 + 1e-12) + 1e-15]
-        best = min([best, *later])
-    return best
 
 
 @dataclass(frozen=True)
@@ -189,7 +169,7 @@ class ElectroThermal(Step):
         target, rest = state.crease_rest, state.spring_rest
         status, message = "converged", ""
         while t < self.duration * (1 - 1e-12):
-            h_try = min(h, self.duration - t, _next_switch(powers.schedules, t) - t)
+            h_try = min(h, self.duration - t, next_switch(powers.schedules, t) - t)
             new_temp = heat.trial(mech.x, powers.mean(t, t + h_try), h_try)
             change = float(np.max(np.abs(new_temp - temp)))
             if change > 2 * self.temperature_step and h_try > dt_min:
