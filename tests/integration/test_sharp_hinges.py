@@ -158,3 +158,47 @@ def test_sharp_model_refuses_bad_input():
     with pytest.raises(ParameterError, match="Pattern"):
         sharp_model("not a pattern")
     assert initial_state(single_crease()).crease_rest.tolist() == [math.pi]
+
+
+# ------------------------------------------------------------------ Miura rigid-origami kinematics
+GAMMA = math.radians(60.0)
+
+
+def miura_sheet(panel_mesh, soft_zigzag):
+    """3 x 3 Miura sheet with sharp creases and stiff panels, its centre panel clamped; the
+    collinear creases (along y in the flat sheet) and the zig-zag ones."""
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+
+    pat = miura_sheet_pattern(L, L, GAMMA, 3, 3, W=100e-6, crease_thickness=1e-6,
+                              panel_thickness=T, material=PANEL)
+    d = np.diff(pat.vertices[pat.edges[pat.creases]], axis=1)[:, 0]
+    collinear = np.abs(d[:, 0]) < 1e-12 * np.linalg.norm(d, axis=1)
+    soft = {int(c): 1e-9 for c in pat.creases[~collinear]} if soft_zigzag else None
+    params = SharpHingeParameters(fold_stiffness=soft, panel_bending_width=1e-6,
+                                  panel_mesh=panel_mesh)
+    centre = sharp_model(pat, params=params).mesh.panel_nodes(4)
+    return sharp_model(pat, Supports.nodes(centre), params), collinear
+
+
+@pytest.mark.parametrize("panel_mesh, soft_zigzag, target, reached", [
+    ("N5B8", True, 2.4, 2.39), ("N4B5", True, 2.4, 2.39), ("N5B8", False, 2.0, 0.46)])
+def test_miura_sheet_folds_along_the_rigid_origami_kinematics(panel_mesh, soft_zigzag, target,
+                                                               reached):
+    """tan(rho_z / 2) = tan(rho_c / 2) / cos(gamma) (theory 3.11) at every increment, when only
+    the collinear creases are driven (their rest angles) and the zig-zag creases follow."""
+    from simulator.cases import miura_fold_signs
+
+    model, collinear = miura_sheet(panel_mesh, soft_zigzag)
+    signs = miura_fold_signs(L, L, GAMMA, 3, 3)
+    creases = model.mesh.crease_ids
+    folds = {int(c): signs[int(c)] * target for c in creases[collinear]}
+    res = simulate(model, [SelfFold(folds, increments=20)])
+    assert res.success, res.message
+    rho = np.abs(res.fold_angle)
+    rho_c = rho[:, collinear].mean(axis=1)
+    predicted = 2 * np.arctan(np.tan(rho_c / 2) / math.cos(GAMMA))
+    assert rho_c[-1] > reached                                # the folding range covered
+    assert np.abs(rho[:, collinear] - rho_c[:, None]).max() < 1e-4
+    assert np.abs(rho[:, ~collinear] - predicted[:, None]).max() < 1e-4
+    signs_now = np.sign(res.fold_angle[-1])
+    assert all(signs_now[k] == signs[int(c)] for k, c in enumerate(creases))
