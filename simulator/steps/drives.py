@@ -39,7 +39,10 @@ def check_force_drive(owner: str, forces) -> None:
         return
     for node, value in forces.items():
         vec = value[0] if _scheduled(value) else value
-        arr = np.asarray(vec, dtype=float) if not isinstance(vec, Schedule) else None
+        try:
+            arr = np.asarray(vec, dtype=float)
+        except (TypeError, ValueError):
+            arr = None
         if arr is None or arr.shape != (3,) or not np.all(np.isfinite(arr)):
             raise ParameterError(f"{owner}: force of node {node!r} is {value!r}; give a finite "
                                  "(fx, fy, fz) [N] or ((fx, fy, fz), schedule) with a "
@@ -87,10 +90,10 @@ class MechanicalDrive:
         folds = dict(folds or {})
         self.fold_terms = [(self.mesh.crease_row_of(c), s) for c, s in folds.items()
                            if isinstance(s, Schedule)]
-        fixed = {c: v for c, v in folds.items() if not isinstance(v, Schedule)}
-        self.crease0 = crease_targets(self.mesh, fixed, state.crease_rest) if fixed \
+        self.fixed = {c: v for c, v in folds.items() if not isinstance(v, Schedule)}
+        self.crease0 = crease_targets(self.mesh, self.fixed, state.crease_rest) if self.fixed \
             else state.crease_rest
-        self.changed_rest = bool(fixed)
+        self.changed_rest = bool(self.fixed)
 
     @property
     def schedules(self) -> list:
@@ -110,9 +113,9 @@ class MechanicalDrive:
         return out
 
     def crease_rest(self, t: float, base=None) -> np.ndarray:
-        """(C,) crease rest angles [rad] at step time t; ``base`` (C,) replaces the constant
-        ones (e.g. the thermally actuated rest angles), the scheduled creases override it."""
-        out = np.array(self.crease0 if base is None else base, float)
+        """(C,) crease rest angles [rad] at step time t; ``base`` (C,) replaces the state's
+        (e.g. the thermally actuated rest angles), the listed creases override it."""
+        out = self.crease0.copy() if base is None else crease_targets(self.mesh, self.fixed, base)
         for row, s in self.fold_terms:
             out[row] = np.pi + s(t)
         return out
