@@ -44,7 +44,7 @@ def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     The fold angle is the relative rotation of the two panels of a crease about the
     crease line, 0 when they are coplanar as in the flat reference and positive when
     the panels fold towards +z (the side a positive rest-angle change folds to). With
-    concentrated hinges (theory 2.5) it is the angle of the crease's fold spring minus pi.
+    concentrated hinges (theory 2.6) it is the angle of the crease's fold spring minus pi.
     """
     if getattr(mesh, "sharp", False):
         return _hinge_rotations(mesh, x)

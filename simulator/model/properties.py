@@ -148,7 +148,7 @@ def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
     -------
     (ns,) array: pi for panel and diagonal springs; edge lines get
     ``pi + (theta0 - pi)(1 - f)/2`` each, the centre line ``pi + f (theta0 - pi)``.
-    A concentrated-hinge mesh (theory 2.5) has one fold spring per crease, which takes the
+    A concentrated-hinge mesh (theory 2.6) has one fold spring per crease, which takes the
     whole change. A crease folded in the mesh's reference geometry (a 3-D start shape) starts instead from
     its springs' initial angles and from :func:`initial_crease_rest`, so that its initial
     rest angles give back the start shape.
@@ -157,7 +157,7 @@ def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
     rho = np.asarray(crease_rest, dtype=float) - rest0
     out = base.copy()
     cs = mesh.crease_springs
-    if getattr(mesh, "sharp", False):           # one fold spring per crease (theory 2.5)
+    if getattr(mesh, "sharp", False):           # one fold spring per crease (theory 2.6)
         out[cs[:, 0]] += rho
         return out
     f = params.centre_line_share

@@ -1,4 +1,4 @@
-"""Concentrated-hinge models: stiffness rules and the model builder (theory 2.5, 3.11).
+"""Concentrated-hinge models: stiffness rules and the model builder (theory 2.6, 3.11).
 
 :func:`sharp_model` builds a :class:`~simulator.model.model.Model` whose creases are sharp
 hinges (:mod:`simulator.model.sharp_mesh`; the reference's ``compliantCreaseOpen = 0``,

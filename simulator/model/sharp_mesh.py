@@ -1,4 +1,4 @@
-"""Concentrated-hinge (sharp-crease) bar-and-hinge mesh (theory 2.5; Filipov et al. 2017).
+"""Concentrated-hinge (sharp-crease) bar-and-hinge mesh (theory 2.6; Filipov et al. 2017).
 
 Creases have no width: the two panels of a crease share the crease's two vertices, and the
 crease is one rotational spring (the *fold spring*) about the shared edge. Panels are meshed as

@@ -1,4 +1,4 @@
-"""Concentrated hinges (sharp creases, theory 2.5 and 3.11): closed forms and every mechanical step.
+"""Concentrated hinges (sharp creases, theory 2.6 and 3.11): closed forms and every mechanical step.
 
 A single sharp crease with a rigid free panel is a one-degree-of-freedom rotational spring:
 statics ``k phi = F L cos(phi)`` under a dead tip load, ``k phi = g cos(phi) sum(m_i r_i)``
