@@ -14,8 +14,8 @@ ramp, square wave, sine, piecewise linear; the formulas are the functions below)
   dimensionless factor of a force vector).
 
 Every schedule may be used where a signal is expected (a power schedule is a non-negative
-signal). ``switch_times(t)`` lists the times after which a schedule jumps or kinks, so that
-adaptive time steppers can end their steps there.
+signal). ``switch_times(t)`` lists the times at which a schedule jumps (steps, square waves) or
+kinks (tables), so that adaptive time steppers end their steps there; ramps and sines list none.
 """
 
 from __future__ import annotations
@@ -222,9 +222,6 @@ class RampSignal(Schedule):
 
     def _integral(self, t):
         return self.offset * t + ramp_integral(t, self.value, self.duration, self.t_start)
-
-    def switch_times(self, t):
-        return (self.t_start, self.t_start + self.duration)
 
 
 @dataclass(frozen=True)
