@@ -175,8 +175,25 @@ def _times(obj, *names):
         _set(obj, name, finite(_field(obj, name), getattr(obj, name), "s"))
 
 
+class _Shifted(Schedule):
+    """A shape (``_shape``, ``_shape_integral``) plus the constant ``offset``; its level fields
+    (``_LEVELS``) are finite numbers."""
+
+    _LEVELS = ("value", "offset")
+
+    def _check_levels(self):
+        for name in self._LEVELS:
+            _level(self, name)
+
+    def _values(self, t):
+        return self.offset + self._shape(t)
+
+    def _integral(self, t):
+        return self.offset * t + self._shape_integral(t)
+
+
 @dataclass(frozen=True)
-class StepSignal(Schedule):
+class StepSignal(_Shifted):
     """``offset + value`` for ``t_on <= t < t_off`` [s], ``offset`` otherwise."""
 
     value: float
@@ -185,25 +202,24 @@ class StepSignal(Schedule):
     offset: float = 0.0
 
     def __post_init__(self):
-        _level(self, "value")
-        _level(self, "offset")
+        self._check_levels()
         _times(self, "t_on")
         t_on = self.t_on
         _set(self, "t_off", number(_field(self, "t_off"), self.t_off, lambda v: v > t_on,
                                    f"a time after t_on = {t_on}", "s"))
 
-    def _values(self, t):
-        return self.offset + step_values(t, self.value, self.t_on, self.t_off)
+    def _shape(self, t):
+        return step_values(t, self.value, self.t_on, self.t_off)
 
-    def _integral(self, t):
-        return self.offset * t + step_integral(t, self.value, self.t_on, self.t_off)
+    def _shape_integral(self, t):
+        return step_integral(t, self.value, self.t_on, self.t_off)
 
     def switch_times(self, t):
         return (self.t_on, self.t_off)
 
 
 @dataclass(frozen=True)
-class RampSignal(Schedule):
+class RampSignal(_Shifted):
     """``offset`` before ``t_start``, linear to ``offset + value`` over ``duration`` [s], held."""
 
     value: float
@@ -212,20 +228,19 @@ class RampSignal(Schedule):
     offset: float = 0.0
 
     def __post_init__(self):
-        _level(self, "value")
-        _level(self, "offset")
+        self._check_levels()
         _set(self, "duration", positive(_field(self, "duration"), self.duration, "s"))
         _times(self, "t_start")
 
-    def _values(self, t):
-        return self.offset + ramp_values(t, self.value, self.duration, self.t_start)
+    def _shape(self, t):
+        return ramp_values(t, self.value, self.duration, self.t_start)
 
-    def _integral(self, t):
-        return self.offset * t + ramp_integral(t, self.value, self.duration, self.t_start)
+    def _shape_integral(self, t):
+        return ramp_integral(t, self.value, self.duration, self.t_start)
 
 
 @dataclass(frozen=True)
-class SquareWaveSignal(Schedule):
+class SquareWaveSignal(_Shifted):
     """``offset + value`` during the first ``duty`` (in (0, 1)) of every ``period`` [s] from
     ``t_start`` [s] on, ``offset`` otherwise."""
 
@@ -236,19 +251,17 @@ class SquareWaveSignal(Schedule):
     offset: float = 0.0
 
     def __post_init__(self):
-        _level(self, "value")
-        _level(self, "offset")
+        self._check_levels()
         _set(self, "period", positive(_field(self, "period"), self.period, "s"))
         _set(self, "duty", number(_field(self, "duty"), self.duty, lambda v: 0 < v < 1,
                                   "in (0, 1) (use StepSignal for 0 or 1)"))
         _times(self, "t_start")
 
-    def _values(self, t):
-        return self.offset + square_values(t, self.value, self.period, self.duty, self.t_start)
+    def _shape(self, t):
+        return square_values(t, self.value, self.period, self.duty, self.t_start)
 
-    def _integral(self, t):
-        return self.offset * t + square_integral(t, self.value, self.period, self.duty,
-                                                 self.t_start)
+    def _shape_integral(self, t):
+        return square_integral(t, self.value, self.period, self.duty, self.t_start)
 
     def switch_times(self, t):
         return square_switches(t, self.period, self.duty, self.t_start)
@@ -264,8 +277,8 @@ class SineSignal(Schedule):
     phase: float = 0.0
 
     def __post_init__(self):
-        _level(self, "amplitude")
-        _level(self, "offset")
+        for name in ("amplitude", "offset"):
+            _level(self, name)
         _set(self, "frequency", positive(_field(self, "frequency"), self.frequency, "Hz"))
         _set(self, "phase", finite(_field(self, "phase"), self.phase, "rad"))
 
