@@ -124,3 +124,15 @@ def test_fold_stiffness_rules():
     k = mixed.properties.spring_stiffness[:mesh.n_creases]
     assert k[0] == pytest.approx(3.0 * length[0]) and k[1] == pytest.approx(default[1])
     assert SharpHingeParameters(fold_stiffness={c0: 3.0}).to_dict()["crease_model"] == "sharp"
+
+
+def test_make_model_chooses_the_crease_model():
+    pat = mixed_pattern()
+    model = make_model(pat, {0: "xyz"}, crease_model="sharp")
+    assert model.mesh.sharp and model.mesh.n_nodes == build_sharp_mesh(pat).n_nodes
+    np.testing.assert_array_equal(model.properties.spring_stiffness,
+                                  sharp_model(pat).properties.spring_stiffness)
+    with pytest.raises(ParameterError, match="crease_model"):
+        make_model(pat, crease_model="hinged")
+    with pytest.raises(ParameterError, match="no contact"):
+        make_model(pat, contact=True, crease_model="sharp")
