@@ -136,3 +136,18 @@ def test_make_model_chooses_the_crease_model():
         make_model(pat, crease_model="hinged")
     with pytest.raises(ParameterError, match="no contact"):
         make_model(pat, contact=True, crease_model="sharp")
+
+
+def test_a_folded_start_shape_is_stress_free():
+    """A 3-D start (theory 2.5): the crease keeps its initial angle as rest angle."""
+    phi = 0.7
+    v = [[-1, 0, 0], [0, 0, 0], [0, 1, 0], [-1, 1, 0],
+         [math.cos(phi), 0, math.sin(phi)], [math.cos(phi), 1, math.sin(phi)]]
+    pat = Pattern(np.array(v) * 1e-3, [[0, 1, 2, 3], [1, 4, 5, 2]], crease_width=1e-4,
+                  crease_thickness=1e-6, panel_thickness=1e-5, panel_material=MAT,
+                  crease_material=MAT)
+    model = sharp_model(pat, Supports.nodes([0, 1, 2, 3]))
+    state = initial_state(model)
+    assert abs(state.crease_rest[0] - np.pi) == pytest.approx(phi, abs=1e-12)
+    ev = equilibrium_system(model).evaluate(state.u, state.spring_rest, hessian=False)
+    assert np.abs(ev.f_int).max() < 1e-18
