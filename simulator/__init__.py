@@ -45,6 +45,10 @@ __getattr__, __dir__ = _attach(__name__, {
     ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model"),
     ".geometry.orientation": ("start_fold_angles",),
     ".model.mesh": ("BarHingeMesh", "build_mesh"),
+    ".model.sharp": ("SharpHingeParameters", "sharp_model"),
+    ".model.sharp_mesh": ("SharpHingeMesh", "build_sharp_mesh"),
+    ".schedules": ("PiecewiseLinearSignal", "RampSignal", "Schedule", "SineSignal",
+                   "SquareWaveSignal", "StepSignal"),
     ".model.model": ("REFERENCE_GRAVITY", "STANDARD_GRAVITY", "ContactParameters", "Model",
                "Supports", "make_model"),
     ".solvers.modes": ("ModesResult", "natural_modes"),
@@ -73,6 +77,8 @@ __all__ = [
     "__version__", "example_patterns",
     # patterns, meshes, models
     "Pattern", "BarHingeMesh", "build_mesh", "Material", "SU8", "SPR", "SUBSTRATE",
+    # concentrated hinges (sharp creases)
+    "sharp_model", "SharpHingeParameters", "SharpHingeMesh", "build_sharp_mesh",
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
@@ -89,6 +95,9 @@ __all__ = [
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
     "ThetaStepper", "theta_step", "REFERENCE_THETA",
+    # time schedules of mechanical drives (Dynamics, ElectroThermal)
+    "Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
+    "PiecewiseLinearSignal",
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",

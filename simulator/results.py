@@ -193,11 +193,13 @@ class SimulationResult:
     def crease_temperature(self) -> np.ndarray:
         """(m, C) crease temperature used for actuation [deg C] (7-node weighted mean)."""
         t = self.history["temperature"][:, self.model.mesh.crease_nodes]
+        if t.shape[2] != 7:                 # concentrated hinges: the two hinge nodes
+            return t.mean(axis=2)
         return t @ crease_temperature_weights()
 
     @cached_property
     def crease_temperature_max(self) -> np.ndarray:
-        """(m, C) hottest of the 7 crease nodes [deg C]."""
+        """(m, C) hottest of the 7 crease nodes (2 hinge nodes of a sharp crease) [deg C]."""
         return self.history["temperature"][:, self.model.mesh.crease_nodes].max(axis=2)
 
     def to_frame(self):

@@ -108,6 +108,9 @@ _THERMAL: "weakref.WeakKeyDictionary[Model, ThermalModel]" = weakref.WeakKeyDict
 
 def thermal_model(model: Model) -> ThermalModel:
     """The cached :class:`~simulator.thermal.steady.ThermalModel` of a model (built on first use)."""
+    if getattr(model.mesh, "sharp", False):
+        from .model.sharp import check_not_sharp
+        check_not_sharp(model, "A heating step")
     if model.thermal is None:
         raise ParameterError("This model has no thermal parameters: pass thermal="
                              "ThermalParameters(...) to make_model to use heating steps.")

@@ -44,8 +44,11 @@ def fold_angles(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     The fold angle is the relative rotation of the two panels of a crease about the
     crease line, 0 when they are coplanar as in the flat reference and positive when
     the panels fold towards the sheet's top side (+z for a flat pattern in the x-y plane; see
-    :mod:`simulator.geometry.orientation`), the side a positive rest-angle change folds to.
+    :mod:`simulator.geometry.orientation`), the side a positive rest-angle change folds to. With
+    concentrated hinges (theory 2.6) it is the angle of the crease's fold spring minus pi.
     """
+    if getattr(mesh, "sharp", False):
+        return _hinge_rotations(mesh, x)
     cur = panel_normals(mesh, x)
     p1, p2 = mesh.crease_panels.T
     # the panels' top sides (Pattern.panel_orientation: consistent across every crease and
@@ -66,8 +69,16 @@ def crease_rotations(mesh: BarHingeMesh, x: np.ndarray) -> np.ndarray:
     The sum over the crease's three fold lines of their rotations from flat, ``theta - pi`` of
     their springs (> 0 towards +z, as the rest-angle change); the centre line is two springs
     (A-Ctr, B-Ctr) and counts with their mean. Equals :func:`fold_angles` while the panels stay
-    flat; see the module docstring.
+    flat; see the module docstring. With concentrated hinges it is the fold angle.
     """
+    if getattr(mesh, "sharp", False):
+        return _hinge_rotations(mesh, x)
     springs = mesh.springs[mesh.crease_springs[:, _EDGE_LINES + _CENTRE_LINE]]     # (C, 4, 4)
     rot = fold_angle(x[springs.reshape(-1, 4)]).reshape(-1, 4) - np.pi
     return rot[:, 0] + rot[:, 1] + 0.5 * (rot[:, 2] + rot[:, 3])
+
+
+def _hinge_rotations(mesh, x: np.ndarray) -> np.ndarray:
+    """theta - pi of the fold spring of every crease of a concentrated-hinge mesh, in [-pi, pi)."""
+    theta = fold_angle(x[mesh.springs[mesh.crease_springs[:, 0]]])
+    return np.mod(theta, 2 * np.pi) - np.pi

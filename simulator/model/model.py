@@ -22,7 +22,7 @@ from ..geometry.polygons import triangle_areas
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
 from ..thermal.steady import ThermalParameters
 
-__all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads",
+__all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads", "CREASE_MODELS",
            "STANDARD_GRAVITY", "REFERENCE_GRAVITY"]
 
 #: Standard gravity [m/s^2] (the default of :func:`gravity_loads` and the ``Gravity`` step).
@@ -192,8 +192,13 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
                params: BarHingeParameters | None = None,
                contact: ContactParameters | bool | None = None,
                thermal: ThermalParameters | None = None,
-               actuators: Actuators | None = None) -> Model:
+               actuators: Actuators | None = None, crease_model: str = "compliant") -> Model:
     """Build a :class:`Model`: mesh (if given a pattern), element properties, supports.
+
+    ``crease_model="sharp"`` gives the concentrated-hinge model of a pattern instead
+    (:func:`~simulator.model.sharp.sharp_model`, theory 2.6; ``params`` then a
+    :class:`~simulator.model.sharp.SharpHingeParameters` or None; no contact, thermal
+    parameters or actuators, which need crease widths).
 
     ``supports`` is a :class:`Supports` or a mapping ``{node: "xyz"-subset}``;
     ``contact=True`` switches contact on with default :class:`ContactParameters`;
@@ -202,6 +207,9 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
     type-checked; a wrong type raises :class:`~simulator.errors.ParameterError` naming the
     argument, the type given and what to pass instead.
     """
+    one_of("make_model: crease_model", crease_model, CREASE_MODELS)
+    if crease_model == "sharp":
+        return _sharp(pattern_or_mesh, supports, params, contact, thermal, actuators)
     _check_arguments(pattern_or_mesh=pattern_or_mesh, supports=supports, params=params,
                      contact=contact, thermal=thermal, actuators=actuators)
     mesh = pattern_or_mesh if isinstance(pattern_or_mesh, BarHingeMesh) \
@@ -220,6 +228,27 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
         actuators.delta_alpha_array(mesh)          # validates the crease ids
     return Model(mesh=mesh, properties=props, params=params, supports=supports, contact=contact,
                  thermal=thermal, actuators=actuators)
+
+
+#: Crease models of :func:`make_model`: compliant creases with a width (theory 2.2) or
+#: concentrated hinges (theory 2.6).
+CREASE_MODELS = ("compliant", "sharp")
+
+
+def _sharp(pattern, supports, params, contact, thermal, actuators) -> Model:
+    """make_model(..., crease_model="sharp"): refuse what needs crease widths, then build."""
+    from .sharp import sharp_model
+
+    given = [n for n, v in (("contact", contact), ("thermal", thermal),
+                            ("actuators", actuators)) if v not in (None, False)]
+    if given:
+        raise ParameterError(f"make_model: crease_model='sharp' takes no {', '.join(given)}: "
+                             "concentrated hinges have no crease area to heat, actuate or "
+                             "touch; use crease_model='compliant' (creases with a width).")
+    if not isinstance(pattern, Pattern):
+        raise ParameterError(f"make_model: crease_model='sharp' meshes a Pattern itself; got "
+                             f"a {type(pattern).__name__}.")
+    return sharp_model(pattern, supports, params)
 
 
 #: make_model's arguments: accepted types and how to build a valid value.

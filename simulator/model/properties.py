@@ -84,6 +84,9 @@ class MechanicalProperties:
 def mechanical_properties(mesh: BarHingeMesh,
                           params: BarHingeParameters = BarHingeParameters()) -> MechanicalProperties:
     """Compute bar areas, moduli and spring stiffnesses (theory 3.4), vectorised."""
+    if getattr(mesh, "sharp", False):
+        raise ParameterError("mechanical_properties: this mesh has concentrated hinges; build "
+                             "its model with simulator.model.sharp.sharp_model(pattern, ...).")
     pat = mesh.pattern
     L0 = mesh.bar_length
     area = np.zeros(len(mesh.bars))
@@ -145,15 +148,19 @@ def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
     -------
     (ns,) array: pi for panel and diagonal springs; edge lines get
     ``pi + (theta0 - pi)(1 - f)/2`` each, the centre line ``pi + f (theta0 - pi)``.
-    A crease folded in the mesh's reference geometry (a 3-D start shape) starts instead from
+    A concentrated-hinge mesh (theory 2.6) has one fold spring per crease, which takes the
+    whole change. A crease folded in the mesh's reference geometry (a 3-D start shape) starts instead from
     its springs' initial angles and from :func:`initial_crease_rest`, so that its initial
     rest angles give back the start shape.
     """
-    f = params.centre_line_share
     rest0, base = _initial_rest(mesh)
     rho = np.asarray(crease_rest, dtype=float) - rest0
     out = base.copy()
     cs = mesh.crease_springs
+    if getattr(mesh, "sharp", False):           # one fold spring per crease (theory 2.6)
+        out[cs[:, 0]] += rho
+        return out
+    f = params.centre_line_share
     out[cs[:, :2]] += (rho * (1 - f) / 2)[:, None]
     out[cs[:, 4:6]] += (rho * f)[:, None]
     return out

@@ -27,7 +27,8 @@ from .._validate import integer, positive
 from ..errors import ParameterError
 from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
-from .mechanical import check_folds, crease_targets, node_vectors
+from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
+from .mechanical import node_vectors
 
 __all__ = ["Dynamics"]
 
@@ -42,15 +43,19 @@ class Dynamics(Step):
         Length of the step [s], > 0.
     dt : float
         Time step [s], > 0 (the last step is shortened to end at ``duration``).
-    forces : mapping {node: (fx, fy, fz)} or (n_nodes, 3) array, optional
-        Load [N] added suddenly at t = 0 to the dead loads of earlier steps; it stays applied
-        afterwards (like :class:`~simulator.steps.Load`). The negative of an earlier load
-        releases the structure from its displaced state.
+    forces : mapping {node: (fx, fy, fz) or ((fx, fy, fz), schedule)} or (n_nodes, 3) array
+        Load [N] added to the dead loads of earlier steps: a constant vector suddenly at t = 0,
+        or the vector times a :class:`~simulator.schedules.Schedule` of the step time
+        (:mod:`simulator.steps.drives`); the value at the end stays applied afterwards (like
+        :class:`~simulator.steps.Load`). The negative of an earlier load releases the
+        structure from its displaced state.
     velocity : mapping {node: (vx, vy, vz)} or (n_nodes, 3) array, optional
         Initial velocities [m/s]; default the state's (zero after quasi-static steps). Fixed DOFs
         are set to zero.
-    folds : mapping {crease id: fold angle [rad]}, optional
-        Crease rest fold angles set suddenly at t = 0 (unlisted creases keep theirs).
+    folds : mapping {crease id: fold angle [rad] or schedule}, optional
+        Crease rest fold angles, set suddenly at t = 0 or driven in time by a schedule of the
+        step time [rad] (e.g. ``SineSignal(amplitude, frequency, offset=fold0)``; unlisted
+        creases keep theirs).
     options : DynamicsOptions
         Scheme ("newmark", "hht", "generalized_alpha"), damping and Newton settings.
     record_every : int
@@ -80,18 +85,19 @@ class Dynamics(Step):
             raise ParameterError(f"Dynamics.options is a {type(self.options).__name__}; give "
                                  "DynamicsOptions(...).")
         integer("Dynamics.record_every", self.record_every)
-        check_folds(self.folds, "Dynamics")
+        check_fold_drive("Dynamics", self.folds)
+        check_force_drive("Dynamics", self.forces)
 
     def run(self, context: StepContext, state) -> StepOutcome:
         model = context.model
-        mesh, n = model.mesh, model.mesh.n_nodes
-        load = state.applied_load
-        if self.forces is not None:
-            load = load + node_vectors(self.forces, n, "Dynamics", "forces")
-        crease_rest, spring_rest = state.crease_rest, state.spring_rest
-        if self.folds:
-            crease_rest = crease_targets(mesh, self.folds, state.crease_rest)
-            spring_rest = spring_rest_angles(mesh, crease_rest, model.params)
+        n = model.mesh.n_nodes
+        drive = MechanicalDrive(model, state, self.forces, self.folds, "Dynamics")
+        load, crease_rest, spring_rest = drive.load0, drive.crease0, state.spring_rest
+        if drive.changed_rest:
+            spring_rest = spring_rest_angles(model.mesh, crease_rest, model.params)
+        # time schedules: functions of the step time
+        f_ext = drive.load if drive.force_terms else load
+        rest = drive.spring_rest if drive.fold_terms else spring_rest
         v0 = state.node_velocity if self.velocity is None \
             else node_vectors(self.velocity, n, "Dynamics", "velocity")
         total = max(1, int(np.ceil(self.duration / self.dt * (1 - 1e-12))))
@@ -102,9 +108,8 @@ class Dynamics(Step):
             context.report(done[0], total)
             return False
 
-        res = integrate(context.system, state.u, v0, self.duration, self.dt, load.ravel(),
-                        spring_rest, self.options, record_every=self.record_every,
-                        callback=callback)
+        res = integrate(context.system, state.u, v0, self.duration, self.dt, f_ext, rest,
+                        self.options, record_every=self.record_every, callback=callback)
         rec = StepRecorder(state)
         rec.iterations, rec.cuts = int(res.iterations.sum()), res.cuts
         energies = res.energies
@@ -115,19 +120,18 @@ class Dynamics(Step):
                        state.crease_power, int(res.iterations[k]), velocity=res.v[k],
                        **columns)
         end = res.state
-        new = replace(state, u=end.u, velocity=end.v, applied_load=load,
+        if drive.force_terms:               # the drives' values at the end persist
+            load = drive.load(end.time)
+        if drive.fold_terms:
+            crease_rest, spring_rest = drive.crease_rest(end.time), end.spring_rest
+        new = replace(state, u=end.u, velocity=end.v, applied_load=load.reshape(n, 3),
                       crease_rest=crease_rest, spring_rest=spring_rest,
                       time=state.time + end.time)
         return rec.finish(res.success, res.status, res.message, new, load.ravel(),
                           end.evaluation)
 
     def describe(self) -> dict:
-        forces = None
-        if isinstance(self.forces, Mapping):
-            forces = {str(k): list(np.asarray(v, float)) for k, v in self.forces.items()}
-        elif self.forces is not None:
-            forces = np.asarray(self.forces, float).sum(axis=0).tolist()
-        return {"duration [s]": self.duration, "dt [s]": self.dt, "forces [N]": forces,
+        return {"duration [s]": self.duration, "dt [s]": self.dt,
+                **describe_drive(self.forces, self.folds),
                 "initial_velocity": self.velocity is not None,
-                "folds [rad]": {str(k): float(v) for k, v in dict(self.folds).items()},
                 "record_every": self.record_every, **self.options.to_dict()}

@@ -58,11 +58,13 @@ from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
 from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
-from ..thermal.schedules import (CreasePowers, PiecewiseLinear, SquareWave, StepPower,
-                               check_power_mapping, describe_power_mapping)
+from ..schedules import next_switch
+from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
 from ..thermal.transient import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
+from ..model.properties import spring_rest_angles
+from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
 from .heating import thermal_actuation
 
 __all__ = ["ElectroThermal", "MECHANICS", "EASY_ITERATIONS", "REFRESH_STEPS"]
@@ -75,26 +77,6 @@ EASY_ITERATIONS = 8
 #: With ``shape_tol > 0`` the heat matrices are still re-assembled after this many steps if the
 #: shape changed at all, so a settled shape is eventually assembled exactly (no lasting bias).
 REFRESH_STEPS = 16
-
-
-def _next_switch(schedules, t: float) -> float:
-    """Earliest time after ``t`` [s] at which a schedule's power jumps or kinks (inf if none):
-    the on / off times of StepPower and SquareWave, the table times of PiecewiseLinear."""
-    best = math.inf
-    for s in schedules:
-        if isinstance(s, StepPower):
-            times = (s.t_on, s.t_off)
-        elif isinstance(s, PiecewiseLinear):
-            times = s.times
-        elif isinstance(s, SquareWave):
-            k = max(0.0, math.floor((t - s.t_start) / s.period))
-            start = s.t_start + k * s.period
-            times = (start, start + s.duty * s.period, start + s.period)
-        else:
-            continue
-        later = [x for x in times if x > t * (1 + 1e-12) + 1e-15]
-        best = min([best, *later])
-    return best
 
 
 @dataclass(frozen=True)
@@ -134,6 +116,12 @@ class ElectroThermal(Step):
         shape changed).
     record_every : int
         Record every k-th accepted time step (the last one is always recorded).
+    forces : mapping {node: (fx, fy, fz) or ((fx, fy, fz), schedule)} or array, optional
+        Mechanical load [N] added to the dead loads, constant or times a schedule of the step
+        time (:mod:`simulator.steps.drives`); the value at the end stays applied.
+    folds : mapping {crease id: fold angle [rad] or schedule}, optional
+        Rest fold angles of creases driven mechanically; they replace the thermally actuated
+        rest angles of those creases.
     """
 
     power: Mapping = field(default_factory=dict)
@@ -147,6 +135,8 @@ class ElectroThermal(Step):
     temperature_step: float = 2.0
     shape_tol: float = 0.0
     record_every: int = 1
+    forces: object = None
+    folds: Mapping = field(default_factory=dict)
     name: str = "electro_thermal"
 
     def __post_init__(self):
@@ -171,6 +161,8 @@ class ElectroThermal(Step):
         positive(f"{owner}.temperature_step", self.temperature_step, "K")
         non_negative(f"{owner}.shape_tol", self.shape_tol, "m")
         integer(f"{owner}.record_every", self.record_every)
+        check_force_drive(owner, self.forces)
+        check_fold_drive(owner, self.folds)
 
     @property
     def bounds(self) -> tuple[float, float]:
@@ -179,24 +171,26 @@ class ElectroThermal(Step):
                 self.dt if self.dt_max is None else float(self.dt_max))
 
     def run(self, context: StepContext, state) -> StepOutcome:
+        drive = MechanicalDrive(context.model, state, self.forces, self.folds, "ElectroThermal")
         heat = _HeatPart(context, state, self)
-        mech = _MechanicsPart(context, state, self)
-        actuate = thermal_actuation(context.model, state)
+        mech = _MechanicsPart(context, state, self, drive.load0)
+        actuate = _driven(thermal_actuation(context.model, state), drive)
         powers = CreasePowers(context.model.mesh, self.power, base=state.crease_power)
+        switches = powers.schedules + drive.schedules
         rec = StepRecorder(state)
         dt_min, dt_max = self.bounds
         t, h, k, temp = 0.0, float(self.dt), 0, state.temperature
         target, rest = state.crease_rest, state.spring_rest
         status, message = "converged", ""
         while t < self.duration * (1 - 1e-12):
-            h_try = min(h, self.duration - t, _next_switch(powers.schedules, t) - t)
+            h_try = min(h, self.duration - t, next_switch(switches, t) - t)
             new_temp = heat.trial(mech.x, powers.mean(t, t + h_try), h_try)
             change = float(np.max(np.abs(new_temp - temp)))
             if change > 2 * self.temperature_step and h_try > dt_min:
                 h = max(dt_min, h_try / 2)                           # reject: too fast heating
                 continue
-            new_target, new_rest = actuate(new_temp)
-            report = mech.trial(h_try, new_rest)
+            new_target, new_rest = actuate(new_temp, t + h_try)
+            report = mech.trial(h_try, new_rest, drive.load(t + h_try))
             if not report.success:
                 if h_try > dt_min:
                     h = max(dt_min, h_try / 2)
@@ -228,9 +222,8 @@ class ElectroThermal(Step):
         logger.info("ElectroThermal: %s", message)
         end = replace(state, u=mech.u, velocity=mech.velocity, temperature=temp,
                       crease_rest=target, spring_rest=rest, crease_power=powers(t),
-                      time=state.time + t)
-        return rec.finish(status == "converged", status, message, end,
-                          state.applied_load.ravel(), mech.evaluation)
+                      time=state.time + t, applied_load=mech.f.reshape(state.u.shape))
+        return rec.finish(status == "converged", status, message, end, mech.f, mech.evaluation)
 
     def describe(self) -> dict:
         dt_min, dt_max = self.bounds
@@ -238,7 +231,20 @@ class ElectroThermal(Step):
                 "duration [s]": self.duration, "dt [s]": self.dt, "dt_min [s]": dt_min,
                 "dt_max [s]": dt_max, "mechanics": self.mechanics, "theta": self.theta,
                 "temperature_step [K]": self.temperature_step, "shape_tol [m]": self.shape_tol,
-                "record_every": self.record_every, **self.options.to_dict()}
+                "record_every": self.record_every, **describe_drive(self.forces, self.folds),
+                **self.options.to_dict()}
+
+
+def _driven(actuate, drive):
+    """``(temp, t) -> (crease_rest, spring_rest)``: the thermal actuation with the creases the
+    drive lists at their driven rest angles at step time t."""
+    if not (drive.fold_terms or drive.fixed):
+        return lambda temp, t: actuate(temp)
+
+    def rest(temp, t):
+        target = drive.crease_rest(t, base=actuate(temp)[0])
+        return target, spring_rest_angles(drive.mesh, target, drive.params)
+    return rest
 
 
 class _HeatPart:
@@ -292,9 +298,9 @@ class _HeatPart:
 class _MechanicsPart:
     """The mechanical half of a step: a dynamic time step or a quasi-static Newton solve."""
 
-    def __init__(self, context, state, step: ElectroThermal):
+    def __init__(self, context, state, step: ElectroThermal, load):
         self.context, self.dynamic = context, step.mechanics == "dynamic"
-        self.f = state.applied_load.ravel()
+        self.f = load
         self.nodes = context.model.mesh.nodes
         self.dissipated = self.work = 0.0
         if self.dynamic:
@@ -314,11 +320,11 @@ class _MechanicsPart:
     def velocity(self):
         return self.motion.v if self.dynamic else None
 
-    def trial(self, h, rest):
-        self.rest_trial = rest
+    def trial(self, h, rest, f):
+        self.rest_trial, self.f_trial = rest, f
         if self.dynamic:
-            return self.integ.step(self.motion, h, self.f, rest)
-        return _QuasiStatic(follow_path(self.context.system, self.u, self.f, self.f,
+            return self.integ.step(self.motion, h, f, rest)
+        return _QuasiStatic(follow_path(self.context.system, self.u, self.f, f,
                                         self.rest, rest, 1, self.context.options))
 
     def accept(self, report) -> None:
@@ -329,7 +335,8 @@ class _MechanicsPart:
         else:
             du = (report.result.u - self.u).ravel()
             self.evaluation, self.rest = report.result.evaluation, self.rest_trial
-        self.work += float(du @ self.f)
+        self.work += float(du @ (0.5 * (self.f + self.f_trial)))
+        self.f = self.f_trial
         self.u = self.motion.u if self.dynamic else report.result.u
 
     def energies(self) -> dict:

@@ -1,5 +1,8 @@
 """Heating power as a function of time: step, ramp, square wave (PWM), sine, piecewise linear.
 
+The power schedules are the non-negative members of :class:`simulator.schedules.Schedule`
+(whose module also has the signed signals for mechanical drives and the shared formulas).
+
 Every schedule is a frozen dataclass mapping time t [s] to a power [W] >= 0, vectorised over
 ``t`` (a float gives a float, an array an array of the same shape) and validated on
 construction. Schedules are applied per crease or per heater circuit with a mapping like the
@@ -15,14 +18,17 @@ Example::
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._validate import finite, non_negative, number, positive
 from ..errors import ParameterError
+from ..schedules import (Schedule, check_table, ramp_integral, ramp_values, sine_integral,
+                         sine_values, square_integral, square_switches, square_values,
+                         step_integral, step_values, table_integral, table_values)
 
 __all__ = ["PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
            "check_power_mapping", "describe_power_mapping", "crease_power_function",
@@ -47,34 +53,16 @@ def _positive(owner, name, value, unit):
     return positive(f"{type(owner).__name__}.{name}", value, unit)
 
 
-class PowerSchedule(ABC):
-    """Power [W] as a function of time [s]; subclasses implement :meth:`_values`."""
-
-    def __call__(self, t):
-        """Power [W] at time(s) ``t`` [s] (float -> float, array -> array of the same shape)."""
-        arr = np.asarray(t, float)
-        out = self._values(arr)
-        return float(out) if arr.ndim == 0 else out
-
-    @abstractmethod
-    def _values(self, t: np.ndarray) -> np.ndarray:
-        """Power [W] at the times ``t`` (any shape)."""
+class PowerSchedule(Schedule):
+    """Power [W] as a function of time [s] (a non-negative :class:`~simulator.schedules.Schedule`);
+    subclasses implement :meth:`_values` and :meth:`_energy`."""
 
     @abstractmethod
     def _energy(self, t: np.ndarray) -> np.ndarray:
         """An antiderivative of the power [J] at the times ``t`` (differences are energies)."""
 
-    def mean(self, t0, t1):
-        """Mean power [W] over ``[t0, t1]`` [s] (exact; arrays broadcast; t1 > t0)."""
-        t0, t1 = np.asarray(t0, float), np.asarray(t1, float)
-        out = (self._energy(t1) - self._energy(t0)) / (t1 - t0)
-        return float(out) if out.ndim == 0 else out
-
-    def describe(self) -> dict:
-        """JSON-able description (class name and fields, SI units; infinite times as None)."""
-        fields = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                  for k, v in asdict(self).items()}
-        return {"schedule": type(self).__name__, **fields}
+    def _integral(self, t):
+        return self._energy(t)
 
 
 @dataclass(frozen=True)
@@ -93,10 +81,13 @@ class StepPower(PowerSchedule):
                                                   f"a time after t_on = {t_on}", "s"))
 
     def _values(self, t):
-        return np.where((t >= self.t_on) & (t < self.t_off), self.power, 0.0)
+        return step_values(t, self.power, self.t_on, self.t_off)
 
     def _energy(self, t):
-        return self.power * (np.clip(t, self.t_on, self.t_off) - self.t_on)
+        return step_integral(t, self.power, self.t_on, self.t_off)
+
+    def switch_times(self, t):
+        return (self.t_on, self.t_off)
 
 
 @dataclass(frozen=True)
@@ -113,12 +104,10 @@ class Ramp(PowerSchedule):
         object.__setattr__(self, "t_start", _time(self, "t_start", self.t_start))
 
     def _values(self, t):
-        return self.power * np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
+        return ramp_values(t, self.power, self.duration, self.t_start)
 
     def _energy(self, t):
-        u = np.clip((t - self.t_start) / self.duration, 0.0, 1.0)
-        held = np.maximum(t - self.t_start - self.duration, 0.0)
-        return self.power * (0.5 * self.duration * u**2 + held)
+        return ramp_integral(t, self.power, self.duration, self.t_start)
 
 
 @dataclass(frozen=True)
@@ -142,14 +131,13 @@ class SquareWave(PowerSchedule):
         object.__setattr__(self, "t_start", _time(self, "t_start", self.t_start))
 
     def _values(self, t):
-        phase = (t - self.t_start) / self.period
-        on = (phase >= 0) & (phase - np.floor(phase) < self.duty)
-        return np.where(on, self.power, 0.0)
+        return square_values(t, self.power, self.period, self.duty, self.t_start)
 
     def _energy(self, t):
-        phase = np.maximum((t - self.t_start) / self.period, 0.0)
-        whole = np.floor(phase)
-        return self.power * self.period * (whole * self.duty + np.minimum(phase - whole, self.duty))
+        return square_integral(t, self.power, self.period, self.duty, self.t_start)
+
+    def switch_times(self, t):
+        return square_switches(t, self.period, self.duty, self.t_start)
 
 
 @dataclass(frozen=True)
@@ -173,11 +161,10 @@ class Sine(PowerSchedule):
         object.__setattr__(self, "phase", _number(self, "phase", self.phase, unit="rad"))
 
     def _values(self, t):
-        return self.offset + self.amplitude * np.sin(2 * np.pi * self.frequency * t + self.phase)
+        return sine_values(t, self.amplitude, self.frequency, self.offset, self.phase)
 
     def _energy(self, t):
-        w = 2 * np.pi * self.frequency
-        return self.offset * t - self.amplitude / w * np.cos(w * t + self.phase)
+        return sine_integral(t, self.amplitude, self.frequency, self.offset, self.phase)
 
 
 @dataclass(frozen=True)
@@ -189,34 +176,19 @@ class PiecewiseLinear(PowerSchedule):
     values: tuple
 
     def __post_init__(self):
-        times, values = (np.asarray(getattr(self, k), dtype=object).ravel()
-                         for k in ("times", "values"))
-        if len(times) < 1 or len(times) != len(values):
-            raise ParameterError(f"PiecewiseLinear: times ({len(times)} entries) and values "
-                                 f"({len(values)}) must be non-empty and of equal length.")
-        t = tuple(_time(self, f"times[{k}]", v) for k, v in enumerate(times))
-        p = tuple(_power(self, f"values[{k}]", v) for k, v in enumerate(values))
-        bad = np.flatnonzero(np.diff(t) <= 0)
-        if len(bad):
-            k = int(bad[0])
-            raise ParameterError(f"PiecewiseLinear.times must be strictly increasing; times[{k}] "
-                                 f"= {t[k]} s is followed by times[{k + 1}] = {t[k + 1]} s.")
+        t, p = check_table(type(self).__name__, self.times, self.values,
+                           lambda name, v: non_negative(name, v, "W"))
         object.__setattr__(self, "times", t)
         object.__setattr__(self, "values", p)
 
     def _values(self, t):
-        return np.interp(t, self.times, self.values)
+        return table_values(t, self.times, self.values)
 
     def _energy(self, t):
-        tk, pk = np.array(self.times), np.array(self.values)
-        if len(tk) == 1:
-            return pk[0] * (t - tk[0])
-        ek = np.r_[0.0, np.cumsum(0.5 * (pk[1:] + pk[:-1]) * np.diff(tk))]
-        i = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, len(tk) - 2)
-        s = np.clip(t, tk[0], tk[-1]) - tk[i]
-        slope = (pk[i + 1] - pk[i]) / (tk[i + 1] - tk[i])
-        inside = ek[i] + pk[i] * s + 0.5 * slope * s**2
-        return inside + pk[0] * np.minimum(t - tk[0], 0.0) + pk[-1] * np.maximum(t - tk[-1], 0.0)
+        return table_integral(t, self.times, self.values)
+
+    def switch_times(self, t):
+        return self.times
 
 
 def check_power_mapping(owner: str, power) -> dict:

@@ -134,6 +134,16 @@ CLASSES = {
     "ThermalParameters": (_with(simulator.ThermalParameters, env_thickness=1e-3), {
         "env_thickness": P, "env_conductivity": P, "env_density": P, "env_specific_heat": P,
         "dissipation_angle": P, "layers": I, "room_temperature": F}),
+    "SharpHingeParameters": (_with(simulator.SharpHingeParameters), {
+        "fold_stiffness": P, "panel_bending_width": P}),
+    "StepSignal": (_with(simulator.StepSignal, value=0.1), {"value": F, "t_on": F,
+                                                              "offset": F}),
+    "RampSignal": (_with(simulator.RampSignal, value=0.1, duration=1.0), {
+        "value": F, "duration": P, "t_start": F, "offset": F}),
+    "SquareWaveSignal": (_with(simulator.SquareWaveSignal, value=0.1, period=0.1), {
+        "value": F, "period": P, "duty": P, "t_start": F, "offset": F}),
+    "SineSignal": (_with(simulator.SineSignal, amplitude=0.1, frequency=10.0), {
+        "amplitude": F, "frequency": P, "offset": F, "phase": F}),
     "BarHingeParameters": (_with(simulator.BarHingeParameters), {
         "diagonal_rate": P, "panel_bending_width": P, "centre_line_share": P}),
     "ContactParameters": (_with(simulator.ContactParameters), {
