@@ -29,6 +29,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.dynamics": ("DynamicsResult", "integrate"),
     ".solvers.dynamics_options": ("DynamicsOptions",),
     ".mechanics.elements.springs": ("spring_kernel_backend",),
+    "._jit": ("kernel_cache_warm", "warm_kernel_cache"),
     ".mechanics.kinematics": ("fold_angles",),
     ".mechanics.equilibrium": ("EquilibriumSystem",),
     ".mechanics.families": ("Configuration", "ElementFamily", "FamilyValues"),
@@ -77,7 +78,7 @@ __all__ = [
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
-    "initial_state", "spring_kernel_backend",
+    "initial_state", "spring_kernel_backend", "kernel_cache_warm", "warm_kernel_cache",
     # element families (a new element type) and the system that assembles them
     "EquilibriumSystem", "ElementFamily", "FamilyValues", "Configuration",
     # transient heat

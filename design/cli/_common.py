@@ -126,12 +126,18 @@ def executor(args):
 
 def kernel_backend(short: bool):
     """Context for a command: short ones (one case, one gripper evaluation: a few thousand
-    spring-kernel calls) use the numpy kernel, since compiling numba's costs more than it saves
-    there; long ones (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
+    kernel calls) use the compiled kernels only when numba's cache holds them (loading costs
+    a few tenths of a second, :func:`simulator.kernel_cache_warm`); with a cold cache they run
+    on the numpy kernels, since compiling costs more than it saves there, and start compiling
+    in a background process for the next run (:func:`simulator.warm_kernel_cache`). Long ones
+    (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
     if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
         return contextlib.nullcontext()
-    from simulator import spring_kernel_backend
+    from simulator import kernel_cache_warm, spring_kernel_backend, warm_kernel_cache
 
+    if kernel_cache_warm():
+        return contextlib.nullcontext()
+    warm_kernel_cache()
     return spring_kernel_backend("numpy")
 
 
