@@ -58,17 +58,18 @@ SMALL_MODEL_KERNELS = (
 
 
 def _cache_dirs(source: pathlib.Path) -> list:
-    """Where numba may keep the cache of functions defined in ``source`` (its locators in
-    order: ``NUMBA_CACHE_DIR``, ``__pycache__`` next to the file, the user-wide cache)."""
-    folder = source.parent
-    relative = pathlib.Path(*folder.parts[1:])           # numba drops the root
-    dirs = []
+    """Where numba may keep the cache of functions defined in ``source``: ``NUMBA_CACHE_DIR``
+    alone when it is set, else ``__pycache__`` next to the file or the user-wide cache (numba's
+    locators in order)."""
+    import hashlib
+
+    folder = pathlib.Path(os.path.abspath(source)).parent
+    # numba's get_suitable_cache_subpath: "<folder name>_<sha1 of the folder path>"
+    subpath = f"{folder.name}_{hashlib.sha1(str(folder).encode()).hexdigest()}"
     if os.environ.get("NUMBA_CACHE_DIR"):
-        dirs.append(pathlib.Path(os.environ["NUMBA_CACHE_DIR"]) / relative)
-    dirs.append(folder / "__pycache__")
+        return [pathlib.Path(os.environ["NUMBA_CACHE_DIR"]) / subpath]
     cache_home = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
-    dirs.append(pathlib.Path(cache_home) / "numba" / relative)
-    return dirs
+    return [folder / "__pycache__", pathlib.Path(cache_home) / "numba" / subpath]
 
 
 def kernel_cache_warm(kernels=SMALL_MODEL_KERNELS) -> bool:

@@ -16,7 +16,7 @@ import pathlib
 
 __all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
            "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
-           "check_output", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
+           "check_output", "add_quiet_option", "show_progress", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
            "MAX_POWER_MW"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
@@ -84,12 +84,36 @@ def floats(flag: str, text: str) -> list:
     return values
 
 
+#: Help of ``-q/--quiet``, the one option for a quiet command (every command and study).
+QUIET_HELP = ("quiet: no progress bar (there is none when stderr is not a terminal either); the "
+              "summary and warnings that affect the result are still printed")
+
+
+def add_quiet_option(parser, top: bool = False) -> None:
+    """``-q/--quiet`` on ``parser``; on a subcommand (``top`` False) it is SUPPRESSed by default
+    so that ``etorigami -q run ...`` and ``etorigami run ... -q`` mean the same."""
+    import argparse
+
+    parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP,
+                        **({} if top else {"default": argparse.SUPPRESS}))
+
+
+def show_progress(quiet: bool) -> bool:
+    """Whether to draw a progress bar: not quiet, and stderr is a terminal (frames of a bar
+    redirected into a log file are noise)."""
+    import sys
+
+    isatty = getattr(sys.stderr, "isatty", None)
+    return not quiet and bool(isatty and isatty())
+
+
 @contextlib.contextmanager
 def progress_bar(total=None, desc: str = "", unit: str = "eval", disable: bool = False):
-    """A tqdm bar on stderr that erases itself when the command is interrupted or fails."""
+    """A tqdm bar on stderr that erases itself when the command is interrupted or fails;
+    disabled when ``disable`` (``--quiet``) or when stderr is not a terminal."""
     from tqdm import tqdm
 
-    bar = tqdm(total=total, desc=desc, unit=unit, disable=disable)
+    bar = tqdm(total=total, desc=desc, unit=unit, disable=not show_progress(disable))
     try:
         yield bar
     except BaseException:

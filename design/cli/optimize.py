@@ -119,6 +119,5 @@ def add_optimize_command(sub) -> None:
     opt.add_argument("--robust", metavar="DEG,DEG,...",
                      help="optimise the worst case over these residual folds (gripper), "
                           "e.g. --robust=-20,-10,0")
-    opt.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_parallel_options(opt)
     opt.set_defaults(func=_optimize, interrupted=_interrupted)

@@ -141,6 +141,7 @@ def _cases(args) -> int:
 def _run(args) -> int:
     from simulator import get_case, simulate
 
+    from ._summary import summary_lines
     from .case_params import case_overrides
     from .files import fold_case, is_fold_file, reader_options
     from .precheck import check_heating
@@ -170,6 +171,8 @@ def _run(args) -> int:
           f"results in {out}")
     print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
                 "temperature_max [degC]"]].to_string(index=False))
+    for line in summary_lines(result):
+        print(line)
     return 0 if result.success else 1
 
 
@@ -205,7 +208,6 @@ def add_simulate_commands(sub) -> None:
                           "--set crease_width=200 --set gravity=true; for a FOLD file "
                           "power.<crease id>=mW or thermal_steps=N")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .files import add_reader_options
 
     add_reader_options(run)

@@ -116,7 +116,6 @@ def _add_common_options(parser, func) -> None:
                         help="design in um (repeatable; default the start design)")
     parser.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
     parser.add_argument("--out", required=True, metavar="DIR")
-    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_parallel_options(parser)
     parser.set_defaults(func=func, interrupted=_interrupted)
 
