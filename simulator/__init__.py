@@ -62,7 +62,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
-    ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
+    ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
 }, modules={"example_patterns": ".geometry.example_patterns"})
@@ -84,7 +84,7 @@ __all__ = [
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
-    "ThetaStepper", "theta_step", "REFERENCE_THETA",
+    "ThetaStepper", "theta_step", "REFERENCE_THETA", "DEFAULT_THETA",
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",
