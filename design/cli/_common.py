@@ -16,7 +16,7 @@ import pathlib
 
 __all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
            "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
-           "check_output", "add_quiet_option", "show_progress", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
+           "check_output", "add_quiet_option", "resuming_line", "BestSoFar", "show_progress", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
            "MAX_POWER_MW"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
@@ -175,6 +175,35 @@ def saved_rows(path) -> int:
     if rows and not text.endswith("\n"):
         rows = rows[:-1]                       # a row cut by the interrupt is dropped on resume
     return max(len(rows) - 1, 0)
+
+
+def resuming_line(log, total=None, what: str = "evaluations") -> str | None:
+    """The line a resumed command prints before its work, e.g. ``resuming: 12 of 40 points
+    saved in out/evaluations.csv are reused``; None when nothing is saved yet (``total`` None:
+    the count of the command's evaluations is not known in advance)."""
+    n = saved_rows(log)
+    if not n:
+        return None
+    of = f" of {total}" if total is not None else ""
+    noun = what if (total or n) != 1 else what[:-1]
+    return f"resuming: {n}{of} {noun} saved in {log} are reused (matching ones are not recomputed)"
+
+
+class BestSoFar:
+    """The best feasible objective [mW] of the evaluations seen so far, for a progress bar
+    (``str()``: ``"9.85 mW"``, or ``"none feasible"``)."""
+
+    def __init__(self):
+        self.best = None
+
+    def add(self, evaluation) -> None:
+        """Take one :class:`design.Evaluation` into account."""
+        if getattr(evaluation, "feasible", False):
+            mw = 1e3 * evaluation.objective
+            self.best = mw if self.best is None else min(self.best, mw)
+
+    def __str__(self) -> str:
+        return "none feasible" if self.best is None else f"{self.best:.4g} mW"
 
 
 def resume_message(log, what: str = "evaluations") -> str:
