@@ -320,7 +320,8 @@ class SimulationResult:
                             displacements=h["u"], positions=mesh.nodes + h["u"],
                             velocity=h["velocity"],
                             temperature=h["temperature"], power=h["power"],
-                            crease_ids=mesh.crease_ids, triangles=mesh.triangles)
+                            crease_ids=mesh.crease_ids, triangles=mesh.triangles,
+                            triangle_kind=triangle_kinds(self.model))
         meta = {"etorigami_version": __version__, "git": _git_hash(),
                 "status": self.status, "message": self.message,
                 "wall_time [s]": self.wall_time, "model": self.model.to_dict(),
@@ -333,6 +334,23 @@ class SimulationResult:
                 **(metadata or {})}
         (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
         return out
+
+
+#: Codes of ``triangle_kind`` in ``nodes.npz``: crease, panel, substrate (a thermal boundary
+#: panel, held at room temperature).
+TRIANGLE_CREASE, TRIANGLE_PANEL, TRIANGLE_SUBSTRATE = 0, 1, 2
+
+
+def triangle_kinds(model) -> np.ndarray:
+    """(nt,) uint8 kind of every mesh triangle: :data:`TRIANGLE_CREASE`,
+    :data:`TRIANGLE_PANEL` or :data:`TRIANGLE_SUBSTRATE` (the panels the thermal model holds at
+    room temperature, ``ThermalParameters.boundary_panels``: the substrate or heat sink)."""
+    mesh = model.mesh
+    kind = np.where(mesh.triangle_crease >= 0, TRIANGLE_CREASE, TRIANGLE_PANEL).astype(np.uint8)
+    boundary = getattr(model.thermal, "boundary_panels", ()) or ()
+    kind[np.isin(mesh.triangle_panel, list(boundary)) & (mesh.triangle_panel >= 0)] = \
+        TRIANGLE_SUBSTRATE
+    return kind
 
 
 def _step_column(values, C: int):
