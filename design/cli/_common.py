@@ -157,11 +157,13 @@ def kernel_backend(short: bool):
     (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
     if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
         return contextlib.nullcontext()
-    from simulator import kernel_cache_warm, spring_kernel_backend, warm_kernel_cache
+    from simulator import kernel_cache_warm, warm_kernel_cache
 
-    if kernel_cache_warm():
+    if kernel_cache_warm():                 # nothing imported: a usage error stays quick
         return contextlib.nullcontext()
     warm_kernel_cache()
+    from simulator import spring_kernel_backend
+
     return spring_kernel_backend("numpy")
 
 
