@@ -102,14 +102,33 @@ def kernel_cache_warm(kernels=SMALL_MODEL_KERNELS) -> bool:
     return True
 
 
+#: A background compilation younger than this [s] is taken to be still running.
+_COMPILE_LOCK_AGE = 300.0
+
+
+def _compile_lock() -> pathlib.Path:
+    """Marker file of a running background compilation of this installation's kernels into
+    this cache (``NUMBA_CACHE_DIR`` is part of the key)."""
+    import hashlib
+    import tempfile
+
+    where = f"{_ROOT}|{os.environ.get('NUMBA_CACHE_DIR', '')}"
+    key = hashlib.sha1(where.encode()).hexdigest()[:12]
+    return pathlib.Path(tempfile.gettempdir()) / f"etorigami-compile-{key}.lock"
+
+
 def compile_small_model_kernels() -> None:
     """Compile (or load) the kernels of :data:`SMALL_MODEL_KERNELS` into numba's cache, in
-    this process (what :func:`warm_kernel_cache` runs in the background)."""
+    this process (what :func:`warm_kernel_cache` runs in the background); removes the marker
+    of a background compilation when done."""
     from .mechanics.elements import _fused_jit
     from .thermal import _thermal_jit
 
-    _fused_jit.fused_kernel()
-    _thermal_jit.use_compiled()
+    try:
+        _fused_jit.fused_kernel()
+        _thermal_jit.use_compiled()
+    finally:
+        _compile_lock().unlink(missing_ok=True)
 
 
 def warm_kernel_cache() -> bool:
@@ -124,16 +143,27 @@ def warm_kernel_cache() -> bool:
 
     if importlib.util.find_spec("numba") is None:
         return False
+    import time
+
+    lock = _compile_lock()
+    try:                                   # one background compilation at a time
+        if time.time() - lock.stat().st_mtime < _COMPILE_LOCK_AGE:
+            return False
+        lock.unlink()
+    except OSError:
+        pass
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(_ROOT.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
     env.pop("ETORIGAMI_JIT", None)
     try:
+        lock.touch()
         subprocess.Popen([sys.executable, "-c", "from simulator._jit import "
                           "compile_small_model_kernels as c; c()"],
                          env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
     except OSError as exc:
         logger.debug("no background compilation of the kernels (%s)", exc)
+        lock.unlink(missing_ok=True)
         return False
     logger.info("compiling the numba kernels in a background process for the next run")
     return True

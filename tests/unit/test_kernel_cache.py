@@ -97,10 +97,21 @@ def test_warm_cache_starts_nothing(monkeypatch):
     assert _jit.warm_kernel_cache() is False
 
 
-def test_cold_cache_starts_one_detached_process(monkeypatch):
+def test_cold_cache_starts_one_detached_process(monkeypatch, tmp_path):
     calls = []
     monkeypatch.setattr(_jit, "kernel_cache_warm", lambda *a: False)
+    monkeypatch.setattr(_jit, "_compile_lock", lambda: tmp_path / "compile.lock")
     monkeypatch.setattr(_jit.subprocess, "Popen", lambda argv, **kw: calls.append((argv, kw)))
     assert _jit.warm_kernel_cache() is True
     (argv, kw), = calls
     assert "compile_small_model_kernels" in argv[-1] and kw["start_new_session"]
+    assert _jit.warm_kernel_cache() is False and len(calls) == 1     # one is running
+    os.utime(tmp_path / "compile.lock", (1.0, 1.0))                   # a stale marker
+    assert _jit.warm_kernel_cache() is True and len(calls) == 2
+
+
+def test_the_lock_depends_on_the_cache_dir(monkeypatch, tmp_path):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    default = _jit._compile_lock()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert _jit._compile_lock() != default
