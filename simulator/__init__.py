@@ -29,6 +29,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.dynamics": ("DynamicsResult", "integrate"),
     ".solvers.dynamics_options": ("DynamicsOptions",),
     ".mechanics.elements.springs": ("spring_kernel_backend",),
+    "._jit": ("kernel_cache_warm", "warm_kernel_cache"),
     ".mechanics.kinematics": ("fold_angles",),
     ".mechanics.equilibrium": ("EquilibriumSystem",),
     ".mechanics.families": ("Configuration", "ElementFamily", "FamilyValues"),
@@ -68,7 +69,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
-    ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
+    ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
 }, modules={"example_patterns": ".geometry.example_patterns"})
@@ -88,13 +89,13 @@ __all__ = [
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
-    "initial_state", "spring_kernel_backend",
+    "initial_state", "spring_kernel_backend", "kernel_cache_warm", "warm_kernel_cache",
     # element families (a new element type) and the system that assembles them
     "EquilibriumSystem", "ElementFamily", "FamilyValues", "Configuration",
     # transient heat
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
-    "ThetaStepper", "theta_step", "REFERENCE_THETA",
+    "ThetaStepper", "theta_step", "REFERENCE_THETA", "DEFAULT_THETA",
     # time schedules of mechanical drives (Dynamics, ElectroThermal)
     "Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
     "PiecewiseLinearSignal",

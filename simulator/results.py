@@ -170,6 +170,8 @@ class SimulationResult:
             for name, values in step.columns.items():
                 col = columns.setdefault(name, [None] * len(stage))
                 col[stage.index(k):stage.index(k) + step.increments] = list(values)
+        if "time [s]" in columns:                   # the clock at the start: the first record
+            columns["time [s]"][0] = float(s0.time)
         return {"stage": np.array(stage), "stage_name": np.array(names), "increment": np.array(inc),
                 "u": np.array(u), "velocity": np.array(vel), "temperature": np.array(temp),
                 "power": np.array(power),
@@ -210,7 +212,15 @@ class SimulationResult:
         ``crease_rotation [deg]`` (sum of the crease's fold-line rotations, what the bimorph
         drives; differs from the fold angle when panels bend), ``temperature [degC]``,
         ``temperature_max [degC]``, ``iterations``, then the steps' step-specific columns (e.g.
-        ``time [s]``; empty for records of steps without them).
+        ``time [s]``; empty for records of steps without them; a column whose values are (C,)
+        arrays is per crease).
+
+        ``power [mW]`` is each crease's power AT the record (at its time, for time-domain
+        steps); :class:`~simulator.steps.TransientHeat` adds ``mean_power [mW]``, the power
+        averaged over the time step ending at the record (what the heat equation integrated:
+        a square wave switched off at t = 5 ms has ``power [mW]`` 0 there, while its
+        ``mean_power [mW]`` over 4-5 ms is the on-power). ``time [s]`` of the initial record is
+        the start time of the simulation (0 unless given a state).
         """
         import pandas as pd
 
@@ -227,8 +237,7 @@ class SimulationResult:
             "temperature [degC]": self.crease_temperature.ravel(),
             "temperature_max [degC]": self.crease_temperature_max.ravel(),
             "iterations": rep(h["iterations"]),
-            **{name: pd.Series(values).repeat(C).reset_index(drop=True)
-               for name, values in h["columns"].items()},
+            **{name: _step_column(values, C) for name, values in h["columns"].items()},
         })
 
     def path_frame(self):
@@ -258,6 +267,8 @@ class SimulationResult:
                         "power [mW]": 1e3 * step.power_history.max(axis=1, initial=0.0),
                         "event": event}
                 for name, values in step.columns.items():
+                    if any(np.ndim(v) == 1 for v in values):
+                        continue                          # per crease: in to_frame only
                     if name.endswith(" [m]"):
                         name = name[:-4] + " [um]"
                         values = [None if v is None else 1e6 * v for v in values]
@@ -311,7 +322,8 @@ class SimulationResult:
                             displacements=h["u"], positions=mesh.nodes + h["u"],
                             velocity=h["velocity"],
                             temperature=h["temperature"], power=h["power"],
-                            crease_ids=mesh.crease_ids, triangles=mesh.triangles)
+                            crease_ids=mesh.crease_ids, triangles=mesh.triangles,
+                            triangle_kind=triangle_kinds(self.model))
         meta = {"etorigami_version": __version__, "git": _git_hash(),
                 "status": self.status, "message": self.message,
                 "wall_time [s]": self.wall_time, "model": self.model.to_dict(),
@@ -324,6 +336,34 @@ class SimulationResult:
                 **(metadata or {})}
         (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
         return out
+
+
+#: Codes of ``triangle_kind`` in ``nodes.npz``: crease, panel, substrate (a thermal boundary
+#: panel, held at room temperature).
+TRIANGLE_CREASE, TRIANGLE_PANEL, TRIANGLE_SUBSTRATE = 0, 1, 2
+
+
+def triangle_kinds(model) -> np.ndarray:
+    """(nt,) uint8 kind of every mesh triangle: :data:`TRIANGLE_CREASE`,
+    :data:`TRIANGLE_PANEL` or :data:`TRIANGLE_SUBSTRATE` (the panels the thermal model holds at
+    room temperature, ``ThermalParameters.boundary_panels``: the substrate or heat sink)."""
+    mesh = model.mesh
+    kind = np.where(mesh.triangle_crease >= 0, TRIANGLE_CREASE, TRIANGLE_PANEL).astype(np.uint8)
+    boundary = getattr(model.thermal, "boundary_panels", ()) or ()
+    kind[np.isin(mesh.triangle_panel, list(boundary)) & (mesh.triangle_panel >= 0)] = \
+        TRIANGLE_SUBSTRATE
+    return kind
+
+
+def _step_column(values, C: int):
+    """A step column (one value per record) as (m C,) rows: (C,) arrays laid out per crease,
+    other values repeated for every crease; records without the column are empty."""
+    import pandas as pd
+
+    if any(np.ndim(v) == 1 for v in values):
+        return np.concatenate([np.full(C, np.nan) if v is None else
+                               np.broadcast_to(np.asarray(v, float), (C,)) for v in values])
+    return pd.Series(values).repeat(C).reset_index(drop=True)
 
 
 _EVENT_COLUMNS = ("step", "stage", "increment", "kind", "load_factor", "power [mW]",

@@ -19,7 +19,7 @@ from .model.model import Model
 from .solvers.newton import NewtonOptions
 from .results import SimulationResult, StepResult
 from .state import SimulationState, initial_state
-from .steps.base import Step, StepContext, StepOutcome
+from .steps.base import Step, StepContext, StepOutcome, StepRecorder, watch_recorders
 
 __all__ = ["simulate"]
 
@@ -27,7 +27,8 @@ logger = logging.getLogger(__name__)
 
 
 def simulate(model: Model, steps, state: SimulationState | None = None,
-             options: NewtonOptions | None = None, progress=None) -> SimulationResult:
+             options: NewtonOptions | None = None, progress=None,
+             interruptible: bool = False) -> SimulationResult:
     """Run loading steps in order, each starting from the state the previous one left.
 
     Parameters
@@ -40,6 +41,13 @@ def simulate(model: Model, steps, state: SimulationState | None = None,
     options : NewtonOptions, optional
     progress : callable, optional
         ``progress(done, total)`` after every accepted increment of every step.
+    interruptible : bool
+        If True, a ``KeyboardInterrupt`` (Ctrl-C) during a step ends the run with a partial
+        result instead of the exception: the steps done, and the interrupted step with the
+        increments it had accepted, status ``"interrupted"`` (its end state is the last accepted
+        increment's displacements, temperatures and powers; see
+        :meth:`~simulator.steps.StepRecorder.last_state`). Default False: the exception
+        propagates.
 
     Returns
     -------
@@ -56,7 +64,13 @@ def simulate(model: Model, steps, state: SimulationState | None = None,
     t_start = time.perf_counter()
     for step in steps:
         t0 = time.perf_counter()
-        outcome = step.run(context, state)
+        with watch_recorders() as recorders:
+            try:
+                outcome = step.run(context, state)
+            except KeyboardInterrupt:
+                if not interruptible:
+                    raise
+                outcome = _interrupted(step, recorders, state)
         if not isinstance(outcome, StepOutcome):
             raise TypeError(f"{type(step).__name__}.run returned {type(outcome).__name__}; a "
                             "step must return a StepOutcome (use StepRecorder.finish).")
@@ -72,6 +86,16 @@ def simulate(model: Model, steps, state: SimulationState | None = None,
     if not result.success and options.raise_on_failure:
         raise ConvergenceError(result.message, result)
     return result
+
+
+def _interrupted(step, recorders, state) -> StepOutcome:
+    """The outcome of a step stopped by Ctrl-C: the records of its first recorder so far."""
+    rec = recorders[0] if recorders else StepRecorder(state)
+    message = (f"interrupted by the user after {len(rec)} accepted increment"
+               f"{'s' if len(rec) != 1 else ''} of step {step.name!r}")
+    logger.info(message)
+    return rec.finish(False, "interrupted", message, rec.last_state(),
+                      rec.start.applied_load.ravel())
 
 
 def _check_inputs(model, steps, state, options) -> None:

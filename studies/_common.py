@@ -87,12 +87,16 @@ TEMP = "temperature [degC]"
 
 
 def progress_bar(iterable, enabled: bool = True, **kwargs):
-    """A tqdm progress bar around ``iterable`` (plain iterable when disabled)."""
+    """A tqdm progress bar around ``iterable`` (plain iterable when disabled; a silent bar when
+    stderr is not a terminal: frames redirected into a log file are noise)."""
+    import sys
+
     if not enabled:
         return iterable
     from tqdm import tqdm
 
-    return tqdm(iterable, **kwargs)
+    terminal = hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+    return tqdm(iterable, **kwargs, **({} if terminal else {"disable": True}))
 
 
 def write_outputs(out: pathlib.Path, name: str, frame, figures: dict, settings: dict,
@@ -128,7 +132,9 @@ def _parser(name: str, doc: str) -> argparse.ArgumentParser:
                         help="write into OUT even if its meta.json records another study or "
                              "other settings (quick and full runs differ); without it such a "
                              "folder is refused (exit 2) before the study runs")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("-q", "--quiet", "--no-progress", dest="no_progress",
+                        action="store_true", help="quiet: no progress bar (none either when "
+                        "stderr is not a terminal); --no-progress is the older name")
     parser.add_argument("--figures-only", action="store_true",
                         help=f"only re-draw the figures from OUT/{name}.csv")
     return parser
@@ -136,7 +142,7 @@ def _parser(name: str, doc: str) -> argparse.ArgumentParser:
 
 def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
     """Command line of a study: ``--quick``, ``--out DIR``, ``--overwrite``,
-    ``--no-progress``, ``--figures-only``.
+    ``-q/--quiet`` (also ``--no-progress``), ``--figures-only``.
 
     ``plot(df)`` may return one Figure or a dict {file stem: Figure}. ``--figures-only``
     re-creates the figures from ``<out>/<name>.csv`` without running the study (the CSV and

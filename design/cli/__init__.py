@@ -19,8 +19,10 @@ Options are in um, mW, degrees and seconds, ``--set`` of a case included (the un
 refused with a hint. ``--out`` is checked before any work (an existing file where a folder is
 expected, a folder that cannot be made or written). A usage error ends with one line on stderr and exit status
 2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.
-Short commands (demo, run, gripper evaluate) use the numpy spring kernel, long ones the
-compiled one (see :func:`simulator.spring_kernel_backend`).
+Short commands (demo, run, gripper evaluate) use the compiled kernels when numba's cache holds
+them, else the numpy ones while a background process compiles them for the next run (see
+:func:`design.cli._common.kernel_backend`); long ones always the compiled ones (see
+:func:`simulator.spring_kernel_backend`).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import sys
 
 from simulator import EtorigamiError, __version__
 
-from ._common import EXIT_INTERRUPTED, CLIError, check_output, kernel_backend
+from ._common import EXIT_INTERRUPTED, CLIError, add_quiet_option, check_output, kernel_backend
 from .files import add_file_commands
 from .gripper import add_gripper_commands
 from .modes import add_modes_command
@@ -49,7 +51,9 @@ def _parser() -> argparse.ArgumentParser:
         description="Simulation and design of electro-thermally actuated origami. "
                     "Lengths in um, powers in mW, angles in degrees.")
     parser.add_argument("--version", action="version", version=f"etorigami {__version__}")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log solver progress")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log solver progress "
+                        "(recovered step cuts, failed trial increments, kernel loading)")
+    add_quiet_option(parser, top=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     add_simulate_commands(sub)
     add_file_commands(sub)
@@ -57,7 +61,18 @@ def _parser() -> argparse.ArgumentParser:
     add_gripper_commands(sub)
     add_optimize_command(sub)
     add_sweep_commands(sub)
+    _quiet_everywhere(sub)
     return parser
+
+
+def _quiet_everywhere(sub) -> None:
+    """``-q/--quiet`` on every (nested) subcommand, so that one flag works on all of them."""
+    for command in sub.choices.values():
+        if "--quiet" not in command._option_string_actions:
+            add_quiet_option(command)
+        for action in command._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _quiet_everywhere(action)
 
 
 def _interrupted(args) -> int:

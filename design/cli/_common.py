@@ -16,7 +16,7 @@ import pathlib
 
 __all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
            "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
-           "check_output", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
+           "check_output", "add_quiet_option", "resuming_line", "BestSoFar", "show_progress", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
            "MAX_POWER_MW"]
 
 #: Largest |residual fold| of the gripper sweeps and robust problems [deg] (their pi/2 limit).
@@ -84,12 +84,36 @@ def floats(flag: str, text: str) -> list:
     return values
 
 
+#: Help of ``-q/--quiet``, the one option for a quiet command (every command and study).
+QUIET_HELP = ("quiet: no progress bar (there is none when stderr is not a terminal either); the "
+              "summary and warnings that affect the result are still printed")
+
+
+def add_quiet_option(parser, top: bool = False) -> None:
+    """``-q/--quiet`` on ``parser``; on a subcommand (``top`` False) it is SUPPRESSed by default
+    so that ``etorigami -q run ...`` and ``etorigami run ... -q`` mean the same."""
+    import argparse
+
+    parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP,
+                        **({} if top else {"default": argparse.SUPPRESS}))
+
+
+def show_progress(quiet: bool) -> bool:
+    """Whether to draw a progress bar: not quiet, and stderr is a terminal (frames of a bar
+    redirected into a log file are noise)."""
+    import sys
+
+    isatty = getattr(sys.stderr, "isatty", None)
+    return not quiet and bool(isatty and isatty())
+
+
 @contextlib.contextmanager
 def progress_bar(total=None, desc: str = "", unit: str = "eval", disable: bool = False):
-    """A tqdm bar on stderr that erases itself when the command is interrupted or fails."""
+    """A tqdm bar on stderr that erases itself when the command is interrupted or fails;
+    disabled when ``disable`` (``--quiet``) or when stderr is not a terminal."""
     from tqdm import tqdm
 
-    bar = tqdm(total=total, desc=desc, unit=unit, disable=disable)
+    bar = tqdm(total=total, desc=desc, unit=unit, disable=not show_progress(disable))
     try:
         yield bar
     except BaseException:
@@ -126,10 +150,18 @@ def executor(args):
 
 def kernel_backend(short: bool):
     """Context for a command: short ones (one case, one gripper evaluation: a few thousand
-    spring-kernel calls) use the numpy kernel, since compiling numba's costs more than it saves
-    there; long ones (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
+    kernel calls) use the compiled kernels only when numba's cache holds them (loading costs
+    a few tenths of a second, :func:`simulator.kernel_cache_warm`); with a cold cache they run
+    on the numpy kernels, since compiling costs more than it saves there, and start compiling
+    in a background process for the next run (:func:`simulator.warm_kernel_cache`). Long ones
+    (optimize, sweep) keep the default. ``ETORIGAMI_JIT`` overrides both."""
     if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
         return contextlib.nullcontext()
+    from simulator import kernel_cache_warm, warm_kernel_cache
+
+    if kernel_cache_warm():                 # nothing imported: a usage error stays quick
+        return contextlib.nullcontext()
+    warm_kernel_cache()
     from simulator import spring_kernel_backend
 
     return spring_kernel_backend("numpy")
@@ -145,6 +177,35 @@ def saved_rows(path) -> int:
     if rows and not text.endswith("\n"):
         rows = rows[:-1]                       # a row cut by the interrupt is dropped on resume
     return max(len(rows) - 1, 0)
+
+
+def resuming_line(log, total=None, what: str = "evaluations") -> str | None:
+    """The line a resumed command prints before its work, e.g. ``resuming: 12 of 40 points
+    saved in out/evaluations.csv are reused``; None when nothing is saved yet (``total`` None:
+    the count of the command's evaluations is not known in advance)."""
+    n = saved_rows(log)
+    if not n:
+        return None
+    of = f" of {total}" if total is not None else ""
+    noun = what if (total or n) != 1 else what[:-1]
+    return f"resuming: {n}{of} {noun} saved in {log} are reused (matching ones are not recomputed)"
+
+
+class BestSoFar:
+    """The best feasible objective [mW] of the evaluations seen so far, for a progress bar
+    (``str()``: ``"9.85 mW"``, or ``"none feasible"``)."""
+
+    def __init__(self):
+        self.best = None
+
+    def add(self, evaluation) -> None:
+        """Take one :class:`design.Evaluation` into account."""
+        if getattr(evaluation, "feasible", False):
+            mw = 1e3 * evaluation.objective
+            self.best = mw if self.best is None else min(self.best, mw)
+
+    def __str__(self) -> str:
+        return "none feasible" if self.best is None else f"{self.best:.4g} mW"
 
 
 def resume_message(log, what: str = "evaluations") -> str:

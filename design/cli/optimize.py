@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 from simulator import EtorigamiError
 
-from ._common import (RESIDUAL_LIMIT_DEG, add_parallel_options, executor, floats, fold_deg,
-                      progress_bar, resume_message)
+from ._common import (RESIDUAL_LIMIT_DEG, BestSoFar, add_parallel_options, executor, floats,
+                      fold_deg, progress_bar, resume_message, resuming_line)
 
 __all__ = ["add_optimize_command"]
 
@@ -82,11 +83,17 @@ def _optimize(args) -> int:
     ex = executor(args)
     options = {"parallel_candidates": True} if (args.parallel or args.dask) and (
         "parallel_candidates" in get_optimizer(args.method).options) else {}
+    if args.out:
+        line = resuming_line(os.path.join(args.out, "evaluations.csv"), args.max_evaluations)
+        if line:
+            print(line, file=sys.stderr, flush=True)
+    best = BestSoFar()
     try:
         with progress_bar(desc=f"{args.target} {args.method}", disable=args.quiet) as bar:
             def callback(evaluation):
+                best.add(evaluation)
                 bar.update(1)
-                bar.set_postfix(objective=f"{evaluation.objective * 1e3:.4g} mW")
+                bar.set_postfix_str(f"best {best}", refresh=False)
 
             res = optimize(problem, args.method, out=args.out, executor=ex,
                            max_evaluations=args.max_evaluations, callback=callback, **options)
@@ -119,6 +126,5 @@ def add_optimize_command(sub) -> None:
     opt.add_argument("--robust", metavar="DEG,DEG,...",
                      help="optimise the worst case over these residual folds (gripper), "
                           "e.g. --robust=-20,-10,0")
-    opt.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_parallel_options(opt)
     opt.set_defaults(func=_optimize, interrupted=_interrupted)

@@ -141,6 +141,7 @@ def _cases(args) -> int:
 def _run(args) -> int:
     from simulator import get_case, simulate
 
+    from ._summary import summary_lines
     from .case_params import case_overrides
     from .files import fold_case, is_fold_file, reader_options
     from .precheck import check_heating
@@ -156,13 +157,17 @@ def _run(args) -> int:
     if warning:
         print(warning, file=sys.stderr, flush=True)
     t0 = time.perf_counter()
+    where = {}
     with progress_bar(desc=name, unit="inc", disable=args.quiet) as bar:
         def progress(done, total):
+            where.update(done=done, total=total)
             if bar.total != total:
                 bar.reset(total=total)
             bar.update(done - bar.n)
 
-        result = simulate(model, steps, progress=progress)
+        result = simulate(model, steps, progress=progress, interruptible=True)
+    if result.status == "interrupted":
+        return _save_interrupted(result, args.out, meta, where)
     out = result.save(args.out, meta)
     frame = result.to_frame()
     last = frame[frame["step"] == frame["step"].max()]
@@ -170,7 +175,28 @@ def _run(args) -> int:
           f"results in {out}")
     print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
                 "temperature_max [degC]"]].to_string(index=False))
+    for line in summary_lines(result):
+        print(line)
     return 0 if result.success else 1
+
+
+def _save_interrupted(result, out_dir, meta, where) -> int:
+    """Ctrl-C during ``run``: save the accepted increments as a partial result (status
+    "interrupted" in meta.json), say so in one line, exit status 130."""
+    import signal
+
+    from ._common import EXIT_INTERRUPTED
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)         # a second Ctrl-C must not cut the save
+    out = result.save(out_dir, {**meta, "interrupted": True})
+    step = result.steps[-1]
+    at = (f", step {step.name!r} at increment {where['done']} of {where['total']}"
+          if where else f", step {step.name!r}")
+    n = len(result.history["stage"]) - 1
+    print(f"interrupted: {n} accepted increment{'s' if n != 1 else ''} saved in {out} as a "
+          f"partial result (status \"interrupted\"{at}); run the same command again to start "
+          "over", file=sys.stderr, flush=True)
+    return EXIT_INTERRUPTED
 
 
 def _not_saved(args) -> str:
@@ -205,7 +231,6 @@ def add_simulate_commands(sub) -> None:
                           "--set crease_width=200 --set gravity=true; for a FOLD file "
                           "power.<crease id>=mW or thermal_steps=N")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     from .files import add_reader_options
 
     add_reader_options(run)

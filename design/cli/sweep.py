@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import os
 import pathlib
+import sys
 
 from ._common import (RESIDUAL_LIMIT_DEG, CLIError, add_parallel_options, executor, floats,
-                      fold_deg, length_um, progress_bar, resume_message)
+                      fold_deg, length_um, progress_bar, resume_message, resuming_line)
 
 __all__ = ["add_sweep_commands", "SCENARIO_NAMES"]
 
@@ -44,6 +45,9 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
     """``sweep(executor, log, progress)`` on the chosen executor, logging to
     ``out/evaluations.csv``, with a progress bar."""
     out.mkdir(parents=True, exist_ok=True)
+    line = resuming_line(out / "evaluations.csv", total, "points")
+    if line:
+        print(line, file=sys.stderr, flush=True)
     ex = executor(args)
     try:
         with progress_bar(total=total, desc=desc, disable=args.quiet) as bar:
@@ -116,7 +120,6 @@ def _add_common_options(parser, func) -> None:
                         help="design in um (repeatable; default the start design)")
     parser.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
     parser.add_argument("--out", required=True, metavar="DIR")
-    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_parallel_options(parser)
     parser.set_defaults(func=func, interrupted=_interrupted)
 

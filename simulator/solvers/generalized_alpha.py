@@ -181,7 +181,7 @@ class TimeIntegrator:
     def _attempt(self, state, span) -> StepReport:
         report = self._solve(state, *span)
         if not report.success:
-            logger.debug("time step %.3g s at t = %.6g s failed (%s); halving", span[0],
+            logger.info("time step %.3g s at t = %.6g s failed (%s); halving", span[0],
                          state.time, report.message)
         return report
 

@@ -319,7 +319,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
                f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}")
-        logger.warning(msg)
+        logger.info(msg)          # data: the caller decides (a step fails, a search moves on)
         return PathResult(False, "failed", msg, u, run.t, total_iter, run.cuts, history,
                           residuals, last_ev)
     if run.status == "stopped":

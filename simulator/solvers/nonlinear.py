@@ -181,7 +181,7 @@ def march(attempt, accept, increments: int, max_cuts: int, max_total_cuts: int,
             if in_row >= max_cuts or cuts >= max_total_cuts:
                 return March("failed", t, dt, in_row, cuts, outcome)
             dt, in_row, cuts = dt / 2, in_row + 1, cuts + 1
-            logger.debug("%s to t = %.6g failed; halving to %.3g", what, t_try, dt)
+            logger.info("%s to t = %.6g failed; halving to %.3g", what, t_try, dt)
             continue
         t = t_try
         stop = accept(t, outcome)

@@ -16,6 +16,8 @@ describe the parameters for ``meta.json`` in :meth:`Step.describe`.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -118,6 +120,23 @@ class StepOutcome:
     events: tuple = ()
 
 
+#: The recorders made while :func:`watch_recorders` is active (the step's records so far,
+#: for a partial result when the run is interrupted), else None.
+_WATCHED: contextvars.ContextVar = contextvars.ContextVar("etorigami_recorders", default=None)
+
+
+@contextlib.contextmanager
+def watch_recorders():
+    """Collect the :class:`StepRecorder` objects made inside the block (in order) into the list
+    it yields; a nested block (a step running ``simulate`` itself) collects its own."""
+    found: list = []
+    token = _WATCHED.set(found)
+    try:
+        yield found
+    finally:
+        _WATCHED.reset(token)
+
+
 class StepRecorder:
     """Collects the records of a running step and builds its :class:`StepOutcome`.
 
@@ -126,6 +145,9 @@ class StepRecorder:
     """
 
     def __init__(self, state: SimulationState):
+        watched = _WATCHED.get()
+        if watched is not None:
+            watched.append(self)
         self.start = state
         self.iterations = 0
         self.cuts = 0
@@ -160,6 +182,18 @@ class StepRecorder:
         self.cuts += path.cuts
         for (t, u, its), res in zip(path.history, path.residual_norms):
             self.record(t, u, temperature, power, its, res)
+
+    def last_state(self) -> SimulationState:
+        """The start state with the displacements, temperatures and powers of the last accepted
+        increment (the start state if none); rest angles and clock stay the start's."""
+        from dataclasses import replace
+
+        if not len(self):
+            return self.start
+        rows = self._rows
+        return replace(self.start, u=np.asarray(rows["u"][-1], float),
+                       temperature=np.asarray(rows["temperature"][-1], float),
+                       crease_power=np.asarray(rows["power"][-1], float))
 
     def finish(self, success: bool, status: str, message: str, state: SimulationState,
                f_ext: np.ndarray, evaluation=None) -> StepOutcome:

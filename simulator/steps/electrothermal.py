@@ -60,7 +60,7 @@ from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
 from ..schedules import next_switch
 from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
-from ..thermal.transient import (REFERENCE_THETA, ThetaStepper, check_theta, check_time_step,
+from ..thermal.transient import (DEFAULT_THETA, ThetaStepper, check_theta, check_time_step,
                               free_heat_input, heat_system, initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from ..model.properties import spring_rest_angles
@@ -100,8 +100,8 @@ class ElectroThermal(Step):
         "dynamic": one implicit time step with inertia and damping (``options``);
         "quasi_static": equilibrium at every time (inertia negligible).
     theta : float
-        Weight of the new time level of the heat step, in [1/2, 1] (default 2/3, the
-        reference's).
+        Weight of the new time level of the heat step, in [1/2, 1] (default 1, backward Euler:
+        L-stable; ``REFERENCE_THETA`` = 2/3 is the reference's).
     options : DynamicsOptions
         Scheme and damping of the dynamic mechanics. The default, generalized-alpha with
         ``rho_inf = 0.5``, damps the stiff crease-node modes that a fast rest-angle change
@@ -130,7 +130,7 @@ class ElectroThermal(Step):
     dt_min: float | None = None
     dt_max: float | None = None
     mechanics: str = "dynamic"
-    theta: float = REFERENCE_THETA
+    theta: float = DEFAULT_THETA
     options: DynamicsOptions = DynamicsOptions(method="generalized_alpha", rho_inf=0.5)
     temperature_step: float = 2.0
     shape_tol: float = 0.0

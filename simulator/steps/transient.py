@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 from .._validate import integer, positive
 from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
-from ..thermal.transient import REFERENCE_THETA, check_theta, check_time_step, integrate_heat
+from ..thermal.transient import DEFAULT_THETA, check_theta, check_time_step, integrate_heat
 from .base import Step, StepContext, StepOutcome, StepRecorder
 
 __all__ = ["TransientHeat"]
@@ -39,7 +39,8 @@ class TransientHeat(Step):
         Time step [s], > 0 (reduced to ``duration / ceil(duration / dt)`` if it does not divide
         the duration).
     theta : float
-        Weight of the new time level in [1/2, 1] (default 2/3, the reference's).
+        Weight of the new time level in [1/2, 1] (default 1, backward Euler: L-stable, never
+        below room temperature; ``REFERENCE_THETA`` = 2/3 is the reference's).
     record_every : int
         Record every k-th time step (the last one is always recorded).
 
@@ -52,7 +53,7 @@ class TransientHeat(Step):
     power: Mapping = field(default_factory=dict)
     duration: float = 1.0
     dt: float = 1e-3
-    theta: float = REFERENCE_THETA
+    theta: float = DEFAULT_THETA
     record_every: int = 1
     name: str = "transient_heat"
 
@@ -75,6 +76,7 @@ class TransientHeat(Step):
             rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
                        result.power[k], 0, (), **{
                            "time [s]": state.time + result.time[k],
+                           "mean_power [mW]": 1e3 * result.mean_power[k],
                            "heat_in [J]": result.heat_in[k],
                            "heat_out [J]": result.heat_out[k],
                            "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]})

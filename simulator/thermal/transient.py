@@ -17,7 +17,12 @@ free unknowns are integrated as temperature rises ``dT`` with the theta-method
                                   + theta q_{k+1} + (1 - theta) q_k,
 
 theta in [1/2, 1] (1/2 Crank-Nicolson, second order; 1 backward Euler, first order, L-stable;
-the reference uses :data:`REFERENCE_THETA` = 2/3). The conductivity and capacity are assembled
+the reference uses :data:`REFERENCE_THETA` = 2/3). The default is :data:`DEFAULT_THETA` = 1,
+backward Euler: L-stable, so under a steady or switched power the temperature never overshoots
+or dips below room temperature, whatever dt (theta < 1 damps the fast modes of a stiff
+environment only partly: with theta = 2/3 a power step at dt = 1 ms makes the single fold dip
+below room temperature and oscillate). Comparisons with the reference pass
+``theta=REFERENCE_THETA``. The conductivity and capacity are assembled
 on the shape at the start of each time step and re-assembled only when the shape changes, so
 ``C / dt + theta K`` is factorised once while dt and shape are fixed. Powers given as schedules
 enter each step as their exact mean over the step (``q_k = q_{k+1}`` = mean), so the heat put
@@ -44,7 +49,7 @@ from .schedules import crease_power_function
 from ..state import thermal_model
 from .steady import ThermalModel
 
-__all__ = ["REFERENCE_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
+__all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
            "theta_step", "TransientHeatResult", "integrate_heat", "environment_profile",
            "free_heat_input", "initial_rise", "check_time_step", "check_theta"]
 
@@ -52,6 +57,9 @@ logger = logging.getLogger(__name__)
 
 #: Weight of the new time level used by the reference (``Solver_DynamicsThermal``, theory 8.5).
 REFERENCE_THETA = 2 / 3
+#: The default weight: 1, backward Euler (L-stable: no undershoot below room temperature, no
+#: oscillation under a power step, whatever the time step).
+DEFAULT_THETA = 1.0
 
 
 def check_time_step(dt, name: str = "dt") -> float:
@@ -202,7 +210,7 @@ class ThetaStepper:
         Backend of the factorisation (:func:`~simulator.linalg.ladder.factorize`).
     """
 
-    def __init__(self, K, C, dt, theta=REFERENCE_THETA, linear_solver="auto"):
+    def __init__(self, K, C, dt, theta=DEFAULT_THETA, linear_solver="auto"):
         self.dt, self.theta = check_time_step(dt), check_theta(theta)
         C = np.asarray(C, float)
         if C.ndim != 1 or K.shape != (len(C), len(C)) or not np.all(C > 0):
@@ -229,7 +237,7 @@ class ThetaStepper:
 _LAST: dict = {}
 
 
-def theta_step(K, C, T, q_old, q_new, dt, theta=REFERENCE_THETA) -> np.ndarray:
+def theta_step(K, C, T, q_old, q_new, dt, theta=DEFAULT_THETA) -> np.ndarray:
     """One theta-method step: solve ``(C/dt + theta K) T_new = (C/dt - (1 - theta) K) T +
     theta q_new + (1 - theta) q_old`` (rises [K], capacities [J/K], heat [W], dt [s]).
 
@@ -256,7 +264,10 @@ class TransientHeatResult(ResultFiles):
     message : str
     time : (m,) [s]
     temperature : (m, n) structure node temperatures [deg C]
-    power : (m, C) crease powers [W]
+    power : (m, C) crease powers at the record's time [W]
+    mean_power : (m, C) crease powers averaged over the time step ending at the record [W]
+        (what the heat equation integrated: the exact mean of a schedule, else the
+        theta-weighted end values; at record 0 the powers at t = 0)
     heat_in : (m,) heat put into the free unknowns since the start [J]
     heat_out : (m,) heat that left to room-temperature nodes and the far layer [J]
     heat_stored : (m,) sum of C (T - room) over the free unknowns [J]; with a fixed shape
@@ -285,6 +296,7 @@ class TransientHeatResult(ResultFiles):
     theta: float
     steps: int
     assemblies: int
+    mean_power: np.ndarray | None = None
 
     def to_frame(self):
         """Long table, one row per record and structure node: ``time [s]``, ``node``,
@@ -320,7 +332,7 @@ def initial_rise(tm, x, T0, room) -> np.ndarray:
     return environment_profile(tm, x, T0 - room)
 
 
-def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA, room=None,
+def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=DEFAULT_THETA, room=None,
                    T0=None, record_every: int = 1, callback=None) -> TransientHeatResult:
     """Integrate the transient heat equation from ``t = 0`` to ``t_end`` by the theta-method.
 
@@ -340,7 +352,8 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=REFERENCE_THETA
     t_end, dt : float
         End time and (largest) time step [s], > 0.
     theta : float
-        In [1/2, 1]; default the reference's 2/3.
+        In [1/2, 1]; default :data:`DEFAULT_THETA` = 1 (backward Euler, L-stable); the
+        reference's is :data:`REFERENCE_THETA` = 2/3.
     room : float, optional
         Room temperature [deg C] (default ``tm.params.room_temperature``).
     T0 : (n,) or ((N + 1) n,) array, optional
@@ -403,8 +416,10 @@ class _HeatRun:
         self.averaged = hasattr(powers, "mean")
         p_new = np.asarray(powers(0.0), float)
         self.q_new = self.heat(p_new)
+        self.p_new = self.p_mean = p_new
         self.log = {"time": [0.0], "temperature": [self.temperature()], "power": [p_new],
-                    "heat_in": [0.0], "heat_out": [0.0], "heat_stored": [self.system.C @ self.T]}
+                    "mean_power": [p_new], "heat_in": [0.0], "heat_out": [0.0],
+                    "heat_stored": [self.system.C @ self.T]}
         self.e_in = self.e_out = 0.0
 
     def heat(self, p) -> np.ndarray:
@@ -448,9 +463,12 @@ class _HeatRun:
         self.reassemble(k, t0)
         p_new = np.asarray(powers(t1), float) if record or not self.averaged else None
         if self.averaged:                     # exact heat input per step (PWM, steps, ramps)
-            q_old = q_new = self.heat(powers.mean(t0, t1))
+            self.p_mean = np.asarray(powers.mean(t0, t1), float)
+            q_old = q_new = self.heat(self.p_mean)
         else:
             q_old, q_new = self.q_new, self.heat(p_new)
+            self.p_mean = theta * p_new + (1 - theta) * self.p_new
+            self.p_new = p_new
         self.q_new = q_new
         T = self.T
         T_new = self.stepper.step(T, q_old, q_new)
@@ -464,7 +482,7 @@ class _HeatRun:
         """Append the state at ``t1`` [s] to the records (``p_new``: the powers there, or None)."""
         p_new = np.asarray(self.powers(t1), float) if p_new is None else p_new
         for key, val in (("time", t1), ("temperature", self.temperature()), ("power", p_new),
-                         ("heat_in", self.e_in), ("heat_out", self.e_out),
+                         ("mean_power", self.p_mean), ("heat_in", self.e_in), ("heat_out", self.e_out),
                          ("heat_stored", self.system.C @ self.T)):
             self.log[key].append(val)
 

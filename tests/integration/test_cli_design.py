@@ -32,11 +32,13 @@ def test_optimize_resumes_from_its_log(tmp_path, capsys):
     out = tmp_path / "cd"
     argv = ["optimize", "gripper", "--method", "cd", "--out", str(out), "-q"]
     assert main(argv + ["--max-evaluations", "2"]) in (0, 1)
-    first = capsys.readouterr().out
-    assert "2 computed, 0 reused" in first
+    first = capsys.readouterr()
+    assert "2 computed, 0 reused" in first.out and "resuming" not in first.err
     main(argv + ["--max-evaluations", "3"])
-    second = capsys.readouterr().out
-    assert "1 computed, 2 reused" in second
+    second = capsys.readouterr()
+    assert "1 computed, 2 reused" in second.out
+    log = out / "evaluations.csv"
+    assert f"resuming: 2 of 3 evaluations saved in {log} are reused" in second.err
     assert (out / "evaluations.csv").exists() and (out / "result.json").exists()
 
 
@@ -47,6 +49,21 @@ def test_sweep_residual_fold(tmp_path, capsys):
     frame = pd.read_csv(out / "sweep.csv")
     assert len(frame) == 2 and "total_power [mW]" in frame.columns
     assert list(frame["residual_fold [deg]"]) == [-10.0, 0.0]
+    assert main(["sweep", "residual-fold", "--values=-10,0,10", "--design",
+                 "W=300,La=1500,L1=500,L2=500", "--out", str(out), "-q"]) == 0
+    assert "resuming: 2 of 3 points saved in " in capsys.readouterr().err
+
+
+def test_best_so_far_keeps_the_lowest_feasible_objective():
+    from types import SimpleNamespace as E
+
+    from design.cli._common import BestSoFar
+
+    best = BestSoFar()
+    assert str(best) == "none feasible"
+    for objective, feasible in ((0.012, True), (0.005, False), (0.0099, True), (0.02, True)):
+        best.add(E(objective=objective, feasible=feasible))
+    assert str(best) == "9.9 mW"
 
 
 @pytest.mark.parametrize("argv, message", [

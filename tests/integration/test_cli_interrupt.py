@@ -83,3 +83,32 @@ def test_ctrl_c_during_dask_sweep_is_one_line(tmp_path):
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("interrupted: "), stderr
     assert re.search(r"\b[1-9]\d* points? saved in ", lines[0]) and "resume" in lines[0]
+
+
+def test_ctrl_c_during_run_saves_a_partial_result(tmp_path):
+    """Issue 21: Ctrl-C on ``run`` keeps the accepted increments (status "interrupted")."""
+    import json
+
+    out = tmp_path / "run"
+    proc = _start(["run", "single-fold", "--set", "thermal_steps=20000", "--out", str(out),
+                   "-q"])
+    time.sleep(10.0)                          # start-up, self-fold and gravity, some heating
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail("the run did not end after Ctrl-C")
+    assert proc.returncode == 130
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    n = int(re.match(r"interrupted: (\d+) accepted increments? saved in ", lines[0]).group(1))
+    assert 'status "interrupted"' in lines[0] and "step 'heat' at increment" in lines[0]
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["status"] == "interrupted" and meta["interrupted"] is True
+    assert [s["status"] for s in meta["steps"]][-1] == "interrupted"
+    assert {s["status"] for s in meta["steps"][:-1]} <= {"converged"}
+    rows = _rows(out / "creases.csv")
+    assert len(rows) == n + 1                                # one crease: a row per record
+    assert sum(r["stage"] == "heat" for r in rows) >= 1      # heating increments were kept

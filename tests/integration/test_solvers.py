@@ -1,5 +1,7 @@
 """Equilibrium solvers: analytic checks, contact, convergence behaviour and failure reporting."""
 
+import logging
+
 import numpy as np
 import pytest
 
@@ -126,6 +128,19 @@ def test_absurd_load_fails_with_status_and_message(free_hinge):
     assert "gave up" in res.message and "cuts" in res.message
     assert res.steps[0].cuts == 3
     np.testing.assert_array_equal(res.state.u, 0)        # last converged state is kept
+
+
+def test_failures_returned_as_data_log_at_info_not_warning(free_hinge, caplog):
+    """Issue 21: a cut increment and a path given up are data of the result (its status and
+    message); they are logged at INFO (shown with -v), never as WARNING (the result's owner
+    reports it; a search that moves on needs no warning)."""
+    absurd = Load({5: (0, 0, 1e3), 6: (0, 0, -1e3)}, increments=1)
+    with caplog.at_level(logging.INFO, logger="simulator"):
+        res = simulate(free_hinge, [absurd], options=NewtonOptions(max_iter=8, max_cuts=3))
+    assert not res.success
+    levels = {r.levelno for r in caplog.records if r.name.startswith("simulator.solvers")}
+    assert levels == {logging.INFO}
+    assert "halving" in caplog.text and "gave up" in caplog.text
 
 
 def test_failure_raises_only_when_asked(free_hinge):

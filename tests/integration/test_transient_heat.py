@@ -17,7 +17,7 @@ from simulator.geometry.pattern import Pattern
 from simulator.thermal.schedules import crease_power_function
 from simulator.state import thermal_model
 from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters
-from simulator.thermal.transient import environment_profile, heat_system
+from simulator.thermal.transient import REFERENCE_THETA, environment_profile, heat_system
 
 
 # ---------------------------------------------------------------- models
@@ -121,7 +121,7 @@ def test_first_steps_match_reference_transient():
     """04/Example01 with RT = 0 (theory 10.9): T of Ctr after steps 1 and 2 of 2 us at 20 mW
     (the shape has not moved yet; later steps differ by the reference's mechanical coupling)."""
     tm = reference_04_model()
-    r = integrate_heat(tm, tm.mesh.nodes, {2: 20e-3}, 4e-6, 2e-6)
+    r = integrate_heat(tm, tm.mesh.nodes, {2: 20e-3}, 4e-6, 2e-6, theta=REFERENCE_THETA)
     np.testing.assert_allclose(r.temperature[1:, 14], [0.049626159, 0.099080744], rtol=2e-8)
     np.testing.assert_allclose(r.temperature[1, [12, 1, 16]],               # printed to 1e-9
                                [0.049624627, 0.021362135, 0.000107962], rtol=0, atol=1e-9)
@@ -251,7 +251,9 @@ def test_transient_heat_step_in_simulate():
                                step.columns["heat_in [J]"] - step.columns["heat_out [J]"],
                                rtol=1e-9)
     df = r.to_frame()
-    assert df["time [s]"].isna().sum() == 3 and df["time [s]"].max() == pytest.approx(0.05)
+    # time 0 on the initial record (issue 21); the two quasi-static Heat records have none
+    assert df["time [s]"].iloc[0] == 0.0
+    assert df["time [s]"].isna().sum() == 2 and df["time [s]"].max() == pytest.approx(0.05)
     assert np.all(step.power_history >= 5e-3 - 1e-15)           # added on top of the 5 mW
     np.testing.assert_array_equal(r.state.temperature, step.temperature_history[-1])
     hot = case.model.mesh.crease_nodes[0, 6]                 # hotter on average than at 5 mW
@@ -269,7 +271,9 @@ def test_transient_result_saves(tmp_path):
     settings = meta["steps"][0]
     assert settings["dt [s]"] == 2e-3 and settings["power_added"]["2"]["t_off"] == 0.01
     text = (tmp_path / "creases.csv").read_text().splitlines()
-    assert "time [s]" in text[0] and text[1].endswith(",,,,")      # initial record: empty
+    header, first = text[0].split(","), text[1].split(",")
+    assert first[header.index("time [s]")] == "0.0"                # initial record: time 0,
+    assert text[1].endswith(",,,,")                                 # no step values
     direct = integrate_heat(model, model.mesh.nodes, {2: StepPower(5e-3, t_off=0.01),
                                                       (2,): Ramp(1e-3, 0.02)}, 0.02, 2e-3)
     np.testing.assert_allclose(r.steps[0].temperature_history, direct.temperature[1:],

@@ -166,7 +166,9 @@ def test_page_loads_without_console_errors(page):
     assert page.errors == []
     assert page.title() == "etorigami: crane"
     assert page.evaluate("window.viewer.records") == 41
-    assert "record 0/40" in page.text_content("#record")
+    start = page.evaluate("window.viewer.startRecord")          # the most folded record
+    assert page.evaluate("window.viewer.record") == start > 0
+    assert f"record {start}/40" in page.text_content("#record")
 
 
 def test_screenshot_shows_the_mesh(page, tmp_path):
@@ -180,6 +182,7 @@ def test_screenshot_shows_the_mesh(page, tmp_path):
 
 
 def test_slider_changes_the_shape(page):
+    page.evaluate("window.viewer.setRecord(0)")
     before = _canvas(page)
     page.focus("#slider")
     page.keyboard.press("End")
@@ -224,3 +227,70 @@ def test_play_pause_and_drag_rotate(page):
     assert page.evaluate("window.viewer.view.yaw") != yaw
     assert (np.abs(_canvas(page).astype(int) - before).sum(axis=2) > 30).mean() > 0.01
     assert page.errors == []
+
+
+# ------------------------------------------------------------------------------ issue 21, item 4
+@pytest.fixture(scope="module")
+def fold_dir(tmp_path_factory):
+    case = get_case("single_fold", thermal_steps=20, gravity=True)
+    result = case.run()
+    assert result.success
+    out = tmp_path_factory.mktemp("single_fold")
+    result.save(out, {"case": case.name})
+    return out
+
+
+def test_viewer_opens_on_the_most_folded_record_and_crease(crane_dir):
+    from simulator.io.viewer import _payload, _start
+
+    data = load_viewer_data(crane_dir)
+    change = np.abs(data["fold_angle"] - data["fold_angle"][:1])
+    record, row = _start(data["fold_angle"])
+    assert change.max(axis=1)[record] == change.max() and change[record, row] == change.max()
+    payload = _payload(data, 10**7)
+    assert (payload["start_record"], payload["start_crease"]) == (record, row)
+    flat = np.zeros((3, 2))
+    assert _start(flat) == (2, 0)                            # nothing folds: the last record
+
+
+def test_saved_triangle_kinds_tell_substrate_from_panels(fold_dir, crane_dir):
+    with np.load(fold_dir / "nodes.npz") as npz:
+        kind, C = npz["triangle_kind"], len(npz["crease_ids"])
+    assert set(np.unique(kind)) == {0, 1, 2}                 # crease, panels, substrate
+    assert (kind[:6 * C] == 0).all()
+    with np.load(crane_dir / "nodes.npz") as npz:
+        assert 0 in npz["triangle_kind"] and 1 in npz["triangle_kind"]
+
+
+def test_page_names_creases_by_id_labels_totals_and_has_a_scale(page, crane_dir):
+    data = load_viewer_data(crane_dir)
+    labels = page.locator("#crease option").all_text_contents()
+    assert labels == [f"crease {int(c)}" for c in data["crease_ids"]]   # as creases.csv
+    page.evaluate("window.viewer.setRecord(40)")
+    page.select_option("#crease", "3")
+    page.wait_for_timeout(100)
+    record = page.text_content("#record")
+    total = data["power"][40].sum() * 1e3
+    assert f"total power (all creases) {total:.2f} mW" in record
+    info = page.text_content("#crease-info")
+    assert info.startswith(f"crease {int(data['crease_ids'][3])}: fold angle")
+    assert f"power (this crease) {data['power'][40, 3] * 1e3:.3f} mW" in info
+    scale = page.evaluate("window.viewer.scale")
+    assert re.fullmatch(r"\d+(\.\d+)? (\u00b5m|mm)", scale), scale
+    assert page.errors == []
+
+
+def test_substrate_is_grey_and_named_in_the_legend(browser, fold_dir):
+    pg = browser.new_page(viewport={"width": 1200, "height": 760})
+    errors = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.goto(write_viewer(fold_dir).as_uri())
+    pg.wait_for_function("window.viewer && window.viewer.ready", timeout=20_000)
+    assert pg.evaluate("window.viewer.substrate") > 0
+    assert "substrate" in pg.text_content("#legend")
+    img = _canvas(pg).astype(int)
+    spread = img.max(axis=2) - img.min(axis=2)
+    grey = (spread < 4) & (np.abs(img - BACKGROUND).sum(axis=2) > 30) & (img[..., 0] > 60)
+    assert grey.mean() > 0.01                                 # the substrate, drawn in grey
+    assert errors == []
+    pg.close()

@@ -6,6 +6,12 @@
 the deformed mesh in 3-D coloured by nodal temperature with a colour bar, a slider over the
 records (initial state, then every accepted increment), play/pause, and the fold angle,
 temperature and power of a picked crease (dropdown, or click near a crease in the view).
+Creases are named by their crease id (the pattern's edge id), as in ``creases.csv``, the CLI
+and FOLD files. The page opens on the most folded record (largest change of any fold angle
+from the first record; the last record if nothing folds) with its most folded crease picked,
+draws a length scale bar, labels the total power of all creases apart from the picked
+crease's, and draws the substrate (panels held at room temperature, ``triangle_kind`` of
+``nodes.npz``) in grey, apart from the temperature-coloured sheet.
 
 Data are compressed for the page: positions are quantised to uint16 inside the bounding box
 of all records (error below 1/65535 of the box size), temperatures to uint16 inside their
@@ -69,6 +75,8 @@ def load_viewer_data(result_dir) -> dict:
             raise ParameterError(f"{path / 'nodes.npz'} lacks {', '.join(absent)}; re-save the "
                                  "result with SimulationResult.save.")
         data = {k: np.asarray(npz[k]) for k in _NPZ_KEYS}
+        data["triangle_kind"] = (np.asarray(npz["triangle_kind"])    # older results lack it
+                                 if "triangle_kind" in npz.files else None)
     frame = pd.read_csv(path / "creases.csv")
     bad = [k for k in ("positions", "temperature") if not np.isfinite(data[k]).all()]
     if bad:
@@ -121,6 +129,28 @@ def _thin(m: int, per_record: int, max_bytes: int) -> np.ndarray:
     return np.unique(np.rint(np.linspace(0, m - 1, keep)).astype(int))
 
 
+def _start(fold: np.ndarray) -> tuple:
+    """(record, crease row) the page opens on: the most folded record of ``fold`` (R, C) [deg]
+    (largest change of any crease from the first record) and its most folded crease; the last
+    record and crease row 0 if nothing folds."""
+    change = np.abs(fold - fold[:1])
+    if not change.size or change.max() < 1e-6:
+        return len(fold) - 1, 0
+    record = int(np.argmax(change.max(axis=1)))
+    return record, int(np.argmax(change[record]))
+
+
+def _triangle_kinds(data: dict) -> np.ndarray:
+    """(nt,) kinds: 0 crease, 1 panel, 2 substrate (crease triangles first, six per crease,
+    when the file does not say)."""
+    kind = data.get("triangle_kind")
+    if kind is not None and len(kind) == len(data["triangles"]):
+        return np.asarray(kind, np.uint8)
+    kind = np.ones(len(data["triangles"]), np.uint8)
+    kind[:6 * len(data["crease_ids"])] = 0
+    return kind
+
+
 def _payload(data: dict, max_bytes: int) -> dict:
     """JSON-able page data: quantised base64 arrays plus labels."""
     pos, temp = data["positions"], data["temperature"]
@@ -135,7 +165,10 @@ def _payload(data: dict, max_bytes: int) -> dict:
     t_lo, t_hi = float(temp.min()), float(temp.max())
     tri = data["triangles"]
     meta = data["meta"]
+    start_record, start_crease = _start(data["fold_angle"][rec])
     return {
+        "start_record": start_record, "start_crease": start_crease,
+        "triangle_kind": _b64(_triangle_kinds(data), "u1"),
         "title": str(meta.get("case") or meta.get("name") or "simulation result"),
         "status": str(meta.get("status", "")), "message": str(meta.get("message", "")),
         "n_records": int(m), "records": rec.tolist(), "n_nodes": int(n),

@@ -18,6 +18,10 @@
   const fold = decode(D.fold_angle, Float32Array);       // (R, C) [deg]
   const power = decode(D.power, Float32Array);           // (R, C) [mW]
   const ctemp = D.crease_temperature ? decode(D.crease_temperature, Float32Array) : null;
+  const kind = decode(D.triangle_kind, Uint8Array);    // (NT,) 0 crease, 1 panel, 2 substrate
+  const SUBSTRATE = 2;
+  let nSubstrate = 0;
+  for (let t = 0; t < NT; t++) if (kind[t] === SUBSTRATE) nSubstrate++;
   const lo = D.bbox[0], hi = D.bbox[1];
   const span = [0, 1, 2].map((k) => hi[k] - lo[k]);
   const mid = [0, 1, 2].map((k) => 0.5 * (lo[k] + hi[k]));
@@ -85,9 +89,11 @@
               (w[0] * scr[2 * a + 1] + w[1] * scr[2 * b + 1] + w[2] * scr[2 * c + 1]) / L, s(temp)];
     });
     ctx.lineWidth = 0.8;
+    const grey = kind[t] === SUBSTRATE ? rgb([0, 1, 2].map(() => Math.round(178 * shade))) : null;
     for (const s of SUB) {
       const P = s.map((i) => pts[i]);
-      const style = rgb(colour(((P[0][2] + P[1][2] + P[2][2]) / 3 - tlo) / ((thi - tlo) || 1), shade));
+      const style = grey ||
+        rgb(colour(((P[0][2] + P[1][2] + P[2][2]) / 3 - tlo) / ((thi - tlo) || 1), shade));
       ctx.beginPath(); ctx.moveTo(P[0][0], P[0][1]); ctx.lineTo(P[1][0], P[1][1]);
       ctx.lineTo(P[2][0], P[2][1]); ctx.closePath();
       ctx.fillStyle = style; ctx.strokeStyle = style; ctx.fill(); ctx.stroke();
@@ -117,9 +123,32 @@
     if (D.crease_triangles) {
       for (let k = 0; k < 6; k++) outline(6 * crease + k, "#e0267d", 2.5 * dpr);
     }
+    scaleBar(W, H, dpr);
     panels();
   }
   const request = () => { if (!pending) { pending = true; requestAnimationFrame(draw); } };
+
+  // ---------------------------------------------------------------- length scale
+  let scaleLabel = "";
+  function niceLength(target) {                   // 1, 2 or 5 times a power of ten [m]
+    const p = Math.pow(10, Math.floor(Math.log10(target)));
+    for (const m of [5, 2, 1]) if (m * p <= target) return m * p;
+    return p;
+  }
+  function lengthText(m) {
+    return m >= 1e-3 ? fmt(m * 1e3, m >= 1e-2 ? 0 : 1) + " mm" : fmt(m * 1e6, m >= 1e-6 ? 0 : 2) + " \u00b5m";
+  }
+  function scaleBar(W, H, dpr) {                  // bar of a round length, at the depth of the centre
+    const pxPerMetre = 0.5 * Math.min(W, H) * view.zoom / radius;
+    const length = niceLength(140 * dpr / pxPerMetre), px = length * pxPerMetre;
+    const x0 = 16 * dpr, y0 = H - 34 * dpr;
+    ctx.strokeStyle = "#1d2330"; ctx.lineWidth = 2 * dpr; ctx.beginPath();
+    ctx.moveTo(x0, y0 - 5 * dpr); ctx.lineTo(x0, y0); ctx.lineTo(x0 + px, y0); ctx.lineTo(x0 + px, y0 - 5 * dpr);
+    ctx.stroke();
+    scaleLabel = lengthText(length);
+    ctx.fillStyle = "#1d2330"; ctx.font = (12 * dpr) + "px sans-serif";
+    ctx.fillText(scaleLabel, x0 + 4 * dpr, y0 - 8 * dpr);
+  }
 
   // ---------------------------------------------------------------- labels and side panels
   const fmt = (x, d) => (x === null || x === undefined || !isFinite(x) ? "-"
@@ -131,11 +160,13 @@
     for (let c = 0; c < C; c++) ptot += power[rec * C + c];
     const time = D.time ? " \u00b7 t " + fmt(D.time[rec], 4) + " s" : "";
     el("record").textContent = "record " + D.records[rec] + "/" + (D.n_records - 1) + " \u00b7 " +
-      D.stage[rec] + " increment " + D.increment[rec] + time + " \u00b7 power " + fmt(ptot, 2) +
-      " mW \u00b7 T " + fmt(tmin, 1) + "\u2013" + fmt(tmax, 1) + " \u00b0C";
+      D.stage[rec] + " increment " + D.increment[rec] + time + " \u00b7 total power (all creases) " +
+      fmt(ptot, 2) + " mW \u00b7 nodes " + fmt(tmin, 1) + "\u2013" + fmt(tmax, 1) + " \u00b0C";
     const k = rec * C + crease;
-    el("crease-info").innerHTML = "fold angle <b id=\"fold\">" + fmt(fold[k], 2) + "</b>&deg;<br>" +
-      "temperature " + fmt(ctemp ? ctemp[k] : null, 1) + " &deg;C<br>power " + fmt(power[k], 3) + " mW";
+    el("crease-info").innerHTML = "crease " + D.creases[crease] + ": fold angle <b id=\"fold\">" +
+      fmt(fold[k], 2) + "</b>&deg;<br>" + "temperature (this crease) " +
+      fmt(ctemp ? ctemp[k] : null, 1) + " &deg;C<br>power (this crease) <span id=\"crease-power\">" +
+      fmt(power[k], 3) + "</span> mW";
     spark();
   }
 
@@ -221,7 +252,7 @@
     playButton.addEventListener("click", () => setPlaying(!playing));
     D.creases.forEach((id, c) => {
       const o = document.createElement("option");
-      o.value = String(c); o.textContent = "crease " + c + " (edge " + id + ")";
+      o.value = String(c); o.textContent = "crease " + id;     // the id of creases.csv and the CLI
       select.appendChild(o);
     });
     select.addEventListener("change", () => pick(Number(select.value)));
@@ -260,13 +291,15 @@
     el("thinned").textContent = "Showing " + R + " of " + D.n_records +
       " records (evenly thinned to keep the page small).";
   }
+  if (nSubstrate) el("legend").textContent = "grey: substrate (held at room temperature)";
   wire();
   colourbar();
-  pick(0);
-  setRecord(0);
+  pick(D.start_crease);
+  setRecord(D.start_record);
   draw();
   window.viewer = {
-    ready: true, records: R, creases: C,
+    ready: true, records: R, creases: C, startRecord: D.start_record, substrate: nSubstrate,
+    get scale() { return scaleLabel; },
     get record() { return rec; }, get crease() { return crease; }, get playing() { return playing; },
     get view() { return Object.assign({}, view); },
     setRecord: (r) => { setRecord(r); draw(); }, pick: (c) => { pick(c); draw(); },
