@@ -196,6 +196,13 @@ class SimulationResult:
         return t @ crease_temperature_weights()
 
     @cached_property
+    def crease_temperature_centre_line(self) -> np.ndarray:
+        """(m, C) mean of the 3 centre-line nodes (A, B, Ctr) of each crease [deg C]: the
+        measure the 1.2 T_g design limit is checked on (docs/theory.md, "Crease temperature
+        limit")."""
+        return self.history["temperature"][:, self.model.mesh.crease_nodes[:, 4:7]].mean(axis=2)
+
+    @cached_property
     def crease_temperature_max(self) -> np.ndarray:
         """(m, C) hottest of the 7 crease nodes [deg C]."""
         return self.history["temperature"][:, self.model.mesh.crease_nodes].max(axis=2)
