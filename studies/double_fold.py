@@ -107,7 +107,8 @@ def plot(df: pd.DataFrame) -> dict:
     note_assumptions(fig, note, missing)
 
     nodes = df[df["table"] == "nodes"]
-    shape = plot_shape(shape_from_frame(nodes, get_case(NAME).model.mesh), record=-1)
+    shape = plot_shape(shape_from_frame(nodes, get_case(NAME).model.mesh), record=-1,
+                       panel_labels={"anchor": 0, "panel 1": 1, "panel 2": 2, "substrate": 3})
     ax = shape.axes[0]
     ax.set_title(f"double fold at {sweep[POWER].max():.1f} mW per crease (true scale)")
     ax.view_init(elev=20, azim=-70)

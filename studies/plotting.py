@@ -26,7 +26,8 @@ from simulator import SU8
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",
            "T_LIMIT", "T_MEASURE", "PALETTE", "LINESTYLES", "figure_style", "note_assumptions",
-           "environment_note", "centre_line_temperatures", "share_3d_scale", "label_points"]
+           "environment_note", "centre_line_temperatures", "share_3d_scale", "label_points",
+           "panel_centres"]
 
 CMAP = "plasma"
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
@@ -164,7 +165,16 @@ def label_points(ax, labels: dict, color="k") -> None:
                                      alpha=0.75))
 
 
-# ----------------------------------------------------------------------------- 3-D shape
+def panel_centres(mesh, x_mm, panels: dict) -> dict:
+    """``{name: centre [mm]}`` of named panels ``{name: panel id or ids}`` at positions
+    ``x_mm`` (n_nodes, 3): the mean of their triangles' nodes."""
+    out = {}
+    for name, ids in panels.items():
+        nodes = np.unique(mesh.triangles[np.isin(mesh.triangle_panel, np.atleast_1d(ids))])
+        out[name] = x_mm[nodes].mean(axis=0)
+    return out
+
+
 def nodal_range(*temperatures) -> tuple:
     """(lowest, highest) nodal temperature [deg C] over arrays: a shared colour scale."""
     return (min(float(np.min(t)) for t in temperatures),
@@ -231,7 +241,7 @@ def _mark_hot_creases(ax, x_mm, temperature, mesh) -> int:
 
 
 def plot_shape(result, record=-1, ax=None, color_by="temperature", show_reference=False,
-               t_range=None, colorbar=True, hide_panels=()) -> Figure:
+               t_range=None, colorbar=True, hide_panels=(), panel_labels=None) -> Figure:
     """Deformed shape of one record in 3-D, faces coloured by temperature.
 
     Parameters
@@ -257,6 +267,8 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     hide_panels : sequence of int
         Panels not drawn (e.g. a large substrate that would dwarf the structure); the axis
         limits then follow the drawn triangles.
+    panel_labels : dict, optional
+        ``{text: panel id or ids}``: names written at the panels' centres (base, arm, ...).
 
     Returns
     -------
@@ -290,6 +302,8 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
                                              edgecolors="0.5", linewidths=0.4, linestyles="--"))
         points.append(x0)
     set_3d_limits(ax, np.concatenate(points))
+    if panel_labels:
+        label_points(ax, panel_centres(mesh, x, panel_labels))
     ax.set_title(_title(result, record))
     return fig
 
