@@ -145,8 +145,8 @@ def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.Data
 # ----------------------------------------------------------------------------- plot
 #: Marker and meaning of each sample category in the power panel.
 _MARKS = {"works": ("o", "works"), "too hot": ("x", "too hot (T > 1.2 T_g)"),
-          "target not met": ("v", "target not met (drawn at the cap)"),
-          "solver failed": ("s", "solver failed, after a retry (not counted)")}
+          "target not met": ("v", "target not met\n(top row)"),
+          "solver failed": ("s", "solver failed twice\n(retried with smaller\nsteps; top row;\nnot counted)")}
 
 
 def _plot_yield(df):
@@ -174,7 +174,7 @@ def _plot_yield(df):
     ax_y.set_title(f"yield: both stages met, T <= 1.2 T_g ({int(summary['samples'].iloc[0])} "
                    "samples per design)", fontsize="medium")
     ax_y.legend(fontsize="small", loc="upper left")
-    cap = np.nanmax(samples["total_power [mW]"].to_numpy(float))
+    cap = 1.08 * np.nanmax(samples["total_power [mW]"].to_numpy(float))
     for i, label in enumerate(summary["design"]):
         d = samples[samples["design"] == label]
         jitter = i + np.linspace(-0.25, 0.25, len(d)) if len(d) > 1 else np.full(len(d), i)
@@ -191,7 +191,7 @@ def _plot_yield(df):
     ax_p.set_ylabel("total power per heated crease [mW]")
     ax_p.set_title("power of every sample, by category", fontsize="medium")
     ax_p.grid(True, alpha=0.3)
-    ax_p.legend(fontsize="small", loc="upper right")
+    ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     note_assumptions(fig, environment_note(
         "air", scenario=SCENARIO_TEXT, extra=["gravity x 1 (lumped self-weight)"]), f"T = {T_MEASURE} (limit {T_LIMIT:.0f} °C); a sample whose simulation "
         f"failed is retried once with power steps {1e3 * RETRY_STEPS[0]:g}/"
@@ -220,7 +220,7 @@ def _plot_inputs(df):
         ax.set_xlim(-1, 1)
         ax.set_xlabel(f"Spearman rank correlation with {out} (95 % CI)")
         ax.grid(True, axis="x", alpha=0.3)
-    ax.legend(fontsize="small", loc="lower left")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     from studies.plotting import environment_note, note_assumptions
 
     note_assumptions(fig, environment_note("air", scenario=SCENARIO_TEXT,
