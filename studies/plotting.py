@@ -235,7 +235,7 @@ def _mark_hot_creases(ax, x_mm, temperature, mesh) -> int:
                    linewidths=2.0, depthshade=False, zorder=10)
         n = int(hot.sum())
         text += f"\n{n} crease{'s' if n > 1 else ''} {_LIMIT_LABEL} (cyan circles)"
-    ax.text2D(0.0, 0.0, text, transform=ax.transAxes, fontsize="x-small",
+    ax.text2D(0.0, 1.0, text, transform=ax.transAxes, fontsize="x-small", va="top",
               color="teal" if hot.any() else "0.25")
     return int(hot.sum())
 
