@@ -223,13 +223,18 @@ def plot(df: pd.DataFrame):
         ax.set_xlabel("residual fold of the actuated creases [deg]")
         ax.grid(True, alpha=0.3)
     limit = sweep["temperature_limit [degC]"].iloc[0]
-    ax_t.axhline(limit, color="red", ls="--", lw=1, label=f"limit 1.2 Tg = {limit:.0f} °C")
+    ax_t.axhline(limit, color="red", ls=":", lw=1.2, label=f"1.2 T_g = {limit:.0f} °C")
     ax_p.set_ylabel("assembly + grip power per heated crease [mW]")
     ax_t.set_ylabel("crease temperature [°C] (centre line)")
     ax_p.set_title("assembly + grip power (x at the top: criterion not met / failed)")
     ax_t.set_title("crease temperature at the stopping power")
-    ax_p.legend(fontsize="small")
-    ax_t.legend(fontsize="small")
+    ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16))
+    ax_t.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2)
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, "environment: air, k_env = 0.026 W/(m K); gravity x 1 (lumped "
+                     "self-weight); the residual fold of all four actuated creases swept "
+                     "together; temperature: centre-line mean of the hottest heated crease")
     return fig
 
 
