@@ -317,7 +317,7 @@ def _grid_figure(grid):
     for ax in axes:
         for h, label in zip(*ax.get_legend_handles_labels()):
             entries.setdefault(label, h)
-    fig.legend(entries.values(), entries.keys(), loc="outside lower center", ncols=3,
+    fig.legend(entries.values(), entries.keys(), loc="outside upper center", ncols=3,
                fontsize="small")
     _note(fig)
     return fig
