@@ -198,8 +198,7 @@ class SimulationResult:
     @cached_property
     def crease_temperature_centre_line(self) -> np.ndarray:
         """(m, C) mean of the 3 centre-line nodes (A, B, Ctr) of each crease [deg C]: the
-        measure the 1.2 T_g design limit is checked on (docs/theory.md, "Crease temperature
-        limit")."""
+        measure the 1.2 T_g design limit is checked on (theory 5.4)."""
         return self.history["temperature"][:, self.model.mesh.crease_nodes[:, 4:7]].mean(axis=2)
 
     @cached_property

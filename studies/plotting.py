@@ -39,7 +39,7 @@ T_LIMIT = 1.2 * SU8.glass_transition
 _LIMIT_LABEL = f"above 1.2 T_g = {T_LIMIT:.0f} °C"
 _FACE_LABEL = "temperature [°C] (facet: its hottest node)"
 #: The one temperature the 1.2 T_g limit is checked on, in the design problems and in every
-#: figure (docs/theory.md, "Crease temperature limit"): the mean of a crease's three
+#: figure (theory 5.4): the mean of a crease's three
 #: centre-line nodes (A, B, Ctr), the reference's measure; the hottest crease's value counts.
 #: The hottest node is shown beside it where the two differ.
 T_MEASURE = "centre-line mean of the hottest crease"

@@ -144,7 +144,7 @@ class LiftPowerResult(ResultFiles):
     snaps : ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the power found
         (the ``" after a snap (...)"`` of the message); empty if none or not met
     temperature : centre-line mean of the hottest crease there [deg C] (the measure of the
-        1.2 T_g limit; docs/theory.md, "Crease temperature limit")
+        1.2 T_g limit; theory 5.4)
     """
 
     success: bool
