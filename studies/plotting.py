@@ -8,17 +8,17 @@ every function returns a figure or writes a file.
 
 from __future__ import annotations
 
-import contextlib
 import pathlib
-import textwrap
 
 import numpy as np
-from cycler import cycler
 from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
-from matplotlib.layout_engine import ConstrainedLayoutEngine
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from studies.figure_notes import (FULL_STAMP, LINESTYLES, PALETTE, QUICK_STAMP,  # noqa: F401
+                                  environment_note, figure_style, note_assumptions,
+                                  stamp_full, stamp_quick)
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
 from simulator import SU8
@@ -44,68 +44,6 @@ _FACE_LABEL = "temperature [°C] (facet: its hottest node)"
 #: The hottest node is shown beside it where the two differ.
 T_MEASURE = "centre-line mean of the hottest crease"
 
-#: Colour-blind-safe colours (Okabe & Ito 2008), the default colour cycle of every study
-#: figure (:func:`figure_style`); ``C0``... name them in this order.
-PALETTE = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000",
-           "#999999")
-#: Line styles cycled with :data:`PALETTE`, so curves differ without colour too.
-LINESTYLES = ("-", "--", "-.", ":", "-", "--", "-.", ":")
-
-
-@contextlib.contextmanager
-def figure_style():
-    """Matplotlib settings of the study figures inside the block: the colour-blind-safe
-    :data:`PALETTE` cycled with :data:`LINESTYLES`, legends on a white frame placed away from
-    the data (``loc="best"``)."""
-    import matplotlib
-
-    with matplotlib.rc_context({"axes.prop_cycle": cycler(color=PALETTE)
-                                + cycler(linestyle=LINESTYLES),
-                                "legend.loc": "best", "legend.framealpha": 0.9}):
-        yield
-
-
-def environment_note(medium: str, k_env: float | None = None, residual_fold=None,
-                     gravity=None, scenario: str | None = None, extra=()) -> str:
-    """One line of a figure's assumptions: medium and k_env [W/(m K)], residual fold [deg],
-    gravity factor, assumed scenario; ``extra`` strings appended."""
-    parts = [f"environment: {medium}" + (f", k_env = {k_env:g} W/(m K)" if k_env else "")]
-    if residual_fold is not None:
-        parts.append(f"residual fold {residual_fold} deg" if isinstance(residual_fold, str)
-                     else f"residual fold {residual_fold:g} deg")
-    if gravity is not None:
-        parts.append("no gravity" if gravity in (0, False) else f"gravity x {float(gravity):g}")
-    if scenario:
-        parts.append(f"assumed scenario: {scenario}")
-    return "; ".join(parts + list(extra))
-
-
-_NOTE_GID, _STATUS_GID = "assumptions", "run-status"
-
-
-def _reserve_bottom(fig, inches: float) -> None:
-    """Keep a strip of ``inches`` under the axes free (constrained layout), at least as
-    high as any strip reserved before."""
-    engine = fig.get_layout_engine()
-    if not isinstance(engine, ConstrainedLayoutEngine):
-        return
-    inches = max(inches, getattr(fig, "_etorigami_strip", 0.0))
-    fig._etorigami_strip = inches
-    strip = min(inches / fig.get_figheight(), 0.35)
-    engine.set(rect=(0.0, strip, 1.0, 1.0 - strip))
-
-
-def note_assumptions(fig, *lines: str) -> None:
-    """State what a figure assumes in a footer under its axes (environment, residual fold,
-    gravity factor, assumed scenario, missing reference data...): one call per figure,
-    lines wrapped to the figure's width; the bottom-right corner stays free for the run
-    status of :func:`save_figure`."""
-    width = max(40, int(fig.get_figwidth() * 72 / 4.6) - 30)   # characters at 7 pt
-    text = "\n".join(textwrap.fill(line, width) for line in lines if line)
-    n = text.count("\n") + 1
-    fig.text(0.005, 0.005, text, ha="left", va="bottom", fontsize=7, color="0.2",
-             gid=_NOTE_GID, linespacing=1.25)
-    _reserve_bottom(fig, 0.06 + n * 7 * 1.25 / 72 + 0.04)
 
 
 def centre_line_temperatures(temperature, mesh) -> np.ndarray:
@@ -494,37 +432,6 @@ def animate(result, path, every=1, fps=10, quick=False) -> pathlib.Path:
     return path
 
 
-#: Text of the stamp on the figures of a ``--quick`` study run (:func:`stamp_quick`).
-QUICK_STAMP = "quick run: coarse settings,\nnot the published figure"
-#: Text of the stamp on the figures of a full study run (:func:`save_figure`).
-FULL_STAMP = "full run"
-_STAMP_GID, _FULL_GID = "quick-stamp", "full-stamp"
-_STAMP_HEIGHT = 0.32   # [inch] strip kept free for the stamp under the axes
-
-
-def stamp_quick(fig) -> None:
-    """Mark ``fig`` as the figure of a quick run: :data:`QUICK_STAMP` in its bottom-right
-    corner, in a strip that a constrained layout keeps free of the axes (so the stamp never
-    covers data; the bottom-left is the footer of :func:`note_assumptions`). Replaces a
-    "full run" stamp; calling it again changes nothing."""
-    if any(t.get_gid() == _STAMP_GID for t in fig.texts):
-        return
-    for t in [t for t in fig.texts if t.get_gid() == _FULL_GID]:
-        t.remove()
-    _reserve_bottom(fig, _STAMP_HEIGHT)
-    fig.text(0.995, 0.005, QUICK_STAMP, ha="right", va="bottom", fontsize="x-small",
-             color="darkred", fontweight="bold", gid=_STAMP_GID)
-
-
-def _stamp_full(fig) -> None:
-    """Mark ``fig`` as the figure of a full run (bottom-right), unless it is stamped."""
-    if any(t.get_gid() in (_STAMP_GID, _FULL_GID) for t in fig.texts):
-        return
-    _reserve_bottom(fig, 0.2)
-    fig.text(0.995, 0.005, FULL_STAMP, ha="right", va="bottom", fontsize=7, color="0.35",
-             gid=_FULL_GID)
-
-
 def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     """Save a figure (PNG unless ``path`` has another suffix), creating the parent folder.
 
@@ -549,6 +456,6 @@ def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     if quick:
         stamp_quick(fig)
     else:
-        _stamp_full(fig)
+        stamp_full(fig)
     fig.savefig(path, dpi=dpi)
     return path
