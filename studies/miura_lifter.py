@@ -134,7 +134,7 @@ def plot(df: pd.DataFrame) -> dict:
     ax_l.axhline(0, color="k", lw=0.8)
     low = sweep[LIFT].min()
     if low < 0:
-        ax_l.text(0.02, 0.5, f"lift < 0 (end moves down) at low power, down to {low:.2f} um",
+        ax_l.text(0.02, 0.78, f"lift < 0 (end moves down) at low power,\ndown to {low:.2f} um",
                   transform=ax_l.transAxes, fontsize="small", color="C3")
     ax_l.legend(fontsize="small", loc="upper left")
 
@@ -160,7 +160,7 @@ def plot(df: pd.DataFrame) -> dict:
     note = environment_note("air", 0.026, 0, None, extra=[
         "no gravity", "first column of panels clamped",
         "substrate 100 um below (room-temperature boundary) in the 'on substrate' run"])
-    note_assumptions(fig, note, "The paper's FE comparison is not re-computed here.")
+    note_assumptions(fig, note)
 
     nodes = df[df["table"] == "nodes"]
     shapes = Figure(figsize=(12.5, 5.3), layout="constrained")
