@@ -24,6 +24,7 @@ from ._version import __version__
 
 __getattr__, __dir__ = _attach(__name__, {
     ".model.bimorph": ("Actuators", "Bimorph"),
+    ".case_notes": ("parameter_note",),
     ".cases": ("Case", "describe_cases", "get_case", "miura_fold_signs", "miura_sheet_model",
                "single_fold_model"),
     ".solvers.dynamics": ("DynamicsResult", "integrate"),
@@ -109,7 +110,7 @@ __all__ = [
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases
-    "SimulationResult", "StepResult", "Case", "get_case", "describe_cases",
+    "SimulationResult", "StepResult", "Case", "get_case", "describe_cases", "parameter_note",
     # result viewer (self-contained HTML)
     "write_viewer", "viewer_html", "load_viewer_data",
     # FOLD files

@@ -80,10 +80,11 @@ def get_case(name: str, **overrides) -> Case:
 
 
 def describe_cases() -> list:
-    """[(name, summary, [(parameter, default, unit), ...]), ...] for every case."""
+    """[(name, summary, [(parameter, default, unit), ...]), ...] for every case; the summary
+    is the first paragraph of the case's docstring, on one line."""
     out = []
     for name, fn in CASES.items():
-        doc = (fn.__doc__ or "").strip().splitlines()[0]
+        doc = " ".join((fn.__doc__ or "").strip().split("\n\n")[0].split())
         params = [(p.name, p.default, fn.units.get(p.name, ""))
                   for p in inspect.signature(fn).parameters.values()]
         out.append((name, doc, params))
@@ -451,7 +452,7 @@ def snap_through(variant: str = "force", span: float = 1e-3, rise: float = 40e-6
                  depth: float = 500e-6, load_mN: float = 1.0, arc_length: float = 0.1,
                  max_increments: int = 300, power_mW: float = 12.0,
                  thermal_steps: int = 60) -> Case:
-    """Snap-through followed past its limit points by arc length (issue 9).
+    """Snap-through followed past its limit points by arc length.
 
     ``variant="force"``: a shallow two-panel roof (``roof_pattern``: span, rise, 20 um SU-8
     panels, a 20 um x 5 um ridge crease), pinned along both eaves and pushed down at its ridge

@@ -200,6 +200,12 @@ class SimulationResult:
         return t @ crease_temperature_weights()
 
     @cached_property
+    def crease_temperature_centre_line(self) -> np.ndarray:
+        """(m, C) mean of the 3 centre-line nodes (A, B, Ctr) of each crease [deg C]: the
+        measure the 1.2 T_g design limit is checked on (theory 5.4)."""
+        return self.history["temperature"][:, self.model.mesh.crease_nodes[:, 4:7]].mean(axis=2)
+
+    @cached_property
     def crease_temperature_max(self) -> np.ndarray:
         """(m, C) hottest of the 7 crease nodes (2 hinge nodes of a sharp crease) [deg C]."""
         return self.history["temperature"][:, self.model.mesh.crease_nodes].max(axis=2)

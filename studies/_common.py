@@ -163,13 +163,26 @@ def study_main(name: str, doc: str, run, plot, argv=None) -> pathlib.Path:
                        "--overwrite.\n")
     t0 = time.perf_counter()
     frame = run(quick=args.quick, progress=not args.no_progress)
-    figs = plot(frame)
-    figs = figs if isinstance(figs, dict) else {name: figs}
-    write_outputs(args.out, name, frame, figs, settings, time.perf_counter() - t0)
+    with _figure_style():
+        figs = _as_dict(plot(frame), name)
+        write_outputs(args.out, name, frame, figs, settings, time.perf_counter() - t0)
     kind = " (quick run: coarse settings, not the published results)" if args.quick else ""
     print(f"{name}: {len(frame)} rows written to {args.out} in "
           f"{time.perf_counter() - t0:.1f} s{kind}")
     return args.out
+
+
+def _figure_style():
+    """The study figures' style (:func:`studies.plotting.figure_style`), for drawing and
+    saving (colours named ``C0``... resolve when a figure is saved)."""
+    from studies.plotting import figure_style
+
+    return figure_style()
+
+
+def _as_dict(figs, name: str) -> dict:
+    """A study's ``plot`` output as {file stem: Figure}."""
+    return figs if isinstance(figs, dict) else {name: figs}
 
 
 def replot(name: str, plot, out: pathlib.Path, quick: bool = False) -> pathlib.Path:
@@ -184,10 +197,10 @@ def replot(name: str, plot, out: pathlib.Path, quick: bool = False) -> pathlib.P
     if not csv.is_file():
         raise SystemExit(f"--figures-only needs {csv}; run the study first (without it).")
     quick = run_was_quick(out, default=quick)
-    figs = plot(pd.read_csv(csv))
-    figs = figs if isinstance(figs, dict) else {name: figs}
-    for fig_name, fig in figs.items():
-        save_figure(fig, pathlib.Path(out) / f"{fig_name}.png", quick=quick)
+    with _figure_style():
+        figs = _as_dict(plot(pd.read_csv(csv)), name)
+        for fig_name, fig in figs.items():
+            save_figure(fig, pathlib.Path(out) / f"{fig_name}.png", quick=quick)
     print(f"{name}: {len(figs)} figure(s) re-drawn in {out}")
     return pathlib.Path(out)
 

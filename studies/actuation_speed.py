@@ -1,4 +1,4 @@
-"""How fast does an electro-thermal crease fold and release? (issue 10, item 6)
+"""How fast does an electro-thermal crease fold and release?
 
 Question
 --------
@@ -265,7 +265,16 @@ def plot(df: pd.DataFrame):
                     f"{bw:.3g} Hz" if np.isfinite(bw) else "(d) square wave"))
     for ax in (ax_t, ax_g, ax_s, ax_f):
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize="x-small")
+    ax_t.legend(fontsize="x-small", loc="upper right")
+    ax_g.legend(fontsize="x-small", loc="center right")
+    ax_s.legend(fontsize="x-small", loc="upper left", ncols=2)
+    ax_f.legend(fontsize="x-small", loc="lower left")
+    from studies.plotting import environment_note, note_assumptions
+
+    note_assumptions(fig, environment_note("air", 0.026, 0, 1.0, extra=[
+        "single crease 150 um over a substrate (contact), chip a heat sink at room "
+        "temperature", "gripper: lumped self-weight, residual fold 0", "air damping "
+        "2 N s/m^3"]))
     return fig
 
 

@@ -26,11 +26,12 @@ Outputs (``results/crane/``)
 ``all active`` or ``8 and 17 deactivated``:
 
 * ``crease`` - the 17 creases at the end of heating: ``crease``, ``crease_ref``, ``heated``
-  (final power > 0), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
-  ``temperature_max [degC]``.
+  (final power > 0), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``
+  (actuation temperature), ``temperature_centre [degC]`` (centre-line mean, the measure of
+  the 1.2 T_g limit), ``temperature_max [degC]``.
 * ``sweep`` - every crease, every record (every 5th in the full run, plus the last):
   ``crease``, ``crease_ref``, ``step``, ``base_power [mW]``, ``power [mW]``,
-  ``fold_angle [deg]``, ``temperature [degC]``.
+  ``fold_angle [deg]``, ``temperature [degC]``, ``temperature_centre [degC]``.
 * ``nodes`` - final node positions ``x [um]``, ``y [um]``, ``z [um]`` and
   ``temperature [degC]`` (``step``, ``stage``, ``increment``, ``node``).
 
@@ -60,6 +61,9 @@ BASE_CREASE_REF = 6                     # gets exactly q in both variants
 SWEEP_EVERY = 5                         # full run: keep every 5th record in the sweep rows
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
                                "temperature_max [degC]")
+TEMP_CL = "temperature_centre [degC]"
+#: Creases (reference numbers) left unheated, and halved, in the second run.
+DEACTIVATED_REF, HALVED_REF = (8, 17), (9, 11)
 
 
 def _params(deactivated: bool, quick: bool = False) -> dict:
@@ -80,7 +84,8 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             "table": "crease", "variant": variant, "crease": ids, "crease_ref": ids + 1,
             "heated": power[-1] > 0, POWER: power[-1],
             FOLD: np.degrees(res.fold_angle[-1]), TEMP: res.crease_temperature[-1],
-            TEMP_MAX: res.crease_temperature_max[-1]}))
+            TEMP_MAX: res.crease_temperature_max[-1],
+            TEMP_CL: res.crease_temperature_centre_line[-1]}))
         m = len(power)
         recs = np.arange(0, m, 1 if quick else SWEEP_EVERY)
         if recs[-1] != m - 1:
@@ -91,7 +96,8 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             "crease": np.tile(ids, len(recs)), "crease_ref": np.tile(ids + 1, len(recs)),
             "step": np.repeat(recs, C), "base_power [mW]": np.repeat(base, C),
             POWER: power[recs].ravel(), FOLD: np.degrees(res.fold_angle[recs]).ravel(),
-            TEMP: res.crease_temperature[recs].ravel()}))
+            TEMP: res.crease_temperature[recs].ravel(),
+            TEMP_CL: res.crease_temperature_centre_line[recs].ravel()}))
         parts.append(node_frame(res, -1, variant=variant))
     return pd.concat(parts, ignore_index=True)
 
@@ -103,7 +109,8 @@ def plot(df: pd.DataFrame) -> dict:
     from matplotlib.lines import Line2D
     from matplotlib.ticker import MaxNLocator
 
-    from studies.plotting import mark_temperature_limit, nodal_range, plot_shape
+    from studies.plotting import environment_note, label_points, mark_temperature_limit, \
+        nodal_range, note_assumptions, plot_shape, share_3d_scale
 
     variants = list(VARIANTS)
     dashes = {variants[0]: "-", variants[1]: "--"}
@@ -113,15 +120,15 @@ def plot(df: pd.DataFrame) -> dict:
     for k, ref in enumerate(REPRESENTATIVE):
         for variant in variants:
             d = sweep[(sweep["crease_ref"] == ref) & (sweep["variant"] == variant)]
-            for ax, col in ((ax_f, FOLD), (ax_t, TEMP)):
+            for ax, col in ((ax_f, FOLD), (ax_t, TEMP_CL)):
                 ax.plot(d["base_power [mW]"], d[col], dashes[variant], color=f"C{k}")
     handles = [Line2D([], [], color=f"C{k}", label=f"crease {ref}")
                for k, ref in enumerate(REPRESENTATIVE)]
     handles += [Line2D([], [], color="0.3", ls=dashes[v], label=LABELS[v]) for v in variants]
-    ax_f.legend(handles=handles, fontsize="small", ncols=2)
+    ax_f.legend(handles=handles, fontsize="small", ncols=2, loc="upper left")
     ax_f.set_ylabel("fold angle [deg] (+ valley, - mountain)")
     ax_f.set_title("(a) fold angles (reference crease numbers)")
-    ax_t.set_ylabel("crease temperature [°C]")
+    ax_t.set_ylabel("crease temperature, centre line [°C]")
     ax_t.set_title("(b) crease temperatures")
     for ax in (ax_f, ax_t):
         ax.set_xlabel("base power q [mW] (crease power = 0.5 q ... 4 q)")
@@ -139,7 +146,7 @@ def plot(df: pd.DataFrame) -> dict:
     for k, variant in enumerate(variants):
         d = creases[creases["variant"] == variant].set_index("crease_ref").loc[refs]
         heated = d["heated"].astype(bool).to_numpy()
-        for ax, col in ((ax_p, POWER), (ax_b, FOLD), (ax_bt, TEMP)):
+        for ax, col in ((ax_p, POWER), (ax_b, FOLD), (ax_bt, TEMP_CL)):
             b = ax.bar(pos + (k - 0.5) * 0.4, d[col], width=0.4, color=f"C{k}",
                        label=LABELS[variant])
             for patch, h in zip(b, heated):
@@ -149,11 +156,12 @@ def plot(df: pd.DataFrame) -> dict:
     ax_p.set_ylabel("final crease power [mW]")
     ax_p.set_title(f"(a) heating at q = {creases[POWER].max() / 4:.0f} mW: crease powers "
                    "(9 and 11 halved in the second run)")
-    ax_p.legend(fontsize="small", title="hatched: unheated crease", title_fontsize="small")
+    ax_p.legend(fontsize="small", title="hatched: unheated crease", title_fontsize="small",
+                loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax_b.set_ylabel("final fold angle [deg]")
     ax_b.set_title("(b) fold angles")
     ax_b.axhline(0, color="k", lw=0.8)
-    ax_bt.set_ylabel("final crease temperature [°C]")
+    ax_bt.set_ylabel("final crease temperature,\ncentre line [°C]")
     ax_bt.set_xlabel("crease (reference numbering)")
     ax_bt.set_title("(c) crease temperatures")
     ax_bt.set_xticks(pos, [str(int(r)) for r in refs])
@@ -161,19 +169,37 @@ def plot(df: pd.DataFrame) -> dict:
         ax.grid(True, axis="y", alpha=0.3)
     mark_temperature_limit(ax_bt)
 
+    note = environment_note("air", 0.026, 0, 0, extra=["no substrate"])
+    for f in (fig, bars):
+        note_assumptions(f, note)
+
     nodes = df[df["table"] == "nodes"]
     q = sweep["base_power [mW]"].max()
-    shapes = Figure(figsize=(12.5, 5.2), layout="constrained")
+    shapes = Figure(figsize=(12.5, 5.6), layout="constrained")
     t_range = nodal_range(nodes[TEMP])             # one colour scale for both shapes
+    axes, points = [], []
     for k, variant in enumerate(variants):
         ax = shapes.add_subplot(1, 2, k + 1, projection="3d")
         mesh = get_case(NAME, **_params(VARIANTS[variant])).model.mesh
-        plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax,
-                   t_range=t_range, colorbar=k == len(variants) - 1)
+        d = nodes[nodes["variant"] == variant]
+        plot_shape(shape_from_frame(d, mesh), ax=ax, t_range=t_range,
+                   colorbar=k == len(variants) - 1)
+        x = d.sort_values("node")[["x [um]", "y [um]", "z [um]"]].to_numpy(float) / 1e3
+        if VARIANTS[variant]:
+            label_points(ax, {**{f"{r} off": x[mesh.crease_nodes[mesh.crease_row_of(r - 1), 6]]
+                                 for r in DEACTIVATED_REF},
+                              **{f"{r}: q/2": x[mesh.crease_nodes[mesh.crease_row_of(r - 1), 6]]
+                                 for r in HALVED_REF}}, color="#D55E00")
+        axes.append(ax)
+        points.append(x)
         ax.set_title(f"{LABELS[variant]}\n(q = {q:.1f} mW)")
         for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
             axis.set_major_locator(MaxNLocator(5))
         ax.view_init(elev=30, azim=-60)
+    scale = share_3d_scale(axes, points)
+    shapes.suptitle(f"Crane, final shapes ({scale}; labels: reference crease numbers of the "
+                    "deactivated and halved creases)", fontsize="medium")
+    note_assumptions(shapes, note)
     return {NAME: fig, f"{NAME}_creases": bars, f"{NAME}_shapes": shapes}
 
 

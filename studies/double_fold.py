@@ -27,7 +27,9 @@ Outputs (``results/double_fold/``)
   increment) and fold: ``fold`` (1 or 2), ``crease`` (edge id), ``step``, ``stage``,
   ``power [mW]`` (power of that crease = power per crease), ``fold_angle [deg]``,
   ``fold_change [deg]`` (relative to the pre-heating record), ``temperature [degC]``
-  (actuation temperature of the crease) and ``temperature_max [degC]`` (hottest crease node).
+  (actuation temperature of the crease), ``temperature_centre [degC]`` (mean of its
+  centre-line nodes: the measure of the 1.2 T_g limit) and ``temperature_max [degC]``
+  (hottest crease node).
 * ``nodes`` - final node positions ``x [um]``, ``y [um]``, ``z [um]`` and
   ``temperature [degC]`` (``step``, ``stage``, ``increment``, ``node``).
 
@@ -48,6 +50,7 @@ THERMAL_STEPS_QUICK = 30
 FOLDS = {1: 2, 2: 5}          # fold number -> crease (edge) id
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
                                "temperature_max [degC]")
+TEMP_CL = "temperature_centre [degC]"
 
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
@@ -65,6 +68,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             "stage": h["stage_name"][recs], POWER: h["power"][recs, row] * 1e3, FOLD: angle,
             "fold_change [deg]": angle - angle[0],
             TEMP: res.crease_temperature[recs, row], TEMP_MAX: res.crease_temperature_max[recs, row],
+            TEMP_CL: res.crease_temperature_centre_line[recs, row],
         }))
     return pd.concat([*parts, node_frame(res, -1)], ignore_index=True)
 
@@ -73,32 +77,42 @@ def plot(df: pd.DataFrame) -> dict:
     """``{"double_fold": folds and temperatures vs power, "double_fold_shape": final shape}``."""
     from matplotlib.figure import Figure
 
-    from studies.plotting import mark_temperature_limit, plot_shape
+    from studies.plotting import environment_note, mark_temperature_limit, note_assumptions, \
+        plot_shape
 
     sweep = df[df["table"] == "sweep"].sort_values("step", kind="stable")
-    fig = Figure(figsize=(11.5, 4.6), layout="constrained")
+    fig = Figure(figsize=(11.5, 4.9), layout="constrained")
     ax_f, ax_t = fig.subplots(1, 2)
+    measured = []
     for fold, d in sweep.groupby("fold"):
         label = f"fold {int(fold)} (crease {int(d['crease'].iloc[0])})"
-        color = f"C{int(fold) - 1}"
-        ax_f.plot(d[POWER], d[FOLD], color=color, label=label)
-        ax_t.plot(d[POWER], d[TEMP], color=color, label=f"{label}, crease temperature")
-        ax_t.plot(d[POWER], d[TEMP_MAX], "--", color=color, label=f"{label}, hottest node")
+        color, style = f"C{int(fold) - 1}", ("-", "-.")[int(fold) - 1]
+        ax_f.plot(d[POWER], d[FOLD], color=color, ls=style, label=label)
+        measured += ax_t.plot(d[POWER], d[TEMP_CL], color=color, ls=style,
+                              label=f"{label}, centre line")
+        ax_t.plot(d[POWER], d[TEMP_MAX], ":", color=color, lw=1.2,
+                  label=f"{label}, hottest node")
     ax_f.set_ylabel("fold angle [deg]")
     ax_f.set_title("(a) fold angles (positive: folding up)")
     ax_t.set_ylabel("temperature [°C]")
-    ax_t.set_title("(b) crease temperatures")
+    ax_t.set_title("(b) crease temperatures (limit on the centre line)")
     for ax in (ax_f, ax_t):
         ax.set_xlabel("power per crease [mW]")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize="small")
-    mark_temperature_limit(ax_t)
+        ax.legend(fontsize="small", loc="upper left")
+    mark_temperature_limit(ax_t, lines=measured)
+    note = environment_note("air", 0.026, 0, 0.9, extra=["substrate 60 um below"])
+    missing = ("the paper's measured fold angles (Fig. 8c-d) are not available here and not "
+               "drawn")
+    note_assumptions(fig, note, missing)
 
     nodes = df[df["table"] == "nodes"]
-    shape = plot_shape(shape_from_frame(nodes, get_case(NAME).model.mesh), record=-1)
+    shape = plot_shape(shape_from_frame(nodes, get_case(NAME).model.mesh), record=-1,
+                       panel_labels={"anchor": 0, "panel 1": 1, "panel 2": 2, "substrate": 3})
     ax = shape.axes[0]
-    ax.set_title(f"double fold at {sweep[POWER].max():.1f} mW per crease")
+    ax.set_title(f"double fold at {sweep[POWER].max():.1f} mW per crease (true scale)")
     ax.view_init(elev=20, azim=-70)
+    note_assumptions(shape, note)
     return {NAME: fig, f"{NAME}_shape": shape}
 
 

@@ -249,6 +249,11 @@ def cd_optimum(df: pd.DataFrame) -> dict:
 PAPER_DEVICES = ((4, 29.8), (9, 21.6))
 
 
+_NOTE = ("environment: air, k_env = 0.026 W/(m K); residual fold 0 deg; gravity x 1 (lumped "
+         "self-weight); temperature: centre-line mean of the hottest heated crease, limit "
+         "1.2 T_g = 252 °C; the paper's simulated curves are not re-drawn here")
+
+
 def _plot_cycles(cycles, stop_message=""):
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
@@ -274,8 +279,9 @@ def _plot_cycles(cycles, stop_message=""):
     ax_p.set_ylabel("power per heated crease [mW]")
     ax_p.set_ylim(bottom=0)
     ax_t = ax_p.twinx()
-    ax_t.plot(cycles["cycle"], cycles[TEMP], "C3-", alpha=0.5, lw=1, label="crease temperature")
-    ax_t.set_ylabel("crease temperature [°C]", color="C3")
+    ax_t.plot(cycles["cycle"], cycles[TEMP], "C3-.", alpha=0.7, lw=1,
+              label="crease temperature (centre line)")
+    ax_t.set_ylabel("crease temperature, centre line [°C]", color="C3")
     ax_t.tick_params(axis="y", colors="C3")
     ax_t.set_ylim(0, 270)
     mark_temperature_limit(ax_t, axis="y")
@@ -284,7 +290,8 @@ def _plot_cycles(cycles, stop_message=""):
                    f"({100 * (1 - p1 / p0):.0f}% less)\n{stop_message}", fontsize="medium")
     h1, l1 = ax_p.get_legend_handles_labels()
     h2, l2 = ax_t.get_legend_handles_labels()
-    ax_p.legend(h1 + h2, l1 + l2, fontsize="small", loc="center right")
+    ax_p.legend(h1 + h2, l1 + l2, fontsize="small", loc="upper center",
+                bbox_to_anchor=(0.5, -0.16), ncols=2)
 
     full = 2 * cycles[ASM] + 2 * cycles[GRIP]
     ax_e.plot(cycles["cycle"], full, "k-o", ms=4,
@@ -306,6 +313,9 @@ def _plot_cycles(cycles, stop_message=""):
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_xlabel("cycle")
         ax.grid(True, alpha=0.3)
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, _NOTE)
     return fig
 
 
@@ -348,8 +358,11 @@ def _plot_methods(comp, hist):
     ax_h.set_ylabel("assembly + grip power per heated crease [mW]")
     ax_h.set_title("best feasible power vs evaluation (dots: every evaluation, x at the top: "
                    "failed, e.g. time limit)")
-    ax_h.legend(fontsize="small", ncol=3)
+    ax_h.legend(fontsize="small", ncol=3, loc="upper right")
     ax_h.grid(True, alpha=0.3)
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, _NOTE)
     return fig
 
 

@@ -17,12 +17,12 @@ Method
 * Designs:
 
   - ``start``: the paper's start design (W 200, La 700, L1 1000, L2 1000 um);
-  - ``paper-optimal``: the coordinate descent's final design of the study
+  - ``our optimum``: the coordinate descent's final design of the study
     ``gripper_optimization`` (last ``cycles`` row of
     ``results/gripper_optimization/gripper_optimization.csv``). If that file does not exist,
     the coordinate descent is re-run here with a small budget (``FALLBACK_CD_BUDGET``
     evaluations, ``--quick``: 3); the ``source`` column says which;
-  - ``robust-optimal``: NLopt SBPLX (60 evaluations, default options: exact penalty for the
+  - ``fold-robust optimum``: NLopt SBPLX (60 evaluations, default options: exact penalty for the
     constraints) from the start design on :class:`~design.analysis.robustness.RobustGripperProblem`
     over the residual folds {-20, -10, 0} deg: objective = the largest total power over the
     three, every one of them must meet both stages and the temperature limit. SBPLX is the
@@ -89,7 +89,7 @@ from studies.gripper_optimization import (
 )
 
 NAME = "gripper_robustness"
-#: Output of the study ``gripper_optimization`` (source of the paper-optimal design).
+#: Output of the study ``gripper_optimization`` (source of our optimum).
 OPTIMUM_CSV = RESULTS / "gripper_optimization" / "gripper_optimization.csv"
 RESIDUALS = (-20.0, -15.0, -10.0, -5.0, 0.0, 5.0, 10.0)        # deg
 RESIDUALS_QUICK = (-10.0, 0.0)
@@ -98,7 +98,7 @@ FALLBACK_CD_BUDGET, FALLBACK_CD_BUDGET_QUICK = 40, 3
 #: Optimiser of the robust problem (see the module docstring) and its budgets.
 ROBUST_METHOD = "sbplx"
 ROBUST_BUDGET, ROBUST_BUDGET_QUICK = 60, 2
-START, PAPER, ROBUST = "start", "paper-optimal", "robust-optimal"
+START, PAPER, ROBUST = "start", "our optimum", "fold-robust optimum"
 POWER, TEMP = "total_power [mW]", "temperature [degC]"
 
 
@@ -156,7 +156,7 @@ def robust_optimum(problem, residuals_deg, budget, progress):
 def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.DataFrame:
     """Designs, then the residual-fold sweep; see the module docstring.
 
-    ``optimum_csv``: the study ``gripper_optimization``'s CSV (paper-optimal design; default
+    ``optimum_csv``: the study ``gripper_optimization``'s CSV (our optimum; default
     :data:`OPTIMUM_CSV`); when it does not exist the coordinate descent is re-run with a small
     budget.
     """
@@ -223,13 +223,18 @@ def plot(df: pd.DataFrame):
         ax.set_xlabel("residual fold of the actuated creases [deg]")
         ax.grid(True, alpha=0.3)
     limit = sweep["temperature_limit [degC]"].iloc[0]
-    ax_t.axhline(limit, color="red", ls="--", lw=1, label=f"limit 1.2 Tg = {limit:.0f} °C")
+    ax_t.axhline(limit, color="red", ls=":", lw=1.2, label=f"1.2 T_g = {limit:.0f} °C")
     ax_p.set_ylabel("assembly + grip power per heated crease [mW]")
     ax_t.set_ylabel("crease temperature [°C] (centre line)")
     ax_p.set_title("assembly + grip power (x at the top: criterion not met / failed)")
     ax_t.set_title("crease temperature at the stopping power")
-    ax_p.legend(fontsize="small")
-    ax_t.legend(fontsize="small")
+    ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16))
+    ax_t.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2)
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, "environment: air, k_env = 0.026 W/(m K); gravity x 1 (lumped "
+                     "self-weight); the residual fold of all four actuated creases swept "
+                     "together; temperature: centre-line mean of the hottest heated crease")
     return fig
 
 

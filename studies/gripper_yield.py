@@ -6,7 +6,7 @@ Fabricated grippers differ from the drawing: each actuated crease keeps its own 
 fold, the gold and SU-8 layers vary in thickness, the bimorph mismatch and the air's heat
 loss vary. Which share of the devices works (both stages met with the crease temperature
 ``T <= 1.2 T_g`` = 252 degC: the *yield*), how much power do they need, which inputs matter
-most, and does a design chosen for yield do better than the power-optimal one?
+most, and does a design chosen for yield do better than our (power-optimal) optimum?
 
 Method
 ------
@@ -18,10 +18,10 @@ Method
   conductivity uniform on [0.024, 0.030] W/(m K).
 * Problem: the paper's gripper problem (:class:`design.GripperProblem`, bisect
   power search).
-* Designs: ``start`` (the paper's start), ``paper-optimal`` (the coordinate descent's final
+* Designs: ``start`` (the paper's start), ``our optimum`` (the coordinate descent's final
   design of the study ``gripper_optimization``, read from its CSV; re-run with a small
   budget if the CSV is missing, see :func:`studies.gripper_robustness.paper_optimum`),
-  ``robust-optimal``: NLopt SBPLX (``ROBUST_BUDGET`` evaluations) from the paper-optimal
+  ``yield-robust optimum``: NLopt SBPLX (``ROBUST_BUDGET`` evaluations) from our optimum
   design on
   :class:`design.analysis.uncertainty_sweep.RobustYieldProblem`: minimise the 90 % quantile of the
   total power subject to a yield of at least 90 %, both estimated on the same
@@ -59,6 +59,8 @@ power and the temperature, per design).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
@@ -79,8 +81,15 @@ ROBUST_SAMPLES, ROBUST_SAMPLES_QUICK = 5, 2
 ROBUST_BUDGET, ROBUST_BUDGET_QUICK = 15, 2
 ROBUST_Q, ROBUST_YIELD = 0.9, 0.9
 WORKERS = 2
-START, PAPER, ROBUST = "start", "paper-optimal", "robust-optimal"
+START, PAPER, ROBUST = "start", "our optimum", "yield-robust optimum"
+#: Power-search steps of the retry of samples whose simulation failed [W per crease]: half
+#: the first step and a quarter of the largest step of the default search.
+RETRY_STEPS = (0.05e-3, 0.1e-3)
 PATH = ("path 1/3", "path 2/3")
+#: How the figures name the assumed scenario.
+SCENARIO_TEXT = ("fabrication spread assumed, not measured: residual fold per crease "
+                 "N(-5, 4) deg, layer thicknesses +-5 %, mismatch 34-42 ppm/K, "
+                 "k_env 0.024-0.030 W/(m K)")
 
 
 def robust_optimum(problem, x0, samples, budget, progress):
@@ -89,7 +98,7 @@ def robust_optimum(problem, x0, samples, budget, progress):
                                 q=ROBUST_Q, yield_target=ROBUST_YIELD)
     res = _optimize(robust, "sbplx", budget, progress, "robust yield sbplx", x0=x0)
     return res.x, _design_row(
-        ROBUST, f"sbplx from the paper-optimal design: min power q{ROBUST_Q:g} s.t. yield >= "
+        ROBUST, f"sbplx from the our optimum: min power q{ROBUST_Q:g} s.t. yield >= "
         f"{ROBUST_YIELD:g} on {samples} LHS samples (seed {SEED}), budget {budget} "
         "evaluations", res.x, res)
 
@@ -118,8 +127,9 @@ def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.Data
         total = len(designs) * len(samples)
         bar = progress_bar(None, enabled=progress, desc="yield sweep", total=total, leave=False)
         shown = (lambda done, n: bar.update(done - bar.n)) if progress else None
+        retry = replace(problem, power_step=RETRY_STEPS[0], max_power_step=RETRY_STEPS[1])
         table = sweep_uncertainty(problem, SCENARIO, samples, [x for x, _ in designs.values()],
-                                  executor=executor, progress=shown)
+                                  executor=executor, progress=shown, retry=retry)
         if progress:
             bar.close()
     labels = list(designs)
@@ -133,13 +143,20 @@ def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.Data
 
 
 # ----------------------------------------------------------------------------- plot
+#: Marker and meaning of each sample category in the power panel.
+_MARKS = {"works": ("o", "works"), "too hot": ("x", "too hot (T > 1.2 T_g)"),
+          "target not met": ("v", "target not met\n(top row)"),
+          "solver failed": ("s", "solver failed twice\n(retried with smaller\nsteps; top row;\nnot counted)")}
+
+
 def _plot_yield(df):
     from matplotlib.figure import Figure
 
+    from studies.plotting import T_LIMIT, T_MEASURE, environment_note, note_assumptions
+
     summary = df[df["table"] == "summary"]
-    samples = df[df["table"] == "samples"].copy()
-    samples["works"] = samples["works"].astype(str).str.lower() == "true"
-    fig = Figure(figsize=(12, 4.6), layout="constrained")
+    samples = df[df["table"] == "samples"]
+    fig = Figure(figsize=(12, 5.2), layout="constrained")
     ax_y, ax_p = fig.subplots(1, 2)
     pos = np.arange(len(summary))
     y = summary["yield [-]"].to_numpy(float)
@@ -147,22 +164,38 @@ def _plot_yield(df):
     ax_y.bar(pos, y, color=[f"C{i}" for i in pos], alpha=0.7)
     ax_y.errorbar(pos, y, yerr=err, fmt="none", ecolor="k", capsize=5,
                   label="95 % Wilson interval")
+    failed = summary["solver_failed"].to_numpy(int)
+    for i, (v, n, f) in enumerate(zip(y, summary["samples"].to_numpy(int), failed)):
+        ax_y.text(i, 0.03, f"{int(round(v * (n - f)))}/{n - f}" + (f"\n+{f} failed" if f else ""),
+                  ha="center", va="bottom", fontsize="small")
     ax_y.set_xticks(pos, summary["design"], rotation=20)
-    ax_y.set_ylim(0, 1.05)
-    ax_y.set_ylabel("yield (both stages met, T <= 1.2 Tg)")
-    ax_y.set_title(f"yield over {int(summary['samples'].iloc[0])} samples per design")
-    ax_y.legend(fontsize="small")
+    ax_y.set_ylim(0, 1.12)
+    ax_y.set_ylabel("yield among evaluated samples [-]")
+    ax_y.set_title(f"yield: both stages met, T <= 1.2 T_g ({int(summary['samples'].iloc[0])} "
+                   "samples per design)", fontsize="medium")
+    ax_y.legend(fontsize="small", loc="upper left")
+    cap = 1.08 * np.nanmax(samples["total_power [mW]"].to_numpy(float))
     for i, label in enumerate(summary["design"]):
         d = samples[samples["design"] == label]
         jitter = i + np.linspace(-0.25, 0.25, len(d)) if len(d) > 1 else np.full(len(d), i)
-        ok = d["works"].to_numpy()
         p = d["total_power [mW]"].to_numpy(float)
-        ax_p.plot(jitter[ok], p[ok], "o", color=f"C{i}", ms=5)
-        ax_p.plot(jitter[~ok], p[~ok], "x", color=f"C{i}", ms=7, mew=2)
+        for cat, (marker, _) in _MARKS.items():
+            hit = (d["category"] == cat).to_numpy()
+            shown = p[hit] if cat in ("works", "too hot") else np.full(hit.sum(), cap)
+            ax_p.plot(jitter[hit], shown, marker, color=f"C{i}" if cat in ("works", "too hot")
+                      else "0.3", ms=6, mew=1.8, mfc="none" if cat != "works" else None, ls="")
+    for cat, (marker, text) in _MARKS.items():
+        ax_p.plot([], [], marker, color="0.3", mfc="none" if cat != "works" else None, ls="",
+                  label=text)
     ax_p.set_xticks(pos, summary["design"], rotation=20)
     ax_p.set_ylabel("total power per heated crease [mW]")
-    ax_p.set_title("power of every sample (x: too hot; not met or failed: not drawn)")
+    ax_p.set_title("power of every sample, by category", fontsize="medium")
     ax_p.grid(True, alpha=0.3)
+    ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    note_assumptions(fig, environment_note(
+        "air", scenario=SCENARIO_TEXT, extra=["gravity x 1 (lumped self-weight)"]), f"T = {T_MEASURE} (limit {T_LIMIT:.0f} °C); a sample whose simulation "
+        f"failed is retried once with power steps {1e3 * RETRY_STEPS[0]:g}/"
+        f"{1e3 * RETRY_STEPS[1]:g} mW; failures left after it are not counted in the yield.")
     return fig
 
 
@@ -187,7 +220,11 @@ def _plot_inputs(df):
         ax.set_xlim(-1, 1)
         ax.set_xlabel(f"Spearman rank correlation with {out} (95 % CI)")
         ax.grid(True, axis="x", alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    from studies.plotting import environment_note, note_assumptions
+
+    note_assumptions(fig, environment_note("air", scenario=SCENARIO_TEXT,
+                                           extra=["gravity x 1 (lumped self-weight)"]))
     return fig
 
 

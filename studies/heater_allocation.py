@@ -216,6 +216,12 @@ def plot(df: pd.DataFrame):
     ax_b.legend(fontsize="small")
     for ax in (ax_p, ax_e, ax_b):
         ax.grid(True, alpha=0.3)
+    from studies.plotting import environment_note, note_assumptions
+
+    note_assumptions(fig, "crane: " + environment_note("air", 0.026, 0, 0) + ". double fold: "
+                     + environment_note("air", 0.026, 0, 0.9), "Temperature bound of the "
+                     "allocation: every crease node <= 1.2 T_g = 252 °C (node-wise, so stricter "
+                     "than the centre-line measure of the other design problems).")
     return fig
 
 

@@ -26,8 +26,9 @@ is ``free`` (no substrate) or ``on substrate``:
   ``step``, ``power [mW]`` (per crease), ``power_normalised [-]``, ``lift [um]``.
 * ``crease`` - the creases at the final power: ``crease`` (edge id), ``x [um]`` and
   ``y [um]`` (the crease's centre node in the flat sheet), ``clamped`` (both panels in the
-  clamped first column), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``,
-  ``temperature_max [degC]``.
+  clamped first column), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``
+  (actuation temperature), ``temperature_centre [degC]`` (centre-line mean: the measure of
+  the 1.2 T_g limit), ``temperature_max [degC]`` (hottest crease node).
 * ``nodes`` - final node positions ``x [um]``, ``y [um]``, ``z [um]`` and
   ``temperature [degC]`` (``step``, ``stage``, ``increment``, ``node``).
 
@@ -48,9 +49,10 @@ NAME = "miura_lifter"
 CELLS = dict(cells_x=4, cells_y=2)
 THERMAL_STEPS_QUICK = 30
 VARIANTS = {"free": False, "on substrate": True}
-Z_STRETCH = 0.3          # 3-D shapes: z box at least 0.3 x the in-plane size
+Z_STRETCH_SHARED = 2.0   # 3-D shapes: z drawn 2 x (the same in both panels)
 POWER, TEMP, TEMP_MAX, LIFT = ("power [mW]", "temperature [degC]", "temperature_max [degC]",
                                "lift [um]")
+TEMP_CL = "temperature_centre [degC]"
 
 
 def _params(substrate: bool, quick: bool = False) -> dict:
@@ -92,7 +94,8 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             "x [um]": centre[:, 0], "y [um]": centre[:, 1],
             "clamped": _clamped_creases(mesh, range(CELLS["cells_y"])),
             POWER: h["power"][-1] * 1e3, "fold_angle [deg]": np.degrees(res.fold_angle[-1]),
-            TEMP: res.crease_temperature[-1], TEMP_MAX: res.crease_temperature_max[-1]}))
+            TEMP: res.crease_temperature[-1], TEMP_MAX: res.crease_temperature_max[-1],
+            TEMP_CL: res.crease_temperature_centre_line[-1]}))
         parts.append(node_frame(res, -1, variant=variant))
     return pd.concat(parts, ignore_index=True)
 
@@ -110,13 +113,14 @@ def plot(df: pd.DataFrame) -> dict:
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
-    from studies.plotting import mark_temperature_limit, nodal_range, plot_shape
+    from studies.plotting import environment_note, mark_temperature_limit, nodal_range, \
+        note_assumptions, plot_shape, share_3d_scale
 
     sweep = df[df["table"] == "sweep"]
     creases = df[df["table"] == "crease"]
     fig = Figure(figsize=(11.5, 4.6), layout="constrained")
     ax_l, ax_t = fig.subplots(1, 2)
-    styles = {"free": dict(color="k"), "on substrate": dict(color="0.55")}
+    styles = {"free": dict(color="C0"), "on substrate": dict(color="C1", ls="--")}
     p_max = sweep[POWER].max()
     for variant, d in sweep.groupby("variant", sort=False):
         d = d.sort_values("step")
@@ -130,41 +134,57 @@ def plot(df: pd.DataFrame) -> dict:
     ax_l.axhline(0, color="k", lw=0.8)
     low = sweep[LIFT].min()
     if low < 0:
-        ax_l.text(0.02, 0.5, f"lift < 0 (end moves down) at low power, down to {low:.2f} um",
+        ax_l.text(0.02, 0.78, f"lift < 0 (end moves down) at low power,\ndown to {low:.2f} um",
                   transform=ax_l.transAxes, fontsize="small", color="C3")
-    ax_l.legend(fontsize="small")
+    ax_l.legend(fontsize="small", loc="upper left")
 
+    measured = []
     for variant, d in creases.groupby("variant", sort=False):
         clamped = d["clamped"].astype(bool)
-        style = styles.get(variant, {})
-        ax_t.plot(d.loc[~clamped, "x [um]"] / 1e3, d.loc[~clamped, TEMP], "o", ms=7,
-                  label=f"{variant}", **style)
-        ax_t.plot(d.loc[clamped, "x [um]"] / 1e3, d.loc[clamped, TEMP], "x", ms=8,
-                  label=f"{variant}, crease inside the clamped column", **style)
+        color = styles.get(variant, {}).get("color")
+        measured += ax_t.plot(d.loc[~clamped, "x [um]"] / 1e3, d.loc[~clamped, TEMP_CL], "o",
+                              ms=7, color=color, ls="", label=f"{variant}")
+        measured += ax_t.plot(d.loc[clamped, "x [um]"] / 1e3, d.loc[clamped, TEMP_CL], "x",
+                              ms=8, color=color, ls="",
+                              label=f"{variant}, crease inside the clamped column")
+        ax_t.plot(d["x [um]"] / 1e3, d[TEMP_MAX], "_", ms=10, color=color, ls="",
+                  label=f"{variant}, hottest node")
     ax_t.set_xlabel("crease position x [mm] (anchored end at x = 0)")
-    ax_t.set_ylabel("crease temperature [°C]")
+    ax_t.set_ylabel("crease temperature, centre line [°C]")
     ax_t.set_title(f"(b) crease temperatures at {p_max:.1f} mW per crease")
-    ax_t.legend(fontsize="small")
-    mark_temperature_limit(ax_t)
+    ax_t.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    mark_temperature_limit(ax_t, lines=measured)
     for ax in (ax_l, ax_t):
         ax.grid(True, alpha=0.3)
 
+    note = environment_note("air", 0.026, 0, None, extra=[
+        "no gravity", "first column of panels clamped",
+        "substrate 100 um below (room-temperature boundary) in the 'on substrate' run"])
+    note_assumptions(fig, note)
+
     nodes = df[df["table"] == "nodes"]
-    shapes = Figure(figsize=(12.5, 5.0), layout="constrained")
+    shapes = Figure(figsize=(12.5, 5.3), layout="constrained")
     t_range = nodal_range(nodes[TEMP])          # one colour scale: the comparison is the point
+    axes, points = [], []
     for k, variant in enumerate(VARIANTS):
         ax = shapes.add_subplot(1, 2, k + 1, projection="3d")
         mesh = get_case(NAME, **_params(VARIANTS[variant])).model.mesh
+        n_sheet = CELLS["cells_x"] * CELLS["cells_y"]
         plot_shape(shape_from_frame(nodes[nodes["variant"] == variant], mesh), ax=ax,
-                   t_range=t_range, colorbar=k == len(VARIANTS) - 1)
+                   t_range=t_range, colorbar=k == len(VARIANTS) - 1,
+                   panel_labels={"clamped": list(range(CELLS["cells_y"]))}
+                   | ({"substrate": n_sheet} if VARIANTS[variant] else {}))
         ax.collections[0].set_zsort("max")     # keeps the large substrate triangles behind
-        spans = [abs(hi - lo) for lo, hi in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
-        ax.set_box_aspect((*spans[:2], max(spans[2], Z_STRETCH * max(spans[:2]))))
+        axes.append(ax)
+        points.append(nodes.loc[nodes["variant"] == variant,
+                                ["x [um]", "y [um]", "z [um]"]].to_numpy(float) / 1e3)
         lift = sweep[sweep["variant"] == variant][LIFT].iloc[-1]
-        ax.set_title(f"{variant}: lift {lift:.0f} um at {p_max:.1f} mW per crease\n"
-                     "(z axis stretched)")
+        ax.set_title(f"{variant}: lift {lift:.0f} um at {p_max:.1f} mW per crease")
         ax.zaxis.set_major_locator(MaxNLocator(4))
         ax.view_init(elev=25, azim=-60)
+    scale = share_3d_scale(axes, points, Z_STRETCH_SHARED)
+    shapes.suptitle(f"Miura lifter, final shapes ({scale})")
+    note_assumptions(shapes, note)
     return {NAME: fig, f"{NAME}_shapes": shapes}
 
 

@@ -1,4 +1,4 @@
-"""Natural frequencies vs heating power and fold state: single crease and gripper (issue 10).
+"""Natural frequencies vs heating power and fold state: single crease and gripper.
 
 Question
 --------
@@ -94,7 +94,7 @@ def plot(df: pd.DataFrame):
     the stage's circuit (c). One line per mode and run."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(15, 4.4), layout="constrained")
+    fig = Figure(figsize=(15, 6.2), layout="constrained")
     ax_p, ax_f, ax_g = fig.subplots(1, 3)
     styles = ("-", "--", ":", "-.")
     for j, (device, d) in enumerate(df.groupby("device", sort=False)):
@@ -114,7 +114,12 @@ def plot(df: pd.DataFrame):
     for ax in (ax_p, ax_f, ax_g):
         ax.set(ylabel="natural frequency [Hz]", yscale="log")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize="xx-small", ncol=2)
+        ax.legend(fontsize="xx-small", ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.18))
+    from studies.plotting import environment_note, note_assumptions
+
+    note_assumptions(fig, environment_note("air", 0.026, "0 and -10", 1.0, extra=[
+        "single crease 150 um over a substrate (contact)", "gripper: lumped self-weight, "
+        "residual fold 0"]))
     return fig
 
 

@@ -14,15 +14,20 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
-from matplotlib.layout_engine import ConstrainedLayoutEngine
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from studies.figure_notes import (FULL_STAMP, LINESTYLES, PALETTE, QUICK_STAMP,  # noqa: F401
+                                  environment_note, figure_style, note_assumptions,
+                                  stamp_full, stamp_quick)
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
 from simulator import SU8
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",
-           "T_LIMIT"]
+           "T_LIMIT", "T_MEASURE", "PALETTE", "LINESTYLES", "figure_style", "note_assumptions",
+           "environment_note", "centre_line_temperatures", "share_3d_scale", "label_points",
+           "panel_centres"]
 
 CMAP = "plasma"
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
@@ -33,9 +38,81 @@ _T_LABEL = "temperature [°C]"
 T_LIMIT = 1.2 * SU8.glass_transition
 _LIMIT_LABEL = f"above 1.2 T_g = {T_LIMIT:.0f} °C"
 _FACE_LABEL = "temperature [°C] (facet: its hottest node)"
+#: The one temperature the 1.2 T_g limit is checked on, in the design problems and in every
+#: figure (theory 5.4): the mean of a crease's three
+#: centre-line nodes (A, B, Ctr), the reference's measure; the hottest crease's value counts.
+#: The hottest node is shown beside it where the two differ.
+T_MEASURE = "centre-line mean of the hottest crease"
 
 
-# ----------------------------------------------------------------------------- 3-D shape
+
+def centre_line_temperatures(temperature, mesh) -> np.ndarray:
+    """Per crease the :data:`T_MEASURE` temperature [deg C]: mean of its centre-line nodes.
+
+    Parameters
+    ----------
+    temperature : array (n_nodes,) or (m, n_nodes)
+        Nodal temperatures [deg C].
+    mesh : BarHingeMesh
+        Its ``crease_nodes`` (C, 7) lists N11, N12, N21, N22, A, B, Ctr.
+
+    Returns
+    -------
+    ndarray (C,) or (m, C)
+    """
+    t = np.asarray(temperature, float)
+    return t[..., np.asarray(mesh.crease_nodes)[:, 4:7]].mean(axis=-1)
+
+
+def share_3d_scale(axes, points, z_stretch: float = 1.0) -> str:
+    """Give side-by-side 3-D panels one length scale: every axis of every panel spans the
+    largest extent over the panels (centred on its own points), z stretched by ``z_stretch``.
+
+    Parameters
+    ----------
+    axes : sequence of 3-D axes
+    points : sequence of arrays (..., 3) [mm], one per panel
+    z_stretch : float
+        Drawn height per unit of length, relative to x and y (1: true shape).
+
+    Returns
+    -------
+    str
+        What a caption should say ("true scale" or "z stretched 3x, same in every panel").
+    """
+    pts = [np.asarray(p, float).reshape(-1, 3) for p in points]
+    span = np.max([p.max(axis=0) - p.min(axis=0) for p in pts], axis=0)
+    span = np.maximum(span, 0.02 * span.max())
+    for ax, p in zip(axes, pts):
+        mid = (p.max(axis=0) + p.min(axis=0)) / 2
+        ax.set_xlim(mid[0] - span[0] / 2, mid[0] + span[0] / 2)
+        ax.set_ylim(mid[1] - span[1] / 2, mid[1] + span[1] / 2)
+        ax.set_zlim(mid[2] - span[2] / 2, mid[2] + span[2] / 2)
+        ax.set_box_aspect((span[0], span[1], span[2] * z_stretch))
+    if z_stretch == 1:
+        return "all panels at one true scale"
+    return f"all panels at one scale, z stretched {z_stretch:g}x"
+
+
+def label_points(ax, labels: dict, color="k") -> None:
+    """Write ``{text: (x, y, z) [mm]}`` labels into a 3-D axes, in front of the facets."""
+    ax.computed_zorder = False
+    for text, (x, y, z) in labels.items():
+        ax.text(x, y, z, text, fontsize="small", color=color, ha="center", va="bottom",
+                zorder=20, bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none",
+                                     alpha=0.75))
+
+
+def panel_centres(mesh, x_mm, panels: dict) -> dict:
+    """``{name: centre [mm]}`` of named panels ``{name: panel id or ids}`` at positions
+    ``x_mm`` (n_nodes, 3): the mean of their triangles' nodes."""
+    out = {}
+    for name, ids in panels.items():
+        nodes = np.unique(mesh.triangles[np.isin(mesh.triangle_panel, np.atleast_1d(ids))])
+        out[name] = x_mm[nodes].mean(axis=0)
+    return out
+
+
 def nodal_range(*temperatures) -> tuple:
     """(lowest, highest) nodal temperature [deg C] over arrays: a shared colour scale."""
     return (min(float(np.min(t)) for t in temperatures),
@@ -78,22 +155,31 @@ def _temperature_colorbar(fig, ax, mappable, shrink=0.7):
     return bar
 
 
-def _mark_hot_nodes(ax, x_mm, temperature) -> int:
-    """Circle the nodes above 1.2 T_g in a 3-D axes; returns how many there are."""
-    hot = np.asarray(temperature) > T_LIMIT
+def _mark_hot_creases(ax, x_mm, temperature, mesh) -> int:
+    """Circle the creases whose :data:`T_MEASURE` temperature is above 1.2 T_g (at their
+    centre node) in a 3-D axes and state the hottest crease's value beside the hottest node's;
+    returns how many creases are above."""
+    t = np.asarray(temperature, float)
+    if not len(mesh.crease_nodes):
+        return 0
+    centre = centre_line_temperatures(t, mesh)
+    hot = centre > T_LIMIT
+    text = (f"hottest crease {centre.max():.0f} °C (centre line), hottest node "
+            f"{t[np.asarray(mesh.crease_nodes)].max():.0f} °C")
     if hot.any():
-        p = x_mm[hot]
+        p = x_mm[np.asarray(mesh.crease_nodes)[hot, 6]]
         ax.computed_zorder = False          # the circles stay in front of the facets
-        ax.scatter(p[:, 0], p[:, 1], p[:, 2], s=90, facecolors="none", edgecolors="c",
+        ax.scatter(p[:, 0], p[:, 1], p[:, 2], s=140, facecolors="none", edgecolors="c",
                    linewidths=2.0, depthshade=False, zorder=10)
         n = int(hot.sum())
-        ax.text2D(0.0, 0.0, f"{n} node{'s' if n > 1 else ''} {_LIMIT_LABEL} (cyan circles)",
-                  transform=ax.transAxes, fontsize="small", color="teal")
+        text += f"\n{n} crease{'s' if n > 1 else ''} {_LIMIT_LABEL} (cyan circles)"
+    ax.text2D(0.0, 1.0, text, transform=ax.transAxes, fontsize="x-small", va="top",
+              color="teal" if hot.any() else "0.25")
     return int(hot.sum())
 
 
 def plot_shape(result, record=-1, ax=None, color_by="temperature", show_reference=False,
-               t_range=None, colorbar=True, hide_panels=()) -> Figure:
+               t_range=None, colorbar=True, hide_panels=(), panel_labels=None) -> Figure:
     """Deformed shape of one record in 3-D, faces coloured by temperature.
 
     Parameters
@@ -106,7 +192,8 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     color_by : {"temperature", None}
         Colour every triangle by the temperature of its hottest node [deg C], on a scale that
         spans the nodal range (so the colour bar reaches the hottest node), with a colour
-        bar; nodes above 1.2 T_g (:data:`T_LIMIT`) are circled. ``None``: panels grey and
+        bar; creases whose centre-line mean (:data:`T_MEASURE`) is above 1.2 T_g
+        (:data:`T_LIMIT`) are circled, and the hottest crease and node are stated. ``None``: panels grey and
         crease triangles orange.
     show_reference : bool
         Also draw the undeformed mesh as a dashed wireframe.
@@ -118,6 +205,8 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
     hide_panels : sequence of int
         Panels not drawn (e.g. a large substrate that would dwarf the structure); the axis
         limits then follow the drawn triangles.
+    panel_labels : dict, optional
+        ``{text: panel id or ids}``: names written at the panels' centres (base, arm, ...).
 
     Returns
     -------
@@ -143,7 +232,7 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
                                     (0.75, 0.78, 0.82, 1.0), (0.95, 0.55, 0.2, 1.0)))
     ax.add_collection3d(coll)
     if color_by == "temperature":
-        _mark_hot_nodes(ax, x, t)
+        _mark_hot_creases(ax, x, t, mesh)
     points = [x[np.unique(tri)]]
     if show_reference:
         x0 = mesh.nodes * 1e3
@@ -151,16 +240,20 @@ def plot_shape(result, record=-1, ax=None, color_by="temperature", show_referenc
                                              edgecolors="0.5", linewidths=0.4, linestyles="--"))
         points.append(x0)
     set_3d_limits(ax, np.concatenate(points))
+    if panel_labels:
+        label_points(ax, panel_centres(mesh, x, panel_labels))
     ax.set_title(_title(result, record))
     return fig
 
 
-def mark_temperature_limit(ax, limit=T_LIMIT, axis="y") -> int:
+def mark_temperature_limit(ax, limit=T_LIMIT, axis="y", lines=None) -> int:
     """Mark temperatures above 1.2 T_g on a 2-D plot whose ``axis`` is a temperature [deg C].
 
     Draws a dotted red line at ``limit`` when the plotted values reach 80 % of it, rings every
     plotted point above it in red, outlines bars above it in red, and adds both to the
-    legend (if the axes has one). Call it after plotting.
+    legend (if the axes has one). Call it after plotting. ``lines``: the curves of the
+    limit's measure (:data:`T_MEASURE`) whose points are ringed; default every line (give
+    them when the axes also shows another measure, e.g. the hottest node).
 
     Returns
     -------
@@ -169,7 +262,7 @@ def mark_temperature_limit(ax, limit=T_LIMIT, axis="y") -> int:
     """
     k = 1 if axis == "y" else 0
     values, hot = [], []
-    for line in ax.get_lines():
+    for line in ax.get_lines() if lines is None else lines:
         xy = np.column_stack([np.asarray(line.get_xdata(), float),
                               np.asarray(line.get_ydata(), float)])
         if line.get_transform() != ax.transData or len(xy) == 0:
@@ -339,26 +432,6 @@ def animate(result, path, every=1, fps=10, quick=False) -> pathlib.Path:
     return path
 
 
-#: Text of the stamp on the figures of a ``--quick`` study run (:func:`stamp_quick`).
-QUICK_STAMP = "quick run: coarse settings,\nnot the published figure"
-_STAMP_GID = "quick-stamp"
-_STAMP_HEIGHT = 0.32   # [inch] strip kept free for the stamp under the axes
-
-
-def stamp_quick(fig) -> None:
-    """Mark ``fig`` as the figure of a quick run: :data:`QUICK_STAMP` in its bottom-left
-    corner, in a strip that a constrained layout keeps free of the axes (so the stamp never
-    covers data). Calling it again changes nothing."""
-    if any(t.get_gid() == _STAMP_GID for t in fig.texts):
-        return
-    engine = fig.get_layout_engine()
-    if isinstance(engine, ConstrainedLayoutEngine):
-        strip = min(_STAMP_HEIGHT / fig.get_figheight(), 0.2)
-        engine.set(rect=(0.0, strip, 1.0, 1.0 - strip))
-    fig.text(0.005, 0.005, QUICK_STAMP, ha="left", va="bottom", fontsize="x-small",
-             color="darkred", fontweight="bold", gid=_STAMP_GID)
-
-
 def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     """Save a figure (PNG unless ``path`` has another suffix), creating the parent folder.
 
@@ -368,7 +441,8 @@ def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     path : str or pathlib.Path
     dpi : float
     quick : bool
-        The figure comes from a ``--quick`` run: stamp it as such (:func:`stamp_quick`).
+        The figure comes from a ``--quick`` run: stamp it as such (:func:`stamp_quick`);
+        otherwise it is stamped "full run".
 
     Returns
     -------
@@ -381,5 +455,7 @@ def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     if quick:
         stamp_quick(fig)
+    else:
+        stamp_full(fig)
     fig.savefig(path, dpi=dpi)
     return path

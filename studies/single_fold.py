@@ -15,6 +15,11 @@ Method
   angle, gravity on the folding panel with substrate contact, then the crease power ramps
   linearly to 150 mW in 250 staggered thermo-mechanical increments). The threshold power is
   the first power at which the fold angle is 1 deg above its pre-heating value.
+* The same threshold runs in air (``env_conductivity=0.026``, ramp to 7.5 mW): the case's
+  default k_env = 0.6 W/(m K) is the reference script's, a water-like value 23 x air's. Heat
+  leaves the crease mainly through the environment, so in air the same temperature, hence
+  the same fold, needs about 20 x less power; the other studies (actuation speed, natural
+  modes, the gripper) use air.
 * Example01: ``get_case("single_fold")`` with its defaults (no gravity, residual 0, 500
   increments to 100 mW), overlaid on the MATLAB reference curve
   ``studies/reference/single_fold_res0.csv`` (``fold_angle_signed_deg`` vs ``power_mW``,
@@ -28,7 +33,8 @@ Outputs (``results/single_fold/``)
 ``single_fold.csv``: one long table, the ``table`` column tells the row kind:
 
 * ``sweep`` - one row per record from the last pre-heating state (power 0) through every
-  heating increment: ``variant``, ``residual_fold [deg]``, ``gravity``, ``step`` (record),
+  heating increment: ``variant``, ``residual_fold [deg]``, ``gravity``,
+  ``env_conductivity [W/(m K)]``, ``step`` (record),
   ``stage``, ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]`` (crease),
   and for the Example01 rows ``reference_fold_angle [deg]`` and ``deviation [deg]``. The
   reference curve itself is the variant ``Example01 reference``.
@@ -64,6 +70,8 @@ REFERENCE = pathlib.Path(__file__).resolve().parent / "reference" / "single_fold
 RESIDUALS = (0.0, -10.0, -20.0)          # deg
 RESIDUALS_QUICK = (0.0, -10.0)
 POWER_MW = 150.0                         # end of the ramp of the threshold runs
+K_REFERENCE, K_AIR = 0.6, 0.026          # W/(m K): the reference script's, and air
+POWER_AIR_MW = 7.5                       # end of the ramp of the runs in air
 THERMAL_STEPS, THERMAL_STEPS_QUICK = 250, 30
 EXAMPLE01_STEPS_QUICK = 50
 SHAPE_RESIDUAL = -10.0                   # the run drawn in 3-D and animated
@@ -74,8 +82,11 @@ EXAMPLE01, EXAMPLE01_REF = "Example01 (ours)", "Example01 reference"
 POWER, FOLD = "power [mW]", "fold_angle [deg]"
 
 
-def gravity_variant(residual_deg: float) -> str:
-    return f"gravity, residual {residual_deg:g} deg"
+K_ENV = "env_conductivity [W/(m K)]"
+
+
+def gravity_variant(residual_deg: float, air: bool = False) -> str:
+    return f"{'air, ' if air else ''}gravity, residual {residual_deg:g} deg"
 
 
 def _subsample(records, every):
@@ -108,7 +119,7 @@ def threshold_power(power_mW, fold_deg, rise=THRESHOLD_RISE) -> float:
 def _threshold_row(sweep: pd.DataFrame) -> dict:
     return {"table": "threshold", "variant": sweep["variant"].iloc[0],
             "residual_fold [deg]": sweep["residual_fold [deg]"].iloc[0],
-            "gravity": sweep["gravity"].iloc[0],
+            "gravity": sweep["gravity"].iloc[0], K_ENV: sweep[K_ENV].iloc[0],
             "threshold_power [mW]": threshold_power(sweep[POWER], sweep[FOLD]),
             "fold_start [deg]": sweep[FOLD].iloc[0], "fold_final [deg]": sweep[FOLD].iloc[-1],
             "temperature_final [degC]": sweep[TEMP].iloc[-1]}
@@ -119,15 +130,18 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     residuals = RESIDUALS_QUICK if quick else RESIDUALS
     steps = THERMAL_STEPS_QUICK if quick else THERMAL_STEPS
     parts, thresholds = [], []
-    for r in residuals:
+    for k_env, power, r in [(K_REFERENCE, POWER_MW, r) for r in residuals] + \
+            [(K_AIR, POWER_AIR_MW, r) for r in residuals]:
+        air = k_env == K_AIR
         _, res = run_case(NAME, dict(residual_fold_deg=r, gravity=True, thermal_steps=steps,
-                             power_mW=POWER_MW), progress, f"residual {r:g} deg")
+                                     power_mW=power, env_conductivity=k_env), progress,
+                          f"residual {r:g} deg, k_env {k_env:g}")
         recs = heating_records(res)
-        sweep = _sweep(res, recs, variant=gravity_variant(r), **{"residual_fold [deg]": r},
-                       gravity=True)
+        sweep = _sweep(res, recs, variant=gravity_variant(r, air), **{"residual_fold [deg]": r},
+                       gravity=True, **{K_ENV: k_env})
         parts.append(sweep)
         thresholds.append(_threshold_row(sweep))
-        if r == SHAPE_RESIDUAL:
+        if r == SHAPE_RESIDUAL and not air:
             frames = 10 if quick else ANIMATION_FRAMES
             shape = node_frame(res, _subsample(recs, max(1, len(recs) // frames)),
                                variant=gravity_variant(r))
@@ -135,7 +149,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     _, res = run_case(NAME, {"thermal_steps": EXAMPLE01_STEPS_QUICK} if quick else {}, progress,
                     "Example01")
     ours = _sweep(res, heating_records(res), variant=EXAMPLE01,
-                  **{"residual_fold [deg]": 0.0}, gravity=False)
+                  **{"residual_fold [deg]": 0.0}, gravity=False, **{K_ENV: K_REFERENCE})
     ref = pd.read_csv(REFERENCE).sort_values("power_mW")
     ours["reference_fold_angle [deg]"] = np.interp(ours[POWER], ref["power_mW"],
                                                    ref["fold_angle_signed_deg"])
@@ -143,7 +157,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     thresholds.append(_threshold_row(ours))
     reference = pd.DataFrame({"table": "sweep", "variant": EXAMPLE01_REF,
                               "residual_fold [deg]": 0.0, "gravity": False,
-                              "step": ref["step"].to_numpy(), "stage": "reference",
+                              K_ENV: K_REFERENCE, "step": ref["step"].to_numpy(), "stage": "reference",
                               POWER: ref["power_mW"].to_numpy(),
                               FOLD: ref["fold_angle_signed_deg"].to_numpy(),
                               TEMP: ref["T_crease_weighted_C"].to_numpy()})
@@ -156,30 +170,18 @@ def plot(df: pd.DataFrame) -> dict:
     """``{"single_fold": fold vs power, "single_fold_shape": 3-D shape of the -10 deg run}``."""
     from matplotlib.figure import Figure
 
-    from studies.plotting import plot_shape
+    from studies.plotting import environment_note, note_assumptions, plot_shape
 
     sweep = df[df["table"] == "sweep"]
     thr = df[df["table"] == "threshold"].set_index("variant")
-    fig = Figure(figsize=(11.5, 4.6), layout="constrained")
-    ax_g, ax_e = fig.subplots(1, 2)
-
-    gravity = [v for v in sweep["variant"].unique() if v.startswith("gravity")]
-    for v in gravity:
-        d = sweep[sweep["variant"] == v]
-        p_thr = thr.loc[v, "threshold_power [mW]"]
-        (line,) = ax_g.plot(d[POWER], d[FOLD], label=f"{v} (threshold {p_thr:.0f} mW)")
-        if np.isfinite(p_thr):
-            ax_g.plot([p_thr], [np.interp(p_thr, d[POWER], d[FOLD])], "o", color=line.get_color(),
-                      mfc="none")
-    ax_g.set_title("(a) with gravity and substrate contact")
-    start = sweep[sweep["variant"].isin(gravity)].groupby("variant")[FOLD].first()
-    ax_g.text(0.02, 0.55, f"All runs start near {start.mean():.0f} deg whatever the residual "
-              "fold:\nthe panel sags onto the substrate 150 um below, which\nstops it there; "
-              "the residual fold sets only the rest angle,\nhence the power needed to lift "
-              "off (the threshold)",
-              transform=ax_g.transAxes, fontsize="small", va="top")
-    ax_g.legend(fontsize="small", title="o: threshold (fold +1 deg)", title_fontsize="small")
-
+    fig = Figure(figsize=(16, 5.2), layout="constrained")
+    ax_g, ax_a, ax_e = fig.subplots(1, 3)
+    for ax, air in ((ax_g, False), (ax_a, True)):
+        _threshold_panel(ax, sweep, thr, air)
+    ax_g.set_title(f"(a) k_env = {K_REFERENCE:g} W/(m K) (reference script, water-like)",
+                   fontsize="medium")
+    ax_a.set_title(f"(b) in air, k_env = {K_AIR:g} W/(m K)", fontsize="medium")
+    start = sweep[sweep["variant"].str.contains("gravity")].groupby("variant")[FOLD].first()
     ours = sweep[sweep["variant"] == EXAMPLE01]
     ref = sweep[sweep["variant"] == EXAMPLE01_REF]
     ax_e.plot(ref[POWER], ref[FOLD], "k-", lw=3, alpha=0.35, label="reference (MATLAB)")
@@ -190,22 +192,50 @@ def plot(df: pd.DataFrame) -> dict:
     ax_d.tick_params(axis="y", colors="C0")
     lim = max(1e-3, 1.2 * float(np.abs(ours["deviation [deg]"]).max()))
     ax_d.set_ylim(-lim, lim)
-    ax_e.set_title("(b) Example01: no gravity, residual 0 deg")
+    ax_e.set_title(f"(c) Example01: no gravity, residual 0 deg, k_env {K_REFERENCE:g}",
+                   fontsize="medium")
     h1, l1 = ax_e.get_legend_handles_labels()
     h2, l2 = ax_d.get_legend_handles_labels()
     ax_e.legend(h1 + h2, l1 + l2, fontsize="small", loc="upper left")
-    for ax in (ax_g, ax_e):
+    for ax in (ax_g, ax_a, ax_e):
         ax.set_xlabel("crease power [mW]")
         ax.set_ylabel("fold angle [deg]")
         ax.grid(True, alpha=0.3)
+    note_assumptions(
+        fig, f"(a), (b): gravity x 1, substrate 150 um below; every run starts near "
+        f"{start.mean():.0f} deg whatever the residual fold: the panel sags onto the substrate, "
+        "which stops it; the residual fold sets the rest angle, hence the power to lift off. "
+        f"k_env = {K_REFERENCE:g} W/(m K) is the reference script's value, {K_REFERENCE / K_AIR:.0f}"
+        " x air's; heat leaves the crease mainly through the environment, so in air the same "
+        "fold needs about 20 x less power.",
+        "The paper's measured threshold points (Fig. 7c) are not available here and not drawn.")
 
     nodes = df[df["table"] == "nodes"]
-    shape = plot_shape(shape_from_frame(nodes, _mesh()), record=-1)
+    shape = plot_shape(shape_from_frame(nodes, _mesh()), record=-1, panel_labels={
+        "anchor panel": 0, "folding panel": 1, "substrate": 2})
     ax = shape.axes[0]
     ax.set_title(f"{nodes['variant'].iloc[0]}: end of heating "
                  f"({sweep[sweep['variant'] == nodes['variant'].iloc[0]][POWER].max():.0f} mW)")
     ax.view_init(elev=20, azim=-60)
+    note_assumptions(shape, environment_note("water-like (reference script)", K_REFERENCE,
+                                             SHAPE_RESIDUAL, 1.0))
     return {NAME: fig, f"{NAME}_shape": shape}
+
+
+def _threshold_panel(ax, sweep, thr, air: bool) -> None:
+    """Fold vs power of the threshold runs at one k_env, thresholds circled."""
+    runs = [v for v in sweep["variant"].unique()
+            if v.startswith("gravity") != air and "gravity" in v]
+    for v in runs:
+        d = sweep[sweep["variant"] == v]
+        p_thr = thr.loc[v, "threshold_power [mW]"]
+        label = v.replace("air, ", "").replace("gravity, ", "")
+        (line,) = ax.plot(d[POWER], d[FOLD], label=f"{label} (threshold {p_thr:.2g} mW)")
+        if np.isfinite(p_thr):
+            ax.plot([p_thr], [np.interp(p_thr, d[POWER], d[FOLD])], "o", color=line.get_color(),
+                    mfc="none")
+    ax.legend(fontsize="small", title="o: threshold (fold +1 deg)", title_fontsize="small",
+              loc="upper left")
 
 
 def animation(df: pd.DataFrame, path, quick: bool = False) -> pathlib.Path:

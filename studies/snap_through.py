@@ -4,8 +4,9 @@ Question
 --------
 Load control (force, rest angle or power increments) stops where an equilibrium path turns
 back. What do the paths look like beyond those limit points, which parts are stable, and does
-the Miura lifter of issue 9 (a = 0.5 mm, gamma = 45 deg, W = 300 um, 4 x 2 cells over a
-substrate), b = 1 mm, whose heating stopped at 9.2 mW per crease, lift continuously past that power?
+a Miura lifter from the design study (a = 0.5 mm, b = 1 mm, gamma = 45 deg, W = 300 um,
+4 x 2 cells over a substrate), whose load-controlled heating stops at 9.2 mW per crease, lift
+continuously past that power, and how hot do its creases get?
 
 Method
 ------
@@ -19,7 +20,8 @@ Method
 * Miura (``get_case("snap_through", variant="heated")``): every crease heated to 12 mW in 60
   staggered increments with ``on_limit_point="continue"``: load control up to the limit point,
   arc length in the power across the unstable branch, load control again once stable. Lift =
-  mean z displacement of the sheet's free-end corner nodes.
+  mean z displacement of the sheet's free-end corner nodes; temperature = the hottest crease's
+  centre-line mean (the measure of the 1.2 T_g limit) and the hottest crease node.
 * ``--quick``: roof arc length with 80 increments at most and arc length 0.2, 20 displacement
   and load-control increments; the Miura with 30 increments.
 
@@ -30,9 +32,11 @@ Outputs (``results/snap_through/``)
 step, load control and arc length in one), ``increment``, ``load [mN]`` (roof: reference load
 times load factor; empty for the Miura), ``power [mW]`` (per crease; Miura), ``displacement
 [um]`` (roof: ridge centre, downwards; Miura: lift of the free end), ``stable`` (True/False;
-empty where not computed, i.e. load-controlled increments), ``negative_eigenvalues``.
-Figure ``snap_through.png``: (a) roof load vs ridge displacement, (b) Miura lift vs power;
-unstable branches red dashed.
+empty where not computed, i.e. load-controlled increments), ``negative_eigenvalues``, and for
+the Miura ``temperature_centre [degC]`` (hottest crease, centre line) and
+``temperature_max [degC]`` (hottest crease node).
+Figure ``snap_through.png``: (a) roof load vs ridge displacement, (b) Miura lift vs power,
+(c) Miura crease temperature vs power with the 1.2 T_g limit; unstable branches dashed.
 """
 
 from __future__ import annotations
@@ -45,6 +49,10 @@ from studies._common import run_case, study_main
 
 NAME = "snap_through"
 LOAD, POWER, DISP = "load [mN]", "power [mW]", "displacement [um]"
+
+
+TEMP_CL, TEMP_MAX = "temperature_centre [degC]", "temperature_max [degC]"
+UNSTABLE = "#D55E00"          # vermillion (colour-blind-safe palette)
 
 
 def _rows(structure, method, x, y, stable=None, negative=None) -> pd.DataFrame:
@@ -91,8 +99,12 @@ def _miura(quick: bool, progress: bool) -> pd.DataFrame:
     free = np.flatnonzero(sheet & np.isclose(mesh.nodes[:, 0], mesh.nodes[sheet, 0].max()))
     lift = 1e6 * step.u_history[:, free, 2].mean(axis=1)
     cols = step.columns
-    return _rows("miura", "heating", 1e3 * step.power_history.max(axis=1), lift,
+    rows = _rows("miura", "heating", 1e3 * step.power_history.max(axis=1), lift,
                  cols.get("stable"), cols.get("negative_eigenvalues"))
+    m = len(lift)                                  # the step's records end the history
+    rows[TEMP_CL] = res.crease_temperature_centre_line[-m:].max(axis=1)
+    rows[TEMP_MAX] = res.crease_temperature_max[-m:].max(axis=1)
+    return rows
 
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
@@ -106,7 +118,7 @@ def _branches(ax, x, y, stable, **style):
     start = 0
     for k in range(1, len(s) + 1):
         if k == len(s) or s[k] != s[start]:
-            unstable = {} if s[start] else {"color": "tab:red"}
+            unstable = {} if s[start] else {"color": UNSTABLE}
             ax.plot(x[max(start - 1, 0):k], y[max(start - 1, 0):k],
                     ls="-" if s[start] else "--", **{**style, **unstable})
             style.pop("label", None)
@@ -114,36 +126,54 @@ def _branches(ax, x, y, stable, **style):
 
 
 def plot(df: pd.DataFrame):
-    """Figure: (a) roof load vs ridge displacement, (b) Miura lift vs power."""
+    """Figure: (a) roof load vs ridge displacement, (b) Miura lift vs power, (c) its crease
+    temperatures vs power."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(11.5, 4.6), layout="constrained")
-    ax_r, ax_m = fig.subplots(1, 2)
+    from studies.plotting import mark_temperature_limit, note_assumptions
+
+    fig = Figure(figsize=(15, 4.9), layout="constrained")
+    ax_r, ax_m, ax_t = fig.subplots(1, 3)
     roof = df[df["table"] == "roof"]
     arc = roof[roof["method"] == "arc length"]
     _branches(ax_r, arc[DISP].to_numpy(), arc[LOAD].to_numpy(), arc["stable"].tolist(),
-              color="k", lw=2, label="arc length (red dashed: unstable)")
+              color="k", lw=2, label="arc length (dashed: unstable)")
     dc = roof[roof["method"] == "displacement control"]
-    ax_r.plot(dc[DISP], dc[LOAD], "o", ms=4, mfc="none", color="0.4",
+    ax_r.plot(dc[DISP], dc[LOAD], "o", ms=4, mfc="none", color="0.4", ls="",
               label="displacement control")
     lc = roof[roof["method"] == "load control"]
-    ax_r.plot(lc[DISP], lc[LOAD], "x", ms=6, color="tab:blue", label="load control")
+    ax_r.plot(lc[DISP], lc[LOAD], "x", ms=6, color="C0", ls="", label="load control")
     ax_r.axhline(0, color="0.7", lw=0.8)
     ax_r.set_xlabel("ridge displacement (down) [um]")
     ax_r.set_ylabel("ridge load [mN]")
     ax_r.set_title("(a) roof snap-through")
-    ax_r.legend(fontsize="small")
+    ax_r.legend(fontsize="small", loc="upper left")
 
     miura = df[df["table"] == "miura"]
-    _branches(ax_m, miura[POWER].to_numpy(float), miura[DISP].to_numpy(float),
-              miura["stable"].tolist(), color="k", lw=1.5,
-              label="heating (red dashed: unstable)")
-    ax_m.set_xlabel("power per crease [mW]")
+    power = miura[POWER].to_numpy(float)
+    _branches(ax_m, power, miura[DISP].to_numpy(float), miura["stable"].tolist(), color="k",
+              lw=1.5, label="heating (dashed: unstable)")
     ax_m.set_ylabel("lift of the free end [um]")
     ax_m.set_title("(b) Miura lifter a = 0.5 mm, 45 deg, W = 300 um")
-    ax_m.legend(fontsize="small")
-    for ax in (ax_r, ax_m):
+    ax_m.legend(fontsize="small", loc="upper left")
+    measured = []
+    if TEMP_CL in miura.columns:
+        measured = ax_t.plot(power, miura[TEMP_CL], "-", color="C0",
+                             label="hottest crease, centre line")
+        ax_t.plot(power, miura[TEMP_MAX], ":", color="C0", label="hottest crease node")
+    ax_t.set_ylabel("temperature [°C]")
+    ax_t.set_title("(c) Miura crease temperatures")
+    ax_t.legend(fontsize="small", loc="upper left")
+    mark_temperature_limit(ax_t, lines=measured)
+    for ax in (ax_m, ax_t):
+        ax.set_xlabel("power per crease [mW]")
+    for ax in (ax_r, ax_m, ax_t):
         ax.grid(True, alpha=0.3)
+    note_assumptions(fig, "(a): no heat, no gravity; pinned eaves, ridge pushed down. (b), "
+                     "(c): environment: air, k_env = 0.026 W/(m K); residual fold 0 deg; no "
+                     "gravity; first column clamped over a substrate 100 um below. The design "
+                     "runs far above 1.2 T_g: it shows the path-following, not a usable "
+                     "operating point.")
     return fig
 
 

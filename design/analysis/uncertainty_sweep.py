@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["GripperSampleProblem", "sweep_uncertainty", "summarize_yield", "input_columns",
-           "RobustYieldProblem"]
+           "RobustYieldProblem", "sample_category", "CATEGORIES"]
 
 logger = logging.getLogger(__name__)
 
@@ -119,6 +119,25 @@ def input_columns(scenario: FabricationScenario) -> list:
     return [i.column for i in scenario.inputs]
 
 
+#: What became of one sample (column ``category``): it works, or why not. "solver failed" is
+#: no verdict on the device (the simulation lost its path), so the yield leaves it out.
+CATEGORIES = ("works", "too hot", "target not met", "solver failed", "outside bounds")
+
+
+def sample_category(ev) -> str:
+    """The :data:`CATEGORIES` entry of one sample's evaluation: ``works`` (feasible),
+    ``too hot`` (both stages met above the temperature limit), ``target not met`` (a stage
+    not met below the power cap), ``solver failed`` (a simulation failed), ``outside
+    bounds`` (met, cool enough, but a size bound violated)."""
+    if ev.feasible:
+        return "works"
+    if ev.status == "not_met":
+        return "target not met"
+    if not ev.success:
+        return "solver failed"
+    return "too hot" if ev.constraints.get("temperature", 0.0) > 0 else "outside bounds"
+
+
 def _evaluate_sample(task):
     """Worker task (top level, picklable): ``(problem, x) -> Evaluation``."""
     problem, x = task
@@ -134,6 +153,7 @@ def _row(problem: GripperSampleProblem, scenario, design: dict, k: int, ev) -> d
         row[inp.column] = ev.x[inp.parameter] * PARAMETERS[inp.parameter][2]
     m = ev.metrics
     row.update({"success": ev.success, "status": ev.status, "works": ev.feasible,
+                "category": sample_category(ev),
                 "total_power [mW]": 1e3 * ev.objective if ev.success else math.nan,
                 "assembly_power [mW]": _power(m, "assembly_power [mW]"),
                 "grip_power [mW]": _power(m, "grip_power [mW]"),
@@ -148,7 +168,8 @@ def _power(metrics, key) -> float:
 
 
 def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, samples,
-                      designs=None, executor=None, log=None, progress=None) -> pd.DataFrame:
+                      designs=None, executor=None, log=None, progress=None,
+                      retry: GripperProblem | None = None) -> pd.DataFrame:
     """Evaluate every design at every sample of the scenario.
 
     Parameters
@@ -167,14 +188,19 @@ def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, sa
         evaluated once.
     progress : callable, optional
         ``progress(done, total)`` over the points computed.
+    retry : GripperProblem, optional
+        Problem (e.g. ``replace(problem, power_step=..., max_power_step=...)``: smaller power
+        steps) that evaluates once more every point whose simulation failed; its result
+        replaces the first one (column ``attempts`` = 2). Retries are not logged.
 
     Returns
     -------
     DataFrame
         One row per (design, sample), designs outer: design variables [um], ``sample``, the
         sampled inputs (display units: deg, um, ppm/K, W/(m K)), ``success``, ``status``,
-        ``works`` (both stages met and ``T <= T_limit``), powers [mW] (empty when not met),
-        ``temperature [degC]``, ``message``, ``wall_time [s]``.
+        ``works`` (both stages met and ``T <= T_limit``), ``category``
+        (:func:`sample_category`), powers [mW] (empty when not met), ``temperature [degC]``,
+        ``message``, ``wall_time [s]``, ``attempts`` (1, or 2 when retried).
     """
     import pandas as pd
 
@@ -203,11 +229,35 @@ def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, sa
         found[k] = ev
         book.append(ev)
 
-    (executor or SerialExecutor()).map(_evaluate_sample, [(point, first[k]) for k in unique],
-                                       progress, on_result=finished, failures="return")
+    executor = executor or SerialExecutor()
+    executor.map(_evaluate_sample, [(point, first[k]) for k in unique], progress,
+                 on_result=finished, failures="return")
+    retried = _retry_failed(retry, scenario, found, vecs, keys, executor)
     n = len(params)
-    return pd.DataFrame([_row(point, scenario, xs[i // n], i % n, found[k])
-                         for i, k in enumerate(keys)])
+    rows = [_row(point, scenario, xs[i // n], i % n, found[k]) for i, k in enumerate(keys)]
+    for row, k in zip(rows, keys):
+        row["attempts"] = 2 if k in retried else 1
+    return pd.DataFrame(rows)
+
+
+def _retry_failed(retry, scenario, found: dict, vecs, keys, executor) -> set:
+    """Evaluate the failed points of ``found`` again with the ``retry`` problem (in place);
+    returns the keys retried."""
+    if retry is None:
+        return set()
+    point = GripperSampleProblem(retry, scenario.parameters)
+    failed = [k for k in dict.fromkeys(keys) if found[k].status == "failed"]
+    todo = [vecs[keys.index(k)] for k in failed]
+    logger.info("uncertainty sweep: retrying %d failed points with smaller power steps",
+                len(todo))
+
+    def finished(j, ev):
+        if not isinstance(ev, TaskFailure):
+            found[failed[j]] = ev
+
+    executor.map(_evaluate_sample, [(point, x) for x in todo], None, on_result=finished,
+                 failures="return")
+    return set(failed)
 
 
 def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
@@ -220,8 +270,10 @@ def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
     Returns
     -------
     summary : DataFrame
-        One row per design: the design [um], ``samples``, ``yield [-]``, ``yield_low [-]``,
-        ``yield_high [-]`` (Wilson interval at ``confidence``), ``power_q<q> [mW]`` (quantiles
+        One row per design: the design [um], ``samples``, ``solver_failed`` (samples whose
+        simulation failed: no verdict on the device), ``yield [-]`` (share of working devices
+        among the other, evaluated samples), ``yield_low [-]``, ``yield_high [-]`` (Wilson
+        interval at ``confidence``), ``power_q<q> [mW]`` (quantiles
         of the total power, unmet samples counted as infinite: empty when the quantile is not
         met), ``power_mean [mW]`` and ``power_std [mW]`` (over the samples that met both
         stages), ``temperature_max [degC]``.
@@ -235,9 +287,12 @@ def summarize_yield(table: pd.DataFrame, scenario: FabricationScenario,
     rows, sens = [], []
     for values, group in table.groupby(dcols, sort=False):
         n, ok = len(group), int(group["works"].sum())
-        low, high = wilson_interval(ok, n, confidence)
+        failed = int((~group["success"].astype(bool) & (group["status"] == "failed")).sum())
+        judged = n - failed
+        low, high = wilson_interval(ok, judged, confidence) if judged else (math.nan,) * 2
         row = dict(zip(dcols, values))
-        row.update({"samples": n, "yield [-]": ok / n, "yield_low [-]": low,
+        row.update({"samples": n, "solver_failed": failed,
+                    "yield [-]": ok / judged if judged else math.nan, "yield_low [-]": low,
                     "yield_high [-]": high})
         for q in quantiles:
             v = quantile(group["total_power [mW]"], q)

@@ -125,16 +125,21 @@ def _demo(args) -> int:
 
 # ------------------------------------------------------------------------------ cases, run
 def _cases(args) -> int:
-    from simulator import describe_cases
+    import textwrap
+
+    from simulator import describe_cases, parameter_note
 
     from .case_params import cli_unit, to_cli
 
     for name, doc, params in describe_cases():
-        print(f"{name.replace('_', '-')}: {doc}")
+        print(textwrap.fill(f"{name.replace('_', '-')}: {doc}", 92, subsequent_indent="  ",
+                            break_on_hyphens=False))
         for pname, default, si_unit in params:
             unit = cli_unit(si_unit).name
             unit = f" [{unit}]" if unit else ""
-            print(f"    {pname} = {to_cli(default, si_unit)!r}{unit}")
+            note = parameter_note(name, pname)
+            print(f"    {pname} = {to_cli(default, si_unit)!r}{unit}"
+                  + (f"  ({note})" if note else ""))
     return 0
 
 

@@ -4,6 +4,7 @@ the size bounds and the crease temperature limit (paper section 6.3).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 from simulator import ParameterError
@@ -47,6 +48,10 @@ class GripperProblem(DesignProblem):
         Allowed multiple of T_g (1.2).
     base : GripperDesign
         Values of everything that is not a design variable.
+    power_step, max_power_step : float
+        First and largest growth step of the bisect power search [W per crease]
+        (:func:`~design.devices.gripper.evaluate_gripper` ``step`` and ``max_step``); smaller
+        steps retry a path that a large step lost (``sweep_uncertainty(retry=...)``).
     """
 
     mode: str = "bisect"
@@ -57,6 +62,8 @@ class GripperProblem(DesignProblem):
     temperature_measure: str = "centre_line"
     power_cap: float = 40e-3
     base: GripperDesign = GripperDesign()
+    power_step: float = 0.1e-3
+    max_power_step: float = 0.4e-3
     space: DesignSpace = field(default=GRIPPER_SPACE, compare=False)
     name: str = "gripper"
 
@@ -66,6 +73,11 @@ class GripperProblem(DesignProblem):
                                  "'centre_line' or 'crease_max'.")
         if self.mode not in ("bisect", "staircase"):
             raise ParameterError(f"mode = {self.mode!r}; use 'bisect' or 'staircase'.")
+        for name in ("power_step", "max_power_step"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ParameterError(f"GripperProblem.{name} = {value!r} W must be a positive "
+                                     "number of watts per crease (e.g. 0.05e-3).")
         groups = dict(self.residual_fold_groups)
         if set(groups) - {"base", "arm"}:
             raise ParameterError(f"residual_fold_groups {groups!r}: groups are 'base' and 'arm'.")
@@ -89,7 +101,8 @@ class GripperProblem(DesignProblem):
                        residual_fold_base=folds["base"], residual_fold_arm=folds["arm"], **values)
 
     def _evaluate(self, values):
-        res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap)
+        res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap,
+                               step=self.power_step, max_step=self.max_power_step)
         d = res.to_dict()
         temp = res.max_temperature if self.temperature_measure == "centre_line" \
             else d["max_crease_temperature [degC]"]
@@ -110,4 +123,10 @@ class GripperProblem(DesignProblem):
                 "T_limit [degC]": self.temperature_limit,
                 "temperature_measure": self.temperature_measure,
                 "power_cap [W]": self.power_cap, "base": self.base.to_dict(),
-                "space": self.space.to_dicts()}
+                "space": self.space.to_dicts(), **self._step_settings()}
+
+    def _step_settings(self) -> dict:
+        """The power-search steps, recorded only when not the defaults (so logs and cache
+        keys of default problems stay as they were)."""
+        steps = (self.power_step, self.max_power_step)
+        return {} if steps == (0.1e-3, 0.4e-3) else {"power_steps [W]": list(steps)}

@@ -130,6 +130,20 @@ def test_single_fold_gravity_threshold(quick):
             < ten["threshold_power [mW]"])
 
 
+def test_single_fold_in_air_needs_about_twenty_times_less_power(quick):
+    """The reference script's k_env = 0.6 W/(m K) against air's 0.026: heat leaves the crease
+    mainly through the environment, so the thresholds drop by 15-25x; the panel still starts
+    on the substrate."""
+    _, _, df = quick("single_fold")
+    thr = _table(df, "threshold").set_index("variant")
+    for r in (0, -10):
+        water, air = thr.loc[f"gravity, residual {r} deg"], thr.loc[f"air, gravity, residual {r} deg"]
+        assert water["env_conductivity [W/(m K)]"] == 0.6
+        assert air["env_conductivity [W/(m K)]"] == 0.026
+        assert 15 < water["threshold_power [mW]"] / air["threshold_power [mW]"] < 25
+        assert air["fold_start [deg]"] < -9.5
+
+
 def test_single_fold_example01_follows_the_reference(quick):
     _, _, df = quick("single_fold")
     sweep = _table(df, "sweep")

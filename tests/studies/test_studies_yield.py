@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pandas as pd
 
+from design.analysis.uncertainty_sweep import CATEGORIES
 from studies import gripper_yield
 
 
@@ -22,9 +23,14 @@ def test_gripper_yield_quick(tmp_path):
     assert list(summary["design"]) == labels
     assert len(samples) == len(labels) * gripper_yield.SAMPLES_QUICK
     works = samples["works"].astype(str).str.lower() == "true"
+    assert set(samples["category"]) <= set(CATEGORIES)
+    assert ((samples["category"] == "works") == works).all()
+    assert set(samples["attempts"]) <= {1, 2}
     for label, row in summary.set_index("design").iterrows():
-        mine = works[samples["design"] == label]
-        assert row["yield [-]"] == mine.mean()
+        mine = samples[samples["design"] == label]
+        failed = int((mine["category"] == "solver failed").sum())
+        assert row["solver_failed"] == failed
+        assert row["yield [-]"] == works[mine.index].sum() / (len(mine) - failed)
         assert row["yield_low [-]"] <= row["yield [-]"] <= row["yield_high [-]"]
     sens = df[df["table"] == "sensitivity"]
     assert len(sens) == len(labels) * 2 * len(gripper_yield.SCENARIO.inputs)
