@@ -3,7 +3,7 @@
 The medium carries ``k grad(u) . grad(v)`` on tetrahedra (triangles in 2-D); the outer sphere
 (circle) carries the far-field Robin term ``(k c / R) u v`` with ``c`` the decay order of the far
 field (1: a monopole in free space, 2: a dipole over an isothermal plane; 2-D: ``1 / ln(R/r0)``
-is not used, the 2-D outer circle is held at room temperature). scikit-fem and pyamg are
+is not used, the 2-D outer circle is held at room temperature). scikit-fem is
 imported here only.
 """
 
@@ -47,7 +47,8 @@ def medium_system(points, cells, k, box_radius, robin_order, plane_z=None, cente
     bnd = np.zeros(mesh.facets.shape[1], bool)
     bnd[mesh.boundary_facets()] = True
     on_plane = bnd & (np.abs(mid[-1] - plane_z) < tol) if plane_z is not None else bnd & False
-    outer = np.flatnonzero(bnd & ~on_plane)
+    far = np.linalg.norm(mid - center[:, None], axis=0) > 0.9 * box_radius
+    outer = np.flatnonzero(bnd & ~on_plane & far)
     fixed = np.zeros(basis.N, bool)
     if plane_z is not None:
         fixed[basis.get_dofs(facets=np.flatnonzero(on_plane)).all()] = True
@@ -83,18 +84,13 @@ def facet_dofs(basis, facets):
     return basis.get_dofs(facets=np.asarray(facets)).all()
 
 
-def solve_spd(A, b, tol=1e-10):
-    """Solve the SPD system ``A x = b`` by CG with a smoothed-aggregation AMG preconditioner
-    (pyamg); direct (SuperLU) up to 5,000 unknowns. Returns (x, residual norm / |b|)."""
+def solve_spd(A, b):
+    """Solve the SPD system ``A x = b`` by the toolkit's factorisation ladder
+    (:func:`~simulator.linalg.ladder.factorize`: PARDISO if installed, else SuperLU).
+    Returns (x, relative residual norm)."""
+    from ...linalg.ladder import factorize
+
     A = sp.csr_matrix(A)
+    x = factorize(A, kind="spd").solve(b)
     nb = float(np.linalg.norm(b)) or 1.0
-    if A.shape[0] <= 5_000:
-        from scipy.sparse.linalg import spsolve
-
-        x = spsolve(A.tocsc(), b)
-    else:
-        import pyamg
-
-        ml = pyamg.smoothed_aggregation_solver(A, symmetry="symmetric")
-        x = ml.solve(b, tol=tol, accel="cg", maxiter=500)
     return x, float(np.linalg.norm(A @ x - b)) / nb

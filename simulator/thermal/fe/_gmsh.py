@@ -121,9 +121,8 @@ def disk_mesh(radius, box_radius, height, level):
     h_edge, h_face, grow, _ = level_sizes(level)
     a, R = 1.0, box_radius / radius
     z = 0.0 if height is None else height / radius
-    if height is not None:
-        h_face = min(h_face, 0.6 * z)
-        h_edge = min(h_edge, 0.2 * z)
+    if height is not None and z < 0.25:          # resolve the gap: every size scales with it
+        h_edge, h_face = h_edge * z / 0.25, h_face * z / 0.25
     with _session() as gmsh:
         occ = gmsh.model.occ
         ball = _domain(gmsh, R, None if height is None else 0.0)
@@ -138,6 +137,26 @@ def disk_mesh(radius, box_radius, height, level):
         xyz, index, tets = _nodes_and_cells(gmsh, 3)
         disk_tris = np.concatenate([_entity_triangles(gmsh, index, t) for _, t in faces])
     return xyz * radius, tets, disk_tris
+
+
+def sphere_mesh(box_radius, level):
+    """Tetrahedra between a unit sphere and a ball of ``box_radius`` (unit-free).
+
+    Returns (points (N, 3), tets (M, 4), inner sphere triangles (k, 3)).
+    """
+    _, h_face, grow, _ = level_sizes(level)
+    with _session() as gmsh:
+        occ = gmsh.model.occ
+        vol = occ.cut([(3, occ.addSphere(0, 0, 0, box_radius))],
+                      [(3, occ.addSphere(0, 0, 0, 1.0))])[0]
+        occ.synchronize()
+        inner = [e for e in gmsh.model.getBoundary(vol, oriented=False)
+                 if max(np.abs(gmsh.model.getBoundingBox(*e))) < 1.5]
+        _size_field(gmsh, [(h_face, inner)], grow, box_radius / 4, [(2, "SurfacesList")])
+        gmsh.model.mesh.generate(3)
+        xyz, index, tets = _nodes_and_cells(gmsh, 3)
+        tris = np.concatenate([_entity_triangles(gmsh, index, t) for _, t in inner])
+    return xyz, tets, tris
 
 
 def sheet_mesh(triangles, box_radius, plane_z, h_crease, h_panel, is_crease, level):

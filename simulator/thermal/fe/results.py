@@ -59,6 +59,8 @@ class FEDiskResult(ResultFiles):
     height : float or None, distance to the isothermal plane [m].
     mesh : FEMeshInfo or None.
     warnings : tuple of str, accuracy warnings (also logged at WARNING).
+    levels : tuple of float, conductances of the levels solved [W/K] (two with
+        ``extrapolate=True``: level - 1, level).
     """
 
     success: bool
@@ -70,6 +72,7 @@ class FEDiskResult(ResultFiles):
     height: float | None = None
     mesh: FEMeshInfo | None = None
     warnings: tuple = ()
+    levels: tuple = ()
 
     @property
     def free_space_ratio(self):

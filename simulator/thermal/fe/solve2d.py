@@ -75,7 +75,7 @@ def solve_fe2d(lengths, kt, heat, k_medium: float, *, fixed_ends: bool = True,
     -------
     FE2DResult
     """
-    L = array("lengths", lengths, (-1,), "m")
+    L = array("lengths", lengths, (None,), "m")
     m = len(L)
     kt = array("kt", kt, (m,), "W/K", hint="one entry per segment")
     heat = array("heat", heat, (m,), "W/m", hint="one entry per segment")
