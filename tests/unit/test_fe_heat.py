@@ -137,3 +137,17 @@ def test_structure_below_the_substrate_is_refused():
         solve_fe3d(model, np.full(model.mesh.n_creases, 1e-3), positions=x, level=0)
     with pytest.raises(ParameterError, match="substrate"):
         solve_fe3d(model, np.full(model.mesh.n_creases, 1e-3), substrate="floor")
+
+
+def test_nodal_heat_equals_the_crease_power_it_comes_from():
+    from simulator.thermal.steady import ThermalModel
+    from studies.heat_loss_calibration import strip_case
+
+    model = strip_case(0.4, 20.0, 1.5, 10, 150.0, 0.6).model
+    q = ThermalModel(model.mesh, model.thermal).heat_vector([4e-3])
+    a = solve_fe3d(model, [4e-3], level=0)
+    b = solve_fe3d(model, heat=q, level=0)
+    np.testing.assert_allclose(a.temperature, b.temperature, rtol=1e-10)
+    assert a.heat_input == pytest.approx(4e-3)
+    with pytest.raises(ParameterError, match="not both"):
+        solve_fe3d(model, [4e-3], heat=q)
