@@ -415,8 +415,9 @@ def plot(df: pd.DataFrame) -> dict:
 def main(argv=None):
     out = study_main(NAME, __doc__, run, plot, argv)
     csv = pathlib.Path(out) / f"{NAME}.csv"
-    if csv.exists():
-        error_table(pd.read_csv(csv)).to_csv(pathlib.Path(out) / ERROR_CSV, index=False)
+    df = pd.read_csv(csv) if csv.exists() else pd.DataFrame()
+    if {"sweep", "T_max_fe3d [-]"} <= set(df.columns):      # a run of this study's table
+        error_table(df).to_csv(pathlib.Path(out) / ERROR_CSV, index=False)
     return out
 
 

@@ -219,8 +219,9 @@ def _plane_frame(x, mesh, params, substrate):
 def _barycentric(p, tri):
     """Barycentric coordinates (k, 3) of points p (k, 3) in the plane of triangle tri (3, 3)."""
     u, v, w = tri[1] - tri[0], tri[2] - tri[0], p - tri[0]
-    G = np.array([[u @ u, u @ v], [u @ v, v @ v]])
-    s, t = np.linalg.solve(G, np.stack([w @ u, w @ v]))
+    uu, uv, vv, wu, wv = u @ u, u @ v, v @ v, w @ u, w @ v      # 2 x 2 normal equations
+    det = uu * vv - uv * uv
+    s, t = (vv * wu - uv * wv) / det, (uu * wv - uv * wu) / det
     lam = np.clip(np.stack([1 - s - t, s, t], axis=1), 0.0, 1.0)
     return lam / lam.sum(axis=1, keepdims=True)
 
