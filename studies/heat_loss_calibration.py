@@ -62,6 +62,13 @@ calibration parameter, not a discretisation one. T rises with N and converges (N
 Si and Au structures conduct the heat to the held ends and run far cooler than SU-8 in air
 (8 and 16 times at W/L = 1, 41 and 85 times at W/L = 0.1); water cools every structure and
 brings the materials closer (W/L = 1: 0.0039, 0.0030, 0.0024 for SU-8, Si, Au).
+Against the 3-D FE at the paper's choice the chain model is within 2 % for Si and Au in air
+(T_max -1.7 to -0.5 %), where the sheet's conduction to the held corners dominates; where the
+loss to the medium dominates it is too cool at the crease centre: T_max -25 to -10 % for SU-8
+in air, -26 to -3 % in water, -16 to -7 % for Si and Au in water, while its T_ave is -6 to
++19 % off (the FE's temperature varies more along the crease). The 2-D section is the hottest
+for SU-8 (0.166 against 0.119 for the 3-D FE at W/L = 1) but below the 3-D FE for Si and Au
+in air, whose section holds the whole end edges at RT.
 
 Outputs (``results/heat_loss_calibration/``)
 --------------------------------------------
