@@ -73,6 +73,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
+    ".thermal.fe": ("FE2DResult", "FE3DResult", "FEDiskResult", "fe_disk", "fe_sphere",
+                    "solve_fe2d", "solve_fe3d"),
 }, modules={"example_patterns": ".geometry.example_patterns"})
 
 __all__ = [
@@ -100,6 +102,9 @@ __all__ = [
     # time schedules of mechanical drives (Dynamics, ElectroThermal)
     "Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
     "PiecewiseLinearSignal",
+    # the FE reference of steady heat transfer (optional extra [fe])
+    "fe_disk", "fe_sphere", "solve_fe3d", "solve_fe2d", "FEDiskResult", "FE3DResult",
+    "FE2DResult",
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",
