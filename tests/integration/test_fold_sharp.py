@@ -190,6 +190,8 @@ def test_run_of_a_sharp_pattern_from_flags(tmp_path, capsys):
     (["--crease-model", "sharp"], "needs a mechanical drive: --fold WHICH=DEG"),
     (["--crease-model", "sharp", "--fold", "all=200"], "in (-180, 180)"),
     (["--fold-stiffness", "1e-6", "--heat", "all", "--power", "1"], "add --crease-model sharp"),
+    (["--crease-width", "0", "--fold", "all=60"], "pass fold_stiffness=<N m/rad/m> (CLI "
+     "--fold-stiffness N_M_PER_RAD_M)"),
 ])
 def test_cli_refusals_are_one_line(tmp_path, capsys, flags, expected):
     assert main(["run", MIURA, *flags, "--out", str(tmp_path / "r"), "-q"]) == 2
@@ -225,3 +227,25 @@ def test_a_heated_model_file_read_as_sharp_is_refused_in_one_line(tmp_path, caps
                  "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert "sharp creases" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("stiffness", [None, 2e-6, "per crease"])
+def test_a_sharp_model_file_runs_back_to_the_same_result(tmp_path, stiffness):
+    from simulator import read_model, write_model
+
+    data = load("miura_3x3_plain.fold")
+    if stiffness == "per crease":
+        data["edges_etorigami:fold_stiffness"] = [None if a == "B" else 1e-6 + 1e-8 * i
+                                                  for i, a in enumerate(data["edges_assignment"])]
+        stiffness = None
+    model, _ = fold_to_model(data, crease_model="sharp", fold_stiffness=stiffness, **PHYS)
+    model = clamped(model, 4)
+    c = int(model.mesh.crease_ids[0])
+    steps = [SelfFold({c: 0.4}, increments=3)]
+    path = write_model(model, steps, tmp_path / "sharp.fold")
+    again, steps_again = read_model(path)
+    assert isinstance(again.mesh, SharpHingeMesh) and again.params == model.params
+    np.testing.assert_array_equal(again.properties.spring_stiffness,
+                                  model.properties.spring_stiffness)
+    np.testing.assert_array_equal(simulate(again, steps_again).fold_angle,
+                                  simulate(model, steps).fold_angle)

@@ -46,9 +46,12 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
         out["frame_title"] = title
     if description:
         out["frame_description"] = description
-    if not np.array_equal(mesh.nodes, build_mesh(pattern).nodes):
-        out[f"{NS}mesh_nodes"] = mesh.nodes.tolist()
-    out[f"{NS}bar_hinge"] = model.params.to_dict()
+    if getattr(mesh, "sharp", False):
+        _sharp_fields(model, out)
+    else:
+        if not np.array_equal(mesh.nodes, build_mesh(pattern).nodes):
+            out[f"{NS}mesh_nodes"] = mesh.nodes.tolist()
+        out[f"{NS}bar_hinge"] = model.params.to_dict()
     out[f"{NS}supports"] = {"fixed": {str(k): v for k, v in model.supports.fixed.items()},
                             "elastic": [list(e) for e in model.supports.elastic]}
     if model.contact is not None:
@@ -73,6 +76,23 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
         out[f"edges_{NS}heater"] = heater
     out[f"{NS}steps"] = [_encode_step(s, i, circuits) for i, s in enumerate(steps)]
     return out
+
+
+def _sharp_fields(model: Model, out: dict) -> None:
+    """``etorigami:sharp_hinge`` (and per-crease fold stiffnesses) of a concentrated-hinge
+    model; its mesh follows from the pattern and the panel mesh."""
+    from ...model.sharp_mesh import build_sharp_mesh
+
+    p, mesh = model.params, model.mesh
+    if not np.array_equal(mesh.nodes, build_sharp_mesh(mesh.pattern, p.panel_mesh).nodes):
+        raise ParameterError("model_to_fold: the sharp model's nodes were edited after meshing; "
+                             "FOLD model files keep node edits of compliant models only.")
+    k = p.fold_stiffness
+    out[f"{NS}sharp_hinge"] = {"panel_bending_width": p.panel_bending_width,
+                               "panel_mesh": p.panel_mesh,
+                               "fold_stiffness": None if isinstance(k, dict) else k}
+    if isinstance(k, dict):
+        out[f"edges_{NS}fold_stiffness"] = [k.get(e) for e in range(mesh.pattern.n_edges)]
 
 
 def write_model(model: Model, steps, path, title: str | None = None,

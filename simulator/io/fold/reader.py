@@ -205,8 +205,8 @@ def check_crease_model(crease_model, crease_width, data=None, edge=None) -> str:
     """The crease model a read asks for: ``"compliant"`` (creases with a width) or ``"sharp"``
     (concentrated hinges, :func:`~simulator.model.sharp.sharp_model`).
 
-    ``crease_model="sharp"``, ``crease_width=0`` or width 0 on every crease of
-    ``edges_etorigami:width`` ask for sharp creases. A file whose creases mix width 0 and
+    ``crease_model="sharp"``, ``crease_width=0``, width 0 on every crease of
+    ``edges_etorigami:width`` or an ``etorigami:sharp_hinge`` object ask for sharp creases. A file whose creases mix width 0 and
     positive widths is refused (per-crease mixing of the two models is not implemented).
 
     Parameters
@@ -228,6 +228,7 @@ def check_crease_model(crease_model, crease_width, data=None, edge=None) -> str:
                              "width) or 'sharp' (concentrated hinges).")
     sharp = crease_model == "sharp" or (crease_width is not None and _is_number(crease_width)
                                         and crease_width == 0)
+    sharp = sharp or (data is not None and data.get(f"{NS}sharp_hinge") is not None)
     widths = None if data is None else data.get(f"edges_{NS}width")
     if isinstance(widths, list) and edge is not None:
         letters = data.get("edges_assignment")

@@ -46,7 +46,7 @@ def sharp_hinge_parameters(geo, fold_stiffness=None, panel_bending_width=None,
     k = fold_stiffness if fold_stiffness is not None else raw.get("fold_stiffness")
     width = panel_bending_width if panel_bending_width is not None else \
         raw.get("panel_bending_width")
-    mesh = panel_mesh if panel_mesh is not None else raw.get("panel_mesh", "N5B8")
+    mesh = panel_mesh if panel_mesh is not None else raw.get("panel_mesh") or "N5B8"
     per_crease = _per_crease(geo)
     creases = geo.pattern.creases.tolist()
     if k is not None:
