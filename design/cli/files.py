@@ -199,7 +199,9 @@ def _check(args) -> int:
     print(f"  vertices {pattern.n_vertices}, panels {pattern.n_panels}, creases "
           f"{len(pattern.creases)}, size {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} um "
           "(lengths converted to metres inside)")
-    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs")
+    kind = " (sharp creases: concentrated hinges)" if getattr(mesh, "sharp", False) else ""
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} "
+          f"springs{kind}")
     print(f"  supports: {fixed} fixed degrees of freedom; contact "
           f"{'on' if model.contact is not None else 'off'}; thermal model "
           f"{'yes' if model.thermal is not None else 'no'}; actuated creases "

@@ -116,7 +116,11 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
         raise CLIError(f"{path} read with sharp creases needs a mechanical drive: --fold "
                        "WHICH=DEG (e.g. --fold all=90; heating needs crease widths)")
     stack = get_stack(args.stack)
-    reader = stack_reader_options(stack, {**options, "crease_model": "sharp"})
+    reader = stack_reader_options(stack, options)
+    if parse_fold(data, **reader).crease_model != "sharp":
+        raise CLIError(f"--fold drives sharp creases, but {path} is read with compliant creases; "
+                       "add --crease-model sharp (compliant creases are driven by --heat)")
+    reader["crease_model"] = "sharp"
     geo = parse_fold(data, **reader)
     read, _ = fold_to_model(data, **reader, **sharp)
     pattern = read.mesh.pattern

@@ -189,6 +189,7 @@ def test_run_of_a_sharp_pattern_from_flags(tmp_path, capsys):
      "with a width"),
     (["--crease-model", "sharp"], "needs a mechanical drive: --fold WHICH=DEG"),
     (["--crease-model", "sharp", "--fold", "all=200"], "in (-180, 180)"),
+    (["--fold", "all=60"], "add --crease-model sharp"),
     (["--fold-stiffness", "1e-6", "--heat", "all", "--power", "1"], "add --crease-model sharp"),
     (["--crease-width", "0", "--fold", "all=60"], "pass fold_stiffness=<N m/rad/m> (CLI "
      "--fold-stiffness N_M_PER_RAD_M)"),
@@ -217,6 +218,7 @@ def test_cli_refuses_mixed_widths_and_heating_width_zero_files(tmp_path, capsys)
                  str(tmp_path / "z"), "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert "heating needs creases with a width" in err and "\n" not in err
+    assert main(["run", str(zero), "--fold", "M=30", "--out", str(tmp_path / "f"), "-q"]) == 0
 
 
 def test_a_heated_model_file_read_as_sharp_is_refused_in_one_line(tmp_path, capsys):
@@ -230,7 +232,7 @@ def test_a_heated_model_file_read_as_sharp_is_refused_in_one_line(tmp_path, caps
 
 
 @pytest.mark.parametrize("stiffness", [None, 2e-6, "per crease"])
-def test_a_sharp_model_file_runs_back_to_the_same_result(tmp_path, stiffness):
+def test_a_sharp_model_file_runs_back_to_the_same_result(tmp_path, capsys, stiffness):
     from simulator import read_model, write_model
 
     data = load("miura_3x3_plain.fold")
@@ -245,7 +247,9 @@ def test_a_sharp_model_file_runs_back_to_the_same_result(tmp_path, stiffness):
     path = write_model(model, steps, tmp_path / "sharp.fold")
     again, steps_again = read_model(path)
     assert isinstance(again.mesh, SharpHingeMesh) and again.params == model.params
+    assert main(["check", str(path)]) == 0
     np.testing.assert_array_equal(again.properties.spring_stiffness,
                                   model.properties.spring_stiffness)
+    assert "sharp creases: concentrated hinges" in capsys.readouterr().out
     np.testing.assert_array_equal(simulate(again, steps_again).fold_angle,
                                   simulate(model, steps).fold_angle)
