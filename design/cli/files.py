@@ -37,15 +37,22 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
     from simulator import load_fold_json, parse_fold, read_model
 
     from .plain import heater_names, is_plain, plain_case
+    from .sharp import is_sharp_request, refuse_heated_sharp, sharp_case
 
     options = dict(options or {})
     heating = options.pop("_heating", None)
+    sharp = options.pop("_sharp", {})
     data = load_fold_json(path)
     geo = None
-    if heating is not None and (heating.heat is not None or is_plain(data)):
+    drive = heating is not None and (heating.heat is not None or getattr(heating, "fold", None)
+                                     or is_plain(data))
+    if drive and (is_sharp_request(options) or getattr(heating, "fold", None)):
+        model, steps, params, geo = sharp_case(path, data, options, sharp, heating)
+    elif drive:
         model, steps, params, geo = plain_case(path, data, options, heating)
     else:
-        model, steps = read_model(path, **options)
+        model, steps = read_model(path, **options, **sharp)
+        refuse_heated_sharp(model, steps, path)
         params = {}
     names = {}
     if any(not o.partition("=")[0].strip()[len("power."):].isdigit()
@@ -92,9 +99,11 @@ def _apply_overrides(path, steps, overrides, names, params) -> list:
 def reader_options(args) -> dict:
     """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale``, the
     ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um],
-    ``--frame``, ``--lay-flat`` and ``--keep-collinear`` (and, under ``_heating``, the flags
-    that heat a plain pattern)."""
+    ``--frame``, ``--lay-flat``, ``--keep-collinear`` and ``--crease-model`` (and, under
+    ``_heating``, the flags that drive a plain pattern; under ``_sharp``, the model keywords
+    of sharp creases, :mod:`.sharp`)."""
     from .plain import frame_option
+    from .sharp import sharp_options
 
     out = {}
     if args.unit_scale is not None:
@@ -104,8 +113,13 @@ def reader_options(args) -> dict:
         out["unit_scale"] = args.unit_scale
     for name in ("crease_width", "crease_thickness", "panel_thickness"):
         value = getattr(args, name)
-        if value is not None:
+        if name == "crease_width" and value == 0:
+            out[name] = 0.0                          # sharp creases (concentrated hinges)
+        elif value is not None:
             out[name] = length_um(f"--{name.replace('_', '-')}", value)
+    if getattr(args, "crease_model", None) is not None:
+        out["crease_model"] = args.crease_model
+    out["_sharp"] = sharp_options(args)
     if getattr(args, "frame", None) is not None:
         out["frame"] = frame_option(args.frame)
     if getattr(args, "lay_flat", False):
@@ -169,10 +183,11 @@ def _check(args) -> int:
     from .plain import check_plain, is_plain
 
     options = reader_options(args)                   # flags first: they need no file
+    sharp = options.pop("_sharp")
     data = load_fold_json(args.file)
     if is_plain(data):
-        return check_plain(args, data, options)
-    model, steps = read_model(args.file, **options)
+        return check_plain(args, data, options, sharp)
+    model, steps = read_model(args.file, **options, **sharp)
     mesh, pattern = model.mesh, model.mesh.pattern
     heated = sorted({int(c) for s in steps if isinstance(s, Heat) for k in dict(s.power)
                      for c in (k if isinstance(k, tuple) else (k,))})
@@ -184,7 +199,9 @@ def _check(args) -> int:
     print(f"  vertices {pattern.n_vertices}, panels {pattern.n_panels}, creases "
           f"{len(pattern.creases)}, size {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} um "
           "(lengths converted to metres inside)")
-    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs")
+    kind = " (sharp creases: concentrated hinges)" if getattr(mesh, "sharp", False) else ""
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} "
+          f"springs{kind}")
     print(f"  supports: {fixed} fixed degrees of freedom; contact "
           f"{'on' if model.contact is not None else 'off'}; thermal model "
           f"{'yes' if model.thermal is not None else 'no'}; actuated creases "
@@ -207,15 +224,18 @@ def add_reader_options(parser, heating: bool = True) -> None:
     """Options for FOLD files drawn in an editor (no etorigami: fields); ``heating`` adds the
     flags that heat a plain pattern (``run``)."""
     from .plain import add_plain_options
+    from .sharp import add_sharp_options
 
     add_plain_options(parser, heating)
+    add_sharp_options(parser, heating)
     parser.add_argument("--unit-scale", type=float, metavar="METRES",
                         help="metres per length unit of a FOLD file whose frame_unit is 'unit' "
                              "(e.g. 1e-3 for millimetres)")
     for name, what in (("crease-width", "crease width"), ("crease-thickness", "crease thickness"),
                        ("panel-thickness", "panel thickness")):
         parser.add_argument(f"--{name}", type=float, metavar="UM",
-                            help=f"{what} in um for a FOLD file that does not give it")
+                            help=f"{what} in um for a FOLD file that does not give it"
+                        + (" (0: sharp creases)" if name == "crease-width" else ""))
 
 
 def add_file_commands(sub) -> None:

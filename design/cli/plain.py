@@ -114,6 +114,9 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     geo = parse_fold(data, **stack_reader_options(stack, options))
     for note in geo.notes:
         print(f"  note: {note}")
+    if geo.crease_model == "sharp":
+        raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
+                       "needs creases with a width; fold it with --fold WHICH=DEG instead")
     if heating.heat is None or heating.power is None:
         missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
                                   ("--power MW", heating.power)) if v is None]
@@ -128,11 +131,14 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     return model, steps, params, geo
 
 
-def check_plain(args, data: dict, options: dict) -> int:
-    """``check`` of a plain pattern: geometry summary, then what a run needs, in CLI flags."""
+def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> int:
+    """``check`` of a plain pattern: geometry summary, then what a run needs, in CLI flags
+    (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
     from simulator import build_mesh, get_stack, parse_fold, start_fold_angles
+
+    from .sharp import check_sharp
 
     stack = get_stack(args.stack)
     needs = []
@@ -142,7 +148,6 @@ def check_plain(args, data: dict, options: dict) -> int:
         options = {**options, "unit_scale": 1e-3}
     geo = parse_fold(data, **stack_reader_options(stack, options))
     pattern = geo.pattern
-    mesh = build_mesh(pattern)
     letters = pattern.edge_assignment[pattern.creases]
     fold = np.degrees(start_fold_angles(pattern)[pattern.creases])
     size = np.ptp(pattern.vertices, axis=0) * 1e6
@@ -156,6 +161,12 @@ def check_plain(args, data: dict, options: dict) -> int:
     print(f"  start shape: {shape}")
     for note in geo.notes:
         print(f"  note: {note}")
+    if geo.crease_model == "sharp":
+        check_sharp(args, geo, sharp or {}, needs)
+        print("  a run needs: " + "; ".join(needs))
+        print(f"  e.g. etorigami run {args.file} --crease-model sharp --fold all=90 --out DIR")
+        return 0
+    mesh = build_mesh(pattern)
     print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
           f"(checked with crease width {pattern.crease_width[pattern.creases].min() * 1e6:g} um)")
     print(f"  physical parameters from layer stack {stack.summary()}")

@@ -178,8 +178,11 @@ def _run(args) -> int:
     last = frame[frame["step"] == frame["step"].max()]
     print(f"{name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
           f"results in {out}")
-    print(last[["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
-                "temperature_max [degC]"]].to_string(index=False))
+    columns = ["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
+               "temperature_max [degC]"]
+    if model.thermal is None and getattr(model.mesh, "sharp", False):
+        columns = ["crease", "fold_angle [deg]"]          # concentrated hinges: not heated
+    print(last[columns].to_string(index=False))
     for line in summary_lines(result):
         print(line)
     return 0 if result.success else 1

@@ -22,7 +22,8 @@ from .mesh import build_mesh
 from .model import Model, Supports, make_model
 from .properties import BarHingeParameters
 
-__all__ = ["LayerStack", "STACKS", "get_stack", "stack_model", "actuation_signs"]
+__all__ = ["LayerStack", "STACKS", "get_stack", "stack_model", "actuation_signs",
+           "central_panel"]
 
 
 @dataclass(frozen=True)
@@ -107,6 +108,12 @@ def actuation_signs(pattern: Pattern) -> np.ndarray:
     return np.where(pattern.is_crease, sign, 0.0)
 
 
+def central_panel(pattern: Pattern) -> int:
+    """The panel whose vertex centroid is nearest the pattern's (the default clamped panel)."""
+    centres = np.array([pattern.vertices[list(p)].mean(axis=0) for p in pattern.panels])
+    return int(np.argmin(np.linalg.norm(centres - pattern.vertices.mean(axis=0), axis=1)))
+
+
 def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                 fixed_panel: int | None = None) -> Model:
     """A heatable model of a pattern with a layer stack.
@@ -127,10 +134,7 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
     if not heated:
         raise ParameterError("no crease to heat: give at least one crease id.")
     mesh = build_mesh(pattern)
-    if fixed_panel is None:
-        centres = np.array([pattern.vertices[list(p)].mean(axis=0) for p in pattern.panels])
-        fixed_panel = int(np.argmin(np.linalg.norm(centres - pattern.vertices.mean(axis=0),
-                                                   axis=1)))
+    fixed_panel = central_panel(pattern) if fixed_panel is None else fixed_panel
     fixed_panel = pattern.check_panel(fixed_panel, "fixed panel")
     sign = actuation_signs(pattern)
     actuators = Actuators(Bimorph(E1=stack.E_active, t1=stack.t_active, E2=stack.E_passive,

@@ -267,12 +267,11 @@ def test_crease_wider_than_its_panel_is_refused_with_the_limit():
     build_mesh(parse_fold(data, crease_width=90e-6).pattern)
 
 
-def test_sharp_crease_request_is_routed_to_the_hinge_model_hook():
+def test_sharp_crease_request_is_routed_to_the_hinge_model():
     data = load("single_crease_60.fold")
-    with pytest.raises(ParameterError, match="concentrated-hinge model"):
-        parse_fold(data, crease_model="sharp", **PHYS)
-    with pytest.raises(ParameterError, match="concentrated-hinge model"):
-        parse_fold(data, **{**PHYS, "crease_width": 0.0})
+    assert parse_fold(data, crease_model="sharp", **PHYS).crease_model == "sharp"
+    assert parse_fold(data, **{**PHYS, "crease_width": 0.0}).crease_model == "sharp"
+    assert geometry(data).crease_model == "compliant"
     with pytest.raises(ParameterError, match="crease_model = 'soft'"):
         parse_fold(data, crease_model="soft", **PHYS)
 

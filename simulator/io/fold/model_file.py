@@ -46,9 +46,12 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
         out["frame_title"] = title
     if description:
         out["frame_description"] = description
-    if not np.array_equal(mesh.nodes, build_mesh(pattern).nodes):
-        out[f"{NS}mesh_nodes"] = mesh.nodes.tolist()
-    out[f"{NS}bar_hinge"] = model.params.to_dict()
+    if getattr(mesh, "sharp", False):
+        _sharp_fields(model, out)
+    else:
+        if not np.array_equal(mesh.nodes, build_mesh(pattern).nodes):
+            out[f"{NS}mesh_nodes"] = mesh.nodes.tolist()
+        out[f"{NS}bar_hinge"] = model.params.to_dict()
     out[f"{NS}supports"] = {"fixed": {str(k): v for k, v in model.supports.fixed.items()},
                             "elastic": [list(e) for e in model.supports.elastic]}
     if model.contact is not None:
@@ -73,6 +76,23 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
         out[f"edges_{NS}heater"] = heater
     out[f"{NS}steps"] = [_encode_step(s, i, circuits) for i, s in enumerate(steps)]
     return out
+
+
+def _sharp_fields(model: Model, out: dict) -> None:
+    """``etorigami:sharp_hinge`` (and per-crease fold stiffnesses) of a concentrated-hinge
+    model; its mesh follows from the pattern and the panel mesh."""
+    from ...model.sharp_mesh import build_sharp_mesh
+
+    p, mesh = model.params, model.mesh
+    if not np.array_equal(mesh.nodes, build_sharp_mesh(mesh.pattern, p.panel_mesh).nodes):
+        raise ParameterError("model_to_fold: the sharp model's nodes were edited after meshing; "
+                             "FOLD model files keep node edits of compliant models only.")
+    k = p.fold_stiffness
+    out[f"{NS}sharp_hinge"] = {"panel_bending_width": p.panel_bending_width,
+                               "panel_mesh": p.panel_mesh,
+                               "fold_stiffness": None if isinstance(k, dict) else k}
+    if isinstance(k, dict):
+        out[f"edges_{NS}fold_stiffness"] = [k.get(e) for e in range(mesh.pattern.n_edges)]
 
 
 def write_model(model: Model, steps, path, title: str | None = None,
@@ -139,14 +159,38 @@ def _encode_key(k, where: str) -> str:
 # ---------------------------------------------------------------------- reading
 def read_model(path, **kwargs):
     """Read a FOLD model file: returns ``(model, steps)`` (keywords: see
-    :func:`~simulator.io.fold.reader.fold_to_pattern`)."""
+    :func:`fold_to_model` and :func:`~simulator.io.fold.reader.fold_to_pattern`)."""
     return fold_to_model(load_fold_json(path), **kwargs)
 
 
-def fold_to_model(data: dict, **kwargs):
+def fold_to_model(data: dict, *, fold_stiffness=None, panel_bending_width=None,
+                  panel_mesh=None, **kwargs):
     """``(model, steps)`` of a parsed FOLD dict; missing model fields take defaults (no
-    supports, no contact, no thermal parameters, no actuators, no steps)."""
+    supports, no contact, no thermal parameters, no actuators, no steps).
+
+    Parameters
+    ----------
+    data : dict
+    fold_stiffness : float, optional
+        Sharp creases: fold-spring stiffness per unit crease length [N m/rad/m] of the creases
+        without ``edges_etorigami:fold_stiffness``; default ``E t^3 / (12 W)`` of the crease.
+    panel_bending_width : float, optional
+        Sharp creases: the length [m] of the panel bending rule; default the mean crease width.
+    panel_mesh : {"N5B8", "N4B5"}, optional
+        Sharp creases: the meshing of quadrilateral panels (default N5B8).
+    **kwargs
+        Reader keywords (:func:`~simulator.io.fold.reader.fold_to_pattern`), among them
+        ``crease_model="sharp"``.
+    """
     geo = parse_fold(data, **kwargs)
+    sharp = {"fold_stiffness": fold_stiffness, "panel_bending_width": panel_bending_width,
+             "panel_mesh": panel_mesh}
+    if geo.crease_model == "sharp":
+        return _sharp_file_model(geo, sharp)
+    given = [k for k, v in sharp.items() if v is not None]
+    if given:
+        raise ParameterError(f"{', '.join(given)} apply to sharp creases only; pass "
+                             "crease_model='sharp' (CLI --crease-model sharp) or drop them.")
     data = geo.data                                   # the chosen frame
     mesh = build_mesh(geo.pattern)
     nodes = data.get(f"{NS}mesh_nodes")
@@ -164,6 +208,26 @@ def fold_to_model(data: dict, **kwargs):
                                                actuators))
     steps = _steps(data, geo)
     return model, steps
+
+
+def _sharp_file_model(geo, given: dict):
+    """``(model, steps)`` of a file read with concentrated hinges (:mod:`.sharp_file`)."""
+    from .sharp_file import sharp_hinge_parameters
+
+    from ...model.sharp import sharp_model
+    from ...model.sharp_mesh import build_sharp_mesh
+
+    data = geo.data
+    params = sharp_hinge_parameters(geo, **given)
+    for field in (f"{NS}contact", f"{NS}thermal", f"{NS}bimorph"):
+        if data.get(field) is not None:
+            fail(field, "is given, but the file is read with sharp creases (concentrated "
+                 "hinges), which have no crease area to heat, actuate or touch; give the "
+                 "creases a positive width (compliant creases) or drop the field.")
+    mesh = _guard(f"{NS}sharp_hinge", lambda: build_sharp_mesh(geo.pattern, params.panel_mesh))
+    supports = _guard(f"{NS}supports", lambda: _supports(data, geo, mesh))
+    model = _guard("model", lambda: sharp_model(geo.pattern, supports, params))
+    return model, _steps(data, geo)
 
 
 def _guard(field: str, build):

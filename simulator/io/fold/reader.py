@@ -30,7 +30,7 @@ from ._merge import merge_flat_faces
 from ._planar import faces_from_edges, lay_in_xy, merge_straight, plane_normal
 
 __all__ = ["read_fold", "fold_to_pattern", "parse_fold", "load_fold_json", "FoldGeometry",
-           "check_crease_model", "UNITS", "NS"]
+           "check_crease_model", "SHARP_PLACEHOLDER", "UNITS", "NS"]
 
 logger = logging.getLogger(__name__)
 
@@ -55,6 +55,13 @@ class FoldGeometry:
     notes : tuple of str
         What the reader repaired or recognised (derived faces, merged vertices, a sheet in
         another plane), for summaries.
+    crease_model : {"compliant", "sharp"}
+        The crease model the file or the reader's keywords ask for (:func:`check_crease_model`).
+    sharp_missing : tuple of str
+        Sharp creases only: the crease data neither the file nor the keywords give
+        (``"crease_width"``, ``"crease_thickness"``). The pattern then carries the placeholder
+        :data:`SHARP_PLACEHOLDER` there, and the model reader asks for the fold stiffness and
+        the panel bending width instead of deriving them from it.
     """
 
     pattern: Pattern
@@ -63,6 +70,8 @@ class FoldGeometry:
     edge: np.ndarray
     data: dict
     notes: tuple = ()
+    crease_model: str = "compliant"
+    sharp_missing: tuple = ()
 
 
 def load_fold_json(path) -> dict:
@@ -116,8 +125,10 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
     lay_flat : bool
         Rotate a flat sheet that lies in another plane (e.g. x-z) into x-y.
     crease_model : {"compliant", "sharp"}
-        Compliant creases with a width (default); ``"sharp"`` (concentrated hinges) is refused
-        with a ParameterError until its model builder is wired.
+        Compliant creases with a width (default), or ``"sharp"`` (concentrated hinges; also
+        chosen by ``crease_width=0`` or width 0 on every crease in ``edges_etorigami:width``).
+        A sharp pattern needs no crease width or thickness: what is missing is recorded in
+        :attr:`FoldGeometry.sharp_missing` (the model reader then needs the fold stiffness).
     """
     return parse_fold(data, **kwargs).pattern
 
@@ -160,7 +171,11 @@ def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickne
     ends = [alias[i] or (a, b) for i, (a, b) in enumerate(edges.tolist())]
     edge = np.array([key.get(tuple(sorted((vertex[a], vertex[b]))), -1) if vertex[a] >= 0
                      and vertex[b] >= 0 else -1 for a, b in ends], int).reshape(-1)
-    check_crease_model(crease_model, crease_width, data, edge)
+    crease_model = check_crease_model(crease_model, crease_width, data, edge)
+    missing = ()
+    if crease_model == "sharp":
+        data, crease_width, crease_thickness, missing = _sharp_defaults(
+            data, edge, crease_width, crease_thickness)
     per_edge = edge_fields(data, geo, edge, letters, angles, crease_width, crease_thickness)
     per_panel = panel_fields(data, groups, panel_thickness, material)
     merged = any(a is not None for a in alias)
@@ -170,7 +185,7 @@ def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickne
     except PatternError as exc:
         _fail("etorigami data", str(exc))
     _note_sign_mismatch(pattern, notes)
-    return FoldGeometry(pattern, vertex, face, edge, data, tuple(notes))
+    return FoldGeometry(pattern, vertex, face, edge, data, tuple(notes), crease_model, missing)
 
 
 def _note_sign_mismatch(pattern: Pattern, notes: list) -> None:
@@ -186,25 +201,73 @@ def _note_sign_mismatch(pattern: Pattern, notes: list) -> None:
         logger.warning("FOLD: %s", notes[-1])
 
 
-def check_crease_model(crease_model, crease_width, data=None, edge=None) -> None:
-    """The crease model hook: ``"compliant"`` (crease widths, this reader) or ``"sharp"``
-    (concentrated hinges, width 0), which is routed to its own model builder once wired.
+def check_crease_model(crease_model, crease_width, data=None, edge=None) -> str:
+    """The crease model a read asks for: ``"compliant"`` (creases with a width) or ``"sharp"``
+    (concentrated hinges, :func:`~simulator.model.sharp.sharp_model`).
 
-    A width of 0 in ``edges_etorigami:width`` or ``crease_width=0`` asks for sharp creases.
+    ``crease_model="sharp"``, ``crease_width=0``, width 0 on every crease of
+    ``edges_etorigami:width`` or an ``etorigami:sharp_hinge`` object ask for sharp creases. A file whose creases mix width 0 and
+    positive widths is refused (per-crease mixing of the two models is not implemented).
+
+    Parameters
+    ----------
+    crease_model : str
+    crease_width : float or None
+        The reader's default crease width [m].
+    data : dict, optional
+        The FOLD frame; with ``edge`` (file edge -> pattern edge, -1 merged away) its widths
+        are checked too.
+
+    Returns
+    -------
+    str
+        ``"compliant"`` or ``"sharp"``.
     """
     if crease_model not in ("compliant", "sharp"):
         raise ParameterError(f"crease_model = {crease_model!r}; use 'compliant' (creases with a "
                              "width) or 'sharp' (concentrated hinges).")
     sharp = crease_model == "sharp" or (crease_width is not None and _is_number(crease_width)
                                         and crease_width == 0)
-    if data is not None and not sharp:
-        widths = data.get(f"edges_{NS}width")
-        sharp = isinstance(widths, list) and any(
-            _is_number(w) and w == 0 and e >= 0 for w, e in zip(widths, edge))
-    if sharp:
-        raise ParameterError("sharp creases (crease_model='sharp' or crease width 0) need the "
-                             "concentrated-hinge model, which this reader cannot build yet; give "
-                             "the creases a positive width (compliant creases).")
+    sharp = sharp or (data is not None and data.get(f"{NS}sharp_hinge") is not None)
+    widths = None if data is None else data.get(f"edges_{NS}width")
+    if isinstance(widths, list) and edge is not None:
+        letters = data.get("edges_assignment")
+        on = [i for i, (w, e) in enumerate(zip(widths, edge)) if e >= 0 and w is not None and
+              not (isinstance(letters, list) and i < len(letters) and
+                   str(letters[i]).upper() in "BFJC")]
+        zero = [i for i in on if _is_number(widths[i]) and widths[i] == 0]
+        if zero and len(zero) < len(on):
+            raise ParameterError(
+                f"edges_{NS}width: creases (file edges) {zero} have width 0 (sharp hinges) and "
+                f"{len(on) - len(zero)} others a positive width; mixing sharp and compliant "
+                "creases in one model is not implemented: give every crease width 0 or every "
+                "crease a positive width.")
+        sharp = sharp or bool(zero)
+    return "sharp" if sharp else "compliant"
+
+
+#: Crease width and thickness [m] a sharp pattern carries where neither the file nor the
+#: reader gives them (a :class:`Pattern` needs positive values; the sharp model uses them only
+#: for its default fold stiffness and panel bending width, which are then asked for).
+SHARP_PLACEHOLDER = 1e-6
+
+
+def _sharp_defaults(data, edge, crease_width, crease_thickness):
+    """``(data, crease_width, crease_thickness, missing)`` of a sharp read: widths of 0 are
+    dropped, and crease data that nobody gives become :data:`SHARP_PLACEHOLDER`."""
+    missing = []
+    width_field = f"edges_{NS}width"
+    widths = data.get(width_field)
+    if isinstance(widths, list) and all(not _is_number(w) or w == 0 or e < 0
+                                        for w, e in zip(widths, edge)):
+        data = {k: v for k, v in data.items() if k != width_field}
+    if width_field not in data and not (_is_number(crease_width) and crease_width > 0):
+        crease_width = SHARP_PLACEHOLDER
+        missing.append("crease_width")
+    if f"edges_{NS}thickness" not in data and crease_thickness is None:
+        crease_thickness = SHARP_PLACEHOLDER
+        missing.append("crease_thickness")
+    return data, crease_width, crease_thickness, tuple(missing)
 
 
 def _alike(data, letters, angles, i, j) -> bool:
