@@ -172,7 +172,7 @@ def test_lost_peak_is_the_highest_point_of_a_failed_run_past_a_maximum():
     from types import SimpleNamespace as NS
 
     from simulator.solvers.path_trace import CriticalPoint
-    from simulator.steps.limit import _lost_peak
+    from simulator.solvers.continuation import _lost_peak
 
     u = np.zeros((1, 3))
     history = [(lam, u, 3) for lam in (0.90, 0.91, 0.918, 0.915, 0.912)]
@@ -316,7 +316,7 @@ def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
     from simulator.solvers.load_path import LoadPath
     from simulator.solvers.stability import tangent_stability
     from simulator.steps.base import StepContext
-    from simulator.steps.limit import _descend
+    from simulator.solvers.descent import descend
     from simulator.state import equilibrium_system
 
     case, res = roof
@@ -330,7 +330,7 @@ def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
     system = StepContext(model, NewtonOptions()).system
     path = LoadPath(system, start.applied_load.ravel(), P.ravel(), start.spring_rest)
     lam = 1.01 * float(lams[top])
-    u = _descend(path, step.u_history[top], lam, NewtonOptions())
+    u = descend(path, step.u_history[top], lam, NewtonOptions())
     assert u is not None
     assert tangent_stability(path.at(u, lam).K).stable
     stable = step.columns["stable"]
