@@ -77,6 +77,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
           until_stable: bool = False, direction=None, prior=None,
           callback=None, resolution: float | None = None, switch_branches: bool = False,
+          locate_stability_loss: bool = False,
           lost_fold_jump: float | None = None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
@@ -147,6 +148,10 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         (and, with ``until_stable``, ends: message "stable on another branch past the
         bifurcation ..."). The jump is in :attr:`ContinuationResult.jumps` and the
         critical point is a "bifurcation".
+    locate_stability_loss : bool
+        Locate such a loss of stability by the same bisection, without the switch: the path
+        goes on from the located point with the arc length of the bisection (so it does not
+        depend on the arc length it arrived with). Implied by ``switch_branches``.
     lost_fold_jump : float, optional
         Where the run fails after passing a load-factor maximum above ``lam0``: land by
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
@@ -163,7 +168,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
                         fast_iterations=fast_iterations, stability=stability,
                         until_stable=until_stable, direction=direction, prior=prior,
                         callback=callback, resolution=resolution,
-                        switch_branches=switch_branches, lost_fold_jump=lost_fold_jump)
+                        switch_branches=switch_branches, lost_fold_jump=lost_fold_jump,
+                        locate_stability_loss=locate_stability_loss)
     return run.trace_path(max_increments)
 
 
@@ -186,7 +192,7 @@ class _ArcLengthRun:
     def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
                  target_displacement, monitor, options, adapt, step_norm, fast_iterations,
                  stability, until_stable, direction, prior, callback, resolution=None,
-                 switch_branches=False, lost_fold_jump=None):
+                 switch_branches=False, lost_fold_jump=None, locate_stability_loss=False):
         self.path, self.options, self.arc_length = path, options, arc_length
         self.resolution, self.fine = resolution, False
         self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
@@ -207,9 +213,10 @@ class _ArcLengthRun:
         self.sig0, self.peak, self.turned = self.sig, self.lam, False
         self.lam_start, self.jump = self.lam, lost_fold_jump
         self.switch = switch_branches and stability
+        self.bisect = (switch_branches or locate_stability_loss) and stability
         self.locate = (resolution if resolution is not None else arc_length) * LOCATE
         self.locating, self.neg0 = 0, (tangent_stability(self.pt.K).negative
-                                       if self.switch else 0)
+                                       if self.bisect else 0)
 
     def result(self, success: bool, status: str, message: str) -> ContinuationResult:
         return self.trace.result(success, status, message, self.u, self.lam)
@@ -293,7 +300,7 @@ class _ArcLengthRun:
             self.trace.pop()
             self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
             return None
-        if self.switch and s == back[2] and (lam1 - back[1]) * self.sig0 > 0 and \
+        if self.bisect and s == back[2] and (lam1 - back[1]) * self.sig0 > 0 and \
                 self.lost_stability():
             done = self.at_bifurcation(back)
             if done is not False:
@@ -352,6 +359,8 @@ class _ArcLengthRun:
             self.ds, self.locating = self.ds / 2, 1
             return None
         self.locating = 0
+        if not self.switch:
+            return False
         from .descent import switch_branch          # (descent imports the corrector)
         landed = switch_branch(self.path, self.u, self.lam, self.trace.stab[-1].mode,
                                self.options)

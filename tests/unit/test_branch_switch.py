@@ -91,3 +91,20 @@ def test_switch_branch_lands_on_the_stable_equilibrium_at_the_load(path):
     near[1, :2] += 1e-3
     v = descend(path, near, lam, NewtonOptions())
     np.testing.assert_allclose(v, w, atol=1e-10)
+
+
+def test_locating_without_switching_bisects_to_the_bifurcation(path):
+    """``locate_stability_loss`` bisects the arc length where stability is lost while the
+    load factor goes on, and stays on the (unstable) branch it follows."""
+    plain = mgdcm(path, np.zeros((2, 3)), arc_length=0.1, target_load_factor=1.5)
+    res = mgdcm(path, np.zeros((2, 3)), arc_length=0.1, target_load_factor=1.5,
+                locate_stability_loss=True)
+    assert res.success and res.u[1, 1] == 0.0 and res.jumps == ()
+    lam = np.array([h[0] for h in res.history])
+    stable = np.array([s.stable for s in res.stability])
+    k = int(np.argmin(stable))                           # first unstable point
+    assert lam[k - 1] < 1.0 < lam[k] and lam[k] - lam[k - 1] <= 0.1 / 16 + 1e-12
+    (bif,) = res.critical_points
+    assert bif.kind == "bifurcation" and abs(bif.load_factor - 1.0) <= 0.1 / 32 + 1e-12
+    (coarse,) = plain.critical_points
+    assert abs(coarse.load_factor - 1.0) > abs(bif.load_factor - 1.0)
