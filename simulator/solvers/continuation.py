@@ -42,7 +42,7 @@ from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _fla
                         _tangent)
 from .newton import NewtonOptions
 from .nonlinear import march
-from .path_trace import ContinuationResult, CriticalPoint, PathTrace
+from .path_trace import ContinuationResult, CriticalPoint, PathTrace, _lost_peak
 from .stability import tangent_stability
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
@@ -402,17 +402,6 @@ class _ArcLengthRun:
         self.peak = self.peak if self.turned else self.lam
         return bool(self.until_stable and self.turned and (self.lam - self.peak) * self.sig0 > 0
                     and (not self.trace.stab or self.trace.stab[-1].stable))
-
-
-def _lost_peak(res, lam0):
-    """Index of the highest accepted point of a failed arc-length run that passed a
-    load-factor maximum above ``lam0``, or None."""
-    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
-                                         for p in res.critical_points):
-        return None
-    lam = np.array([h[0] for h in res.history])
-    k = int(np.argmax(lam))
-    return k if lam[k] > lam0 else None
 
 
 def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):

@@ -199,7 +199,8 @@ class PathTrace:
             if j in switched:
                 out.append(CriticalPoint(switched[j], 0.5 * (lam[j + o - 1] + lam[j + o]), j,
                                          self.measure(pts[j + o - 1][1])))
-            elif j > 0 and neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j) for k in turns):
+            elif j > 0 and neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j)
+                                                            for k in turns):
                 a = min(self.align[j - 1], self.align[j])
                 kind = "bifurcation" if a < BIFURCATION_ALIGNMENT else "stability_change"
                 out.append(CriticalPoint(kind, 0.5 * (lam[j + o - 1] + lam[j + o]), j,
@@ -216,3 +217,14 @@ class PathTrace:
                                   self.temps, tuple(self.critical),
                                   None if self.last is None else self.last.evaluation,
                                   tuple(self.jumps))
+
+
+def _lost_peak(res, lam0):
+    """Index of the highest accepted point of a failed arc-length run that passed a
+    load-factor maximum above ``lam0``, or None."""
+    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
+                                         for p in res.critical_points):
+        return None
+    lam = np.array([h[0] for h in res.history])
+    k = int(np.argmax(lam))
+    return k if lam[k] > lam0 else None
