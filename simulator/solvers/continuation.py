@@ -42,7 +42,8 @@ from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _fla
                         _tangent)
 from .newton import NewtonOptions
 from .nonlinear import march
-from .path_trace import ContinuationResult, CriticalPoint, PathTrace
+from .path_trace import ContinuationResult, CriticalPoint, PathTrace, _lost_peak
+from .stability import tangent_stability
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
            "displacement_control"]
@@ -54,6 +55,9 @@ logger = logging.getLogger(__name__)
 #: halve after those needing at least :data:`SLOW_ITERATIONS`.
 FAST_ITERATIONS = 4
 SLOW_ITERATIONS = 13
+#: With ``switch_branches``, a loss of stability is located to this fraction of the
+#: resolution (or of the arc length) before the branch switch.
+LOCATE = 1 / 16
 
 
 def _monitor_vector(path, target_displacement):
@@ -72,7 +76,9 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           max_arc_length: float | None = None, step_norm: float | None = None,
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
           until_stable: bool = False, direction=None, prior=None,
-          callback=None, resolution: float | None = None) -> ContinuationResult:
+          callback=None, resolution: float | None = None, switch_branches: bool = False,
+          locate_stability_loss: bool = False,
+          lost_fold_jump: float | None = None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
     Parameters
@@ -132,6 +138,25 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         the limit point, and where the path crosses its load factor again). So the limit
         point (and a snap's jump) is located at this resolution, whatever the arc length the
         path arrived with. Default: no cap.
+    switch_branches : bool
+        Follow the stable branch at a loss of stability without a load-factor turn (with
+        ``stability``): where the tangent gains a negative eigenvalue while the load factor
+        goes on, the loss is located by bisection of the arc length (to :data:`LOCATE`
+        of ``resolution``, or of ``arc_length``), and the first unstable point, pushed along
+        its critical mode, falls by energy descent to a stable equilibrium at its load
+        factor (:func:`~simulator.solvers.descent.switch_branch`), where the path goes on
+        (and, with ``until_stable``, ends: message "stable on another branch past the
+        bifurcation ..."). The jump is in :attr:`ContinuationResult.jumps` and the
+        critical point is a "bifurcation".
+    locate_stability_loss : bool
+        Locate such a loss of stability by the same bisection, without the switch: the path
+        goes on from the located point with the arc length of the bisection (so it does not
+        depend on the arc length it arrived with). Implied by ``switch_branches``.
+    lost_fold_jump : float, optional
+        Where the run fails after passing a load-factor maximum above ``lam0``: land by
+        energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
+        highest point reached, and end there with success (message "jump from load factor
+        ..."; from the highest point itself if the descent fails).
     """
     _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor)
@@ -142,7 +167,9 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
                         options=options, adapt=adapt, step_norm=step_norm,
                         fast_iterations=fast_iterations, stability=stability,
                         until_stable=until_stable, direction=direction, prior=prior,
-                        callback=callback, resolution=resolution)
+                        callback=callback, resolution=resolution,
+                        switch_branches=switch_branches, lost_fold_jump=lost_fold_jump,
+                        locate_stability_loss=locate_stability_loss)
     return run.trace_path(max_increments)
 
 
@@ -164,7 +191,8 @@ class _ArcLengthRun:
 
     def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
                  target_displacement, monitor, options, adapt, step_norm, fast_iterations,
-                 stability, until_stable, direction, prior, callback, resolution=None):
+                 stability, until_stable, direction, prior, callback, resolution=None,
+                 switch_branches=False, lost_fold_jump=None, locate_stability_loss=False):
         self.path, self.options, self.arc_length = path, options, arc_length
         self.resolution, self.fine = resolution, False
         self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
@@ -183,6 +211,12 @@ class _ArcLengthRun:
         self.sig = 1.0 if target_load_factor is None or target_load_factor >= self.lam else -1.0
         self.ds, self.uhat_prev, self.norm1 = arc_length, None, None
         self.sig0, self.peak, self.turned = self.sig, self.lam, False
+        self.lam_start, self.jump = self.lam, lost_fold_jump
+        self.switch = switch_branches and stability
+        self.bisect = (switch_branches or locate_stability_loss) and stability
+        self.locate = (resolution if resolution is not None else arc_length) * LOCATE
+        self.locating, self.neg0 = 0, (tangent_stability(self.pt.K).negative
+                                       if self.bisect else 0)
 
     def result(self, success: bool, status: str, message: str) -> ContinuationResult:
         return self.trace.result(success, status, message, self.u, self.lam)
@@ -249,8 +283,10 @@ class _ArcLengthRun:
     def cut(self, msg: str) -> ContinuationResult | None:
         """Halve the arc length after a failed increment; the failed result below ``min_ds``."""
         if self.ds / 2 < self.min_ds:
-            return self.result(False, "failed", f"gave up at load factor {self.lam:.6g} after "
-                               f"{self.trace.cuts} cuts (arc length {self.ds:.3g}): {msg}")
+            msg = (f"gave up at load factor {self.lam:.6g} after {self.trace.cuts} cuts (arc "
+                   f"length {self.ds:.3g}): {msg}")
+            res = self.result(False, "failed", msg)
+            return res if self.jump is None else self.jump_lost_fold(res, msg)
         self.ds, self.trace.cuts = self.ds / 2, self.trace.cuts + 1
         return None
 
@@ -264,6 +300,11 @@ class _ArcLengthRun:
             self.trace.pop()
             self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
             return None
+        if self.bisect and s == back[2] and (lam1 - back[1]) * self.sig0 > 0 and \
+                self.lost_stability():
+            done = self.at_bifurcation(back)
+            if done is not False:
+                return done
         if self.callback is not None and self.callback(lam1, u1):
             return self.result(False, "stopped", f"stopped by callback at load factor "
                                f"{lam1:.6g}")
@@ -273,7 +314,9 @@ class _ArcLengthRun:
         if self.stable_again(s):
             return self.result(True, "converged", f"stable again past the limit point at "
                                f"load factor {lam1:.6g}")
-        if self.adapt:
+        if self.locating:          # bisecting a loss of stability: no doubling meanwhile
+            self.locating = 0 if self.locating > 2 else self.locating + 1
+        elif self.adapt:
             self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
                 max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
         if self.fine and abs(lam1 - self.lam_fine) <= self.resolution:
@@ -296,6 +339,61 @@ class _ArcLengthRun:
             return False
         self.ds = self.resolution
         return True
+
+    def lost_stability(self) -> bool:
+        """True if the tangent at the last accepted point has more negative eigenvalues than
+        at the point before (the start's count for the first)."""
+        stab = self.trace.stab
+        before = stab[-2].negative if len(stab) > 1 else self.neg0
+        return bool(stab) and stab[-1].negative > before
+
+    def at_bifurcation(self, back):
+        """A loss of stability while the load factor goes on (``back``: the point before):
+        None to redo the increment at half the arc length (bisection), until it is located
+        to ``locate``; then the branch switch from the unstable point. False if the descent
+        does not land (the path goes on along the unstable branch), else None or the result
+        if the run ends there (``until_stable``)."""
+        if self.ds > max(self.locate, self.min_ds):
+            self.trace.pop()
+            self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
+            self.ds, self.locating = self.ds / 2, 1
+            return None
+        self.locating = 0
+        if not self.switch:
+            return False
+        from .descent import switch_branch          # (descent imports the corrector)
+        landed = switch_branch(self.path, self.u, self.lam, self.trace.stab[-1].mode,
+                               self.options)
+        if landed is None:
+            logger.debug("no stable branch found from load factor %.6g", self.lam)
+            return False
+        pt = self.path.at(landed, self.lam)
+        self.trace.accept(landed, self.lam, pt, 0, [])
+        self.trace.jumps.append((len(self.trace.history) - 3, len(self.trace.history) - 1,
+                                 "bifurcation"))
+        self.u, self.uhat_prev, self.direction, self.sig = landed, None, None, self.sig0
+        self.pt = _begin(self.path, landed, self.lam)
+        if self.until_stable and (not self.trace.stab or self.trace.stab[-1].stable):
+            return self.result(True, "converged", "stable on another branch past the "
+                               f"bifurcation at load factor {self.lam:.6g}")
+        return None
+
+    def jump_lost_fold(self, failed: ContinuationResult, msg: str) -> ContinuationResult:
+        """After a failure past a load-factor maximum above the start (:func:`_lost_peak`):
+        the result at the equilibrium ``lost_fold_jump`` above the highest point that energy
+        descent lands on (the highest point itself if it does not), with success; else
+        ``failed``."""
+        k = _lost_peak(failed, self.lam_start)
+        if k is None:
+            return failed
+        from .descent import descend
+        lam1, u1 = float(failed.history[k][0]), failed.history[k][1]
+        landed = descend(self.path, u1, lam1 + self.jump, self.options, rounds=1)
+        if landed is not None:
+            lam1, u1 = lam1 + self.jump, landed
+        self.path.at(u1, lam1)                     # (a heating path: temperatures there)
+        return self.trace.result(True, "converged", f"{msg}; jump from load factor "
+                                 f"{lam1:.6g}", u1, lam1)
 
     def stable_again(self, s) -> bool:
         """Note whether the load factor turned (sign ``s`` of the last step); True if

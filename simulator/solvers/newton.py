@@ -225,33 +225,23 @@ class _LoadControl:
 
 
 def _reference_newton(system, u0, f_ext, spring_rest, options):
-    """The reference's Newton loop (theory 6.4 and 6.5); see ``NewtonOptions.reference_loop``."""
+    """The reference's Newton loop (theory 6.4 and 6.5; see ``NewtonOptions.reference_loop``):
+    :func:`~simulator.solvers.nonlinear.iterate` with ``reference_loop``, on the system's own
+    ``evaluate`` and the ladder's solve; an unconverged end is accepted with a warning."""
     free = system.free
-    u = u0.copy().ravel()
-    measure, res_norms, cor_norms, updates = math.inf, [], [], 0
-    while updates < options.max_iter - 1 and measure > options.atol:
-        ev = system.evaluate(u.reshape(-1, 3), spring_rest)
-        r = (f_ext - ev.f_int)[free]
-        du = linear_solve(_tangent(ev), r, backend=options.linear_solver)
-        if du is None:
-            return _newton_result(u0, False, updates, res_norms, cor_norms,
-                                  "tangent stiffness is singular (mechanism or unsupported body?)")
-        u[free] += du
-        updates += 1
-        res_norms.append(float(np.linalg.norm(r)))
-        cor_norms.append(float(np.linalg.norm(du)))
-        measure = res_norms[-1] if options.criterion == "residual" else cor_norms[-1]
-        if not math.isfinite(measure):
-            return _newton_result(u0, False, updates, res_norms, cor_norms,
-                                  "residual is not finite")
-    ev = system.evaluate(u.reshape(-1, 3), spring_rest)
-    if measure <= options.atol:
-        message = f"reference loop: {updates} updates"
-    else:
-        message = (f"reference loop: accepted unconverged after {updates} updates "
-                   f"({options.criterion} {measure:.3g} > {options.atol:.3g})")
-        logger.warning(message)
-    return _newton_result(u, True, updates, res_norms, cor_norms, message, ev)
+    backend = options.linear_solver
+    problem = _LoadControl(u0.copy().ravel(), free, f_ext[free],
+                           lambda u: system.evaluate(u, spring_rest),
+                           lambda ev, r: linear_solve(_tangent(ev), r, backend=backend))
+    out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
+                  size=0.0, criterion=options.criterion, reference_loop=True)
+    if out.reason in ("no correction", "not finite"):
+        return _newton_result(u0, False, out.iterations, out.residual_norms,
+                              out.correction_norms, out.message)
+    if not out.success:
+        logger.warning(out.message)
+    return _newton_result(problem.u, True, out.iterations, out.residual_norms,
+                          out.correction_norms, out.message, out.point)
 
 
 def _operations(system, spring_rest, backend="auto"):

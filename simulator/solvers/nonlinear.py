@@ -79,7 +79,8 @@ class Iteration:
 
 def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
             criterion: str = "residual", max_step: float | None = None,
-            tolerance=None, on_residual=None, record_final: bool = False) -> Iteration:
+            tolerance=None, on_residual=None, record_final: bool = False,
+            reference_loop: bool = False) -> Iteration:
     """Newton's method on ``problem`` from its current iterate.
 
     Parameters
@@ -108,7 +109,12 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
         ``on_residual(rn, point)`` after every evaluation (e.g. to keep the best iterate).
     record_final : bool
         Record the residual norm of the evaluation that follows a correction-based stop.
+    reference_loop : bool
+        The reference's loop instead (theory 6.4, :func:`_reference_iterate`): only
+        ``max_iter``, ``atol``, ``criterion`` apply.
     """
+    if reference_loop:
+        return _reference_iterate(problem, max_iter, atol, criterion)
     res, cor, ref = [], [], None
     for it in range(max_iter + 1):
         r, point = problem.evaluate()
@@ -146,6 +152,33 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
             return Iteration(True, it + 1, res, cor, message, point)
     return Iteration(False, max_iter, res, cor, f"no convergence in {max_iter} iterations "
                      f"(last residual {res[-1]:.3g} N)", point, "max_iter")
+
+
+def _reference_iterate(problem, max_iter: int, atol: float, criterion: str) -> Iteration:
+    """The reference's Newton loop: the measure (residual or correction norm, as
+    ``criterion`` says) is taken before each update is applied, so one more update always
+    follows the one that meets ``atol``; at most ``max_iter - 1`` updates; the final iterate
+    is evaluated. Ends "max_iter" (not a success: the caller decides) when out of updates."""
+    res, cor, measure, updates = [], [], math.inf, 0
+    while updates < max_iter - 1 and measure > atol:
+        r, point = problem.evaluate()
+        dx = problem.correct(point, r)
+        if isinstance(dx, str):
+            return Iteration(False, updates, res, cor, dx, point, "no correction")
+        problem.apply(dx, 1.0)
+        updates += 1
+        res.append(math.sqrt(r.dot(r)))
+        cor.append(math.sqrt(dx.dot(dx)))
+        measure = res[-1] if criterion == "residual" else cor[-1]
+        if not math.isfinite(measure):
+            return Iteration(False, updates, res, cor, "residual is not finite", point,
+                             "not finite")
+    _, point = problem.evaluate()
+    if measure <= atol:
+        return Iteration(True, updates, res, cor, f"reference loop: {updates} updates", point)
+    return Iteration(False, updates, res, cor, f"reference loop: accepted unconverged after "
+                     f"{updates} updates ({criterion} {measure:.3g} > {atol:.3g})", point,
+                     "max_iter")
 
 
 @dataclass

@@ -74,6 +74,10 @@ class ContinuationResult(ResultFiles):
     temperatures : list of (n_nodes,) arrays or None per accepted point
     critical_points : tuple of CriticalPoint
     evaluation : Evaluation at the last accepted point
+    jumps : tuple of (before, after, kind)
+        Branch switches (``mgdcm(switch_branches=True)``): history indices of the last stable
+        point before a loss of stability and of the stable point the path jumped to at the
+        load factor of the first unstable one, and the kind ("bifurcation").
     """
 
     success: bool
@@ -89,6 +93,7 @@ class ContinuationResult(ResultFiles):
     temperatures: list = field(default_factory=list)
     critical_points: tuple = ()
     evaluation: object = None
+    jumps: tuple = ()
 
     _csv_name = "path.csv"
 
@@ -132,7 +137,7 @@ class PathTrace:
         self.path, self.monitor, self.check = path, monitor, stability
         self.history, self.residuals, self.stab, self.temps = [], [], [], []
         self.iterations, self.cuts, self.critical, self.align = 0, 0, [], []
-        self.points, self.arc = [], []
+        self.points, self.arc, self.jumps = [], [], []
         for u, lam in ([] if prior is None else [prior]) + [(u0, lam0)]:
             self._add(np.asarray(u, float), float(lam))
         self.offset = len(self.points)           # point k is history entry k - offset
@@ -186,8 +191,16 @@ class PathTrace:
                                      max(0, k + 1 - o if s_star > 0 else k - o), disp,
                                      bool(lam[k] > lam[k - 1])))
         neg = [st.negative for st in self.stab]
-        for j in range(1, len(neg)):              # history j is point j + o
-            if neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j) for k in turns):
+        switched = {b + 1: kind for b, _, kind in self.jumps}   # first unstable point
+        landed = {a for _, a, _ in self.jumps}
+        for j in range(len(neg)):                 # history j is point j + o
+            if j in landed:
+                continue                          # the jump back onto a stable branch
+            if j in switched:
+                out.append(CriticalPoint(switched[j], 0.5 * (lam[j + o - 1] + lam[j + o]), j,
+                                         self.measure(pts[j + o - 1][1])))
+            elif j > 0 and neg[j] != neg[j - 1] and not any(k - o in (j - 2, j - 1, j)
+                                                            for k in turns):
                 a = min(self.align[j - 1], self.align[j])
                 kind = "bifurcation" if a < BIFURCATION_ALIGNMENT else "stability_change"
                 out.append(CriticalPoint(kind, 0.5 * (lam[j + o - 1] + lam[j + o]), j,
@@ -202,4 +215,16 @@ class PathTrace:
         return ContinuationResult(success, status, message, u, float(lam), self.iterations,
                                   self.cuts, self.history, self.residuals, self.stab,
                                   self.temps, tuple(self.critical),
-                                  None if self.last is None else self.last.evaluation)
+                                  None if self.last is None else self.last.evaluation,
+                                  tuple(self.jumps))
+
+
+def _lost_peak(res, lam0):
+    """Index of the highest accepted point of a failed arc-length run that passed a
+    load-factor maximum above ``lam0``, or None."""
+    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
+                                         for p in res.critical_points):
+        return None
+    lam = np.array([h[0] for h in res.history])
+    k = int(np.argmax(lam))
+    return k if lam[k] > lam0 else None

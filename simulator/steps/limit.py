@@ -15,9 +15,9 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   power for heating, and the jump of the most-moving node's displacement), and so do the
   step's events (:class:`~simulator.events.Event`: the critical points of the arc-length
   stretches, and a ``"snap"`` per snap). If arc length fails after the load factor turned
-  back, the step jumps from the highest point reached to the equilibrium just above it that
-  damped Newton on the potential energy finds (where the snap lands), and load control
-  resumes there.
+  back, the continuation driver jumps from the highest point reached to the equilibrium just
+  above it that descent on the potential energy finds (where the snap lands; ``mgdcm``'s
+  ``lost_fold_jump``), and load control resumes there.
 
 Heating continuation (:class:`HeatPath`): crease power ``P0 + lambda dP``. On a given shape the
 temperatures are affine in lambda (the heat problem is linear in the power), which gives the
@@ -36,8 +36,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..linalg.ladder import factorize
-from ..linalg.small_solve import as_dense
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
@@ -65,9 +63,13 @@ ARC_LOAD_STEP = 0.01
 #: (:func:`~simulator.solvers.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
 #: are located at that resolution.
 RESOLVE = 8
-#: Free DOFs at most of the (dense) energy descent that lands a jump past a lost fold; larger
-#: models resume load control from the fold instead.
-DESCENT_DOF_LIMIT = 3000
+#: Switch to the stable branch at a loss of stability without a load-factor turn
+#: (:func:`~simulator.solvers.continuation.mgdcm`'s ``switch_branches``). Off: on the heated
+#: Miura (a = 0.5 mm, gamma = 45 deg) the loss at load factor 0.767372 is located, but the
+#: landing's rounds of (temperatures on the shape, energy descent) alternate between two
+#: shapes 0.5 mm apart instead of converging, and locating alone (without the switch) spreads
+#: the snap's jump further (26 / 21 / 48 / 50 um at 30 / 60 / 120 / 240 increments).
+SWITCH_BRANCHES = False
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -192,6 +194,10 @@ def _snaps(res, c) -> list:
     lam = np.array([h[0] for h in res.history])
     m = np.array([float(c @ h[1].ravel()) for h in res.history])
     out, used = [], set()
+    for before, after, kind in res.jumps:     # a branch switch: last stable to landed
+        p = next(p for p in res.critical_points if p.kind == kind and
+                 p.increment == before + 1)
+        out.append((p, m[after]))
     for p in res.critical_points:
         k = p.increment
         if p.kind != "limit_point" or not p.maximum:
@@ -233,7 +239,8 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     for up to :data:`MAX_SNAPS` failures. Where arc length fails after the load factor turned
     back (a branch that falls away from the step's end, or a corrector stalled in contact
     chatter on it), the step jumps from the highest point it reached to the equilibrium at
-    ``ARC_LOAD_STEP / RESOLVE`` above it that :func:`_descend` finds (or, failing that, resumes
+    ``ARC_LOAD_STEP / RESOLVE`` above it that
+    :func:`~simulator.solvers.descent.descend` finds (or, failing that, resumes
     load control from that point), then load control resumes (message "jump from load factor
     ...", the load factor where it resumed).
     """
@@ -250,20 +257,13 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         res = _arc(context, origin, current, path, increments, c, until_stable=True)
         record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
                             powers=powers)
-        state = end_state(res.u, res.load_factor) if res.history else current.state
+        state = end_state(res.u, res.load_factor) if res.history or res.success else \
+            current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
                      f"{res.message}" + _snap_text(rec, res, c, powers))
-        lam1, k = res.load_factor, _lost_peak(res, lam0) if not res.success else None
-        if k is not None:       # the path turned back and was lost: jump on from its peak
-            lam1, u1 = float(res.history[k][0]), res.history[k][1]
-            landed = _descend(path, u1, lam1 + ARC_LOAD_STEP / RESOLVE, context.options)
-            if landed is not None:
-                lam1, u1 = lam1 + ARC_LOAD_STEP / RESOLVE, landed
-            path.at(u1, lam1)                      # (a heating path: temperatures there)
-            state = end_state(u1, lam1)
-            notes.append(f"jump from load factor {lam1:.6g}")
-        elif not res.success or res.load_factor >= 1.0 - 1e-12:
+        lam1 = res.load_factor
+        if not res.success or lam1 >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
                               state.applied_load.ravel(), res.evaluation)
         current, origin = resume(state, lam1), (state.u, lam1)
@@ -319,73 +319,9 @@ def _arc(context, origin, outcome, path, increments, c, until_stable):
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
                  direction=recent, prior=prior, callback=None if until_stable else turned,
-                 resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None)
-
-
-def _lost_peak(res, lam0):
-    """Index of the highest accepted point of a failed arc-length run that passed a
-    load-factor maximum above ``lam0``, or None."""
-    if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum
-                                         for p in res.critical_points):
-        return None
-    lam = np.array([h[0] for h in res.history])
-    k = int(np.argmax(lam))
-    return k if lam[k] > lam0 else None
-
-
-def _descend(path, u, lam, options, max_iter=300):
-    """The equilibrium at ``lam`` that damped Newton on the potential energy reaches from
-    ``u`` (the temperatures held on the shape ``u``): where a snap lands, without dynamics;
-    polished on ``path`` with the load factor fixed. None if it does not get there (or the
-    model has more than :data:`DESCENT_DOF_LIMIT` free DOFs).
-
-    Levenberg-Marquardt: steps ``(K + mu I)^-1 r`` accepted where the energy decreases
-    (``mu`` / 3, else ``mu`` * 4), so indefinite tangents past a fold are passed downhill
-    and the steps become Newton's near the minimum.
-    """
-    system, free = path.system, path.free
-    if len(free) > DESCENT_DOF_LIMIT:
-        return None
-    path.at(u, lam)                             # a heating path: temperatures on this shape
-    rest, f = path.rest(lam), path.f_ext(lam)
-
-    def energy(v):
-        ev = system.evaluate(v.reshape(-1, 3), rest)
-        return sum(ev.energies.values()) - float(f @ v), ev
-
-    v = np.array(u, float).ravel()
-    e, ev = energy(v)
-    eye = np.eye(len(free))
-    mu, step, size = None, getattr(system, "max_step", None), _size(system)
-    for _ in range(max_iter):
-        g, K = (ev.f_int - f)[free], as_dense(ev.K)
-        mu = 1e-6 * float(np.mean(np.abs(np.diag(K)))) if mu is None else mu
-        while mu < 1e30:
-            try:
-                dv = -factorize(K + mu * eye, kind="spd", backend="dense").solve(g)
-            except np.linalg.LinAlgError:                   # not positive definite yet
-                mu *= 4
-                continue
-            if step is not None and np.max(np.abs(dv)) > step:
-                dv *= step / np.max(np.abs(dv))
-            if np.max(np.abs(dv)) <= 1e-9 * size:  # (undamped by then: Newton's steps)
-                break
-            w = v.copy()
-            w[free] += dv
-            e1, ev1 = energy(w)
-            if e1 < e:
-                v, e, ev, mu = w, e1, ev1, mu / 3
-                break
-            mu *= 4
-        else:
-            return None
-        if np.max(np.abs(dv)) <= 1e-9 * size:
-            break
-    else:
-        return None
-    ok, u1, _, _, _, _, _ = _correct(path, v.reshape(-1, 3), lam, _Constraint(None, lam),
-                                     options, size)
-    return u1 if ok else None
+                 resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
+                 switch_branches=until_stable and SWITCH_BRANCHES,
+                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE if until_stable else None)
 
 
 def _on_path(context, path, u, lam, direction):

@@ -147,3 +147,23 @@ def test_the_solvers_have_no_newton_loop_or_round_off_floor_of_their_own():
         offenders += [f"{path.name}: {m.group(0)}" for m in loop.finditer(text)]
         offenders += [f"{path.name}: {m.group(0)}" for m in floor.finditer(text)]
     assert offenders == []
+
+
+def test_reference_loop_measures_before_the_update():
+    """iterate(reference_loop=True): the residual measured before each update, so one update
+    follows the one that meets atol; at most max_iter - 1 updates, then 'max_iter' (the
+    caller accepts it); a missing correction is a failure."""
+    p = Cubic([2.0])
+    out = iterate(p, max_iter=30, atol=1e-8, rtol=0.0, size=1.0, reference_loop=True)
+    assert out.success and out.message == f"reference loop: {out.iterations} updates"
+    r = out.residual_norms
+    assert len(r) == out.iterations and r[-1] <= 1e-8 < r[-2]     # measured, then updated
+    assert p.evaluations == out.iterations + 1                    # and the final evaluation
+    assert abs(2.0 - (p.x[0] + p.x[0] ** 3)) < r[-1]              # one update past it
+    p = Cubic([2.0])
+    out = iterate(p, max_iter=3, atol=1e-8, rtol=0.0, size=1.0, reference_loop=True)
+    assert not out.success and out.reason == "max_iter" and out.iterations == 2
+    assert "accepted unconverged after 2 updates (residual" in out.message
+    out = iterate(Cubic([2.0], singular_at=1), max_iter=30, atol=1e-8, rtol=0.0, size=1.0,
+                  reference_loop=True)
+    assert not out.success and out.reason == "no correction" and out.iterations == 1
