@@ -347,7 +347,7 @@ def _sweep_figure(df, sweeps):
                   loc="upper left", ncols=2)
     _style_legend(fig, any_ref, any_fe)
     fig.suptitle(r"Heat loss of the SU-8 strip (k = 0.3 W/(m K)) to air ($k_{env}$ = 0.026 "
-                 r"W/(m K)), RT = 0, Q = 10 W L $t_c$; FE (black) needs no $\beta$, "
+                 r"W/(m K)), RT = 0, Q = 10 W L $t_c$; FE (grey, dotted) needs no $\beta$, "
                  r"$t_{env}$, N", fontsize="medium")
     return fig
 
