@@ -61,6 +61,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
+    ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
@@ -84,6 +85,8 @@ __all__ = [
     "TransientHeat", "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
     "PiecewiseLinear", "integrate_heat", "TransientHeatResult", "capacity_vector",
     "ThetaStepper", "theta_step", "REFERENCE_THETA",
+    # heat loss: calibrating the chain model to the boundary-integral model or the FE
+    "calibrate_environment", "CalibrationResult",
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",

@@ -12,8 +12,8 @@ at the triangle centroids.
   (Wilton et al. 1984, IEEE Trans. Antennas Propag. 32(3) 276), for any point, also on the
   triangle (the singular self-integral) or in its plane;
 * :func:`collocation_matrix`: ``V_ij = int_j G(c_i, y) dS_y`` [K m^2/W], the closed form for
-  near pairs and the centroid rule ``A_j G(c_i, c_j)`` for pairs farther apart than
-  :data:`NEAR_FACTOR` source diameters;
+  pairs closer than :data:`NEAR_FACTOR` source diameters, a 3-point rule of degree 2 up to
+  ``MID_FACTOR x NEAR_FACTOR`` and the centroid rule ``A_j G(c_i, c_j)`` beyond;
 * :func:`subdivision`: barycentric coordinates of the uniform refinement of a triangle into
   ``m^2`` sub-triangles.
 """
@@ -28,9 +28,11 @@ from . import _single_layer_jit
 
 __all__ = ["triangle_potential", "collocation_matrix", "subdivision", "NEAR_FACTOR"]
 
-#: Pairs whose centroid distance is below this many source diameters use the closed form; the
-#: centroid rule's relative error beyond is below ~(1 / NEAR_FACTOR)^2 / 24 (second moment).
-NEAR_FACTOR = 3.0
+#: Pairs whose centroid distance is below this many source diameters use the closed form.
+NEAR_FACTOR = 1.5
+#: Pairs between NEAR_FACTOR and MID_FACTOR x NEAR_FACTOR source diameters use the 3-point rule
+#: of degree 2 (barycentric (2/3, 1/6, 1/6) and permutations), farther ones the centroid rule.
+MID_FACTOR = 2.0
 
 
 def triangle_potential(p, tri) -> np.ndarray:
@@ -156,6 +158,10 @@ def _kernel_matrix(points, tri, centroid, area, diam, near, compiled=None):
     close = dist < near * diam[None, :]
     with np.errstate(divide="ignore"):
         out = area[None, :] / dist
+    i, j = np.nonzero(~close & (dist < MID_FACTOR * near * diam[None, :]))
+    q = (3 * tri[j][:, :, None, :] * np.eye(3)[None, :, :, None]
+         + tri[j][:, None, :, :]).sum(axis=2) / 6          # (2/3, 1/6, 1/6) points, (p, 3, 3)
+    out[i, j] = area[j] * (1 / np.linalg.norm(q - points[i][:, None, :], axis=2)).mean(axis=1)
     i, j = np.nonzero(close)
     out[i, j] = triangle_potential(points[i], tri[j])
     return out

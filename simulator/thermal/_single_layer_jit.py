@@ -24,6 +24,9 @@ _SIGNATURE = "void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, 
 
 _compiled = None
 _broken = False
+#: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
+#: :data:`simulator.thermal._single_layer.MID_FACTOR`).
+_MID_FACTOR = 2.0
 
 
 def _potential(px, py, pz, t):
@@ -63,6 +66,7 @@ def _potential(px, py, pz, t):
 
 
 def _kernel(points, tri, centroid, area, diam, near, out):
+    mid = _MID_FACTOR * near
     for i in range(points.shape[0]):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         for j in range(tri.shape[0]):
@@ -70,18 +74,28 @@ def _kernel(points, tri, centroid, area, diam, near, out):
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             if dist < near * diam[j]:
                 out[i, j] = _potential(px, py, pz, tri[j])
+            elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
+                acc = 0.0
+                for a in range(3):
+                    b, c = (a + 1) % 3, (a + 2) % 3
+                    qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
+                    qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
+                    qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
+                    acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
+                out[i, j] = area[j] * acc / 3.0
             else:
                 out[i, j] = area[j] / dist
 
 
 def _cholesky_solve(S, B):
-    """Overwrite ``S`` (n, n) with its lower Cholesky factor and ``B`` (n, k) with ``S^-1 B``;
+    """Overwrite ``S`` (n, n) with its lower Cholesky factor and the rows of ``B`` (k, n) with
+    ``S^-1`` times them;
     returns False (S, B partly overwritten) if ``S`` is not positive definite.
 
     Single-threaded on purpose: LAPACK's threads, next to the solver's, cost a hundred times
     the arithmetic of these small (n < ~1000) systems on a loaded machine.
     """
-    n, k = S.shape[0], B.shape[1]
+    n, k = S.shape[0], B.shape[0]
     for j in range(n):
         d = S[j, j]
         for m in range(j):
@@ -95,17 +109,17 @@ def _cholesky_solve(S, B):
             for m in range(j):
                 v -= S[i, m] * S[j, m]
             S[i, j] = v / d
-    for c in range(k):
+    for c in range(k):                                         # B holds the right sides as rows
         for i in range(n):                                     # L y = b
-            v = B[i, c]
+            v = B[c, i]
             for m in range(i):
-                v -= S[i, m] * B[m, c]
-            B[i, c] = v / S[i, i]
-        for i in range(n - 1, -1, -1):                         # L^T x = y
-            v = B[i, c]
-            for m in range(i + 1, n):
-                v -= S[m, i] * B[m, c]
-            B[i, c] = v / S[i, i]
+                v -= S[i, m] * B[c, m]
+            B[c, i] = v / S[i, i]
+        for i in range(n - 1, -1, -1):                         # L^T x = y (column sweep)
+            B[c, i] /= S[i, i]
+            v = B[c, i]
+            for m in range(i):
+                B[c, m] -= S[i, m] * v
     return True
 
 
@@ -117,7 +131,7 @@ def _build():
         g["_potential"] = njit(cache=True, inline="always")(_potential)
     if not hasattr(g["_cholesky_solve"], "py_func"):
         g["_cholesky_solve"] = njit("b1(f8[:, ::1], f8[:, ::1])", cache=True)(_cholesky_solve)
-    return njit(_SIGNATURE, cache=True)(_kernel)
+    return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
 
 
 def use_compiled() -> bool:
@@ -136,8 +150,8 @@ def cholesky_solve(S, B):
     """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n, k) by the compiled
     single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not changed)."""
     B = np.asarray(B, np.float64)
-    S, X = np.array(S, np.float64, order="C"), np.array(B.reshape(len(B), -1), order="C")
-    return X.reshape(B.shape) if _cholesky_solve(S, X) else None
+    S, X = np.array(S, np.float64, order="C"), np.array(B.reshape(len(B), -1).T, order="C")
+    return X.T.reshape(B.shape) if _cholesky_solve(S, X) else None
 
 
 def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Heat loss with nothing to fit: the single-layer potential of the sheet (theory 4.8).
+"""Heat loss with nothing to fit: the single-layer potential of the sheet (theory 4.7).
 
 The medium (conductivity ``k_env``) around the thin sheet is unbounded and homogeneous, or a
 half space above an isothermal substrate plane (image method). Each conducting mesh triangle
@@ -52,12 +52,18 @@ class IntegralLoss:
         Sub-triangles per triangle edge m (m^2 sub-triangles per triangle).
     plane : (origin (3,), unit normal (3,)), optional
         Isothermal substrate plane; the medium lies on the normal's side.
+    shape_tol : float
+        Rebuild the operator when a node has moved more than ``shape_tol`` times the mean
+        sub-triangle diameter since the last build (0: on every change).
     """
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
-                 plane=None):
+                 plane=None, shape_tol: float = 0.0):
         self.triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
         self.n_nodes, self.conductivity, self.plane = int(n_nodes), float(conductivity), plane
+        self.shape_tol = float(shape_tol)
+        #: number of operator builds so far (a diagnostic)
+        self.builds = 0
         bary_vertices, bary_centroids = subdivision(refinement)
         self.n_sub = len(self.triangles) * len(bary_centroids)
         if self.n_sub > MAX_SUB_TRIANGLES:
@@ -78,6 +84,7 @@ class IntegralLoss:
         self.nodes = np.unique(self.triangles)
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
+        self._warned = False
 
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
@@ -85,12 +92,17 @@ class IntegralLoss:
         return np.einsum("sab,tbk->tsak", self._bary, corners).reshape(-1, 3, 3)
 
     def _response(self, x):
-        """``P = S^-1 M`` (n_sub, n_sheet) [W/K] at positions ``x`` (cached for one shape): the
-        heat each sub-triangle loses per kelvin of each sheet node."""
+        """``P = S^-1 M`` (n_sub, n_sheet) [W/K] at positions ``x``: the heat each sub-triangle
+        loses per kelvin of each sheet node (kept while the shape stays within ``shape_tol``
+        of the last build)."""
         x = np.asarray(x, float)
-        if self._cache is not None and np.array_equal(self._cache[0], x):
-            return self._cache[1]
-        V, area, _ = collocation_matrix(self.sub_triangles(x), self.conductivity, self.plane)
+        if self._cache is not None:
+            last, P, size = self._cache
+            if np.array_equal(last, x) or (self.shape_tol > 0 and np.max(
+                    np.abs(x[self.nodes] - last[self.nodes])) <= self.shape_tol * size):
+                return P
+        sub = self.sub_triangles(x)
+        V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
         S = V / area[None, :]
         S = 0.5 * (S + S.T)
         P = _single_layer_jit.cholesky_solve(S, self.M) if _single_layer_jit.use_compiled() \
@@ -100,11 +112,15 @@ class IntegralLoss:
                 P = sla.cho_solve(sla.cho_factor(S, lower=True, check_finite=False), self.M,
                                   check_finite=False)
             except np.linalg.LinAlgError:
-                logger.warning("the single-layer matrix is not positive definite (sub-triangles "
+                log = logger.info if self._warned else logger.warning
+                self._warned = True
+                log("the single-layer matrix is not positive definite (sub-triangles "
                                "touching the substrate plane or each other?); using LU")
                 P = sla.lu_solve(sla.lu_factor(S, check_finite=False), self.M,
                                  check_finite=False)
-        self._cache = (x.copy(), P)
+        size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
+        self._cache = (x.copy(), P, size)
+        self.builds += 1
         return P
 
     def loss_matrix(self, x) -> np.ndarray:

@@ -124,6 +124,10 @@ class ThermalParameters:
     substrate_plane : tuple of 6 floats, or ()
         "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
         (3,) pointing into the medium, in the global frame; () for an unbounded medium.
+    integral_shape_tol : float
+        "integral" model only: the dense operator is rebuilt when a node has moved more than
+        this fraction of the mean sub-triangle diameter since the last build, >= 0 (0:
+        rebuilt on every change of shape).
     """
 
     env_thickness: float
@@ -138,6 +142,7 @@ class ThermalParameters:
     loss_model: str = "chain"
     integral_refinement: int = 2
     substrate_plane: tuple = ()
+    integral_shape_tol: float = 0.05
 
     def __post_init__(self):
         owner = "ThermalParameters"
@@ -153,6 +158,7 @@ class ThermalParameters:
             object.__setattr__(self, name, _ids(getattr(self, name), name))
         one_of(f"{owner}.loss_model", self.loss_model, ("chain", "integral"))
         integer(f"{owner}.integral_refinement", self.integral_refinement, 1, 16)
+        non_negative(f"{owner}.integral_shape_tol", self.integral_shape_tol)
         object.__setattr__(self, "substrate_plane", _plane(self.substrate_plane))
         if self.loss_model == "integral" and not self.env_conductivity > 0:
             raise ParameterError(f"{owner}.env_conductivity = {self.env_conductivity!r} W/(m K): "
@@ -213,7 +219,8 @@ class ThermalModel:
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
             self.integral = IntegralLoss(tri[~self.is_boundary], n, params.env_conductivity,
-                                         params.integral_refinement, params.plane)
+                                         params.integral_refinement, params.plane,
+                                         params.integral_shape_tol)
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
