@@ -65,6 +65,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".thermal.transient": ("REFERENCE_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
+    ".thermal.fe": ("FE2DResult", "FE3DResult", "FEDiskResult", "fe_disk", "fe_sphere",
+                    "solve_fe2d", "solve_fe3d"),
 }, modules={"example_patterns": ".geometry.example_patterns"})
 
 __all__ = [
@@ -87,6 +89,9 @@ __all__ = [
     "ThetaStepper", "theta_step", "REFERENCE_THETA",
     # heat loss: calibrating the chain model to the boundary-integral model or the FE
     "calibrate_environment", "CalibrationResult",
+    # the FE reference of steady heat transfer (optional extra [fe])
+    "fe_disk", "fe_sphere", "solve_fe3d", "solve_fe2d", "FEDiskResult", "FE3DResult",
+    "FE2DResult",
     # dynamics and natural modes
     "Dynamics", "DynamicsOptions", "DynamicsResult", "MotionState", "TimeIntegrator", "integrate",
     "lumped_masses", "natural_modes", "ModesResult",

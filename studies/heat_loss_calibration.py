@@ -92,6 +92,7 @@ from simulator.geometry.example_patterns import strip_pattern
 from studies._common import progress_bar, study_main
 
 NAME = "heat_loss_calibration"
+ERROR_CSV = "heat_loss_chain_error.csv"
 REFERENCE_CSV = pathlib.Path(__file__).parent / "reference" / "verification02_heat_loss.csv"
 
 L = 1.0
@@ -107,6 +108,11 @@ ENVIRONMENTS = {"air": 0.026, "water": 0.6}
 W_OVER_L_QUICK = (0.2, 0.4)
 SWEEPS_QUICK = {"beta": (10.0, 20.0), "t_env": (1.5, 3.0), "N": (2, 10)}
 STRUCTURES_QUICK = ("SU-8", "Si")
+
+#: The paper's chosen chain parameters, highlighted in the figures.
+CHOSEN = {"beta": 20.0, "t_env": 1.5, "N": 10}
+#: FE settings (simulator.thermal.fe): mesh level and box (outer sphere radius / strip size).
+FE_LEVEL, FE_LEVEL_QUICK, FE_BOX = 1, 0, 4.0
 
 PANEL = {"beta": ("(b)", r"$\beta$ [deg]"), "t_env": ("(c)", r"$t_{env}$ [L]"),
          "N": ("(d)", "N [-]")}
@@ -133,6 +139,34 @@ def crease_temperatures(case) -> tuple:
         raise RuntimeError(f"{case.name} {case.parameters}: {res.message}")
     t = res.state.temperature
     return float(t[10]), float(np.mean(t[[8, 9, 10]]))
+
+
+def fe_temperatures(W, k, k_env, level=FE_LEVEL) -> tuple:
+    """(T_max, T_ave) of the 3-D FE and T at the crease centre of the 2-D cross-section FE of
+    the strip (structure ``k``, medium ``k_env`` [W/(m K)]); NaN without the ``[fe]`` extra.
+
+    3-D: :func:`simulator.thermal.fe.solve_fe3d` on the strip's own triangles and heat,
+    measured on the same nodes as the chain model. 2-D: :func:`~simulator.thermal.fe.solve_fe2d`
+    on the section panel | crease | panel (lengths L1, W, L2; k t_p, k t_c, k t_p; heat per
+    unit depth Q / L on the crease), ends held at RT, box radius 4 x half length.
+    """
+    try:
+        from simulator.thermal.fe import solve_fe2d, solve_fe3d
+        import gmsh  # noqa: F401
+        import skfem  # noqa: F401
+    except ImportError:
+        return np.nan, np.nan, np.nan
+    case = strip_case(W, k=k, k_env=k_env)
+    p = case.parameters
+    power = 10 * W * L * p["tc"]
+    r3 = solve_fe3d(case.model, [power], level=level, box_factor=FE_BOX, accuracy=0.05)
+    r2 = solve_fe2d([p["L1"], W, p["L2"]], [k * p["tp"], k * p["tc"], k * p["tp"]],
+                    [0.0, power / L, 0.0], k_env, room_temperature=0.0, level=level,
+                    box_factor=FE_BOX, accuracy=1.0)
+    for r in (r3, r2):
+        if not r.success:
+            raise RuntimeError(f"FE of the strip W = {W}, k = {k}, k_env = {k_env}: {r.message}")
+    return float(r3.crease_t_ctr[0]), float(r3.crease_t_ave[0]), float(r2.segment_temperature[1])
 
 
 def _key(W, beta, t_env, N):
@@ -167,11 +201,14 @@ def _jobs(quick):
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     """All sweeps (coarse with ``quick``); one row per (sweep, value, W/L), no file I/O."""
     ref = _reference()
-    out = []
+    out, fe = [], {}
     for j in progress_bar(_jobs(quick), progress, desc=NAME):
         W = j["wl"] * L
         k, k_env = STRUCTURES[j["structure"]], ENVIRONMENTS[j["environment"]]
         t_max, t_ave = crease_temperatures(strip_case(W, j["beta"], j["t_env"], j["N"], k, k_env))
+        if (W, k, k_env) not in fe:
+            fe[W, k, k_env] = fe_temperatures(W, k, k_env, FE_LEVEL_QUICK if quick else FE_LEVEL)
+        f_max, f_ave, f_2d = fe[W, k, k_env]
         r_max, r_ave = (ref.get(_key(W, j["beta"], j["t_env"], j["N"]), (np.nan, np.nan))
                         if (k, k_env) == (0.3, 0.026) else (np.nan, np.nan))
         out.append({
@@ -181,12 +218,40 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             "k [W/(m K)]": k, "k_env [W/(m K)]": k_env, "T_max [-]": t_max, "T_ave [-]": t_ave,
             "T_max_ref [-]": r_max, "T_ave_ref [-]": r_ave,
             "T_max - ref [-]": t_max - r_max, "T_ave - ref [-]": t_ave - r_ave,
+            "T_max_fe3d [-]": f_max, "T_ave_fe3d [-]": f_ave, "T_fe2d [-]": f_2d,
+            "T_max error vs fe3d [%]": 100 * (t_max / f_max - 1),
+            "T_ave error vs fe3d [%]": 100 * (t_ave / f_ave - 1),
         })
     return pd.DataFrame(out)
 
 
-def _curves(ax, d, group_col, label_fmt):
-    """T_max (solid) and T_ave (dashed) per group, reference values as crosses.
+def error_table(df: pd.DataFrame) -> pd.DataFrame:
+    """The chain model's error against the 3-D FE at the chosen parameters (beta = 20 deg,
+    t_env = 1.5 L, N = 10): one row per structure, environment and W/L."""
+    d = df[(df["sweep"] == "material")]
+    cols = ["structure", "environment", "k [W/(m K)]", "k_env [W/(m K)]", "W/L [-]",
+            "beta [deg]", "t_env [-]", "N [-]", "T_max [-]", "T_max_fe3d [-]",
+            "T_max error vs fe3d [%]", "T_ave [-]", "T_ave_fe3d [-]", "T_ave error vs fe3d [%]",
+            "T_fe2d [-]"]
+    return d[cols].rename(columns={"T_max [-]": "T_max chain [-]",
+                                   "T_ave [-]": "T_ave chain [-]"}).reset_index(drop=True)
+
+
+def _fe_lines(ax, g, color, label=False):
+    """3-D FE T_max (solid) and T_ave (dashed) as thick translucent lines with triangles, and
+    the 2-D FE as a dotted line, of one group ``g`` (sorted by W/L)."""
+    if "T_max_fe3d [-]" not in g or g["T_max_fe3d [-]"].isna().all():
+        return False
+    kw = dict(color=color, alpha=0.45, lw=3.2, ms=6)
+    ax.plot(g["W/L [-]"], g["T_max_fe3d [-]"], "-^", **kw)
+    ax.plot(g["W/L [-]"], g["T_ave_fe3d [-]"], "--v", **kw)
+    ax.plot(g["W/L [-]"], g["T_fe2d [-]"], ":", color=color, lw=1.6)
+    return True
+
+
+def _curves(ax, d, group_col, label_fmt, chosen=None):
+    """Chain T_max (solid) and T_ave (dashed) per group (the ``chosen`` value thick), reference
+    values as crosses.
 
     Returns (colour legend handles, whether reference values were drawn).
     """
@@ -196,97 +261,147 @@ def _curves(ax, d, group_col, label_fmt):
     for i, (value, g) in enumerate(d.groupby(group_col, sort=False)):
         g = g.sort_values("W/L [-]")
         c = f"C{i}"
-        ax.plot(g["W/L [-]"], g["T_max [-]"], "-o", color=c, ms=4)
-        ax.plot(g["W/L [-]"], g["T_ave [-]"], "--s", color=c, ms=4, mfc="none")
+        lw = 2.6 if chosen is not None and value == chosen else 1.2
+        ax.plot(g["W/L [-]"], g["T_max [-]"], "-o", color=c, ms=4, lw=lw)
+        ax.plot(g["W/L [-]"], g["T_ave [-]"], "--s", color=c, ms=4, mfc="none", lw=lw)
         for col in ("T_max_ref [-]", "T_ave_ref [-]"):
             if col in g and g[col].notna().any():
                 has_ref = True
                 ax.plot(g["W/L [-]"], g[col], "x", color="k", ms=6, mew=0.9, zorder=3)
-        handles.append(Line2D([], [], color=c, label=label_fmt(value)))
+        label = label_fmt(value) + (" (chosen)" if lw > 2 else "")
+        handles.append(Line2D([], [], color=c, lw=lw, label=label))
     return handles, has_ref
 
 
-def _style_legend(fig, has_ref):
-    """Figure-level legend of the line styles (and of the reference markers)."""
+def _style_legend(fig, has_ref, has_fe):
+    """Figure-level legend of the line styles (and of the reference and FE markers)."""
     from matplotlib.lines import Line2D
 
     handles = [Line2D([], [], color="0.3", ls="-", marker="o", ms=4,
-                      label=r"$T_{max}$ (centre node Ctr)"),
+                      label=r"chain $T_{max}$ (centre node Ctr)"),
                Line2D([], [], color="0.3", ls="--", marker="s", ms=4, mfc="none",
-                      label=r"$T_{ave}$ (mean of centre line A, B, Ctr)")]
+                      label=r"chain $T_{ave}$ (mean of centre line A, B, Ctr)")]
+    if has_fe:
+        handles += [Line2D([], [], color="0.3", alpha=0.45, lw=3.2, marker="^", ms=6,
+                           label=r"3-D FE $T_{max}$"),
+                    Line2D([], [], color="0.3", alpha=0.45, lw=3.2, ls="--", marker="v", ms=6,
+                           label=r"3-D FE $T_{ave}$"),
+                    Line2D([], [], color="0.3", ls=":", lw=1.6,
+                           label="2-D FE (cross-section, box 4 x half length)")]
     if has_ref:
         handles.append(Line2D([], [], color="k", ls="none", marker="x", ms=6,
                               label="reference implementation (MATLAB)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles),
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 3),
                fontsize="small")
 
 
+def _sweep_figure(df, sweeps):
+    """Panels (b) beta, (c) t_env, (d) N of the SU-8 strip in air, with the FE curves."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.6 * len(sweeps), 5.2), layout="constrained")
+    axes = fig.subplots(1, len(sweeps), squeeze=False)[0]
+    any_ref = any_fe = False
+    for ax, sweep in zip(axes, sweeps):
+        d = df[df["sweep"] == sweep].copy()
+        d["_v"] = pd.to_numeric(d["value"])
+        d = d.sort_values("_v", kind="stable")
+        tag, label = PANEL[sweep]
+        handles, has_ref = _curves(ax, d, "_v", lambda v: f"{v:g}", CHOSEN[sweep])
+        fe = d.drop_duplicates("W/L [-]").sort_values("W/L [-]")
+        any_fe |= _fe_lines(ax, fe, "k")
+        any_ref |= has_ref
+        r = d.iloc[0]
+        fixed = {"beta": rf"$t_{{env}}$ = {r['t_env [-]']:g} L, N = {r['N [-]']:g}",
+                 "t_env": rf"$\beta$ = {r['beta [deg]']:g} deg, N = {r['N [-]']:g}",
+                 "N": rf"$\beta$ = {r['beta [deg]']:g} deg, $t_{{env}}$ = "
+                      rf"{r['t_env [-]']:g} L"}[sweep]
+        ax.set_title(f"{tag} {label}  ({fixed})", fontsize="medium")
+        ax.set_xlabel("W/L [-]")
+        ax.set_ylabel("crease temperature T [-]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(handles=handles, title=label, fontsize="small", title_fontsize="small",
+                  loc="upper left", ncols=2)
+    _style_legend(fig, any_ref, any_fe)
+    fig.suptitle(r"Heat loss of the SU-8 strip (k = 0.3 W/(m K)) to air ($k_{env}$ = 0.026 "
+                 r"W/(m K)), RT = 0, Q = 10 W L $t_c$; FE (black) needs no $\beta$, "
+                 r"$t_{env}$, N", fontsize="medium")
+    return fig
+
+
+def _materials_figure(mat):
+    """Panels (e) air, (f) water: chain and FE per material; below, the chain's error."""
+    from matplotlib.figure import Figure
+
+    envs = [e for e in ENVIRONMENTS if e in set(mat["environment"])]
+    has_fe = "T_max_fe3d [-]" in mat and mat["T_max_fe3d [-]"].notna().any()
+    rows = 2 if has_fe else 1
+    fig = Figure(figsize=(5.4 * len(envs), 4.4 * rows + 0.8), layout="constrained")
+    axes = fig.subplots(rows, len(envs), sharex=True, squeeze=False,
+                        height_ratios=[1.6, 1][:rows])
+    any_ref = False
+    for col, (env, tag) in enumerate(zip(envs, ("(e)", "(f)"))):
+        ax = axes[0, col]
+        d = mat[mat["environment"] == env]
+        k_env = d["k_env [W/(m K)]"].iloc[0]
+        ks = d.groupby("structure", sort=False)["k [W/(m K)]"].first()
+        handles, has_ref = _curves(ax, d, "structure",
+                                   lambda s, ks=ks: f"{s} (k = {ks[s]:g} W/(m K))")
+        for i, (_, g) in enumerate(d.groupby("structure", sort=False)):
+            _fe_lines(ax, g.sort_values("W/L [-]"), f"C{i}")
+        any_ref |= has_ref
+        ax.set_yscale("log")
+        ax.set_title(rf"{tag} {env} ($k_{{env}}$ = {k_env:g} W/(m K))", fontsize="medium")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(handles=handles, title="structure", fontsize="small",
+                  title_fontsize="small", loc="lower right")
+        if has_fe:
+            _error_axes(axes[1, col], d)
+    axes[0, 0].set_ylabel("crease temperature T [-]")
+    for ax in axes[-1]:
+        ax.set_xlabel("W/L [-]")
+    _style_legend(fig, any_ref, has_fe)
+    r = mat.iloc[0]
+    fig.suptitle(rf"Structure materials: chain model at $\beta$ = {r['beta [deg]']:g} deg, "
+                 rf"$t_{{env}}$ = {r['t_env [-]']:g} L, N = {r['N [-]']:g} (the paper's "
+                 "choice) against FE; Q = 10 W L $t_c$, RT = 0", fontsize="medium")
+    return fig
+
+
+def _error_axes(ax, d):
+    """The chain model's error against the 3-D FE [%], T_max solid, T_ave dashed."""
+    for i, (_, g) in enumerate(d.groupby("structure", sort=False)):
+        g = g.sort_values("W/L [-]")
+        ax.plot(g["W/L [-]"], g["T_max error vs fe3d [%]"], "-o", color=f"C{i}", ms=4)
+        ax.plot(g["W/L [-]"], g["T_ave error vs fe3d [%]"], "--s", color=f"C{i}", ms=4,
+                mfc="none")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_ylabel("chain / 3-D FE - 1 [%]")
+    ax.grid(True, alpha=0.3)
+
+
 def plot(df: pd.DataFrame) -> dict:
-    """{"heat_loss_calibration": panels b-d, "heat_loss_materials": panels e-f} (Figures).
+    """{"heat_loss_calibration": panels b-d, "heat_loss_materials": panels e-f and the chain
+    model's error against 3-D FE} (Figures).
 
     matplotlib is imported here only: ``run`` never loads it.
     """
-    from matplotlib.figure import Figure
-
     figs = {}
     sweeps = [s for s in PANEL if s in set(df["sweep"])]
     if sweeps:
-        fig = Figure(figsize=(4.4 * len(sweeps), 4.6), layout="constrained")
-        axes = fig.subplots(1, len(sweeps), squeeze=False)[0]
-        any_ref = False
-        for ax, sweep in zip(axes, sweeps):
-            d = df[df["sweep"] == sweep].copy()
-            d["_v"] = pd.to_numeric(d["value"])
-            d = d.sort_values("_v", kind="stable")
-            tag, label = PANEL[sweep]
-            handles, has_ref = _curves(ax, d, "_v", lambda v: f"{v:g}")
-            any_ref |= has_ref
-            r = d.iloc[0]
-            fixed = {"beta": rf"$t_{{env}}$ = {r['t_env [-]']:g} L, N = {r['N [-]']:g}",
-                     "t_env": rf"$\beta$ = {r['beta [deg]']:g} deg, N = {r['N [-]']:g}",
-                     "N": rf"$\beta$ = {r['beta [deg]']:g} deg, $t_{{env}}$ = "
-                          rf"{r['t_env [-]']:g} L"}[sweep]
-            ax.set_title(f"{tag} {label}  ({fixed})", fontsize="medium")
-            ax.set_xlabel("W/L [-]")
-            ax.set_ylabel("crease temperature T [-]")
-            ax.grid(True, alpha=0.3)
-            ax.legend(handles=handles, title=label, fontsize="small", title_fontsize="small",
-                      loc="upper left", ncols=2)
-        _style_legend(fig, any_ref)
-        fig.suptitle(r"Heat loss of the SU-8 strip (k = 0.3 W/(m K)) to air ($k_{env}$ = 0.026 "
-                     r"W/(m K)), RT = 0, Q = 10 W L $t_c$", fontsize="medium")
-        figs["heat_loss_calibration"] = fig
+        figs["heat_loss_calibration"] = _sweep_figure(df, sweeps)
     mat = df[df["sweep"] == "material"]
     if len(mat):
-        envs = [e for e in ENVIRONMENTS if e in set(mat["environment"])]
-        fig = Figure(figsize=(5.0 * len(envs), 4.6), layout="constrained")
-        axes = fig.subplots(1, len(envs), sharey=True, squeeze=False)[0]
-        any_ref = False
-        for ax, env, tag in zip(axes, envs, ("(e)", "(f)")):
-            d = mat[mat["environment"] == env]
-            k_env = d["k_env [W/(m K)]"].iloc[0]
-            ks = d.groupby("structure", sort=False)["k [W/(m K)]"].first()
-            handles, has_ref = _curves(ax, d, "structure",
-                                       lambda s, ks=ks: f"{s} (k = {ks[s]:g} W/(m K))")
-            any_ref |= has_ref
-            ax.set_yscale("log")
-            ax.set_title(rf"{tag} {env} ($k_{{env}}$ = {k_env:g} W/(m K))", fontsize="medium")
-            ax.set_xlabel("W/L [-]")
-            ax.grid(True, which="both", alpha=0.3)
-            ax.legend(handles=handles, title="structure", fontsize="small",
-                      title_fontsize="small", loc="lower right")
-        axes[0].set_ylabel("crease temperature T [-]")
-        _style_legend(fig, any_ref)
-        r = mat.iloc[0]
-        fig.suptitle(rf"Structure materials: $\beta$ = {r['beta [deg]']:g} deg, "
-                     rf"$t_{{env}}$ = {r['t_env [-]']:g} L, N = {r['N [-]']:g}, "
-                     "Q = 10 W L $t_c$, RT = 0", fontsize="medium")
-        figs["heat_loss_materials"] = fig
+        figs["heat_loss_materials"] = _materials_figure(mat)
     return figs
 
 
 def main(argv=None):
-    return study_main(NAME, __doc__, run, plot, argv)
+    out = study_main(NAME, __doc__, run, plot, argv)
+    csv = pathlib.Path(out) / f"{NAME}.csv"
+    if csv.exists():
+        error_table(pd.read_csv(csv)).to_csv(pathlib.Path(out) / ERROR_CSV, index=False)
+    return out
 
 
 if __name__ == "__main__":
