@@ -87,15 +87,22 @@ def _reference_solver(model: Model, reference):
         return tm.solve, "integral"
     if reference == "fe":
         try:
-            from . import fe
-            solve = fe.steady_temperatures
-        except (ImportError, AttributeError) as exc:
+            import gmsh  # noqa: F401
+            import skfem  # noqa: F401
+            from .fe import solve_fe3d
+        except ImportError as exc:
             raise ParameterError(
                 "calibrate_environment(reference='fe') needs the 3-D FE reference "
                 f"(simulator.thermal.fe, optional extra [fe]): {exc}. Install it with "
                 "pip install 'etorigami[fe]', or use reference='integral' or a callable "
                 "(x, q) -> temperatures.") from None
-        return (lambda x, q: solve(model, x, q)), "fe"
+
+        def solve(x, q):
+            res = solve_fe3d(model, heat=q, positions=x)
+            if not res.success:
+                raise ParameterError(f"calibrate_environment: the 3-D FE failed: {res.message}")
+            return res.temperature
+        return solve, "fe"
     raise ParameterError(f"reference = {reference!r}; use 'integral', 'fe' or a callable "
                          "(x (n, 3) [m], q (n,) [W]) -> temperatures (n,) [deg C].")
 

@@ -56,12 +56,20 @@ def test_bad_input_is_named(kw, match):
 
 def test_fe_reference_needs_the_extra():
     try:
-        from simulator.thermal import fe  # noqa: F401
+        import gmsh  # noqa: F401
+        import skfem  # noqa: F401
         pytest.skip("the FE reference is installed")
     except ImportError:
         pass
     with pytest.raises(ParameterError, match=r"needs the 3-D FE reference .*\[fe\]"):
         calibrate_environment(_strip(), [4e-3], reference="fe")
+
+
+def test_fe_reference_gives_a_fit():
+    pytest.importorskip("skfem")
+    pytest.importorskip("gmsh")
+    res = calibrate_environment(_strip(), [4e-3], reference="fe")
+    assert res.reference == "fe" and res.success and res.rms_error <= res.initial_rms_error
 
 
 def test_needs_thermal_parameters():
