@@ -22,9 +22,9 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import ParameterError
+from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
 
@@ -84,7 +84,6 @@ class IntegralLoss:
         self.nodes = np.unique(self.triangles)
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
-        self._warned = False
 
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
@@ -107,17 +106,8 @@ class IntegralLoss:
         S = 0.5 * (S + S.T)
         P = _single_layer_jit.cholesky_solve(S, self.M) if _single_layer_jit.use_compiled() \
             else None
-        if P is None:
-            try:
-                P = sla.cho_solve(sla.cho_factor(S, lower=True, check_finite=False), self.M,
-                                  check_finite=False)
-            except np.linalg.LinAlgError:
-                log = logger.info if self._warned else logger.warning
-                self._warned = True
-                log("the single-layer matrix is not positive definite (sub-triangles "
-                               "touching the substrate plane or each other?); using LU")
-                P = sla.lu_solve(sla.lu_factor(S, check_finite=False), self.M,
-                                 check_finite=False)
+        if P is None:                    # the ladder: dense Cholesky, LU if not definite
+            P = factorize(S, kind="spd", dense_limit=len(S)).solve(self.M)
         size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
         self._cache = (x.copy(), P, size)
         self.builds += 1
