@@ -18,9 +18,16 @@ node owns a chain of N environment layers over t_env with the spreading angle be
 as the reference does, beta [rad] = beta_deg / 180 * 3.14. Lengths are in units of L and the
 temperatures are non-dimensional (with k in W/(m K), q''' = 10 W/m^3 and L = 1 m they would
 be kelvin above RT). Measured as in the paper: T_max = T(Ctr) (0-based node 10), T_ave = mean of
-the crease centre line A, B, Ctr (nodes 8, 9, 10). The paper also has 2-D and 3-D FE curves;
-we have no FE model, so the comparison here is with the reference implementation
-(``studies/reference/verification02_heat_loss.csv``) row by row.
+the crease centre line A, B, Ctr (nodes 8, 9, 10). The chain model is compared with the
+reference implementation (``studies/reference/verification02_heat_loss.csv``) row by row, and
+with the paper's two FE references, re-computed by ``simulator.thermal.fe`` (docs/heat_fe.md):
+the 3-D FE of the medium around the strip's own triangles (``solve_fe3d``, mesh level 1,
+box_factor 4, far-field Robin condition; the same sheet conduction, heat and measuring nodes
+as the chain model, so only the loss to the medium differs) and the 2-D cross-section FE
+(``solve_fe2d``: panel | crease | panel, ends held at RT, box radius 4 x half length). The FE
+has no beta, t_env or N: in panels (b)-(d) it is one curve, the paper's choice (beta = 20
+deg, t_env = 1.5 L, N = 10) is drawn thick; the materials (e)-(f) are at that choice, with
+the chain model's error against 3-D FE below them. Quick runs use FE level 0.
 
 Sweeps, each over W/L in {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0}:
 
@@ -68,12 +75,21 @@ Outputs (``results/heat_loss_calibration/``)
 * ``T_max [-]``, ``T_ave [-]``: T(Ctr) and mean of A, B, Ctr (non-dimensional);
 * ``T_max_ref [-]``, ``T_ave_ref [-]``: the reference implementation's values for the same
   parameters (empty where it has no such row) and ``T_max - ref [-]``, ``T_ave - ref [-]``:
-  our value minus the reference's.
+  our value minus the reference's;
+* ``T_max_fe3d [-]``, ``T_ave_fe3d [-]``: the 3-D FE's T(Ctr) and mean of A, B, Ctr;
+  ``T_fe2d [-]``: the 2-D FE's crease-centre temperature (empty without the ``[fe]`` extra);
+* ``T_max error vs fe3d [%]``, ``T_ave error vs fe3d [%]``: chain / 3-D FE - 1.
+
+``heat_loss_chain_error.csv``: the chain model's error against 3-D FE at the chosen parameters,
+one row per structure, environment and W/L (``T_max chain [-]``, ``T_max_fe3d [-]``,
+``T_max error vs fe3d [%]``, the same for T_ave, and ``T_fe2d [-]``).
 
 ``heat_loss_calibration.png``: panels (b) beta, (c) t_env, (d) N; T_max (solid) and T_ave
-(dashed) against W/L, one colour per parameter value, reference values as crosses.
+(dashed) against W/L, one colour per parameter value (the chosen one thick), reference values
+as crosses, 3-D FE thick grey-black, 2-D FE dotted.
 ``heat_loss_materials.png``: panels (e) air and (f) water; T_max and T_ave against W/L (log
-scale), one colour per structure material.
+scale), one colour per structure material, chain thin, 3-D FE thick translucent, 2-D FE
+dotted; below each, the chain model's error against 3-D FE [%].
 ``meta.json``: settings, row count, wall time.
 """
 
@@ -237,7 +253,7 @@ def error_table(df: pd.DataFrame) -> pd.DataFrame:
                                    "T_ave [-]": "T_ave chain [-]"}).reset_index(drop=True)
 
 
-def _fe_lines(ax, g, color, label=False):
+def _fe_lines(ax, g, color):
     """3-D FE T_max (solid) and T_ave (dashed) as thick translucent lines with triangles, and
     the 2-D FE as a dotted line, of one group ``g`` (sorted by W/L)."""
     if "T_max_fe3d [-]" not in g or g["T_max_fe3d [-]"].isna().all():

@@ -59,6 +59,20 @@ def test_quick_main_writes_csv_pngs_meta_and_csv_replots(which, within_quick, lo
     assert all(isinstance(f, Figure) and f.axes for f in figs.values())
 
 
+def test_loss_writes_the_chain_error_against_3d_fe(loss_quick):
+    """The FE columns and ``heat_loss_chain_error.csv`` (chosen parameters, unit columns):
+    every material row has a 3-D and a 2-D FE value and the error is chain / FE - 1."""
+    pytest.importorskip("skfem")
+    out, df = loss_quick
+    err = pd.read_csv(out / loss.ERROR_CSV)
+    assert len(err) == (df["sweep"] == "material").sum() > 0
+    assert all(c.endswith("]") for c in err.columns if c not in TEXT_COLUMNS)
+    assert err[["T_max_fe3d [-]", "T_ave_fe3d [-]", "T_fe2d [-]"]].gt(0).all().all()
+    np.testing.assert_allclose(err["T_max error vs fe3d [%]"],
+                               100 * (err["T_max chain [-]"] / err["T_max_fe3d [-]"] - 1))
+    assert set(err["beta [deg]"]) == {20.0} and set(err["t_env [-]"]) == {1.5}
+
+
 def test_run_does_not_load_matplotlib():
     code = ("import sys\n"
             "from studies import heat_within_structure as a, heat_loss_calibration as b\n"

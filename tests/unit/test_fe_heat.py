@@ -111,3 +111,43 @@ def test_held_nodes_stay_at_room_temperature_and_power_scales_linearly():
     held = list(case.model.thermal.room_temperature_nodes)
     assert np.all(r1.temperature[held] == 0.0)
     np.testing.assert_allclose(r2.temperature, 2 * r1.temperature, rtol=1e-8, atol=1e-14)
+
+
+def test_double_fold_over_its_substrate_plane():
+    """The flat double fold over its substrate (boundary panel 3 gives the plane): the
+    substrate nodes lie on the plane at room temperature and fold 2, farther from the
+    anchor, runs hotter than fold 1."""
+    from simulator import get_case
+
+    model = get_case("double_fold").model
+    r = solve_fe3d(model, [10e-3, 10e-3], level=0)          # crease rows: pattern edges 2, 5
+    assert r.success
+    sub = np.unique(model.mesh.triangles[model.mesh.triangle_panel == 3])
+    assert np.all(r.temperature[sub] == r.room_temperature)
+    assert r.crease_temperature[1] > r.crease_temperature[0] > r.room_temperature + 10
+
+
+def test_structure_below_the_substrate_is_refused():
+    from simulator import get_case
+
+    model = get_case("double_fold").model
+    x = model.mesh.nodes.copy()
+    x[4, 2] = -1e-3
+    with pytest.raises(ParameterError, match="below the substrate"):
+        solve_fe3d(model, np.full(model.mesh.n_creases, 1e-3), positions=x, level=0)
+    with pytest.raises(ParameterError, match="substrate"):
+        solve_fe3d(model, np.full(model.mesh.n_creases, 1e-3), substrate="floor")
+
+
+def test_nodal_heat_equals_the_crease_power_it_comes_from():
+    from simulator.thermal.steady import ThermalModel
+    from studies.heat_loss_calibration import strip_case
+
+    model = strip_case(0.4, 20.0, 1.5, 10, 150.0, 0.6).model
+    q = ThermalModel(model.mesh, model.thermal).heat_vector([4e-3])
+    a = solve_fe3d(model, [4e-3], level=0)
+    b = solve_fe3d(model, heat=q, level=0)
+    np.testing.assert_allclose(a.temperature, b.temperature, rtol=1e-10)
+    assert a.heat_input == pytest.approx(4e-3)
+    with pytest.raises(ParameterError, match="not both"):
+        solve_fe3d(model, [4e-3], heat=q)

@@ -98,18 +98,24 @@ def _nodes_and_cells(gmsh, dim):
     return xyz.reshape(-1, 3), index, cells
 
 
-def _entity_triangles(gmsh, index, tag):
-    """Vertex ids (k, 3) of the mesh triangles on surface ``tag``."""
-    types, _, nodes = gmsh.model.mesh.getElements(2, tag)
-    return np.concatenate([index[np.asarray(nd, np.int64)].reshape(-1, 3)
-                           for t, nd in zip(types, nodes) if t == 2])
+def _entity_triangles(gmsh, index, tag, dim=2):
+    """Vertex ids (k, dim + 1) of the linear mesh cells on entity ``(dim, tag)``: triangles on
+    a surface, segments (``dim=1``) on a curve."""
+    types, _, nodes = gmsh.model.mesh.getElements(dim, tag)
+    linear = {2: 2, 1: 1}[dim]                 # gmsh element types: 3-node triangle, 2-node line
+    return np.concatenate([index[np.asarray(nd, np.int64)].reshape(-1, dim + 1)
+                           for t, nd in zip(types, nodes) if t == linear])
 
 
-def _entity_lines(gmsh, index, tag):
-    """Vertex ids (k, 2) of the mesh segments on curve ``tag``."""
-    types, _, nodes = gmsh.model.mesh.getElements(1, tag)
-    return np.concatenate([index[np.asarray(nd, np.int64)].reshape(-1, 2)
-                           for t, nd in zip(types, nodes) if t == 1])
+def _embedded_cells(gmsh, index, maps, dim):
+    """Mesh cells on the embedded entities (every input but the first of ``fragment``'s maps)
+    and the input each lies in: ((k, dim + 1), (k,))."""
+    cells, parent = [], []
+    for i, m in enumerate(maps[1:]):
+        for _, t in m:
+            cells.append(_entity_triangles(gmsh, index, t, dim))
+            parent.append(np.full(len(cells[-1]), i))
+    return np.concatenate(cells), np.concatenate(parent)
 
 
 def disk_mesh(radius, box_radius, height, level):
@@ -198,12 +204,8 @@ def sheet_mesh(triangles, box_radius, plane_z, h_crease, h_panel, is_crease, lev
                     [(2, "SurfacesList")])
         gmsh.model.mesh.generate(3)
         xyz, index, tets = _nodes_and_cells(gmsh, 3)
-        tris, parent = [], []
-        for i, m in enumerate(maps[1:]):
-            for _, t in m:
-                tris.append(_entity_triangles(gmsh, index, t))
-                parent.append(np.full(len(tris[-1]), i))
-    return xyz, tets, np.concatenate(tris), np.concatenate(parent)
+        tris, parent = _embedded_cells(gmsh, index, maps, 2)
+    return xyz, tets, tris, parent
 
 
 def section_mesh(x_nodes, box_radius, plane_z, h_sheet, level):
@@ -224,9 +226,5 @@ def section_mesh(x_nodes, box_radius, plane_z, h_sheet, level):
         _size_field(gmsh, [(h_sheet, lines)], grow, box_radius / 4, [(1, "CurvesList")])
         gmsh.model.mesh.generate(2)
         xyz, index, tris = _nodes_and_cells(gmsh, 2)
-        segs, parent = [], []
-        for i, m in enumerate(maps[1:]):
-            for _, t in m:
-                segs.append(_entity_lines(gmsh, index, t))
-                parent.append(np.full(len(segs[-1]), i))
-    return xyz, tris, np.concatenate(segs), np.concatenate(parent)
+        segs, parent = _embedded_cells(gmsh, index, maps, 1)
+    return xyz, tris, segs, parent
