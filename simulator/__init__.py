@@ -70,6 +70,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
+    ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
@@ -102,6 +103,8 @@ __all__ = [
     # time schedules of mechanical drives (Dynamics, ElectroThermal)
     "Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
     "PiecewiseLinearSignal",
+    # heat loss: calibrating the chain model to the boundary-integral model or the FE
+    "calibrate_environment", "CalibrationResult",
     # the FE reference of steady heat transfer (optional extra [fe])
     "fe_disk", "fe_sphere", "solve_fe3d", "solve_fe2d", "FEDiskResult", "FE3DResult",
     "FE2DResult",

@@ -32,12 +32,13 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
-from .._validate import array, finite, in_range, integer, non_negative, positive
+from .._validate import array, finite, in_range, integer, non_negative, one_of, positive
 from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..geometry.materials import AIR
 from ..model.mesh import BarHingeMesh
+from .integral import IntegralLoss
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
 
@@ -71,6 +72,20 @@ def _ids(value, name):
     return ids
 
 
+def _plane(value):
+    """``substrate_plane`` as a tuple of 6 floats (a point and a non-zero normal) or ()."""
+    try:
+        v = tuple(float(c) for c in value)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or len(v) not in (0, 6) or not all(map(math.isfinite, v)) \
+            or (v and not any(v[3:])):
+        raise ParameterError(f"ThermalParameters.substrate_plane = {value!r} is invalid; give "
+                             "() or 6 finite numbers: a point (x, y, z) [m] and a non-zero "
+                             "normal (nx, ny, nz) pointing into the medium.")
+    return v
+
+
 @dataclass(frozen=True)
 class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
@@ -97,6 +112,22 @@ class ThermalParameters:
         reference transient example, :data:`~simulator.geometry.materials.AIR`).
     env_specific_heat : float
         Environment specific heat c_env [J/(kg K)], >= 0 (transient heat only; default air).
+    loss_model : {"chain", "integral"}
+        Heat loss of the steady model: "chain" (the paper's fitted chains, using
+        ``env_thickness``, ``layers``, ``dissipation_angle``) or "integral" (the single-layer
+        potential of the sheet in the medium, :mod:`simulator.thermal.integral`: nothing to fit;
+        boundary panels lie on the substrate at room temperature). Transient and
+        electro-thermal steps always use the chains (they carry the medium's heat capacity).
+    integral_refinement : int
+        Sub-triangles per triangle edge m of the "integral" model (m^2 per mesh triangle),
+        1..16.
+    substrate_plane : tuple of 6 floats, or ()
+        "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
+        (3,) pointing into the medium, in the global frame; () for an unbounded medium.
+    integral_shape_tol : float
+        "integral" model only: the dense operator is rebuilt when a node has moved more than
+        this fraction of the mean sub-triangle diameter since the last build, >= 0 (0:
+        rebuilt on every change of shape).
     """
 
     env_thickness: float
@@ -108,6 +139,10 @@ class ThermalParameters:
     room_temperature_nodes: tuple = ()
     env_density: float = AIR.density
     env_specific_heat: float = AIR.specific_heat
+    loss_model: str = "chain"
+    integral_refinement: int = 2
+    substrate_plane: tuple = ()
+    integral_shape_tol: float = 0.05
 
     def __post_init__(self):
         owner = "ThermalParameters"
@@ -121,6 +156,21 @@ class ThermalParameters:
         integer(f"{owner}.layers", self.layers)
         for name in ("boundary_panels", "room_temperature_nodes"):
             object.__setattr__(self, name, _ids(getattr(self, name), name))
+        one_of(f"{owner}.loss_model", self.loss_model, ("chain", "integral"))
+        integer(f"{owner}.integral_refinement", self.integral_refinement, 1, 16)
+        non_negative(f"{owner}.integral_shape_tol", self.integral_shape_tol)
+        object.__setattr__(self, "substrate_plane", _plane(self.substrate_plane))
+        if self.loss_model == "integral" and not self.env_conductivity > 0:
+            raise ParameterError(f"{owner}.env_conductivity = {self.env_conductivity!r} W/(m K): "
+                                 "loss_model 'integral' needs a medium conductivity > 0.")
+
+    @property
+    def plane(self):
+        """The substrate plane as ``(point (3,), unit normal (3,))``, or None."""
+        if not self.substrate_plane:
+            return None
+        v = np.array(self.substrate_plane, float)
+        return v[:3], v[3:] / np.linalg.norm(v[3:])
 
     def to_dict(self) -> dict:
         """Plain-dict view for result metadata."""
@@ -163,6 +213,15 @@ class ThermalModel:
         self._cap_nodes = np.unique(tri[~self.is_boundary])
         fixed = np.zeros(n, bool)
         fixed[list(params.room_temperature_nodes)] = True
+        #: room-temperature nodes of the chain model (and of the transient model)
+        self.chain_fixed_nodes = np.flatnonzero(fixed)
+        self.integral = None
+        if params.loss_model == "integral":          # boundary panels lie on the substrate
+            fixed[tri[self.is_boundary].ravel()] = True
+            self.integral = IntegralLoss(tri[~self.is_boundary], n, params.env_conductivity,
+                                         params.integral_refinement, params.plane,
+                                         params.integral_shape_tol)
+        #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
         free_index = np.full(n, -1)
@@ -376,7 +435,10 @@ class ThermalModel:
                 and np.array_equal(last[1], x):
             return last[2]
         K, g_eff = self._conductances(x, compiled)
-        solver = self._factorize(K, g_eff[self.free_nodes])
+        if self.integral is None:
+            solver = self._factorize(K, g_eff[self.free_nodes])
+        else:
+            solver = self._factorize(K, np.zeros(len(self.free_nodes)), self._integral_loss(x))
         self._factor_cache = (compiled, x.copy(), solver)
         return solver
 
@@ -413,7 +475,29 @@ class ThermalModel:
         keep = p.positions < p.nnz
         return p.dense_positions()[p.positions[keep]], keep
 
-    def _factorize(self, K, g_free):
+    def _integral_loss(self, x):
+        """The integral model's loss conductance [W/K] on the free nodes, (n_free, n_free)."""
+        idx = np.full(self.mesh.n_nodes, -1)
+        idx[self.free_nodes] = np.arange(len(self.free_nodes))
+        sheet = idx[self.integral.nodes]
+        keep = sheet >= 0
+        L = np.zeros((len(self.free_nodes),) * 2)
+        L[np.ix_(sheet[keep], sheet[keep])] = self.integral.loss_matrix(x)[np.ix_(keep, keep)]
+        return L
+
+    def environment_loss(self, x, temperature, room_temperature=None) -> np.ndarray:
+        """Heat [W] each node loses to the medium at temperatures ``temperature`` (n,) [deg C]
+        and positions ``x`` (n, 3) [m], (n,), by the parameters' loss model (the rest of the
+        heat input leaves through the room-temperature nodes)."""
+        rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
+        rise = np.asarray(temperature, float) - rt
+        if self.integral is None:
+            return self._conductances(x, False)[1] * rise
+        out = np.zeros(self.mesh.n_nodes)
+        out[self.integral.nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
+        return out
+
+    def _factorize(self, K, g_free, loss=None):
         """Factorise the free-node system (conduction plus condensed chains); returns its
         solver ``q_free -> rise_free``.
 
@@ -425,6 +509,11 @@ class ThermalModel:
         """
         n_free = len(g_free)
         limit = thresholds.CONDUCTION_DENSE_LIMIT
+        if loss is not None:             # the integral model: dense anyway
+            pos, keep = self._dense_position
+            flat = np.concatenate([K.ravel(), g_free])[keep]
+            A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free) + loss
+            return factorize(A, kind="spd", dense_limit=n_free).solve
         if n_free <= limit:
             pos, keep = self._dense_position
             flat = np.concatenate([K.ravel(), g_free])[keep]

@@ -139,7 +139,7 @@ def _dirichlet_mask(tm: ThermalModel) -> np.ndarray:
     """Full-size mask of the unknowns held at room temperature."""
     n, N = tm.mesh.n_nodes, tm.params.layers
     fixed = np.zeros((N + 1, n), bool)
-    fixed[0, tm.fixed_nodes] = True
+    fixed[0, tm.chain_fixed_nodes] = True
     fixed[N] = True
     if tm.params.env_conductivity == 0:
         fixed[1:] = True                   # layers decoupled from the structure: room temperature
@@ -154,6 +154,10 @@ def heat_system(tm: ThermalModel, x) -> HeatSystem:
             f"ThermalParameters: env_density = {prm.env_density!r} kg/m^3 and env_specific_heat "
             f"= {prm.env_specific_heat!r} J/(kg K): transient heat transfer with an environment "
             "needs both > 0 (e.g. **AIR.environment() or **WATER.environment()).")
+    if tm.integral is not None and not getattr(tm, "_told_transient", False):
+        tm._told_transient = True
+        logger.info("transient heat uses the chain environment model (env_thickness, layers, "
+                    "dissipation_angle): loss_model 'integral' is for steady heat only")
     fixed = _dirichlet_mask(tm)
     free = np.flatnonzero(~fixed)
     K = tm.conductivity_matrix(x).tocsc()

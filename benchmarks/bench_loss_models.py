@@ -1,0 +1,94 @@
+"""Wall time of the boundary-integral heat-loss model against the chain model (issue 19).
+
+Acceptance: a gripper evaluation (bisect power search, start design) with
+``loss_model="integral"`` takes at most 2x the chain model's time, and the crane case at most
+3x. Both runs use the same settings; each is timed after a warm-up run (numba compilation), the
+median of ``--repeat`` runs. The two models predict different temperatures, so the power
+searches and the Newton paths differ as well: the ratio is that of the whole evaluation, as a
+user sees it.
+
+Run: ``python benchmarks/bench_loss_models.py`` (about a minute); ``--refinement m`` sets
+``integral_refinement``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import statistics
+import time
+
+from design.devices import gripper
+from simulator import simulate
+from simulator.cases import get_case
+
+
+def _integral(thermal, refinement):
+    return dataclasses.replace(thermal, loss_model="integral", integral_refinement=refinement)
+
+
+def _timed(fn, repeat):
+    fn()                                                   # warm-up (compilation, caches)
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def gripper_run(loss_model: str, refinement: int):
+    """A function evaluating the start-design gripper (bisect) with one loss model."""
+    original = gripper.gripper_model
+
+    def model_with_loss(design, *args, **kw):
+        model, pre = original(design, *args, **kw)
+        if loss_model == "integral":
+            model = dataclasses.replace(model, thermal=_integral(model.thermal, refinement))
+        return model, pre
+
+    def run():
+        gripper.gripper_model = model_with_loss
+        try:
+            return gripper.evaluate_gripper(gripper.GripperDesign(), mode="bisect")
+        finally:
+            gripper.gripper_model = original
+    return run
+
+
+def crane_run(loss_model: str, refinement: int):
+    """A function running the crane case with one loss model."""
+    case = get_case("crane")
+    model = case.model
+    if loss_model == "integral":
+        model = dataclasses.replace(model, thermal=_integral(model.thermal, refinement))
+    return lambda: simulate(model, case.steps)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--refinement", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args(argv)
+    for name, make, limit in (("gripper evaluation (bisect)", gripper_run, 2.0),
+                              ("crane case", crane_run, 3.0)):
+        walls = {}
+        for loss in ("chain", "integral"):
+            walls[loss], out = _timed(make(loss, args.refinement), args.repeat)
+            print(f"{name:<28} {loss:<9}: {walls[loss]:7.3f} s   {_summary(out)}")
+        ratio = walls["integral"] / walls["chain"]
+        print(f"{name:<28} ratio integral / chain = {ratio:.2f} (acceptance <= {limit:g}: "
+              f"{'met' if ratio <= limit else 'NOT met'})")
+
+
+def _summary(out) -> str:
+    if hasattr(out, "assembly"):
+        a, g = out.assembly.power_per_crease, out.grip.power_per_crease
+        fmt = lambda p: "-" if p is None else f"{1e3 * p:.3f}"  # noqa: E731
+        return f"assembly {fmt(a)} mW, grip {fmt(g)} mW per crease ({out.status})"
+    n = sum(s.increments for s in out.steps)
+    return f"{out.status}, {n} increments, {1e3 * out.wall_time / max(n, 1):.1f} ms per increment"
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,167 @@
+"""Kernels of the boundary-integral heat-loss model: the single-layer potential of flat triangles.
+
+The medium around the sheet (conductivity ``k``) obeys Laplace's equation; its temperature rise
+is the single-layer potential ``u(x) = int_S sigma(y) G(x, y) dS_y`` of the heat-flux density
+``sigma`` [W/m^2] leaving the sheet through BOTH faces (the jump of the normal flux: the sheet is
+a two-sided screen), with ``G = 1 / (4 pi k |x - y|)`` in an unbounded medium and
+``G = (1 / |x - y| - 1 / |x - y*|) / (4 pi k)`` above an isothermal plane (``y*`` the mirror
+image of ``y``). The density is constant per triangle and the equation ``u = T`` is collocated
+at the triangle centroids.
+
+* :func:`triangle_potential`: ``int_T 1 / |p - y| dS_y`` over flat triangles, in closed form
+  (Wilton et al. 1984, IEEE Trans. Antennas Propag. 32(3) 276), for any point, also on the
+  triangle (the singular self-integral) or in its plane;
+* :func:`collocation_matrix`: ``V_ij = int_j G(c_i, y) dS_y`` [K m^2/W], the closed form for
+  pairs closer than :data:`NEAR_FACTOR` source diameters, a 3-point rule of degree 2 up to
+  ``MID_FACTOR x NEAR_FACTOR`` and the centroid rule ``A_j G(c_i, c_j)`` beyond;
+* :func:`subdivision`: barycentric coordinates of the uniform refinement of a triangle into
+  ``m^2`` sub-triangles.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _single_layer_jit
+
+__all__ = ["triangle_potential", "collocation_matrix", "subdivision", "NEAR_FACTOR"]
+
+#: Pairs whose centroid distance is below this many source diameters use the closed form.
+NEAR_FACTOR = 1.5
+#: Pairs between NEAR_FACTOR and MID_FACTOR x NEAR_FACTOR source diameters use the 3-point rule
+#: of degree 2 (barycentric (2/3, 1/6, 1/6) and permutations), farther ones the centroid rule.
+MID_FACTOR = 2.0
+
+
+def triangle_potential(p, tri) -> np.ndarray:
+    """``int_T 1 / |p - y| dS_y`` [m] of flat triangles ``tri`` (..., 3, 3) at points ``p`` (..., 3).
+
+    Closed form (Wilton et al. 1984): with ``d`` the height of ``p`` over the triangle's plane,
+    ``rho`` its projection and, per edge, ``P0`` the signed in-plane distance of ``rho`` to the
+    edge line, ``l-``, ``l+`` the edge ends' coordinates along it and ``R-``, ``R+`` their
+    distances to ``p``::
+
+        sum_edges  P0 ln((R+ + l+) / (R- + l-))
+                 - |d| [atan(P0 l+ / (R0^2 + |d| R+)) - atan(P0 l- / (R0^2 + |d| R-))]
+
+    with ``R0^2 = P0^2 + d^2``. Exact also for ``p`` on the triangle (the integrable singular
+    case: ``d = 0``) and in its plane; edges whose line passes through ``rho`` contribute 0.
+    """
+    p, tri = np.asarray(p, float), np.asarray(tri, float)
+    a, b = tri, np.roll(tri, -1, axis=-2)                       # edge i from vertex i to i+1
+    normal = np.cross(tri[..., 1, :] - tri[..., 0, :], tri[..., 2, :] - tri[..., 0, :])
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    d = np.einsum("...j,...j->...", p - tri[..., 0, :], normal)
+    rho = p - d[..., None] * normal
+    edge = b - a
+    length = np.linalg.norm(edge, axis=-1)
+    t = edge / length[..., None]
+    u = np.cross(t, normal[..., None, :])                      # outward in-plane edge normal
+    ra, rb = a - rho[..., None, :], b - rho[..., None, :]
+    p0 = np.einsum("...ij,...ij->...i", ra, u)
+    l_minus, l_plus = np.einsum("...ij,...ij->...i", ra, t), np.einsum("...ij,...ij->...i", rb, t)
+    ad = np.abs(d)[..., None]
+    r_minus = np.sqrt(l_minus ** 2 + p0 ** 2 + ad ** 2)
+    r_plus = np.sqrt(l_plus ** 2 + p0 ** 2 + ad ** 2)
+    r0sq = p0 ** 2 + ad ** 2
+    tiny = 1e-12 * length
+    on_line = np.abs(p0) <= tiny
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # r + l without cancellation where l < 0 (r + l = r0^2 / (r - l))
+        num = np.where(l_plus >= 0, r_plus + l_plus, r0sq / (r_plus - l_plus))
+        den = np.where(l_minus >= 0, r_minus + l_minus, r0sq / (r_minus - l_minus))
+        log = np.log(num / den)
+        angle = (np.arctan2(p0 * l_plus, r0sq + ad * r_plus)
+                 - np.arctan2(p0 * l_minus, r0sq + ad * r_minus))
+    term = np.where(on_line, 0.0, p0 * log - ad * angle)
+    return term.sum(axis=-1)
+
+
+def subdivision(level: int):
+    """Uniform refinement of a triangle into ``level^2`` sub-triangles.
+
+    Returns
+    -------
+    vertices : (level^2, 3, 3) array
+        Barycentric coordinates (rows: sub-triangle corners, columns: weights of the parent
+        vertices 0, 1, 2); every sub-triangle has the orientation of its parent.
+    centroids : (level^2, 3) array
+        Barycentric coordinates of the sub-triangle centroids.
+    """
+    m = int(level)
+    corners = []
+    for i in range(m):
+        for j in range(m - i):
+            p = [(i, j), (i + 1, j), (i, j + 1)]
+            corners.append(p)
+            if j < m - i - 1:
+                corners.append([(i + 1, j), (i + 1, j + 1), (i, j + 1)])
+    ij = np.array(corners, float) / m                           # (m^2, 3, 2): weights of v1, v2
+    vertices = np.concatenate([1 - ij.sum(axis=-1, keepdims=True), ij], axis=-1)
+    return vertices, vertices.mean(axis=1)
+
+
+def _mirror(points, plane):
+    """Mirror images of ``points`` (..., 3) in the plane ``(origin, unit normal)``."""
+    origin, normal = plane
+    h = (points - origin) @ normal
+    return points - 2 * h[..., None] * normal
+
+
+def collocation_matrix(tri, conductivity: float, plane=None, near: float = NEAR_FACTOR,
+                       compiled=None):
+    """Collocation matrix ``V_ij = int_j G(c_i, y) dS_y`` [K m^2 / W] of flat triangles.
+
+    Parameters
+    ----------
+    tri : (n, 3, 3) array
+        Triangle corners [m].
+    conductivity : float
+        Medium conductivity k [W/(m K)], > 0.
+    plane : (origin (3,), unit normal (3,)), optional
+        Isothermal plane (image method, ``G = (1/r - 1/r*) / (4 pi k)``); the medium is on the
+        side the normal points to.
+    near : float
+        Pairs closer than ``near`` source diameters use the closed form (:func:`triangle_potential`),
+        the others the centroid rule.
+    compiled : bool, optional
+        Use the compiled kernel (default: when the numba backend is selected).
+
+    Returns
+    -------
+    V : (n, n) array
+    area : (n,) array of triangle areas [m^2]
+    centroid : (n, 3) array [m]
+    """
+    tri = np.asarray(tri, float)
+    c = tri.mean(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    diam = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    V = _kernel_matrix(c, tri, c, area, diam, near, compiled)
+    if plane is not None:
+        plane = (np.asarray(plane[0], float), np.asarray(plane[1], float))
+        V -= _kernel_matrix(c, _mirror(tri, plane), _mirror(c, plane), area, diam, near, compiled)
+    return V / (4 * math.pi * conductivity), area, c
+
+
+def _kernel_matrix(points, tri, centroid, area, diam, near, compiled=None):
+    """``int_j 1 / |p_i - y| dS_y`` for all points and triangles: centroid rule, closed form near
+    (by :mod:`simulator.thermal._single_layer_jit` when ``compiled``, default: when selected)."""
+    if compiled is None:
+        compiled = _single_layer_jit.use_compiled()
+    if compiled:
+        return _single_layer_jit.kernel_matrix(points, tri, centroid, area, diam, near)
+    diff = points[:, None, :] - centroid[None, :, :]
+    dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
+    close = dist < near * diam[None, :]
+    with np.errstate(divide="ignore"):
+        out = area[None, :] / dist
+    i, j = np.nonzero(~close & (dist < MID_FACTOR * near * diam[None, :]))
+    q = (3 * tri[j][:, :, None, :] * np.eye(3)[None, :, :, None]
+         + tri[j][:, None, :, :]).sum(axis=2) / 6          # (2/3, 1/6, 1/6) points, (p, 3, 3)
+    out[i, j] = area[j] * (1 / np.linalg.norm(q - points[i][:, None, :], axis=2)).mean(axis=1)
+    i, j = np.nonzero(close)
+    out[i, j] = triangle_potential(points[i], tri[j])
+    return out

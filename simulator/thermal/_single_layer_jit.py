@@ -1,0 +1,163 @@
+"""Compiled (numba) twin of :func:`simulator.thermal._single_layer._kernel_matrix`.
+
+The same formulas pair by pair: the closed form of ``int_T 1 / |p - y| dS_y`` (Wilton et al.)
+for pairs closer than ``near`` source diameters, the centroid rule otherwise. The numpy path is
+the checked reference (tests compare the two). It follows the spring kernel's backend
+(:func:`simulator.mechanics.elements.springs.spring_kernel_backend`, environment variable
+``ETORIGAMI_JIT``): compiled on first use, cached by numba, numpy if numba is missing or fails.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import compile_kernel
+from ..mechanics.elements import _springs_jit
+
+__all__ = ["use_compiled", "kernel_matrix", "cholesky_solve"]
+
+#: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
+#: output (n, m)
+_SIGNATURE = "void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, f8[:, ::1])"
+
+_compiled = None
+_broken = False
+#: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
+#: :data:`simulator.thermal._single_layer.MID_FACTOR`).
+_MID_FACTOR = 2.0
+
+
+def _potential(px, py, pz, t):
+    """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) at the point p."""
+    e1 = (t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2])
+    e2 = (t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2])
+    nx, ny, nz = e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], \
+        e1[0] * e2[1] - e1[1] * e2[0]
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    nx, ny, nz = nx / nn, ny / nn, nz / nn
+    d = (px - t[0, 0]) * nx + (py - t[0, 1]) * ny + (pz - t[0, 2]) * nz
+    rx, ry, rz = px - d * nx, py - d * ny, pz - d * nz
+    ad = abs(d)
+    total = 0.0
+    for i in range(3):
+        j = (i + 1) % 3
+        ex, ey, ez = t[j, 0] - t[i, 0], t[j, 1] - t[i, 1], t[j, 2] - t[i, 2]
+        length = math.sqrt(ex * ex + ey * ey + ez * ez)
+        tx, ty, tz = ex / length, ey / length, ez / length
+        ux, uy, uz = ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx
+        ax, ay, az = t[i, 0] - rx, t[i, 1] - ry, t[i, 2] - rz
+        bx, by, bz = t[j, 0] - rx, t[j, 1] - ry, t[j, 2] - rz
+        p0 = ax * ux + ay * uy + az * uz
+        if abs(p0) <= 1e-12 * length:
+            continue
+        lm = ax * tx + ay * ty + az * tz
+        lp = bx * tx + by * ty + bz * tz
+        r0sq = p0 * p0 + ad * ad
+        rm = math.sqrt(lm * lm + r0sq)
+        rp = math.sqrt(lp * lp + r0sq)
+        # r + l without cancellation where l < 0 (r + l = r0^2 / (r - l))
+        num = rp + lp if lp >= 0.0 else r0sq / (rp - lp)
+        den = rm + lm if lm >= 0.0 else r0sq / (rm - lm)
+        total += p0 * math.log(num / den) - ad * (
+            math.atan2(p0 * lp, r0sq + ad * rp) - math.atan2(p0 * lm, r0sq + ad * rm))
+    return total
+
+
+def _kernel(points, tri, centroid, area, diam, near, out):
+    mid = _MID_FACTOR * near
+    for i in range(points.shape[0]):
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        for j in range(tri.shape[0]):
+            dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
+            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if dist < near * diam[j]:
+                out[i, j] = _potential(px, py, pz, tri[j])
+            elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
+                acc = 0.0
+                for a in range(3):
+                    b, c = (a + 1) % 3, (a + 2) % 3
+                    qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
+                    qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
+                    qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
+                    acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
+                out[i, j] = area[j] * acc / 3.0
+            else:
+                out[i, j] = area[j] / dist
+
+
+def _cholesky_solve(S, B):
+    """Overwrite ``S`` (n, n) with its lower Cholesky factor and the rows of ``B`` (k, n) with
+    ``S^-1`` times them;
+    returns False (S, B partly overwritten) if ``S`` is not positive definite.
+
+    Single-threaded on purpose: LAPACK's threads, next to the solver's, cost a hundred times
+    the arithmetic of these small (n < ~1000) systems on a loaded machine.
+    """
+    n, k = S.shape[0], B.shape[0]
+    for j in range(n):
+        d = S[j, j]
+        for m in range(j):
+            d -= S[j, m] * S[j, m]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        S[j, j] = d
+        for i in range(j + 1, n):
+            v = S[i, j]
+            for m in range(j):
+                v -= S[i, m] * S[j, m]
+            S[i, j] = v / d
+    for c in range(k):                                         # B holds the right sides as rows
+        for i in range(n):                                     # L y = b
+            v = B[c, i]
+            for m in range(i):
+                v -= S[i, m] * B[c, m]
+            B[c, i] = v / S[i, i]
+        for i in range(n - 1, -1, -1):                         # L^T x = y (column sweep)
+            B[c, i] /= S[i, i]
+            v = B[c, i]
+            for m in range(i):
+                B[c, m] -= S[i, m] * v
+    return True
+
+
+def _build():
+    from numba import njit
+
+    g = globals()
+    if not hasattr(g["_potential"], "py_func"):
+        g["_potential"] = njit(cache=True, inline="always")(_potential)
+    if not hasattr(g["_cholesky_solve"], "py_func"):
+        g["_cholesky_solve"] = njit("b1(f8[:, ::1], f8[:, ::1])", cache=True)(_cholesky_solve)
+    return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
+
+
+def use_compiled() -> bool:
+    """Whether the compiled kernel is used (the spring kernel's backend is "numba"); compiles
+    or loads it on the first call."""
+    global _compiled, _broken
+    if _broken or not _springs_jit.numba_selected():
+        return False
+    if _compiled is None:
+        _compiled = compile_kernel("single-layer kernel", _build, "using numpy")
+        _broken = _compiled is None
+    return _compiled is not None
+
+
+def cholesky_solve(S, B):
+    """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n, k) by the compiled
+    single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not changed)."""
+    B = np.asarray(B, np.float64)
+    S, X = np.array(S, np.float64, order="C"), np.array(B.reshape(len(B), -1).T, order="C")
+    return X.T.reshape(B.shape) if _cholesky_solve(S, X) else None
+
+
+def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:
+    """``int_j 1 / |p_i - y| dS_y`` [m], (n, m), by the compiled kernel (see module notes)."""
+    out = np.empty((len(points), len(tri)))
+    c = np.ascontiguousarray
+    _compiled(c(points, np.float64), c(tri, np.float64), c(centroid, np.float64),
+              c(area, np.float64), c(diam, np.float64), float(near), out)
+    return out

@@ -1,0 +1,124 @@
+"""Heat loss with nothing to fit: the single-layer potential of the sheet (theory 4.7).
+
+The medium (conductivity ``k_env``) around the thin sheet is unbounded and homogeneous, or a
+half space above an isothermal substrate plane (image method). Each conducting mesh triangle
+(boundary panels excepted: they lie on the substrate and their nodes are held at room
+temperature) is refined uniformly into ``m^2`` sub-triangles (``m =
+ThermalParameters.integral_refinement``); the sheet temperature rise on them is the linear
+interpolation of the nodal rises, ``M T`` at the sub-triangle centroids. The heat ``p_i`` [W]
+leaving sub-triangle ``i`` through both faces solves the collocated single-layer equation
+``S p = M T`` with ``S_ij = V_ij / A_j`` (:func:`~simulator.thermal._single_layer.collocation_matrix`,
+symmetrised), and the nodes lose ``M^T p``: the loss conductance added to the sheet's T3
+conduction is the dense ``L = M^T S^-1 M`` [W/K], symmetric positive definite.
+
+Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (memory
+``~3 x 8 n_s^2`` bytes during assembly), Cholesky ``n_s^3 / 3`` flops, once per shape. Models
+above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
+``loss_model="chain"``, or the 3-D FE reference of :mod:`simulator.thermal.fe`).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..linalg.ladder import factorize
+from . import _single_layer_jit
+from ._single_layer import collocation_matrix, subdivision
+
+__all__ = ["IntegralLoss", "MAX_SUB_TRIANGLES"]
+
+logger = logging.getLogger(__name__)
+
+#: Largest number of sub-triangles of the dense single-layer operator: 4000 x 4000 is 128 MB
+#: per matrix and about 2 s of assembly and Cholesky on one core.
+MAX_SUB_TRIANGLES = 4000
+
+
+class IntegralLoss:
+    """Dense single-layer loss operator of one mesh's sheet, for any shape.
+
+    Parameters
+    ----------
+    triangles : (n_tri, 3) int array
+        Node ids of the sheet triangles that lose heat to the medium.
+    n_nodes : int
+        Number of mesh nodes.
+    conductivity : float
+        Medium conductivity k_env [W/(m K)], > 0.
+    refinement : int
+        Sub-triangles per triangle edge m (m^2 sub-triangles per triangle).
+    plane : (origin (3,), unit normal (3,)), optional
+        Isothermal substrate plane; the medium lies on the normal's side.
+    shape_tol : float
+        Rebuild the operator when a node has moved more than ``shape_tol`` times the mean
+        sub-triangle diameter since the last build (0: on every change).
+    """
+
+    def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
+                 plane=None, shape_tol: float = 0.0):
+        self.triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
+        self.n_nodes, self.conductivity, self.plane = int(n_nodes), float(conductivity), plane
+        self.shape_tol = float(shape_tol)
+        #: number of operator builds so far (a diagnostic)
+        self.builds = 0
+        bary_vertices, bary_centroids = subdivision(refinement)
+        self.n_sub = len(self.triangles) * len(bary_centroids)
+        if self.n_sub > MAX_SUB_TRIANGLES:
+            raise ParameterError(
+                f"ThermalParameters.loss_model = 'integral': {len(self.triangles)} triangles x "
+                f"{len(bary_centroids)} sub-triangles (integral_refinement = {refinement}) = "
+                f"{self.n_sub} sub-triangles exceeds the dense-operator limit MAX_SUB_TRIANGLES = "
+                f"{MAX_SUB_TRIANGLES}; lower integral_refinement, or use the chain model "
+                "(loss_model='chain', calibrated by simulator.calibrate_environment) or the 3-D "
+                "FE reference (simulator.thermal.fe).")
+        self._bary = bary_vertices                                  # (s, 3, 3)
+        s = len(bary_centroids)
+        #: (n_sub, n_nodes) interpolation of nodal values at the sub-triangle centroids
+        M = np.zeros((self.n_sub, self.n_nodes))
+        rows = np.repeat(np.arange(self.n_sub), 3)
+        cols = np.repeat(self.triangles, s, axis=0).ravel()
+        np.add.at(M, (rows, cols), np.tile(bary_centroids, (len(self.triangles), 1)).ravel())
+        self.nodes = np.unique(self.triangles)
+        self.M = M[:, self.nodes]                                    # only the sheet's nodes
+        self._cache = None
+
+    def sub_triangles(self, x) -> np.ndarray:
+        """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
+        corners = np.asarray(x, float)[self.triangles]                # (n_tri, 3, 3)
+        return np.einsum("sab,tbk->tsak", self._bary, corners).reshape(-1, 3, 3)
+
+    def _response(self, x):
+        """``P = S^-1 M`` (n_sub, n_sheet) [W/K] at positions ``x``: the heat each sub-triangle
+        loses per kelvin of each sheet node (kept while the shape stays within ``shape_tol``
+        of the last build)."""
+        x = np.asarray(x, float)
+        if self._cache is not None:
+            last, P, size = self._cache
+            if np.array_equal(last, x) or (self.shape_tol > 0 and np.max(
+                    np.abs(x[self.nodes] - last[self.nodes])) <= self.shape_tol * size):
+                return P
+        sub = self.sub_triangles(x)
+        V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
+        S = V / area[None, :]
+        S = 0.5 * (S + S.T)
+        P = _single_layer_jit.cholesky_solve(S, self.M) if _single_layer_jit.use_compiled() \
+            else None
+        if P is None:                    # the ladder: dense Cholesky, LU if not definite
+            P = factorize(S, kind="spd", dense_limit=len(S)).solve(self.M)
+        size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
+        self._cache = (x.copy(), P, size)
+        self.builds += 1
+        return P
+
+    def loss_matrix(self, x) -> np.ndarray:
+        """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)."""
+        L = self.M.T @ self._response(x)
+        return 0.5 * (L + L.T)
+
+    def sub_triangle_heat(self, x, rise) -> np.ndarray:
+        """Heat [W] leaving each sub-triangle through both faces, (n_sub,), for nodal
+        temperature rises ``rise`` (n_nodes,) [K] at positions ``x`` [m]."""
+        return self._response(x) @ np.asarray(rise, float)[self.nodes]

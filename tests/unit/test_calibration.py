@@ -1,0 +1,77 @@
+"""calibrate_environment: the chain model's beta and t_env fitted to a reference."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import simulator
+from simulator import ParameterError, calibrate_environment
+from simulator.cases import verification_strip
+from simulator.thermal.steady import ThermalModel
+
+
+def _strip():
+    return verification_strip().model
+
+
+def test_recovers_the_parameters_of_a_chain_reference():
+    model = _strip()
+    truth = ThermalModel(model.mesh, dataclasses.replace(
+        model.thermal, dissipation_angle=math.radians(35), env_thickness=1.2))
+    res = calibrate_environment(model, [4e-3], reference=truth.solve)
+    assert res.success and res.status == "converged" and res.reference == "callable"
+    assert math.degrees(res.dissipation_angle) == pytest.approx(35, abs=0.05)
+    assert res.env_thickness == pytest.approx(1.2, rel=1e-3)
+    assert res.rms_error < 1e-5 < res.initial_rms_error
+    assert res.thermal.loss_model == "chain" and res.thermal.env_thickness == res.env_thickness
+
+
+def test_fit_to_the_integral_model_reports_its_residual():
+    res = calibrate_environment(_strip(), [4e-3])
+    assert res.reference == "integral" and res.success
+    assert 0 < res.rms_error <= res.initial_rms_error <= 1
+    assert res.max_error >= res.rms_error
+    row = res.to_frame().iloc[0]
+    assert row["rms_error [-]"] == res.rms_error and "dissipation_angle [deg]" in row
+
+
+def test_exported():
+    assert "calibrate_environment" in simulator.__all__ and "CalibrationResult" in simulator.__all__
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(reference="bem"), r"reference = 'bem'; use 'integral', 'fe' or a callable"),
+    (dict(power=[0.0]), "must heat at least one crease"),
+    (dict(beta_bounds=(0.5, 0.1)), "low < high"),
+    (dict(t_env_bounds=(-1.0, 1.0)), r"t_env_bounds\[0\]"),
+    (dict(x=np.zeros((3, 3))), "x"),
+])
+def test_bad_input_is_named(kw, match):
+    args = {"power": [4e-3], **kw}
+    with pytest.raises(ParameterError, match=match):
+        calibrate_environment(_strip(), **args)
+
+
+def test_fe_reference_needs_the_extra():
+    try:
+        import gmsh  # noqa: F401
+        import skfem  # noqa: F401
+        pytest.skip("the FE reference is installed")
+    except ImportError:
+        pass
+    with pytest.raises(ParameterError, match=r"needs the 3-D FE reference .*\[fe\]"):
+        calibrate_environment(_strip(), [4e-3], reference="fe")
+
+
+def test_fe_reference_gives_a_fit():
+    pytest.importorskip("skfem")
+    pytest.importorskip("gmsh")
+    res = calibrate_environment(_strip(), [4e-3], reference="fe")
+    assert res.reference == "fe" and res.success and res.rms_error <= res.initial_rms_error
+
+
+def test_needs_thermal_parameters():
+    with pytest.raises(ParameterError, match="needs a Model with thermal parameters"):
+        calibrate_environment(object(), [1e-3])
