@@ -45,7 +45,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from . import linsolve, pardiso, thresholds
-from .small_solve import DenseFactor, as_dense, checked_solve
+from .small_solve import DenseFactor, as_dense, solve_dense
 
 __all__ = ["Factor", "factorize", "solve", "BACKENDS", "KINDS", "check_backend",
            "last_backend"]
@@ -162,10 +162,11 @@ def factorize(A, kind: str = "symmetric", backend: str = "auto", *,
     Each rung but the last is kept only if its solution of a vector of ones is accurate
     (see the module docstring). Raises RuntimeError if SuperLU finds ``A`` exactly singular.
     """
-    _check(kind, backend)
+    if kind not in KINDS or backend not in BACKENDS:
+        _check(kind, backend)
     n = A.shape[0]
-    if _is_dense(A, backend, dense_limit):
-        factor = _dense_factor(as_dense(A), kind)
+    if (backend == "auto" and type(A) is np.ndarray) or _is_dense(A, backend, dense_limit):
+        factor = _dense_factor(A if type(A) is np.ndarray else as_dense(A), kind)
         if factor is not None:
             return _chosen(factor)
         if backend == "dense":
@@ -268,7 +269,15 @@ def solve(A, b: np.ndarray, kind: str = "symmetric", backend: str = "auto", *,
         epsilon (Newton). False for bordered systems, whose tangent is nearly singular at a
         limit point by design (arc length).
     """
-    _check(kind, backend)
+    if (cholesky is None and type(A) is np.ndarray and backend == "auto" and kind in KINDS
+            and reject_ill_conditioned):
+        # Newton's loop on a small model (the fused kernel's dense tangent): the dense rung
+        # straight away, with the calls of _dense_solve below taken out of the loop
+        x = solve_dense(A, b, kind != "general")
+        _last.backend = "dense" if x is not None else None
+        return x
+    if kind not in KINDS or backend not in BACKENDS:
+        _check(kind, backend)
     _last.backend = None
     if _is_dense(A, backend, dense_limit):
         x = _dense_solve(A, b, kind, cholesky, reject_ill_conditioned)
@@ -292,9 +301,11 @@ def _dense_solve(A, b, kind, cholesky, reject_ill_conditioned):
     if (cholesky is not None and kind != "general" and n >= thresholds.SPARSE_MIN
             and 20 * cholesky.flops <= n ** 3):
         return cholesky.solve(A, b)
-    factor = DenseFactor(as_dense(A), cholesky_first=kind != "general")
+    if type(A) is not np.ndarray:
+        A = as_dense(A)
     if reject_ill_conditioned:
-        return checked_solve(factor, b)
+        return solve_dense(A, b, kind != "general")
+    factor = DenseFactor(A, cholesky_first=kind != "general")
     if factor.info != 0:
         return None
     x = factor.solve(b)

@@ -90,13 +90,9 @@ class Evaluation:
         if isinstance(K, np.ndarray) and to_csr is None:
             raise ValueError("Evaluation: a dense tangent needs to_csr (e.g. "
                              "EquilibriumSystem.to_csr) to give K as CSR.")
-        set_ = object.__setattr__                     # frozen: set once, here
-        set_(self, "f_int", f_int)
-        set_(self, "tangent", K)
-        set_(self, "energies", energies)
-        set_(self, "n_contacts", n_contacts)
-        set_(self, "to_csr", to_csr)
-        set_(self, "contact_pairs", contact_pairs)
+        # frozen: set once, here (one dict update: this runs at every Newton iteration)
+        self.__dict__.update(f_int=f_int, tangent=K, energies=energies, n_contacts=n_contacts,
+                             to_csr=to_csr, contact_pairs=contact_pairs)
 
     @cached_property
     def K(self) -> sp.csr_matrix | None:
@@ -252,7 +248,7 @@ class EquilibriumSystem:
         below SPARSE_MIN (the choice is the dense rung of the ladder,
         :func:`~simulator.linalg.ladder.solve`)."""
         chol = None
-        if ev.contact_pairs is not None and self.n_free >= thresholds.SPARSE_MIN:
+        if ev.contact_pairs is not None and len(self.free) >= thresholds.SPARSE_MIN:
             chol = self._cholesky(ev.contact_pairs)
         return solve(ev.tangent, r, cholesky=chol)
 
