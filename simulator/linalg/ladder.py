@@ -269,11 +269,13 @@ def solve(A, b: np.ndarray, kind: str = "symmetric", backend: str = "auto", *,
         epsilon (Newton). False for bordered systems, whose tangent is nearly singular at a
         limit point by design (arc length).
     """
-    if (cholesky is None and type(A) is np.ndarray and backend == "auto" and kind in KINDS
-            and reject_ill_conditioned):
+    if type(A) is np.ndarray and backend == "auto" and kind in KINDS:
         # Newton's loop on a small model (the fused kernel's dense tangent): the dense rung
-        # straight away, with the calls of _dense_solve below taken out of the loop
-        x = solve_dense(A, b, kind != "general")
+        # straight away, the checks below being true (the same rung, in fewer calls)
+        if cholesky is None and reject_ill_conditioned:
+            x = solve_dense(A, b, kind != "general")
+        else:
+            x = _dense_solve(A, b, kind, cholesky, reject_ill_conditioned)
         _last.backend = "dense" if x is not None else None
         return x
     if kind not in KINDS or backend not in BACKENDS:

@@ -48,6 +48,7 @@ from ..model.model import Model
 __all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
 
 logger = logging.getLogger(__name__)
+_all = np.logical_and.reduce            # with axis=None: ndarray.all() without its wrapper
 
 #: Merge contact pairs into the cached stiffness pattern up to this many Hessian entries.
 MERGE_LIMIT = 200_000
@@ -247,14 +248,13 @@ class EquilibriumSystem:
         ~n^3/3 multiply-adds, LAPACK's dense routines are faster and solve instead, as they do
         below SPARSE_MIN (the choice is the dense rung of the ladder,
         :func:`~simulator.linalg.ladder.solve`)."""
-        chol = None
-        if ev.contact_pairs is not None and len(self.free) >= thresholds.SPARSE_MIN:
-            chol = self._cholesky(ev.contact_pairs)
-        return solve(ev.tangent, r, cholesky=chol)
+        if ev.contact_pairs is None or len(self.free) < thresholds.SPARSE_MIN:
+            return solve(ev.tangent, r)
+        return solve(ev.tangent, r, cholesky=self._cholesky(ev.contact_pairs))
 
     def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:
         chol, covered = self._chol
-        if chol is None or (len(pairs) and not covered[pairs].all()):
+        if chol is None or (len(pairs) and not _all(covered[pairs], axis=None)):
             covered = covered.copy()
             covered[pairs] = True
             families = [self.bar_dofs, self.spr_dofs]

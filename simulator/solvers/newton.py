@@ -264,10 +264,11 @@ def _operations(system, spring_rest, backend="auto"):
         (lambda u: system.evaluate(u, spring_rest))
     dense = getattr(system, "solve_dense_tangent", None)
     sparse_only = backend in ("pardiso", "superlu")
+    dense = None if sparse_only else dense
 
     def correct(ev, r):
         K = ev.tangent if type(ev) is Evaluation else _tangent(ev)
-        if dense is not None and not sparse_only and isinstance(K, np.ndarray):
+        if dense is not None and isinstance(K, np.ndarray):
             du = dense(ev, r)
         else:
             du = linear_solve(ev.K if sparse_only and isinstance(K, np.ndarray) else K, r,
