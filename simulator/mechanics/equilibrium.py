@@ -216,15 +216,15 @@ class EquilibriumSystem:
         nodes, first, rest = self._fused
         spring_rest = np.ascontiguousarray(spring_rest, dtype=float)
         n_dof, n_free, n_pairs, to_csr = self.n_dof, self.n_free, len(rest[4]), self.to_csr
+        model_args = (*first, spring_rest, *rest)        # the arguments fixed for this loop
+        empty, i8 = np.empty, np.int64
 
         def evaluate(u, hessian=True):
             u = np.ascontiguousarray(u, dtype=float)
-            f, e = np.empty(n_dof), np.empty(6)
-            n = n_free if hessian else 0
-            K = np.empty((n, n))
-            active = np.empty(n_pairs, np.int64)
-            n_contacts = kernel(nodes + u, u, *first, spring_rest, *rest, hessian, f, K, e,
-                                active)
+            f, e = empty(n_dof), empty(6)
+            K = empty((n_free, n_free) if hessian else (0, 0))
+            active = empty(n_pairs, i8)
+            n_contacts = kernel(nodes + u, u, *model_args, hessian, f, K, e, active)
             return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
                               n_contacts, to_csr, active[:n_contacts])
         return evaluate

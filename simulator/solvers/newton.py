@@ -264,16 +264,19 @@ def _operations(system, spring_rest, backend="auto"):
         (lambda u: system.evaluate(u, spring_rest))
     dense = getattr(system, "solve_dense_tangent", None)
     sparse_only = backend in ("pardiso", "superlu")
-    dense = None if sparse_only else dense
-
-    def correct(ev, r):
-        K = ev.tangent if type(ev) is Evaluation else _tangent(ev)
-        if dense is not None and isinstance(K, np.ndarray):
-            du = dense(ev, r)
-        else:
-            du = linear_solve(ev.K if sparse_only and isinstance(K, np.ndarray) else K, r,
-                              backend=backend)
-        return _SINGULAR if du is None else du
+    if dense is not None and not sparse_only:
+        def correct(ev, r):                    # (the loop of small models: kept short)
+            K = ev.tangent if type(ev) is Evaluation else _tangent(ev)
+            du = dense(ev, r) if isinstance(K, np.ndarray) else linear_solve(K, r,
+                                                                              backend=backend)
+            return _SINGULAR if du is None else du
+    else:
+        def correct(ev, r):
+            K = _tangent(ev)
+            if sparse_only and isinstance(K, np.ndarray):
+                K = ev.K
+            du = linear_solve(K, r, backend=backend)
+            return _SINGULAR if du is None else du
     return evaluate, correct
 
 

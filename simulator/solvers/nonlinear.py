@@ -134,9 +134,10 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
         if not math.isfinite(rn):
             return Iteration(False, it, res, cor, "residual is not finite", point, "not finite")
         if by_residual:
-            ref = rn if ref is None else ref
-            tol = max(atol, rtol * ref) if tolerance is None else tolerance(point, ref)
-            if rn <= tol:
+            if ref is None:
+                ref = rn
+                tol = max(atol, rtol * ref)               # fixed by the first residual
+            if rn <= (tol if tolerance is None else tolerance(point, ref)):
                 return Iteration(True, it, res, cor, "converged", point)
         if it == max_iter:
             break
