@@ -46,6 +46,8 @@ def number(field: str, value, ok, allowed: str, unit: str = "", hint: str = "",
     """``value`` as a float if it is a number (not NaN) with ``ok(value)`` True, else
     :class:`ParameterError` saying it must be ``allowed`` [``unit``]; ``None`` passes with
     ``allow_none``. The building block of the helpers below."""
+    if type(value) is float and value == value and ok(value):    # the common case, cheaply
+        return value
     if value is None and allow_none:
         return None
     if not (is_number(value) and not math.isnan(value) and ok(float(value))):
@@ -107,6 +109,8 @@ def integer(field: str, value, minimum: int = 1, maximum: int | None = None, hin
 
 def one_of(field: str, value, choices, hint: str = ""):
     """``value`` if it is one of ``choices`` (compared with ``==``, bools never match)."""
+    if type(value) is str and type(choices) is tuple and value in choices:
+        return value                                  # the common case, checked cheaply
     choices = tuple(choices)
     if isinstance(value, (bool, np.bool_)) or not any(
             type(value) is type(c) and value == c for c in choices):

@@ -170,6 +170,9 @@ class SparseCholesky:
         self.rk, self.rpos = col[by_row].astype(np.int64), pos[by_row].astype(np.int64)
         self.rp = np.searchsorted(row[by_row], np.arange(n + 1)).astype(np.int64)
         self.flops = int(np.sum((counts - 1) ** 2))
+        #: whether its factorisation needs at most a twentieth of dense Cholesky's ~n^3/3
+        #: multiply-adds (the ladder's dense rung then uses it, from SPARSE_MIN rows)
+        self.beats_dense = 20 * self.flops <= n ** 3
 
     @property
     def nnz(self) -> int:
