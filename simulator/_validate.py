@@ -26,6 +26,7 @@ __all__ = ["is_number", "number", "finite", "positive", "non_negative", "in_rang
            "probability", "integer", "one_of", "array"]
 
 _REALS = (int, float, np.integer, np.floating)
+_all = np.logical_and.reduce          # with axis=None: ndarray.all() without its Python wrapper
 
 
 def is_number(value) -> bool:
@@ -45,6 +46,8 @@ def number(field: str, value, ok, allowed: str, unit: str = "", hint: str = "",
     """``value`` as a float if it is a number (not NaN) with ``ok(value)`` True, else
     :class:`ParameterError` saying it must be ``allowed`` [``unit``]; ``None`` passes with
     ``allow_none``. The building block of the helpers below."""
+    if type(value) is float and value == value and ok(value):    # the common case, cheaply
+        return value
     if value is None and allow_none:
         return None
     if not (is_number(value) and not math.isnan(value) and ok(float(value))):
@@ -88,6 +91,8 @@ def integer(field: str, value, minimum: int = 1, maximum: int | None = None, hin
             allow_none: bool = False):
     """``value`` as an int if it is an integer (int or numpy integer, not bool) in
     ``[minimum, maximum]``."""
+    if type(value) is int and value >= minimum and (maximum is None or value <= maximum):
+        return value                                  # the common case, checked cheaply
     if value is None and allow_none:
         return None
     good = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
@@ -104,6 +109,8 @@ def integer(field: str, value, minimum: int = 1, maximum: int | None = None, hin
 
 def one_of(field: str, value, choices, hint: str = ""):
     """``value`` if it is one of ``choices`` (compared with ``==``, bools never match)."""
+    if type(value) is str and type(choices) is tuple and value in choices:
+        return value                                  # the common case, checked cheaply
     choices = tuple(choices)
     if isinstance(value, (bool, np.bool_)) or not any(
             type(value) is type(c) and value == c for c in choices):
@@ -120,9 +127,10 @@ def array(field: str, value, shape, unit: str = "", hint: str = "", finite_value
         out = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError):
         _array_fail(field, shape, unit, hint, finite_values, f"{value!r:.80}")
-    if out.ndim != len(shape) or any(n is not None and m != n for m, n in zip(out.shape, shape)):
+    if out.shape != shape and (out.ndim != len(shape) or any(
+            n is not None and m != n for m, n in zip(out.shape, shape))):
         _array_fail(field, shape, unit, hint, finite_values, f"shape {out.shape}")
-    if finite_values and not np.isfinite(out).all():
+    if finite_values and not _all(np.isfinite(out), axis=None):
         bad = tuple(np.argwhere(~np.isfinite(out))[0].tolist())
         _array_fail(field, shape, unit, hint, finite_values, f"{out[bad].item()!r} at index {bad}")
     return out

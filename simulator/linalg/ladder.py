@@ -45,7 +45,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from . import linsolve, pardiso, thresholds
-from .small_solve import DenseFactor, as_dense, checked_solve
+from .small_solve import DenseFactor, as_dense, solve_dense
 
 __all__ = ["Factor", "factorize", "solve", "BACKENDS", "KINDS", "check_backend",
            "last_backend"]
@@ -56,6 +56,7 @@ logger = logging.getLogger(__name__)
 BACKENDS = ("auto", "dense", "pardiso", "superlu")
 #: Values of ``kind``.
 KINDS = ("symmetric", "spd", "general")
+_LAPACK_BACKENDS = ("auto", "dense")       # the backends that solve a dense array densely
 #: Tolerance of the vector-of-ones check of kept factors, and of a single solve.
 _KEPT_RTOL, _SOLVE_RTOL = 1e-8, 1e-6
 
@@ -81,6 +82,7 @@ class Factor:
 
     def __init__(self, raw, backend: str, n: int, inertia=None):
         self.raw, self.backend, self.n, self._inertia = raw, backend, n, inertia
+        self.solve = raw.solve              # (the method below, one call less per solve)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``A^-1 b`` for b (n,) or (n, k)."""
@@ -162,10 +164,11 @@ def factorize(A, kind: str = "symmetric", backend: str = "auto", *,
     Each rung but the last is kept only if its solution of a vector of ones is accurate
     (see the module docstring). Raises RuntimeError if SuperLU finds ``A`` exactly singular.
     """
-    _check(kind, backend)
+    if kind not in KINDS or backend not in BACKENDS:
+        _check(kind, backend)
     n = A.shape[0]
-    if _is_dense(A, backend, dense_limit):
-        factor = _dense_factor(as_dense(A), kind)
+    if (backend == "auto" and type(A) is np.ndarray) or _is_dense(A, backend, dense_limit):
+        factor = _dense_factor(A if type(A) is np.ndarray else as_dense(A), kind)
         if factor is not None:
             return _chosen(factor)
         if backend == "dense":
@@ -191,7 +194,8 @@ def _canonical(A) -> sp.csr_matrix:
 
 def _chosen(factor: Factor) -> Factor:
     _last.backend = factor.backend
-    logger.debug("factorised %d x %d by %s", factor.n, factor.n, factor.backend)
+    if logger.isEnabledFor(logging.DEBUG):
+        logger.debug("factorised %d x %d by %s", factor.n, factor.n, factor.backend)
     return factor
 
 
@@ -268,17 +272,35 @@ def solve(A, b: np.ndarray, kind: str = "symmetric", backend: str = "auto", *,
         epsilon (Newton). False for bordered systems, whose tangent is nearly singular at a
         limit point by design (arc length).
     """
-    _check(kind, backend)
+    if type(A) is not np.ndarray or backend not in _LAPACK_BACKENDS or kind not in KINDS:
+        # (a small dense array, as in Newton's loop on small models, skips these tests)
+        if kind not in KINDS or backend not in BACKENDS:
+            _check(kind, backend)
+        if not _is_dense(A, backend, dense_limit):
+            return _sparse_solve(A, b, kind, backend, rtol)
+        A = as_dense(A)
+    if (cholesky is not None and kind != "general" and cholesky.beats_dense
+            and A.shape[0] >= thresholds.SPARSE_MIN):
+        x = cholesky.solve(A, b)
+    elif reject_ill_conditioned:
+        x = solve_dense(A, b, kind != "general")
+    else:
+        factor = DenseFactor(A, cholesky_first=kind != "general")
+        x = factor.solve(b) if factor.info == 0 else None
+        x = x if x is not None and np.all(np.isfinite(x)) else None
+    _last.backend = "dense" if x is not None else None
+    return x
+
+
+def _sparse_solve(A, b, kind, backend, rtol):
+    """The sparse rungs of :func:`solve`: the solution, or None if every rung fails
+    (singular) or it is not finite."""
     _last.backend = None
-    if _is_dense(A, backend, dense_limit):
-        x = _dense_solve(A, b, kind, cholesky, reject_ill_conditioned)
-        _last.backend = "dense" if x is not None else None
-        return x
     A = _canonical(A)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
-            x, rung = _sparse_solve(A, b, kind, backend, rtol)
+            x, rung = _sparse_rungs_solve(A, b, kind, backend, rtol)
         except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, Warning):
             return None
     if not np.all(np.isfinite(x)):
@@ -287,21 +309,7 @@ def solve(A, b: np.ndarray, kind: str = "symmetric", backend: str = "auto", *,
     return x
 
 
-def _dense_solve(A, b, kind, cholesky, reject_ill_conditioned):
-    n = A.shape[0]
-    if (cholesky is not None and kind != "general" and n >= thresholds.SPARSE_MIN
-            and 20 * cholesky.flops <= n ** 3):
-        return cholesky.solve(A, b)
-    factor = DenseFactor(as_dense(A), cholesky_first=kind != "general")
-    if reject_ill_conditioned:
-        return checked_solve(factor, b)
-    if factor.info != 0:
-        return None
-    x = factor.solve(b)
-    return x if np.all(np.isfinite(x)) else None
-
-
-def _sparse_solve(A, b, kind, backend, rtol):
+def _sparse_rungs_solve(A, b, kind, backend, rtol):
     """(x, rung) from the first sparse rung whose solution is accurate after refinement."""
     Ac = None
     for rung in _sparse_rungs(A.shape[0], kind, backend):

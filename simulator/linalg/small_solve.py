@@ -27,11 +27,16 @@ from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
 from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
-__all__ = ["as_dense", "solve_dense", "checked_solve", "DenseFactor", "SparseCholesky",
+__all__ = ["as_dense", "solve_dense", "DenseFactor", "SparseCholesky",
            "pattern_of",
            "DENSE_LIMIT", "SPARSE_MIN"]
 
 _EPS = float(np.finfo(float).eps)
+#: ``np.logical_and.reduce`` (with ``axis=None``): what ``ndarray.all()`` calls, without its
+#: Python wrapper (one call fewer per solve on the hot path of small models; the same result).
+_all = np.logical_and.reduce
+_dlange, _dpotrf, _dpocon, _dpotrs = lapack.dlange, lapack.dpotrf, lapack.dpocon, lapack.dpotrs
+_dgetrf, _dgecon, _dgetrs = lapack.dgetrf, lapack.dgecon, lapack.dgetrs
 
 
 def as_dense(K) -> np.ndarray:
@@ -39,21 +44,43 @@ def as_dense(K) -> np.ndarray:
     return K.toarray() if sp.issparse(K) else np.asarray(K)
 
 
-def solve_dense(K: np.ndarray, r: np.ndarray):
+def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):
     """Solve the dense symmetric K du = r: Cholesky (upper triangle) when K is positive
-    definite, else LU with partial pivoting (``scipy.linalg.solve``'s general path). None when
-    K is singular, ill-conditioned (reciprocal condition estimate below machine epsilon) or
-    the result is not finite."""
-    return checked_solve(DenseFactor(K), r)
+    definite (and ``cholesky_first``), else LU with partial pivoting (``scipy.linalg.solve``'s
+    general path). None when K is singular, ill-conditioned (reciprocal condition estimate
+    below machine epsilon) or the result is not finite.
 
-
-def checked_solve(factor: DenseFactor, r: np.ndarray):
-    """``factor``'s solution of ``K du = r``, or None when K is singular, ill-conditioned
-    (reciprocal condition estimate below machine epsilon) or du is not finite."""
-    if factor.info != 0 or not factor.rcond >= _EPS:
+    The LAPACK calls of :class:`DenseFactor` (in the same order) and its solve, written out
+    without the object: this is the one-shot solve of Newton's loop on small models, where
+    Python overhead per iteration is the cost that counts."""
+    anorm = _dlange("1", K)
+    if cholesky_first:
+        c, info = _dpotrf(K, lower=0, clean=0)
+        if info == 0:
+            if not _dpocon(c, anorm)[0] >= _EPS:
+                return None
+            du, info = _dpotrs(c, r)
+            return du if info == 0 and _all(np.isfinite(du), axis=None) else None
+    lu, piv, info = _dgetrf(K)
+    if info != 0 or not _dgecon(lu, anorm)[0] >= _EPS:
         return None
-    du, info = factor.solve_info(r)
-    return du if info == 0 and np.isfinite(du).all() else None
+    du, info = _dgetrs(lu, piv, r)
+    return du if info == 0 and _all(np.isfinite(du), axis=None) else None
+
+
+def _factor(K: np.ndarray, cholesky_first: bool, condition: bool, lu_fallback: bool) -> tuple:
+    """``(method, info, factors, pivots, rcond)`` of a dense square K (see
+    :class:`DenseFactor`): pivots None for Cholesky, rcond None without ``condition``."""
+    anorm = _dlange("1", K) if condition else None
+    if cholesky_first:
+        c, info = _dpotrf(K, lower=0, clean=0)
+        if info == 0:
+            return "cholesky", 0, c, None, _dpocon(c, anorm)[0] if condition else None
+        if not lu_fallback:                     # not positive definite, and no LU wanted
+            return "cholesky", info, None, None, 0.0
+    lu, piv, info = _dgetrf(K)
+    rcond = (_dgecon(lu, anorm)[0] if info == 0 else 0.0) if condition else None
+    return "lu", info, lu, piv, rcond
 
 
 class DenseFactor:
@@ -76,28 +103,14 @@ class DenseFactor:
     def __init__(self, K: np.ndarray, cholesky_first: bool = True, condition: bool = True,
                  lu_fallback: bool = True):
         self.n = K.shape[0]
-        anorm = lapack.dlange("1", K) if condition else None
-        self.rcond = None
-        if cholesky_first:
-            c, info = lapack.dpotrf(K, lower=0, clean=0)
-            if info == 0:
-                self.method, self.info, self._c = "cholesky", 0, c
-                if condition:
-                    self.rcond = lapack.dpocon(c, anorm)[0]
-                return
-            if not lu_fallback:                     # not positive definite, and no LU wanted
-                self.method, self.info, self.rcond = "cholesky", info, 0.0
-                return
-        lu, piv, info = lapack.dgetrf(K)
-        self.method, self.info, self._c, self._piv = "lu", info, lu, piv
-        if condition:
-            self.rcond = lapack.dgecon(lu, anorm)[0] if info == 0 else 0.0
+        self.method, self.info, self._c, self._piv, self.rcond = _factor(
+            K, cholesky_first, condition, lu_fallback)
 
     def solve_info(self, b: np.ndarray):
         """(``K^-1 b``, LAPACK's ``info``) for b (n,) or (n, k)."""
         if self.method == "cholesky":
-            return lapack.dpotrs(self._c, b)
-        return lapack.dgetrs(self._c, self._piv, b)
+            return _dpotrs(self._c, b)
+        return _dgetrs(self._c, self._piv, b)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``K^-1 b`` for b (n,) or (n, k) (not finite where K is singular); raises
@@ -157,6 +170,9 @@ class SparseCholesky:
         self.rk, self.rpos = col[by_row].astype(np.int64), pos[by_row].astype(np.int64)
         self.rp = np.searchsorted(row[by_row], np.arange(n + 1)).astype(np.int64)
         self.flops = int(np.sum((counts - 1) ** 2))
+        #: whether its factorisation needs at most a twentieth of dense Cholesky's ~n^3/3
+        #: multiply-adds (the ladder's dense rung then uses it, from SPARSE_MIN rows)
+        self.beats_dense = 20 * self.flops <= n ** 3
 
     @property
     def nnz(self) -> int:
@@ -177,7 +193,7 @@ class SparseCholesky:
         if rcond >= _EPS:                               # (NaN: du not finite)
             return du
         if rcond < 0:                                   # not positive definite
-            return checked_solve(DenseFactor(K, cholesky_first=False), r)
+            return solve_dense(K, r, cholesky_first=False)
         return None
 
 

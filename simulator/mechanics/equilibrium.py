@@ -48,6 +48,7 @@ from ..model.model import Model
 __all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
 
 logger = logging.getLogger(__name__)
+_all = np.logical_and.reduce            # with axis=None: ndarray.all() without its wrapper
 
 #: Merge contact pairs into the cached stiffness pattern up to this many Hessian entries.
 MERGE_LIMIT = 200_000
@@ -90,13 +91,9 @@ class Evaluation:
         if isinstance(K, np.ndarray) and to_csr is None:
             raise ValueError("Evaluation: a dense tangent needs to_csr (e.g. "
                              "EquilibriumSystem.to_csr) to give K as CSR.")
-        set_ = object.__setattr__                     # frozen: set once, here
-        set_(self, "f_int", f_int)
-        set_(self, "tangent", K)
-        set_(self, "energies", energies)
-        set_(self, "n_contacts", n_contacts)
-        set_(self, "to_csr", to_csr)
-        set_(self, "contact_pairs", contact_pairs)
+        # frozen: set once, here (one dict update: this runs at every Newton iteration)
+        self.__dict__.update(f_int=f_int, tangent=K, energies=energies, n_contacts=n_contacts,
+                             to_csr=to_csr, contact_pairs=contact_pairs)
 
     @cached_property
     def K(self) -> sp.csr_matrix | None:
@@ -219,15 +216,15 @@ class EquilibriumSystem:
         nodes, first, rest = self._fused
         spring_rest = np.ascontiguousarray(spring_rest, dtype=float)
         n_dof, n_free, n_pairs, to_csr = self.n_dof, self.n_free, len(rest[4]), self.to_csr
+        model_args = (*first, spring_rest, *rest)        # the arguments fixed for this loop
+        empty, i8 = np.empty, np.int64
 
         def evaluate(u, hessian=True):
             u = np.ascontiguousarray(u, dtype=float)
-            f, e = np.empty(n_dof), np.empty(6)
-            n = n_free if hessian else 0
-            K = np.empty((n, n))
-            active = np.empty(n_pairs, np.int64)
-            n_contacts = kernel(nodes + u, u, *first, spring_rest, *rest, hessian, f, K, e,
-                                active)
+            f, e = empty(n_dof), empty(6)
+            K = empty((n_free, n_free) if hessian else (0, 0))
+            active = empty(n_pairs, i8)
+            n_contacts = kernel(nodes + u, u, *model_args, hessian, f, K, e, active)
             return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
                               n_contacts, to_csr, active[:n_contacts])
         return evaluate
@@ -251,14 +248,13 @@ class EquilibriumSystem:
         ~n^3/3 multiply-adds, LAPACK's dense routines are faster and solve instead, as they do
         below SPARSE_MIN (the choice is the dense rung of the ladder,
         :func:`~simulator.linalg.ladder.solve`)."""
-        chol = None
-        if ev.contact_pairs is not None and self.n_free >= thresholds.SPARSE_MIN:
-            chol = self._cholesky(ev.contact_pairs)
-        return solve(ev.tangent, r, cholesky=chol)
+        if ev.contact_pairs is None or len(self.free) < thresholds.SPARSE_MIN:
+            return solve(ev.tangent, r)
+        return solve(ev.tangent, r, cholesky=self._cholesky(ev.contact_pairs))
 
     def _cholesky(self, pairs: np.ndarray) -> SparseCholesky:
         chol, covered = self._chol
-        if chol is None or (len(pairs) and not covered[pairs].all()):
+        if chol is None or (len(pairs) and not _all(covered[pairs], axis=None)):
             covered = covered.copy()
             covered[pairs] = True
             families = [self.bar_dofs, self.spr_dofs]

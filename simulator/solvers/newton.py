@@ -179,49 +179,47 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     u = u0.copy().ravel()
     size = getattr(system, "size", None) or float(np.max(np.ptp(system.model.mesh.nodes, axis=0)))
     f_free = f_ext[free]
-    evaluate, solve = _operations(system, spring_rest, options.linear_solver)
-    problem = _LoadControl(u, free, f_free, evaluate, solve)
-    best = [math.inf, None, None]
-
-    def keep_best(rn, ev):
-        if rn < best[0]:
-            best[:] = rn, problem.u.copy(), ev
+    problem = _LoadControl(u, free, f_free, *_operations(system, spring_rest,
+                                                         options.linear_solver))
     out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
                   size=size, criterion=options.criterion, max_step=system.max_step,
-                  on_residual=keep_best)
+                  keep_best=u.copy)
     res_norms, cor_norms = out.residual_norms, out.correction_norms
     if out.success:
-        return _newton_result(problem.u, True, out.iterations, res_norms, cor_norms,
+        return _newton_result(u, True, out.iterations, res_norms, cor_norms,
                               out.message, out.point)
     if out.reason != "max_iter":
         return _newton_result(u0, False, out.iterations, res_norms, cor_norms, out.message)
     stall = options.stall_rtol * math.sqrt(f_free.dot(f_free))
-    if best[0] <= stall:
-        return _newton_result(best[1], True, options.max_iter, res_norms, cor_norms,
-                              f"converged (residual stalled at {best[0]:.3g} N, at most "
-                              f"{options.stall_rtol:g} of the load)", best[2])
+    best_rn, best_ev, best_u = out.best or (math.inf, None, None)
+    if best_rn <= stall:
+        return _newton_result(best_u, True, options.max_iter, res_norms, cor_norms,
+                              f"converged (residual stalled at {best_rn:.3g} N, at most "
+                              f"{options.stall_rtol:g} of the load)", best_ev)
     return _newton_result(u0, False, options.max_iter, res_norms, cor_norms, out.message)
 
 
 class _LoadControl:
     """Newton's problem of load control for :func:`~simulator.solvers.nonlinear.iterate`:
-    residual ``f_ext - f_int`` on the free DOFs, correction by the tangent."""
+    residual ``f_ext - f_int`` on the free DOFs, correction by the tangent.
 
-    def __init__(self, u, free, f_free, evaluate, solve):
-        self.u, self.free, self.f_free = u, free, f_free
-        self._evaluate, self._solve = evaluate, solve
+    ``evaluate``, ``correct`` and ``apply`` are closures over the arrays (set per instance:
+    no attribute look-ups per iteration on the hot path of small models)."""
 
-    def evaluate(self):
-        ev = self._evaluate(self.u.reshape(-1, 3))
-        return self.f_free - ev.f_int[self.free], ev
+    def __init__(self, u, free, f_free, evaluate, correct):
+        self.u = u
+        shaped = u.reshape(-1, 3)                       # a view: follows the updates of u
 
-    def correct(self, ev, r):
-        du = self._solve(ev, r)
-        return "tangent stiffness is singular (mechanism or unsupported body?)" if du is None \
-            else du
+        def residual():
+            ev = evaluate(shaped)
+            return f_free - ev.f_int[free], ev
 
-    def apply(self, du, scale):
-        self.u[self.free] += du
+        def apply(du, scale):
+            u[free] += du
+        self.evaluate, self.correct, self.apply = residual, correct, apply
+
+
+_SINGULAR = "tangent stiffness is singular (mechanism or unsupported body?)"
 
 
 def _reference_newton(system, u0, f_ext, spring_rest, options):
@@ -230,9 +228,9 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
     ``evaluate`` and the ladder's solve; an unconverged end is accepted with a warning."""
     free = system.free
     backend = options.linear_solver
-    problem = _LoadControl(u0.copy().ravel(), free, f_ext[free],
-                           lambda u: system.evaluate(u, spring_rest),
-                           lambda ev, r: linear_solve(_tangent(ev), r, backend=backend))
+    problem = _LoadControl(
+        u0.copy().ravel(), free, f_ext[free], lambda u: system.evaluate(u, spring_rest),
+        lambda ev, r: _or_singular(linear_solve(_tangent(ev), r, backend=backend)))
     out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
                   size=0.0, criterion=options.criterion, reference_loop=True)
     if out.reason in ("no correction", "not finite"):
@@ -244,26 +242,38 @@ def _reference_newton(system, u0, f_ext, spring_rest, options):
                           out.correction_norms, out.message, out.point)
 
 
+def _or_singular(du):
+    """A correction, or :data:`_SINGULAR` for a singular tangent (the protocol of iterate)."""
+    return _SINGULAR if du is None else du
+
+
 def _operations(system, spring_rest, backend="auto"):
-    """``evaluate(u)`` and ``solve(ev, r)`` for a system: an EquilibriumSystem's prepared
+    """``evaluate(u)`` and ``correct(ev, r)`` for a system: an EquilibriumSystem's prepared
     evaluator and, for the dense tangents of its fused kernel, its sparse / dense solve
     (:meth:`~simulator.mechanics.equilibrium.EquilibriumSystem.solve_dense_tangent`); else
     ``evaluate`` and the ladder's :func:`~simulator.linalg.ladder.solve` (any object with the
     ``evaluate`` interface). A forced sparse ``backend`` solves the CSR form of a dense
-    tangent."""
+    tangent. ``correct`` returns the correction, or :data:`_SINGULAR` when the tangent is
+    singular (the protocol of :func:`~simulator.solvers.nonlinear.iterate`)."""
     evaluator = getattr(system, "evaluator", None)
     evaluate = evaluator(spring_rest) if evaluator is not None else \
         (lambda u: system.evaluate(u, spring_rest))
     dense = getattr(system, "solve_dense_tangent", None)
-
-    def solve(ev, r):
-        K = _tangent(ev)
-        if isinstance(K, np.ndarray) and backend in ("pardiso", "superlu"):
-            K = ev.K
-        elif dense is not None and isinstance(K, np.ndarray):
-            return dense(ev, r)
-        return linear_solve(K, r, backend=backend)
-    return evaluate, solve
+    sparse_only = backend in ("pardiso", "superlu")
+    if dense is not None and not sparse_only:
+        def correct(ev, r):                    # (the loop of small models: kept short)
+            K = ev.tangent if type(ev) is Evaluation else _tangent(ev)
+            du = dense(ev, r) if isinstance(K, np.ndarray) else linear_solve(K, r,
+                                                                              backend=backend)
+            return _SINGULAR if du is None else du
+    else:
+        def correct(ev, r):
+            K = _tangent(ev)
+            if sparse_only and isinstance(K, np.ndarray):
+                K = ev.K
+            du = linear_solve(K, r, backend=backend)
+            return _SINGULAR if du is None else du
+    return evaluate, correct
 
 
 def _tangent(ev):

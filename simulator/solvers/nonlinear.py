@@ -37,6 +37,9 @@ logger = logging.getLogger(__name__)
 ROUND_OFF = 1e-13
 #: A path parameter within this of 1 has reached the end of the path.
 END_TOL = 1e-12
+#: What ``ndarray.max()`` / ``min()`` call, without their Python wrappers (two calls fewer per
+#: iteration on small models; the same values).
+_max, _min = np.maximum.reduce, np.minimum.reduce
 
 
 def limit_step(dx: np.ndarray, max_step: float | None) -> tuple[float, float]:
@@ -66,6 +69,10 @@ class Iteration:
     reason : str
         "converged", "not finite" (a residual), "no correction" (``correct`` said why) or
         "max_iter" (no convergence in ``max_iter`` corrections).
+    best : tuple or None
+        With ``keep_best`` and reason "max_iter": ``(rn, point, state)`` of the evaluation with
+        the smallest residual norm (the first of equals), ``state`` what ``keep_best`` returned
+        there; else None.
     """
 
     success: bool
@@ -75,11 +82,12 @@ class Iteration:
     message: str = ""
     point: object = None
     reason: str = "converged"
+    best: tuple | None = None
 
 
 def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
             criterion: str = "residual", max_step: float | None = None,
-            tolerance=None, on_residual=None, record_final: bool = False,
+            tolerance=None, keep_best=None, record_final: bool = False,
             reference_loop: bool = False) -> Iteration:
     """Newton's method on ``problem`` from its current iterate.
 
@@ -105,8 +113,11 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
     tolerance : callable, optional
         ``tolerance(point, first_residual_norm) -> float``: the residual tolerance instead of
         ``max(atol, rtol * first)`` (dynamics scales it by the step's force norms).
-    on_residual : callable, optional
-        ``on_residual(rn, point)`` after every evaluation (e.g. to keep the best iterate).
+    keep_best : callable, optional
+        ``keep_best() -> state``: a copy of the problem's current iterate, taken at every
+        evaluation whose residual norm is below all before it (e.g. the bound ``u.copy`` of
+        the unknowns: no Python call per iteration); the best one is returned in
+        ``Iteration.best`` when the iteration runs out of corrections (a stall rule).
     record_final : bool
         Record the residual norm of the evaluation that follows a correction-based stop.
     reference_loop : bool
@@ -115,43 +126,51 @@ def iterate(problem, *, max_iter: int, atol: float, rtol: float, size: float,
     """
     if reference_loop:
         return _reference_iterate(problem, max_iter, atol, criterion)
-    res, cor, ref = [], [], None
+    res, cor, ref, best = [], [], None, None
+    best_rn = math.inf
+    evaluate, correct, apply = problem.evaluate, problem.correct, problem.apply
+    by_residual, by_correction = criterion == "residual", criterion == "displacement"
+    floor = ROUND_OFF * size
     for it in range(max_iter + 1):
-        r, point = problem.evaluate()
+        r, point = evaluate()
         rn = math.sqrt(r.dot(r))                       # = np.linalg.norm(r), less overhead
         res.append(rn)
-        if on_residual is not None:
-            on_residual(rn, point)
+        if keep_best is not None and rn < best_rn:
+            best_rn, best = rn, (rn, point, keep_best())
         if not math.isfinite(rn):
             return Iteration(False, it, res, cor, "residual is not finite", point, "not finite")
-        if criterion == "residual":
-            ref = rn if ref is None else ref
-            tol = max(atol, rtol * ref) if tolerance is None else tolerance(point, ref)
-            if rn <= tol:
+        if by_residual:
+            if ref is None:
+                ref = rn
+                tol = max(atol, rtol * ref)               # fixed by the first residual
+            if rn <= (tol if tolerance is None else tolerance(point, ref)):
                 return Iteration(True, it, res, cor, "converged", point)
         if it == max_iter:
             break
-        dx = problem.correct(point, r)
+        dx = correct(point, r)
         if isinstance(dx, str):
             return Iteration(False, it, res, cor, dx, point, "no correction")
-        scale, step = limit_step(dx, max_step)
-        problem.apply(dx, scale)
+        step = max(_max(dx), -_min(dx)) if dx.size else 0.0       # = max |dx|
+        scale = 1.0
+        if max_step is not None and step > max_step:
+            scale, step = limit_step(dx, max_step)
+        apply(dx, scale)
         dn = math.sqrt(dx.dot(dx))
         cor.append(dn)
         message = None
-        if criterion == "displacement":
+        if by_correction:
             ref = dn if ref is None else ref
             if dn <= max(atol, rtol * ref):
                 message = "converged"
-        if message is None and dx.size and step <= ROUND_OFF * size:
+        if message is None and dx.size and step <= floor:
             message = "converged (correction at round-off level)"
         if message is not None:
-            r, point = problem.evaluate()
+            r, point = evaluate()
             if record_final:
                 res.append(math.sqrt(r.dot(r)))
             return Iteration(True, it + 1, res, cor, message, point)
     return Iteration(False, max_iter, res, cor, f"no convergence in {max_iter} iterations "
-                     f"(last residual {res[-1]:.3g} N)", point, "max_iter")
+                     f"(last residual {res[-1]:.3g} N)", point, "max_iter", best)
 
 
 def _reference_iterate(problem, max_iter: int, atol: float, criterion: str) -> Iteration:

@@ -414,7 +414,7 @@ class ThermalModel:
         rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
         q = np.asarray(q, float)
         n = self.mesh.n_nodes
-        if q.shape[:1] != (n,) or q.ndim > 2 or not np.all(np.isfinite(q)) \
+        if q.shape[:1] != (n,) or q.ndim > 2 or not np.isfinite(q).all() \
                 or not math.isfinite(rt):
             raise ParameterError(f"q must be a finite array of shape ({n},) or ({n}, k) [W] and "
                                  "the room temperature finite.")

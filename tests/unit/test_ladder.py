@@ -117,6 +117,23 @@ def test_ill_conditioned_dense_systems_are_rejected_only_on_request():
     assert x is not None and np.allclose(A @ x, b, rtol=0, atol=1e-3)
 
 
+@pytest.mark.parametrize("kind", ["symmetric", "spd", "general"])
+def test_a_small_dense_array_takes_the_dense_rung_as_its_factors_do(kind):
+    """The dense fast path of solve (Newton's loop on small models): the same solution as the
+    kept dense factors, bit for bit, for one and several right-hand sides, Cholesky or LU."""
+    rng = np.random.default_rng(5)
+    for A in (_spd(40).toarray(), _indefinite(40, seed=6).toarray()):
+        for b in (rng.normal(size=40), rng.normal(size=(40, 3))):
+            x = solve(A, b, kind=kind)
+            assert ladder.last_backend() == "dense"
+            if kind == "spd" and np.linalg.eigvalsh(A).min() < 0:
+                continue                        # kept "spd" factors refuse LU (sparse rungs)
+            assert np.array_equal(x, factorize(A, kind=kind).solve(b))
+    bad = _spd(40).toarray()
+    bad[3, 3] = np.nan
+    assert solve(bad, np.ones(40), kind=kind) is None and ladder.last_backend() is None
+
+
 def test_bad_backends_are_errors_naming_the_option(monkeypatch):
     with pytest.raises(ParameterError, match="NewtonOptions.linear_solver = 'mumps'"):
         NewtonOptions(linear_solver="mumps")

@@ -72,6 +72,33 @@ def test_failures_are_data():
     assert out.reason == "not finite" and out.message == "residual is not finite"
 
 
+class Oscillating(Cubic):
+    """A residual that falls, then rises again: Newton on it never converges."""
+
+    norms = (3.0, 1.0, 2.0, 1.0, 4.0)
+
+    def evaluate(self):
+        self.evaluations += 1
+        return np.array([self.norms[self.evaluations - 1]]), self.evaluations
+
+    def correct(self, point, r):
+        return np.array([0.5])
+
+
+def test_keep_best_returns_the_first_smallest_residual_when_out_of_corrections():
+    p = Oscillating([0.0])
+    out = iterate(p, max_iter=4, atol=1e-14, rtol=0.0, size=1.0, keep_best=p.x.copy)
+    assert out.reason == "max_iter" and out.residual_norms == list(Oscillating.norms)
+    rn, point, state = out.best
+    assert (rn, point) == (1.0, 2)                 # evaluation 2, not the equal one at 4
+    assert np.array_equal(state, [0.5])            # the iterate then (one correction applied)
+    assert state is not p.x                        # a copy, not the live iterate
+    assert iterate(Oscillating([0.0]), max_iter=4, atol=1e-14, rtol=0.0, size=1.0).best is None
+    p = Cubic([2.0])
+    assert iterate(p, max_iter=30, atol=1e-14, rtol=0.0, size=1.0, keep_best=p.x.copy).best \
+        is None                                    # converged: nothing to fall back on
+
+
 def test_step_limit_scales_the_correction_and_reports_the_factor():
     dx = np.array([3.0, -6.0])
     assert limit_step(dx, None) == (1.0, 6.0) and limit_step(dx, 10.0) == (1.0, 6.0)

@@ -104,6 +104,8 @@ def test_array():
     with pytest.raises(ParameterError, match="got 'abc'"):
         v.array("x", "abc", (3,))
     assert np.isnan(v.array("x", [NAN], (1,), finite_values=False)[0])
+    with pytest.raises(ParameterError, match=r"got nan at index \(1, 2\)"):   # every entry
+        v.array("x", [[0, 1, 2], [3, 4, NAN]], (2, 3))                    # (exact shape)
 
 
 # ------------------------------------------------------------------ the wrong message of issue 18
