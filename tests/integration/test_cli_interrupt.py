@@ -31,6 +31,12 @@ def _start(argv):
                             start_new_session=True)
 
 
+def _cpu_seconds(pid) -> float:
+    """User + system CPU time [s] of a process so far (Linux /proc)."""
+    fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def _interrupt_after_first_row(argv, log):
     proc = _start(argv)
     deadline = time.monotonic() + 120
@@ -90,9 +96,13 @@ def test_ctrl_c_during_run_saves_a_partial_result(tmp_path):
     import json
 
     out = tmp_path / "run"
-    proc = _start(["run", "single-fold", "--set", "thermal_steps=20000", "--out", str(out),
+    proc = _start(["run", "single-fold", "--set", "thermal_steps=100000", "--out", str(out),
                    "-q"])
-    time.sleep(10.0)                          # start-up, self-fold and gravity, some heating
+    # start-up, self-fold and gravity take about 2-3 s of CPU: interrupt after 6 s of the
+    # process's own CPU time (not wall time, which depends on the machine's load)
+    deadline = time.monotonic() + 300
+    while _cpu_seconds(proc.pid) < 6.0 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
     assert proc.poll() is None, "the run ended before it could be interrupted"
     os.killpg(proc.pid, signal.SIGINT)
     try:
