@@ -106,6 +106,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     ``--fold`` drive (the layer stack gives the crease data the flags and the file lack)."""
     from simulator import (SelfFold, Supports, central_panel, fold_to_model, get_stack,
                            parse_fold, sharp_model)
+    from simulator.model.stack import check_supported
 
     from .plain import stack_reader_options
 
@@ -126,6 +127,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     pattern = read.mesh.pattern
     panel = central_panel(pattern) if args.fix_panel is None else \
         pattern.check_panel(args.fix_panel, "--fix-panel")
+    check_supported(pattern, panel, "clamped panel")
     clamp = sharp_model(pattern, None, read.params).mesh.panel_nodes(panel)
     model = sharp_model(pattern, Supports.nodes(clamp), read.params)
     folds = _folds(args.fold, geo)
