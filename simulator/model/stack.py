@@ -131,7 +131,8 @@ def check_supported(pattern: Pattern, panel: int, what: str = "fixed panel") -> 
     """Raise :class:`ParameterError` naming the panels that clamping ``panel`` leaves free."""
     free = unsupported_panels(pattern, panel)
     if free:
-        shown = free if len(free) <= 8 else free[:8] + ["..."]
+        shown = str(free) if len(free) <= 8 else \
+            f"[{', '.join(map(str, free[:8]))}, ...] ({len(free)} in all)"
         raise ParameterError(
             f"{what} {panel}: panels {shown} are joined to it by no crease (a separate sheet, "
             "or one touching it at a vertex only), so they would float free (a mechanism): "
