@@ -136,8 +136,8 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import build_mesh, central_panel, get_stack, parse_fold, start_fold_angles
-    from simulator.model.stack import check_supported
+    from simulator import (build_mesh, central_panel, check_supported, get_stack, parse_fold,
+                           start_fold_angles)
 
     from .sharp import check_sharp
 

@@ -104,9 +104,8 @@ def _folds(specs, geo) -> dict:
 def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     """``(model, steps, parameters, geo)`` of a FOLD file run with sharp creases and a
     ``--fold`` drive (the layer stack gives the crease data the flags and the file lack)."""
-    from simulator import (SelfFold, Supports, central_panel, fold_to_model, get_stack,
-                           parse_fold, sharp_model)
-    from simulator.model.stack import check_supported
+    from simulator import (SelfFold, Supports, central_panel, check_supported, fold_to_model,
+                           get_stack, parse_fold, sharp_model)
 
     from .plain import stack_reader_options
 
