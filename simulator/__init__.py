@@ -44,7 +44,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".geometry.materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
                    "Material"),
     ".model.mass": ("lumped_masses",),
-    ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel"),
+    ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
+                     "unsupported_panels", "check_supported"),
     ".geometry.orientation": ("start_fold_angles",),
     ".model.mesh": ("BarHingeMesh", "build_mesh"),
     ".model.sharp": ("SharpHingeParameters", "sharp_model"),
@@ -89,7 +90,8 @@ __all__ = [
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # plain crease patterns: layer stacks and fold signs of a start shape
-    "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "start_fold_angles",
+    "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "unsupported_panels",
+    "check_supported", "start_fold_angles",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",

@@ -136,7 +136,8 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import build_mesh, get_stack, parse_fold, start_fold_angles
+    from simulator import (build_mesh, central_panel, check_supported, get_stack, parse_fold,
+                           start_fold_angles)
 
     from .sharp import check_sharp
 
@@ -148,6 +149,9 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
         options = {**options, "unit_scale": 1e-3}
     geo = parse_fold(data, **stack_reader_options(stack, options))
     pattern = geo.pattern
+    panel = getattr(args, "fix_panel", None)
+    panel = central_panel(pattern) if panel is None else pattern.check_panel(panel, "--fix-panel")
+    check_supported(pattern, panel, "clamped panel")
     letters = pattern.edge_assignment[pattern.creases]
     fold = np.degrees(start_fold_angles(pattern)[pattern.creases])
     size = np.ptp(pattern.vertices, axis=0) * 1e6

@@ -104,8 +104,8 @@ def _folds(specs, geo) -> dict:
 def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     """``(model, steps, parameters, geo)`` of a FOLD file run with sharp creases and a
     ``--fold`` drive (the layer stack gives the crease data the flags and the file lack)."""
-    from simulator import (SelfFold, Supports, central_panel, fold_to_model, get_stack,
-                           parse_fold, sharp_model)
+    from simulator import (SelfFold, Supports, central_panel, check_supported, fold_to_model,
+                           get_stack, parse_fold, sharp_model)
 
     from .plain import stack_reader_options
 
@@ -126,6 +126,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     pattern = read.mesh.pattern
     panel = central_panel(pattern) if args.fix_panel is None else \
         pattern.check_panel(args.fix_panel, "--fix-panel")
+    check_supported(pattern, panel, "clamped panel")
     clamp = sharp_model(pattern, None, read.params).mesh.panel_nodes(panel)
     model = sharp_model(pattern, Supports.nodes(clamp), read.params)
     folds = _folds(args.fold, geo)

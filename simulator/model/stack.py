@@ -114,6 +114,31 @@ def central_panel(pattern: Pattern) -> int:
     return int(np.argmin(np.linalg.norm(centres - pattern.vertices.mean(axis=0), axis=1)))
 
 
+def unsupported_panels(pattern: Pattern, panel: int) -> list[int]:
+    """Panels joined to ``panel`` by no chain of creases (a separate sheet, or one that touches
+    the rest at a vertex only): clamping ``panel`` leaves them free to move as rigid bodies."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pairs = pattern.edge_panels[pattern.creases]
+    n = pattern.n_panels
+    adj = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(adj, directed=False)
+    return np.flatnonzero(label != label[panel]).tolist()
+
+
+def check_supported(pattern: Pattern, panel: int, what: str = "fixed panel") -> None:
+    """Raise :class:`ParameterError` naming the panels that clamping ``panel`` leaves free."""
+    free = unsupported_panels(pattern, panel)
+    if free:
+        shown = str(free) if len(free) <= 8 else \
+            f"[{', '.join(map(str, free[:8]))}, ...] ({len(free)} in all)"
+        raise ParameterError(
+            f"{what} {panel}: panels {shown} are joined to it by no crease (a separate sheet, "
+            "or one touching it at a vertex only), so they would float free (a mechanism): "
+            "give one sheet joined by creases, or split the file into one file per sheet.")
+
+
 def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                 fixed_panel: int | None = None) -> Model:
     """A heatable model of a pattern with a layer stack.
@@ -136,6 +161,7 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
     mesh = build_mesh(pattern)
     fixed_panel = central_panel(pattern) if fixed_panel is None else fixed_panel
     fixed_panel = pattern.check_panel(fixed_panel, "fixed panel")
+    check_supported(pattern, fixed_panel)
     sign = actuation_signs(pattern)
     actuators = Actuators(Bimorph(E1=stack.E_active, t1=stack.t_active, E2=stack.E_passive,
                                   t2=stack.t_passive),

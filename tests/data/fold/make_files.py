@@ -175,6 +175,13 @@ def main():
                              [2, 5], [5, 6]],
           "edges_assignment": ["B", "B", "V", "V", "B", "M", "B", "B", "B", "B"]}
     _write("t_junction.fold", tj)
+    _write("sheets_touching_at_a_vertex.fold", {
+        "frame_unit": "mm", "frame_title": "two creased squares that share one vertex only",
+        "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1], [2, 1], [2, 2], [1, 2]],
+        "faces_vertices": [[0, 1, 2], [0, 2, 3], [2, 4, 5], [2, 5, 6]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 0], [2, 3], [3, 0], [2, 4], [4, 5], [5, 2],
+                           [5, 6], [6, 2]],
+        "edges_assignment": ["B", "B", "V", "B", "B", "B", "B", "M", "B", "B"]})
 
 
 if __name__ == "__main__":
