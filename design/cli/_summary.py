@@ -67,10 +67,10 @@ def _temperature_lines(result) -> list:
 
 def summary_lines(result) -> list:
     """Lines for the CLI summary of a :class:`simulator.SimulationResult`: one per event
-    (``event: ...``), then the hottest crease and the 1.2 T_g check (without thermal records:
-    none)."""
+    (``event: ...``), then the hottest crease and the 1.2 T_g check (a model without a
+    thermal part, e.g. concentrated hinges, or without thermal records: none)."""
     ids = result.model.mesh.crease_ids
     lines = [f"event: {_event_line(e, ids)}" for e in result.events]
-    if result.history["temperature"].size:
+    if result.history["temperature"].size and result.model.thermal is not None:
         lines += _temperature_lines(result)
     return lines

@@ -176,6 +176,7 @@ def test_run_of_a_sharp_pattern_from_flags(tmp_path, capsys):
                  "10", "--out", str(out_dir), "-q"]) == 0
     out = capsys.readouterr().out
     assert "converged" in out and "power [mW]" not in out
+    assert "hottest crease" not in out and "T_g" not in out      # no thermal part: no claims
     table = pd.read_csv(out_dir / "creases.csv")
     last = table[table["step"] == table["step"].max()]
     fold = last.set_index("crease")["fold_angle [deg]"]
