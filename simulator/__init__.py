@@ -70,7 +70,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
     ".solvers.load_path": ("LoadPath",),
     ".solvers.stability": ("Stability", "tangent_stability"),
-    ".thermal.steady": ("REFERENCE_BETA", "ThermalParameters"),
+    ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),

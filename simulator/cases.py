@@ -166,7 +166,7 @@ def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None
     substrate : bool
         Include the substrate panel (supported) under the folding panel.
     thermal, actuators : optional
-        :class:`~simulator.thermal.steady.ThermalParameters` and :class:`~simulator.model.bimorph.Actuators`,
+        :class:`~simulator.thermal.parameters.ThermalParameters` and :class:`~simulator.model.bimorph.Actuators`,
         needed for heating steps.
     **pattern_kwargs
         Geometry of :func:`~simulator.geometry.example_patterns.single_fold_pattern` (SI units).

@@ -129,7 +129,7 @@ class Fluid:
             non_negative(f"Fluid {self.name!r}: {field}", getattr(self, field), _UNITS[field])
 
     def environment(self) -> dict:
-        """Keyword arguments of :class:`~simulator.thermal.steady.ThermalParameters` for this fluid,
+        """Keyword arguments of :class:`~simulator.thermal.parameters.ThermalParameters` for this fluid,
         e.g. ``ThermalParameters(env_thickness=1e-3, **WATER.environment())``."""
         return {"env_conductivity": self.thermal_conductivity, "env_density": self.density,
                 "env_specific_heat": self.specific_heat}

@@ -202,7 +202,7 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
 
     ``supports`` is a :class:`Supports` or a mapping ``{node: "xyz"-subset}``;
     ``contact=True`` switches contact on with default :class:`ContactParameters`;
-    ``thermal`` (:class:`~simulator.thermal.steady.ThermalParameters`) and ``actuators``
+    ``thermal`` (:class:`~simulator.thermal.parameters.ThermalParameters`) and ``actuators``
     (:class:`~simulator.model.bimorph.Actuators`) are needed for heating steps. Every argument is
     type-checked; a wrong type raises :class:`~simulator.errors.ParameterError` naming the
     argument, the type given and what to pass instead.

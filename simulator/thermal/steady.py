@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import asdict, dataclass
 from functools import cached_property
 
 import numpy as np
@@ -32,22 +31,17 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
-from .._validate import array, finite, in_range, integer, non_negative, one_of, positive
+from .._validate import array
 from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
-from ..geometry.materials import AIR
 from ..model.mesh import BarHingeMesh
 from .integral import IntegralLoss
+from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
 
 logger = logging.getLogger(__name__)
-
-#: The reference's default dissipation angle: 20 degrees converted with pi ~ 3.14
-#: (0.348888... rad instead of 0.349066 rad; tan differs by 0.06 %). Use it to reproduce
-#: the reference's numbers; ``math.radians(20)`` is the physical value.
-REFERENCE_BETA = 20 / 180 * 3.14
 
 #: Cap value of boundary triangles themselves and of all triangles without boundary panels [m].
 _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
@@ -59,122 +53,6 @@ _MIN_AIR_FRACTION = 1e-9
 def heat_weights() -> np.ndarray:
     """Share of a crease's power on its nodes N11, N12, N21, N22, A, B, Ctr (theory 4.6), (7,)."""
     return np.array([1 / 8, 1 / 8, 1 / 8, 1 / 8, 1 / 12, 1 / 12, 1 / 3])
-
-
-def _ids(value, name):
-    try:
-        ids = tuple(int(v) for v in value)
-    except (TypeError, ValueError):
-        ids = None
-    if ids is None or any(i != v or isinstance(v, bool) for i, v in zip(ids, value)):
-        raise ParameterError(f"ThermalParameters.{name} = {value!r} is invalid; it must be a "
-                             "sequence of integer (0-based) ids.")
-    return ids
-
-
-def _plane(value):
-    """``substrate_plane`` as a tuple of 6 floats (a point and a non-zero normal) or ()."""
-    try:
-        v = tuple(float(c) for c in value)
-    except (TypeError, ValueError):
-        v = None
-    if v is None or len(v) not in (0, 6) or not all(map(math.isfinite, v)) \
-            or (v and not any(v[3:])):
-        raise ParameterError(f"ThermalParameters.substrate_plane = {value!r} is invalid; give "
-                             "() or 6 finite numbers: a point (x, y, z) [m] and a non-zero "
-                             "normal (nx, ny, nz) pointing into the medium.")
-    return v
-
-
-@dataclass(frozen=True)
-class ThermalParameters:
-    """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
-
-    Parameters
-    ----------
-    env_thickness : float
-        Environment thickness t_env [m] between the structure and room temperature, > 0
-        (the paper suggests 1.5 x the panel length).
-    env_conductivity : float
-        Environment conductivity k_env [W/(m K)], >= 0 (air 0.026, water ~0.6).
-    layers : int
-        Number N of environment layers per node, >= 1.
-    dissipation_angle : float
-        Heat-spreading angle beta [rad] in [0, pi/2); :data:`REFERENCE_BETA` matches the reference.
-    room_temperature : float
-        Room temperature [deg C] of the far layer and of ``room_temperature_nodes``.
-    boundary_panels : tuple of int
-        Panel ids of thermal boundaries (substrate); their distance caps t_env.
-    room_temperature_nodes : tuple of int
-        Mesh node ids whose structure temperature is held at room temperature.
-    env_density : float
-        Environment density rho_env [kg/m^3], >= 0 (transient heat only; default air as in the
-        reference transient example, :data:`~simulator.geometry.materials.AIR`).
-    env_specific_heat : float
-        Environment specific heat c_env [J/(kg K)], >= 0 (transient heat only; default air).
-    loss_model : {"chain", "integral"}
-        Heat loss of the steady model: "chain" (the paper's fitted chains, using
-        ``env_thickness``, ``layers``, ``dissipation_angle``) or "integral" (the single-layer
-        potential of the sheet in the medium, :mod:`simulator.thermal.integral`: nothing to fit;
-        boundary panels lie on the substrate at room temperature). Transient and
-        electro-thermal steps always use the chains (they carry the medium's heat capacity).
-    integral_refinement : int
-        Sub-triangles per triangle edge m of the "integral" model (m^2 per mesh triangle),
-        1..16.
-    substrate_plane : tuple of 6 floats, or ()
-        "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
-        (3,) pointing into the medium, in the global frame; () for an unbounded medium.
-    integral_shape_tol : float
-        "integral" model only: the dense operator is rebuilt when a node has moved more than
-        this fraction of the mean sub-triangle diameter since the last build, >= 0 (0:
-        rebuilt on every change of shape).
-    """
-
-    env_thickness: float
-    env_conductivity: float = 0.026
-    layers: int = 10
-    dissipation_angle: float = math.radians(20)
-    room_temperature: float = 21.0
-    boundary_panels: tuple = ()
-    room_temperature_nodes: tuple = ()
-    env_density: float = AIR.density
-    env_specific_heat: float = AIR.specific_heat
-    loss_model: str = "chain"
-    integral_refinement: int = 2
-    substrate_plane: tuple = ()
-    integral_shape_tol: float = 0.05
-
-    def __post_init__(self):
-        owner = "ThermalParameters"
-        for name, unit in (("env_density", "kg/m^3"), ("env_specific_heat", "J/(kg K)"),
-                           ("env_conductivity", "W/(m K)")):
-            non_negative(f"{owner}.{name}", getattr(self, name), unit)
-        positive(f"{owner}.env_thickness", self.env_thickness, "m")
-        in_range(f"{owner}.dissipation_angle", self.dissipation_angle, 0, math.pi / 2, "rad",
-                 hint="the range is [0, pi/2)", open_high=True)
-        finite(f"{owner}.room_temperature", self.room_temperature, "deg C")
-        integer(f"{owner}.layers", self.layers)
-        for name in ("boundary_panels", "room_temperature_nodes"):
-            object.__setattr__(self, name, _ids(getattr(self, name), name))
-        one_of(f"{owner}.loss_model", self.loss_model, ("chain", "integral"))
-        integer(f"{owner}.integral_refinement", self.integral_refinement, 1, 16)
-        non_negative(f"{owner}.integral_shape_tol", self.integral_shape_tol)
-        object.__setattr__(self, "substrate_plane", _plane(self.substrate_plane))
-        if self.loss_model == "integral" and not self.env_conductivity > 0:
-            raise ParameterError(f"{owner}.env_conductivity = {self.env_conductivity!r} W/(m K): "
-                                 "loss_model 'integral' needs a medium conductivity > 0.")
-
-    @property
-    def plane(self):
-        """The substrate plane as ``(point (3,), unit normal (3,))``, or None."""
-        if not self.substrate_plane:
-            return None
-        v = np.array(self.substrate_plane, float)
-        return v[:3], v[3:] / np.linalg.norm(v[3:])
-
-    def to_dict(self) -> dict:
-        """Plain-dict view for result metadata."""
-        return asdict(self)
 
 
 class ThermalModel:
