@@ -164,7 +164,7 @@ def test_symmetric_strip_has_symmetric_temperatures():
 
 @pytest.mark.parametrize("extrapolation", [False, True])
 def test_energy_balance_all_heat_leaves_through_the_potential(extrapolation):
-    tm, x, q = _strip(room=(), integral_extrapolation=extrapolation)
+    tm, x, q = _strip(4, room=(), integral_extrapolation=extrapolation)
     T = tm.solve(x, q)
     loss = tm.environment_loss(x, T)
     assert loss.sum() == pytest.approx(q.sum(), rel=1e-9)
