@@ -22,14 +22,33 @@ from ..errors import ParameterError
 from .parameters import ThermalParameters
 from .steady import ThermalModel
 
-__all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane"]
+__all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane",
+           "CreaseTemperatureTable"]
 
 #: Boundary panels farther than this fraction of their extent from one plane are not coplanar.
 _COPLANAR = 1e-6
 
 
+class CreaseTemperatureTable:
+    """``to_frame`` of a result with the crease temperature fields ``temperature``,
+    ``crease_temperature``, ``crease_temperature_max``, ``crease_t_ctr``, ``crease_t_ave``
+    (this module's result and :class:`~simulator.thermal.fe.FE3DResult`)."""
+
+    def to_frame(self):
+        """One row per crease: ``crease [-]`` and the four crease temperatures [degC]."""
+        import pandas as pd
+
+        if self.temperature is None:
+            return pd.DataFrame()
+        return pd.DataFrame({"crease [-]": np.arange(len(self.crease_t_ctr)),
+                             "temperature [degC]": self.crease_temperature,
+                             "temperature_max [degC]": self.crease_temperature_max,
+                             "T_ctr [degC]": self.crease_t_ctr,
+                             "T_ave [degC]": self.crease_t_ave})
+
+
 @dataclass(frozen=True)
-class FixedShapeTemperatures(ResultFiles):
+class FixedShapeTemperatures(CreaseTemperatureTable, ResultFiles):
     """Steady temperatures of :func:`fixed_shape_temperatures` (the fields of
     :class:`~simulator.thermal.fe.FE3DResult`, which the ``"fe"`` model returns).
 
@@ -63,16 +82,6 @@ class FixedShapeTemperatures(ResultFiles):
     wall_time: float
 
     _csv_name = "fixed_shape_creases.csv"
-
-    def to_frame(self):
-        """One row per crease: ``crease [-]`` and the four crease temperatures [degC]."""
-        import pandas as pd
-
-        return pd.DataFrame({"crease [-]": np.arange(len(self.crease_t_ctr)),
-                             "temperature [degC]": self.crease_temperature,
-                             "temperature_max [degC]": self.crease_temperature_max,
-                             "T_ctr [degC]": self.crease_t_ctr,
-                             "T_ave [degC]": self.crease_t_ave})
 
     def _meta(self) -> dict:
         return {"heat_input [W]": self.heat_input, "loss_model": self.loss_model,
