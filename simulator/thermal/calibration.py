@@ -156,7 +156,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     q = chain.heat_vector(power)
     if not q.sum() > 0:
         raise ParameterError("calibrate_environment: power must heat at least one crease (> 0).")
-    ref_fixed = getattr(solve, "__self__", chain).fixed_nodes      # the reference's own, if a model
+    ref_fixed = getattr(solve, "__self__", chain).held_nodes(x)    # the reference's own, if a model
     nodes = np.setdiff1d(np.unique(mesh.crease_nodes), np.union1d(chain.fixed_nodes, ref_fixed))
     if not len(nodes):
         raise ParameterError("calibrate_environment: every crease node is held at room "

@@ -15,6 +15,16 @@ Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (
 ``~3 x 8 n_s^2`` bytes during assembly), Cholesky ``n_s^3 / 3`` flops, once per shape. Models
 above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
 ``loss_model="chain"``, or the 3-D FE reference of :mod:`simulator.thermal.fe`).
+
+Sheet on the substrate: the rule of the 3-D FE reference (``solve_fe3d`` holds sheet nodes on
+the plane at room temperature and does not embed triangles lying in it). Nodes closer to the
+plane than :data:`TOUCH_TOLERANCE` times the sheet's extent touch the substrate
+(:meth:`IntegralLoss.touching`): the steady model holds them at room temperature, and the
+sub-triangles lying in the plane are left out of ``S`` (there the layer and its image cancel:
+their rows and columns of ``S`` vanish, they carry heat straight into the substrate and none
+into the medium). Nodes below the plane are pressed onto it (a warning) for the operator.
+Between two sheets of the plane the gap conducts ``~ k A / h`` through the image term, which
+tends to the held temperature as ``h -> 0``.
 """
 
 from __future__ import annotations
@@ -28,13 +38,16 @@ from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
 
-__all__ = ["IntegralLoss", "MAX_SUB_TRIANGLES"]
+__all__ = ["IntegralLoss", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE"]
 
 logger = logging.getLogger(__name__)
 
 #: Largest number of sub-triangles of the dense single-layer operator: 4000 x 4000 is 128 MB
 #: per matrix and about 2 s of assembly and Cholesky on one core.
 MAX_SUB_TRIANGLES = 4000
+#: A node closer to the substrate plane than this fraction of the sheet's extent touches it
+#: (held at room temperature): the tolerance of the 3-D FE reference's on-plane nodes.
+TOUCH_TOLERANCE = 1e-9
 
 
 class IntegralLoss:
@@ -85,6 +98,36 @@ class IntegralLoss:
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
 
+    def _heights(self, x):
+        """Height of every node over the substrate plane [m], (n_nodes,), and the touch
+        tolerance [m] (``None, 0`` without a plane)."""
+        if self.plane is None:
+            return None, 0.0
+        origin, normal = (np.asarray(v, float) for v in self.plane)
+        h = (x - origin) @ normal
+        return h, TOUCH_TOLERANCE * float(np.ptp(x[self.nodes], axis=0).max())
+
+    def touching(self, x) -> np.ndarray:
+        """Nodes on (or below) the substrate plane at positions ``x`` (n, 3) [m], (n_nodes,)
+        bool: the steady model holds them at room temperature (all False without a plane)."""
+        h, tol = self._heights(np.asarray(x, float))
+        return np.zeros(self.n_nodes, bool) if h is None else h <= tol
+
+    def _pressed(self, x):
+        """``x`` with the nodes below the substrate plane moved onto it, and the mask of the
+        sub-triangles lying in the plane (None if there is none)."""
+        h, tol = self._heights(x)
+        if h is None or not np.any(h <= tol):
+            return x, None
+        if np.any(below := h < -tol):
+            logger.warning("%d node(s) up to %.3g m below the substrate plane: pressed onto it "
+                           "for the heat loss", int(below.sum()), float(-h.min()))
+            x = x - np.minimum(h, 0.0)[:, None] * np.asarray(self.plane[1], float)
+            h = np.maximum(h, 0.0)
+        corner = np.einsum("sab,tb->tsa", self._bary, h[self.triangles]).reshape(-1, 3)
+        flat = np.all(corner <= tol, axis=1)
+        return x, (flat if flat.any() else None)
+
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
         corners = np.asarray(x, float)[self.triangles]                # (n_tri, 3, 3)
@@ -100,15 +143,22 @@ class IntegralLoss:
             if np.array_equal(last, x) or (self.shape_tol > 0 and np.max(
                     np.abs(x[self.nodes] - last[self.nodes])) <= self.shape_tol * size):
                 return P
-        sub = self.sub_triangles(x)
+        xp, flat = self._pressed(x)
+        sub, M = self.sub_triangles(xp), self.M
+        if flat is not None:             # on the substrate: no potential, no unknown
+            sub, M = sub[~flat], M[~flat]
         V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
         S = V / area[None, :]
         S = 0.5 * (S + S.T)
-        P = _single_layer_jit.cholesky_solve(S, self.M) if _single_layer_jit.use_compiled() \
-            else None
+        P = _single_layer_jit.cholesky_solve(S, M) if _single_layer_jit.use_compiled() \
+            and len(S) else None
         if P is None:                    # the ladder: dense Cholesky, LU if not definite
-            P = factorize(S, kind="spd", dense_limit=len(S)).solve(self.M)
-        size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
+            P = factorize(S, kind="spd", dense_limit=len(S)).solve(M) if len(S) else M
+        if flat is not None:
+            P, live = np.zeros(self.M.shape), P
+            P[~flat] = live
+        size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean() \
+            if len(sub) else 0.0
         self._cache = (x.copy(), P, size)
         self.builds += 1
         return P

@@ -93,12 +93,16 @@ class ThermalModel:
         fixed[list(params.room_temperature_nodes)] = True
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
-        self.integral = None
+        #: the integral model's loss operator (refinement m) and, with
+        #: ``integral_extrapolation``, the coarse one (m // 2) of the Richardson combination
+        self.integral = self._integral_coarse = None
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
-            self.integral = IntegralLoss(tri[~self.is_boundary], n, params.env_conductivity,
-                                         params.integral_refinement, params.plane,
-                                         params.integral_shape_tol)
+            m = params.integral_refinement
+            self.integral, self._integral_coarse = (IntegralLoss(
+                tri[~self.is_boundary], n, params.env_conductivity, r, params.plane,
+                params.integral_shape_tol) if r else None for r in
+                (m, m // 2 if params.integral_extrapolation else 0))
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
@@ -315,8 +319,9 @@ class ThermalModel:
         K, g_eff = self._conductances(x, compiled)
         if self.integral is None:
             solver = self._factorize(K, g_eff[self.free_nodes])
-        else:
-            solver = self._factorize(K, np.zeros(len(self.free_nodes)), self._integral_loss(x))
+        else:                            # nodes touching the substrate are held there
+            solver = self._factorize(K, np.zeros(len(self.free_nodes)), self._integral_loss(x),
+                                     self.integral.touching(x)[self.free_nodes])
         self._factor_cache = (compiled, x.copy(), solver)
         return solver
 
@@ -353,6 +358,25 @@ class ThermalModel:
         keep = p.positions < p.nnz
         return p.dense_positions()[p.positions[keep]], keep
 
+    def held_nodes(self, x) -> np.ndarray:
+        """Nodes the steady model holds at room temperature at positions ``x`` (n, 3) [m]:
+        :attr:`fixed_nodes` and, in the integral model, the nodes touching the substrate plane
+        (:meth:`~simulator.thermal.integral.IntegralLoss.touching`)."""
+        if self.integral is None:
+            return self.fixed_nodes
+        return np.union1d(self.fixed_nodes, np.flatnonzero(self.integral.touching(x)))
+
+    def integral_loss_matrix(self, x) -> np.ndarray:
+        """The integral model's loss conductance [W/K] on ``integral.nodes`` at positions
+        ``x`` (n, 3) [m]: ``L_m``, or with ``integral_extrapolation`` the Richardson
+        combination ``(m L_m - c L_c) / (m - c)``, ``c = m // 2`` (theory 4.7)."""
+        L = self.integral.loss_matrix(x)
+        if self._integral_coarse is None:
+            return L
+        m = self.params.integral_refinement
+        c = m // 2
+        return (m * L - c * self._integral_coarse.loss_matrix(x)) / (m - c)
+
     def _integral_loss(self, x):
         """The integral model's loss conductance [W/K] on the free nodes, (n_free, n_free)."""
         idx = np.full(self.mesh.n_nodes, -1)
@@ -360,7 +384,7 @@ class ThermalModel:
         sheet = idx[self.integral.nodes]
         keep = sheet >= 0
         L = np.zeros((len(self.free_nodes),) * 2)
-        L[np.ix_(sheet[keep], sheet[keep])] = self.integral.loss_matrix(x)[np.ix_(keep, keep)]
+        L[np.ix_(sheet[keep], sheet[keep])] = self.integral_loss_matrix(x)[np.ix_(keep, keep)]
         return L
 
     def environment_loss(self, x, temperature, room_temperature=None) -> np.ndarray:
@@ -372,12 +396,18 @@ class ThermalModel:
         if self.integral is None:
             return self._conductances(x, False)[1] * rise
         out = np.zeros(self.mesh.n_nodes)
-        out[self.integral.nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
+        nodes = self.integral.nodes
+        if self._integral_coarse is None:
+            out[nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
+        else:                            # the extrapolated conductance the solve used
+            out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
         return out
 
-    def _factorize(self, K, g_free, loss=None):
-        """Factorise the free-node system (conduction plus condensed chains); returns its
-        solver ``q_free -> rise_free``.
+    def _factorize(self, K, g_free, loss=None, held=None):
+        """Factorise the free-node system (conduction plus condensed chains, or plus the
+        integral model's dense ``loss``); returns its solver ``q_free -> rise_free``
+        (``held`` (n_free,) bool: free nodes eliminated with a zero rise, the integral model's
+        nodes touching the substrate).
 
         By the factorisation ladder (:func:`~simulator.linalg.ladder.factorize`, kind
         "spd"): up to :data:`~simulator.linalg.thresholds.CONDUCTION_DENSE_LIMIT` free nodes
@@ -391,7 +421,9 @@ class ThermalModel:
             pos, keep = self._dense_position
             flat = np.concatenate([K.ravel(), g_free])[keep]
             A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free) + loss
-            return factorize(A, kind="spd", dense_limit=n_free).solve
+            if held is None or not held.any():
+                return factorize(A, kind="spd", dense_limit=n_free).solve
+            return _held_solver(A, ~held)
         if n_free <= limit:
             pos, keep = self._dense_position
             flat = np.concatenate([K.ravel(), g_free])[keep]
@@ -399,3 +431,18 @@ class ThermalModel:
         else:
             A = self._free_pattern.matrix([K, g_free])
         return factorize(A, kind="spd", dense_limit=limit).solve
+
+
+def _held_solver(A, keep):
+    """Solver ``q -> rise`` of the dense system ``A`` with the rows and columns not in ``keep``
+    eliminated (their rise 0: held at room temperature; their heat goes to the holder)."""
+    solve = factorize(A[np.ix_(keep, keep)], kind="spd", dense_limit=int(keep.sum())).solve \
+        if keep.any() else None
+
+    def solver(q):
+        q = np.asarray(q, float)
+        rise = np.zeros(q.shape)
+        if solve is not None:
+            rise[keep] = solve(q[keep])
+        return rise
+    return solver

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._result import ResultFiles
+from ..fixed_shape import CreaseTemperatureTable
 
 __all__ = ["FEMeshInfo", "FEDiskResult", "FE3DResult", "FE2DResult"]
 
@@ -89,7 +90,7 @@ class FEDiskResult(ResultFiles):
 
 
 @dataclass(frozen=True)
-class FE3DResult(ResultFiles):
+class FE3DResult(CreaseTemperatureTable, ResultFiles):
     """Steady temperatures of a model's sheet in a 3-D medium (:func:`solve_fe3d`).
 
     Attributes
@@ -121,18 +122,6 @@ class FE3DResult(ResultFiles):
     warnings: tuple = field(default=())
 
     _csv_name = "fe3d_creases.csv"
-
-    def to_frame(self):
-        """One row per crease: ``crease [-]`` and the four crease temperatures [degC]."""
-        import pandas as pd
-
-        if self.temperature is None:
-            return pd.DataFrame()
-        return pd.DataFrame({"crease [-]": np.arange(len(self.crease_t_ctr)),
-                             "temperature [degC]": self.crease_temperature,
-                             "temperature_max [degC]": self.crease_temperature_max,
-                             "T_ctr [degC]": self.crease_t_ctr,
-                             "T_ave [degC]": self.crease_t_ave})
 
     def _meta(self) -> dict:
         return {"heat_input [W]": self.heat_input, "warnings": list(self.warnings)} | (
