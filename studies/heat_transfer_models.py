@@ -55,20 +55,20 @@ the folded shapes.
 
 Findings (full run)
 -------------------
-Errors of the rise against the extrapolated 3-D FE (against its finer level in brackets).
+Errors of the temperature rise against the extrapolated 3-D FE.
 Strip: the integral model at m = 8 is within -0.3 to +2.5 % in T_max and T_ave on all 24
 strips (+3.6 % at most against level 2: SU-8 in water, W/L = 0.1), at m = 2 up to +14.6 %
 (SU-8, W/L = 0.1; Au within 4.1 %); the chain model is -26 to -5 % off in T_max for SU-8,
 -12 to -8 % for Au in water and within 1 % for Au in air, and -8 to +16 % in T_ave. Folded
 shapes (T_crease of the heated creases): the integral model at m = 8 is +1.3 / +1.4 % on
 the double fold, +2.2 % at the gripper's assembly and +1.3 to +2.0 % at grip (every measure
-within 2.4 %, 4.8 % against level 1), at m = 2 +4 to +7 %; the chain model runs 20 and 38 %
+within 2.5 %, 4.8 % against level 1), at m = 2 +4 to +7 %; the chain model runs 20 and 38 %
 cooler on the double fold, 42 % at assembly and 42-52 % at grip. The FE's finer level is
 0-2.3 % below its extrapolation. The double fold's fold 2 centre line (T_ave), 250 degC in
 the chain model, is 264 degC in the FE: above 1.2 T_g = 252 degC on that shape. These
 folded-shape numbers depend on the integral model's treatment of sheet parts on the
 substrate (theory 4.7), which may change: re-run with ``python -m
-studies.heat_transfer_models --overwrite`` (about 5 min on two loaded cores).
+studies.heat_transfer_models`` (about 5 min on two loaded cores).
 
 Outputs (``results/heat_transfer_models/``)
 -------------------------------------------
