@@ -18,6 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from ._result import ResultFiles, _git_hash, _jsonable
+from ._table import step_array, write_csv
 from ._version import __version__
 from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
@@ -230,11 +231,26 @@ class SimulationResult:
         """
         import pandas as pd
 
+        C = len(self.model.mesh.crease_ids)
+        return pd.DataFrame({**self._record_columns(), **{
+            name: _step_column(values, C) for name, values in self.history["columns"].items()}})
+
+    def to_columns(self) -> dict:
+        """The columns of :meth:`to_frame` without pandas: {name: (records x creases,) numpy
+        array}, the same values and order; a step column is typed as pandas types it (float
+        with NaN where a record lacks it, int, bool, or an object array of booleans or
+        strings with None; :func:`simulator._table.step_array`)."""
+        C = len(self.model.mesh.crease_ids)
+        return {**self._record_columns(), **{
+            name: step_array(values, C) for name, values in self.history["columns"].items()}}
+
+    def _record_columns(self) -> dict:
+        """The columns of :meth:`to_frame` every result has (all but the step columns)."""
         h = self.history
         creases = self.model.mesh.crease_ids
         m, C = len(h["stage"]), len(creases)
         rep = lambda a: np.repeat(a, C)  # noqa: E731
-        return pd.DataFrame({
+        return {
             "step": rep(np.arange(m)), "stage": rep(h["stage_name"]),
             "increment": rep(h["increment"]), "crease": np.tile(creases, m),
             "power [mW]": h["power"].ravel() * 1e3,
@@ -243,8 +259,7 @@ class SimulationResult:
             "temperature [degC]": self.crease_temperature.ravel(),
             "temperature_max [degC]": self.crease_temperature_max.ravel(),
             "iterations": rep(h["iterations"]),
-            **{name: _step_column(values, C) for name, values in h["columns"].items()},
-        })
+        }
 
     def path_frame(self):
         """Equilibrium path of the steps with path-following columns (one row per increment),
@@ -318,10 +333,12 @@ class SimulationResult:
         """
         out = pathlib.Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        self.to_frame().to_csv(out / "creases.csv", index=False)
-        path = self.path_frame()
-        if path is not None:
-            path.to_csv(out / "path.csv", index=False)
+        if not write_csv(out / "creases.csv", self.to_columns()):   # pandas only if needed
+            self.to_frame().to_csv(out / "creases.csv", index=False)
+        if any(step.columns for step in self.steps):                 # else no path.csv
+            path = self.path_frame()
+            if path is not None:
+                path.to_csv(out / "path.csv", index=False)
         h = self.history
         mesh = self.model.mesh
         np.savez_compressed(out / "nodes.npz", reference_positions=mesh.nodes,
