@@ -181,16 +181,14 @@ class SimulationResult:
     @cached_property
     def fold_angle(self) -> np.ndarray:
         """(m, C) crease fold angles [rad] of every record (0 flat, > 0 towards +z)."""
-        mesh = self.model.mesh
-        return np.array([fold_angles(mesh, mesh.nodes + u) for u in self.history["u"]])
+        return _per_record(fold_angles, self.model.mesh, self.history["u"])
 
     @cached_property
     def crease_rotation(self) -> np.ndarray:
         """(m, C) crease rotations [rad] of every record: the sum of the rotations of each
         crease's fold lines (what the bimorph drives); equals :attr:`fold_angle` (panel to
         panel) while the panels stay flat (:func:`~simulator.mechanics.kinematics.crease_rotations`)."""
-        mesh = self.model.mesh
-        return np.array([crease_rotations(mesh, mesh.nodes + u) for u in self.history["u"]])
+        return _per_record(crease_rotations, self.model.mesh, self.history["u"])
 
     @cached_property
     def crease_temperature(self) -> np.ndarray:
@@ -376,6 +374,19 @@ def triangle_kinds(model) -> np.ndarray:
     kind[np.isin(mesh.triangle_panel, list(boundary)) & (mesh.triangle_panel >= 0)] = \
         TRIANGLE_SUBSTRATE
     return kind
+
+
+#: Records measured at once by :func:`_per_record` (bounds the temporary arrays).
+_RECORD_BLOCK = 256
+
+
+def _per_record(measure, mesh, u: np.ndarray) -> np.ndarray:
+    """(m, C) ``measure(mesh, positions)`` of every record of the displacements u (m, n, 3),
+    computed for blocks of records at once (the same numbers as one call per record)."""
+    if len(u) == 0:
+        return np.zeros((0, len(mesh.crease_ids)))
+    return np.concatenate([measure(mesh, mesh.nodes + u[i:i + _RECORD_BLOCK])
+                           for i in range(0, len(u), _RECORD_BLOCK)])
 
 
 def _step_column(values, C: int):
