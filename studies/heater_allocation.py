@@ -238,14 +238,17 @@ def _limit_note(df: pd.DataFrame) -> str:
     from studies.plotting import T_LIMIT
 
     s = df[df["table"] == "summary"]
-    s = s[s["variant"] != "flat-shape LP"]              # the allocations, which the limit binds
     line = (f"Temperature bound of the allocation: the centre-line mean (nodes A, B, Ctr) of "
             f"every crease <= 1.2 T_g = {T_LIMIT:.0f} °C, the measure of every design problem "
             "and figure (theory 5.4)")
-    if "limit_temperature [degC]" in s and s["limit_temperature [degC]"].notna().any():
-        line += (f"; hottest crease of the allocations {s['limit_temperature [degC]'].max():.0f}"
-                 f" °C (centre line), hottest node {s['max_crease_temperature [degC]'].max():.0f}"
-                 " °C")
+    if "limit_temperature [degC]" not in s:
+        return line + "."
+    flat = s["variant"] == "flat-shape LP"
+    for what, rows in (("the allocations", s[~flat]), ("the flat-shape LP", s[flat])):
+        if rows["limit_temperature [degC]"].notna().any():
+            line += (f"; hottest crease of {what} {rows['limit_temperature [degC]'].max():.0f} °C"
+                     f" (centre line), hottest node "
+                     f"{rows['max_crease_temperature [degC]'].max():.0f} °C")
     return line + "."
 
 

@@ -22,7 +22,9 @@ def test_the_bound_is_the_centre_line_measure_and_the_figure_says_so(quick_study
     note = " ".join(t.get_text() for t in module.plot(df).texts
                     if t.get_gid() == "assumptions").replace("\n", " ")
     assert "centre-line mean (nodes A, B, Ctr) of every crease <= 1.2 T_g = 252" in note
-    assert f"{s['limit_temperature [degC]'].max():.0f} °C (centre line)" in note
+    assert (f"allocations {s['limit_temperature [degC]'].max():.0f} °C (centre line), hottest "
+            f"node {s['max_crease_temperature [degC]'].max():.0f} °C") in note
+    assert "flat-shape LP" in note
 
 
 def test_writes_csv_png_and_meta(quick):
