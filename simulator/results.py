@@ -5,7 +5,9 @@ node temperatures and crease powers. Crease fold angles (panel to panel), crease
 rotations (sum over the crease's fold lines, see :mod:`simulator.mechanics.kinematics`) and crease
 temperatures are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
 table (one row per record and crease, unit-bearing column names) and
-:meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``.
+:meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``;
+:meth:`SimulationResult.to_columns` is the same table as numpy columns, without pandas (what
+``save`` writes ``creases.csv`` from, byte for byte as pandas would: :mod:`simulator._table`).
 """
 
 from __future__ import annotations
