@@ -31,8 +31,9 @@ __getattr__, __dir__ = _attach(__name__, {
                        "optimize", "optimizers", "register_optimizer", "unregister_optimizer"),
     ".analysis.robustness": ("CREASE_GROUPS", "RobustGripperProblem", "residual_fold_grid",
                     "sweep_residual_fold", "with_residual_fold"),
-    ".analysis.heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "allocate_heaters",
-                 "fold_sensitivity", "influence_matrices", "linear_allocation"),
+    ".analysis.heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "TEMPERATURE_MEASURES",
+                          "allocate_heaters", "fold_sensitivity", "influence_matrices",
+                          "limit_temperatures", "linear_allocation"),
     ".core.executors": ("DaskExecutor", "Executor", "ExecutorError", "ProcessExecutor",
                    "SerialExecutor", "TaskError", "TaskFailure", "executor_from_option",
                    "make_executor"),
@@ -61,7 +62,7 @@ __all__ = [
     "RobustGripperProblem", "CREASE_GROUPS",
     # heater allocation
     "allocate_heaters", "linear_allocation", "HeaterAllocation", "ALLOCATION_STATUSES",
-    "influence_matrices", "fold_sensitivity",
+    "influence_matrices", "fold_sensitivity", "limit_temperatures", "TEMPERATURE_MEASURES",
     # executors
     "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "ExecutorError",
     "TaskError", "make_executor", "executor_from_option",

@@ -5,7 +5,9 @@ node temperatures and crease powers. Crease fold angles (panel to panel), crease
 rotations (sum over the crease's fold lines, see :mod:`simulator.mechanics.kinematics`) and crease
 temperatures are derived from them on demand. :meth:`SimulationResult.to_frame` gives a long
 table (one row per record and crease, unit-bearing column names) and
-:meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``.
+:meth:`SimulationResult.save` writes ``creases.csv``, ``nodes.npz`` and ``meta.json``;
+:meth:`SimulationResult.to_columns` is the same table as numpy columns, without pandas (what
+``save`` writes ``creases.csv`` from, byte for byte as pandas would: :mod:`simulator._table`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ._result import ResultFiles, _git_hash, _jsonable
+from ._table import step_array, write_csv
 from ._version import __version__
 from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
@@ -180,16 +183,14 @@ class SimulationResult:
     @cached_property
     def fold_angle(self) -> np.ndarray:
         """(m, C) crease fold angles [rad] of every record (0 flat, > 0 towards +z)."""
-        mesh = self.model.mesh
-        return np.array([fold_angles(mesh, mesh.nodes + u) for u in self.history["u"]])
+        return _per_record(fold_angles, self.model.mesh, self.history["u"])
 
     @cached_property
     def crease_rotation(self) -> np.ndarray:
         """(m, C) crease rotations [rad] of every record: the sum of the rotations of each
         crease's fold lines (what the bimorph drives); equals :attr:`fold_angle` (panel to
         panel) while the panels stay flat (:func:`~simulator.mechanics.kinematics.crease_rotations`)."""
-        mesh = self.model.mesh
-        return np.array([crease_rotations(mesh, mesh.nodes + u) for u in self.history["u"]])
+        return _per_record(crease_rotations, self.model.mesh, self.history["u"])
 
     @cached_property
     def crease_temperature(self) -> np.ndarray:
@@ -230,11 +231,26 @@ class SimulationResult:
         """
         import pandas as pd
 
+        C = len(self.model.mesh.crease_ids)
+        return pd.DataFrame({**self._record_columns(), **{
+            name: _step_column(values, C) for name, values in self.history["columns"].items()}})
+
+    def to_columns(self) -> dict:
+        """The columns of :meth:`to_frame` without pandas: {name: (records x creases,) numpy
+        array}, the same values and order; a step column is typed as pandas types it (float
+        with NaN where a record lacks it, int, bool, or an object array of booleans or
+        strings with None; :func:`simulator._table.step_array`)."""
+        C = len(self.model.mesh.crease_ids)
+        return {**self._record_columns(), **{
+            name: step_array(values, C) for name, values in self.history["columns"].items()}}
+
+    def _record_columns(self) -> dict:
+        """The columns of :meth:`to_frame` every result has (all but the step columns)."""
         h = self.history
         creases = self.model.mesh.crease_ids
         m, C = len(h["stage"]), len(creases)
         rep = lambda a: np.repeat(a, C)  # noqa: E731
-        return pd.DataFrame({
+        return {
             "step": rep(np.arange(m)), "stage": rep(h["stage_name"]),
             "increment": rep(h["increment"]), "crease": np.tile(creases, m),
             "power [mW]": h["power"].ravel() * 1e3,
@@ -243,8 +259,7 @@ class SimulationResult:
             "temperature [degC]": self.crease_temperature.ravel(),
             "temperature_max [degC]": self.crease_temperature_max.ravel(),
             "iterations": rep(h["iterations"]),
-            **{name: _step_column(values, C) for name, values in h["columns"].items()},
-        })
+        }
 
     def path_frame(self):
         """Equilibrium path of the steps with path-following columns (one row per increment),
@@ -318,10 +333,12 @@ class SimulationResult:
         """
         out = pathlib.Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        self.to_frame().to_csv(out / "creases.csv", index=False)
-        path = self.path_frame()
-        if path is not None:
-            path.to_csv(out / "path.csv", index=False)
+        if not write_csv(out / "creases.csv", self.to_columns()):   # pandas only if needed
+            self.to_frame().to_csv(out / "creases.csv", index=False)
+        if any(step.columns for step in self.steps):                 # else no path.csv
+            path = self.path_frame()
+            if path is not None:
+                path.to_csv(out / "path.csv", index=False)
         h = self.history
         mesh = self.model.mesh
         np.savez_compressed(out / "nodes.npz", reference_positions=mesh.nodes,
@@ -359,6 +376,19 @@ def triangle_kinds(model) -> np.ndarray:
     kind[np.isin(mesh.triangle_panel, list(boundary)) & (mesh.triangle_panel >= 0)] = \
         TRIANGLE_SUBSTRATE
     return kind
+
+
+#: Records measured at once by :func:`_per_record` (bounds the temporary arrays).
+_RECORD_BLOCK = 256
+
+
+def _per_record(measure, mesh, u: np.ndarray) -> np.ndarray:
+    """(m, C) ``measure(mesh, positions)`` of every record of the displacements u (m, n, 3),
+    computed for blocks of records at once (the same numbers as one call per record)."""
+    if len(u) == 0:
+        return np.zeros((0, len(mesh.crease_ids)))
+    return np.concatenate([measure(mesh, mesh.nodes + u[i:i + _RECORD_BLOCK])
+                           for i in range(0, len(u), _RECORD_BLOCK)])
 
 
 def _step_column(values, C: int):

@@ -23,7 +23,15 @@ from simulator.state import equilibrium_system, thermal_model
 
 from ..devices.limits import SU8_TG
 
-__all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation"]
+__all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation", "TEMPERATURE_MEASURES",
+           "limit_temperatures"]
+
+#: What the temperature limit bounds: ``"centre_line"``, the mean of each crease's three
+#: centre-line nodes (A, B, Ctr; the documented measure of the 1.2 T_g limit, theory 5.4, as
+#: in every design problem and figure), or ``"crease_max"``, every crease node (stricter).
+TEMPERATURE_MEASURES = ("centre_line", "crease_max")
+#: Columns of ``BarHingeMesh.crease_nodes`` on the crease's centre line (A, B, Ctr).
+_CENTRE_LINE_NODES = slice(4, 7)
 
 
 def _heater_table(model: Model, heaters) -> dict:
@@ -63,6 +71,40 @@ def influence_matrices(model: Model, x: np.ndarray, heaters: Mapping) -> tuple:
     nodes = rise[mesh.crease_nodes]                               # (C, 7, k)
     G = np.einsum("cwk,w->ck", nodes, crease_temperature_weights())
     return G, nodes.reshape(-1, len(heaters))
+
+
+def _check_measure(measure) -> str:
+    if measure not in TEMPERATURE_MEASURES:
+        raise ParameterError(f"temperature_measure = {measure!r}; use 'centre_line' (the mean "
+                             "of each crease's centre-line nodes, the documented measure of the "
+                             "1.2 T_g limit) or 'crease_max' (every crease node).")
+    return measure
+
+
+def limit_temperatures(model: Model, node_values: np.ndarray,
+                       measure: str = "centre_line") -> np.ndarray:
+    """What the temperature limit bounds, from values at the mesh nodes.
+
+    ``node_values`` (n,) or (n, k) (temperatures [deg C], or rises per heater watt [K/W]);
+    returns (C,) or (C, k) for ``"centre_line"`` (the mean of each crease's centre-line nodes
+    A, B, Ctr: a linear functional, so the LP stays linear) or (C * 7,) or (C * 7, k) for
+    ``"crease_max"`` (every crease node, rows of ``mesh.crease_nodes``).
+    """
+    return _of_crease_nodes(np.asarray(node_values)[model.mesh.crease_nodes],
+                            _check_measure(measure))
+
+
+def _of_crease_nodes(nodes: np.ndarray, measure: str) -> np.ndarray:
+    """The limit measure from values at the crease nodes, (C, 7) or (C, 7, k)."""
+    if measure == "centre_line":
+        return nodes[:, _CENTRE_LINE_NODES].mean(axis=1)
+    return nodes.reshape(-1, *nodes.shape[2:])
+
+
+def _limit_rows(H: np.ndarray, measure: str) -> np.ndarray:
+    """Rows of the limit measure per heater watt from ``H`` (C * 7, k), the rise of every
+    crease node (:func:`influence_matrices`)."""
+    return _of_crease_nodes(H.reshape(-1, 7, H.shape[1]), measure)
 
 
 def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
@@ -163,22 +205,24 @@ def _check_targets(model, targets, rot):
 
 def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None = None,
                       state: SimulationState | None = None,
-                      temperature_limit: float = 1.2 * SU8_TG, band: float = 0.0
-                      ) -> np.ndarray:
+                      temperature_limit: float = 1.2 * SU8_TG, band: float = 0.0,
+                      temperature_measure: str = "centre_line") -> np.ndarray:
     """Powers [W] per heater from one LP at ``state`` (default flat), without simulating.
 
     The design one would make ignoring that folding changes the heat loss and the
-    mechanics: the baseline that :func:`allocate_heaters` improves on. Raises
+    mechanics: the baseline that :func:`allocate_heaters` improves on. ``temperature_limit``
+    [deg C] bounds ``temperature_measure`` as in :func:`allocate_heaters`. Raises
     :class:`ParameterError` if the LP has no solution.
     """
+    _check_measure(temperature_measure)
     table = _heater_table(model, heaters)
     state = initial_state(model) if state is None else state
     rows = _check_targets(model, targets, model.actuators.rotation_per_kelvin(model.mesh))
     A, H, folds = _linear_model(model, state, table, rows)
     step = np.array([float(v) for v in dict(targets).values()]) - folds
-    p, _, status = _solve_lp(A, step, band, H,
-                             temperature_limit
-                             - state.temperature[model.mesh.crease_nodes].ravel(),
+    rise_limit = temperature_limit - limit_temperatures(model, state.temperature,
+                                                        temperature_measure)
+    p, _, status = _solve_lp(A, step, band, _limit_rows(H, temperature_measure), rise_limit,
                              _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
         raise SolverError(f"linear_allocation: LP not solved ({status}).")

@@ -107,13 +107,35 @@ def show_progress(quiet: bool) -> bool:
     return not quiet and bool(isatty and isatty())
 
 
+class _HiddenBar:
+    """What a disabled tqdm bar does, without importing tqdm: ``update`` and the drawing
+    methods do nothing, ``reset(total)`` sets ``total``; ``n`` stays 0."""
+
+    def __init__(self, total=None):
+        self.total, self.n, self.leave, self.disable = total, 0, True, True
+
+    def reset(self, total=None) -> None:
+        self.n = 0
+        if total is not None:
+            self.total = total
+
+    def __getattr__(self, name):                # update, close, set_postfix_str, refresh, ...
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return lambda *args, **kwargs: None
+
+
 @contextlib.contextmanager
 def progress_bar(total=None, desc: str = "", unit: str = "eval", disable: bool = False):
     """A tqdm bar on stderr that erases itself when the command is interrupted or fails;
-    disabled when ``disable`` (``--quiet``) or when stderr is not a terminal."""
+    hidden when ``disable`` (``--quiet``) or when stderr is not a terminal (then tqdm is not
+    even imported: a short command's start-up)."""
+    if not show_progress(disable):
+        yield _HiddenBar(total)
+        return
     from tqdm import tqdm
 
-    bar = tqdm(total=total, desc=desc, unit=unit, disable=not show_progress(disable))
+    bar = tqdm(total=total, desc=desc, unit=unit)
     try:
         yield bar
     except BaseException:

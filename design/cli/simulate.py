@@ -174,18 +174,26 @@ def _run(args) -> int:
     if result.status == "interrupted":
         return _save_interrupted(result, args.out, meta, where)
     out = result.save(args.out, meta)
-    frame = result.to_frame()
-    last = frame[frame["step"] == frame["step"].max()]
     print(f"{name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
           f"results in {out}")
-    columns = ["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
-               "temperature_max [degC]"]
-    if model.thermal is None and getattr(model.mesh, "sharp", False):
-        columns = ["crease", "fold_angle [deg]"]          # concentrated hinges: not heated
-    print(last[columns].to_string(index=False))
+    print(_last_record_table(result, model))
     for line in summary_lines(result):
         print(line)
     return 0 if result.success else 1
+
+
+def _last_record_table(result, model) -> str:
+    """The creases at the last record (crease, power, fold angle, temperatures), printed as
+    pandas would print those rows of ``creases.csv`` (without importing pandas)."""
+    from ._text_table import format_table
+
+    columns = result.to_columns()
+    last = columns["step"] == columns["step"].max()
+    names = ["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
+             "temperature_max [degC]"]
+    if model.thermal is None and getattr(model.mesh, "sharp", False):
+        names = ["crease", "fold_angle [deg]"]            # concentrated hinges: not heated
+    return format_table({n: columns[n][last] for n in names})
 
 
 def _save_interrupted(result, out_dir, meta, where) -> int:

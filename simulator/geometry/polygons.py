@@ -54,31 +54,34 @@ def fan_normals(corners: np.ndarray, sizes, centre: np.ndarray | None = None) ->
     """Cross products (S, 3) ``(c_j - o) x (c_{j+1} - o)`` of every fan triangle [m^2].
 
     Each is twice the vector area of the fan triangle (o, c_j, c_{j+1}); ``centre`` (P, 3)
-    gives o per polygon, default :func:`centroids`.
+    gives o per polygon, default :func:`centroids`. ``corners`` (..., S, 3) and ``centre``
+    (..., P, 3) with leading axes (e.g. records) give (..., S, 3), each the same numbers as
+    one call per record.
     """
     r = rings(sizes)
-    o = (centroids(corners, sizes) if centre is None else centre)[r.owner]
-    return np.cross(corners - o, corners[r.nxt] - o)
+    o = (centroids(corners, sizes) if centre is None else centre)[..., r.owner, :]
+    return np.cross(corners - o, corners[..., r.nxt, :] - o)
 
 
 def area_vectors(corners: np.ndarray, sizes, centre: np.ndarray | None = None) -> np.ndarray:
     """Vector area (P, 3) of every polygon [m^2]: normal by the right-hand rule, length = area.
 
     Newell's method (half the sum of :func:`fan_normals`); independent of ``centre`` for a
-    planar polygon.
+    planar polygon. Leading axes as in :func:`fan_normals` (with ``centre`` given).
     """
     sizes = np.asarray(sizes)
-    return 0.5 * np.add.reduceat(fan_normals(corners, sizes, centre), np.cumsum(sizes) - sizes)
+    return 0.5 * np.add.reduceat(fan_normals(corners, sizes, centre), np.cumsum(sizes) - sizes,
+                                 axis=-2)
 
 
 def unit_normals(corners: np.ndarray, sizes, centre: np.ndarray | None = None,
                  upward: bool = False) -> np.ndarray:
     """Unit normals (P, 3) by Newell's method; orientation from the corner order, or with a
-    non-negative z component if ``upward``."""
+    non-negative z component if ``upward``. Leading axes as in :func:`area_vectors`."""
     n = area_vectors(corners, sizes, centre)
     if upward:
-        n = n * np.where(n[:, 2] < 0, -1.0, 1.0)[:, None]
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+        n = n * np.where(n[..., 2] < 0, -1.0, 1.0)[..., None]
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
 
 def triangle_areas(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

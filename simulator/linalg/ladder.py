@@ -42,7 +42,6 @@ import warnings
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import linsolve, pardiso, thresholds
 from .small_solve import DenseFactor, as_dense, solve_dense
@@ -236,16 +235,24 @@ def _kept_nd(A) -> Factor | None:
     return None if lu is None else Factor(lu, "superlu-nd", A.shape[0])
 
 
+def _splu(A, **options):
+    """SuperLU factors of a CSC matrix (``scipy.sparse.linalg`` is imported on first use: a
+    small model never needs it)."""
+    import scipy.sparse.linalg as spla
+
+    return spla.splu(A, **options)
+
+
 def _mmd(Ac):
-    return spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                     options={"SymmetricMode": True})
+    return _splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                 options={"SymmetricMode": True})
 
 
 _KEPT = {
     "pardiso": _kept_pardiso,
     "superlu-nd": _kept_nd,
     "superlu-mmd": lambda A: Factor(_mmd(A.tocsc()), "superlu-mmd", A.shape[0]),
-    "superlu": lambda A: Factor(spla.splu(A.tocsc()), "superlu", A.shape[0]),
+    "superlu": lambda A: Factor(_splu(A.tocsc()), "superlu", A.shape[0]),
 }
 
 
@@ -323,7 +330,7 @@ def _sparse_rungs_solve(A, b, kind, backend, rtol):
             x, ok = linsolve.refined(A, lu.solve, b, lu.solve(b), rtol)
             x = x if ok else None
         else:
-            x = spla.splu(A.tocsc() if Ac is None else Ac).solve(b)
+            x = _splu(A.tocsc() if Ac is None else Ac).solve(b)
         if x is not None:
             return x, rung
     raise AssertionError("unreachable: the last rung always solves")

@@ -51,7 +51,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import pardiso
 
@@ -171,6 +170,8 @@ class NestedDissection:
         if K.shape != (len(self.perm),) * 2 or K.nnz != len(self.data_map):
             raise ValueError(f"matrix {K.shape} with {K.nnz} entries is not of this pattern")
         A = sp.csc_matrix((K.data[self.data_map], self.indices, self.indptr), shape=K.shape)
+        import scipy.sparse.linalg as spla
+
         return PermutedLU(spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
                                     options={"SymmetricMode": True}), self.perm)
 
@@ -179,7 +180,7 @@ class NestedDissection:
 class PermutedLU:
     """SuperLU factors ``lu`` of ``K[perm][:, perm]``, solving with ``K`` itself."""
 
-    lu: spla.SuperLU
+    lu: "scipy.sparse.linalg.SuperLU"
     perm: np.ndarray
 
     def solve(self, r: np.ndarray) -> np.ndarray:

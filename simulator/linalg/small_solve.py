@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg.lapack as lapack
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
@@ -143,6 +142,8 @@ class SparseCholesky:
         self.n = n
         A = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)).tocsc()
         A = (abs(A) + abs(A.T) + sp.identity(n, format="csc") * (2.0 * n)).tocsc()
+        import scipy.sparse.linalg as spla
+
         lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
         self.order = np.argsort(lu.perm_c).astype(np.int64)

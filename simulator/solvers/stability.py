@@ -19,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .._result import ResultFiles
 from ..linalg.ladder import factorize
@@ -105,6 +104,8 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto") -> Stability:
         A = as_dense(K)
         w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
         return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], True)
+    import scipy.sparse.linalg as spla
+
     diag = np.abs(K.diagonal())
     shift = -1e-8 * float(np.median(diag[diag > 0])) if np.any(diag > 0) else -1e-12
     K = sp.csr_matrix(K)

@@ -25,7 +25,6 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from . import _thermal_jit
 
@@ -141,6 +140,8 @@ class ThermalModel:
         live = tri[self.conductivity * self.thickness > 0]
         adj = sp.coo_matrix((np.ones(3 * len(live)), (live.ravel(), np.roll(live, 1, 1).ravel())),
                             shape=(n, n))
+        from scipy.sparse.csgraph import connected_components
+
         n_comp, label = connected_components(adj, directed=False)
         bad = np.setdiff1d(np.arange(n_comp), label[self.fixed_nodes])
         if len(bad):

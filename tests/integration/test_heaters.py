@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from design.analysis.heaters import allocate_heaters, influence_matrices
+from design.analysis.heaters import allocate_heaters, influence_matrices, limit_temperatures
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
 from simulator import Heat, simulate
@@ -104,6 +104,7 @@ def test_one_circuit_sets_two_folds_only_in_its_own_ratio(folded):
     ({"band": -0.1}, "band"),
     ({"stages": 0}, "stages"),
     ({"max_power": -1.0}, "max_power"),
+    ({"temperature_measure": "hottest"}, "temperature_measure = 'hottest'.*centre_line"),
 ])
 def test_bad_input_is_named(folded, kwargs, match):
     model, start, _, targets = folded
@@ -139,3 +140,38 @@ def test_crane_allocation_finds_the_papers_total_power():
     assert res.status == "converged", res.message
     assert res.total_power == pytest.approx(1e-3 * 112.0, rel=0.01)
     assert max(abs(res.achieved[c] - t) for c, t in targets.items()) <= math.radians(0.5)
+
+
+def test_limit_measure_is_the_centre_line_mean_of_the_results(folded):
+    """The default measure is the one of theory 5.4 and of SimulationResult: the mean of each
+    crease's centre-line nodes (A, B, Ctr); "crease_max" is every crease node."""
+    model, start, state, _ = folded
+    res = simulate(model, [Heat({2: P_REF, 5: P_REF}, increments=5)], state=start)
+    T = res.state.temperature
+    np.testing.assert_array_equal(limit_temperatures(model, T),
+                                  res.crease_temperature_centre_line[-1])
+    nodes = limit_temperatures(model, T, "crease_max").reshape(-1, 7)
+    np.testing.assert_array_equal(nodes.max(axis=1), res.crease_temperature_max[-1])
+    # per heater watt (columns) the measure is linear: the mean of the node rises
+    _, H = influence_matrices(model, model.mesh.nodes + state.u, {"a": (2,), "b": (5,)})
+    rise = np.zeros((model.mesh.n_nodes, 2))
+    rise[model.mesh.crease_nodes.ravel()] = H
+    np.testing.assert_allclose(limit_temperatures(model, rise),
+                               H.reshape(-1, 7, 2)[:, 4:7].mean(axis=1), rtol=1e-15)
+
+
+def test_limit_between_centre_line_and_hottest_node_separates_the_measures(folded):
+    """At the 6 + 6 mW shape the hottest crease's centre line is at 124 degC and its hottest
+    node at 130 degC: a 127 degC limit is met on the centre line (the documented measure)
+    but not on every node."""
+    model, start, _, targets = folded
+    res = allocate_heaters(model, targets, state=start, increments=30, temperature_limit=127.0)
+    assert res.status == "converged", res.message
+    assert res.temperature_measure == "centre_line"
+    assert res.max_temperature <= 127.0 < res.max_node_temperature
+    assert res.max_temperature == pytest.approx(
+        float(limit_temperatures(model, res.state.temperature).max()), abs=0)
+    strict = allocate_heaters(model, targets, state=start, increments=30,
+                              temperature_limit=127.0, temperature_measure="crease_max")
+    assert strict.status == "infeasible" and "127 degC (crease_max)" in strict.message
+    assert strict.max_temperature == strict.max_node_temperature

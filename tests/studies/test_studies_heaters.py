@@ -12,6 +12,21 @@ def quick(quick_study):
     return out, df
 
 
+def test_the_bound_is_the_centre_line_measure_and_the_figure_says_so(quick_study):
+    module, _, df = quick_study("heater_allocation")
+    s = df[(df["table"] == "summary") & (df["variant"] != "flat-shape LP")]
+    assert (s["temperature_measure"] == "centre_line").all()
+    # the limit measure (centre-line mean) is below the hottest node and within 1.2 T_g
+    assert (s["limit_temperature [degC]"] < s["max_crease_temperature [degC]"]).all()
+    assert (s["limit_temperature [degC]"] <= 252.0 + 1e-6).all()
+    note = " ".join(t.get_text() for t in module.plot(df).texts
+                    if t.get_gid() == "assumptions").replace("\n", " ")
+    assert "centre-line mean (nodes A, B, Ctr) of every crease <= 1.2 T_g = 252" in note
+    assert (f"allocations {s['limit_temperature [degC]'].max():.0f} °C (centre line), hottest "
+            f"node {s['max_crease_temperature [degC]'].max():.0f} °C") in note
+    assert "flat-shape LP" in note
+
+
 def test_writes_csv_png_and_meta(quick):
     out, df = quick
     assert (out / "heater_allocation.png").stat().st_size > 10_000

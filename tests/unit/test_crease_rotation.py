@@ -87,3 +87,37 @@ def test_every_case_reports_crease_rotation(name, tmp_path):
     np.testing.assert_allclose(rest["crease_rotation [deg]"], rest["fold_angle [deg]"], atol=1e-5)
     saved = res.save(tmp_path)
     assert "crease_rotation [deg]" in pd.read_csv(saved / "creases.csv").columns
+
+
+def _meshes():
+    from simulator import build_sharp_mesh
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+
+    cases = [("single_fold", {}), ("double_fold", {}), ("miura_lifter", {}), ("crane", {})]
+    meshes = [(name, get_case(name, **kw).model.mesh) for name, kw in cases]
+    return meshes + [("sharp miura", build_sharp_mesh(miura_sheet_pattern()))]
+
+
+@pytest.mark.parametrize("name, mesh", _meshes(), ids=lambda v: v if isinstance(v, str) else "")
+@pytest.mark.parametrize("measure", [fold_angles, crease_rotations])
+def test_measures_of_many_records_at_once_are_bit_identical_to_one_call_per_record(
+        name, mesh, measure):
+    rng = np.random.default_rng(7)
+    size = np.ptp(mesh.nodes, axis=0).max()
+    x = mesh.nodes + 0.05 * size * rng.standard_normal((6, *mesh.nodes.shape))
+    one_by_one = np.array([measure(mesh, xk) for xk in x])
+    np.testing.assert_array_equal(measure(mesh, x), one_by_one)
+    np.testing.assert_array_equal(measure(mesh, x.reshape(2, 3, *mesh.nodes.shape)),
+                                  one_by_one.reshape(2, 3, -1))
+
+
+def test_result_measures_are_the_per_record_measures(crane, monkeypatch):
+    import simulator.results as results
+
+    case, res = crane
+    monkeypatch.setattr(results, "_RECORD_BLOCK", 7)          # several blocks, a short last one
+    fresh = results.SimulationResult(res.steps, res.state, res.model, res.initial_state)
+    mesh = case.model.mesh
+    x = mesh.nodes + res.history["u"]
+    np.testing.assert_array_equal(fresh.fold_angle, [fold_angles(mesh, xk) for xk in x])
+    np.testing.assert_array_equal(fresh.crease_rotation, [crease_rotations(mesh, xk) for xk in x])

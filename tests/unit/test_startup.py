@@ -133,3 +133,27 @@ def test_design_optimize_is_the_function_in_any_import_order(code):
                " isinstance(m, types.ModuleType), m.optimize is g,"
                " design.OptimizationResult is OptimizationResult)")
     assert out.split() == ["True"] * 6
+
+
+#: Not needed by ``etorigami run`` of a small case (issue 21: the CLI at library speed).
+NOT_ON_THE_RUN_PATH = ("pandas", "tqdm", "matplotlib", "scipy.sparse.linalg",
+                       "scipy.sparse.csgraph", "scipy.optimize", "scipy.stats", "cvxpy", "nlopt")
+
+
+def test_cli_run_imports_no_pandas_tqdm_or_unused_scipy(tmp_path):
+    """``etorigami run single-fold ... -q --out DIR`` (numpy kernels, so that the check does
+    not depend on numba's cache) writes its files and prints its table without pandas, tqdm,
+    scipy.sparse.linalg or scipy.sparse.csgraph."""
+    out = tmp_path / "run"
+    code = ("import contextlib, io, json, sys\nfrom design.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()) as buf:\n"
+            "    code = main(['run', 'single-fold', '--set', 'thermal_steps=4', '--set',"
+            f" 'gravity=true', '-q', '--out', {str(out)!r}])\n"
+            f"print(json.dumps({{'code': code, 'text': buf.getvalue(), 'loaded': [m for m in"
+            f" {NOT_ON_THE_RUN_PATH!r} if m in sys.modules]}}))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, env=dict(ENV, ETORIGAMI_JIT="0"))
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["code"] == 0 and got["loaded"] == []
+    assert "fold_angle [deg]" in got["text"] and (out / "creases.csv").stat().st_size > 0
