@@ -74,3 +74,38 @@ def test_figure_redraws_from_the_csv(quick):
     from matplotlib.figure import Figure
 
     assert isinstance(study.plot(quick[2]), Figure)
+
+
+class _Failed:
+    """A simulation result that says it failed (the rest is the real result's)."""
+
+    success, message = False, "Heat: Newton did not converge (test)"
+
+    def __init__(self, res):
+        self._res = res
+
+    def __getattr__(self, name):
+        return getattr(self._res, name)
+
+
+def test_a_failing_model_is_a_row_not_an_exception(monkeypatch):
+    case = get_case("double_fold", thermal_steps=2)
+    monkeypatch.setattr(study, "_cases", lambda quick: {"double_fold": case})
+    real = study.simulate
+
+    def simulate(model, steps, **kw):
+        res = real(model, steps, **kw)
+        return _Failed(res) if model.thermal.loss_model == "integral" else res
+
+    monkeypatch.setattr(study, "simulate", simulate)
+    sweeps, fe, comparison = study._run_cases(True, 0, False)
+    assert fe.empty and set(sweeps["model"]) == {"chain", "integral"}
+    row = comparison.iloc[0]
+    assert len(comparison) == 1 and row["quantity"] == "run" and row["over_10pct"] is None
+    assert row["message"] == "the integral model failed: Heat: Newton did not converge (test)"
+
+
+def test_no_verdict_without_both_values():
+    row = study._verdict("gripper cycle 4", "full-function power", "mW",
+                         {"chain": 42.4, "integral": None}, None, None, "")
+    assert row["over_10pct"] is None and "closer" not in row
