@@ -92,6 +92,7 @@ from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import PAPER_DEVICES
 from studies.gripper_shapes import _cd_csv, _cd_cycles, gripper_states
+from studies.miura_lifter import lift_um
 
 __all__ = ["main", "plot", "run", "integral_model", "substrate_plane"]
 
@@ -345,17 +346,12 @@ def _cases(quick):
                                      substrate=True, thermal_steps=steps)}
 
 
-def _lift(case, res) -> np.ndarray:
-    from studies.miura_lifter import lift_um
-    return lift_um(case, res)
-
-
 def _sweep(name, case, model, res) -> pd.DataFrame:
     mesh, h = case.model.mesh, res.history
     if name == "miura_lifter":
         return pd.DataFrame({"table": "sweep", "case": name, "model": model,
                              "step": np.arange(len(h["power"])),
-                             POWER: 1e3 * h["power"].max(axis=1), "lift [um]": _lift(case, res)})
+                             POWER: 1e3 * h["power"].max(axis=1), "lift [um]": lift_um(case, res)})
     recs = np.flatnonzero(h["stage_name"] == "heat")
     if not len(recs):                              # failed before heating
         return pd.DataFrame()
@@ -383,7 +379,7 @@ def _quantities(name, case, res) -> dict:
             out[(f"fold {fold} actuation temperature", "degC")] = float(_actuation(mesh, T)[r])
             out[(f"fold {fold} centre-line temperature", "degC")] = float(_centre(mesh, T)[r])
         return out
-    return {("lift of the free end", "um"): float(_lift(case, res)[-1]),
+    return {("lift of the free end", "um"): float(lift_um(case, res)[-1]),
             ("mean |fold angle|", "deg"): float(np.degrees(np.abs(res.fold_angle[-1])).mean()),
             ("mean actuation temperature", "degC"): float(_actuation(mesh, T).mean()),
             ("hottest centre-line temperature", "degC"): float(_centre(mesh, T).max())}
