@@ -37,16 +37,18 @@ from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHin
                        Supports, ThermalParameters, build_mesh, example_patterns, make_model,
                        simulate)
 from simulator._result import ResultFiles
-from simulator._validate import one_of, positive
+from simulator._validate import integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
-           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES"]
+           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES", "LOSS_MODELS"]
 
 logger = logging.getLogger(__name__)
 
+#: Heat-loss models of :attr:`GripperDesign.loss_model` (theory 4.3 and 4.7).
+LOSS_MODELS = ("chain", "integral")
 #: Heater circuits (0-based crease ids): base hinges (reference 3, 6), arm hinges (4, 10).
 BASE_CREASES = (2, 5)
 ARM_CREASES = (3, 9)
@@ -92,6 +94,12 @@ class GripperDesign:
         that override the group values (default none)
     delta_alpha : bimorph expansion mismatch alpha_SU8 - alpha_Au [1/K] (38e-6, the paper's)
     env_conductivity : thermal conductivity of the surrounding air [W/(m K)] (0.026)
+    loss_model : heat loss of the steady heat transfer, ``"chain"`` (the paper's fitted
+        chains, default) or ``"integral"`` (theory 4.7: the single-layer potential of the sheet
+        in the air over the isothermal substrate plane ``undercut`` below the sheet; nothing
+        to fit)
+    integral_refinement : sub-triangles per triangle edge of the ``"integral"`` model
+        (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 2)
     """
 
     W: float = 200e-6
@@ -109,6 +117,8 @@ class GripperDesign:
     residual_fold_creases: tuple = ()
     delta_alpha: float = 38e-6
     env_conductivity: float = 0.026
+    loss_model: str = "chain"
+    integral_refinement: int = 2
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -117,8 +127,10 @@ class GripperDesign:
             raise ParameterError(f"GripperDesign.residual_fold_creases = {folds!r}: crease ids "
                                  f"must be actuated creases {BASE_CREASES + ARM_CREASES}.")
         object.__setattr__(self, "residual_fold_creases", tuple(sorted(folds)))
+        one_of("GripperDesign.loss_model", self.loss_model, LOSS_MODELS)
+        integer("GripperDesign.integral_refinement", self.integral_refinement, 1, 16)
         for name, value in asdict(self).items():
-            if name == "residual_fold_creases":
+            if name in ("residual_fold_creases", "loss_model", "integral_refinement"):
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -131,7 +143,8 @@ class GripperDesign:
 
     def to_dict(self) -> dict:
         """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
-        ``env_conductivity``) only when they differ from their defaults, so that problem
+        ``env_conductivity``, ``loss_model``, ``integral_refinement``) only when they differ
+        from their defaults, so that problem
         settings, and the hashes of evaluation logs written before they existed, are kept."""
         out = asdict(self)
         for name in _OPTIONAL:
@@ -281,8 +294,10 @@ class GripperResult(ResultFiles):
         }
 
 
-_UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)"}
-_OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026}
+_UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
+          "integral_refinement": "-"}
+_OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
+             "loss_model": "chain", "integral_refinement": 2}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
@@ -311,6 +326,16 @@ def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
     return f
 
 
+def _loss_model(design: GripperDesign) -> dict:
+    """The :class:`~simulator.ThermalParameters` fields of the design's heat-loss model: none
+    for the chains (their defaults), else the integral model over the substrate plane (the
+    substrate panel's plane, ``undercut`` below the sheet, normal +z into the air)."""
+    if design.loss_model == "chain":
+        return {}
+    return {"loss_model": design.loss_model, "integral_refinement": design.integral_refinement,
+            "substrate_plane": (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)}
+
+
 def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
     """The gripper model and the loading steps before heating (residual fold, gravity)."""
     pattern = example_patterns.gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
@@ -322,7 +347,8 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(env_thickness=1.5 * (design.L1 + design.L2) / 2,
                                 env_conductivity=design.env_conductivity, dissipation_angle=REFERENCE_BETA,
-                                boundary_panels=(5,), room_temperature_nodes=(37,))
+                                boundary_panels=(5,), room_temperature_nodes=(37,),
+                                **_loss_model(design))
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),

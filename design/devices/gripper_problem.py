@@ -109,7 +109,8 @@ class GripperProblem(DesignProblem):
         constraints = dict(self.space.bound_margins(values))
         constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
         metrics = {k: v for k, v in d.items()
-                   if not k.endswith("[m]") and not k.startswith("residual_fold")
+                   if not k.endswith("[m]")
+                   and not k.startswith(("residual_fold", "loss_model", "integral_refinement"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = temp
         return (res.total_power, constraints, metrics, None if res.success else res.status,
