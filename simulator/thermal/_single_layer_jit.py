@@ -16,7 +16,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix", "cholesky_solve"]
+__all__ = ["use_compiled", "kernel_matrix", "loss_factor", "back_substitute", "cholesky_solve"]
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
 #: output (n, m)
@@ -87,40 +87,61 @@ def _kernel(points, tri, centroid, area, diam, near, out):
                 out[i, j] = area[j] / dist
 
 
-def _cholesky_solve(S, B):
-    """Overwrite ``S`` (n, n) with its lower Cholesky factor and the rows of ``B`` (k, n) with
-    ``S^-1`` times them;
-    returns False (S, B partly overwritten) if ``S`` is not positive definite.
+def _loss_factor(S, W):
+    """Overwrite the lower triangle of ``S`` (n, n) with its Cholesky factor C (``S = C C^T``)
+    and ``W`` (n, k) with ``C^-1 W``; returns False (S, W partly overwritten) if ``S`` is not
+    positive definite.
 
-    Single-threaded on purpose: LAPACK's threads, next to the solver's, cost a hundred times
-    the arithmetic of these small (n < ~1000) systems on a loaded machine.
+    Row by row (left-looking): the dot products run over contiguous row prefixes and the
+    forward substitution over contiguous rows of ``W``, so both vectorise (compiled with
+    fastmath: sums in any order, round-off level differences only). Single-threaded on
+    purpose: LAPACK's threads, next to the solver's, cost a hundred times the arithmetic of
+    these small (n < ~1000) systems on a loaded machine.
     """
-    n, k = S.shape[0], B.shape[0]
-    for j in range(n):
-        d = S[j, j]
-        for m in range(j):
-            d -= S[j, m] * S[j, m]
-        if not d > 0.0:
-            return False
-        d = math.sqrt(d)
-        S[j, j] = d
-        for i in range(j + 1, n):
+    n, k = S.shape[0], W.shape[1]
+    for i in range(n):
+        for j in range(i + 1):
             v = S[i, j]
             for m in range(j):
                 v -= S[i, m] * S[j, m]
-            S[i, j] = v / d
-    for c in range(k):                                         # B holds the right sides as rows
-        for i in range(n):                                     # L y = b
-            v = B[c, i]
-            for m in range(i):
-                v -= S[i, m] * B[c, m]
-            B[c, i] = v / S[i, i]
-        for i in range(n - 1, -1, -1):                         # L^T x = y (column sweep)
-            B[c, i] /= S[i, i]
-            v = B[c, i]
-            for m in range(i):
-                B[c, m] -= S[i, m] * v
+            if i == j:
+                if not v > 0.0:
+                    return False
+                S[i, i] = math.sqrt(v)
+            else:
+                S[i, j] = v / S[j, j]
+        for m in range(i):                                     # row i of C^-1 W
+            c = S[i, m]
+            for q in range(k):
+                W[i, q] -= c * W[m, q]
+        d = 1.0 / S[i, i]
+        for q in range(k):
+            W[i, q] *= d
     return True
+
+
+def _back_substitute(C, B):
+    """Overwrite the rows of ``B`` (k, n) with ``C^-T`` times them (C (n, n) lower)."""
+    n = C.shape[0]
+    for c in range(B.shape[0]):
+        for i in range(n - 1, -1, -1):
+            B[c, i] /= C[i, i]
+            v = B[c, i]
+            for m in range(i):
+                B[c, m] -= C[i, m] * v
+
+
+def _gram(W, out):
+    """``out = W^T W`` (k, k) for ``W`` (n, k), through its transpose (contiguous rows)."""
+    Wt = W.T.copy()
+    k, n = Wt.shape
+    for a in range(k):
+        for b in range(a, k):
+            v = 0.0
+            for r in range(n):
+                v += Wt[a, r] * Wt[b, r]
+            out[a, b] = v
+            out[b, a] = v
 
 
 def _build():
@@ -129,8 +150,11 @@ def _build():
     g = globals()
     if not hasattr(g["_potential"], "py_func"):
         g["_potential"] = njit(cache=True, inline="always")(_potential)
-    if not hasattr(g["_cholesky_solve"], "py_func"):
-        g["_cholesky_solve"] = njit("b1(f8[:, ::1], f8[:, ::1])", cache=True)(_cholesky_solve)
+    for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1])"),
+                      ("_back_substitute", "void(f8[:, ::1], f8[:, ::1])"),
+                      ("_gram", "void(f8[:, ::1], f8[:, ::1])")):
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(sig, cache=True, fastmath=True)(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
 
 
@@ -146,12 +170,33 @@ def use_compiled() -> bool:
     return _compiled is not None
 
 
-def cholesky_solve(S, B):
-    """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n, k) by the compiled
-    single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not changed)."""
+def loss_factor(S, M):
+    """Cholesky factor ``C`` of a symmetric positive definite ``S`` (n, n), ``W = C^-1 M`` for
+    ``M`` (n, k) and the Gram matrix ``W^T W = M^T S^-1 M`` (k, k), by the compiled
+    single-threaded kernel; None if ``S`` is not positive definite (inputs not changed)."""
+    C, W = np.array(S, np.float64, order="C"), np.array(M, np.float64, order="C")
+    if W.ndim != 2 or not _loss_factor(C, W):
+        return None
+    G = np.empty((W.shape[1],) * 2)
+    _gram(W, G)
+    return C, W, G
+
+
+def back_substitute(C, B):
+    """``C^-T B`` for the factor ``C`` (n, n) of :func:`loss_factor` and ``B`` (n,) or (n, k)."""
     B = np.asarray(B, np.float64)
-    S, X = np.array(S, np.float64, order="C"), np.array(B.reshape(len(B), -1).T, order="C")
-    return X.T.reshape(B.shape) if _cholesky_solve(S, X) else None
+    X = np.array(B.reshape(len(B), -1).T, order="C")
+    _back_substitute(C, X)
+    return X.T.reshape(B.shape)
+
+
+def cholesky_solve(S, B):
+    """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n,) or (n, k) by the
+    compiled single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not
+    changed)."""
+    B = np.asarray(B, np.float64)
+    out = loss_factor(S, B.reshape(len(B), -1))
+    return None if out is None else back_substitute(out[0], out[1]).reshape(B.shape)
 
 
 def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:

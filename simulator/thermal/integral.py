@@ -20,8 +20,11 @@ above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.distance import pdist
 
 from ..errors import ParameterError
 from ..linalg.ladder import factorize
@@ -53,8 +56,9 @@ class IntegralLoss:
     plane : (origin (3,), unit normal (3,)), optional
         Isothermal substrate plane; the medium lies on the normal's side.
     shape_tol : float
-        Rebuild the operator when a node has moved more than ``shape_tol`` times the mean
-        sub-triangle diameter since the last build (0: on every change).
+        Rebuild the operator when the distance between two sheet nodes has changed by more
+        than ``shape_tol`` times the larger of that distance and the mean sub-triangle
+        diameter since the last build (0: on every change of position).
     """
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
@@ -90,35 +94,87 @@ class IntegralLoss:
         corners = np.asarray(x, float)[self.triangles]                # (n_tri, 3, 3)
         return np.einsum("sab,tbk->tsak", self._bary, corners).reshape(-1, 3, 3)
 
-    def _response(self, x):
-        """``P = S^-1 M`` (n_sub, n_sheet) [W/K] at positions ``x``: the heat each sub-triangle
-        loses per kelvin of each sheet node (kept while the shape stays within ``shape_tol``
-        of the last build)."""
+    def _operator(self, x) -> "_Operator":
+        """The operator at positions ``x`` (n, 3) [m]: the last build while the shape stays
+        within ``shape_tol`` of it (:meth:`_unchanged`), else a new one."""
         x = np.asarray(x, float)
-        if self._cache is not None:
-            last, P, size = self._cache
-            if np.array_equal(last, x) or (self.shape_tol > 0 and np.max(
-                    np.abs(x[self.nodes] - last[self.nodes])) <= self.shape_tol * size):
-                return P
+        if self._cache is None or not self._unchanged(x):
+            self._cache = self._build(x)
+            self.builds += 1
+        return self._cache
+
+    def _unchanged(self, x) -> bool:
+        """Whether none of :meth:`_distances` has changed since the last build by more than
+        ``shape_tol`` times its :meth:`_scale` (a rigid motion changes none; 0: exactly the
+        same positions only)."""
+        last = self._cache
+        if np.array_equal(last.x, x):
+            return True
+        if self.shape_tol == 0:
+            return False
+        change = np.abs(self._distances(x) - last.distances) / last.scale
+        return bool(change.max(initial=0.0) <= self.shape_tol)
+
+    def _distances(self, x) -> np.ndarray:
+        """What the operator depends on, up to a rigid motion: the distances [m] between the
+        sheet nodes (condensed, as ``scipy.spatial.distance.pdist``) and, with a substrate
+        plane, between each node and its mirror image (twice its height)."""
+        p = x[self.nodes]
+        d = pdist(p)
+        if self.plane is None:
+            return d
+        origin, normal = self.plane
+        return np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
+
+    def _build(self, x) -> "_Operator":
+        """Assemble ``S`` at positions ``x`` and factorise it: the loss conductance and the map
+        from nodal rises to sub-triangle heats."""
         sub = self.sub_triangles(x)
         V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
         S = V / area[None, :]
         S = 0.5 * (S + S.T)
-        P = _single_layer_jit.cholesky_solve(S, self.M) if _single_layer_jit.use_compiled() \
+        out = _single_layer_jit.loss_factor(S, self.M) if _single_layer_jit.use_compiled() \
             else None
-        if P is None:                    # the ladder: dense Cholesky, LU if not definite
+        if out is not None:              # S = C C^T, W = C^-1 M, L = W^T W
+            C, W, L = out
+            heat = lambda rise: _single_layer_jit.back_substitute(C, W @ rise)  # noqa: E731
+        else:                            # the ladder: dense Cholesky, LU if not definite
             P = factorize(S, kind="spd", dense_limit=len(S)).solve(self.M)
+            L = self.M.T @ P
+            L = 0.5 * (L + L.T)
+            heat = P.__matmul__
         size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
-        self._cache = (x.copy(), P, size)
-        self.builds += 1
-        return P
+        d = self._distances(x)
+        L.setflags(write=False)
+        return _Operator(x.copy(), L, heat, d, self._scale(d, size))
+
+    def _scale(self, distances, size) -> np.ndarray:
+        """How far each of :meth:`_distances` may change per unit of ``shape_tol`` [m]: the
+        distance, at least the mean sub-triangle diameter ``size``; a height over the plane
+        at least 1 % of it (the image's share of the loss changes with the height itself)."""
+        n = len(self.nodes) * (len(self.nodes) - 1) // 2
+        floor = np.where(np.arange(len(distances)) < n, size, 0.01 * size)
+        return np.maximum(distances, floor)
 
     def loss_matrix(self, x) -> np.ndarray:
         """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)."""
-        L = self.M.T @ self._response(x)
-        return 0.5 * (L + L.T)
+        return self._operator(x).L
 
     def sub_triangle_heat(self, x, rise) -> np.ndarray:
         """Heat [W] leaving each sub-triangle through both faces, (n_sub,), for nodal
         temperature rises ``rise`` (n_nodes,) [K] at positions ``x`` [m]."""
-        return self._response(x) @ np.asarray(rise, float)[self.nodes]
+        return self._operator(x).heat(np.asarray(rise, float)[self.nodes])
+
+
+@dataclass(frozen=True)
+class _Operator:
+    """One build of :class:`IntegralLoss`: the positions ``x`` (n, 3) [m] it was built at, the
+    loss conductance ``L`` (n_sheet, n_sheet) [W/K], ``heat(rise_sheet) -> (n_sub,)`` [W] and
+    :meth:`IntegralLoss._distances` [m] there with the scale of their allowed change
+    (:meth:`IntegralLoss._scale`)."""
+
+    x: np.ndarray
+    L: np.ndarray
+    heat: Callable
+    distances: np.ndarray
+    scale: np.ndarray

@@ -1,0 +1,126 @@
+"""When the integral loss operator is kept and when rebuilt (simulator.thermal.integral): a rigid
+motion keeps it and equals a fresh build, a change beyond integral_shape_tol rebuilds it, the
+substrate plane's height counts, and the compiled factorisation agrees with LAPACK."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from simulator import simulate
+from simulator.cases import get_case, verification_strip
+from simulator.thermal import _single_layer_jit
+from simulator.thermal.integral import IntegralLoss
+
+
+def _sheet(plane=None, shape_tol=0.05):
+    mesh = verification_strip().model.mesh
+    loss = IntegralLoss(mesh.triangles, mesh.n_nodes, 0.026, 2, plane, shape_tol)
+    return loss, mesh.nodes.copy()
+
+
+def _rotation(angle, axis):
+    return scipy.linalg.expm(angle * np.cross(np.eye(3), np.asarray(axis, float)))
+
+
+def _size(loss, x):
+    sub = loss.sub_triangles(x)
+    return np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
+
+
+def test_a_rigid_motion_keeps_the_operator_and_equals_a_fresh_build():
+    loss, x = _sheet()
+    L0 = loss.loss_matrix(x).copy()
+    moved = x @ _rotation(0.7, [1, 2, 3]).T + [2e-3, -1e-3, 5e-3]
+    assert np.array_equal(loss.loss_matrix(moved), L0)
+    assert loss.builds == 1
+    fresh = _sheet()[0].loss_matrix(moved)
+    assert np.allclose(fresh, L0, rtol=0, atol=1e-10 * np.abs(L0).max())
+
+
+def test_a_change_beyond_the_tolerance_rebuilds():
+    loss, x = _sheet()
+    loss.loss_matrix(x)
+    h = _size(loss, x)
+    node = loss.nodes[0]
+    small, large = x.copy(), x.copy()
+    small[node, 0] += 0.5 * 0.05 * h               # in plane: half the allowed change
+    large[node, 0] += 10 * 0.05 * h
+    loss.loss_matrix(small)
+    assert loss.builds == 1
+    loss.loss_matrix(large)
+    assert loss.builds == 2
+
+
+def test_zero_tolerance_rebuilds_on_every_change_of_position():
+    loss, x = _sheet(shape_tol=0.0)
+    loss.loss_matrix(x)
+    loss.loss_matrix(x.copy())
+    assert loss.builds == 1
+    loss.loss_matrix(x + [1e-9, 0, 0])
+    assert loss.builds == 2
+
+
+def test_with_a_plane_the_height_counts_but_not_a_motion_along_it():
+    plane = (np.array([0, 0, -0.2]), np.array([0, 0, 1.0]))        # the strip is 2.4 x 1
+    loss, x = _sheet(plane)
+    L0 = loss.loss_matrix(x).copy()
+    along = x @ _rotation(0.4, [0, 0, 1]).T + [3e-3, 1e-3, 0]
+    assert np.array_equal(loss.loss_matrix(along), L0) and loss.builds == 1
+    assert np.allclose(_sheet(plane)[0].loss_matrix(along), L0, rtol=0,
+                       atol=1e-10 * np.abs(L0).max())
+    closer = x - [0, 0, 0.02]                       # 0.2 -> 0.18 above the plane
+    assert not np.allclose(loss.loss_matrix(closer), L0)
+    assert loss.builds == 2
+
+
+def test_the_kept_loss_matrix_is_read_only_and_symmetric():
+    loss, x = _sheet()
+    L = loss.loss_matrix(x)
+    assert np.array_equal(L, L.T)
+    with pytest.raises(ValueError):
+        L[0, 0] = 1.0
+
+
+def test_compiled_and_numpy_paths_give_the_same_operator_and_heats(monkeypatch):
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    loss, x = _sheet()
+    rise = np.linspace(1.0, 3.0, len(x))
+    L1, p1 = loss.loss_matrix(x), loss.sub_triangle_heat(x, rise)
+    monkeypatch.setattr(_single_layer_jit, "use_compiled", lambda: False)
+    ref = _sheet()[0]
+    L0, p0 = ref.loss_matrix(x), ref.sub_triangle_heat(x, rise)
+    assert np.allclose(L1, L0, rtol=0, atol=1e-11 * np.abs(L0).max())
+    assert np.allclose(p1, p0, rtol=0, atol=1e-11 * np.abs(p0).max())
+
+
+def test_compiled_loss_factor_matches_lapack():
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    rng = np.random.default_rng(5)
+    A = rng.random((40, 40))
+    S, M = A @ A.T + 40 * np.eye(40), rng.random((40, 7))
+    C, W, G = _single_layer_jit.loss_factor(S, M)
+    assert np.allclose(np.tril(C) @ np.tril(C).T, S)
+    assert np.allclose(W, scipy.linalg.solve_triangular(np.linalg.cholesky(S), M, lower=True))
+    assert np.allclose(G, M.T @ np.linalg.solve(S, M)) and np.array_equal(G, G.T)
+    b = rng.random(7)
+    assert np.allclose(_single_layer_jit.back_substitute(C, W @ b), np.linalg.solve(S, M @ b))
+    assert _single_layer_jit.loss_factor(-S, M) is None
+
+
+def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percent():
+    """The double fold heated with the integral model: the operator kept within the default
+    integral_shape_tol against one rebuilt at every increment."""
+    case = get_case("double_fold", thermal_steps=40)
+    runs = {}
+    for tol in (0.05, 0.0):
+        thermal = dataclasses.replace(case.model.thermal, loss_model="integral",
+                                      integral_shape_tol=tol)
+        result = simulate(dataclasses.replace(case.model, thermal=thermal), case.steps)
+        assert result.success, result.message
+        runs[tol] = result.steps[-1].temperature_history[-1] - thermal.room_temperature
+    kept, rebuilt = runs[0.05], runs[0.0]
+    assert np.abs(kept - rebuilt).max() <= 5e-3 * np.abs(rebuilt).max()
