@@ -16,7 +16,8 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix", "loss_factor", "back_substitute", "cholesky_solve"]
+__all__ = ["use_compiled", "kernel_matrix", "loss_factor", "lu_response", "back_substitute",
+           "cholesky_solve"]
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
 #: output (n, m)
@@ -87,10 +88,11 @@ def _kernel(points, tri, centroid, area, diam, near, out):
                 out[i, j] = area[j] / dist
 
 
-def _loss_factor(S, W):
-    """Overwrite the lower triangle of ``S`` (n, n) with its Cholesky factor C (``S = C C^T``)
-    and ``W`` (n, k) with ``C^-1 W``; returns False (S, W partly overwritten) if ``S`` is not
-    positive definite.
+def _loss_factor(S, W, sign):
+    """Overwrite the lower triangle of the symmetric ``S`` (n, n) with C of ``S = C diag(sign)
+    C^T`` (positive diagonal, ``sign`` (n,) of +-1: Cholesky where ``S`` is positive definite)
+    and ``W`` (n, k) with ``C^-1 W``; returns False (S, W partly overwritten) if a pivot is
+    below 1e-12 of its diagonal entry (then LU with pivoting is needed).
 
     Row by row (left-looking): the dot products run over contiguous row prefixes and the
     forward substitution over contiguous rows of ``W``, so both vectorise (compiled with
@@ -99,17 +101,21 @@ def _loss_factor(S, W):
     these small (n < ~1000) systems on a loaded machine.
     """
     n, k = S.shape[0], W.shape[1]
+    G = np.empty((n, n))                                       # G[i, m] = C[i, m] sign[m]
     for i in range(n):
         for j in range(i + 1):
             v = S[i, j]
             for m in range(j):
-                v -= S[i, m] * S[j, m]
+                v -= S[i, m] * G[j, m]
             if i == j:
-                if not v > 0.0:
+                if not abs(v) > 1e-12 * abs(S[i, i]):
                     return False
-                S[i, i] = math.sqrt(v)
+                sign[i] = 1.0 if v > 0.0 else -1.0
+                S[i, i] = math.sqrt(abs(v))
+                G[i, i] = S[i, i] * sign[i]
             else:
-                S[i, j] = v / S[j, j]
+                S[i, j] = v / G[j, j]
+                G[i, j] = S[i, j] * sign[j]
         for m in range(i):                                     # row i of C^-1 W
             c = S[i, m]
             for q in range(k):
@@ -117,6 +123,42 @@ def _loss_factor(S, W):
         d = 1.0 / S[i, i]
         for q in range(k):
             W[i, q] *= d
+    return True
+
+
+def _lu_solve(A, B):
+    """Overwrite ``B`` (n, k) with ``A^-1 B`` by LU with partial pivoting (``A`` (n, n)
+    overwritten by its factors), row-oriented like :func:`_loss_factor`; returns False if a
+    pivot is exactly zero."""
+    n, k = A.shape[0], B.shape[1]
+    for j in range(n):
+        p = j
+        for i in range(j + 1, n):
+            if abs(A[i, j]) > abs(A[p, j]):
+                p = i
+        if A[p, j] == 0.0:
+            return False
+        if p != j:
+            for c in range(n):
+                A[j, c], A[p, c] = A[p, c], A[j, c]
+            for q in range(k):
+                B[j, q], B[p, q] = B[p, q], B[j, q]
+        inv = 1.0 / A[j, j]
+        for i in range(j + 1, n):
+            f = A[i, j] * inv
+            if f != 0.0:
+                for c in range(j + 1, n):
+                    A[i, c] -= f * A[j, c]
+                for q in range(k):
+                    B[i, q] -= f * B[j, q]
+    for i in range(n - 1, -1, -1):
+        for m in range(i + 1, n):
+            f = A[i, m]
+            for q in range(k):
+                B[i, q] -= f * B[m, q]
+        inv = 1.0 / A[i, i]
+        for q in range(k):
+            B[i, q] *= inv
     return True
 
 
@@ -131,17 +173,18 @@ def _back_substitute(C, B):
                 B[c, m] -= C[i, m] * v
 
 
-def _gram(W, out):
-    """``out = W^T W`` (k, k) for ``W`` (n, k), through its transpose (contiguous rows)."""
-    Wt = W.T.copy()
+def _gram(U, W, out):
+    """``out = (U^T W + W^T U) / 2`` (k, k) for ``U``, ``W`` (n, k), through their transposes
+    (contiguous rows); ``W^T W`` when ``U`` is ``W``."""
+    Ut, Wt = U.T.copy(), W.T.copy()
     k, n = Wt.shape
     for a in range(k):
         for b in range(a, k):
             v = 0.0
             for r in range(n):
-                v += Wt[a, r] * Wt[b, r]
-            out[a, b] = v
-            out[b, a] = v
+                v += Ut[a, r] * Wt[b, r] + Wt[a, r] * Ut[b, r]
+            out[a, b] = 0.5 * v
+            out[b, a] = 0.5 * v
 
 
 def _build():
@@ -150,9 +193,10 @@ def _build():
     g = globals()
     if not hasattr(g["_potential"], "py_func"):
         g["_potential"] = njit(cache=True, inline="always")(_potential)
-    for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1])"),
+    for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1], f8[::1])"),
+                      ("_lu_solve", "b1(f8[:, ::1], f8[:, ::1])"),
                       ("_back_substitute", "void(f8[:, ::1], f8[:, ::1])"),
-                      ("_gram", "void(f8[:, ::1], f8[:, ::1])")):
+                      ("_gram", "void(f8[:, ::1], f8[:, ::1], f8[:, ::1])")):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(sig, cache=True, fastmath=True)(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
@@ -171,21 +215,37 @@ def use_compiled() -> bool:
 
 
 def loss_factor(S, M):
-    """Cholesky factor ``C`` of a symmetric positive definite ``S`` (n, n), ``W = C^-1 M`` for
-    ``M`` (n, k) and the Gram matrix ``W^T W = M^T S^-1 M`` (k, k), by the compiled
-    single-threaded kernel; None if ``S`` is not positive definite (inputs not changed)."""
+    """``C``, ``sign`` of the symmetric ``S = C diag(sign) C^T`` (n, n) (Cholesky when ``S`` is
+    positive definite: ``sign`` all +1), ``W = C^-1 M`` for ``M`` (n, k) and ``M^T S^-1 M =
+    W^T diag(sign) W`` (k, k), by the compiled single-threaded kernel; None if a pivot
+    vanishes (inputs not changed: use :func:`lu_response`)."""
     C, W = np.array(S, np.float64, order="C"), np.array(M, np.float64, order="C")
-    if W.ndim != 2 or not _loss_factor(C, W):
+    sign = np.empty(len(C))
+    if W.ndim != 2 or not _loss_factor(C, W, sign):
         return None
     G = np.empty((W.shape[1],) * 2)
-    _gram(W, G)
-    return C, W, G
+    _gram(np.ascontiguousarray(sign[:, None] * W), W, G)
+    return C, sign, W, G
 
 
-def back_substitute(C, B):
-    """``C^-T B`` for the factor ``C`` (n, n) of :func:`loss_factor` and ``B`` (n,) or (n, k)."""
+def lu_response(S, M):
+    """``P = S^-1 M`` and ``(M^T P + P^T M) / 2`` for a square ``S`` (n, n) that is not
+    positive definite and ``M`` (n, k), by the compiled single-threaded LU with partial
+    pivoting; None if ``S`` is singular (inputs not changed)."""
+    A, P = np.array(S, np.float64, order="C"), np.array(M, np.float64, order="C")
+    if P.ndim != 2 or not _lu_solve(A, P):
+        return None
+    G = np.empty((P.shape[1],) * 2)
+    _gram(np.ascontiguousarray(M, np.float64), P, G)
+    return P, G
+
+
+def back_substitute(C, B, sign=None):
+    """``C^-T B`` for the factor ``C`` (n, n) of :func:`loss_factor` and ``B`` (n,) or (n, k);
+    ``C^-T diag(sign) B`` with its ``sign``."""
     B = np.asarray(B, np.float64)
-    X = np.array(B.reshape(len(B), -1).T, order="C")
+    X = B.reshape(len(B), -1)
+    X = np.array((X if sign is None else sign[:, None] * X).T, order="C")
     _back_substitute(C, X)
     return X.T.reshape(B.shape)
 
@@ -196,7 +256,9 @@ def cholesky_solve(S, B):
     changed)."""
     B = np.asarray(B, np.float64)
     out = loss_factor(S, B.reshape(len(B), -1))
-    return None if out is None else back_substitute(out[0], out[1]).reshape(B.shape)
+    if out is None or not np.all(out[1] > 0):
+        return None
+    return back_substitute(out[0], out[2]).reshape(B.shape)
 
 
 def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:

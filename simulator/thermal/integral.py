@@ -88,6 +88,7 @@ class IntegralLoss:
         self.nodes = np.unique(self.triangles)
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
+        self._warned = False             # the warning of an operator not positive definite
 
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
@@ -132,21 +133,40 @@ class IntegralLoss:
         sub = self.sub_triangles(x)
         V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
         S = V / area[None, :]
-        S = 0.5 * (S + S.T)
-        out = _single_layer_jit.loss_factor(S, self.M) if _single_layer_jit.use_compiled() \
-            else None
-        if out is not None:              # S = C C^T, W = C^-1 M, L = W^T W
-            C, W, L = out
-            heat = lambda rise: _single_layer_jit.back_substitute(C, W @ rise)  # noqa: E731
-        else:                            # the ladder: dense Cholesky, LU if not definite
-            P = factorize(S, kind="spd", dense_limit=len(S)).solve(self.M)
-            L = self.M.T @ P
-            L = 0.5 * (L + L.T)
-            heat = P.__matmul__
+        L, heat, definite = self._factorise(0.5 * (S + S.T))
+        if not definite and not self._warned:
+            self._warned = True
+            logger.warning(
+                "loss_model='integral': the single-layer operator is not positive definite "
+                "at this shape: parts of the sheet are closer to each other than about a "
+                "sub-triangle diameter or pass through each other (a model without contact?); "
+                "the temperatures there are not reliable. Raise integral_refinement or add "
+                "contact (said once per model).")
         size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean()
         d = self._distances(x)
         L.setflags(write=False)
         return _Operator(x.copy(), L, heat, d, self._scale(d, size))
+
+    def _factorise(self, S):
+        """``(L, heat, definite)`` of the symmetric ``S`` (n_sub, n_sub): the loss conductance
+        (n_sheet, n_sheet) [W/K], ``heat(rise_sheet) -> (n_sub,)`` [W] and whether ``S`` is
+        positive definite. Compiled: ``S = C diag(sign) C^T`` (Cholesky if definite), ``L =
+        W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
+        (dense Cholesky, a sparse LU if not definite)."""
+        M = self.M
+        if _single_layer_jit.use_compiled():
+            out = _single_layer_jit.loss_factor(S, M)
+            if out is not None:
+                C, sign, W, L = out
+                return (L, lambda rise: _single_layer_jit.back_substitute(C, W @ rise, sign),
+                        bool(np.all(sign > 0)))
+            out = _single_layer_jit.lu_response(S, M)
+            if out is not None:
+                return out[1], out[0].__matmul__, False
+        factor = factorize(S, kind="spd", dense_limit=len(S))
+        P = factor.solve(M)
+        L = M.T @ P
+        return 0.5 * (L + L.T), P.__matmul__, factor.backend == "dense"
 
     def _scale(self, distances, size) -> np.ndarray:
         """How far each of :meth:`_distances` may change per unit of ``shape_tol`` [m]: the

@@ -102,13 +102,32 @@ def test_compiled_loss_factor_matches_lapack():
     rng = np.random.default_rng(5)
     A = rng.random((40, 40))
     S, M = A @ A.T + 40 * np.eye(40), rng.random((40, 7))
-    C, W, G = _single_layer_jit.loss_factor(S, M)
-    assert np.allclose(np.tril(C) @ np.tril(C).T, S)
+    C, sign, W, G = _single_layer_jit.loss_factor(S, M)
+    assert np.all(sign == 1) and np.allclose(np.tril(C) @ np.tril(C).T, S)
     assert np.allclose(W, scipy.linalg.solve_triangular(np.linalg.cholesky(S), M, lower=True))
     assert np.allclose(G, M.T @ np.linalg.solve(S, M)) and np.array_equal(G, G.T)
     b = rng.random(7)
     assert np.allclose(_single_layer_jit.back_substitute(C, W @ b), np.linalg.solve(S, M @ b))
-    assert _single_layer_jit.loss_factor(-S, M) is None
+    C, sign, W, G = _single_layer_jit.loss_factor(-S, M)       # negative definite
+    assert np.all(sign == -1) and np.allclose(G, -M.T @ np.linalg.solve(S, M))
+    assert _single_layer_jit.cholesky_solve(-S, M) is None
+
+
+def test_compiled_signed_factor_solves_a_symmetric_indefinite_matrix():
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    rng = np.random.default_rng(7)
+    Q = np.linalg.qr(rng.random((30, 30)))[0]
+    S = Q @ np.diag(np.linspace(-2.0, 3.0, 30) + 0.05) @ Q.T          # symmetric, indefinite
+    M = rng.random((30, 5))
+    C, sign, W, G = _single_layer_jit.loss_factor(S, M)
+    assert (sign < 0).any() and (sign > 0).any()
+    C = np.tril(C)
+    assert np.allclose(C @ np.diag(sign) @ C.T, S)
+    assert np.allclose(G, M.T @ np.linalg.solve(S, M))
+    b = rng.random(5)
+    assert np.allclose(_single_layer_jit.back_substitute(C, W @ b, sign),
+                       np.linalg.solve(S, M @ b))
 
 
 def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percent():
@@ -124,3 +143,33 @@ def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percen
         runs[tol] = result.steps[-1].temperature_history[-1] - thermal.room_temperature
     kept, rebuilt = runs[0.05], runs[0.0]
     assert np.abs(kept - rebuilt).max() <= 5e-3 * np.abs(rebuilt).max()
+
+
+def test_compiled_lu_response_matches_numpy_for_an_indefinite_matrix():
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    rng = np.random.default_rng(6)
+    A = rng.random((30, 30))
+    S, M = A + A.T - 15 * np.eye(30), rng.random((30, 5))       # symmetric, indefinite
+    P, G = _single_layer_jit.lu_response(S, M)
+    assert np.allclose(P, np.linalg.solve(S, M))
+    assert np.allclose(G, M.T @ np.linalg.solve(S, M)) and np.array_equal(G, G.T)
+    assert _single_layer_jit.lu_response(np.zeros((3, 3)), np.ones((3, 1))) is None
+
+
+def test_a_vanishing_pivot_goes_to_lu_and_an_indefinite_operator_is_warned_once(monkeypatch,
+                                                                                 caplog):
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    loss, x = _sheet(shape_tol=0.0)
+    rise = np.linspace(1.0, 3.0, len(x))
+    L0, p0 = loss.loss_matrix(x).copy(), loss.sub_triangle_heat(x, rise)
+    monkeypatch.setattr(_single_layer_jit, "loss_factor", lambda S, M: None)
+    with caplog.at_level("WARNING", logger="simulator.thermal.integral"):
+        for shift in (1e-9, 2e-9):
+            moved = x + [shift, 0, 0]
+            L1, p1 = loss.loss_matrix(moved), loss.sub_triangle_heat(moved, rise)
+    assert np.allclose(L1, L0, rtol=0, atol=1e-9 * np.abs(L0).max())
+    assert np.allclose(p1, p0, rtol=0, atol=1e-9 * np.abs(p0).max())
+    warnings = [r for r in caplog.records if "not positive definite" in r.message]
+    assert len(warnings) == 1 and "pass through each other" in warnings[0].message
