@@ -30,24 +30,41 @@ _broken = False
 _MID_FACTOR = 2.0
 
 
-def _potential(px, py, pz, t):
-    """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) at the point p."""
+def _frame(t, f):
+    """The point-independent part of :func:`_potential` for the triangle ``t`` (3, 3), into
+    ``f`` (4, 7): row 0 the unit normal (columns 0-2); row e + 1 (edge e, from vertex e to
+    e + 1) its unit tangent (0-2), outward in-plane normal (3-5) and length (6)."""
     e1 = (t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2])
     e2 = (t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2])
     nx, ny, nz = e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], \
         e1[0] * e2[1] - e1[1] * e2[0]
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = nx / nn, ny / nn, nz / nn
+    f[0, 0], f[0, 1], f[0, 2] = nx, ny, nz
+    for i in range(3):
+        j = (i + 1) % 3
+        ex, ey, ez = t[j, 0] - t[i, 0], t[j, 1] - t[i, 1], t[j, 2] - t[i, 2]
+        length = math.sqrt(ex * ex + ey * ey + ez * ez)
+        tx, ty, tz = ex / length, ey / length, ez / length
+        f[i + 1, 0], f[i + 1, 1], f[i + 1, 2] = tx, ty, tz
+        f[i + 1, 3] = ty * nz - tz * ny
+        f[i + 1, 4] = tz * nx - tx * nz
+        f[i + 1, 5] = tx * ny - ty * nx
+        f[i + 1, 6] = length
+
+
+def _potential(px, py, pz, t, f):
+    """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) with its :func:`_frame`
+    ``f`` (4, 7) at the point p."""
+    nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
     d = (px - t[0, 0]) * nx + (py - t[0, 1]) * ny + (pz - t[0, 2]) * nz
     rx, ry, rz = px - d * nx, py - d * ny, pz - d * nz
     ad = abs(d)
     total = 0.0
     for i in range(3):
         j = (i + 1) % 3
-        ex, ey, ez = t[j, 0] - t[i, 0], t[j, 1] - t[i, 1], t[j, 2] - t[i, 2]
-        length = math.sqrt(ex * ex + ey * ey + ez * ez)
-        tx, ty, tz = ex / length, ey / length, ez / length
-        ux, uy, uz = ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx
+        tx, ty, tz = f[i + 1, 0], f[i + 1, 1], f[i + 1, 2]
+        ux, uy, uz, length = f[i + 1, 3], f[i + 1, 4], f[i + 1, 5], f[i + 1, 6]
         ax, ay, az = t[i, 0] - rx, t[i, 1] - ry, t[i, 2] - rz
         bx, by, bz = t[j, 0] - rx, t[j, 1] - ry, t[j, 2] - rz
         p0 = ax * ux + ay * uy + az * uz
@@ -68,13 +85,16 @@ def _potential(px, py, pz, t):
 
 def _kernel(points, tri, centroid, area, diam, near, out):
     mid = _MID_FACTOR * near
+    frames = np.empty((tri.shape[0], 4, 7))             # point-independent, once per triangle
+    for j in range(tri.shape[0]):
+        _frame(tri[j], frames[j])
     for i in range(points.shape[0]):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         for j in range(tri.shape[0]):
             dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             if dist < near * diam[j]:
-                out[i, j] = _potential(px, py, pz, tri[j])
+                out[i, j] = _potential(px, py, pz, tri[j], frames[j])
             elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
                 acc = 0.0
                 for a in range(3):
@@ -191,8 +211,9 @@ def _build():
     from numba import njit
 
     g = globals()
-    if not hasattr(g["_potential"], "py_func"):
-        g["_potential"] = njit(cache=True, inline="always")(_potential)
+    for name in ("_potential", "_frame"):
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(cache=True, inline="always")(g[name])
     for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1], f8[::1])"),
                       ("_lu_solve", "b1(f8[:, ::1], f8[:, ::1])"),
                       ("_back_substitute", "void(f8[:, ::1], f8[:, ::1])"),
