@@ -120,7 +120,7 @@ def _loss_factor(S, W, sign):
     purpose: LAPACK's threads, next to the solver's, cost a hundred times the arithmetic of
     these small (n < ~1000) systems on a loaded machine.
     """
-    n, k = S.shape[0], W.shape[1]
+    n = S.shape[0]
     G = np.empty((n, n))                                       # G[i, m] = C[i, m] sign[m]
     for i in range(n):
         for j in range(i + 1):
@@ -137,13 +137,21 @@ def _loss_factor(S, W, sign):
                 S[i, j] = v / G[j, j]
                 G[i, j] = S[i, j] * sign[j]
         for m in range(i):                                     # row i of C^-1 W
-            c = S[i, m]
-            for q in range(k):
-                W[i, q] -= c * W[m, q]
-        d = 1.0 / S[i, i]
-        for q in range(k):
-            W[i, q] *= d
+            _row_update(W, i, m, S[i, m])
+        _row_scale(W, i, 1.0 / S[i, i])
     return True
+
+
+def _row_update(B, i, m, f):
+    """``B[i] -= f B[m]`` (contiguous rows: vectorised)."""
+    for q in range(B.shape[1]):
+        B[i, q] -= f * B[m, q]
+
+
+def _row_scale(B, i, f):
+    """``B[i] *= f``."""
+    for q in range(B.shape[1]):
+        B[i, q] *= f
 
 
 def _lu_solve(A, B):
@@ -169,16 +177,11 @@ def _lu_solve(A, B):
             if f != 0.0:
                 for c in range(j + 1, n):
                     A[i, c] -= f * A[j, c]
-                for q in range(k):
-                    B[i, q] -= f * B[j, q]
+                _row_update(B, i, j, f)
     for i in range(n - 1, -1, -1):
         for m in range(i + 1, n):
-            f = A[i, m]
-            for q in range(k):
-                B[i, q] -= f * B[m, q]
-        inv = 1.0 / A[i, i]
-        for q in range(k):
-            B[i, q] *= inv
+            _row_update(B, i, m, A[i, m])
+        _row_scale(B, i, 1.0 / A[i, i])
     return True
 
 
@@ -211,7 +214,7 @@ def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame"):
+    for name in ("_potential", "_frame", "_row_update", "_row_scale"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1], f8[::1])"),
