@@ -14,10 +14,10 @@ import math
 import numpy as np
 
 from .._jit import compile_kernel
+from ..linalg._dense_jit import cholesky_solve  # noqa: F401  (its old home)
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix", "loss_factor", "lu_response", "back_substitute",
-           "cholesky_solve"]
+__all__ = ["use_compiled", "kernel_matrix", "cholesky_solve"]
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
 #: output (n, m)
@@ -108,121 +108,13 @@ def _kernel(points, tri, centroid, area, diam, near, out):
                 out[i, j] = area[j] / dist
 
 
-def _loss_factor(S, W, sign):
-    """Overwrite the lower triangle of the symmetric ``S`` (n, n) with C of ``S = C diag(sign)
-    C^T`` (positive diagonal, ``sign`` (n,) of +-1: Cholesky where ``S`` is positive definite)
-    and ``W`` (n, k) with ``C^-1 W``; returns False (S, W partly overwritten) if a pivot is
-    below 1e-12 of its diagonal entry (then LU with pivoting is needed).
-
-    Row by row (left-looking): the dot products run over contiguous row prefixes and the
-    forward substitution over contiguous rows of ``W``, so both vectorise (compiled with
-    fastmath: sums in any order, round-off level differences only). Single-threaded on
-    purpose: LAPACK's threads, next to the solver's, cost a hundred times the arithmetic of
-    these small (n < ~1000) systems on a loaded machine.
-    """
-    n = S.shape[0]
-    G = np.empty((n, n))                                       # G[i, m] = C[i, m] sign[m]
-    for i in range(n):
-        for j in range(i + 1):
-            v = S[i, j]
-            for m in range(j):
-                v -= S[i, m] * G[j, m]
-            if i == j:
-                if not abs(v) > 1e-12 * abs(S[i, i]):
-                    return False
-                sign[i] = 1.0 if v > 0.0 else -1.0
-                S[i, i] = math.sqrt(abs(v))
-                G[i, i] = S[i, i] * sign[i]
-            else:
-                S[i, j] = v / G[j, j]
-                G[i, j] = S[i, j] * sign[j]
-        for m in range(i):                                     # row i of C^-1 W
-            _row_update(W, i, m, S[i, m])
-        _row_scale(W, i, 1.0 / S[i, i])
-    return True
-
-
-def _row_update(B, i, m, f):
-    """``B[i] -= f B[m]`` (contiguous rows: vectorised)."""
-    for q in range(B.shape[1]):
-        B[i, q] -= f * B[m, q]
-
-
-def _row_scale(B, i, f):
-    """``B[i] *= f``."""
-    for q in range(B.shape[1]):
-        B[i, q] *= f
-
-
-def _lu_solve(A, B):
-    """Overwrite ``B`` (n, k) with ``A^-1 B`` by LU with partial pivoting (``A`` (n, n)
-    overwritten by its factors), row-oriented like :func:`_loss_factor`; returns False if a
-    pivot is exactly zero."""
-    n, k = A.shape[0], B.shape[1]
-    for j in range(n):
-        p = j
-        for i in range(j + 1, n):
-            if abs(A[i, j]) > abs(A[p, j]):
-                p = i
-        if A[p, j] == 0.0:
-            return False
-        if p != j:
-            for c in range(n):
-                A[j, c], A[p, c] = A[p, c], A[j, c]
-            for q in range(k):
-                B[j, q], B[p, q] = B[p, q], B[j, q]
-        inv = 1.0 / A[j, j]
-        for i in range(j + 1, n):
-            f = A[i, j] * inv
-            if f != 0.0:
-                for c in range(j + 1, n):
-                    A[i, c] -= f * A[j, c]
-                _row_update(B, i, j, f)
-    for i in range(n - 1, -1, -1):
-        for m in range(i + 1, n):
-            _row_update(B, i, m, A[i, m])
-        _row_scale(B, i, 1.0 / A[i, i])
-    return True
-
-
-def _back_substitute(C, B):
-    """Overwrite the rows of ``B`` (k, n) with ``C^-T`` times them (C (n, n) lower)."""
-    n = C.shape[0]
-    for c in range(B.shape[0]):
-        for i in range(n - 1, -1, -1):
-            B[c, i] /= C[i, i]
-            v = B[c, i]
-            for m in range(i):
-                B[c, m] -= C[i, m] * v
-
-
-def _gram(U, W, out):
-    """``out = (U^T W + W^T U) / 2`` (k, k) for ``U``, ``W`` (n, k), through their transposes
-    (contiguous rows); ``W^T W`` when ``U`` is ``W``."""
-    Ut, Wt = U.T.copy(), W.T.copy()
-    k, n = Wt.shape
-    for a in range(k):
-        for b in range(a, k):
-            v = 0.0
-            for r in range(n):
-                v += Ut[a, r] * Wt[b, r] + Wt[a, r] * Ut[b, r]
-            out[a, b] = 0.5 * v
-            out[b, a] = 0.5 * v
-
-
 def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_row_update", "_row_scale"):
+    for name in ("_potential", "_frame"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
-    for name, sig in (("_loss_factor", "b1(f8[:, ::1], f8[:, ::1], f8[::1])"),
-                      ("_lu_solve", "b1(f8[:, ::1], f8[:, ::1])"),
-                      ("_back_substitute", "void(f8[:, ::1], f8[:, ::1])"),
-                      ("_gram", "void(f8[:, ::1], f8[:, ::1], f8[:, ::1])")):
-        if not hasattr(g[name], "py_func"):
-            g[name] = njit(sig, cache=True, fastmath=True)(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
 
 
@@ -236,53 +128,6 @@ def use_compiled() -> bool:
         _compiled = compile_kernel("single-layer kernel", _build, "using numpy")
         _broken = _compiled is None
     return _compiled is not None
-
-
-def loss_factor(S, M):
-    """``C``, ``sign`` of the symmetric ``S = C diag(sign) C^T`` (n, n) (Cholesky when ``S`` is
-    positive definite: ``sign`` all +1), ``W = C^-1 M`` for ``M`` (n, k) and ``M^T S^-1 M =
-    W^T diag(sign) W`` (k, k), by the compiled single-threaded kernel; None if a pivot
-    vanishes (inputs not changed: use :func:`lu_response`)."""
-    C, W = np.array(S, np.float64, order="C"), np.array(M, np.float64, order="C")
-    sign = np.empty(len(C))
-    if W.ndim != 2 or not _loss_factor(C, W, sign):
-        return None
-    G = np.empty((W.shape[1],) * 2)
-    _gram(np.ascontiguousarray(sign[:, None] * W), W, G)
-    return C, sign, W, G
-
-
-def lu_response(S, M):
-    """``P = S^-1 M`` and ``(M^T P + P^T M) / 2`` for a square ``S`` (n, n) that is not
-    positive definite and ``M`` (n, k), by the compiled single-threaded LU with partial
-    pivoting; None if ``S`` is singular (inputs not changed)."""
-    A, P = np.array(S, np.float64, order="C"), np.array(M, np.float64, order="C")
-    if P.ndim != 2 or not _lu_solve(A, P):
-        return None
-    G = np.empty((P.shape[1],) * 2)
-    _gram(np.ascontiguousarray(M, np.float64), P, G)
-    return P, G
-
-
-def back_substitute(C, B, sign=None):
-    """``C^-T B`` for the factor ``C`` (n, n) of :func:`loss_factor` and ``B`` (n,) or (n, k);
-    ``C^-T diag(sign) B`` with its ``sign``."""
-    B = np.asarray(B, np.float64)
-    X = B.reshape(len(B), -1)
-    X = np.array((X if sign is None else sign[:, None] * X).T, order="C")
-    _back_substitute(C, X)
-    return X.T.reshape(B.shape)
-
-
-def cholesky_solve(S, B):
-    """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n,) or (n, k) by the
-    compiled single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not
-    changed)."""
-    B = np.asarray(B, np.float64)
-    out = loss_factor(S, B.reshape(len(B), -1))
-    if out is None or not np.all(out[1] > 0):
-        return None
-    return back_substitute(out[0], out[2]).reshape(B.shape)
 
 
 def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:

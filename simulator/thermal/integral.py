@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial.distance import pdist
 
 from ..errors import ParameterError
+from ..linalg import _dense_jit
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
@@ -154,13 +155,13 @@ class IntegralLoss:
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
         M = self.M
-        if _single_layer_jit.use_compiled():
-            out = _single_layer_jit.loss_factor(S, M)
+        if _single_layer_jit.use_compiled() and _dense_jit.available():
+            out = _dense_jit.loss_factor(S, M)
             if out is not None:
                 C, sign, W, L = out
-                return (L, lambda rise: _single_layer_jit.back_substitute(C, W @ rise, sign),
+                return (L, lambda rise: _dense_jit.back_substitute(C, W @ rise, sign),
                         bool(np.all(sign > 0)))
-            out = _single_layer_jit.lu_response(S, M)
+            out = _dense_jit.lu_response(S, M)
             if out is not None:
                 return out[1], out[0].__matmul__, False
         factor = factorize(S, kind="spd", dense_limit=len(S))
