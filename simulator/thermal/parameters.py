@@ -105,7 +105,7 @@ class ThermalParameters:
     loss_model: str = "chain"
     integral_refinement: int = 2
     substrate_plane: tuple = ()
-    integral_shape_tol: float = 0.05
+    integral_shape_tol: float = 0.02
 
     def __post_init__(self):
         owner = "ThermalParameters"
