@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from .._jit import compile_kernel
+from ..linalg._dense_jit import cholesky_solve  # noqa: F401  (its old home)
 from ..mechanics.elements import _springs_jit
 
 __all__ = ["use_compiled", "kernel_matrix", "cholesky_solve"]
@@ -29,24 +30,41 @@ _broken = False
 _MID_FACTOR = 2.0
 
 
-def _potential(px, py, pz, t):
-    """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) at the point p."""
+def _frame(t, f):
+    """The point-independent part of :func:`_potential` for the triangle ``t`` (3, 3), into
+    ``f`` (4, 7): row 0 the unit normal (columns 0-2); row e + 1 (edge e, from vertex e to
+    e + 1) its unit tangent (0-2), outward in-plane normal (3-5) and length (6)."""
     e1 = (t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2])
     e2 = (t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2])
     nx, ny, nz = e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], \
         e1[0] * e2[1] - e1[1] * e2[0]
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = nx / nn, ny / nn, nz / nn
+    f[0, 0], f[0, 1], f[0, 2] = nx, ny, nz
+    for i in range(3):
+        j = (i + 1) % 3
+        ex, ey, ez = t[j, 0] - t[i, 0], t[j, 1] - t[i, 1], t[j, 2] - t[i, 2]
+        length = math.sqrt(ex * ex + ey * ey + ez * ez)
+        tx, ty, tz = ex / length, ey / length, ez / length
+        f[i + 1, 0], f[i + 1, 1], f[i + 1, 2] = tx, ty, tz
+        f[i + 1, 3] = ty * nz - tz * ny
+        f[i + 1, 4] = tz * nx - tx * nz
+        f[i + 1, 5] = tx * ny - ty * nx
+        f[i + 1, 6] = length
+
+
+def _potential(px, py, pz, t, f):
+    """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) with its :func:`_frame`
+    ``f`` (4, 7) at the point p."""
+    nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
     d = (px - t[0, 0]) * nx + (py - t[0, 1]) * ny + (pz - t[0, 2]) * nz
     rx, ry, rz = px - d * nx, py - d * ny, pz - d * nz
     ad = abs(d)
     total = 0.0
     for i in range(3):
         j = (i + 1) % 3
-        ex, ey, ez = t[j, 0] - t[i, 0], t[j, 1] - t[i, 1], t[j, 2] - t[i, 2]
-        length = math.sqrt(ex * ex + ey * ey + ez * ez)
-        tx, ty, tz = ex / length, ey / length, ez / length
-        ux, uy, uz = ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx
+        tx, ty, tz = f[i + 1, 0], f[i + 1, 1], f[i + 1, 2]
+        ux, uy, uz, length = f[i + 1, 3], f[i + 1, 4], f[i + 1, 5], f[i + 1, 6]
         ax, ay, az = t[i, 0] - rx, t[i, 1] - ry, t[i, 2] - rz
         bx, by, bz = t[j, 0] - rx, t[j, 1] - ry, t[j, 2] - rz
         p0 = ax * ux + ay * uy + az * uz
@@ -67,13 +85,16 @@ def _potential(px, py, pz, t):
 
 def _kernel(points, tri, centroid, area, diam, near, out):
     mid = _MID_FACTOR * near
+    frames = np.empty((tri.shape[0], 4, 7))             # point-independent, once per triangle
+    for j in range(tri.shape[0]):
+        _frame(tri[j], frames[j])
     for i in range(points.shape[0]):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         for j in range(tri.shape[0]):
             dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             if dist < near * diam[j]:
-                out[i, j] = _potential(px, py, pz, tri[j])
+                out[i, j] = _potential(px, py, pz, tri[j], frames[j])
             elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
                 acc = 0.0
                 for a in range(3):
@@ -87,50 +108,13 @@ def _kernel(points, tri, centroid, area, diam, near, out):
                 out[i, j] = area[j] / dist
 
 
-def _cholesky_solve(S, B):
-    """Overwrite ``S`` (n, n) with its lower Cholesky factor and the rows of ``B`` (k, n) with
-    ``S^-1`` times them;
-    returns False (S, B partly overwritten) if ``S`` is not positive definite.
-
-    Single-threaded on purpose: LAPACK's threads, next to the solver's, cost a hundred times
-    the arithmetic of these small (n < ~1000) systems on a loaded machine.
-    """
-    n, k = S.shape[0], B.shape[0]
-    for j in range(n):
-        d = S[j, j]
-        for m in range(j):
-            d -= S[j, m] * S[j, m]
-        if not d > 0.0:
-            return False
-        d = math.sqrt(d)
-        S[j, j] = d
-        for i in range(j + 1, n):
-            v = S[i, j]
-            for m in range(j):
-                v -= S[i, m] * S[j, m]
-            S[i, j] = v / d
-    for c in range(k):                                         # B holds the right sides as rows
-        for i in range(n):                                     # L y = b
-            v = B[c, i]
-            for m in range(i):
-                v -= S[i, m] * B[c, m]
-            B[c, i] = v / S[i, i]
-        for i in range(n - 1, -1, -1):                         # L^T x = y (column sweep)
-            B[c, i] /= S[i, i]
-            v = B[c, i]
-            for m in range(i):
-                B[c, m] -= S[i, m] * v
-    return True
-
-
 def _build():
     from numba import njit
 
     g = globals()
-    if not hasattr(g["_potential"], "py_func"):
-        g["_potential"] = njit(cache=True, inline="always")(_potential)
-    if not hasattr(g["_cholesky_solve"], "py_func"):
-        g["_cholesky_solve"] = njit("b1(f8[:, ::1], f8[:, ::1])", cache=True)(_cholesky_solve)
+    for name in ("_potential", "_frame"):
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(cache=True, inline="always")(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
 
 
@@ -144,14 +128,6 @@ def use_compiled() -> bool:
         _compiled = compile_kernel("single-layer kernel", _build, "using numpy")
         _broken = _compiled is None
     return _compiled is not None
-
-
-def cholesky_solve(S, B):
-    """``S^-1 B`` for a symmetric positive definite ``S`` (n, n) and ``B`` (n, k) by the compiled
-    single-threaded Cholesky, or None if ``S`` is not positive definite (inputs not changed)."""
-    B = np.asarray(B, np.float64)
-    S, X = np.array(S, np.float64, order="C"), np.array(B.reshape(len(B), -1).T, order="C")
-    return X.T.reshape(B.shape) if _cholesky_solve(S, X) else None
 
 
 def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:

@@ -30,10 +30,13 @@ tends to the held temperature as ``h -> 0``.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ParameterError
+from ..linalg import _dense_jit
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
@@ -66,8 +69,9 @@ class IntegralLoss:
     plane : (origin (3,), unit normal (3,)), optional
         Isothermal substrate plane; the medium lies on the normal's side.
     shape_tol : float
-        Rebuild the operator when a node has moved more than ``shape_tol`` times the mean
-        sub-triangle diameter since the last build (0: on every change).
+        Rebuild the operator when the distance between two sheet nodes has changed by more
+        than ``shape_tol`` times the larger of that distance and the mean sub-triangle
+        diameter since the last build (0: on every change of position).
     """
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
@@ -97,6 +101,7 @@ class IntegralLoss:
         self.nodes = np.unique(self.triangles)
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
+        self._warned = False             # the warning of an operator not positive definite
 
     def _heights(self, x):
         """Height of every node over the substrate plane [m], (n_nodes,), and the touch
@@ -133,42 +138,128 @@ class IntegralLoss:
         corners = np.asarray(x, float)[self.triangles]                # (n_tri, 3, 3)
         return np.einsum("sab,tbk->tsak", self._bary, corners).reshape(-1, 3, 3)
 
-    def _response(self, x):
-        """``P = S^-1 M`` (n_sub, n_sheet) [W/K] at positions ``x``: the heat each sub-triangle
-        loses per kelvin of each sheet node (kept while the shape stays within ``shape_tol``
-        of the last build)."""
+    def _operator(self, x) -> "_Operator":
+        """The operator at positions ``x`` (n, 3) [m]: the last build while the shape stays
+        within ``shape_tol`` of it (:meth:`_unchanged`), else a new one."""
         x = np.asarray(x, float)
-        if self._cache is not None:
-            last, P, size = self._cache
-            if np.array_equal(last, x) or (self.shape_tol > 0 and np.max(
-                    np.abs(x[self.nodes] - last[self.nodes])) <= self.shape_tol * size):
-                return P
+        if self._cache is None or not self._unchanged(x):
+            self._cache = self._build(x)
+            self.builds += 1
+        return self._cache
+
+    def _unchanged(self, x) -> bool:
+        """Whether none of :meth:`_distances` has changed since the last build by more than
+        ``shape_tol`` times its :meth:`_scale` (a rigid motion changes none; 0: exactly the
+        same positions only)."""
+        last = self._cache
+        if np.array_equal(last.x, x):
+            return True
+        if self.shape_tol == 0:
+            return False
+        change = np.abs(self._distances(x) - last.distances) / last.scale
+        return bool(change.max(initial=0.0) <= self.shape_tol)
+
+    def _distances(self, x) -> np.ndarray:
+        """What the operator depends on, up to a rigid motion: the distances [m] between the
+        sheet nodes (condensed, as ``scipy.spatial.distance.pdist``) and, with a substrate
+        plane, between each node and its mirror image (twice its height)."""
+        from scipy.spatial.distance import pdist    # not needed by a chain-model run
+
+        p = x[self.nodes]
+        d = pdist(p)
+        if self.plane is None:
+            return d
+        origin, normal = self.plane
+        return np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
+
+    def _build(self, x) -> "_Operator":
+        """Assemble ``S`` at positions ``x`` and factorise it: the loss conductance and the map
+        from nodal rises to sub-triangle heats."""
+        full = self.sub_triangles(x)
         xp, flat = self._pressed(x)
         sub, M = self.sub_triangles(xp), self.M
         if flat is not None:             # on the substrate: no potential, no unknown
             sub, M = sub[~flat], M[~flat]
-        V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
-        S = V / area[None, :]
-        S = 0.5 * (S + S.T)
-        P = _single_layer_jit.cholesky_solve(S, M) if _single_layer_jit.use_compiled() \
-            and len(S) else None
-        if P is None:                    # the ladder: dense Cholesky, LU if not definite
-            P = factorize(S, kind="spd", dense_limit=len(S)).solve(M) if len(S) else M
+        if len(sub):
+            V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
+            S = V / area[None, :]
+            L, heat, definite = self._factorise(0.5 * (S + S.T), M)
+        else:                            # the whole sheet lies on the substrate
+            L, heat, definite = np.zeros((len(self.nodes),) * 2), None, True
         if flat is not None:
-            P, live = np.zeros(self.M.shape), P
-            P[~flat] = live
-        size = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean() \
-            if len(sub) else 0.0
-        self._cache = (x.copy(), P, size)
-        self.builds += 1
-        return P
+            heat = _padded(heat, ~flat, self.n_sub)
+        if not definite and not self._warned:
+            self._warned = True
+            logger.warning(
+                "loss_model='integral': the single-layer operator is not positive definite "
+                "at this shape: parts of the sheet are closer to each other than about a "
+                "sub-triangle diameter or pass through each other (a model without contact?); "
+                "the temperatures there are not reliable. Raise integral_refinement or add "
+                "contact (said once per model).")
+        size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
+        d = self._distances(x)
+        L.setflags(write=False)
+        return _Operator(x.copy(), L, heat, d, self._scale(d, size))
+
+    def _factorise(self, S, M):
+        """``(L, heat, definite)`` of the symmetric ``S`` (n_live, n_live) with the
+        interpolation ``M`` (n_live, n_sheet) of its live sub-triangles: the loss conductance
+        (n_sheet, n_sheet) [W/K], ``heat(rise_sheet) -> (n_sub,)`` [W] and whether ``S`` is
+        positive definite. Compiled: ``S = C diag(sign) C^T`` (Cholesky if definite), ``L =
+        W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
+        (dense Cholesky, a sparse LU if not definite)."""
+        if _single_layer_jit.use_compiled() and _dense_jit.available():
+            out = _dense_jit.loss_factor(S, M)
+            if out is not None:
+                C, sign, W, L = out
+                return (L, lambda rise: _dense_jit.back_substitute(C, W @ rise, sign),
+                        bool(np.all(sign > 0)))
+            out = _dense_jit.lu_response(S, M)
+            if out is not None:
+                return out[1], out[0].__matmul__, False
+        factor = factorize(S, kind="spd", dense_limit=len(S))
+        P = factor.solve(M)
+        L = M.T @ P
+        return 0.5 * (L + L.T), P.__matmul__, factor.backend == "dense"
+
+    def _scale(self, distances, size) -> np.ndarray:
+        """How far each of :meth:`_distances` may change per unit of ``shape_tol`` [m]: the
+        distance, at least the mean sub-triangle diameter ``size``; a height over the plane
+        at least 1 % of it (the image's share of the loss changes with the height itself)."""
+        n = len(self.nodes) * (len(self.nodes) - 1) // 2
+        floor = np.where(np.arange(len(distances)) < n, size, 0.01 * size)
+        return np.maximum(distances, floor)
 
     def loss_matrix(self, x) -> np.ndarray:
         """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)."""
-        L = self.M.T @ self._response(x)
-        return 0.5 * (L + L.T)
+        return self._operator(x).L
 
     def sub_triangle_heat(self, x, rise) -> np.ndarray:
         """Heat [W] leaving each sub-triangle through both faces, (n_sub,), for nodal
         temperature rises ``rise`` (n_nodes,) [K] at positions ``x`` [m]."""
-        return self._response(x) @ np.asarray(rise, float)[self.nodes]
+        return self._operator(x).heat(np.asarray(rise, float)[self.nodes])
+
+
+def _padded(heat, live, n_sub):
+    """``heat(rise) -> (n_sub,)`` [W] from the heat of the ``live`` sub-triangles (None: none
+    is live); the others, lying on the substrate, lose nothing to the medium."""
+    def padded(rise):
+        out = np.zeros(n_sub)
+        if heat is not None:
+            out[live] = heat(rise)
+        return out
+    return padded
+
+
+@dataclass(frozen=True)
+class _Operator:
+    """One build of :class:`IntegralLoss`: the positions ``x`` (n, 3) [m] it was built at, the
+    loss conductance ``L`` (n_sheet, n_sheet) [W/K], ``heat(rise_sheet) -> (n_sub,)`` [W] and
+    :meth:`IntegralLoss._distances` [m] there with the scale of their allowed change
+    (:meth:`IntegralLoss._scale`)."""
+
+    x: np.ndarray
+    L: np.ndarray
+    heat: Callable
+    distances: np.ndarray
+    scale: np.ndarray

@@ -94,9 +94,12 @@ class ThermalParameters:
         "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
         (3,) pointing into the medium, in the global frame; () for an unbounded medium.
     integral_shape_tol : float
-        "integral" model only: the dense operator is rebuilt when a node has moved more than
-        this fraction of the mean sub-triangle diameter since the last build, >= 0 (0:
-        rebuilt on every change of shape).
+        "integral" model only: the dense operator is rebuilt when the distance between two
+        sheet nodes has changed since the last build by more than this fraction of the larger
+        of that distance and the mean sub-triangle diameter (or, with a substrate plane, a
+        node's height over it by more than this fraction of the height, at least 1 % of the
+        diameter), >= 0 (a rigid motion of the sheet changes none; 0: rebuilt on every change
+        of position).
     """
 
     env_thickness: float
@@ -111,7 +114,7 @@ class ThermalParameters:
     loss_model: str = "chain"
     integral_refinement: int = 2
     substrate_plane: tuple = ()
-    integral_shape_tol: float = 0.05
+    integral_shape_tol: float = 0.02
     integral_extrapolation: bool = False
 
     def __post_init__(self):
