@@ -41,31 +41,37 @@ def _timed(fn, repeat):
     return statistics.median(walls), statistics.median(cpus), out
 
 
-def gripper_run(loss_model: str, refinement: int):
-    """A function evaluating the start-design gripper (bisect) with one loss model."""
+def gripper_run(loss_model: str, refinement: int, extrapolation: bool = False):
+    """A function evaluating the start-design gripper (bisect) with one loss model: the
+    device's own option ``GripperDesign(loss_model=...)``, whose integral model includes the
+    substrate plane under the gripper (z = -undercut), as the device has."""
+    design = gripper.GripperDesign(loss_model=loss_model, integral_refinement=refinement)
+    if not extrapolation:
+        return lambda: gripper.evaluate_gripper(design, mode="bisect")
     original = gripper.gripper_model
 
-    def model_with_loss(design, *args, **kw):
+    def model_with_extrapolation(design, *args, **kw):
         model, pre = original(design, *args, **kw)
-        if loss_model == "integral":
-            model = dataclasses.replace(model, thermal=_integral(model.thermal, refinement))
-        return model, pre
+        thermal = dataclasses.replace(model.thermal, integral_extrapolation=True)
+        return dataclasses.replace(model, thermal=thermal), pre
 
     def run():
-        gripper.gripper_model = model_with_loss
+        gripper.gripper_model = model_with_extrapolation
         try:
-            return gripper.evaluate_gripper(gripper.GripperDesign(), mode="bisect")
+            return gripper.evaluate_gripper(design, mode="bisect")
         finally:
             gripper.gripper_model = original
     return run
 
 
-def crane_run(loss_model: str, refinement: int):
+def crane_run(loss_model: str, refinement: int, extrapolation: bool = False):
     """A function running the crane case with one loss model."""
     case = get_case("crane")
     model = case.model
     if loss_model == "integral":
-        model = dataclasses.replace(model, thermal=_integral(model.thermal, refinement))
+        thermal = dataclasses.replace(_integral(model.thermal, refinement),
+                                      integral_extrapolation=extrapolation)
+        model = dataclasses.replace(model, thermal=thermal)
     return lambda: simulate(model, case.steps)
 
 
@@ -73,12 +79,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--refinement", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--extrapolation", action="store_true",
+                    help="integral_extrapolation (Richardson from m // 2 and m; m >= 4)")
+    ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     args = ap.parse_args(argv)
     for name, make, limit in (("gripper evaluation (bisect)", gripper_run, 2.0),
                               ("crane case", crane_run, 3.0)):
+        if args.only and not name.startswith(args.only):
+            continue
         walls, cpus = {}, {}
         for loss in ("chain", "integral"):
-            walls[loss], cpus[loss], out = _timed(make(loss, args.refinement), args.repeat)
+            walls[loss], cpus[loss], out = _timed(make(loss, args.refinement, args.extrapolation),
+                                                      args.repeat)
             print(f"{name:<28} {loss:<9}: {walls[loss]:7.3f} s (CPU {cpus[loss]:7.3f} s)   "
                   f"{_summary(out)}")
         ratio = walls["integral"] / walls["chain"]
