@@ -64,9 +64,7 @@ def _monitor_vector(path, target_displacement):
     """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
     if target_displacement is None:
         return None, None
-    c, value = target_displacement
-    c = np.asarray(c, float).ravel()
-    return c, float(value)
+    return np.asarray(target_displacement[0], float).ravel(), float(target_displacement[1])
 
 
 # ---------------------------------------------------------------------------- the algorithms
@@ -77,7 +75,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
           until_stable: bool = False, direction=None, prior=None,
           callback=None, resolution: float | None = None, switch_branches: bool = False,
-          locate_stability_loss: bool = False,
+          locate_stability_loss: bool | str = False,
           lost_fold_jump: float | None = None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
@@ -148,10 +146,13 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         (and, with ``until_stable``, ends: message "stable on another branch past the
         bifurcation ..."). The jump is in :attr:`ContinuationResult.jumps` and the
         critical point is a "bifurcation".
-    locate_stability_loss : bool
+    locate_stability_loss : bool or "stop"
         Locate such a loss of stability by the same bisection, without the switch: the path
-        goes on from the located point with the arc length of the bisection (so it does not
-        depend on the arc length it arrived with). Implied by ``switch_branches``.
+        goes on from the located point with the arc length of the bisection (True), or ends
+        there ("stop": success, message "stability lost at load factor ...", the last two
+        accepted points the last stable and the first unstable one), for a restart from it
+        with settings that do not depend on how the path got there. Implied by
+        ``switch_branches``.
     lost_fold_jump : float, optional
         Where the run fails after passing a load-factor maximum above ``lam0``: land by
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
@@ -213,7 +214,8 @@ class _ArcLengthRun:
         self.sig0, self.peak, self.turned = self.sig, self.lam, False
         self.lam_start, self.jump = self.lam, lost_fold_jump
         self.switch = switch_branches and stability
-        self.bisect = (switch_branches or locate_stability_loss) and stability
+        self.bisect = (switch_branches or bool(locate_stability_loss)) and stability
+        self.stop_at_loss = self.bisect and locate_stability_loss == "stop"
         self.locate = (resolution if resolution is not None else arc_length) * LOCATE
         self.locating, self.neg0 = 0, (tangent_stability(self.pt.K).negative
                                        if self.bisect else 0)
@@ -350,15 +352,19 @@ class _ArcLengthRun:
     def at_bifurcation(self, back):
         """A loss of stability while the load factor goes on (``back``: the point before):
         None to redo the increment at half the arc length (bisection), until it is located
-        to ``locate``; then the branch switch from the unstable point. False if the descent
-        does not land (the path goes on along the unstable branch), else None or the result
-        if the run ends there (``until_stable``)."""
+        to ``locate``; then the result (``locate_stability_loss="stop"``), or the branch
+        switch from the unstable point: False if the descent does not land (the path goes on
+        along the unstable branch), else None or the result if the run ends there
+        (``until_stable``)."""
         if self.ds > max(self.locate, self.min_ds):
             self.trace.pop()
             self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
             self.ds, self.locating = self.ds / 2, 1
             return None
         self.locating = 0
+        if self.stop_at_loss:
+            return self.result(True, "converged", f"stability lost at load factor "
+                               f"{self.lam:.6g}")
         if not self.switch:
             return False
         from .descent import switch_branch          # (descent imports the corrector)

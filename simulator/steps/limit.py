@@ -70,6 +70,14 @@ RESOLVE = 8
 #: shapes 0.5 mm apart instead of converging, and locating alone (without the switch) spreads
 #: the snap's jump further (26 / 21 / 48 / 50 um at 30 / 60 / 120 / 240 increments).
 SWITCH_BRANCHES = False
+#: On a heating path (temperatures on the current shape) the continuation ends where the
+#: tangent loses stability while the load factor still rises (located by bisection) and
+#: restarts from there with settings of that point alone (:func:`_restart`): the heated
+#: Miura's tangent loses stability at load factor 0.767372 before the fold at 0.767986, and
+#: past it the coupled path has several branches; arc length arriving with the step size
+#: and monitor scale of a given increment count followed different ones (jumps 47 / 35 / 48
+#: / 50 um at 30 / 60 / 120 / 240 increments).
+RESTART_AT_STABILITY_LOSS = True
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -254,14 +262,16 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     notes, current, c = [], outcome, _motion_monitor(start, outcome)
     origin = (start.u, 0.0)                 # where the load control of ``current`` began
     for _ in range(MAX_SNAPS):
-        res = _arc(context, origin, current, path, increments, c, until_stable=True)
-        record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
-                            powers=powers)
+        parts, texts = _continuation(context, origin, current, path, increments, c), []
+        for res in parts:
+            record_continuation(rec, res, current.state.temperature,
+                                current.state.crease_power, c, powers=powers)
+            texts.append(res.message + _snap_text(rec, res, c, powers))
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
-                     f"{res.message}" + _snap_text(rec, res, c, powers))
+                     + "; restarted there: ".join(texts))
         lam1 = res.load_factor
         if not res.success or lam1 >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
@@ -276,7 +286,46 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                       current.state, current.f_ext, current.evaluation)
 
 
-def _arc(context, origin, outcome, path, increments, c, until_stable):
+def _continuation(context, origin, outcome, path, increments, c) -> list:
+    """[ContinuationResult] from the last state of a failed load-controlled outcome to a
+    stable point past the snap (or the end): one :func:`_arc`, or, on a heating path with
+    temperatures on the current shape (:data:`RESTART_AT_STABILITY_LOSS`), two: the first
+    ends at a loss of stability located by bisection (``mgdcm(locate_stability_loss=
+    "stop")``), the second restarts from there (:func:`_restart`)."""
+    restart = RESTART_AT_STABILITY_LOSS and getattr(path, "iterated", False)
+    first = _arc(context, origin, outcome, path, increments, c, until_stable=True,
+                 locate="stop" if restart else False)
+    if not (restart and _lost_stability(first)):
+        return [first]
+    return [first, _restart(context, origin, first, path, c)]
+
+
+def _lost_stability(res) -> bool:
+    """True if ``res`` ended with success on an unstable point short of load factor 1 (where
+    ``mgdcm(locate_stability_loss="stop")`` located a loss of stability)."""
+    return bool(res.success and res.load_factor < 1.0 - 1e-12 and len(res.history) > 1
+                and res.stability and not res.stability[-1].stable)
+
+
+def _restart(context, origin, located, path, c):
+    """MGDCM from the first unstable point of ``located`` (a run ended at a located loss of
+    stability) towards load factor 1, with settings that depend only on that point and on
+    ``origin`` = (u, load factor) where the step's load control began: the first predictor
+    moves the displacements by the mean rate from ``origin`` to the point times
+    :data:`ARC_LOAD_STEP`, along the step from the last stable point, which is the prior
+    (bisection puts both points within ``ARC_LOAD_STEP / RESOLVE / 16`` of the loss at any
+    increment count, so the traced snap does not depend on it)."""
+    (lam_s, u_s, _), (lam_u, u_u, _) = located.history[-2], located.history[-1]
+    moved = float(np.linalg.norm((u_u - origin[0]).ravel()[path.free]))
+    step = moved / (lam_u - float(origin[1])) * ARC_LOAD_STEP
+    return mgdcm(path, u_u, lam_u, arc_length=ARC_LOAD_STEP,
+                 max_increments=CONTINUATION_INCREMENTS, target_load_factor=1.0, monitor=c,
+                 options=context.options, step_norm=step, stability=True, until_stable=True,
+                 direction=u_u - u_s, prior=(u_s, lam_s), resolution=ARC_LOAD_STEP / RESOLVE,
+                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE)
+
+
+def _arc(context, origin, outcome, path, increments, c, until_stable, locate=False):
     """MGDCM from the last state of a failed load-controlled outcome towards load factor 1;
     ``origin`` = (u, load factor) where that load control began (the step's start, or where
     it resumed after a snap).
@@ -321,6 +370,7 @@ def _arc(context, origin, outcome, path, increments, c, until_stable):
                  direction=recent, prior=prior, callback=None if until_stable else turned,
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
                  switch_branches=until_stable and SWITCH_BRANCHES,
+                 locate_stability_loss=locate,
                  lost_fold_jump=ARC_LOAD_STEP / RESOLVE if until_stable else None)
 
 
