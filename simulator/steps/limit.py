@@ -186,9 +186,10 @@ def _replay(rec: StepRecorder, outcome: StepOutcome) -> None:
                    outcome.residual_norms[k], **{n: v[k] for n, v in outcome.columns.items()})
 
 
-def _motion_monitor(start, outcome) -> np.ndarray:
-    """(n_dof,) weights of the most-moving node's displacement along its motion so far."""
-    du = outcome.state.u - start.u
+def _motion_monitor(u0, u) -> np.ndarray:
+    """(n_dof,) weights of the displacement of the node that moves most from ``u0`` to ``u``
+    (n_nodes, 3), along that motion."""
+    du = np.asarray(u, float) - u0
     node = int(np.argmax(np.linalg.norm(du, axis=1)))
     c = np.zeros(du.size)
     n = np.linalg.norm(du[node])
@@ -259,10 +260,12 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
             if len(outcome.load_factor) else outcome
     rec = StepRecorder(start)
     _replay(rec, outcome)
-    notes, current, c = [], outcome, _motion_monitor(start, outcome)
+    notes, current, c = [], outcome, _motion_monitor(start.u, outcome.state.u)
     origin = (start.u, 0.0)                 # where the load control of ``current`` began
-    for _ in range(MAX_SNAPS):
-        parts, texts = _continuation(context, origin, current, path, increments, c), []
+    for k in range(MAX_SNAPS):
+        parts, c = _continuation(context, origin, current, path, increments, c,
+                                 None if k else start.u)
+        texts = []
         for res in parts:
             record_continuation(rec, res, current.state.temperature,
                                 current.state.crease_power, c, powers=powers)
@@ -286,18 +289,27 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                       current.state, current.f_ext, current.evaluation)
 
 
-def _continuation(context, origin, outcome, path, increments, c) -> list:
-    """[ContinuationResult] from the last state of a failed load-controlled outcome to a
-    stable point past the snap (or the end): one :func:`_arc`, or, on a heating path with
+def _continuation(context, origin, outcome, path, increments, c, u0=None):
+    """``([ContinuationResult], c)`` from the last state of a failed load-controlled outcome
+    to a stable point past the snap (or the end): one :func:`_arc`, or, on a heating path with
     temperatures on the current shape (:data:`RESTART_AT_STABILITY_LOSS`), two: the first
     ends at a loss of stability located by bisection (``mgdcm(locate_stability_loss=
-    "stop")``), the second restarts from there (:func:`_restart`)."""
+    "stop")``), the second restarts from there (:func:`_restart`).
+
+    ``c`` (n_dof,) weighs the monitored displacement; with ``u0`` (the step's start
+    displacements, for its first continuation) a restart re-bases it on the motion from
+    ``u0`` to the located point, which does not depend on where load control failed (the
+    first run, whose path the monitor does not change, is then redone to measure with it).
+    """
     restart = RESTART_AT_STABILITY_LOSS and getattr(path, "iterated", False)
-    first = _arc(context, origin, outcome, path, increments, c, until_stable=True,
-                 locate="stop" if restart else False)
+    locate = "stop" if restart else False
+    first = _arc(context, origin, outcome, path, increments, c, True, locate)
     if not (restart and _lost_stability(first)):
-        return [first]
-    return [first, _restart(context, origin, first, path, c)]
+        return [first], c
+    if u0 is not None:
+        c = _motion_monitor(u0, first.u)
+        first = _arc(context, origin, outcome, path, increments, c, True, locate)
+    return [first, _restart(context, origin, first, path, c)], c
 
 
 def _lost_stability(res) -> bool:
@@ -391,7 +403,7 @@ def _on_path(context, path, u, lam, direction):
 
 def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
     """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
-    c = _motion_monitor(start, outcome)
+    c = _motion_monitor(start.u, outcome.state.u)
     res = _arc(context, (start.u, 0.0), outcome, path, increments, c, until_stable=False)
     limits = [p for p in res.critical_points if p.kind == "limit_point"]
     if not limits:
