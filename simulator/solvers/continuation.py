@@ -36,7 +36,7 @@ import logging
 
 import numpy as np
 
-from .._validate import finite, integer, positive
+from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
                         _tangent)
@@ -58,13 +58,6 @@ SLOW_ITERATIONS = 13
 #: With ``switch_branches``, a loss of stability is located to this fraction of the
 #: resolution (or of the arc length) before the branch switch.
 LOCATE = 1 / 16
-
-
-def _monitor_vector(path, target_displacement):
-    """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
-    if target_displacement is None:
-        return None, None
-    return np.asarray(target_displacement[0], float).ravel(), float(target_displacement[1])
 
 
 # ---------------------------------------------------------------------------- the algorithms
@@ -162,6 +155,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor)
     positive("resolution", resolution, allow_none=True)
+    if not (isinstance(locate_stability_loss, bool) or locate_stability_loss == "stop"):
+        one_of("locate_stability_loss", locate_stability_loss, (True, False, "stop"))
     run = _ArcLengthRun(path, u0, lam0, arc_length=arc_length, max_arc_length=max_arc_length,
                         target_load_factor=target_load_factor,
                         target_displacement=target_displacement, monitor=monitor,
@@ -203,7 +198,8 @@ class _ArcLengthRun:
                                                                          arc_length)
         self.min_ds = arc_length / 2 ** options.max_cuts
         self.free, self.size = path.free, _size(path.system)
-        self.c_t, self.v_t = _monitor_vector(path, target_displacement)
+        self.c_t, self.v_t = (None, None) if target_displacement is None else (  # c . u = v
+            np.asarray(target_displacement[0], float).ravel(), float(target_displacement[1]))
         self.u, self.lam = np.array(u0, float).reshape(-1, 3), float(lam0)
         self.trace = PathTrace(path, self.c_t if monitor is None else
                                np.asarray(monitor, float).ravel(), stability, self.u, self.lam,

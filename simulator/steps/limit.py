@@ -14,7 +14,10 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
   power for heating, and the jump of the most-moving node's displacement), and so do the
   step's events (:class:`~simulator.events.Event`: the critical points of the arc-length
-  stretches, and a ``"snap"`` per snap). If arc length fails after the load factor turned
+  stretches, and a ``"snap"`` per snap). On a heating path the arc length stops where the
+  tangent loses stability while the power still rises (located by bisection) and restarts
+  there with settings of that point alone, so that the branch it follows past it, and the
+  snap, do not depend on the step's increments. If arc length fails after the load factor turned
   back, the continuation driver jumps from the highest point reached to the equilibrium just
   above it that descent on the potential energy finds (where the snap lands; ``mgdcm``'s
   ``lost_fold_jump``), and load control resumes there.
@@ -67,16 +70,19 @@ RESOLVE = 8
 #: (:func:`~simulator.solvers.continuation.mgdcm`'s ``switch_branches``). Off: on the heated
 #: Miura (a = 0.5 mm, gamma = 45 deg) the loss at load factor 0.767372 is located, but the
 #: landing's rounds of (temperatures on the shape, energy descent) alternate between two
-#: shapes 0.5 mm apart instead of converging, and locating alone (without the switch) spreads
-#: the snap's jump further (26 / 21 / 48 / 50 um at 30 / 60 / 120 / 240 increments).
+#: shapes 0.5 mm apart instead of converging: at the temperatures of the loss, descent
+#: lands 125 um further on, where the creases run 8.5 K cooler, and at those temperatures it
+#: falls back 266 um behind the loss. There is no stable coupled equilibrium near the loss at
+#: its power (the traced far branch is stable from load factor 0.7743 on).
 SWITCH_BRANCHES = False
 #: On a heating path (temperatures on the current shape) the continuation ends where the
-#: tangent loses stability while the load factor still rises (located by bisection) and
-#: restarts from there with settings of that point alone (:func:`_restart`): the heated
-#: Miura's tangent loses stability at load factor 0.767372 before the fold at 0.767986, and
-#: past it the coupled path has several branches; arc length arriving with the step size
-#: and monitor scale of a given increment count followed different ones (jumps 47 / 35 / 48
-#: / 50 um at 30 / 60 / 120 / 240 increments).
+#: tangent loses stability while the load factor still rises (located by bisection to
+#: ARC_LOAD_STEP / RESOLVE / 16, ``mgdcm(locate_stability_loss="stop")``) and restarts from
+#: there with settings of that point alone (:func:`_restart`): the heated Miura's tangent
+#: loses stability at load factor 0.767372 before the fold at 0.767986, and past it the
+#: coupled path has several branches; arc length arriving with the step size of a given
+#: increment count followed different ones (the snap's jump 47.0 / 35.1 / 48.0 / 49.6 um at 30
+#: / 60 / 120 / 240 increments; 52.26 um at all four with the restart).
 RESTART_AT_STABILITY_LOSS = True
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5

@@ -283,6 +283,16 @@ def test_heated_miura_reaches_12_mw_at_120_increments():
     assert res.state.crease_power.max() == pytest.approx(12e-3)
     power, jump = max(snaps, key=lambda s: s[1])
     assert 9.0 < power < 9.4 and jump > 0
+    # the continuation stopped at the loss of stability located by bisection (before the
+    # fold) and restarted there: the snap measured on the restarted run, 52.26 um at every
+    # increment count (the slow test below)
+    events = res.steps[0].events
+    snap = max((e for e in events if e.kind == "snap"), key=lambda e: e.jump)
+    loss = [e for e in events if e.kind in ("bifurcation", "stability_change")
+            and e.increment <= snap.increment]
+    assert loss and loss[0].load_factor == pytest.approx(0.767372, abs=1e-5)
+    assert loss[0].load_factor < snap.load_factor and "restarted there" in res.steps[0].message
+    assert 1e6 * snap.jump == pytest.approx(52.26, abs=0.5) and snap.node == loss[0].node
 
 
 #: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the

@@ -134,3 +134,9 @@ def test_locating_with_stop_runs_on_where_stability_is_never_lost(path):
                 locate_stability_loss="stop")
     assert res.success and res.load_factor == 0.9 and res.stability[-1].stable
     assert [h[0] for h in res.history] == [h[0] for h in plain.history]
+
+
+def test_locate_stability_loss_rejects_unknown_values(path):
+    from simulator.errors import ParameterError
+    with pytest.raises(ParameterError, match="locate_stability_loss"):
+        mgdcm(path, np.zeros((2, 3)), locate_stability_loss="halt")
