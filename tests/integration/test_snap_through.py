@@ -188,13 +188,24 @@ def test_lost_peak_is_the_highest_point_of_a_failed_run_past_a_maximum():
 
 @pytest.mark.slow
 def test_heated_miura_passes_its_snap():
-    """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease."""
+    """Issue 9: MiuraDesign(a=0.5 mm, gamma=45 deg, W=300 um) heated to 12 mW per crease.
+
+    One snap below 11 mW, at 9.2 mW. Above it the coupled path has two small folds, near
+    11.05 and 11.93 mW, which arc length passes as snaps of 1-5 um wherever load control
+    fails at them (30, 120, 240 increments before the restart at the loss of stability, and
+    60 increments since: load control resumes at load factor 0.7745 instead of 0.7755 and
+    meets them); they are at most a tenth of the main snap."""
     case = get_case("snap_through", variant="heated")
     res = case.run()
     assert res.success, res.message
     step = res.steps[0]
     assert step.power_history[-1].max() == pytest.approx(12e-3)
-    assert step.message.count("snap at load factor") == 1
+    snaps = [e for e in step.events if e.kind == "snap"]
+    main = max(snaps, key=lambda e: e.jump)
+    assert [e for e in snaps if max(e.power_per_crease) < 11e-3] == [main]
+    assert all(e.jump < 0.1 * main.jump and max(e.power_per_crease) > 11e-3
+               for e in snaps if e is not main)
+    assert step.message.count("snap at load factor") == len(snaps)
     lam = float(step.message.split("snap at load factor ")[1].split(" ")[0])
     assert 9.0e-3 < 12e-3 * lam < 9.4e-3                       # the snap power
     stable = step.columns["stable"]
