@@ -142,8 +142,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     locate_stability_loss : bool or "stop"
         Locate such a loss of stability by the same bisection, without the switch: the path
         goes on from the located point with the arc length of the bisection (True), or ends
-        there ("stop": success, message "stability lost at load factor ...", the last two
-        accepted points the last stable and the first unstable one), for a restart from it
+        there ("stop": success, status "stability_lost", the last two accepted points the
+        last stable and the first unstable one), for a restart from it
         with settings that do not depend on how the path got there. Implied by
         ``switch_branches``.
     lost_fold_jump : float, optional
@@ -359,7 +359,7 @@ class _ArcLengthRun:
             return None
         self.locating = 0
         if self.stop_at_loss:
-            return self.result(True, "converged", f"stability lost at load factor "
+            return self.result(True, "stability_lost", f"stability lost at load factor "
                                f"{self.lam:.6g}")
         if not self.switch:
             return False

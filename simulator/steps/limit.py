@@ -310,7 +310,7 @@ def _continuation(context, origin, outcome, path, increments, c, u0=None):
     restart = RESTART_AT_STABILITY_LOSS and getattr(path, "iterated", False)
     locate = "stop" if restart else False
     first = _arc(context, origin, outcome, path, increments, c, True, locate)
-    if not (restart and _lost_stability(first)):
+    if first.status != "stability_lost":
         return [first], c
     if u0 is not None:
         c = _motion_monitor(u0, first.u)
@@ -318,11 +318,6 @@ def _continuation(context, origin, outcome, path, increments, c, u0=None):
     return [first, _restart(context, origin, first, path, c)], c
 
 
-def _lost_stability(res) -> bool:
-    """True if ``res`` ended with success on an unstable point short of load factor 1 (where
-    ``mgdcm(locate_stability_loss="stop")`` located a loss of stability)."""
-    return bool(res.success and res.load_factor < 1.0 - 1e-12 and len(res.history) > 1
-                and res.stability and not res.stability[-1].stable)
 
 
 def _restart(context, origin, located, path, c):

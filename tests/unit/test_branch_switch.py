@@ -118,7 +118,7 @@ def test_locating_with_stop_ends_at_the_first_unstable_point(path, arc_length):
     as the heating continuation makes, relies on)."""
     res = mgdcm(path, np.zeros((2, 3)), arc_length=arc_length, target_load_factor=1.5,
                 locate_stability_loss="stop")
-    assert res.success and res.status == "converged"
+    assert res.success and res.status == "stability_lost"
     assert res.message.startswith(f"stability lost at load factor {res.load_factor:.6g}")
     assert not res.stability[-1].stable and res.stability[-2].stable
     (lam_s, u_s, _), (lam_u, u_u, _) = res.history[-2:]
