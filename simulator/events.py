@@ -52,7 +52,9 @@ class Event(CriticalPoint):
         Displacement of the monitored node ``node`` there [m], from the mesh position, along a
         direction: the controlled or monitored one of a path-following step; for a
         load-controlled step continued past a limit point, the node that moved most in the
-        step, along its motion (interpolated at a limit point).
+        step, along its motion (up to where load control failed; for a heating step whose
+        continuation restarted at a located loss of stability, up to that point, which
+        does not depend on the increments) (interpolated at a limit point).
     maximum : bool
         True at a load-factor maximum (and for a snap).
     power_per_crease : tuple of float

@@ -36,7 +36,7 @@ import logging
 
 import numpy as np
 
-from .._validate import finite, integer, positive
+from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
                         _tangent)
@@ -60,15 +60,6 @@ SLOW_ITERATIONS = 13
 LOCATE = 1 / 16
 
 
-def _monitor_vector(path, target_displacement):
-    """(c, value) with c the (n_dof,) weights of the monitored displacement, or (None, None)."""
-    if target_displacement is None:
-        return None, None
-    c, value = target_displacement
-    c = np.asarray(c, float).ravel()
-    return c, float(value)
-
-
 # ---------------------------------------------------------------------------- the algorithms
 def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_increments: int = 100,
           target_load_factor: float | None = None, target_displacement=None, monitor=None,
@@ -77,7 +68,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           fast_iterations: int = FAST_ITERATIONS, stability: bool = True,
           until_stable: bool = False, direction=None, prior=None,
           callback=None, resolution: float | None = None, switch_branches: bool = False,
-          locate_stability_loss: bool = False,
+          locate_stability_loss: bool | str = False,
           lost_fold_jump: float | None = None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
@@ -148,10 +139,13 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         (and, with ``until_stable``, ends: message "stable on another branch past the
         bifurcation ..."). The jump is in :attr:`ContinuationResult.jumps` and the
         critical point is a "bifurcation".
-    locate_stability_loss : bool
+    locate_stability_loss : bool or "stop"
         Locate such a loss of stability by the same bisection, without the switch: the path
-        goes on from the located point with the arc length of the bisection (so it does not
-        depend on the arc length it arrived with). Implied by ``switch_branches``.
+        goes on from the located point with the arc length of the bisection (True), or ends
+        there ("stop": success, status "stability_lost", the last two accepted points the
+        last stable and the first unstable one), for a restart from it
+        with settings that do not depend on how the path got there. Implied by
+        ``switch_branches``.
     lost_fold_jump : float, optional
         Where the run fails after passing a load-factor maximum above ``lam0``: land by
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
@@ -161,6 +155,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
     _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor)
     positive("resolution", resolution, allow_none=True)
+    if not (isinstance(locate_stability_loss, bool) or locate_stability_loss == "stop"):
+        one_of("locate_stability_loss", locate_stability_loss, (True, False, "stop"))
     run = _ArcLengthRun(path, u0, lam0, arc_length=arc_length, max_arc_length=max_arc_length,
                         target_load_factor=target_load_factor,
                         target_displacement=target_displacement, monitor=monitor,
@@ -202,7 +198,8 @@ class _ArcLengthRun:
                                                                          arc_length)
         self.min_ds = arc_length / 2 ** options.max_cuts
         self.free, self.size = path.free, _size(path.system)
-        self.c_t, self.v_t = _monitor_vector(path, target_displacement)
+        self.c_t, self.v_t = (None, None) if target_displacement is None else (  # c . u = v
+            np.asarray(target_displacement[0], float).ravel(), float(target_displacement[1]))
         self.u, self.lam = np.array(u0, float).reshape(-1, 3), float(lam0)
         self.trace = PathTrace(path, self.c_t if monitor is None else
                                np.asarray(monitor, float).ravel(), stability, self.u, self.lam,
@@ -213,7 +210,8 @@ class _ArcLengthRun:
         self.sig0, self.peak, self.turned = self.sig, self.lam, False
         self.lam_start, self.jump = self.lam, lost_fold_jump
         self.switch = switch_branches and stability
-        self.bisect = (switch_branches or locate_stability_loss) and stability
+        self.bisect = (switch_branches or bool(locate_stability_loss)) and stability
+        self.stop_at_loss = self.bisect and locate_stability_loss == "stop"
         self.locate = (resolution if resolution is not None else arc_length) * LOCATE
         self.locating, self.neg0 = 0, (tangent_stability(self.pt.K).negative
                                        if self.bisect else 0)
@@ -350,15 +348,19 @@ class _ArcLengthRun:
     def at_bifurcation(self, back):
         """A loss of stability while the load factor goes on (``back``: the point before):
         None to redo the increment at half the arc length (bisection), until it is located
-        to ``locate``; then the branch switch from the unstable point. False if the descent
-        does not land (the path goes on along the unstable branch), else None or the result
-        if the run ends there (``until_stable``)."""
+        to ``locate``; then the result (``locate_stability_loss="stop"``), or the branch
+        switch from the unstable point: False if the descent does not land (the path goes on
+        along the unstable branch), else None or the result if the run ends there
+        (``until_stable``)."""
         if self.ds > max(self.locate, self.min_ds):
             self.trace.pop()
             self.u, self.lam, self.sig, self.uhat_prev, self.pt = back
             self.ds, self.locating = self.ds / 2, 1
             return None
         self.locating = 0
+        if self.stop_at_loss:
+            return self.result(True, "stability_lost", f"stability lost at load factor "
+                               f"{self.lam:.6g}")
         if not self.switch:
             return False
         from .descent import switch_branch          # (descent imports the corrector)

@@ -63,7 +63,8 @@ class ContinuationResult(ResultFiles):
     ----------
     success : bool
     status : str
-        "converged", "failed" or "stopped".
+        "converged", "failed", "stopped" or (``mgdcm(locate_stability_loss="stop")``, with
+        success) "stability_lost".
     message : str
     u : (n_nodes, 3) displacements at the last accepted point [m]
     load_factor : float at the last accepted point

@@ -14,7 +14,10 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   unstable branch in between (column ``stable``); the message gives the snaps (load factor,
   power for heating, and the jump of the most-moving node's displacement), and so do the
   step's events (:class:`~simulator.events.Event`: the critical points of the arc-length
-  stretches, and a ``"snap"`` per snap). If arc length fails after the load factor turned
+  stretches, and a ``"snap"`` per snap). On a heating path the arc length stops where the
+  tangent loses stability while the power still rises (located by bisection) and restarts
+  there with settings of that point alone, so that the branch it follows past it, and the
+  snap, do not depend on the step's increments. If arc length fails after the load factor turned
   back, the continuation driver jumps from the highest point reached to the equilibrium just
   above it that descent on the potential energy finds (where the snap lands; ``mgdcm``'s
   ``lost_fold_jump``), and load control resumes there.
@@ -67,9 +70,20 @@ RESOLVE = 8
 #: (:func:`~simulator.solvers.continuation.mgdcm`'s ``switch_branches``). Off: on the heated
 #: Miura (a = 0.5 mm, gamma = 45 deg) the loss at load factor 0.767372 is located, but the
 #: landing's rounds of (temperatures on the shape, energy descent) alternate between two
-#: shapes 0.5 mm apart instead of converging, and locating alone (without the switch) spreads
-#: the snap's jump further (26 / 21 / 48 / 50 um at 30 / 60 / 120 / 240 increments).
+#: shapes 0.5 mm apart instead of converging: at the temperatures of the loss, descent
+#: lands 125 um further on, where the creases run 8.5 K cooler, and at those temperatures it
+#: falls back 266 um behind the loss. There is no stable coupled equilibrium near the loss at
+#: its power (the traced far branch is stable from load factor 0.7743 on).
 SWITCH_BRANCHES = False
+#: On a heating path (temperatures on the current shape) the continuation ends where the
+#: tangent loses stability while the load factor still rises (located by bisection to
+#: ARC_LOAD_STEP / RESOLVE / 16, ``mgdcm(locate_stability_loss="stop")``) and restarts from
+#: there with settings of that point alone (:func:`_restart`): the heated Miura's tangent
+#: loses stability at load factor 0.767372 before the fold at 0.767986, and past it the
+#: coupled path has several branches; arc length arriving with the step size of a given
+#: increment count followed different ones (the snap's jump 47.0 / 35.1 / 48.0 / 49.6 um at 30
+#: / 60 / 120 / 240 increments; 52.26 um at all four with the restart).
+RESTART_AT_STABILITY_LOSS = True
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 
@@ -178,9 +192,10 @@ def _replay(rec: StepRecorder, outcome: StepOutcome) -> None:
                    outcome.residual_norms[k], **{n: v[k] for n, v in outcome.columns.items()})
 
 
-def _motion_monitor(start, outcome) -> np.ndarray:
-    """(n_dof,) weights of the most-moving node's displacement along its motion so far."""
-    du = outcome.state.u - start.u
+def _motion_monitor(u0, u) -> np.ndarray:
+    """(n_dof,) weights of the displacement of the node that moves most from ``u0`` to ``u``
+    (n_nodes, 3), along that motion."""
+    du = np.asarray(u, float) - u0
     node = int(np.argmax(np.linalg.norm(du, axis=1)))
     c = np.zeros(du.size)
     n = np.linalg.norm(du[node])
@@ -251,17 +266,21 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
             if len(outcome.load_factor) else outcome
     rec = StepRecorder(start)
     _replay(rec, outcome)
-    notes, current, c = [], outcome, _motion_monitor(start, outcome)
+    notes, current, c = [], outcome, _motion_monitor(start.u, outcome.state.u)
     origin = (start.u, 0.0)                 # where the load control of ``current`` began
-    for _ in range(MAX_SNAPS):
-        res = _arc(context, origin, current, path, increments, c, until_stable=True)
-        record_continuation(rec, res, current.state.temperature, current.state.crease_power, c,
-                            powers=powers)
+    for k in range(MAX_SNAPS):
+        parts, c = _continuation(context, origin, current, path, increments, c,
+                                 None if k else start.u)
+        texts = []
+        for res in parts:
+            record_continuation(rec, res, current.state.temperature,
+                                current.state.crease_power, c, powers=powers)
+            texts.append(res.message + _snap_text(rec, res, c, powers))
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
         notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
-                     f"{res.message}" + _snap_text(rec, res, c, powers))
+                     + "; restarted there: ".join(texts))
         lam1 = res.load_factor
         if not res.success or lam1 >= 1.0 - 1e-12:
             return rec.finish(res.success, res.status, "; ".join(notes), state,
@@ -276,7 +295,50 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                       current.state, current.f_ext, current.evaluation)
 
 
-def _arc(context, origin, outcome, path, increments, c, until_stable):
+def _continuation(context, origin, outcome, path, increments, c, u0=None):
+    """``([ContinuationResult], c)`` from the last state of a failed load-controlled outcome
+    to a stable point past the snap (or the end): one :func:`_arc`, or, on a heating path with
+    temperatures on the current shape (:data:`RESTART_AT_STABILITY_LOSS`), two: the first
+    ends at a loss of stability located by bisection (``mgdcm(locate_stability_loss=
+    "stop")``), the second restarts from there (:func:`_restart`).
+
+    ``c`` (n_dof,) weighs the monitored displacement; with ``u0`` (the step's start
+    displacements, for its first continuation) a restart re-bases it on the motion from
+    ``u0`` to the located point, which does not depend on where load control failed (the
+    first run, whose path the monitor does not change, is then redone to measure with it).
+    """
+    restart = RESTART_AT_STABILITY_LOSS and getattr(path, "iterated", False)
+    locate = "stop" if restart else False
+    first = _arc(context, origin, outcome, path, increments, c, True, locate)
+    if first.status != "stability_lost":
+        return [first], c
+    if u0 is not None:
+        c = _motion_monitor(u0, first.u)
+        first = _arc(context, origin, outcome, path, increments, c, True, locate)
+    return [first, _restart(context, origin, first, path, c)], c
+
+
+
+
+def _restart(context, origin, located, path, c):
+    """MGDCM from the first unstable point of ``located`` (a run ended at a located loss of
+    stability) towards load factor 1, with settings that depend only on that point and on
+    ``origin`` = (u, load factor) where the step's load control began: the first predictor
+    moves the displacements by the mean rate from ``origin`` to the point times
+    :data:`ARC_LOAD_STEP`, along the step from the last stable point, which is the prior
+    (bisection puts both points within ``ARC_LOAD_STEP / RESOLVE / 16`` of the loss at any
+    increment count, so the traced snap does not depend on it)."""
+    (lam_s, u_s, _), (lam_u, u_u, _) = located.history[-2], located.history[-1]
+    moved = float(np.linalg.norm((u_u - origin[0]).ravel()[path.free]))
+    step = moved / (lam_u - float(origin[1])) * ARC_LOAD_STEP
+    return mgdcm(path, u_u, lam_u, arc_length=ARC_LOAD_STEP,
+                 max_increments=CONTINUATION_INCREMENTS, target_load_factor=1.0, monitor=c,
+                 options=context.options, step_norm=step, stability=True, until_stable=True,
+                 direction=u_u - u_s, prior=(u_s, lam_s), resolution=ARC_LOAD_STEP / RESOLVE,
+                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE)
+
+
+def _arc(context, origin, outcome, path, increments, c, until_stable, locate=False):
     """MGDCM from the last state of a failed load-controlled outcome towards load factor 1;
     ``origin`` = (u, load factor) where that load control began (the step's start, or where
     it resumed after a snap).
@@ -321,6 +383,7 @@ def _arc(context, origin, outcome, path, increments, c, until_stable):
                  direction=recent, prior=prior, callback=None if until_stable else turned,
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
                  switch_branches=until_stable and SWITCH_BRANCHES,
+                 locate_stability_loss=locate,
                  lost_fold_jump=ARC_LOAD_STEP / RESOLVE if until_stable else None)
 
 
@@ -341,7 +404,7 @@ def _on_path(context, path, u, lam, direction):
 
 def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcome:
     """Status "limit_point" if a short arc-length probe passes a load-factor maximum."""
-    c = _motion_monitor(start, outcome)
+    c = _motion_monitor(start.u, outcome.state.u)
     res = _arc(context, (start.u, 0.0), outcome, path, increments, c, until_stable=False)
     limits = [p for p in res.critical_points if p.kind == "limit_point"]
     if not limits:

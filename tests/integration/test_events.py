@@ -206,8 +206,10 @@ def test_heated_miura_snap_is_an_event():
     res = case.run()
     assert res.success, res.message
     snaps = [e for e in res.events if e.kind == "snap"]
-    assert len(snaps) == 1 and snaps[0].step == res.steps[0].name
-    snap = snaps[0]
+    snap = max(snaps, key=lambda e: e.jump)     # the main snap; the path's small folds near
+    # 11.05 and 11.93 mW pass as snaps of 1-5 um (test_heated_miura_passes_its_snap)
+    assert [e for e in snaps if max(e.power_per_crease) < 11e-3] == [snap]
+    assert all(e.step == res.steps[0].name for e in snaps)
     assert 9.0e-3 < max(snap.power_per_crease) < 9.4e-3
     assert snap.load_factor * 12e-3 == pytest.approx(max(snap.power_per_crease), rel=1e-12)
     assert snap.jump > 0 and snap.temperature_max > 100.0     # the jump's size depends on
@@ -222,7 +224,8 @@ def test_heated_miura_snap_is_an_event():
     model = miura_model(d)
     trial = ps.heating_trial(model, tuple(heated_creases(d)), simulate(model, []).state,
                              12e-3, increments=60)
-    (t,) = trial.snaps
+    t = max(trial.snaps, key=lambda e: e.jump)
+    assert len(trial.snaps) == len(snaps) and t.jump == pytest.approx(snap.jump, rel=1e-9)
     assert t.total_power == pytest.approx(snap.total_power, rel=1e-3)
-    assert trial.snap == (f"snap at {1e3 * max(t.power_per_crease):.4g} mW per crease: "
-                          f"displacement jumps {1e6 * t.jump:.4g} um")
+    assert trial.snap.split("; ")[0] == (f"snap at {1e3 * max(t.power_per_crease):.4g} mW per "
+                                         f"crease: displacement jumps {1e6 * t.jump:.4g} um")

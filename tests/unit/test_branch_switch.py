@@ -108,3 +108,35 @@ def test_locating_without_switching_bisects_to_the_bifurcation(path):
     assert bif.kind == "bifurcation" and abs(bif.load_factor - 1.0) <= 0.1 / 32 + 1e-12
     (coarse,) = plain.critical_points
     assert abs(coarse.load_factor - 1.0) > abs(bif.load_factor - 1.0)
+
+
+@pytest.mark.parametrize("arc_length", [0.1, 0.07, 0.13])
+def test_locating_with_stop_ends_at_the_first_unstable_point(path, arc_length):
+    """``locate_stability_loss="stop"`` ends the run (success) at the located first unstable
+    point, the last stable one before it: within arc_length / 16 of the bifurcation at
+    lambda = 1 whatever the arc length the path arrived with (what a restart from there,
+    as the heating continuation makes, relies on)."""
+    res = mgdcm(path, np.zeros((2, 3)), arc_length=arc_length, target_load_factor=1.5,
+                locate_stability_loss="stop")
+    assert res.success and res.status == "stability_lost"
+    assert res.message.startswith(f"stability lost at load factor {res.load_factor:.6g}")
+    assert not res.stability[-1].stable and res.stability[-2].stable
+    (lam_s, u_s, _), (lam_u, u_u, _) = res.history[-2:]
+    assert lam_s < 1.0 < lam_u == res.load_factor and lam_u - lam_s <= arc_length / 16 + 1e-12
+    assert u_u[1, 0] == pytest.approx(lam_u, rel=1e-12) and u_u[1, 1] == 0.0
+    assert [c.kind for c in res.critical_points] == ["bifurcation"]
+
+
+def test_locating_with_stop_runs_on_where_stability_is_never_lost(path):
+    """Short of the bifurcation, ``"stop"`` changes nothing: the same points as a plain run."""
+    plain = mgdcm(path, np.zeros((2, 3)), arc_length=0.1, target_load_factor=0.9)
+    res = mgdcm(path, np.zeros((2, 3)), arc_length=0.1, target_load_factor=0.9,
+                locate_stability_loss="stop")
+    assert res.success and res.load_factor == 0.9 and res.stability[-1].stable
+    assert [h[0] for h in res.history] == [h[0] for h in plain.history]
+
+
+def test_locate_stability_loss_rejects_unknown_values(path):
+    from simulator.errors import ParameterError
+    with pytest.raises(ParameterError, match="locate_stability_loss"):
+        mgdcm(path, np.zeros((2, 3)), locate_stability_loss="halt")
