@@ -89,17 +89,31 @@ def _cpu() -> str:
     return "|".join(info)
 
 
+def _numba_version():
+    """numba's version file (``numba/_version.py``, read, not imported: cheaper than
+    ``importlib.metadata``), else its distribution's version; None if numba is missing."""
+    spec = importlib.util.find_spec("numba")
+    if spec is None or not spec.origin:
+        return None
+    try:
+        return (pathlib.Path(spec.origin).parent / "_version.py").read_text(encoding="utf-8")
+    except OSError:
+        from importlib import metadata
+
+        try:
+            return metadata.version("numba")
+        except metadata.PackageNotFoundError:
+            return None
+
+
 def key():
     """Hex SHA-256 of the kernel sources (:data:`SOURCES`), the numba, numpy and Python
     versions and the CPU; None if numba is not installed or a source cannot be read. Computed
     without importing numba."""
-    from importlib import metadata
-
     import numpy
 
-    try:
-        numba_version = metadata.version("numba")
-    except metadata.PackageNotFoundError:
+    numba_version = _numba_version()
+    if numba_version is None:
         return None
     digest = hashlib.sha256()
     for part in (numba_version, numpy.__version__, sys.version, sysconfig.get_config_var(
