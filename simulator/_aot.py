@@ -224,20 +224,29 @@ def kernel(name: str):
     return getattr(_module, name, None) if _module else None
 
 
-def available() -> bool:
+def available(log: bool = False) -> bool:
     """Whether a module for the current sources is present with a matching manifest (the
-    files only: nothing is imported)."""
+    files only: nothing is imported); with ``log``, say at INFO why not."""
+    why = None
     if _switched_off():
-        return False
-    k = key()
-    if k is None:
-        return False
-    _, module_file, manifest_file = _paths(k)
-    try:
-        manifest = json.loads(manifest_file.read_text(encoding="utf-8"))
-        return manifest.get("key") == k and module_file.exists()
-    except (OSError, ValueError):
-        return False
+        why = "switched off (ETORIGAMI_AOT)"
+    elif (k := key()) is None:
+        why = "numba is not installed or a kernel source is missing"
+    else:
+        _, module_file, manifest_file = _paths(k)
+        try:
+            manifest = json.loads(manifest_file.read_text(encoding="utf-8"))
+            if manifest.get("key") != k:
+                why = f"{manifest_file} is stale"
+            elif not module_file.exists():
+                why = f"{module_file} is missing"
+        except FileNotFoundError:
+            why = f"not built yet for these sources ({manifest_file})"
+        except (OSError, ValueError) as exc:
+            why = f"unreadable manifest {manifest_file} ({type(exc).__name__}: {exc})"
+    if why and log:
+        logger.info("no ahead-of-time kernels: %s", why)
+    return why is None
 
 
 def wanted() -> bool:

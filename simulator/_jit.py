@@ -189,5 +189,6 @@ def warm_kernel_cache() -> bool:
         logger.debug("no background compilation of the kernels (%s)", exc)
         lock.unlink(missing_ok=True)
         return False
-    logger.info("compiling the numba kernels in a background process for the next run")
+    logger.info("compiling the numba kernels and the ahead-of-time module in a background "
+                "process for the next run")
     return True

@@ -183,7 +183,7 @@ def kernel_backend(short: bool):
         return contextlib.nullcontext()
     from simulator import _aot, kernel_cache_warm, warm_kernel_cache
 
-    if _aot.available():                    # files only: a usage error stays quick
+    if _aot.available(log=True):            # files only: a usage error stays quick
         return _aot.enabled()               # no numba imported (falls back to it if needed)
     warm = kernel_cache_warm()
     warm_kernel_cache()                     # numba's cache if cold, then the AOT module

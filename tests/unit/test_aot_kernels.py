@@ -162,7 +162,9 @@ def test_a_stale_module_is_ignored_with_a_log_line(aot_env, tmp_path, monkeypatc
     monkeypatch.setenv("ETORIGAMI_AOT_DIR", str(tmp_path / "stale"))
     data = json.loads(manifest.read_text())
     manifest.write_text(json.dumps(dict(data, key="0" * 64)))
-    assert not _aot.available()
+    with caplog.at_level(logging.INFO, logger="simulator._aot"):
+        assert not _aot.available(log=True)
+    assert "is stale" in caplog.text
     _falls_back(caplog, monkeypatch, "stale")
 
 
@@ -189,7 +191,9 @@ def test_no_module_means_numba_with_a_log_line(tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("ETORIGAMI_AOT_DIR", str(tmp_path / "empty"))
     monkeypatch.setattr(_aot, "_enabled", False)
     monkeypatch.setattr(_aot, "_module", None)
-    assert not _aot.available() and _aot.wanted()
+    with caplog.at_level(logging.INFO, logger="simulator._aot"):
+        assert not _aot.available(log=True) and _aot.wanted()
+    assert "not built yet" in caplog.text
     _falls_back(caplog, monkeypatch, "no ahead-of-time kernels")
     monkeypatch.setenv("ETORIGAMI_AOT", "0")
     assert not _aot.wanted() and not _aot.available()

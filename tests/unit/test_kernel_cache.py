@@ -81,7 +81,7 @@ def test_short_commands_use_numba_only_with_a_warm_cache(monkeypatch, warm):
 
     started = []
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
-    monkeypatch.setattr(_aot, "available", lambda: False)
+    monkeypatch.setattr(_aot, "available", lambda log=False: False)
     monkeypatch.setattr(simulator, "kernel_cache_warm", lambda: warm, raising=False)
     monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: started.append(1),
                         raising=False)
@@ -99,7 +99,7 @@ def test_short_commands_use_the_aot_kernels_when_built(monkeypatch):
     from simulator import _aot
 
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
-    monkeypatch.setattr(_aot, "available", lambda: True)
+    monkeypatch.setattr(_aot, "available", lambda log=False: True)
     monkeypatch.setattr(_aot, "_enabled", False)
     monkeypatch.setattr(_aot, "_module", False)            # as if it failed to load
     monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: pytest.fail("started"),
