@@ -89,19 +89,19 @@ def _cpu() -> str:
     return "|".join(info)
 
 
-def _numba_version():
-    """numba's version file (``numba/_version.py``, read, not imported: cheaper than
-    ``importlib.metadata``), else its distribution's version; None if numba is missing."""
-    spec = importlib.util.find_spec("numba")
+def _version_file(package: str, name: str):
+    """The text of ``package``'s version file ``name`` (read, not imported: a usage error of
+    the CLI stays quick), else its distribution's version; None if it is not installed."""
+    spec = importlib.util.find_spec(package)
     if spec is None or not spec.origin:
         return None
     try:
-        return (pathlib.Path(spec.origin).parent / "_version.py").read_text(encoding="utf-8")
+        return (pathlib.Path(spec.origin).parent / name).read_text(encoding="utf-8")
     except OSError:
         from importlib import metadata
 
         try:
-            return metadata.version("numba")
+            return metadata.version(package)
         except metadata.PackageNotFoundError:
             return None
 
@@ -109,22 +109,20 @@ def _numba_version():
 def key():
     """Hex SHA-256 of the kernel sources (:data:`SOURCES`), the numba, numpy and Python
     versions and the CPU; None if numba is not installed or a source cannot be read. Computed
-    without importing numba."""
-    import numpy
-
-    numba_version = _numba_version()
+    without importing numba or numpy."""
+    numba_version = _version_file("numba", "_version.py")
     if numba_version is None:
         return None
-    digest = hashlib.sha256()
-    for part in (numba_version, numpy.__version__, sys.version, sysconfig.get_config_var(
-            "EXT_SUFFIX") or "", _cpu()):
-        digest.update(part.encode() + b"\0")
+    hasher = hashlib.sha256()
+    for part in (numba_version, _version_file("numpy", "version.py") or "", sys.version,
+                 sysconfig.get_config_var("EXT_SUFFIX") or "", _cpu()):
+        hasher.update(part.encode() + b"\0")
     try:
         for rel in SOURCES:
-            digest.update((_ROOT / rel).read_bytes() + b"\0")
+            hasher.update((_ROOT / rel).read_bytes() + b"\0")
     except OSError:
         return None
-    return digest.hexdigest()
+    return hasher.hexdigest()
 
 
 def _paths(k: str):
@@ -139,7 +137,7 @@ def _switched_off() -> bool:
     return os.environ.get("ETORIGAMI_AOT", "").strip().lower() in _OFF
 
 
-def _file_digest(path) -> str:
+def _file_sha256(path) -> str:
     return hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
 
 
@@ -164,7 +162,7 @@ def _load():
             logger.info("ahead-of-time kernels %s are stale (built for other sources or "
                         "versions); ignored, using numba", module_file)
             return None
-        if manifest.get("sha256") != _file_digest(module_file):
+        if manifest.get("sha256") != _file_sha256(module_file):
             logger.info("ahead-of-time kernels %s do not match their manifest (damaged or "
                         "replaced); ignored, using numba", module_file)
             return None
@@ -296,7 +294,7 @@ def build() -> pathlib.Path:
                 built = found[0]
             staged = pathlib.Path(tmp) / "staged"
             shutil.copyfile(built, staged)
-            manifest = {"key": k, "sha256": _file_digest(staged),
+            manifest = {"key": k, "sha256": _file_sha256(staged),
                         "exports": [e[0] for e in EXPORTS]}
             os.replace(staged, module_file)
             (pathlib.Path(tmp) / "manifest").write_text(json.dumps(manifest), encoding="utf-8")

@@ -183,7 +183,7 @@ def test_an_unloadable_module_is_ignored_with_a_log_line(aot_env, tmp_path, monk
     monkeypatch.setenv("ETORIGAMI_AOT_DIR", str(tmp_path / "garbage"))
     so.write_bytes(b"not a shared object")
     data = json.loads(manifest.read_text())
-    manifest.write_text(json.dumps(dict(data, sha256=_aot._file_digest(so))))
+    manifest.write_text(json.dumps(dict(data, sha256=_aot._file_sha256(so))))
     _falls_back(caplog, monkeypatch, "could not load")
 
 
