@@ -254,10 +254,26 @@ def wanted() -> bool:
             and not available())
 
 
+#: Modules kept in :func:`aot_dir` (other checkouts or versions share it); older ones are
+#: removed after a build.
+KEEP = 8
+
+
+def _prune(folder: pathlib.Path, keep: int = KEEP) -> None:
+    """Remove all but the ``keep`` newest modules (and their manifests) from ``folder``."""
+    manifests = sorted(folder.glob(_PREFIX + "*.json"), key=lambda f: f.stat().st_mtime,
+                       reverse=True)
+    for manifest in manifests[keep:]:
+        stem = manifest.name[:-len(".json")]
+        for f in folder.glob(stem + "*"):
+            f.unlink(missing_ok=True)
+
+
 def build() -> pathlib.Path:
     """Compile the kernels of :data:`EXPORTS` with ``numba.pycc`` into the module of the
-    current key (several seconds of CPU; imports numba), write its manifest, and remove the
-    modules of other keys; returns the module file. Raises if compilation fails."""
+    current key (several seconds of CPU; imports numba), write its manifest, and keep the
+    :data:`KEEP` newest modules (other checkouts or versions share the folder); returns the
+    module file. Raises if compilation fails."""
     import importlib
     import shutil
     import tempfile
@@ -299,8 +315,6 @@ def build() -> pathlib.Path:
             os.replace(staged, module_file)
             (pathlib.Path(tmp) / "manifest").write_text(json.dumps(manifest), encoding="utf-8")
             os.replace(pathlib.Path(tmp) / "manifest", manifest_file)
-    for old in folder.glob(_PREFIX + "*"):        # modules of earlier sources or versions
-        if old.name not in (module_file.name, manifest_file.name):
-            old.unlink(missing_ok=True)
+    _prune(folder)
     logger.info("compiled the ahead-of-time kernels into %s", module_file)
     return module_file

@@ -210,3 +210,15 @@ def test_the_key_follows_the_sources(tmp_path, monkeypatch):
     with open(tmp_path / _aot.SOURCES[1], "a") as fh:
         fh.write("\n# edited\n")
     assert _aot.key() != before
+
+
+def test_only_the_newest_modules_are_kept(tmp_path):
+    for i in range(5):
+        for suffix in (".json", ".so"):
+            f = tmp_path / f"_etorigami_kernels_{i:024d}{suffix}"
+            f.write_text("x")
+            os.utime(f, (1000.0 + i, 1000.0 + i))
+    (tmp_path / "other.txt").write_text("kept")
+    _aot._prune(tmp_path, keep=2)
+    kept = [f"_etorigami_kernels_{i:024d}{s}" for i in (3, 4) for s in (".json", ".so")]
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(["other.txt"] + kept)
