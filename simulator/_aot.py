@@ -2,9 +2,10 @@
 
 A short command (one case, one gripper evaluation) spends more time importing numba and
 setting up its compiler (about 0.55 s of CPU, even when every kernel comes from numba's cache)
-than in its kernels. So the two kernels such a run calls, the fused mechanics evaluation
-(:mod:`simulator.mechanics.elements._fused_jit`) and the thermal element data
-(:mod:`simulator.thermal._thermal_jit`), are also compiled ahead of time with ``numba.pycc``
+than in its kernels. So the kernels such a run calls, the fused mechanics evaluation
+(:mod:`simulator.mechanics.elements._fused_jit`), the thermal element data
+(:mod:`simulator.thermal._thermal_jit`) and the sparse Cholesky of models from 64 free DOFs
+(:mod:`simulator.linalg._cholesky_jit`), are also compiled ahead of time with ``numba.pycc``
 into one extension module in the user cache (:func:`aot_dir`). Loading it costs well under a
 millisecond and imports nothing from numba.
 
@@ -49,11 +50,12 @@ _ROOT = pathlib.Path(__file__).resolve().parent
 EXPORTS = (
     ("fused", "mechanics.elements._fused_jit", "_kernel", "SIGNATURE"),
     ("thermal", "thermal._thermal_jit", "_kernel", "_SIGNATURE"),
+    ("cholesky", "linalg._cholesky_jit", "_kernel", "SIGNATURE"),
 )
 #: Every source the compiled code comes from (the fused kernel calls the spring element of
 #: ``_springs_jit``), and this file (how it is built).
 SOURCES = ("mechanics/elements/_fused_jit.py", "mechanics/elements/_springs_jit.py",
-           "thermal/_thermal_jit.py", "_aot.py")
+           "thermal/_thermal_jit.py", "linalg/_cholesky_jit.py", "_aot.py")
 _PREFIX = "_etorigami_kernels_"
 _OFF = ("0", "off", "no", "false", "never", "numpy", "jit")
 
@@ -212,8 +214,9 @@ def enabled():
 
 
 def kernel(name: str):
-    """The ahead-of-time compiled kernel ``name`` (``"fused"``, ``"thermal"``), or None if this
-    process has not called :func:`enable` or the module does not load (logged once)."""
+    """The ahead-of-time compiled kernel ``name`` (``"fused"``, ``"thermal"``, ``"cholesky"``),
+    or None if this process has not called :func:`enable` or the module does not load
+    (logged once)."""
     global _module
     if not _enabled:
         return None
@@ -289,11 +292,13 @@ def build() -> pathlib.Path:
         warnings.simplefilter("ignore")            # numba.pycc is deprecated (still works)
         from numba.pycc import CC
 
+        from .linalg import _cholesky_jit
         from .mechanics.elements import _fused_jit
         from .thermal import _thermal_jit
 
         _fused_jit._compile()                      # the compiled helpers the kernels call
         _thermal_jit._build()
+        _cholesky_jit._build()
         with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
             cc = CC(name)
             cc.output_dir = tmp

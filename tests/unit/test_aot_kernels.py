@@ -26,6 +26,11 @@ RUN = ["run", "single-fold", "--set", "residual_fold_deg=-10", "--set", "gravity
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     """A folder holding the module built for the current sources (about 8 s of CPU)."""
+    import sysconfig
+    from shutil import which
+
+    if not which((sysconfig.get_config_var("CC") or "cc").split()[0]) and not which("cc"):
+        pytest.skip("no C compiler for numba.pycc")
     folder = tmp_path_factory.mktemp("aot")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("ETORIGAMI_AOT_DIR", str(folder))
@@ -74,9 +79,11 @@ def _same_results(jit, aot, calls):
 
 
 def test_aot_kernels_give_the_jit_floats(aot_env, monkeypatch):
-    """On a heated single fold (bars, springs, supports, thermal), the gripper with active
-    contact in all three distance zones and a Miura sheet with elastic supports."""
+    """On a heated single fold (bars, springs, supports, thermal), the gripper (its sparse
+    Cholesky solves) with active contact in all three distance zones and a Miura sheet with
+    elastic supports."""
     from simulator.cases import get_case
+    from simulator.linalg import _cholesky_jit
     from tests.unit.test_fused_kernel import _gripper_with_contacts, _miura
 
     module = _aot._load()
@@ -84,17 +91,21 @@ def test_aot_kernels_give_the_jit_floats(aot_env, monkeypatch):
     jit_fused = _fused_jit.fused_kernel()
     assert _thermal_jit.use_compiled()
     jit_thermal = _thermal_jit._compiled
-    assert hasattr(jit_fused, "py_func") and hasattr(jit_thermal, "py_func")   # numba's
+    jit_cholesky = _cholesky_jit.cholesky_solve()
+    for jit in (jit_fused, jit_thermal, jit_cholesky):
+        assert hasattr(jit, "py_func")                              # numba's
     fused_calls = _recorder(monkeypatch, _fused_jit, jit_fused)
     thermal_calls = _recorder(monkeypatch, _thermal_jit, jit_thermal)
+    cholesky_calls = _recorder(monkeypatch, _cholesky_jit, jit_cholesky)
     get_case("single-fold", residual_fold_deg=-10, gravity=True, thermal_steps=40).run()
-    for system, u, rest in (_gripper_with_contacts(), _miura()):
+    for system, u, rest in (_gripper_with_contacts(), _miura()):    # the gripper: Cholesky
         system.evaluate(u, rest)
         system.evaluate(u, rest, hessian=False)
-    assert len(fused_calls) > 100 and len(thermal_calls) > 10
+    assert len(fused_calls) > 100 and len(thermal_calls) > 10 and len(cholesky_calls) > 10
     assert max(result for _, result in fused_calls) >= 6            # active contact pairs
     _same_results(jit_fused, module.fused, fused_calls)
     _same_results(jit_thermal, module.thermal, thermal_calls)
+    _same_results(jit_cholesky, module.cholesky, cholesky_calls)
 
 
 def test_enabled_kernels_are_the_aot_ones(aot_env, monkeypatch):
@@ -106,6 +117,8 @@ def test_enabled_kernels_are_the_aot_ones(aot_env, monkeypatch):
         assert aot is not None and not hasattr(aot, "py_func")
         assert _fused_jit.fused_kernel() is aot and not _fused_jit.needs_compiling()
         assert _thermal_jit.use_compiled() and _thermal_jit._compiled is None
+        from simulator.linalg import _cholesky_jit
+        assert _cholesky_jit.cholesky_solve() is _aot.kernel("cholesky")
     assert hasattr(_fused_jit.fused_kernel(), "py_func")  # numba's again
 
 
