@@ -131,16 +131,40 @@ def compile_small_model_kernels() -> None:
         _compile_lock().unlink(missing_ok=True)
 
 
+def compile_kernels_and_aot_module() -> None:
+    """:func:`compile_small_model_kernels`, then the ahead-of-time module of
+    :mod:`simulator._aot` if it is missing (what :func:`warm_kernel_cache` runs in the
+    background); a failure of the latter is logged and leaves numba's kernels in use."""
+    from . import _aot
+
+    lock = _compile_lock()
+    try:
+        if not kernel_cache_warm():
+            compile_small_model_kernels()
+        if _aot.wanted():
+            lock.touch()
+            try:
+                _aot.build()
+            except Exception as exc:  # noqa: BLE001 - an accelerator of the next short run
+                logger.warning("could not build the ahead-of-time kernels (%s: %s); short "
+                               "commands keep numba's kernels", type(exc).__name__, exc)
+    finally:
+        lock.unlink(missing_ok=True)
+
+
 def warm_kernel_cache() -> bool:
     """Start a detached background process that compiles the kernels of a small model into
-    numba's cache (several seconds of CPU, on another core), unless they are cached already;
-    returns whether it was started. The caller does not wait: its own run keeps the numpy
-    kernels, and the next process finds the cache warm (:func:`kernel_cache_warm`). Any
+    numba's cache and then the ahead-of-time module of :mod:`simulator._aot` (several seconds
+    of CPU, on another core), unless both are there already; returns whether it was
+    started. The caller does not wait: its own run keeps the kernels it has, and the next
+    process finds the cache warm (:func:`kernel_cache_warm`) and the module built. Any
     failure is logged at DEBUG and ignored (only the next run's speed depends on it)."""
-    if kernel_cache_warm():
-        return False
     import importlib.util
 
+    from . import _aot
+
+    if kernel_cache_warm() and not _aot.wanted():
+        return False
     if importlib.util.find_spec("numba") is None:
         return False
     import time
@@ -158,12 +182,13 @@ def warm_kernel_cache() -> bool:
     try:
         lock.touch()
         subprocess.Popen([sys.executable, "-c", "from simulator._jit import "
-                          "compile_small_model_kernels as c; c()"],
+                          "compile_kernels_and_aot_module as c; c()"],
                          env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
     except OSError as exc:
         logger.debug("no background compilation of the kernels (%s)", exc)
         lock.unlink(missing_ok=True)
         return False
-    logger.info("compiling the numba kernels in a background process for the next run")
+    logger.info("compiling the numba kernels and the ahead-of-time module in a background "
+                "process for the next run")
     return True

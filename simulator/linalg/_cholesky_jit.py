@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 
+from .. import _aot
 from .._jit import HELPER_OPTIONS, compile_kernel
 
 __all__ = ["cholesky_solve", "SIGNATURE", "broken"]
@@ -150,9 +151,13 @@ _HELPERS = {"_apply_inverse": "void(f8[::1], i8[::1], i8[::1], f8[::1])",
 
 
 def cholesky_solve():
-    """The compiled function (compiled, or loaded from numba's cache, on first use), or None
-    if numba cannot compile it (logged once)."""
+    """The compiled function, or None if numba cannot compile it (logged once): the
+    ahead-of-time compiled one when enabled and loaded (:mod:`simulator._aot`, no numba
+    imported), else numba's, compiled or loaded from its cache on first use."""
     global _compiled, broken
+    aot = _aot.kernel("cholesky")                      # enabled by short CLI commands only
+    if aot is not None:
+        return aot
     if _compiled is None and not broken:
         _compiled = compile_kernel("sparse Cholesky", _build, "solving densely")
         broken = _compiled is None

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _aot
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
@@ -224,11 +225,12 @@ def compile_in_background() -> bool:
 
 
 def use_compiled() -> bool:
-    """Whether the thermal model uses this kernel (the spring kernel's backend is "numba");
-    compiles or loads it on the first call."""
+    """Whether the thermal model uses this kernel (the spring kernel's backend is "numba"):
+    the ahead-of-time compiled one if enabled and loaded (:mod:`simulator._aot`), else
+    numba's, compiled or loaded on the first call."""
     if _broken or not _springs_jit.numba_selected():
         return False
-    return (_compiled or _compile()) is not None
+    return (_aot.kernel("thermal") or _compiled or _compile()) is not None
 
 
 def thermal_element_data(args, x):
@@ -236,7 +238,7 @@ def thermal_element_data(args, x):
     [W/K] at positions ``x`` (n, 3) [m], and the number of triangles whose t_air was floored;
     ``args`` are the model's arguments of the kernel (``ThermalModel._kernel_args``). Compiles
     the kernel on first use (see :func:`use_compiled`)."""
-    kernel = _compiled or _compile()
+    kernel = _aot.kernel("thermal") or _compiled or _compile()
     n, m, layers = len(x), len(args[0]), args[8]
     Ke, g_eff = np.empty((m, 3, 3)), np.empty(n)
     floored = kernel(np.require(x, np.float64, ("C", "W")), *args, Ke, g_eff, np.zeros(n),

@@ -77,24 +77,59 @@ def test_the_package_kernels_are_named_by_existing_functions():
 def test_short_commands_use_numba_only_with_a_warm_cache(monkeypatch, warm):
     import simulator
     from design.cli import _common
+    from simulator import _aot
 
     started = []
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
+    monkeypatch.setattr(_aot, "available", lambda log=False: False)
     monkeypatch.setattr(simulator, "kernel_cache_warm", lambda: warm, raising=False)
     monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: started.append(1),
                         raising=False)
     with _common.kernel_backend(short=True):
         chosen = _springs_jit.backend
     assert chosen == (None if warm else "numpy")           # None: the default (numba)
-    assert started == ([] if warm else [1])
+    assert started == [1]                      # builds the AOT module (and the cache if cold)
     with _common.kernel_backend(short=False):
         assert _springs_jit.backend is None
 
 
+def test_short_commands_use_the_aot_kernels_when_built(monkeypatch):
+    import simulator
+    from design.cli import _common
+    from simulator import _aot
+
+    monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
+    monkeypatch.setattr(_aot, "available", lambda log=False: True)
+    monkeypatch.setattr(_aot, "_enabled", False)
+    monkeypatch.setattr(_aot, "_module", False)            # as if it failed to load
+    monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: pytest.fail("started"),
+                        raising=False)
+    with _common.kernel_backend(short=True):
+        assert _aot._enabled and _springs_jit.backend is None
+    assert not _aot._enabled                               # only within the command
+    with _common.kernel_backend(short=False):
+        assert not _aot._enabled
+
+
 def test_warm_cache_starts_nothing(monkeypatch):
+    from simulator import _aot
+
     monkeypatch.setattr(_jit, "kernel_cache_warm", lambda *a: True)
+    monkeypatch.setattr(_aot, "wanted", lambda: False)
     monkeypatch.setattr(_jit.subprocess, "Popen", lambda *a, **k: pytest.fail("started"))
     assert _jit.warm_kernel_cache() is False
+
+
+def test_warm_cache_without_the_aot_module_builds_it(monkeypatch, tmp_path):
+    from simulator import _aot
+
+    calls = []
+    monkeypatch.setattr(_jit, "kernel_cache_warm", lambda *a: True)
+    monkeypatch.setattr(_aot, "wanted", lambda: True)
+    monkeypatch.setattr(_jit, "_compile_lock", lambda: tmp_path / "compile.lock")
+    monkeypatch.setattr(_jit.subprocess, "Popen", lambda argv, **kw: calls.append(argv))
+    assert _jit.warm_kernel_cache() is True
+    assert "compile_kernels_and_aot_module" in calls[0][-1]
 
 
 def test_cold_cache_starts_one_detached_process(monkeypatch, tmp_path):
@@ -104,7 +139,7 @@ def test_cold_cache_starts_one_detached_process(monkeypatch, tmp_path):
     monkeypatch.setattr(_jit.subprocess, "Popen", lambda argv, **kw: calls.append((argv, kw)))
     assert _jit.warm_kernel_cache() is True
     (argv, kw), = calls
-    assert "compile_small_model_kernels" in argv[-1] and kw["start_new_session"]
+    assert "compile_kernels_and_aot_module" in argv[-1] and kw["start_new_session"]
     assert _jit.warm_kernel_cache() is False and len(calls) == 1     # one is running
     os.utime(tmp_path / "compile.lock", (1.0, 1.0))                   # a stale marker
     assert _jit.warm_kernel_cache() is True and len(calls) == 2

@@ -41,6 +41,7 @@ import math
 
 import numpy as np
 
+from ... import _aot
 from ..._jit import compile_kernel
 from . import _springs_jit
 from ._springs_jit import HELPER_OPTIONS, _cross, _dot  # noqa: F401 - compiled ones at _compile
@@ -375,13 +376,18 @@ def _spring_element(*args):                            # replaced by the compile
 
 def needs_compiling() -> bool:
     """Whether :func:`fused_kernel` has yet to compile (or load) the kernel in this process."""
-    return _compiled is None and not broken
+    return _compiled is None and not broken and _aot.kernel("fused") is None
 
 
 def fused_kernel():
-    """The compiled kernel (compiling or loading it on first use), or None if compilation
-    fails (logged once; :data:`broken` is then set)."""
+    """The compiled kernel, or None if compilation fails (logged once; :data:`broken` is then
+    set): the ahead-of-time compiled one when this process enabled it and it loads
+    (:mod:`simulator._aot`, no numba imported), else numba's, compiled or loaded from its cache
+    on first use."""
     global broken
+    aot = _aot.kernel("fused")                         # enabled by short CLI commands only
+    if aot is not None:
+        return aot
     if _compiled is not None:
         return _compiled
     if broken:
