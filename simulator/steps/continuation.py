@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solvers.continuation import displacement_control, mgdcm
+from ..solvers.continuation import mgdcm
+from ..solvers.displacement_control import displacement_control
 from .._validate import finite, positive
 from ..errors import ParameterError
 from ..solvers.load_path import LoadPath
