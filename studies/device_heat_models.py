@@ -88,6 +88,7 @@ from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, ev
 from simulator import simulate, solve_fe3d
 from simulator.cases import get_case
 from simulator.model.bimorph import crease_temperature_weights
+from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import PAPER_DEVICES
@@ -116,15 +117,7 @@ POWER, TEMP, TEMP_CL = "power [mW]", "temperature [degC]", "temperature_centre [
 def substrate_plane(model) -> tuple:
     """The plane of ``model``'s thermal boundary panels (point, normal into the structure's
     side; 6 floats [m]), as ``solve_fe3d(substrate="model")`` takes it; () without any."""
-    mesh, panels = model.mesh, model.thermal.boundary_panels
-    if not panels:
-        return ()
-    p = mesh.nodes[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
-    origin = p.mean(axis=0)
-    normal = np.linalg.svd(p - origin)[2][-1]
-    if np.mean((mesh.nodes - origin) @ normal) < 0:
-        normal = -normal
-    return (*map(float, origin), *map(float, normal))
+    return boundary_panel_plane(model, model.mesh.nodes)
 
 
 def integral_model(model, refinement: int = 2):

@@ -108,6 +108,7 @@ import numpy as np
 import pandas as pd
 
 from simulator.model.bimorph import crease_temperature_weights
+from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 
@@ -161,17 +162,9 @@ def crease_measures(mesh, temperature) -> dict:
 def substrate_plane(model, x) -> tuple:
     """The isothermal substrate plane of the model's thermal boundary panels at positions
     ``x`` (n, 3) [m], as ``ThermalParameters.substrate_plane`` (a point and the unit normal
-    towards the rest of the structure), or () without boundary panels."""
-    mesh = model.mesh
-    panels = tuple(model.thermal.boundary_panels)
-    if not panels:
-        return ()
-    p = x[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
-    origin = p.mean(axis=0)
-    normal = np.linalg.svd(p - origin)[2][-1]
-    if np.mean((x - origin) @ normal) < 0:
-        normal = -normal
-    return tuple(float(v) for v in np.r_[origin, normal])
+    towards the rest of the structure), or () without boundary panels
+    (:func:`simulator.thermal.fixed_shape.boundary_panel_plane`, the FE's ``substrate="model"``)."""
+    return boundary_panel_plane(model, x)
 
 
 # ----------------------------------------------------------------------------- cases
