@@ -14,10 +14,9 @@ import math
 import numpy as np
 
 from .._jit import compile_kernel
-from ..linalg._dense_jit import cholesky_solve  # noqa: F401  (its old home)
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix", "cholesky_solve"]
+__all__ = ["use_compiled", "kernel_matrix"]
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
 #: output (n, m)
