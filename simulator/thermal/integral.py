@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..linalg import _dense_jit
+from ..linalg import _dense_jit, dense_lapack
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
@@ -48,6 +48,10 @@ logger = logging.getLogger(__name__)
 #: Largest number of sub-triangles of the dense single-layer operator: 4000 x 4000 is 128 MB
 #: per matrix and about 2 s of assembly and Cholesky on one core.
 MAX_SUB_TRIANGLES = 4000
+#: From this many sub-triangles on, a positive definite operator is factorised by single-threaded
+#: LAPACK (:mod:`simulator.linalg.dense_lapack`), below by the compiled kernel (faster for small
+#: matrices: no call overhead).
+LAPACK_MIN_SIZE = 256
 #: A node closer to the substrate plane than this fraction of the sheet's extent touches it
 #: (held at room temperature): the tolerance of the 3-D FE reference's on-plane nodes.
 TOUCH_TOLERANCE = 1e-9
@@ -102,6 +106,12 @@ class IntegralLoss:
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
         self._cache = None
         self._warned = False             # the warning of an operator not positive definite
+        #: ``[positions, distances]`` of the last :meth:`_distances` call; operators of the
+        #: same sheet and plane at other refinements may share the list (they need the same)
+        self.distance_memo = [None, None]
+        #: the floor of :meth:`_scale` is this many mean sub-triangle diameters for the
+        #: distances, ``height_floor`` times that for the heights over the plane
+        self.floor_factor, self.height_floor = 1.0, 0.01
 
     def _heights(self, x):
         """Height of every node over the substrate plane [m], (n_nodes,), and the touch
@@ -147,6 +157,18 @@ class IntegralLoss:
             self.builds += 1
         return self._cache
 
+    def rebuild(self, x) -> np.ndarray:
+        """Build the operator at positions ``x`` (n, 3) [m] whatever the last build, keep it,
+        and return its loss conductance (see :meth:`loss_matrix`)."""
+        self._cache = self._build(np.asarray(x, float))
+        self.builds += 1
+        return self._cache.L
+
+    @property
+    def last_positions(self):
+        """Positions (n, 3) [m] of the last build (None before the first)."""
+        return None if self._cache is None else self._cache.x
+
     def _unchanged(self, x) -> bool:
         """Whether none of :meth:`_distances` has changed since the last build by more than
         ``shape_tol`` times its :meth:`_scale` (a rigid motion changes none; 0: exactly the
@@ -165,19 +187,23 @@ class IntegralLoss:
         plane, between each node and its mirror image (twice its height)."""
         from scipy.spatial.distance import pdist    # not needed by a chain-model run
 
+        memo = self.distance_memo
+        if memo[0] is not None and memo[0].shape == x.shape and np.array_equal(memo[0], x):
+            return memo[1]
         p = x[self.nodes]
         d = pdist(p)
-        if self.plane is None:
-            return d
-        origin, normal = self.plane
-        return np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
+        if self.plane is not None:
+            origin, normal = self.plane
+            d = np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
+        memo[:] = [x.copy(), d]
+        return d
 
     def _build(self, x) -> "_Operator":
         """Assemble ``S`` at positions ``x`` and factorise it: the loss conductance and the map
         from nodal rises to sub-triangle heats."""
         full = self.sub_triangles(x)
         xp, flat = self._pressed(x)
-        sub, M = self.sub_triangles(xp), self.M
+        sub, M = (full if xp is x else self.sub_triangles(xp)), self.M
         if flat is not None:             # on the substrate: no potential, no unknown
             sub, M = sub[~flat], M[~flat]
         if len(sub):
@@ -196,7 +222,8 @@ class IntegralLoss:
                 "sub-triangle diameter or pass through each other (a model without contact?); "
                 "the temperatures there are not reliable. Raise integral_refinement or add "
                 "contact (said once per model).")
-        size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
+        size = self.floor_factor * np.linalg.norm(full - np.roll(full, 1, axis=1),
+                                                  axis=2).max(axis=1).mean()
         d = self._distances(x)
         L.setflags(write=False)
         return _Operator(x.copy(), L, heat, d, self._scale(d, size))
@@ -208,6 +235,10 @@ class IntegralLoss:
         positive definite. Compiled: ``S = C diag(sign) C^T`` (Cholesky if definite), ``L =
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
+        out = dense_lapack.cholesky_loss(S, M) if len(S) >= LAPACK_MIN_SIZE else None
+        if out is not None:                  # positive definite: blocked LAPACK
+            C, W, L = out
+            return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True
         if _single_layer_jit.use_compiled() and _dense_jit.available():
             out = _dense_jit.loss_factor(S, M)
             if out is not None:
@@ -227,7 +258,7 @@ class IntegralLoss:
         distance, at least the mean sub-triangle diameter ``size``; a height over the plane
         at least 1 % of it (the image's share of the loss changes with the height itself)."""
         n = len(self.nodes) * (len(self.nodes) - 1) // 2
-        floor = np.where(np.arange(len(distances)) < n, size, 0.01 * size)
+        floor = np.where(np.arange(len(distances)) < n, size, self.height_floor * size)
         return np.maximum(distances, floor)
 
     def loss_matrix(self, x) -> np.ndarray:

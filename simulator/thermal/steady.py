@@ -35,7 +35,7 @@ from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
-from .integral import IntegralLoss
+from .integral_levels import integral_operator
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
@@ -92,16 +92,15 @@ class ThermalModel:
         fixed[list(params.room_temperature_nodes)] = True
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
-        #: the integral model's loss operator (refinement m) and, with
-        #: ``integral_extrapolation``, the coarse one (m // 2) of the Richardson combination
-        self.integral = self._integral_coarse = None
+        #: the integral model's loss operator (:mod:`simulator.thermal.integral_levels`:
+        #: an :class:`IntegralLoss` at refinement m, or its Richardson extrapolation, or either
+        #: corrected through the m = 1 operator between rebuilds)
+        self.integral = None
+        self._integral_plain = None      # the IntegralLoss, if it is the operator alone
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
-            m = params.integral_refinement
-            self.integral, self._integral_coarse = (IntegralLoss(
-                tri[~self.is_boundary], n, params.env_conductivity, r, params.plane,
-                params.integral_shape_tol) if r else None for r in
-                (m, m // 2 if params.integral_extrapolation else 0))
+            self.integral, self._integral_plain = integral_operator(
+                tri[~self.is_boundary], n, params)
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
@@ -370,13 +369,9 @@ class ThermalModel:
     def integral_loss_matrix(self, x) -> np.ndarray:
         """The integral model's loss conductance [W/K] on ``integral.nodes`` at positions
         ``x`` (n, 3) [m]: ``L_m``, or with ``integral_extrapolation`` the Richardson
-        combination ``(m L_m - c L_c) / (m - c)``, ``c = m // 2`` (theory 4.7)."""
-        L = self.integral.loss_matrix(x)
-        if self._integral_coarse is None:
-            return L
-        m = self.params.integral_refinement
-        c = m // 2
-        return (m * L - c * self._integral_coarse.loss_matrix(x)) / (m - c)
+        combination ``(m L_m - c L_c) / (m - c)``, ``c = max(m // 2, 2)``, and with
+        ``integral_correction_tol`` that operator corrected between rebuilds (theory 4.7)."""
+        return self.integral.loss_matrix(x)
 
     def _integral_loss(self, x):
         """The integral model's loss conductance [W/K] on the free nodes, (n_free, n_free)."""
@@ -398,9 +393,9 @@ class ThermalModel:
             return self._conductances(x, False)[1] * rise
         out = np.zeros(self.mesh.n_nodes)
         nodes = self.integral.nodes
-        if self._integral_coarse is None:
+        if self._integral_plain is not None:
             out[nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
-        else:                            # the extrapolated conductance the solve used
+        else:                            # the combined conductance the solve used
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
         return out
 

@@ -119,9 +119,9 @@ def test_extrapolation_brings_the_disk_closer_to_8_k_a():
     assert abs(2 * q[4] - q[2] - 1) < 0.7 * abs(q[4] - 1)
 
 
-def test_extrapolation_needs_a_refinement_of_4():
+def test_extrapolation_needs_a_refinement_of_3():
     with pytest.raises(ParameterError, match=r"integral_extrapolation = True needs "
-                       r"integral_refinement >= 4, got 2"):
+                       r"integral_refinement >= 3, got 2"):
         ThermalParameters(env_thickness=1e-3, integral_extrapolation=True)
     with pytest.raises(ParameterError, match="integral_extrapolation = 'yes' must be True or"):
         ThermalParameters(env_thickness=1e-3, integral_extrapolation="yes")
