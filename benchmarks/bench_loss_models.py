@@ -8,8 +8,10 @@ beside it, the steadier measure on a shared, loaded machine. The two models pred
 searches and the Newton paths differ as well: the ratio is that of the whole evaluation, as a
 user sees it.
 
-Run: ``python benchmarks/bench_loss_models.py`` (about a minute); ``--refinement m`` sets
-``integral_refinement``.
+Run: ``python benchmarks/bench_loss_models.py`` (about a minute): the integral model at its
+defaults (m = 3, Richardson-extrapolated, corrected between rebuilds); ``--refinement m``,
+``--correction-tol``, ``--plain`` (the plain operator at m rebuilt at ``integral_shape_tol``,
+the integral model before 6 Dec 2026).
 """
 
 from __future__ import annotations
@@ -24,8 +26,17 @@ from simulator import simulate
 from simulator.cases import get_case
 
 
-def _integral(thermal, refinement):
-    return dataclasses.replace(thermal, loss_model="integral", integral_refinement=refinement)
+def _settings(args) -> dict:
+    """The integral model's ThermalParameters fields from the options (empty: its defaults,
+    m = 3 Richardson-extrapolated from 2 and 3, corrected between rebuilds at 0.5)."""
+    out = {}
+    if args.refinement is not None:
+        out["integral_refinement"] = args.refinement
+    if args.plain:
+        out.update(integral_extrapolation=False, integral_correction_tol=0.0)
+    if args.correction_tol is not None:
+        out["integral_correction_tol"] = args.correction_tol
+    return out
 
 
 def _timed(fn, repeat):
@@ -41,22 +52,26 @@ def _timed(fn, repeat):
     return statistics.median(walls), statistics.median(cpus), out
 
 
-def gripper_run(loss_model: str, refinement: int, extrapolation: bool = False):
+def gripper_run(loss_model: str, settings: dict):
     """A function evaluating the start-design gripper (bisect) with one loss model: the
     device's own option ``GripperDesign(loss_model=...)``, whose integral model includes the
-    substrate plane under the gripper (z = -undercut), as the device has."""
-    design = gripper.GripperDesign(loss_model=loss_model, integral_refinement=refinement)
-    if not extrapolation:
+    substrate plane under the gripper (z = -undercut), as the device has; ``settings``: other
+    ThermalParameters fields of the integral model."""
+    design = gripper.GripperDesign(loss_model=loss_model,
+                                   **({"integral_refinement": settings["integral_refinement"]}
+                                      if "integral_refinement" in settings else {}))
+    extra = {k: v for k, v in settings.items() if k != "integral_refinement"}
+    if loss_model == "chain" or not extra:
         return lambda: gripper.evaluate_gripper(design, mode="bisect")
     original = gripper.gripper_model
 
-    def model_with_extrapolation(design, *args, **kw):
+    def model_with(design, *args, **kw):
         model, pre = original(design, *args, **kw)
-        thermal = dataclasses.replace(model.thermal, integral_extrapolation=True)
+        thermal = dataclasses.replace(model.thermal, **extra)
         return dataclasses.replace(model, thermal=thermal), pre
 
     def run():
-        gripper.gripper_model = model_with_extrapolation
+        gripper.gripper_model = model_with
         try:
             return gripper.evaluate_gripper(design, mode="bisect")
         finally:
@@ -64,23 +79,26 @@ def gripper_run(loss_model: str, refinement: int, extrapolation: bool = False):
     return run
 
 
-def crane_run(loss_model: str, refinement: int, extrapolation: bool = False):
+def crane_run(loss_model: str, settings: dict):
     """A function running the crane case with one loss model."""
     case = get_case("crane")
     model = case.model
     if loss_model == "integral":
-        thermal = dataclasses.replace(_integral(model.thermal, refinement),
-                                      integral_extrapolation=extrapolation)
+        thermal = dataclasses.replace(model.thermal, loss_model="integral", **settings)
         model = dataclasses.replace(model, thermal=thermal)
     return lambda: simulate(model, case.steps)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--refinement", type=int, default=2)
+    ap.add_argument("--refinement", type=int, default=None,
+                    help="integral_refinement m (default: the model's, 3)")
+    ap.add_argument("--plain", action="store_true",
+                    help="the plain operator at m, rebuilt at integral_shape_tol (no "
+                         "extrapolation, no correction: the integral model before 6 Dec 2026)")
+    ap.add_argument("--correction-tol", type=float, default=None,
+                    help="integral_correction_tol (default: the model's, 0.5)")
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--extrapolation", action="store_true",
-                    help="integral_extrapolation (Richardson from m // 2 and m; m >= 4)")
     ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     args = ap.parse_args(argv)
     for name, make, limit in (("gripper evaluation (bisect)", gripper_run, 2.0),
@@ -89,8 +107,7 @@ def main(argv=None):
             continue
         walls, cpus = {}, {}
         for loss in ("chain", "integral"):
-            walls[loss], cpus[loss], out = _timed(make(loss, args.refinement, args.extrapolation),
-                                                      args.repeat)
+            walls[loss], cpus[loss], out = _timed(make(loss, _settings(args)), args.repeat)
             print(f"{name:<28} {loss:<9}: {walls[loss]:7.3f} s (CPU {cpus[loss]:7.3f} s)   "
                   f"{_summary(out)}")
         ratio = walls["integral"] / walls["chain"]

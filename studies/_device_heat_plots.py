@@ -18,9 +18,11 @@ STYLE = {"chain": dict(color="C0", ls="-"), "integral": dict(color="C3", ls="--"
 
 
 def plot_gripper(ax, gripper, comparison):
-    """(a) Full-function power per design: chain, integral (m = 2), FE-implied (mean of the
-    estimates on both models' stopping shapes) and the paper's measured device."""
-    g = gripper[gripper["integral_refinement [-]"].fillna(2) == 2]
+    """(a) Full-function power per design: chain, integral (its default m), FE-implied (mean
+    of the estimates on both models' stopping shapes) and the paper's measured device."""
+    from studies.device_heat_models import DEFAULT_M
+
+    g = gripper[gripper["integral_refinement [-]"].fillna(DEFAULT_M) == DEFAULT_M]
     cycles = sorted(g["cycle"].dropna().unique())
     comp = comparison[comparison["quantity"] == "full-function power"]
     bars = [("chain", "C0"), ("integral", "C3"), ("FE-implied", "C2"), ("measured", "C6")]

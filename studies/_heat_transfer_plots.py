@@ -14,7 +14,9 @@ __all__ = ["strip_figure", "folded_figure"]
 
 def _model_label(row) -> str:
     if row["model"] == "integral":
-        return f"integral m = {int(row['integral_refinement [-]'])}"
+        extrapolated = str(row.get("integral_extrapolation [-]")) == "True"
+        return (f"integral m = {int(row['integral_refinement [-]'])}"
+                + (" extrapolated (default)" if extrapolated else ""))
     if row["model"].startswith("FE"):
         lv = row["FE level [-]"]
         return f"3-D FE, level {int(lv)}" if row["model"] == "FE" else \

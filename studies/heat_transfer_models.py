@@ -77,7 +77,8 @@ Outputs (``results/heat_transfer_models/``)
 ``structure``, ``medium``, ``k [W/(m K)]``, ``k_env [W/(m K)]``, ``W/L [-]`` (strip),
 ``crease [-]`` (pattern crease id), ``crease name``, ``crease power [W]`` (this crease's heat
 input), ``room temperature [degC]``, ``model`` (``chain``, ``integral``, ``FE``, ``FE
-extrapolated``), ``integral_refinement [-]`` (integral rows), ``FE level [-]`` (FE rows: the
+extrapolated``), ``integral_refinement [-]`` and ``integral_extrapolation [-]`` (integral rows:
+m and whether Richardson-extrapolated), ``FE level [-]`` (FE rows: the
 level; extrapolated rows: the finer of the two), ``T_crease [degC]``, ``T_max [degC]``,
 ``T_ave [degC]``, ``T_hottest [degC]``, ``<measure> error vs FE [%]`` and ``<measure> error
 vs FE extrapolated [%]`` (of the rise above room temperature, for T_crease, T_max, T_ave),
@@ -127,9 +128,12 @@ MEDIA = {"air": 0.026, "water": 0.6}
 STRIP_QUICK = ((0.4, "SU-8", "air"), (0.4, "Au", "water"))
 #: The paper's chain parameters on the strip (beta [deg], t_env [L], N).
 CHAIN_STRIP = (20.0, 1.5, 10)
-#: Integral refinements m, and FE mesh levels (coarse, fine), per kind of case.
-REFINEMENTS = {"strip": (2, 8), "folded": (2, 8)}
-REFINEMENTS_QUICK = {"strip": (2, 8), "folded": (2,)}
+#: Integral model variants (refinement m, Richardson-extrapolated), per kind of case: the
+#: default (m = 3 extrapolated from 2 and 3), the plain m = 2 (the default before 6 Dec 2026)
+#: and the plain m = 8; and FE mesh levels (coarse, fine).
+REFINEMENTS = {"strip": ((3, True), (2, False), (8, False)),
+               "folded": ((3, True), (2, False), (8, False))}
+REFINEMENTS_QUICK = {"strip": ((3, True), (2, False), (8, False)), "folded": ((3, True),)}
 FE_LEVELS = {"strip": (1, 2), "folded": (0, 1)}
 FE_LEVELS_QUICK = {"strip": (0,), "folded": (0,)}
 FE_BOX = 4.0
@@ -251,10 +255,10 @@ def _solutions(model, x, q, kind, quick):
     """[(model label, refinement, FE level, T (n,), wall [s], success, message)]."""
     rows = [("chain", None, None, *_steady(model, x, q), True, "converged")]
     plane = substrate_plane(model, x)
-    for m in (REFINEMENTS_QUICK if quick else REFINEMENTS)[kind]:
+    for m, extrapolated in (REFINEMENTS_QUICK if quick else REFINEMENTS)[kind]:
         T, wall = _steady(model, x, q, loss_model="integral", integral_refinement=m,
-                          substrate_plane=plane)
-        rows.append(("integral", m, None, T, wall, True, "converged"))
+                          integral_extrapolation=extrapolated, substrate_plane=plane)
+        rows.append(("integral", (m, extrapolated), None, T, wall, True, "converged"))
     try:
         import gmsh  # noqa: F401
         import skfem  # noqa: F401
@@ -287,7 +291,8 @@ def _rows(labels, model, x, power, quick) -> list:
         out += [{**const, "crease [-]": int(cid), "crease name": names.get(int(cid), "crease"),
                  "crease power [W]": float(power[r]),
                  "room temperature [degC]": model.thermal.room_temperature, "model": label,
-                 "integral_refinement [-]": m if label == "integral" else None,
+                 "integral_refinement [-]": m[0] if label == "integral" else None,
+                 "integral_extrapolation [-]": m[1] if label == "integral" else None,
                  "FE level [-]": lv, **{f"{k} [degC]": float(v[r]) for k, v in meas.items()},
                  "wall_time [s]": wall, "success": ok, "message": msg}
                 for r, cid in enumerate(mesh.crease_ids)]
@@ -330,7 +335,9 @@ def error_table(df: pd.DataFrame) -> pd.DataFrame:
     an extrapolation). FE rows give the finer level's error against the extrapolation."""
     d = df[(df["crease power [W]"] > 0) & ~df["model"].isin(["FE extrapolated"])].copy()
     d["integral_refinement [-]"] = d["integral_refinement [-]"].fillna(-1)
-    group = ["case", "shape", "structure", "medium", "model", "integral_refinement [-]"]
+    d["integral_extrapolation [-]"] = d["integral_extrapolation [-]"].astype(object).fillna("-")
+    group = ["case", "shape", "structure", "medium", "model", "integral_refinement [-]",
+             "integral_extrapolation [-]"]
     out = []
     for key, g in d.groupby(group, sort=False):
         for m in MEASURES[1:] if key[0] == "strip" else MEASURES:
@@ -350,6 +357,8 @@ def error_table(df: pd.DataFrame) -> pd.DataFrame:
     t = pd.DataFrame(out)
     t["integral_refinement [-]"] = t["integral_refinement [-]"].where(
         t["integral_refinement [-]"] >= 0)
+    t["integral_extrapolation [-]"] = t["integral_extrapolation [-]"].where(
+        t["integral_extrapolation [-]"] != "-")
     return t
 
 

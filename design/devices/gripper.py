@@ -99,7 +99,8 @@ class GripperDesign:
         in the air over the isothermal substrate plane ``undercut`` below the sheet; nothing
         to fit)
     integral_refinement : sub-triangles per triangle edge of the ``"integral"`` model
-        (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 2)
+        (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 3:
+        Richardson-extrapolated from 3 on, corrected between rebuilds; theory 4.7)
     """
 
     W: float = 200e-6
@@ -118,7 +119,7 @@ class GripperDesign:
     delta_alpha: float = 38e-6
     env_conductivity: float = 0.026
     loss_model: str = "chain"
-    integral_refinement: int = 2
+    integral_refinement: int = 3
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -297,7 +298,7 @@ class GripperResult(ResultFiles):
 _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
           "integral_refinement": "-"}
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
-             "loss_model": "chain", "integral_refinement": 2}
+             "loss_model": "chain", "integral_refinement": 3}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:

@@ -56,7 +56,7 @@ class ExtrapolatedLoss:
         return self.fine.builds
 
     @property
-    def x(self) -> np.ndarray:
+    def last_positions(self) -> np.ndarray:
         """Positions [m] of the last build."""
         return self.fine.last_positions
 
@@ -109,7 +109,7 @@ class CorrectedLoss:
         """``L_acc(x0) + L_base(x) - L_base(x0)`` [W/K] on :attr:`nodes` at positions ``x``."""
         La = self.accurate.loss_matrix(x)
         if self.accurate.builds != self._built:
-            x0 = self.accurate.x
+            x0 = self.accurate.last_positions
             self._offset = La - self.base.rebuild(x0)
             self._built = self.accurate.builds
             logger.debug("integral loss: accurate operator rebuilt (%d so far)", self._built)
@@ -122,7 +122,7 @@ def integral_operator(triangles, n_nodes, params):
     :class:`IntegralLoss` at ``integral_refinement`` built at ``integral_shape_tol`` if the
     operator is that one alone (None otherwise)."""
     m, k, plane = params.integral_refinement, params.env_conductivity, params.plane
-    correct = params.integral_correction_tol > 0 and (m > 1 or params.integral_extrapolation)
+    correct = params.integral_correction_tol > 0 and (m > 1 or params.extrapolated)
     tol = params.integral_correction_tol if correct else params.integral_shape_tol
 
     memo = [None, None]                      # the levels share the sheet's distances
@@ -136,7 +136,7 @@ def integral_operator(triangles, n_nodes, params):
     if correct:          # the correction is the error of the m = 1 operator: its length scale
         fine.floor_factor, fine.height_floor = float(m), 1.0
     accurate = fine
-    if params.integral_extrapolation:
+    if params.extrapolated:
         c = coarse_refinement(m)
         accurate = ExtrapolatedLoss(fine, level(c), m, c)
     if not correct:

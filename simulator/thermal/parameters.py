@@ -81,21 +81,24 @@ class ThermalParameters:
         electro-thermal steps always use the chains (they carry the medium's heat capacity).
     integral_refinement : int
         Sub-triangles per triangle edge m of the "integral" model (m^2 per mesh triangle),
-        1..16.
-    integral_extrapolation : bool
+        1..16 (default 3).
+    integral_extrapolation : bool or None
         "integral" model only: Richardson extrapolation of the loss conductance from the
         refinements ``c = max(m // 2, 2)`` and ``m``, ``(m L_m - c L_c) / (m - c)``, which
         removes the error of first order in ``1 / m`` (the flux density's edge singularity;
         theory 4.7). Needs m >= 3 (the coarse level must be in the first-order regime: from
-        m = 1 it is not). False: the plain operator at ``m``. On the strips and folded shapes
-        of docs/heat_fe.md m = 3 with extrapolation is within 2.8 % of the converged 3-D FE
-        (m = 4: 2.3 %) where the plain m = 2 is up to 15 % hot.
+        m = 1 it is not). False: the plain operator at ``m``. None (default): True from
+        m = 3 on, else False. On the strips and folded shapes of docs/heat_fe.md the default
+        (m = 3 extrapolated) is within 2.8 % of the converged 3-D FE (m = 4: 2.3 %) where the
+        plain m = 2 is up to 15 % hot.
     integral_correction_tol : float
-        "integral" model only, >= 0: the operator at ``integral_refinement`` (extrapolated if
-        asked) is rebuilt only when the shape has changed by more than this tolerance (the
-        measure of ``integral_shape_tol``), and follows the shape in between through the
-        change of the cheap m = 1 operator, rebuilt at ``integral_shape_tol``:
-        ``L(x) = L_m(x0) + L_1(x) - L_1(x0)`` (theory 4.7). 0: the operator at
+        "integral" model only, >= 0 (default 0.5): the operator at ``integral_refinement``
+        (extrapolated or not) is rebuilt only when the shape has changed by more than this
+        tolerance (the measure of ``integral_shape_tol``, with the mesh triangles' mean
+        diameter as the floor of distances and heights), and follows the shape in between
+        through the change of the cheap m = 1 operator, rebuilt at ``integral_shape_tol``:
+        ``L(x) = L_m(x0) + L_1(x) - L_1(x0)`` (theory 4.7; the default costs the gripper's
+        power search under 0.5 % against a rebuild at every shape). 0: the operator at
         ``integral_refinement`` itself is rebuilt at ``integral_shape_tol``. No effect with
         m = 1 without extrapolation.
     substrate_plane : tuple of 6 floats, or ()
@@ -120,11 +123,11 @@ class ThermalParameters:
     env_density: float = AIR.density
     env_specific_heat: float = AIR.specific_heat
     loss_model: str = "chain"
-    integral_refinement: int = 2
+    integral_refinement: int = 3
     substrate_plane: tuple = ()
     integral_shape_tol: float = 0.02
-    integral_extrapolation: bool = False
-    integral_correction_tol: float = 0.0
+    integral_extrapolation: bool | None = None
+    integral_correction_tol: float = 0.5
 
     def __post_init__(self):
         owner = "ThermalParameters"
@@ -141,10 +144,13 @@ class ThermalParameters:
         one_of(f"{owner}.loss_model", self.loss_model, ("chain", "integral"))
         integer(f"{owner}.integral_refinement", self.integral_refinement, 1, 16)
         non_negative(f"{owner}.integral_shape_tol", self.integral_shape_tol)
-        if not isinstance(self.integral_extrapolation, (bool, np.bool_)):
+        if self.integral_extrapolation is not None and not isinstance(
+                self.integral_extrapolation, (bool, np.bool_)):
             raise ParameterError(f"{owner}.integral_extrapolation = "
-                                 f"{self.integral_extrapolation!r} must be True or False.")
-        object.__setattr__(self, "integral_extrapolation", bool(self.integral_extrapolation))
+                                 f"{self.integral_extrapolation!r} must be True, False or None "
+                                 "(True from integral_refinement = 3 on).")
+        if self.integral_extrapolation is not None:
+            object.__setattr__(self, "integral_extrapolation", bool(self.integral_extrapolation))
         if self.integral_extrapolation and self.integral_refinement < 3:
             raise ParameterError(f"{owner}.integral_extrapolation = True needs "
                                  f"integral_refinement >= 3, got {self.integral_refinement}: "
@@ -155,6 +161,14 @@ class ThermalParameters:
         if self.loss_model == "integral" and not self.env_conductivity > 0:
             raise ParameterError(f"{owner}.env_conductivity = {self.env_conductivity!r} W/(m K): "
                                  "loss_model 'integral' needs a medium conductivity > 0.")
+
+    @property
+    def extrapolated(self) -> bool:
+        """Whether the integral model extrapolates (``integral_extrapolation``, None: from
+        ``integral_refinement`` = 3 on)."""
+        if self.integral_extrapolation is None:
+            return self.integral_refinement >= 3
+        return self.integral_extrapolation
 
     @property
     def plane(self):

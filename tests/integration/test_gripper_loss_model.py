@@ -16,20 +16,20 @@ def test_default_design_keeps_the_chain_model_and_its_dict():
     model, _ = gripper_model(GripperDesign())
     assert model.thermal.loss_model == "chain" and model.thermal.substrate_plane == ()
     assert "loss_model" not in GripperDesign().to_dict()
-    assert "integral_refinement" not in GripperDesign(integral_refinement=2).to_dict()
+    assert "integral_refinement" not in GripperDesign(integral_refinement=3).to_dict()
 
 
 def test_integral_design_uses_the_substrate_plane_under_the_sheet():
-    design = GripperDesign(**CYCLE9, loss_model="integral", integral_refinement=3)
+    design = GripperDesign(**CYCLE9, loss_model="integral", integral_refinement=4)
     thermal = gripper_model(design)[0].thermal
     chain = gripper_model(GripperDesign(**CYCLE9))[0].thermal
-    assert (thermal.loss_model, thermal.integral_refinement) == ("integral", 3)
+    assert (thermal.loss_model, thermal.integral_refinement) == ("integral", 4)
     assert thermal.substrate_plane == (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)
     # everything else is the chain model's
-    assert dataclasses.replace(thermal, loss_model="chain", integral_refinement=2,
+    assert dataclasses.replace(thermal, loss_model="chain", integral_refinement=3,
                                substrate_plane=()) == chain
     assert design.to_dict()["loss_model"] == "integral"
-    assert design.to_dict()["integral_refinement"] == 3
+    assert design.to_dict()["integral_refinement"] == 4
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -104,7 +104,9 @@ def test_strip_errors_are_finite_bounded_and_the_integral_model_converges(fe_qui
         assert np.isfinite(e).all() and e.abs().max() < 30
         e2 = _temps(d, "integral", 2, m) / _temps(d, "FE", measure=m) - 1
         e8 = _temps(d, "integral", 8, m) / _temps(d, "FE", measure=m) - 1
+        e3 = _temps(d, "integral", 3, m) / _temps(d, "FE", measure=m) - 1   # extrapolated
         assert (e8.abs() < e2.abs()).all()             # collocation converges with m
+        assert (e3.abs() < e2.abs()).all()             # the default beats the plain m = 2
     fe = d[d["model"] == "FE"]
     assert (fe["FE level [-]"] == 0).all() and fe[[f"{m} error vs FE [%]" for m in
                                                    htm.MEASURES]].eq(0).all().all()

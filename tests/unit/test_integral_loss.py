@@ -145,7 +145,10 @@ def test_disk_near_a_plane_conducts_more_the_closer_it_gets():
 
 # ------------------------------------------------------------------ the model
 def _strip(refinement=2, room=(0, 3, 5, 6), **kw):
+    """The strip with the integral model at ``refinement``, rebuilt at every shape (no
+    correction between rebuilds: tests/unit/test_integral_levels.py)."""
     model = verification_strip().model
+    kw = {"integral_correction_tol": 0.0, **kw}
     params = dataclasses.replace(model.thermal, loss_model="integral",
                                  integral_refinement=refinement, room_temperature_nodes=room, **kw)
     tm = ThermalModel(model.mesh, params)

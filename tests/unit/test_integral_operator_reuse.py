@@ -140,6 +140,7 @@ def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percen
     runs, builds = {}, {}
     for tol in (default, 0.0):
         thermal = dataclasses.replace(case.model.thermal, loss_model="integral",
+                                      integral_refinement=2, integral_correction_tol=0.0,
                                       integral_shape_tol=tol)
         model = dataclasses.replace(case.model, thermal=thermal)
         result = simulate(model, case.steps)
