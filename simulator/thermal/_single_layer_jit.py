@@ -77,8 +77,13 @@ def _potential(px, py, pz, t, f):
         # r + l without cancellation where l < 0 (r + l = r0^2 / (r - l))
         num = rp + lp if lp >= 0.0 else r0sq / (rp - lp)
         den = rm + lm if lm >= 0.0 else r0sq / (rm - lm)
-        total += p0 * math.log(num / den) - ad * (
-            math.atan2(p0 * lp, r0sq + ad * rp) - math.atan2(p0 * lm, r0sq + ad * rm))
+        total += p0 * math.log(num / den)
+        if ad > 0.0:
+            # atan2(y1, x1) - atan2(y2, x2) in one atan2: both x > 0, so both angles lie in
+            # (-pi/2, pi/2) and their difference in (-pi, pi), atan2's own range
+            y1, x1 = p0 * lp, r0sq + ad * rp
+            y2, x2 = p0 * lm, r0sq + ad * rm
+            total -= ad * math.atan2(y1 * x2 - y2 * x1, x1 * x2 + y1 * y2)
     return total
 
 
