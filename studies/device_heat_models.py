@@ -20,8 +20,8 @@ Method
 * Gripper: the coordinate-descent designs of cycles 4 and 9
   (``results/gripper_optimization/gripper_optimization.csv``), evaluated as in that study
   (``evaluate_gripper``, bisect, the :class:`~design.GripperProblem` defaults) with
-  ``GripperDesign(loss_model=...)``; the integral model also at m = 2 (plain: the default
-  before 6 Dec 2026, 4-7 % hot on folded shapes). Full-function power =
+  ``GripperDesign(loss_model=...)``; the integral model also at m = 2 without extrapolation
+  (the default before 6 Dec 2026, 4-7 % hot on folded shapes). Full-function power =
   2 base creases x assembly power + 2 arm creases x grip power (the paper's measured
   quantity). ``--quick``: cycle 9 only, no m = 2.
 * Double fold: ``get_case("double_fold")`` (both creases to 10 mW, 250 increments; quick 30).

@@ -20,8 +20,10 @@ of a crease's power on N11, N12, N21, N22, 1/12 on A and B, 1/3 on Ctr). They sh
 T3 conduction and the room-temperature nodes; they differ only in how heat leaves the sheet.
 The chain model is the model's own ``ThermalParameters``; the integral model is the same
 parameters by ``dataclasses.replace(model.thermal, loss_model="integral",
-integral_refinement=m, substrate_plane=...)`` at m = 2 (the default) and m = 8 (what the strip
-needs for 3 %), with the isothermal substrate plane of the model's thermal boundary panels
+integral_refinement=m, integral_extrapolation=..., substrate_plane=...)`` in three variants:
+the default (m = 3, Richardson-extrapolated from m = 2 and 3), the plain m = 2 (the default
+before 6 Dec 2026) and the plain m = 8, with the isothermal substrate plane of the model's
+thermal boundary panels
 (the plane the FE uses, ``substrate="model"``; none on the strip). The FE is solved at two
 mesh levels (strip: 1 and 2; folded shapes: 0 and 1; box_factor 4, Robin far field) and
 Richardson-extrapolated, ``T_ext = 2 T_fine - T_coarse`` on the nodal temperatures (the FE
@@ -55,20 +57,19 @@ the folded shapes.
 
 Findings (full run)
 -------------------
-Errors of the temperature rise against the extrapolated 3-D FE.
-Strip: the integral model at m = 8 is within -0.3 to +2.5 % in T_max and T_ave on all 24
-strips (+3.6 % at most against level 2: SU-8 in water, W/L = 0.1), at m = 2 up to +14.6 %
-(SU-8, W/L = 0.1; Au within 4.1 %); the chain model is -26 to -5 % off in T_max for SU-8,
+Errors of the temperature rise against the extrapolated 3-D FE (6 Dec 2026).
+Strip: the default integral model (m = 3 extrapolated) is within -2.8 to +1.2 % in T_max and
+T_ave on all 24 strips, the plain m = 8 within -0.3 to +2.5 %, the plain m = 2 up to +14.6 %
+(SU-8, W/L = 0.1; Au within 4.1 %); the chain model is -27 to -5 % off in T_max for SU-8,
 -12 to -8 % for Au in water and within 1 % for Au in air, and -8 to +16 % in T_ave. Folded
-shapes (T_crease of the heated creases): the integral model at m = 8 is +1.3 / +1.4 % on
-the double fold, +2.2 % at the gripper's assembly and +1.3 to +2.0 % at grip (every measure
-within 2.5 %, 4.8 % against level 1), at m = 2 +4 to +7 %; the chain model runs 20 and 38 %
-cooler on the double fold, 42 % at assembly and 42-52 % at grip. The FE's finer level is
-0-2.3 % below its extrapolation. The double fold's fold 2 centre line (T_ave), 250 degC in
-the chain model, is 264 degC in the FE: above 1.2 T_g = 252 degC on that shape. These
-folded-shape numbers depend on the integral model's treatment of sheet parts on the
-substrate (theory 4.7), which may change: re-run with ``python -m
-studies.heat_transfer_models`` (about 5 min on two loaded cores).
+shapes (heated creases): the default integral model is within -0.2 to +1.0 % in T_crease,
+-0.8 to +1.5 % in T_ave and -4.2 to -1.8 % in T_max (the centre node; -4.2 % on the double
+fold's fold 1) on the double fold, the gripper's assembly and grip; the plain m = 8 within
+2.5 % and the plain m = 2 +4 to +9 %; the chain model runs 20 and 38 % cooler on the double
+fold, 42 % at assembly and 42-52 % at grip (T_crease). The FE's finer level is 0-2.3 % below
+its extrapolation. The double fold's fold 2 centre line (T_ave), 250 degC in the chain model,
+is 264 degC in the FE: above 1.2 T_g = 252 degC on that shape. Re-run with ``python -m
+studies.heat_transfer_models`` (70 s on the idle machine, about 5 min on two loaded cores).
 
 Outputs (``results/heat_transfer_models/``)
 -------------------------------------------

@@ -5,10 +5,11 @@ crease after heating and the gripper (default design) at assembly with 3 mW per 
 All models solve the same fixed shape and heat (``fixed_shape_temperatures``); the FE reference
 is the Richardson extrapolation ``2 T_1 - T_0`` of levels 0 and 1 (first order in the mesh
 size, docs/heat_fe.md), and the error is that of the temperature rise over room temperature.
-Measured (2 Dec 2026), integral m = 4 with extrapolation against it, 7-node / centre line:
-double fold +0.3 / +0.0 % (fold 1), +0.4 / +0.1 % (fold 2); gripper base creases +0.9 / +0.8 %
-and +0.9 / +1.0 % (the chain model: -38 / -36 %, -20 / -6 %; -42 / -32 %, -42 / -32 %; the
-plain default m = 2: +6.2 / +7.1 %, +3.9 / +4.8 %; +6.7 / +7.0 %, +6.7 / +7.2 %).
+Measured (6 Dec 2026), the integral model at its defaults (m = 3, Richardson-extrapolated from
+2 and 3) against it, 7-node / centre line: double fold +0.3 / -0.2 % (fold 1), +0.5 / +0.1 %
+(fold 2); gripper base creases +1.0 / +0.9 % and +1.0 / +1.1 % (the chain model: -38 / -36 %,
+-20 / -6 %; -42 / -32 %, -42 / -32 %; the plain m = 2, the default before: +6.2 / +7.1 %,
++3.9 / +4.8 %; +6.7 / +7.0 %, +6.7 / +7.2 %; m = 4 extrapolated: within 1.0 %).
 """
 
 import numpy as np
@@ -26,8 +27,7 @@ def _rises(model, power, x):
     """Crease rises [K] (7-node, centre line) of the FE reference and the integral model."""
     fe = [fixed_shape_temperatures(model, "fe", power, positions=x, fe_level=lv) for lv in (0, 1)]
     assert all(r.success for r in fe)
-    integral = fixed_shape_temperatures(model, "integral", power, positions=x, refinement=4,
-                                        extrapolation=True)
+    integral = fixed_shape_temperatures(model, "integral", power, positions=x)   # defaults
     rt = integral.room_temperature
 
     def pair(r):
