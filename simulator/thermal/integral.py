@@ -235,10 +235,15 @@ class IntegralLoss:
         positive definite. Compiled: ``S = C diag(sign) C^T`` (Cholesky if definite), ``L =
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
-        out = dense_lapack.cholesky_loss(S, M) if len(S) >= LAPACK_MIN_SIZE else None
-        if out is not None:                  # positive definite: blocked LAPACK
-            C, W, L = out
-            return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True
+        if len(S) >= LAPACK_MIN_SIZE:        # blocked LAPACK, single-threaded
+            out = dense_lapack.cholesky_loss(S, M)
+            if out is not None:              # positive definite
+                C, W, L = out
+                return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True
+            out = dense_lapack.lu_loss(S, M)
+            if out is not None:              # not positive definite: LU
+                factor, L = out
+                return L, lambda rise: dense_lapack.lu_solve(factor, M @ rise), False
         if _single_layer_jit.use_compiled() and _dense_jit.available():
             out = _dense_jit.loss_factor(S, M)
             if out is not None:

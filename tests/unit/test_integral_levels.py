@@ -140,3 +140,19 @@ def test_lapack_factorisation_matches_the_compiled_one():
     np.testing.assert_allclose(dense_lapack.back_substitute(C, W @ rise),
                                np.linalg.solve(S, loss.M @ rise), rtol=1e-9)
     assert dense_lapack.cholesky_loss(-S, loss.M) is None          # not positive definite
+
+
+def test_lapack_lu_handles_an_operator_that_is_not_positive_definite():
+    """A sheet passing through itself makes S indefinite: LU (dgetrf) gives the same loss
+    conductance as a dense solve."""
+    rng = np.random.default_rng(3)
+    A = rng.random((300, 300))
+    S = A + A.T - 150 * np.eye(300)                        # symmetric, indefinite
+    M = rng.random((300, 7))
+    assert dense_lapack.cholesky_loss(S, M) is None
+    factor, L = dense_lapack.lu_loss(S, M)
+    P = np.linalg.solve(S, M)
+    np.testing.assert_allclose(L, 0.5 * (M.T @ P + P.T @ M), rtol=1e-8, atol=1e-10)
+    b = rng.random(7)
+    np.testing.assert_allclose(dense_lapack.lu_solve(factor, M @ b), P @ b, rtol=1e-8)
+    assert dense_lapack.lu_loss(np.zeros((300, 300)), M) is None       # singular
