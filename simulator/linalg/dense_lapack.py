@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import lapack
 
-__all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss", "lu_solve"]
+__all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss"]
 
 _controller = None
 
@@ -57,9 +57,10 @@ def back_substitute(C, b):
 
 
 def lu_loss(S, M):
-    """``(factor, L)`` for a square ``S`` (n, n) that is not positive definite and ``M`` (n, k):
-    the LU factorisation with partial pivoting (``dgetrf``) and ``L = M^T S^-1 M`` (k, k),
-    symmetrised; None if ``S`` is singular (or threads cannot be limited)."""
+    """``(solve, L)`` for a square ``S`` (n, n) that is not positive definite and ``M`` (n, k):
+    ``solve(b) = S^-1 b`` for ``b`` (n,) or (n, k) by the LU factorisation with partial
+    pivoting (``dgetrf``) and ``L = M^T S^-1 M`` (k, k), symmetrised; None if ``S`` is singular
+    (or threads cannot be limited)."""
     if not available():
         return None
     with _controller.limit(limits=1, user_api="blas"):
@@ -70,12 +71,8 @@ def lu_loss(S, M):
         if info != 0:
             return None
         L = np.asarray(M, np.float64).T @ X
-    return (lu, piv), 0.5 * (L + L.T)
 
-
-def lu_solve(factor, b):
-    """``S^-1 b`` for the factor of :func:`lu_loss` and ``b`` (n,) or (n, k)."""
-    lu, piv = factor
-    with _controller.limit(limits=1, user_api="blas"):
-        x, _ = lapack.dgetrs(lu, piv, np.asarray(b, np.float64))
-    return x
+    def solve(b):
+        with _controller.limit(limits=1, user_api="blas"):
+            return lapack.dgetrs(lu, piv, np.asarray(b, np.float64))[0]
+    return solve, 0.5 * (L + L.T)

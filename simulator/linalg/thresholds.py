@@ -8,7 +8,7 @@ Different consumers need different dense limits for measured reasons; they are a
 from __future__ import annotations
 
 __all__ = ["DENSE_LIMIT", "SPARSE_MIN", "PARDISO_LIMIT", "ND_LIMIT", "CONDUCTION_DENSE_LIMIT",
-           "TRANSIENT_DENSE_LIMIT", "EIGEN_DENSE_LIMIT"]
+           "TRANSIENT_DENSE_LIMIT", "EIGEN_DENSE_LIMIT", "LOSS_DENSE_LAPACK_MIN"]
 
 #: Up to this many free DOFs mechanical tangents are dense: evaluated by the fused kernel
 #: (compiled backend) and solved densely by LAPACK or the compiled sparse Cholesky (faster
@@ -42,3 +42,10 @@ TRANSIENT_DENSE_LIMIT = 0
 #: eigensolver (all eigenvalues, exact inertia); above, shift-invert Lanczos with a factor from
 #: the ladder.
 EIGEN_DENSE_LIMIT = 600
+
+#: The integral heat-loss operator (dense, theory 4.7) is factorised by single-threaded blocked
+#: LAPACK (:mod:`~simulator.linalg.dense_lapack`: Cholesky, LU where not positive definite) from
+#: this many sub-triangles on, below by the compiled row-oriented kernels of
+#: :mod:`~simulator.linalg._dense_jit` (faster there: no call overhead; n = 176: 0.35 ms
+#: against 0.29 ms, n = 396: 2.7 ms against 1.6 ms, n = 584: 7.5 ms against 3.8 ms).
+LOSS_DENSE_LAPACK_MIN = 256

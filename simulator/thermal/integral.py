@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..linalg import _dense_jit, dense_lapack
+from ..linalg import _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
@@ -48,10 +48,6 @@ logger = logging.getLogger(__name__)
 #: Largest number of sub-triangles of the dense single-layer operator: 4000 x 4000 is 128 MB
 #: per matrix and about 2 s of assembly and Cholesky on one core.
 MAX_SUB_TRIANGLES = 4000
-#: From this many sub-triangles on, a positive definite operator is factorised by single-threaded
-#: LAPACK (:mod:`simulator.linalg.dense_lapack`), below by the compiled kernel (faster for small
-#: matrices: no call overhead).
-LAPACK_MIN_SIZE = 256
 #: A node closer to the substrate plane than this fraction of the sheet's extent touches it
 #: (held at room temperature): the tolerance of the 3-D FE reference's on-plane nodes.
 TOUCH_TOLERANCE = 1e-9
@@ -235,15 +231,15 @@ class IntegralLoss:
         positive definite. Compiled: ``S = C diag(sign) C^T`` (Cholesky if definite), ``L =
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
-        if len(S) >= LAPACK_MIN_SIZE:        # blocked LAPACK, single-threaded
+        if len(S) >= thresholds.LOSS_DENSE_LAPACK_MIN:     # blocked LAPACK, single-threaded
             out = dense_lapack.cholesky_loss(S, M)
             if out is not None:              # positive definite
                 C, W, L = out
                 return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True
             out = dense_lapack.lu_loss(S, M)
             if out is not None:              # not positive definite: LU
-                factor, L = out
-                return L, lambda rise: dense_lapack.lu_solve(factor, M @ rise), False
+                solve, L = out
+                return L, lambda rise: solve(M @ rise), False
         if _single_layer_jit.use_compiled() and _dense_jit.available():
             out = _dense_jit.loss_factor(S, M)
             if out is not None:

@@ -9,7 +9,7 @@ import pytest
 
 from simulator import ParameterError, ThermalParameters, simulate
 from simulator.cases import get_case, verification_strip
-from simulator.linalg import _dense_jit, dense_lapack
+from simulator.linalg import _dense_jit, dense_lapack, thresholds
 from simulator.thermal import _single_layer_jit
 from simulator.thermal._single_layer import collocation_matrix
 from simulator.thermal.integral import IntegralLoss
@@ -128,7 +128,7 @@ def test_lapack_factorisation_matches_the_compiled_one():
     V, area, _ = collocation_matrix(loss.sub_triangles(mesh.nodes), 0.026)
     S = V / area[None, :]
     S = 0.5 * (S + S.T)
-    assert len(S) >= 256 and dense_lapack.available()
+    assert len(S) >= thresholds.LOSS_DENSE_LAPACK_MIN and dense_lapack.available()
     C, W, L = dense_lapack.cholesky_loss(S, loss.M)
     assert np.array_equal(L, L.T)
     if _single_layer_jit.use_compiled() and _dense_jit.available():
@@ -150,9 +150,9 @@ def test_lapack_lu_handles_an_operator_that_is_not_positive_definite():
     S = A + A.T - 150 * np.eye(300)                        # symmetric, indefinite
     M = rng.random((300, 7))
     assert dense_lapack.cholesky_loss(S, M) is None
-    factor, L = dense_lapack.lu_loss(S, M)
+    solve, L = dense_lapack.lu_loss(S, M)
     P = np.linalg.solve(S, M)
     np.testing.assert_allclose(L, 0.5 * (M.T @ P + P.T @ M), rtol=1e-8, atol=1e-10)
     b = rng.random(7)
-    np.testing.assert_allclose(dense_lapack.lu_solve(factor, M @ b), P @ b, rtol=1e-8)
+    np.testing.assert_allclose(solve(M @ b), P @ b, rtol=1e-8)
     assert dense_lapack.lu_loss(np.zeros((300, 300)), M) is None       # singular
