@@ -12,12 +12,16 @@ indefinite path at n = 1314), and the compiled kernel stays for a singular ``S``
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from scipy.linalg import lapack
 
 __all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss"]
 
 _controller = None
+#: threadpoolctl's limit is process-wide: calls from several threads take turns
+_lock = threading.Lock()
 
 
 def available() -> bool:
@@ -38,7 +42,7 @@ def cholesky_loss(S, M):
     ``S`` is not positive definite (or threads cannot be limited: :func:`available`)."""
     if not available():
         return None
-    with _controller.limit(limits=1, user_api="blas"):
+    with _lock, _controller.limit(limits=1, user_api="blas"):
         C, info = lapack.dpotrf(np.asarray(S, np.float64), lower=1, clean=1)
         if info != 0:
             return None
@@ -51,7 +55,7 @@ def cholesky_loss(S, M):
 
 def back_substitute(C, b):
     """``C^-T b`` for the factor ``C`` of :func:`cholesky_loss` and ``b`` (n,) or (n, k)."""
-    with _controller.limit(limits=1, user_api="blas"):
+    with _lock, _controller.limit(limits=1, user_api="blas"):
         x, _ = lapack.dtrtrs(C, np.asarray(b, np.float64), lower=1, trans=1)
     return x
 
@@ -63,7 +67,7 @@ def lu_loss(S, M):
     (or threads cannot be limited)."""
     if not available():
         return None
-    with _controller.limit(limits=1, user_api="blas"):
+    with _lock, _controller.limit(limits=1, user_api="blas"):
         lu, piv, info = lapack.dgetrf(np.asarray(S, np.float64))
         if info != 0:
             return None
@@ -73,6 +77,6 @@ def lu_loss(S, M):
         L = np.asarray(M, np.float64).T @ X
 
     def solve(b):
-        with _controller.limit(limits=1, user_api="blas"):
+        with _lock, _controller.limit(limits=1, user_api="blas"):
             return lapack.dgetrs(lu, piv, np.asarray(b, np.float64))[0]
     return solve, 0.5 * (L + L.T)

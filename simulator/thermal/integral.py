@@ -105,9 +105,6 @@ class IntegralLoss:
         #: ``[positions, distances]`` of the last :meth:`_distances` call; operators of the
         #: same sheet and plane at other refinements may share the list (they need the same)
         self.distance_memo = [None, None]
-        #: the floor of :meth:`_scale` is this many mean sub-triangle diameters for the
-        #: distances, ``height_floor`` times that for the heights over the plane
-        self.floor_factor, self.height_floor = 1.0, 0.01
 
     def _heights(self, x):
         """Height of every node over the substrate plane [m], (n_nodes,), and the touch
@@ -159,6 +156,12 @@ class IntegralLoss:
         self._cache = self._build(np.asarray(x, float))
         self.builds += 1
         return self._cache.L
+
+    @property
+    def last_definite(self) -> bool:
+        """Whether the operator of the last build was positive definite (False where parts of
+        the sheet come too close or pass through each other; True before the first build)."""
+        return True if self._cache is None else self._cache.definite
 
     @property
     def last_positions(self):
@@ -218,11 +221,10 @@ class IntegralLoss:
                 "sub-triangle diameter or pass through each other (a model without contact?); "
                 "the temperatures there are not reliable. Raise integral_refinement or add "
                 "contact (said once per model).")
-        size = self.floor_factor * np.linalg.norm(full - np.roll(full, 1, axis=1),
-                                                  axis=2).max(axis=1).mean()
+        size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
         d = self._distances(x)
         L.setflags(write=False)
-        return _Operator(x.copy(), L, heat, d, self._scale(d, size))
+        return _Operator(x.copy(), L, heat, d, self._scale(d, size), definite)
 
     def _factorise(self, S, M):
         """``(L, heat, definite)`` of the symmetric ``S`` (n_live, n_live) with the
@@ -259,7 +261,7 @@ class IntegralLoss:
         distance, at least the mean sub-triangle diameter ``size``; a height over the plane
         at least 1 % of it (the image's share of the loss changes with the height itself)."""
         n = len(self.nodes) * (len(self.nodes) - 1) // 2
-        floor = np.where(np.arange(len(distances)) < n, size, self.height_floor * size)
+        floor = np.where(np.arange(len(distances)) < n, size, 0.01 * size)
         return np.maximum(distances, floor)
 
     def loss_matrix(self, x) -> np.ndarray:
@@ -295,3 +297,4 @@ class _Operator:
     heat: Callable
     distances: np.ndarray
     scale: np.ndarray
+    definite: bool = True

@@ -8,12 +8,12 @@ singularity). Two combinations make it accurate at a fraction of the cost of a f
   operators at ``m`` and ``c`` (``ThermalParameters.integral_extrapolation``), built together at
   the same shapes;
 * :class:`CorrectedLoss`: the accurate operator (plain or extrapolated) rebuilt only when the
-  shape has moved by a loose tolerance, and followed in between through the change of a cheap
-  one (``m = 1``) rebuilt at the usual tolerance,
-  ``L(x) = L_acc(x0) + L_1(x) - L_1(x0)`` (``ThermalParameters.integral_correction_tol``). The
-  correction ``L_acc - L_1`` is the discretisation error of ``L_1``: a near-field quantity that
-  changes slowly with the shape, so it is refreshed rarely (docs/heat_fe.md measures how
-  rarely, and what that costs in accuracy).
+  cheap one (``m = 1``, rebuilt at the usual tolerance) has changed by a fraction of itself
+  (``ThermalParameters.integral_correction_tol``), and followed in between through the change
+  of the cheap one, ``L(x) = L_acc(x0) + L_1(x) - L_1(x0)``. The correction ``L_acc - L_1`` is
+  the discretisation error of ``L_1``: a near-field quantity that changes slowly with the
+  shape, so it is refreshed rarely (theory 4.7 and docs/heat_fe.md measure how rarely, and
+  what that costs in accuracy).
 
 All operators share the interface the steady model uses: ``nodes``, ``builds``,
 ``loss_matrix(x)``, ``touching(x)``.
@@ -46,6 +46,8 @@ class ExtrapolatedLoss:
     """
 
     def __init__(self, fine: IntegralLoss, coarse: IntegralLoss, m: int, c: int):
+        if not int(m) > int(c) >= 1:
+            raise ValueError(f"ExtrapolatedLoss needs m > c >= 1, got m = {m}, c = {c}")
         self.fine, self.coarse, self.m, self.c = fine, coarse, int(m), int(c)
         self.nodes = fine.nodes
         self._L, self._built = None, -1
@@ -55,42 +57,55 @@ class ExtrapolatedLoss:
         """Number of builds so far (of the fine operator; each also builds the coarse one)."""
         return self.fine.builds
 
-    @property
-    def last_positions(self) -> np.ndarray:
-        """Positions [m] of the last build."""
-        return self.fine.last_positions
-
     def touching(self, x) -> np.ndarray:
         return self.fine.touching(x)
+
+    def _combine(self, Lf, Lc) -> np.ndarray:
+        L = (self.m * Lf - self.c * Lc) / (self.m - self.c)
+        L.setflags(write=False)
+        self._L, self._built = L, self.fine.builds
+        return L
 
     def loss_matrix(self, x) -> np.ndarray:
         """``(m L_m - c L_c) / (m - c)`` [W/K] on :attr:`nodes` at positions ``x`` (n, 3) [m]."""
         Lf = self.fine.loss_matrix(x)
         if self.fine.builds != self._built:
-            Lc = self.coarse.rebuild(self.fine.last_positions)
-            self._L = (self.m * Lf - self.c * Lc) / (self.m - self.c)
-            self._built = self.fine.builds
+            return self._combine(Lf, self.coarse.rebuild(self.fine.last_positions))
         return self._L
+
+    def rebuild(self, x) -> np.ndarray:
+        """Build both operators at positions ``x`` (n, 3) [m] whatever the last build; returns
+        the extrapolated loss conductance."""
+        return self._combine(self.fine.rebuild(x), self.coarse.rebuild(x))
 
 
 class CorrectedLoss:
-    """An accurate operator refreshed at a loose tolerance, following the shape in between
-    through a cheap one: ``L(x) = L_acc(x0) + L_base(x) - L_base(x0)``.
+    """An accurate operator rebuilt only where the shape has changed enough, following the
+    shape in between through a cheap one: ``L(x) = L_acc(x0) + L_base(x) - L_base(x0)``.
+
+    The accurate operator is rebuilt (at ``x0 = x``) when the cheap one, itself rebuilt at its
+    ``shape_tol``, has changed since the last accurate build by more than ``tol`` of itself:
+    ``||L_base(x) - L_base(x0)|| > tol ||L_base(x0)||`` (largest absolute row sum). The
+    correction ``L_acc - L_base`` is the cheap operator's discretisation error, a function of
+    the near-field geometry that ``L_base`` sees (parts of the sheet approaching each other or
+    the substrate plane change it most), so its change is measured through ``L_base``; a
+    rigid motion changes neither.
 
     Parameters
     ----------
     accurate : IntegralLoss or ExtrapolatedLoss
-        The accurate operator; its own ``shape_tol`` (the loose one) decides when it is rebuilt
-        (at ``x0``).
+        The accurate operator (has ``rebuild(x)``).
     base : IntegralLoss
-        The cheap operator, rebuilt at its (tight) ``shape_tol``; rebuilt at ``x0`` whenever the
-        accurate one is, so that ``L(x0) = L_acc(x0)``.
+        The cheap operator (m = 1), rebuilt at its ``shape_tol``; rebuilt at ``x0`` whenever
+        the accurate one is, so that ``L(x0) = L_acc(x0)``.
+    tol : float
+        Relative change of ``L_base`` that triggers an accurate rebuild, > 0.
     """
 
-    def __init__(self, accurate, base: IntegralLoss):
-        self.accurate, self.base = accurate, base
+    def __init__(self, accurate, base: IntegralLoss, tol: float):
+        self.accurate, self.base, self.tol = accurate, base, float(tol)
         self.nodes = base.nodes
-        self._offset, self._built = None, -1
+        self._accurate0 = self._base0 = None
 
     @property
     def builds(self) -> int:
@@ -105,15 +120,28 @@ class CorrectedLoss:
     def touching(self, x) -> np.ndarray:
         return self.base.touching(x)
 
+    def change(self, L_base) -> float:
+        """Relative change of the cheap operator ``L_base`` since the last accurate build
+        (largest absolute row sum of the difference over that of ``L_base(x0)``)."""
+        norm = np.abs(self._base0).sum(axis=1).max()
+        return float(np.abs(L_base - self._base0).sum(axis=1).max() / norm) if norm > 0 \
+            else float(np.abs(L_base).max() > 0)
+
     def loss_matrix(self, x) -> np.ndarray:
         """``L_acc(x0) + L_base(x) - L_base(x0)`` [W/K] on :attr:`nodes` at positions ``x``."""
-        La = self.accurate.loss_matrix(x)
-        if self.accurate.builds != self._built:
-            x0 = self.accurate.last_positions
-            self._offset = La - self.base.rebuild(x0)
-            self._built = self.accurate.builds
-            logger.debug("integral loss: accurate operator rebuilt (%d so far)", self._built)
-        return self._offset + self.base.loss_matrix(x)
+        x = np.asarray(x, float)
+        Lb = None
+        if self._accurate0 is not None:
+            Lb = self.base.loss_matrix(x)
+            # not refreshed where the m = 1 operator is not positive definite: the sheet passes
+            # through itself and the model is not reliable there (IntegralLoss warns once)
+            if self.change(Lb) <= self.tol or not self.base.last_definite:
+                return self._accurate0 + (Lb - self._base0)
+        self._accurate0 = self.accurate.rebuild(x)
+        last = self.base.last_positions
+        self._base0 = Lb if Lb is not None and np.array_equal(last, x) else self.base.rebuild(x)
+        logger.debug("integral loss: accurate operator rebuilt (%d so far)", self.builds)
+        return self._accurate0
 
 
 def integral_operator(triangles, n_nodes, params):
@@ -123,22 +151,18 @@ def integral_operator(triangles, n_nodes, params):
     operator is that one alone (None otherwise)."""
     m, k, plane = params.integral_refinement, params.env_conductivity, params.plane
     correct = params.integral_correction_tol > 0 and (m > 1 or params.extrapolated)
-    tol = params.integral_correction_tol if correct else params.integral_shape_tol
-
     memo = [None, None]                      # the levels share the sheet's distances
 
-    def level(r, shape_tol=tol):
-        out = IntegralLoss(triangles, n_nodes, k, r, plane, shape_tol)
+    def level(r):
+        out = IntegralLoss(triangles, n_nodes, k, r, plane, params.integral_shape_tol)
         out.distance_memo = memo
         return out
 
     fine = level(m)
-    if correct:          # the correction is the error of the m = 1 operator: its length scale
-        fine.floor_factor, fine.height_floor = float(m), 1.0
     accurate = fine
     if params.extrapolated:
         c = coarse_refinement(m)
         accurate = ExtrapolatedLoss(fine, level(c), m, c)
     if not correct:
         return accurate, (fine if accurate is fine else None)
-    return CorrectedLoss(accurate, level(1, params.integral_shape_tol)), None
+    return CorrectedLoss(accurate, level(1), params.integral_correction_tol), None

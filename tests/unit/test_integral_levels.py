@@ -74,19 +74,20 @@ def _folded_double_fold(increments=20):
 def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between():
     model, folded = _folded_double_fold()
     x0 = model.mesh.nodes
-    prm = dataclasses.replace(model.thermal, loss_model="integral", integral_refinement=3,
-                              integral_extrapolation=True, integral_correction_tol=0.5,
-                              integral_shape_tol=0.0)
+    prm = dataclasses.replace(model.thermal, loss_model="integral", integral_shape_tol=0.0)
+    assert (prm.integral_refinement, prm.extrapolated, prm.integral_correction_tol) == (3, True,
+                                                                                       0.1)
     tm = ThermalModel(model.mesh, prm)
     op = tm.integral
     assert isinstance(op, CorrectedLoss)
     fresh = ThermalModel(model.mesh, dataclasses.replace(prm, integral_correction_tol=0.0))
     np.testing.assert_allclose(op.loss_matrix(x0), fresh.integral_loss_matrix(x0), rtol=1e-12,
                                atol=1e-13)
-    # a tenth of the fold: the accurate operator is kept, the m = 1 one rebuilt
-    x1 = x0 + 0.1 * (folded - x0)
+    # a twentieth of the fold: the accurate operator is kept, the m = 1 one rebuilt
+    x1 = x0 + 0.05 * (folded - x0)
     L1 = op.loss_matrix(x1)
     assert (op.builds, op.base_builds) == (1, 2)
+    assert 0 < op.change(op.base.loss_matrix(x1)) <= 0.1
     base = {x.tobytes(): IntegralLoss(op.base.triangles, model.mesh.n_nodes,
                                       prm.env_conductivity, 1, None).loss_matrix(x)
             for x in (x0, x1)}
@@ -95,15 +96,13 @@ def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between
 
 
 def test_corrected_operator_stays_close_to_the_accurate_one_along_a_fold():
-    """The double fold heated to 10 mW per crease in 12 increments (fold 2 passes 120 deg):
-    at every shape of the path the node temperatures with the corrected operator (tolerance
-    0.5) are within 0.5 % of the largest rise from the accurate operator rebuilt at that shape
-    (measured: 0.41 %, 0.59 % of a crease node's own rise), with 3 accurate builds for the 12
-    heated shapes."""
+    """The double fold heated to 10 mW per crease in 12 increments (fold 2 passes 120 deg), the
+    integral model at its defaults: at every shape of the path the node temperatures are
+    within 0.5 % of the largest rise from the accurate operator rebuilt at that shape
+    (measured: 0.44 %), with 3 accurate builds."""
     case = get_case("double_fold", thermal_steps=12)
     model = case.model
-    prm = dataclasses.replace(model.thermal, loss_model="integral", integral_refinement=3,
-                              integral_extrapolation=True, integral_correction_tol=0.5)
+    prm = dataclasses.replace(model.thermal, loss_model="integral")
     model = dataclasses.replace(model, thermal=prm)
     res = simulate(model, case.steps)
     assert res.success
@@ -119,7 +118,40 @@ def test_corrected_operator_stays_close_to_the_accurate_one_along_a_fold():
         c = corrected.solve(x, q) - prm.room_temperature
         worst = max(worst, np.abs(c - a).max() / a.max())
     assert worst < 5e-3
-    assert corrected.integral.builds <= len(shapes) // 3
+    assert corrected.integral.builds <= 4
+
+
+def test_corrected_operator_follows_a_sheet_approaching_the_substrate():
+    """The strip's first panel lowered onto the plane z = 0 and lifted again (lift 0.2 .. 0 ..
+    0.4): the correction's change near the plane is seen through the m = 1 operator, so the
+    accurate operator is rebuilt and the temperatures stay those of a rebuild at every shape
+    (a criterion on node distances alone kept one build there and was 7.6 % off)."""
+    model = verification_strip().model
+    prm = dataclasses.replace(model.thermal, loss_model="integral", room_temperature_nodes=(),
+                              substrate_plane=(0, 0, 0, 0, 0, 1))
+    corrected = ThermalModel(model.mesh, prm)
+    accurate = ThermalModel(model.mesh, dataclasses.replace(prm, integral_correction_tol=0.0,
+                                                            integral_shape_tol=0.0))
+    q = corrected.heat_vector([4e-3])
+    worst = 0.0
+    for lift in (0.2, 0.1, 0.05, 0.02, 0.01, 0.005, 0.0, 0.005, 0.02, 0.05, 0.1, 0.2, 0.4):
+        x = model.mesh.nodes.copy()
+        x[:, 2] = 0.3 * np.maximum(x[:, 0] - 1.0, 0.0) + lift
+        a = accurate.solve(x, q) - prm.room_temperature
+        c = corrected.solve(x, q) - prm.room_temperature
+        worst = max(worst, np.abs(c - a).max() / a.max())
+    assert worst < 5e-3
+    assert corrected.integral.builds > 5
+
+
+def test_automatic_extrapolation_follows_the_refinement():
+    prm = ThermalParameters(env_thickness=1e-3)
+    assert prm.integral_extrapolation is None and prm.extrapolated
+    two = dataclasses.replace(dataclasses.replace(prm, integral_refinement=4),
+                              integral_refinement=2)
+    assert not two.extrapolated and two.integral_extrapolation is None
+    assert not ThermalParameters(env_thickness=1e-3, integral_refinement=4,
+                                 integral_extrapolation=False).extrapolated
 
 
 def test_lapack_factorisation_matches_the_compiled_one():
