@@ -145,12 +145,16 @@ class GripperDesign:
     def to_dict(self) -> dict:
         """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
         ``env_conductivity``, ``loss_model``, ``integral_refinement``) only when they differ
-        from their defaults, so that problem
-        settings, and the hashes of evaluation logs written before they existed, are kept."""
+        from their defaults, so that problem settings, and the hashes of evaluation logs
+        written before they existed, are kept; ``integral_refinement`` always with the
+        integral model (its default changed, so an older log of the integral model never
+        matches)."""
         out = asdict(self)
         for name in _OPTIONAL:
             if out[name] == _OPTIONAL[name]:
                 del out[name]
+        if self.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
+            out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
         return out
 
     def crease_residual_folds(self) -> dict:

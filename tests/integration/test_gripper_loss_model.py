@@ -17,6 +17,8 @@ def test_default_design_keeps_the_chain_model_and_its_dict():
     assert model.thermal.loss_model == "chain" and model.thermal.substrate_plane == ()
     assert "loss_model" not in GripperDesign().to_dict()
     assert "integral_refinement" not in GripperDesign(integral_refinement=3).to_dict()
+    # with the integral model m is always named (its default changed from 2 to 3)
+    assert GripperDesign(loss_model="integral").to_dict()["integral_refinement"] == 3
 
 
 def test_integral_design_uses_the_substrate_plane_under_the_sheet():
