@@ -28,7 +28,7 @@ from simulator.cases import get_case
 
 def _settings(args) -> dict:
     """The integral model's ThermalParameters fields from the options (empty: its defaults,
-    m = 3 Richardson-extrapolated from 2 and 3, corrected between rebuilds at 0.5)."""
+    m = 3 Richardson-extrapolated from 2 and 3, corrected between rebuilds)."""
     out = {}
     if args.refinement is not None:
         out["integral_refinement"] = args.refinement
@@ -97,7 +97,7 @@ def main(argv=None):
                     help="the plain operator at m, rebuilt at integral_shape_tol (no "
                          "extrapolation, no correction: the integral model before 6 Dec 2026)")
     ap.add_argument("--correction-tol", type=float, default=None,
-                    help="integral_correction_tol (default: the model's, 0.5)")
+                    help="integral_correction_tol (default: the model's, 0.1)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     args = ap.parse_args(argv)

@@ -146,8 +146,7 @@ class IntegralLoss:
         within ``shape_tol`` of it (:meth:`_unchanged`), else a new one."""
         x = np.asarray(x, float)
         if self._cache is None or not self._unchanged(x):
-            self._cache = self._build(x)
-            self.builds += 1
+            self.rebuild(x)
         return self._cache
 
     def rebuild(self, x) -> np.ndarray:

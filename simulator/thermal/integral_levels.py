@@ -146,9 +146,8 @@ class CorrectedLoss:
 
 def integral_operator(triangles, n_nodes, params):
     """The integral loss operator of :class:`~simulator.thermal.parameters.ThermalParameters`
-    ``params`` on the sheet ``triangles``: ``(operator, plain)`` where ``plain`` is the
-    :class:`IntegralLoss` at ``integral_refinement`` built at ``integral_shape_tol`` if the
-    operator is that one alone (None otherwise)."""
+    ``params`` on the sheet ``triangles``: an :class:`IntegralLoss` at ``integral_refinement``
+    built at ``integral_shape_tol``, an :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
     m, k, plane = params.integral_refinement, params.env_conductivity, params.plane
     correct = params.integral_correction_tol > 0 and (m > 1 or params.extrapolated)
     memo = [None, None]                      # the levels share the sheet's distances
@@ -164,5 +163,5 @@ def integral_operator(triangles, n_nodes, params):
         c = coarse_refinement(m)
         accurate = ExtrapolatedLoss(fine, level(c), m, c)
     if not correct:
-        return accurate, (fine if accurate is fine else None)
-    return CorrectedLoss(accurate, level(1), params.integral_correction_tol), None
+        return accurate
+    return CorrectedLoss(accurate, level(1), params.integral_correction_tol)

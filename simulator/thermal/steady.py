@@ -35,6 +35,7 @@ from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
+from .integral import IntegralLoss
 from .integral_levels import integral_operator
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
@@ -96,11 +97,9 @@ class ThermalModel:
         #: an :class:`IntegralLoss` at refinement m, or its Richardson extrapolation, or either
         #: corrected through the m = 1 operator between rebuilds)
         self.integral = None
-        self._integral_plain = None      # the IntegralLoss, if it is the operator alone
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
-            self.integral, self._integral_plain = integral_operator(
-                tri[~self.is_boundary], n, params)
+            self.integral = integral_operator(tri[~self.is_boundary], n, params)
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
@@ -393,7 +392,7 @@ class ThermalModel:
             return self._conductances(x, False)[1] * rise
         out = np.zeros(self.mesh.n_nodes)
         nodes = self.integral.nodes
-        if self._integral_plain is not None:
+        if isinstance(self.integral, IntegralLoss):       # the plain operator alone
             out[nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
         else:                            # the combined conductance the solve used
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
