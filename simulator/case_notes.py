@@ -9,7 +9,8 @@ __all__ = ["parameter_note", "CHOICES", "POWER_MEANING"]
 CHOICES = {"coupling": ("staggered", "iterated"), "on_limit_point": ("stop", "continue"),
            "mechanics": ("dynamic", "quasi_static"),
            ("verification_strip", "variant"): ("within", "loss"),
-           ("snap_through", "variant"): ("force", "heated")}
+           ("snap_through", "variant"): ("force", "heated"),
+           ("crane", "loss_model"): ("chain", "integral")}
 #: What the ``power_mW`` of each case is: per which crease or circuit.
 POWER_MEANING = {
     "single_fold": "the one crease's power at the end of the ramp",
@@ -17,7 +18,8 @@ POWER_MEANING = {
     "single_fold_step_response": "the one crease's power while on",
     "double_fold": "per crease, both creases alike",
     "miura_lifter": "per crease, every crease alike",
-    "crane": "the base power q; the creases get q/2 ... 4 q (reference classes)",
+    "crane": "the base power q; the creases get q/2 ... 4 q (reference classes); default "
+             "4 mW with the chain heat loss, 0.8 mW with the integral one",
     "snap_through": "per crease, every crease alike (variant 'heated' only)"}
 
 

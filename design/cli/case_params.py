@@ -124,7 +124,8 @@ def _convert(name, text, default, si_unit):
     elif isinstance(default, int):
         if not isinstance(value, int) or isinstance(value, bool):
             raise CLIError(f"--set {name} expects an integer, got {text!r}")
-    elif isinstance(default, float):
+    elif isinstance(default, float) or (default is None and unit.check):
+        # a number (a default of None: chosen by the case from its other parameters)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise CLIError(f"--set {name} expects a number in {unit.name or 'CLI units'}, "
                            f"got {text!r}")

@@ -42,6 +42,18 @@ def test_names_with_a_unit_suffix_keep_their_unit():
         "dt": 2e-3, "t_on": 0.5}
 
 
+def test_a_number_whose_default_the_case_chooses_is_checked_in_cli_units():
+    """The crane's power_mW defaults to None (chosen by its loss_model): a number typed for
+    it is a power in mW, range-checked like any other."""
+    assert case_parameters()["crane"]["power_mW"] == (None, "mW")
+    assert case_overrides(["power_mW=0.5", "loss_model=integral"], "crane") == {
+        "power_mW": 0.5, "loss_model": "integral"}
+    with pytest.raises(CLIError, match="--set power_mW = -1 mW is outside"):
+        case_overrides(["power_mW=-1"], "crane")
+    with pytest.raises(CLIError, match="--set power_mW expects a number in mW"):
+        case_overrides(["power_mW=high"], "crane")
+
+
 def test_every_default_round_trips_through_cli_units_bit_identically():
     from simulator import describe_cases
 
