@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from studies.heat_transfer_models import (ACCEPTANCE, DOUBLE_FOLD_POWER, FE_BOX, GRIPPER_ASSEMBLY,
-                                          GRIPPER_GRIP, GRIPPER_POWER, MEDIA, STRUCTURES)
+from studies.heat_transfer_models import (ACCEPTANCE, CRANE_POWER_MW, DOUBLE_FOLD_POWER, FE_BOX,
+                                          GRIPPER_ASSEMBLY, GRIPPER_GRIP, GRIPPER_POWER, MEDIA,
+                                          STRUCTURES)
 
-__all__ = ["strip_figure", "folded_figure"]
+__all__ = ["strip_figure", "folded_figure", "crane_figure"]
 
 
 def _model_label(row) -> str:
@@ -99,15 +100,52 @@ def _note(fig, df, kind, what):
 
 def folded_figure(df):
     """Crease temperatures per model on each folded shape (bars from room temperature) and
-    below them each model's error against the 3-D FE."""
+    below them each model's error against the 3-D FE (the double fold, the gripper)."""
+    fig = _crease_bars(df[~df["case"].isin(["strip", "crane"])], 4.6)
+    fig.suptitle("Folded shapes: 7-node crease temperature per model on the same shape and "
+                 f"heat (bars from RT); below, the error against the 3-D FE "
+                 f"({_ref_name(df)}), +-{ACCEPTANCE['folded']:g} % shaded", fontsize="medium")
+    _note(fig, df, "folded", "environment: air, k_env = 0.026 W/(m K); double fold: shape "
+          f"after heating at {1e3 * DOUBLE_FOLD_POWER:g} mW per crease (gravity x 0.9, substrate "
+          "plane of its anchor panel); gripper (default design, self-weight): shapes at the "
+          f"end of assembly ({1e3 * GRIPPER_ASSEMBLY:.2f} mW per base crease) and grip "
+          f"(+ {1e3 * GRIPPER_GRIP:.2f} mW per arm crease), then {1e3 * GRIPPER_POWER:g} mW per "
+          "heated crease on the fixed shape; integral and FE over the substrate plane of the "
+          "thermal boundary panel; chain at the models' own beta, t_env; the 1.2 T_g limit "
+          "(252 °C) applies to the centre-line mean T_ave (in the CSV), not to T_crease")
+    return fig
+
+
+def crane_figure(df):
+    """The flat crane at the end of its case's heating: crease temperatures per model and
+    their errors against the 3-D FE."""
+    fig = _crease_bars(df[df["case"] == "crane"], 13.0)
+    fig.suptitle("Flat crane heated as the crane case at q = "
+                 f"{CRANE_POWER_MW:g} mW (0.5 q ... 4 q per crease): 7-node crease temperature "
+                 f"per model (bars from RT); below, the error against the 3-D FE "
+                 f"({_ref_name(df)})", fontsize="medium")
+    _note(fig, df, "folded", "environment: air, k_env = 0.026 W/(m K), no substrate; the "
+          "crane case's chains: beta = 20 deg, t_env = 1 mm (the reference's t2RT = a); its "
+          "power of 4 mW was chosen for them: with the integral model the case uses 0.8 mW "
+          "(simulator.cases.CRANE_POWER_MW)")
+    return fig
+
+
+def _ref_name(df) -> str:
+    return "extrapolated" if df["model"].eq("FE extrapolated").any() else "finest level"
+
+
+def _crease_bars(d, width):
+    """Bars per crease and model on each (case, shape) of ``d``: temperatures above, errors
+    against the (extrapolated) FE below; ``width`` [in] per shape."""
     from matplotlib.figure import Figure
 
-    d = df[df["case"] != "strip"].copy()
+    d = d.copy()
     d["label"] = d.apply(_model_label, axis=1)
     shapes = d.drop_duplicates(["case", "shape"])[["case", "shape"]].to_numpy()
     labels = list(dict.fromkeys(d["label"]))
     ref = "FE extrapolated" if d["model"].eq("FE extrapolated").any() else "FE"
-    fig = Figure(figsize=(4.6 * len(shapes) + 2.6, 7.4), layout="constrained")
+    fig = Figure(figsize=(width * len(shapes) + 2.6, 7.4), layout="constrained")
     axes = fig.subplots(2, len(shapes), squeeze=False, height_ratios=[1.5, 1])
     ref_label = d.loc[d["model"] == ref, "label"].iloc[0] if (d["model"] == ref).any() else None
     below = [lab for lab in labels if lab != ref_label]
@@ -131,8 +169,9 @@ def folded_figure(df):
         names = [f"{r['crease name']} ({int(r['crease [-]'])})"
                  + ("" if r["crease power [W]"] > 0 else "\nunheated")
                  for _, r in creases.iterrows()]
-        p = 1e3 * creases["crease power [W]"].max()
-        top.set_title(f"({'abc'[col]}) {case}, {shape}: {p:g} mW per heated crease",
+        p = 1e3 * creases.loc[creases["crease power [W]"] > 0, "crease power [W]"]
+        p = f"{p.max():g} mW" if p.min() == p.max() else f"{p.min():g}-{p.max():g} mW"
+        top.set_title(f"({'abc'[col]}) {case}, {shape}: {p} per heated crease",
                       fontsize="medium")
         top.set_ylabel("crease temperature T_crease [°C]")
         top.axhline(rt, color="k", lw=0.8)
@@ -143,16 +182,4 @@ def folded_figure(df):
             ax.set_xticks(xs, names, fontsize="small")
             ax.grid(True, axis="y", alpha=0.3)
     _legend(fig, axes)
-    fig.suptitle("Folded shapes: 7-node crease temperature per model on the same shape and "
-                 f"heat (bars from RT); below, the error against the 3-D FE "
-                 f"({'extrapolated' if ref != 'FE' else 'finest level'}), "
-                 f"+-{ACCEPTANCE['folded']:g} % shaded", fontsize="medium")
-    _note(fig, df, "folded", "environment: air, k_env = 0.026 W/(m K); double fold: shape "
-          f"after heating at {1e3 * DOUBLE_FOLD_POWER:g} mW per crease (gravity x 0.9, substrate "
-          "plane of its anchor panel); gripper (default design, self-weight): shapes at the "
-          f"end of assembly ({1e3 * GRIPPER_ASSEMBLY:.2f} mW per base crease) and grip "
-          f"(+ {1e3 * GRIPPER_GRIP:.2f} mW per arm crease), then {1e3 * GRIPPER_POWER:g} mW per "
-          "heated crease on the fixed shape; integral and FE over the substrate plane of the "
-          "thermal boundary panel; chain at the models' own beta, t_env; the 1.2 T_g limit "
-          "(252 °C) applies to the centre-line mean T_ave (in the CSV), not to T_crease")
     return fig

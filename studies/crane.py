@@ -16,6 +16,12 @@ the crease) ramped to q = 4 mW in 500 staggered thermo-mechanical increments. Th
 ``base_power [mW]`` of a record is the power of reference crease 6 (which gets q in both
 variants). ``--quick`` uses 30 increments.
 
+Heat loss: the case's chains (beta = 20 deg, t_env = 1 mm, the reference's t2RT = a), for
+which the reference chose its 4 mW. The integral model (nothing fitted, theory 4.7) and the 3-D
+FE put the flat crane's crease temperature rises at that power 3.4-10.1 times higher
+(``studies.heat_transfer_models``, flat crane); ``get_case("crane", loss_model="integral")``
+runs the crane at 0.8 mW instead, where it ends at this study's hottest crease temperature.
+
 Crease ids: ``crease`` is our edge id (0-based), ``crease_ref`` = edge id + 1 is the
 reference (and paper) numbering. Fold angles are signed (0 flat, positive = valley towards
 +z, negative = mountain).

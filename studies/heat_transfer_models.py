@@ -133,9 +133,10 @@ CHAIN_STRIP = (20.0, 1.5, 10)
 #: default (m = 3 extrapolated from 2 and 3), the plain m = 2 (the default before 6 Dec 2026)
 #: and the plain m = 8; and FE mesh levels (coarse, fine).
 REFINEMENTS = {"strip": ((3, True), (2, False), (8, False)),
-               "folded": ((3, True), (2, False), (8, False))}
+               "folded": ((3, True), (2, False), (8, False)),
+               "crane": ((3, True), (2, False), (5, False))}   # m = 8: above the dense limit
 REFINEMENTS_QUICK = {"strip": ((3, True), (2, False), (8, False)), "folded": ((3, True),)}
-FE_LEVELS = {"strip": (1, 2), "folded": (0, 1)}
+FE_LEVELS = {"strip": (1, 2), "folded": (0, 1), "crane": (0, 1)}
 FE_LEVELS_QUICK = {"strip": (0,), "folded": (0,)}
 FE_BOX = 4.0
 #: Acceptance of issue 19 on the integral model [%]: strip, folded shapes.
@@ -148,8 +149,12 @@ DOUBLE_FOLD_POWER, DOUBLE_FOLD_STEPS, DOUBLE_FOLD_STEPS_QUICK = 10e-3, 250, 20
 GRIPPER_ASSEMBLY, GRIPPER_GRIP = 26.4375e-3, 5.8625e-3
 GRIPPER_INCREMENTS, GRIPPER_INCREMENTS_QUICK = 10, 3
 GRIPPER_POWER = 3e-3
+#: The flat crane heated as ``get_case("crane")`` at the end of its ramp (the reference's 4 mW
+#: base power: 2-16 mW per crease); not in ``--quick`` (its FE takes about 12 min).
+CRANE_POWER_MW = 4.0
 CREASE_NAMES = {"double fold": {2: "fold 1", 5: "fold 2"},
-                "gripper": {2: "base", 5: "base", 3: "arm", 9: "arm"}}
+                "gripper": {2: "base", 5: "base", 3: "arm", 9: "arm"},
+                "crane": {c: f"ref {c + 1}" for c in range(32)}}     # reference numbering
 MEASURES = ("T_crease", "T_max", "T_ave")
 MODELS = ("chain", "integral", "FE", "FE extrapolated")
 
@@ -209,6 +214,22 @@ def _gripper(quick):
     return out
 
 
+def _crane():
+    from simulator.cases import get_case
+
+    case = get_case("crane", power_mW=CRANE_POWER_MW)
+    mesh = case.model.mesh
+    power = np.zeros(mesh.n_creases)
+    for crease, p in case.steps[-1].power.items():
+        power[mesh.crease_row_of(crease)] = p
+    return case.model, mesh.nodes, power
+
+
+def _kind(labels) -> str:
+    """The kind of a case: its integral variants and FE levels (strip, folded, crane)."""
+    return labels["case"] if labels["case"] in ("strip", "crane") else "folded"
+
+
 def cases(quick: bool = False):
     """The cases as (labels dict, thunk -> (model, positions (n, 3) [m], crease power (C,)
     [W])); the folded shapes are simulated when their thunk is called."""
@@ -227,6 +248,9 @@ def cases(quick: bool = False):
 
     out += [({"case": "gripper", "shape": s, "structure": "Au/SU-8", "medium": "air"},
              lambda s=s: gripper(s)) for s in ("assembly", "grip")]
+    if not quick:
+        out.append(({"case": "crane", "shape": "flat", "structure": "Au/SU-8",
+                     "medium": "air"}, _crane))
     return out
 
 
@@ -276,7 +300,7 @@ def _solutions(model, x, q, kind, quick):
 
 
 def _rows(labels, model, x, power, quick) -> list:
-    kind = "strip" if labels["case"] == "strip" else "folded"
+    kind = _kind(labels)
     mesh = model.mesh
     q = ThermalModel(mesh, model.thermal).heat_vector(power)
     names = CREASE_NAMES.get(labels["case"], {})
@@ -365,14 +389,17 @@ def error_table(df: pd.DataFrame) -> pd.DataFrame:
 
 def plot(df: pd.DataFrame) -> dict:
     """{"heat_transfer_models_strip": strip errors vs W/L, "heat_transfer_models_folded":
-    crease temperatures and errors on the folded shapes} (Figures; from the CSV alone)."""
-    from studies._heat_transfer_plots import folded_figure, strip_figure
+    crease temperatures and errors on the folded shapes, "heat_transfer_models_crane": the
+    same on the flat crane} (Figures; from the CSV alone)."""
+    from studies._heat_transfer_plots import crane_figure, folded_figure, strip_figure
 
     figs = {}
     if (df["case"] == "strip").any():
         figs[f"{NAME}_strip"] = strip_figure(df)
-    if (df["case"] != "strip").any():
+    if (~df["case"].isin(["strip", "crane"])).any():
         figs[f"{NAME}_folded"] = folded_figure(df)
+    if (df["case"] == "crane").any():
+        figs[f"{NAME}_crane"] = crane_figure(df)
     return figs
 
 
