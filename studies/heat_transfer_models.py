@@ -47,6 +47,12 @@ little where the mesh error falls faster).
    26.44 mW per base crease and 5.86 mW per arm crease, from the coordinate descent's cycle
    0); on them 3 mW per heated crease: the two base creases at assembly, base and arm creases
    at grip (the base heat stays on while gripping).
+4. **Crane, flat** (``get_case("crane")`` at the end of its ramp, q = 4 mW: 2-16 mW per
+   crease, reference classes; not in ``--quick``: its FE takes about 12 min): the flat sheet
+   without substrate, the case's chains (beta = 20 deg, t_env = 1 mm, the reference's
+   t2RT = a), for which the reference chose that power. Integral variants m = 3 extrapolated,
+   plain m = 2 and plain m = 5 (m = 8, 9344 sub-triangles, is above the dense-operator
+   limit); FE levels 0 and 1. Figure ``heat_transfer_models_crane.png``.
 
 For the folded shapes the measures per crease are the 7-node actuation temperature
 ``T_crease`` (the one that drives the bimorph), ``T_max`` (Ctr), ``T_ave`` (A, B, Ctr, the
@@ -68,13 +74,18 @@ fold's fold 1) on the double fold, the gripper's assembly and grip; the plain m 
 2.5 % and the plain m = 2 +4 to +9 %; the chain model runs 20 and 38 % cooler on the double
 fold, 42 % at assembly and 42-52 % at grip (T_crease). The FE's finer level is 0-2.3 % below
 its extrapolation. The double fold's fold 2 centre line (T_ave), 250 degC in the chain model,
-is 264 degC in the FE: above 1.2 T_g = 252 degC on that shape. Re-run with ``python -m
-studies.heat_transfer_models`` (70 s on the idle machine, about 5 min on two loaded cores).
+is 264 degC in the FE: above 1.2 T_g = 252 degC on that shape. Flat crane at the case's 4 mW:
+the default integral model is within -0.08 to +0.13 % in T_crease (-0.7 to +0.2 % in T_max,
++0.06 to +0.17 % in T_ave), the plain m = 2 within 2.7 % and m = 5 within 1.1 %; the chain
+model (the case's t_env = 1 mm) is 70-90 % cool in T_crease: the reference's 4 mW raises the
+crease temperatures 3.4-10.1 times more than its chains predict, which is why
+``get_case("crane", loss_model="integral")`` runs at 0.8 mW. Re-run with ``python -m
+studies.heat_transfer_models`` (13 min on the idle machine, 12 of them for the crane's FE).
 
 Outputs (``results/heat_transfer_models/``)
 -------------------------------------------
 ``heat_transfer_models.csv``, one row per case, shape, material, W/L, crease and model:
-``case`` (strip, double fold, gripper), ``shape`` (flat, after heating, assembly, grip),
+``case`` (strip, double fold, gripper, crane), ``shape`` (flat, after heating, assembly, grip),
 ``structure``, ``medium``, ``k [W/(m K)]``, ``k_env [W/(m K)]``, ``W/L [-]`` (strip),
 ``crease [-]`` (pattern crease id), ``crease name``, ``crease power [W]`` (this crease's heat
 input), ``room temperature [degC]``, ``model`` (``chain``, ``integral``, ``FE``, ``FE
@@ -96,6 +107,7 @@ Au dashed, the 3 % band shaded, and the FE's own finer level as a grey reference
 ``heat_transfer_models_folded.png``: crease temperatures per model on the double fold, the
 gripper at assembly and at grip (bars from room temperature), and below them the error of
 each model's rise against the extrapolated FE, with the 5 % band.
+``heat_transfer_models_crane.png``: the same for the 17 creases of the flat crane.
 ``meta.json``: settings, row count, wall time.
 """
 
