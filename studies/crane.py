@@ -20,7 +20,8 @@ Heat loss: the case's chains (beta = 20 deg, t_env = 1 mm, the reference's t2RT 
 which the reference chose its 4 mW. The integral model (nothing fitted, theory 4.7) and the 3-D
 FE put the flat crane's crease temperature rises at that power 3.4-10.1 times higher
 (``studies.heat_transfer_models``, flat crane); ``get_case("crane", loss_model="integral")``
-runs the crane at 0.8 mW instead, where it ends at this study's hottest crease temperature.
+runs the crane at 0.8 mW instead, where it ends at this study's hottest crease temperature;
+the study's third run does that (all creases active).
 
 Crease ids: ``crease`` is our edge id (0-based), ``crease_ref`` = edge id + 1 is the
 reference (and paper) numbering. Fold angles are signed (0 flat, positive = valley towards
@@ -29,7 +30,8 @@ reference (and paper) numbering. Fold angles are signed (0 flat, positive = vall
 Outputs (``results/crane/``)
 ----------------------------
 ``crane.csv``: one long table, the ``table`` column tells the row kind, ``variant`` is
-``all active`` or ``8 and 17 deactivated``:
+``all active`` or ``8 and 17 deactivated`` (the case's chains, q = 4 mW) or ``all active,
+integral heat loss`` (q = 0.8 mW), ``loss_model`` its heat loss (``chain``, ``integral``):
 
 * ``crease`` - the 17 creases at the end of heating: ``crease``, ``crease_ref``, ``heated``
   (final power > 0), ``power [mW]``, ``fold_angle [deg]``, ``temperature [degC]``
@@ -43,8 +45,10 @@ Outputs (``results/crane/``)
 
 Figures: ``crane.png`` (fold angle and temperature vs base power for representative creases:
 1 (4 q), 6 (q), 9 (q, or q / 2 when deactivated), and the deactivated 8 and 17),
-``crane_creases.png`` (final fold and temperature of every crease, both variants) and
-``crane_shapes.png`` (the two final 3-D shapes side by side, coloured by temperature).
+``crane_creases.png`` (final fold and temperature of every crease, both variants),
+``crane_shapes.png`` (the two final 3-D shapes side by side, coloured by temperature) and
+``crane_heat_models.png`` (power, fold and temperature of every crease, all active, with the
+chain and the integral heat loss).
 """
 
 from __future__ import annotations
@@ -58,10 +62,13 @@ from studies._common import node_frame, run_case, shape_from_frame, study_main
 NAME = "crane"
 THERMAL_STEPS_QUICK = 30
 VARIANTS = {"all active": False, "8 and 17 deactivated": True}
-#: Figure labels of the variants: the deactivated run (like the reference Example04) also
+#: The third run: all creases active with the integral heat loss (its case power, 0.8 mW).
+INTEGRAL = "all active, integral heat loss"
+#: Figure labels of the runs: the deactivated run (like the reference Example04) also
 #: halves the power of creases 9 and 11, which the figures must say.
 LABELS = {"all active": "all 17 creases heated",
-          "8 and 17 deactivated": "8, 17 unheated; 9, 11 at half power"}
+          "8 and 17 deactivated": "8, 17 unheated; 9, 11 at half power",
+          INTEGRAL: "all 17 heated, integral heat loss"}
 REPRESENTATIVE = (1, 6, 9, 8, 17)       # reference ids
 BASE_CREASE_REF = 6                     # gets exactly q in both variants
 SWEEP_EVERY = 5                         # full run: keep every 5th record in the sweep rows
@@ -72,22 +79,28 @@ TEMP_CL = "temperature_centre [degC]"
 DEACTIVATED_REF, HALVED_REF = (8, 17), (9, 11)
 
 
-def _params(deactivated: bool, quick: bool = False) -> dict:
-    return dict(deactivated=deactivated, **({"thermal_steps": THERMAL_STEPS_QUICK} if quick
-                                            else {}))
+def _params(deactivated: bool, quick: bool = False, loss_model: str = "chain") -> dict:
+    return dict(deactivated=deactivated, loss_model=loss_model,
+                **({"thermal_steps": THERMAL_STEPS_QUICK} if quick else {}))
+
+
+#: The runs: (variant, deactivated, loss model)
+RUNS = tuple((v, d, "chain") for v, d in VARIANTS.items()) + ((INTEGRAL, False, "integral"),)
 
 
 def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
-    """Fold the crane with all creases and with two creases deactivated."""
+    """Fold the crane with all creases and with two creases deactivated (the case's chain
+    heat loss at 4 mW), and with all creases and the integral heat loss (0.8 mW)."""
     parts = []
-    for variant, deactivated in VARIANTS.items():
-        case, res = run_case(NAME, _params(deactivated, quick), progress, variant)
+    for variant, deactivated, loss_model in RUNS:
+        case, res = run_case(NAME, _params(deactivated, quick, loss_model), progress, variant)
         h, mesh = res.history, case.model.mesh
         ids = mesh.crease_ids
         C = len(ids)
         power = h["power"] * 1e3
         parts.append(pd.DataFrame({
-            "table": "crease", "variant": variant, "crease": ids, "crease_ref": ids + 1,
+            "table": "crease", "variant": variant, "loss_model": loss_model,
+            "crease": ids, "crease_ref": ids + 1,
             "heated": power[-1] > 0, POWER: power[-1],
             FOLD: np.degrees(res.fold_angle[-1]), TEMP: res.crease_temperature[-1],
             TEMP_MAX: res.crease_temperature_max[-1],
@@ -98,19 +111,20 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
             recs = np.r_[recs, m - 1]
         base = power[recs, mesh.crease_row_of(BASE_CREASE_REF - 1)]
         parts.append(pd.DataFrame({
-            "table": "sweep", "variant": variant,
+            "table": "sweep", "variant": variant, "loss_model": loss_model,
             "crease": np.tile(ids, len(recs)), "crease_ref": np.tile(ids + 1, len(recs)),
             "step": np.repeat(recs, C), "base_power [mW]": np.repeat(base, C),
             POWER: power[recs].ravel(), FOLD: np.degrees(res.fold_angle[recs]).ravel(),
             TEMP: res.crease_temperature[recs].ravel(),
             TEMP_CL: res.crease_temperature_centre_line[recs].ravel()}))
-        parts.append(node_frame(res, -1, variant=variant))
+        parts.append(node_frame(res, -1, variant=variant, loss_model=loss_model))
     return pd.concat(parts, ignore_index=True)
 
 
 def plot(df: pd.DataFrame) -> dict:
-    """Curves, per-crease bars and the two final shapes (``crane``, ``crane_creases``,
-    ``crane_shapes``)."""
+    """Curves, per-crease bars and the two final shapes of the chain runs (``crane``,
+    ``crane_creases``, ``crane_shapes``); both heat-loss models per crease
+    (``crane_heat_models``)."""
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.ticker import MaxNLocator
@@ -119,6 +133,8 @@ def plot(df: pd.DataFrame) -> dict:
         nodal_range, note_assumptions, plot_shape, share_3d_scale
 
     variants = list(VARIANTS)
+    all_creases = df[df["table"] == "crease"]
+    df = df[df["variant"].isin(variants)]            # the case's chains, the reference's 4 mW
     dashes = {variants[0]: "-", variants[1]: "--"}
     sweep = df[df["table"] == "sweep"].sort_values("step", kind="stable")
     fig = Figure(figsize=(11.5, 4.8), layout="constrained")
@@ -145,39 +161,23 @@ def plot(df: pd.DataFrame) -> dict:
                  "effect", fontsize="medium")
 
     creases = df[df["table"] == "crease"]
-    bars = Figure(figsize=(11.5, 8.2), layout="constrained")
-    ax_p, ax_b, ax_bt = bars.subplots(3, 1, sharex=True)
-    refs = np.sort(creases["crease_ref"].unique())
-    pos = np.arange(len(refs))
-    for k, variant in enumerate(variants):
-        d = creases[creases["variant"] == variant].set_index("crease_ref").loc[refs]
-        heated = d["heated"].astype(bool).to_numpy()
-        for ax, col in ((ax_p, POWER), (ax_b, FOLD), (ax_bt, TEMP_CL)):
-            b = ax.bar(pos + (k - 0.5) * 0.4, d[col], width=0.4, color=f"C{k}",
-                       label=LABELS[variant])
-            for patch, h in zip(b, heated):
-                if not h:
-                    patch.set_hatch("//")
-                    patch.set_edgecolor("k")
-    ax_p.set_ylabel("final crease power [mW]")
-    ax_p.set_title(f"(a) heating at q = {creases[POWER].max() / 4:.0f} mW: crease powers "
-                   "(9 and 11 halved in the second run)")
-    ax_p.legend(fontsize="small", title="hatched: unheated crease", title_fontsize="small",
-                loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    ax_b.set_ylabel("final fold angle [deg]")
-    ax_b.set_title("(b) fold angles")
-    ax_b.axhline(0, color="k", lw=0.8)
-    ax_bt.set_ylabel("final crease temperature,\ncentre line [°C]")
-    ax_bt.set_xlabel("crease (reference numbering)")
-    ax_bt.set_title("(c) crease temperatures")
-    ax_bt.set_xticks(pos, [str(int(r)) for r in refs])
-    for ax in (ax_p, ax_b, ax_bt):
-        ax.grid(True, axis="y", alpha=0.3)
-    mark_temperature_limit(ax_bt)
-
+    bars = _bars(creases, variants, "(9 and 11 halved in the second run)")
     note = environment_note("air", 0.026, 0, 0, extra=["no substrate"])
     for f in (fig, bars):
         note_assumptions(f, note)
+    figs = {NAME: fig, f"{NAME}_creases": bars}
+    if (all_creases["variant"] == INTEGRAL).any():
+        models = _bars(all_creases, ["all active", INTEGRAL], "",
+                       {"all active": "chain heat loss (the case's)",
+                        INTEGRAL: "integral heat loss"})
+        models.suptitle("Crane, all creases heated, with both heat-loss models: each ramped to "
+                        "its case power, where its hottest crease ends at the same actuation "
+                        "temperature", fontsize="medium")
+        note_assumptions(models, environment_note("air", 0.026, 0, 0, extra=[
+            "no substrate", "chain: beta = 20 deg, t_env = 1 mm (the reference's); integral: "
+            "nothing fitted (theory 4.7), within 0.2 % of the 3-D FE in crease temperature on "
+            "the flat crane (heat_transfer_models)"]))
+        figs[f"{NAME}_heat_models"] = models
 
     nodes = df[df["table"] == "nodes"]
     q = sweep["base_power [mW]"].max()
@@ -206,7 +206,47 @@ def plot(df: pd.DataFrame) -> dict:
     shapes.suptitle(f"Crane, final shapes ({scale}; labels: reference crease numbers of the "
                     "deactivated and halved creases)", fontsize="medium")
     note_assumptions(shapes, note)
-    return {NAME: fig, f"{NAME}_creases": bars, f"{NAME}_shapes": shapes}
+    return {**figs, f"{NAME}_shapes": shapes}
+
+
+def _bars(creases, variants, halved, labels=None):
+    """Final crease power, fold angle and centre-line temperature per crease (bars per
+    variant, labelled by ``labels`` or :data:`LABELS`; hatched: unheated)."""
+    from matplotlib.figure import Figure
+
+    from studies.plotting import mark_temperature_limit
+
+    bars = Figure(figsize=(11.5, 8.2), layout="constrained")
+    ax_p, ax_b, ax_bt = bars.subplots(3, 1, sharex=True)
+    refs = np.sort(creases["crease_ref"].unique())
+    pos = np.arange(len(refs))
+    for k, variant in enumerate(variants):
+        d = creases[creases["variant"] == variant].set_index("crease_ref").loc[refs]
+        heated = d["heated"].astype(bool).to_numpy()
+        for ax, col in ((ax_p, POWER), (ax_b, FOLD), (ax_bt, TEMP_CL)):
+            b = ax.bar(pos + (k - 0.5) * 0.4, d[col], width=0.4, color=f"C{k}",
+                       label=(labels or LABELS)[variant])
+            for patch, h in zip(b, heated):
+                if not h:
+                    patch.set_hatch("//")
+                    patch.set_edgecolor("k")
+    q = " and ".join(dict.fromkeys(f"{creases.loc[creases['variant'] == v, POWER].max() / 4:.3g}"
+                                   for v in variants))
+    ax_p.set_ylabel("final crease power [mW]")
+    ax_p.set_title(f"(a) heating at q = {q} mW: crease powers {halved}".rstrip())
+    ax_p.legend(fontsize="small", title="hatched: unheated crease", title_fontsize="small",
+                loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax_b.set_ylabel("final fold angle [deg]")
+    ax_b.set_title("(b) fold angles")
+    ax_b.axhline(0, color="k", lw=0.8)
+    ax_bt.set_ylabel("final crease temperature,\ncentre line [°C]")
+    ax_bt.set_xlabel("crease (reference numbering)")
+    ax_bt.set_title("(c) crease temperatures")
+    ax_bt.set_xticks(pos, [str(int(r)) for r in refs])
+    for ax in (ax_p, ax_b, ax_bt):
+        ax.grid(True, axis="y", alpha=0.3)
+    mark_temperature_limit(ax_bt)
+    return bars
 
 
 def main(argv=None):
