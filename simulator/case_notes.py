@@ -19,7 +19,7 @@ POWER_MEANING = {
     "double_fold": "per crease, both creases alike",
     "miura_lifter": "per crease, every crease alike",
     "crane": "the base power q; the creases get q/2 ... 4 q (reference classes); default "
-             "4 mW with the chain heat loss, 0.8 mW with the integral one",
+             "4 mW with the chain heat loss, 0.7 mW with the integral one",
     "snap_through": "per crease, every crease alike (variant 'heated' only)"}
 
 

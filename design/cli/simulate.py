@@ -138,8 +138,8 @@ def _cases(args) -> int:
             unit = cli_unit(si_unit).name
             unit = f" [{unit}]" if unit else ""
             note = parameter_note(name, pname)
-            print(f"    {pname} = {to_cli(default, si_unit)!r}{unit}"
-                  + (f"  ({note})" if note else ""))
+            shown = "(chosen by the case)" if default is None else repr(to_cli(default, si_unit))
+            print(f"    {pname} = {shown}{unit}" + (f"  ({note})" if note else ""))
     return 0
 
 

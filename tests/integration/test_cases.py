@@ -139,13 +139,15 @@ def test_crane_folds_with_two_creases_deactivated():
     np.testing.assert_array_equal(np.sign(fold), np.sign(np.degrees(full.fold_angle[-1])))
 
 
-def test_crane_with_the_integral_heat_loss_folds_without_passing_through_itself(caplog):
-    """The crane case's power follows its heat-loss model (4 mW chain, 0.8 mW integral): the
-    integral model's crane ends at the chain crane's hottest crease temperature, folded the
-    same way, and never passes through itself (no warning of the integral model)."""
+def test_crane_with_the_integral_heat_loss_folds_as_far_at_its_own_power(caplog):
+    """The crane case's power follows its heat-loss model (4 mW chain, 0.7 mW integral): the
+    integral model's crane folds as far as the chain crane (mean |fold| 98.8 against 100.2
+    deg at 500 increments), every crease the same way, without a warning (it does not pass
+    through itself); crease by crease the folds differ (rms 18.6 deg) and its hottest crease
+    is cooler (115.6 against 146.2 deg C): the heat is shared between creases."""
     chain = get_case("crane", thermal_steps=100)
     case = get_case("crane", thermal_steps=100, loss_model="integral")
-    assert chain.parameters["power_mW"] == 4.0 and case.parameters["power_mW"] == 0.8
+    assert chain.parameters["power_mW"] == 4.0 and case.parameters["power_mW"] == 0.7
     assert case.model.thermal.loss_model == "integral"
     assert chain.model.thermal.loss_model == "chain"
     with caplog.at_level("WARNING"):
@@ -153,11 +155,12 @@ def test_crane_with_the_integral_heat_loss_folds_without_passing_through_itself(
     assert res.success, res.message
     assert not [r for r in caplog.records if r.levelname == "WARNING"]
     ref = chain.run()
-    hottest, hottest_chain = res.crease_temperature[-1].max(), ref.crease_temperature[-1].max()
-    assert hottest == pytest.approx(hottest_chain, abs=3.0)           # 146 deg C
     fold, fold_chain = np.degrees(res.fold_angle[-1]), np.degrees(ref.fold_angle[-1])
+    assert np.abs(fold).mean() == pytest.approx(np.abs(fold_chain).mean(), rel=0.05)
     np.testing.assert_array_equal(np.sign(fold), np.sign(fold_chain))
-    assert np.all(np.abs(fold) < 175)              # not through itself (flat at 180 deg)
+    assert 10 < np.sqrt(np.mean((fold - fold_chain) ** 2)) < 25
+    hottest, hottest_chain = res.crease_temperature[-1].max(), ref.crease_temperature[-1].max()
+    assert 20 < hottest_chain - hottest < 40                  # 146.2 against 114.9 deg C here
     assert get_case("crane", loss_model="integral", power_mW=2.0).parameters["power_mW"] == 2.0
     with pytest.raises(ParameterError, match="loss_model = 'fem'"):
         get_case("crane", loss_model="fem")

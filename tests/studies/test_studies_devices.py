@@ -200,13 +200,14 @@ def test_crane_folds_with_and_without_two_creases(quick):
     assert (deact.loc[[8, 17], "temperature [degC]"] < full.loc[[8, 17], "temperature [degC]"]
             - 20).all()
     assert deact["fold_angle [deg]"].abs().mean() < full["fold_angle [deg]"].abs().mean()
-    # the integral heat loss at its case power (0.8 mW): every crease folds the same way,
-    # further (its heat spreads to the less heated creases), none through itself
+    # the integral heat loss at its case power (0.7 mW): every crease folds the same way,
+    # about as far on average, its hottest crease cooler (the heat is shared)
     integral = creases[creases["variant"] == "all active, integral heat loss"]
     integral = integral.set_index("crease_ref")
     assert (integral["loss_model"] == "integral").all() and (full["loss_model"] == "chain").all()
-    np.testing.assert_allclose(integral["power [mW]"], full["power [mW]"] * 0.2)
+    np.testing.assert_allclose(integral["power [mW]"], full["power [mW]"] * 0.7 / 4.0)
     np.testing.assert_array_equal(np.sign(integral["fold_angle [deg]"]),
                                   np.sign(full["fold_angle [deg]"]))
-    assert integral["fold_angle [deg]"].abs().mean() > full["fold_angle [deg]"].abs().mean()
-    assert (integral["fold_angle [deg]"].abs() < 175).all()
+    assert integral["fold_angle [deg]"].abs().mean() == pytest.approx(
+        full["fold_angle [deg]"].abs().mean(), rel=0.1)
+    assert integral["temperature [degC]"].max() < full["temperature [degC]"].max() - 10

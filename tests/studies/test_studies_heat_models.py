@@ -153,7 +153,9 @@ def test_substrate_plane_is_the_boundary_panels_plane_facing_the_structure():
 def test_committed_full_run_holds_the_acceptance_and_draws_the_crane():
     """The published table (results/heat_transfer_models, full run): the default integral
     model within 3 % (strip) and 5 % (folded shapes, the flat crane) of the extrapolated FE;
-    the crane's chains (t_env = 1 mm) 60-91 % too cool; its figure drawn from the CSV."""
+    the crane's chains (t_env = 1 mm) 70-90 % too cool in T_crease; its figure drawn from the
+    CSV. (A check of the published table; the study's computation is tested on its quick run
+    above.)"""
     import pathlib
 
     path = pathlib.Path(__file__).parents[2] / "results" / htm.NAME / f"{htm.NAME}.csv"
@@ -163,9 +165,10 @@ def test_committed_full_run_holds_the_acceptance_and_draws_the_crane():
                     & (table["integral_extrapolation [-]"].astype(str) == "True")]
     assert set(default["case"]) == {"strip", "double fold", "gripper", "crane"}
     assert default["within acceptance"].all(), default[~default["within acceptance"]]
-    crane = table[(table["case"] == "crane") & (table["model"] == "chain")]
-    assert crane["error extrapolated max [%]"].max() < -60
-    assert crane["error extrapolated min [%]"].min() > -91
+    crane = table[(table["case"] == "crane") & (table["model"] == "chain")
+                  & (table["measure"] == "T_crease")].iloc[0]
+    assert -91 < crane["error extrapolated min [%]"] < -90         # documented: 70-90 % cool
+    assert -71 < crane["error extrapolated max [%]"] < -70
     figs = htm.plot(df)
     assert set(figs) == {f"{htm.NAME}_strip", f"{htm.NAME}_folded", f"{htm.NAME}_crane"}
     assert len(figs[f"{htm.NAME}_crane"].axes) == 2
