@@ -72,7 +72,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
-    ".thermal.fixed_shape": ("FixedShapeTemperatures", "fixed_shape_temperatures"),
+    ".thermal.fixed_shape": ("FixedShapeTemperatures", "fixed_shape_temperatures",
+                             "boundary_panel_plane"),
     ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
                         "capacity_vector", "integrate_heat", "theta_step"),
     ".io.viewer": ("load_viewer_data", "viewer_html", "write_viewer"),
@@ -109,7 +110,7 @@ __all__ = [
     # heat loss: calibrating the chain model to the boundary-integral model or the FE
     "calibrate_environment", "CalibrationResult",
     # steady temperatures of a fixed shape under the chain, integral or FE loss model
-    "fixed_shape_temperatures", "FixedShapeTemperatures",
+    "fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane",
     # the FE reference of steady heat transfer (optional extra [fe])
     "fe_disk", "fe_sphere", "solve_fe3d", "solve_fe2d", "FEDiskResult", "FE3DResult",
     "FE2DResult",

@@ -22,6 +22,7 @@ from .._result import ResultFiles
 from .._validate import array, in_range, positive
 from ..errors import ParameterError
 from ..model.model import Model
+from .fixed_shape import boundary_panel_plane
 from .steady import ThermalModel
 
 __all__ = ["calibrate_environment", "CalibrationResult"]
@@ -78,13 +79,17 @@ class CalibrationResult(ResultFiles):
                 "initial_rms_error [-]": self.initial_rms_error}
 
 
-def _reference_solver(model: Model, reference):
-    """``(x, q) -> temperatures (n,) [deg C]`` of the reference."""
+def _reference_solver(model: Model, reference, x):
+    """``(x, q) -> temperatures (n,) [deg C]`` of the reference. The integral model takes the
+    model's ``substrate_plane``, else the plane of its thermal boundary panels at positions
+    ``x`` (as the 3-D FE does)."""
     if callable(reference):
         return reference, "callable"
     if reference == "integral":
-        tm = ThermalModel(model.mesh, dataclasses.replace(model.thermal, loss_model="integral"))
-        return tm.solve, "integral"
+        prm = dataclasses.replace(model.thermal, loss_model="integral")
+        if not prm.substrate_plane:
+            prm = dataclasses.replace(prm, substrate_plane=boundary_panel_plane(model, x))
+        return ThermalModel(model.mesh, prm).solve, "integral"
     if reference == "fe":
         try:
             import gmsh  # noqa: F401
@@ -122,8 +127,10 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
         Node positions [m] (default: the mesh's nodes); calibrate on the shape that matters
         (e.g. the gripper at assembly).
     reference : {"integral", "fe"} or callable
-        The boundary-integral model (:mod:`simulator.thermal.integral`), the 3-D FE
-        (:mod:`simulator.thermal.fe`, when installed), or ``f(x, q) -> temperatures`` (n,).
+        The boundary-integral model (:mod:`simulator.thermal.integral`; over the model's
+        ``substrate_plane``, else over the plane of its thermal boundary panels at ``x``, as
+        the 3-D FE), the 3-D FE (:mod:`simulator.thermal.fe`, when installed), or ``f(x, q)
+        -> temperatures`` (n,).
     beta_bounds : (float, float)
         Range of beta [rad] searched, within [0, pi/2).
     t_env_bounds : (float, float), optional
@@ -151,7 +158,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     if not (lo_b < hi_b and lo_t < hi_t):
         raise ParameterError(f"beta_bounds = {beta_bounds!r}, t_env_bounds = {t_env_bounds!r}: "
                              "each must be (low, high) with low < high.")
-    solve, name = _reference_solver(model, reference)
+    solve, name = _reference_solver(model, reference, x)
     chain = ThermalModel(mesh, prm)
     q = chain.heat_vector(power)
     if not q.sum() > 0:

@@ -88,14 +88,18 @@ class FixedShapeTemperatures(CreaseTemperatureTable, ResultFiles):
                 "thermal": self.thermal.to_dict(), "wall_time [s]": self.wall_time}
 
 
-def boundary_panel_plane(model, x) -> tuple:
-    """The plane of the model's thermal boundary panels at positions ``x`` (n, 3) [m], as
-    ``ThermalParameters.substrate_plane`` (a point and the unit normal towards the rest of the
-    sheet, 6 floats), or () without boundary panels (the FE's ``substrate="model"``)."""
+def boundary_panel_plane(model, x=None) -> tuple:
+    """The plane of the model's thermal boundary panels at positions ``x`` (n, 3) [m] (default:
+    the mesh's), as ``ThermalParameters.substrate_plane`` (a point and the unit normal towards
+    the rest of the sheet, 6 floats), or () without boundary panels (the FE's
+    ``substrate="model"``): the substrate plane to give the integral heat loss of a model
+    with boundary panels, ``dataclasses.replace(model.thermal, loss_model="integral",
+    substrate_plane=boundary_panel_plane(model))``."""
     panels = tuple(model.thermal.boundary_panels) if model.thermal is not None else ()
     if not panels:
         return ()
     mesh = model.mesh
+    x = mesh.nodes if x is None else np.asarray(x, float)
     p = x[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
     origin = p.mean(axis=0)
     normal = np.linalg.svd(p - origin)[2][-1]

@@ -103,7 +103,10 @@ class ThermalParameters:
         m = 1 without extrapolation.
     substrate_plane : tuple of 6 floats, or ()
         "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
-        (3,) pointing into the medium, in the global frame; () for an unbounded medium.
+        (3,) pointing into the medium, in the global frame; () for an unbounded medium. A
+        model with ``boundary_panels`` (the substrate) wants their plane,
+        :func:`~simulator.thermal.fixed_shape.boundary_panel_plane`; without one the steady
+        model warns (once).
     integral_shape_tol : float
         "integral" model only: the dense operator is rebuilt when the distance between two
         sheet nodes has changed since the last build by more than this fraction of the larger

@@ -92,3 +92,35 @@ def test_chains_cannot_represent_the_flat_crane():
     assert 0.2 < fit.rms_error < 0.3 and fit.max_error > 0.8
     assert math.degrees(fit.dissipation_angle) == pytest.approx(5.3, abs=0.2)
     assert fit.env_thickness == pytest.approx(23.8e-3, rel=0.02)
+
+
+def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypatch):
+    """A model with a substrate (boundary) panel: the integral reference takes that panel's
+    plane, as the FE does (without it the medium would be unbounded below the sheet and the
+    steady model warns); calibrated on it, the chains fit the same as against a reference
+    given that plane explicitly."""
+    from simulator import boundary_panel_plane
+    from simulator.cases import get_case
+
+    model = get_case("double_fold", thermal_steps=2).model
+    plane = boundary_panel_plane(model)
+    assert len(plane) == 6 and plane[5] > 0.99               # the substrate, normal up
+    power = np.full(model.mesh.n_creases, 10e-3)
+    with caplog.at_level("WARNING"):
+        fit = calibrate_environment(model, power)
+    assert not [r for r in caplog.records if "substrate_plane" in r.getMessage()]
+    explicit = ThermalModel(model.mesh, dataclasses.replace(
+        model.thermal, loss_model="integral", substrate_plane=plane))
+    same = calibrate_environment(model, power, reference=explicit.solve)
+    assert fit.rms_error == pytest.approx(same.rms_error, rel=1e-9)
+    assert fit.env_thickness == pytest.approx(same.env_thickness, rel=1e-9)
+    from simulator.thermal import steady
+
+    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", set())     # said once per process
+    with caplog.at_level("WARNING"):
+        unbounded = ThermalModel(model.mesh, dataclasses.replace(model.thermal,
+                                                                 loss_model="integral"))
+        hot = unbounded.solve(model.mesh.nodes, explicit.heat_vector(power))
+    assert any("no substrate_plane" in r.getMessage() for r in caplog.records)
+    cool = explicit.solve(model.mesh.nodes, explicit.heat_vector(power))
+    assert hot.max() > cool.max() + 1.0                     # the substrate cools the sheet
