@@ -22,7 +22,7 @@ from .._result import ResultFiles
 from .._validate import array, in_range, positive
 from ..errors import ParameterError
 from ..model.model import Model
-from .fixed_shape import boundary_panel_plane
+from .fixed_shape import resolve_substrate
 from .steady import ThermalModel
 
 __all__ = ["calibrate_environment", "CalibrationResult"]
@@ -79,17 +79,16 @@ class CalibrationResult(ResultFiles):
                 "initial_rms_error [-]": self.initial_rms_error}
 
 
-def _reference_solver(model: Model, reference, x):
-    """``(x, q) -> temperatures (n,) [deg C]`` of the reference. The integral model takes the
-    model's ``substrate_plane``, else the plane of its thermal boundary panels at positions
-    ``x`` (as the 3-D FE does)."""
+def _reference_solver(model: Model, reference, x, substrate):
+    """``(x, q) -> temperatures (n,) [deg C]`` of the reference; the integral model and the FE
+    over the plane ``substrate`` at positions ``x`` (:func:`calibrate_environment`)."""
     if callable(reference):
         return reference, "callable"
     if reference == "integral":
-        prm = dataclasses.replace(model.thermal, loss_model="integral")
-        if not prm.substrate_plane:
-            prm = dataclasses.replace(prm, substrate_plane=boundary_panel_plane(model, x))
-        return ThermalModel(model.mesh, prm).solve, "integral"
+        prm = dataclasses.replace(model.thermal, loss_model="integral",
+                                  substrate_plane=resolve_substrate(model, x, substrate))
+        return (ThermalModel(model.mesh, prm, warn_no_plane=substrate is not None).solve,
+                "integral")
     if reference == "fe":
         try:
             import gmsh  # noqa: F401
@@ -102,8 +101,11 @@ def _reference_solver(model: Model, reference, x):
                 "pip install 'etorigami[fe]', or use reference='integral' or a callable "
                 "(x, q) -> temperatures.") from None
 
+        plane = resolve_substrate(model, x, substrate)
+
         def solve(x, q):
-            res = solve_fe3d(model, heat=q, positions=x)
+            res = solve_fe3d(model, heat=q, positions=x,
+                             substrate=(plane[:3], plane[3:]) if plane else None)
             if not res.success:
                 raise ParameterError(f"calibrate_environment: the 3-D FE failed: {res.message}")
             return res.temperature
@@ -113,8 +115,8 @@ def _reference_solver(model: Model, reference, x):
 
 
 def calibrate_environment(model: Model, power, x=None, reference="integral",
-                          beta_bounds=(0.0, math.radians(80)), t_env_bounds=None
-                          ) -> CalibrationResult:
+                          beta_bounds=(0.0, math.radians(80)), t_env_bounds=None,
+                          substrate="model") -> CalibrationResult:
     """Fit the chain model's beta and t_env to a reference's steady crease temperatures.
 
     Parameters
@@ -127,14 +129,18 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
         Node positions [m] (default: the mesh's nodes); calibrate on the shape that matters
         (e.g. the gripper at assembly).
     reference : {"integral", "fe"} or callable
-        The boundary-integral model (:mod:`simulator.thermal.integral`; over the model's
-        ``substrate_plane``, else over the plane of its thermal boundary panels at ``x``, as
-        the 3-D FE), the 3-D FE (:mod:`simulator.thermal.fe`, when installed), or ``f(x, q)
+        The boundary-integral model (:mod:`simulator.thermal.integral`), the 3-D FE
+        (:mod:`simulator.thermal.fe`, when installed), both over ``substrate``, or ``f(x, q)
         -> temperatures`` (n,).
     beta_bounds : (float, float)
         Range of beta [rad] searched, within [0, pi/2).
     t_env_bounds : (float, float), optional
         Range of t_env [m] (default: 0.01 to 100 times the model's t_env).
+    substrate : "model", None or (point, normal)
+        Isothermal substrate plane of the reference (integral model or FE): the model's
+        ``substrate_plane``, else the plane of its thermal boundary panels at ``x``
+        (``"model"``; none without either), none, or a given plane [m], as in
+        :func:`~simulator.thermal.fixed_shape.fixed_shape_temperatures`.
 
     Returns
     -------
@@ -158,7 +164,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     if not (lo_b < hi_b and lo_t < hi_t):
         raise ParameterError(f"beta_bounds = {beta_bounds!r}, t_env_bounds = {t_env_bounds!r}: "
                              "each must be (low, high) with low < high.")
-    solve, name = _reference_solver(model, reference, x)
+    solve, name = _reference_solver(model, reference, x, substrate)
     chain = ThermalModel(mesh, prm)
     q = chain.heat_vector(power)
     if not q.sum() > 0:

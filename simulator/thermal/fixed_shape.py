@@ -104,19 +104,24 @@ def boundary_panel_plane(model, x=None) -> tuple:
     origin = p.mean(axis=0)
     normal = np.linalg.svd(p - origin)[2][-1]
     if np.abs((p - origin) @ normal).max() > _COPLANAR * np.ptp(p, axis=0).max():
-        raise ParameterError("substrate='model': the thermal boundary panels are not coplanar; "
-                             "pass substrate=(point, normal) or None.")
+        raise ParameterError(f"the thermal boundary panels {panels} are not coplanar: there is "
+                             "no substrate plane to take from them; give the plane explicitly "
+                             "(ThermalParameters.substrate_plane, or substrate=(point, normal) "
+                             "or None where the function has that argument).")
     if np.mean((x - origin) @ normal) < 0:
         normal = -normal
     return tuple(float(v) for v in np.concatenate([origin, normal]))
 
 
-def _plane(model, x, substrate):
+def resolve_substrate(model, x, substrate):
+    """``substrate`` ("model", None or (point, normal)) as a ``substrate_plane`` (6 floats or
+    ()): "model" is the model's own ``substrate_plane``, else its boundary panels' plane."""
     if substrate is None:
         return ()
     if isinstance(substrate, str):
         one_of("substrate", substrate, ("model",), hint=" (or None, or (point, normal))")
-        return boundary_panel_plane(model, x)
+        own = model.thermal.substrate_plane if model.thermal is not None else ()
+        return tuple(own) if own else boundary_panel_plane(model, x)
     try:
         point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
     except (TypeError, ValueError):
@@ -164,9 +169,10 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
         Shape ``mesh.nodes + state.u`` and default power; ``positions`` (n, 3) [m] overrides
         the shape. Default: the mesh's nodes.
     substrate : "model", None or (point, normal)
-        Isothermal substrate plane of the integral model and the FE: that of the thermal
-        boundary panels (``"model"``, none without), none, or a given plane [m]. The chain
-        model ignores it (its substrate is the boundary panels' distance cap).
+        Isothermal substrate plane of the integral model and the FE: the model's
+        ``substrate_plane``, else that of its thermal boundary panels (``"model"``; none
+        without either), none, or a given plane [m]. The chain model ignores it (its
+        substrate is the boundary panels' distance cap).
     refinement : int, optional
         ``integral_refinement`` of the integral model (default: the model's).
     extrapolation : bool, optional
@@ -191,17 +197,20 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
         from .fe import solve_fe3d
 
         integer("fe_level", fe_level, 0, 3)
-        return solve_fe3d(model, heat=q, positions=x, substrate=substrate, level=fe_level,
+        plane = resolve_substrate(model, x, substrate)
+        return solve_fe3d(model, heat=q, positions=x,
+                          substrate=(plane[:3], plane[3:]) if plane else None, level=fe_level,
                           room_temperature=room_temperature, accuracy=1.0)
     t0 = time.perf_counter()
     prm = dataclasses.replace(model.thermal, loss_model=loss_model)
     if loss_model == "integral":
         prm = dataclasses.replace(
-            prm, substrate_plane=_plane(model, x, substrate),
+            prm, substrate_plane=resolve_substrate(model, x, substrate),
             integral_refinement=prm.integral_refinement if refinement is None else refinement,
             integral_extrapolation=(prm.integral_extrapolation if extrapolation is None
                                     else extrapolation))
-    tm = chain if loss_model == "chain" else ThermalModel(model.mesh, prm)
+    tm = chain if loss_model == "chain" else ThermalModel(model.mesh, prm,
+                                                          warn_no_plane=substrate is not None)
     rt = prm.room_temperature if room_temperature is None else float(room_temperature)
     T = tm.solve(x, q, rt)
     return _result(model, T, q, tm, rt, time.perf_counter() - t0)

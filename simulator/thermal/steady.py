@@ -50,22 +50,22 @@ _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
 _MIN_AIR_FRACTION = 1e-9
 
 
-#: ThermalParameters already warned about (:func:`_warn_no_plane`): once per process each.
-_NO_PLANE_WARNED = set()
+#: Whether :func:`_warn_no_plane` has spoken in this process (it speaks once).
+_NO_PLANE_WARNED = [False]
 
 
 def _warn_no_plane(params) -> None:
-    """Warn (once per process for the same parameters) that the integral model has boundary
-    panels but no substrate plane: its medium is unbounded under the sheet."""
-    if params in _NO_PLANE_WARNED:
+    """Warn, once per process, that the integral model has boundary panels but no substrate
+    plane: its medium is unbounded under the sheet."""
+    if _NO_PLANE_WARNED[0]:
         return
-    _NO_PLANE_WARNED.add(params)
+    _NO_PLANE_WARNED[0] = True
     logger.warning(
         "loss_model='integral' with boundary_panels %s but no substrate_plane: the medium is "
         "taken as unbounded below the sheet, without the substrate's isothermal plane (the "
         "loss near the substrate is underestimated: the gripper's assembly power comes out "
-        "43 %% low at m = 2); give substrate_plane=boundary_panel_plane(model, x), the "
-        "boundary panels' plane, as the 3-D FE takes it (said once).",
+        "43 %% low at m = 2); give substrate_plane=boundary_panel_plane(model), the boundary "
+        "panels' plane, as the 3-D FE takes it (said once per process).",
         tuple(params.boundary_panels))
 
 
@@ -81,9 +81,14 @@ class ThermalModel:
     ----------
     mesh : BarHingeMesh
     params : ThermalParameters
+    warn_no_plane : bool
+        With ``loss_model="integral"``, boundary panels and no ``substrate_plane``, warn (once
+        per process) at the first steady solve that the medium is unbounded below the sheet;
+        False where the caller chose no plane.
     """
 
-    def __init__(self, mesh: BarHingeMesh, params: ThermalParameters):
+    def __init__(self, mesh: BarHingeMesh, params: ThermalParameters,
+                 warn_no_plane: bool = True):
         if not isinstance(params, ThermalParameters):
             raise ParameterError(f"params must be ThermalParameters, got {type(params).__name__}.")
         self.mesh, self.params = mesh, params
@@ -119,8 +124,10 @@ class ThermalModel:
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
             self.integral = integral_operator(tri[~self.is_boundary], n, params)
-            if params.boundary_panels and not params.substrate_plane:
-                _warn_no_plane(params)
+        #: warn at the first steady solve with the integral loss that boundary panels have no
+        #: substrate plane (``warn_no_plane=False``: the caller chose no plane)
+        self._warn_plane = (warn_no_plane and self.integral is not None
+                            and bool(params.boundary_panels) and not params.substrate_plane)
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
@@ -395,6 +402,9 @@ class ThermalModel:
 
     def _integral_loss(self, x):
         """The integral model's loss conductance [W/K] on the free nodes, (n_free, n_free)."""
+        if self._warn_plane:
+            self._warn_plane = False
+            _warn_no_plane(self.params)
         idx = np.full(self.mesh.n_nodes, -1)
         idx[self.free_nodes] = np.arange(len(self.free_nodes))
         sheet = idx[self.integral.nodes]

@@ -96,31 +96,68 @@ def test_chains_cannot_represent_the_flat_crane():
 
 def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypatch):
     """A model with a substrate (boundary) panel: the integral reference takes that panel's
-    plane, as the FE does (without it the medium would be unbounded below the sheet and the
-    steady model warns); calibrated on it, the chains fit the same as against a reference
-    given that plane explicitly."""
+    plane by default, as the FE does (without it the medium would be unbounded below the
+    sheet); calibrated on it, the chains fit as against a reference given that plane; at
+    positions other than the mesh's the plane is taken there."""
     from simulator import boundary_panel_plane
     from simulator.cases import get_case
+    from simulator.thermal import steady
 
+    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])    # said once per process
     model = get_case("double_fold", thermal_steps=2).model
     plane = boundary_panel_plane(model)
     assert len(plane) == 6 and plane[5] > 0.99               # the substrate, normal up
     power = np.full(model.mesh.n_creases, 10e-3)
     with caplog.at_level("WARNING"):
         fit = calibrate_environment(model, power)
+        unbounded = calibrate_environment(model, power, substrate=None)   # asked for: silent
     assert not [r for r in caplog.records if "substrate_plane" in r.getMessage()]
     explicit = ThermalModel(model.mesh, dataclasses.replace(
         model.thermal, loss_model="integral", substrate_plane=plane))
     same = calibrate_environment(model, power, reference=explicit.solve)
     assert fit.rms_error == pytest.approx(same.rms_error, rel=1e-9)
     assert fit.env_thickness == pytest.approx(same.env_thickness, rel=1e-9)
+    # the chains know the substrate (their cap): far from a reference without it
+    assert unbounded.initial_rms_error > fit.initial_rms_error + 0.2
+    moved = model.mesh.nodes + [0.0, 0.0, 1e-3]            # the whole model 1 mm up
+    lifted = calibrate_environment(model, power, x=moved)
+    assert lifted.env_thickness == pytest.approx(fit.env_thickness, rel=1e-6)
+
+
+def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(caplog,
+                                                                             monkeypatch):
+    """The steady model warns once per process, at its first solve with the integral loss;
+    not for the FE's or a transient run's use of the same parameters, nor where the caller
+    chose no plane."""
+    from simulator import fixed_shape_temperatures
+    from simulator.cases import get_case
     from simulator.thermal import steady
 
-    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", set())     # said once per process
+    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])
+    model = get_case("double_fold", thermal_steps=2).model
+    prm = dataclasses.replace(model.thermal, loss_model="integral")
+    integral = dataclasses.replace(model, thermal=prm)
+    q = ThermalModel(model.mesh, model.thermal).heat_vector(np.full(model.mesh.n_creases, 1e-3))
     with caplog.at_level("WARNING"):
-        unbounded = ThermalModel(model.mesh, dataclasses.replace(model.thermal,
-                                                                 loss_model="integral"))
-        hot = unbounded.solve(model.mesh.nodes, explicit.heat_vector(power))
-    assert any("no substrate_plane" in r.getMessage() for r in caplog.records)
-    cool = explicit.solve(model.mesh.nodes, explicit.heat_vector(power))
-    assert hot.max() > cool.max() + 1.0                     # the substrate cools the sheet
+        fixed_shape_temperatures(integral, "integral", heat=q, substrate=None)
+        tm = ThermalModel(model.mesh, prm)                   # built: not yet
+        tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
+        assert not [r for r in caplog.records if "substrate_plane" in r.getMessage()]
+        tm.solve(model.mesh.nodes, q)
+        ThermalModel(model.mesh, dataclasses.replace(prm, env_conductivity=0.03)).solve(
+            model.mesh.nodes, q)
+    said = [r for r in caplog.records if "no substrate_plane" in r.getMessage()]
+    assert len(said) == 1 and "boundary_panel_plane(model)" in said[0].getMessage()
+
+
+def test_non_coplanar_boundary_panels_name_the_way_out():
+    from simulator.cases import get_case
+
+    model = get_case("double_fold", thermal_steps=2).model
+    bent = dataclasses.replace(model, thermal=dataclasses.replace(model.thermal,
+                                                                  boundary_panels=(0, 3)))
+    power = np.full(model.mesh.n_creases, 10e-3)
+    with pytest.raises(ParameterError, match="not coplanar.*substrate_plane"):
+        calibrate_environment(bent, power)
+    fit = calibrate_environment(bent, power, substrate=None)
+    assert fit.success and np.isfinite(fit.rms_error)

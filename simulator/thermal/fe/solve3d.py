@@ -259,7 +259,8 @@ def _model_inputs(model, positions, state, crease_power, heat):
         positions = mesh.nodes if state is None else mesh.nodes + np.asarray(state.u, float)
     x = array("positions", positions, (n, 3), "m")
     params = model.thermal or ThermalParameters(env_thickness=1.0)
-    tm = ThermalModel(mesh, params)
+    # the nodal heat and the sheet's conductances only: no loss model (the FE is the loss)
+    tm = ThermalModel(mesh, dataclasses.replace(params, loss_model="chain"))
     if heat is not None:
         if crease_power is not None:
             raise ParameterError("give crease_power or heat, not both.")
