@@ -232,10 +232,7 @@ def _crane():
 
     case = get_case("crane", power_mW=CRANE_BASE_POWER_MW)
     mesh = case.model.mesh
-    power = np.zeros(mesh.n_creases)
-    for crease, p in case.steps[-1].power.items():
-        power[mesh.crease_row_of(crease)] = p
-    return case.model, mesh.nodes, power
+    return case.model, mesh.nodes, case.steps[-1].power_array(mesh)
 
 
 def _kind(labels) -> str:

@@ -82,11 +82,7 @@ def test_chains_cannot_represent_the_flat_crane():
     from simulator.cases import get_case
 
     case = get_case("crane")
-    mesh = case.model.mesh
-    power = np.zeros(mesh.n_creases)
-    for crease, p in case.steps[0].power.items():
-        power[mesh.crease_row_of(crease)] = p
-    fit = calibrate_environment(case.model, power)
+    fit = calibrate_environment(case.model, case.steps[0].power_array(case.model.mesh))
     assert fit.success, fit.message
     assert fit.initial_rms_error == pytest.approx(0.81, abs=0.01)
     assert 0.2 < fit.rms_error < 0.3 and fit.max_error > 0.8
