@@ -122,8 +122,8 @@ def crane_figure(df):
     fig = _crease_bars(df[df["case"] == "crane"], 13.0)
     fig.suptitle(f"Flat crane heated as the crane case at q = {CRANE_BASE_POWER_MW:g} mW "
                  "(0.5 q ... 4 q per crease): 7-node crease temperature per model (bars from "
-                 f"RT); below, the error against the 3-D FE ({_ref_name(df)})",
-                 fontsize="medium")
+                 f"RT); below, the error against the 3-D FE ({_ref_name(df)}), "
+                 f"+-{ACCEPTANCE['folded']:g} % shaded", fontsize="medium")
     _note(fig, df, "folded", "environment: air, k_env = 0.026 W/(m K), no substrate; the "
           "crane case's chains: beta = 20 deg, t_env = 1 mm (the reference's t2RT = a); its "
           "power of 4 mW was chosen for them: with the integral model the case uses 0.7 mW "
