@@ -25,10 +25,12 @@ import numpy as np
 from .errors import ParameterError
 from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
 
-__all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node"]
+__all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event"]
 
-#: Kinds of :class:`Event`: those of a critical point, and ``"snap"``.
-EVENT_KINDS = CRITICAL_KINDS + ("snap",)
+#: Kinds of :class:`Event`: those of a critical point, ``"snap"``, and the two of an accepted
+#: load-controlled state found unstable (:func:`branch_event`): ``"branch_switch"`` (left for
+#: a stable branch along its critical mode) and ``"stability_lost"`` (not left).
+EVENT_KINDS = CRITICAL_KINDS + ("snap", "branch_switch", "stability_lost")
 
 
 @dataclass(frozen=True)
@@ -148,3 +150,23 @@ def monitored_node(c) -> int | None:
         return None
     nodes = np.unique(np.flatnonzero(np.asarray(c).ravel()) // 3)
     return int(nodes[0]) if len(nodes) == 1 else None
+
+
+def branch_event(switch, load_factor: float, increment: int, power, temperature) -> Event:
+    """The :class:`Event` of a :class:`~simulator.solvers.newton.BranchSwitch` of a step's
+    load control: kind ``"branch_switch"`` when a stable state was reached (``jump`` and
+    ``node``: the largest node displacement from the unstable state to it, and whose) or
+    ``"stability_lost"``; ``load_factor`` and ``increment`` as the step counts them (the
+    record the state is, or would be, recorded as), ``power`` (C,) [W] and ``temperature``
+    (n_nodes,) [deg C] there."""
+    jump = node = None
+    if switch.switched:
+        d = np.linalg.norm(np.asarray(switch.choice.u, float).reshape(-1, 3)
+                           - np.asarray(switch.u_from, float).reshape(-1, 3), axis=1)
+        node = int(np.argmax(d))
+        jump = float(d[node])
+    return Event(kind="branch_switch" if switch.switched else "stability_lost",
+                 load_factor=float(load_factor), increment=int(increment), maximum=False,
+                 power_per_crease=power, temperature_max=float(np.max(temperature)), node=node,
+                 jump=jump, message=switch.describe().replace(
+                     f"path parameter {switch.t:.6g}", f"load factor {load_factor:.6g}"))

@@ -58,7 +58,11 @@ class StepResult(ResultFiles):
         Step-specific per-increment quantities (e.g. ``stable``, ``time [s]``).
     velocity_history : (m, n_nodes, 3) node velocities [m/s], or None (quasi-static step)
     events : tuple of Event
-        Limit points, bifurcations and snaps on the step's path (:mod:`simulator.events`).
+        Limit points, bifurcations, snaps and branch switches on the step's path
+        (:mod:`simulator.events`).
+    stable : bool or None
+        Whether the step's end state is a stable equilibrium, where the step checked it
+        (quasi-static steps, ``NewtonOptions.stability`` not "off"); else None.
     """
 
     name: str
@@ -81,6 +85,7 @@ class StepResult(ResultFiles):
     columns: dict = field(default_factory=dict)
     velocity_history: np.ndarray | None = None
     events: tuple = ()
+    stable: bool | None = None
 
     @property
     def increments(self) -> int:
@@ -135,6 +140,12 @@ class SimulationResult:
     def message(self) -> str:
         bad = [s for s in self.steps if not s.success]
         return "all steps converged" if not bad else f"step {bad[0].name!r}: {bad[0].message}"
+
+    @property
+    def stable(self) -> bool | None:
+        """Whether the final state is a stable equilibrium: the last step's check (None if
+        it made none)."""
+        return self.steps[-1].stable if self.steps else None
 
     @property
     def events(self) -> tuple:
@@ -348,11 +359,11 @@ class SimulationResult:
                             crease_ids=mesh.crease_ids, triangles=mesh.triangles,
                             triangle_kind=triangle_kinds(self.model))
         meta = {"etorigami_version": __version__, "git": _git_hash(),
-                "status": self.status, "message": self.message,
+                "status": self.status, "message": self.message, "stable": self.stable,
                 "wall_time [s]": self.wall_time, "model": self.model.to_dict(),
                 "options": self.options,
                 "steps": [{"name": s.name, "status": s.status, "message": s.message,
-                           "increments": s.increments, "iterations": s.iterations,
+                           "stable": s.stable, "increments": s.increments, "iterations": s.iterations,
                            "cuts": s.cuts, "wall_time [s]": s.wall_time, **s.settings}
                           for s in self.steps],
                 "events": [e.to_dict(mesh.crease_ids) for e in self.events],

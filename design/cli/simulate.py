@@ -144,7 +144,7 @@ def _cases(args) -> int:
 
 
 def _run(args) -> int:
-    from simulator import get_case, simulate
+    from simulator import NewtonOptions, get_case, simulate
 
     from ._summary import summary_lines
     from .case_params import case_overrides
@@ -170,7 +170,8 @@ def _run(args) -> int:
                 bar.reset(total=total)
             bar.update(done - bar.n)
 
-        result = simulate(model, steps, progress=progress, interruptible=True)
+        result = simulate(model, steps, progress=progress, interruptible=True,
+                          options=NewtonOptions(stability=args.stability, branch=args.branch))
     if result.status == "interrupted":
         return _save_interrupted(result, args.out, meta, where)
     out = result.save(args.out, meta)
@@ -247,6 +248,13 @@ def add_simulate_commands(sub) -> None:
                           "--set crease_width=200 --set gravity=true; for a FOLD file "
                           "power.<crease id>=mW or thermal_steps=N")
     run.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    run.add_argument("--branch", choices=("lower", "other"), default="lower",
+                     help="where a state turns unstable (a flat sheet heated at a bifurcation), "
+                          "leave it for the branch of lower energy (default) or the other one")
+    run.add_argument("--stability", choices=("switch", "check", "off"), default="switch",
+                     help="check every accepted state and leave an unstable one (switch, "
+                          "default), only report it (check; a run ending unstable fails) or "
+                          "neither (off, the reference's behaviour)")
     from .files import add_reader_options
 
     add_reader_options(run)

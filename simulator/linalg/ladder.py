@@ -232,7 +232,21 @@ def _kept_pardiso(A) -> Factor | None:
 
 def _kept_nd(A) -> Factor | None:
     lu = linsolve.nd_factors(A)
-    return None if lu is None else Factor(lu, "superlu-nd", A.shape[0])
+    return None if lu is None else Factor(lu, "superlu-nd", A.shape[0],
+                                          lambda: _superlu_inertia(lu.lu))
+
+
+def _superlu_inertia(lu) -> tuple[int, int, int] | None:
+    """Inertia of a symmetric matrix from SuperLU factors with diagonal pivots (the same
+    permutation of rows and columns): ``P A P^T = L U`` with ``U = D L^T``, so by Sylvester's
+    law the signs of U's diagonal count the eigenvalues. None where a pivot left the diagonal
+    (the factors then say nothing of the inertia)."""
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return None
+    d = lu.U.diagonal()
+    n = len(d)
+    tol = n * np.finfo(float).eps * max(float(np.abs(d).max(initial=0.0)), 1e-300)
+    return int(np.sum(d > tol)), int(np.sum(d < -tol)), int(np.sum(np.abs(d) <= tol))
 
 
 def _splu(A, **options):
@@ -243,6 +257,10 @@ def _splu(A, **options):
     return spla.splu(A, **options)
 
 
+def _mmd_factor(lu, n: int) -> Factor:
+    return Factor(lu, "superlu-mmd", n, lambda: _superlu_inertia(lu))
+
+
 def _mmd(Ac):
     return _splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                  options={"SymmetricMode": True})
@@ -251,7 +269,7 @@ def _mmd(Ac):
 _KEPT = {
     "pardiso": _kept_pardiso,
     "superlu-nd": _kept_nd,
-    "superlu-mmd": lambda A: Factor(_mmd(A.tocsc()), "superlu-mmd", A.shape[0]),
+    "superlu-mmd": lambda A: _mmd_factor(_mmd(A.tocsc()), A.shape[0]),
     "superlu": lambda A: Factor(_splu(A.tocsc()), "superlu", A.shape[0]),
 }
 

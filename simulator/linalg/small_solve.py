@@ -26,7 +26,7 @@ from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
 from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
-__all__ = ["as_dense", "solve_dense", "DenseFactor", "SparseCholesky",
+__all__ = ["as_dense", "solve_dense", "positive_definite", "DenseFactor", "SparseCholesky",
            "pattern_of",
            "DENSE_LIMIT", "SPARSE_MIN"]
 
@@ -41,6 +41,12 @@ _dgetrf, _dgecon, _dgetrs = lapack.dgetrf, lapack.dgecon, lapack.dgetrs
 def as_dense(K) -> np.ndarray:
     """``K`` as a dense array: a sparse matrix densified, an array as it is (not copied)."""
     return K.toarray() if sp.issparse(K) else np.asarray(K)
+
+
+def positive_definite(K: np.ndarray) -> bool:
+    """True if LAPACK's Cholesky factorisation of the dense symmetric ``K`` (upper triangle)
+    succeeds: K is numerically positive definite."""
+    return _dpotrf(K, lower=0, clean=0)[1] == 0
 
 
 def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):

@@ -45,7 +45,7 @@ from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, S
                        SupportFamily, check_family, model_families)
 from ..model.model import Model
 
-__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT"]
+__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT", "assembled_tangent"]
 
 logger = logging.getLogger(__name__)
 _all = np.logical_and.reduce            # with axis=None: ndarray.all() without its wrapper
@@ -100,6 +100,12 @@ class Evaluation:
         if isinstance(self.tangent, np.ndarray):
             return self.to_csr(self.tangent)
         return self.tangent
+
+
+def assembled_tangent(ev):
+    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
+    ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
+    return ev.tangent if isinstance(ev, Evaluation) else ev.K
 
 
 class EquilibriumSystem:

@@ -15,23 +15,34 @@ in the direction where the energy falls further. The continuation driver
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..linalg.ladder import factorize
+from ..linalg.thresholds import EIGEN_DENSE_LIMIT
 from ..linalg.small_solve import as_dense
 from .load_path import _Constraint, _correct, _size
 
-__all__ = ["DESCENT_DOF_LIMIT", "descend", "switch_branch"]
+__all__ = ["DESCENT_DOF_LIMIT", "BRANCHES", "BranchChoice", "descend", "switch_branch",
+           "choose_branch"]
 
 logger = logging.getLogger(__name__)
 
-#: Free DOFs at most of the (dense) energy descent; larger models are not landed.
-DESCENT_DOF_LIMIT = 3000
+#: Free DOFs at most of the energy descent (dense up to EIGEN_DENSE_LIMIT, sparse above);
+#: larger models are not landed.
+DESCENT_DOF_LIMIT = 300_000
 #: Rounds at most of (temperatures on the shape, descent) before the polish.
 ROUNDS = 20
 #: Push along the critical mode of :func:`switch_branch`, as a fraction of the model size.
 PUSH = 1e-3
+#: Which of the two pushes along a critical mode :func:`choose_branch` follows: "lower" (the
+#: one whose descent ends at the lower potential energy; on a tie, the sign that makes the
+#: mode's first sizeable entry positive) or "other" (the other one).
+BRANCHES = ("lower", "other")
+#: Energies closer than this, relative, are a tie (a symmetric structure's two branches).
+TIE_RTOL = 1e-9
 
 
 def _energy_of(path, lam):
@@ -47,21 +58,26 @@ def _energy_of(path, lam):
 
 def _minimise(path, u, lam, max_iter):
     """(flat displacements, energy) of the energy minimum that damped Newton reaches from
-    ``u`` at ``lam``, temperatures solved on the shape ``u`` first; None if it does not."""
+    ``u`` at ``lam``, temperatures solved on the shape ``u`` first; None if it does not.
+
+    Up to :data:`~simulator.linalg.thresholds.EIGEN_DENSE_LIMIT` free DOFs the damped tangent
+    is factorised densely (Cholesky: it fails where the damping is not yet enough), above by
+    the ladder's symmetric factorisation, whose inertia says the same."""
     free, size = path.free, _size(path.system)
     path.at(u, lam)                             # a heating path: temperatures on this shape
     energy, f = _energy_of(path, lam)
     v = np.array(u, float).ravel()
     e, ev = energy(v)
-    eye = np.eye(len(free))
+    dense = len(free) <= EIGEN_DENSE_LIMIT
     mu, step = None, getattr(path.system, "max_step", None)
     for _ in range(max_iter):
-        g, K = (ev.f_int - f)[free], as_dense(ev.K)
-        mu = 1e-6 * float(np.mean(np.abs(np.diag(K)))) if mu is None else mu
+        g = (ev.f_int - f)[free]
+        K = as_dense(ev.K) if dense else sp.csr_matrix(ev.K)
+        if mu is None:
+            mu = 1e-6 * float(np.mean(np.abs(K.diagonal())))
         while mu < 1e30:
-            try:
-                dv = -factorize(K + mu * eye, kind="spd", backend="dense").solve(g)
-            except np.linalg.LinAlgError:                   # not positive definite yet
+            dv = _damped_step(K, mu, g, dense)
+            if dv is None:                                  # not positive definite yet
                 mu *= 4
                 continue
             if step is not None and np.max(np.abs(dv)) > step:
@@ -78,6 +94,24 @@ def _minimise(path, u, lam, max_iter):
         else:
             return None
     return None
+
+
+def _damped_step(K, mu, g, dense):
+    """``-(K + mu I)^-1 g``, or None where ``K + mu I`` is not positive definite."""
+    n = K.shape[0]
+    if dense:
+        try:
+            return -factorize(K + mu * np.eye(n), kind="spd", backend="dense").solve(g)
+        except np.linalg.LinAlgError:
+            return None
+    try:
+        factor = factorize((K + mu * sp.identity(n, format="csr")).tocsr(), kind="symmetric")
+    except RuntimeError:                                    # exactly singular
+        return None
+    inertia = factor.inertia
+    if inertia is None or inertia[1] or inertia[2]:
+        return None
+    return -factor.solve(g)
 
 
 def descend(path, u, lam, options, max_iter=300, start=None, rounds=ROUNDS):
@@ -110,12 +144,48 @@ def descend(path, u, lam, options, max_iter=300, start=None, rounds=ROUNDS):
     return u1 if ok else None
 
 
-def switch_branch(path, u, lam, mode, options, max_iter=300):
+@dataclass(frozen=True, eq=False)
+class BranchChoice:
+    """Where an unstable equilibrium went (:func:`choose_branch`).
+
+    Attributes
+    ----------
+    u : (n_nodes, 3) displacements of the stable equilibrium reached [m], or None
+    sign : int
+        +1 or -1: the push along the critical mode (its sign made deterministic: the first
+        entry of at least half the largest magnitude is positive).
+    energies : tuple of (float or None, float or None)
+        Potential energy [J] where the descents of the pushes +1 and -1 ended (None: no
+        minimum reached).
+    tie : bool
+        The two energies agree within :data:`TIE_RTOL` (then ``sign`` is +1 for "lower").
+    """
+
+    u: np.ndarray | None
+    sign: int
+    energies: tuple
+    tie: bool
+
+    @property
+    def gap(self) -> float | None:
+        """Energy of the branch not taken minus that of the one taken [J] (None if only one
+        was reached)."""
+        e = self.energies
+        if e[0] is None or e[1] is None:
+            return None
+        taken = e[0] if self.sign > 0 else e[1]
+        return (e[1] if self.sign > 0 else e[0]) - taken
+
+
+def choose_branch(path, u, lam, mode, options, prefer: str = "lower",
+                  max_iter=300) -> BranchChoice | None:
     """The stable equilibrium at ``lam`` that the unstable one ``u`` (n_nodes, 3) falls to
     when pushed along its critical ``mode`` (n_free,): both pushes (:data:`PUSH` of the
-    model size) descend on the energy with the temperatures of ``u``; the one ending lower
-    goes on (:func:`descend`; a tie, as in a symmetric structure, takes the sign that makes
-    the mode's first sizeable entry positive). None if neither lands."""
+    model size) descend on the energy with the temperatures of ``u``; ``prefer`` "lower" goes
+    on from the one ending lower (a tie, as in a symmetric structure, takes the sign that makes
+    the mode's first sizeable entry positive), "other" from the other one (:func:`descend`).
+    None if the model is too large for the descent (:data:`DESCENT_DOF_LIMIT`) or neither
+    push lands."""
     if len(path.free) > DESCENT_DOF_LIMIT:
         return None
     mode = np.asarray(mode, float)
@@ -127,13 +197,25 @@ def switch_branch(path, u, lam, mode, options, max_iter=300):
         v = np.array(u, float).ravel()
         v[path.free] += sign * push * mode
         ends.append((_minimise(path, v.reshape(-1, 3), lam, max_iter), v))
-    found = [(out[1], k) for k, (out, _) in enumerate(ends) if out is not None]
+    energies = tuple(None if out is None else float(out[1]) for out, _ in ends)
+    found = [(e, k) for k, e in enumerate(energies) if e is not None]
     if not found:
         return None
-    e = [x for x, _ in found]
-    tie = len(found) == 2 and abs(e[0] - e[1]) <= 1e-9 * max(abs(e[0]), abs(e[1]), 1e-300)
+    tie = len(found) == 2 and abs(energies[0] - energies[1]) <= TIE_RTOL * max(
+        abs(energies[0]), abs(energies[1]), 1e-300)
     k = 0 if tie else min(found)[1]
+    if prefer == "other" and len(found) == 2:
+        k = 1 - k
     out, v = ends[k]
     logger.debug("branch switch at load factor %.6g: push %+d along the critical mode", lam,
                  1 if k == 0 else -1)
-    return descend(path, v.reshape(-1, 3), lam, options, max_iter, start=out)
+    u1 = descend(path, v.reshape(-1, 3), lam, options, max_iter, start=out)
+    return BranchChoice(u1, 1 if k == 0 else -1, energies, tie)
+
+
+def switch_branch(path, u, lam, mode, options, max_iter=300):
+    """The stable equilibrium at ``lam`` that the unstable one ``u`` (n_nodes, 3) falls to
+    when pushed along its critical ``mode`` (n_free,) (:func:`choose_branch` with "lower"):
+    displacements (n_nodes, 3), or None if neither push lands."""
+    choice = choose_branch(path, u, lam, mode, options, "lower", max_iter)
+    return None if choice is None else choice.u

@@ -37,7 +37,7 @@ from .._validate import positive
 from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
 from ..errors import ParameterError
 from ..model.mass import check_masses, lumped_areas, lumped_masses
-from .newton import _tangent
+from ..mechanics.equilibrium import assembled_tangent as _tangent
 from ..linalg import thresholds
 from ..linalg.ladder import solve
 from ..linalg.small_solve import as_dense

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .newton import _tangent as _assembled_tangent
+from ..mechanics.equilibrium import assembled_tangent as _assembled_tangent
 from .nonlinear import iterate
 from ..linalg.ladder import solve
 

@@ -19,15 +19,22 @@ from functools import cached_property
 
 import numpy as np
 
-from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
-from .._validate import integer, non_negative
+from ..mechanics.equilibrium import EquilibriumSystem, Evaluation, assembled_tangent as _tangent
+from .._validate import integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
+from .branches import BranchSwitch, judge, leave_critical
+from .descent import BRANCHES
 from .nonlinear import iterate, march
+from .stability import state_stability
 
-__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton", "follow_path"]
+__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "BranchSwitch", "newton",
+           "follow_path", "STABILITY_ACTIONS"]
 
 logger = logging.getLogger(__name__)
+
+#: Values of ``NewtonOptions.stability``.
+STABILITY_ACTIONS = ("switch", "check", "off")
 
 
 @dataclass(frozen=True)
@@ -71,6 +78,20 @@ class NewtonOptions:
         (5e-7 N against ~1e-8 N of self-weight) this takes one to a few updates per increment,
         i.e. under-converged equilibria: keep it off for real work.
 
+    stability : {"switch", "check", "off"}
+        What load control does with the stability of every accepted state
+        (:func:`follow_path`): "switch" (default) checks it (one Cholesky factorisation of the
+        tangent, the eigenvalues only where it fails: :func:`~simulator.solvers.stability.state_stability`)
+        and leaves an unstable equilibrium, such as the symmetric state of a flat sheet heated
+        at a bifurcation, for the stable branch it falls to along its critical mode
+        (:func:`~simulator.solvers.descent.choose_branch`; theory 6.9); "check" checks and
+        reports but stays on the branch (a path that ends on an unstable state does not
+        succeed); "off" does neither (the reference's behaviour).
+    branch : {"lower", "other"}
+        Which branch "switch" takes where an equilibrium turns unstable: "lower" (default) the
+        one whose energy descent ends lower (a tie, as in a symmetric structure, by the sign
+        of the critical mode: theory 6.9), "other" the other one.
+
     linear_solver : {"auto", "dense", "pardiso", "superlu"}
         Backend of the tangent solves (:mod:`simulator.linalg.ladder`): "auto" is the ladder
         (dense up to 150 free DOFs, PARDISO when MKL is installed, else SuperLU in a
@@ -93,9 +114,16 @@ class NewtonOptions:
     stall_rtol: float = 1e-3
     reference_loop: bool = False
     linear_solver: str = "auto"
+    stability: str = "switch"
+    branch: str = "lower"
 
     def __post_init__(self):
         check_backend(self.linear_solver, "NewtonOptions.linear_solver")
+        one_of("NewtonOptions.stability", self.stability, STABILITY_ACTIONS,
+               hint="'switch' leaves an unstable state for the stable branch, 'check' only "
+               "reports it, 'off' does neither")
+        one_of("NewtonOptions.branch", self.branch, BRANCHES,
+               hint="'lower': the branch of lower energy, 'other': the other one")
         if self.criterion not in ("residual", "displacement"):
             raise ParameterError(f"NewtonOptions.criterion = {self.criterion!r}; use 'residual' or "
                                  "'displacement'.")
@@ -153,6 +181,9 @@ class PathResult:
     history : list of (t, u, iterations) per accepted increment
     residual_norms : list of arrays, residual history of each accepted increment
     evaluation : Evaluation at the final state
+    stability : list of Stability or None, per accepted increment (None: not checked,
+        ``NewtonOptions.stability="off"``)
+    switches : list of BranchSwitch, the unstable states met and where they were left
     """
 
     success: bool
@@ -165,6 +196,14 @@ class PathResult:
     history: list = field(default_factory=list)
     residual_norms: list = field(default_factory=list)
     evaluation: Evaluation | None = None
+    stability: list = field(default_factory=list)
+    switches: list = field(default_factory=list)
+
+    @property
+    def stable(self) -> bool | None:
+        """Whether the last accepted state is stable (None: not checked or none accepted)."""
+        st = self.stability[-1] if self.stability else None
+        return None if st is None else st.stable
 
 
 def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_rest: np.ndarray,
@@ -276,12 +315,6 @@ def _operations(system, spring_rest, backend="auto"):
     return evaluate, correct
 
 
-def _tangent(ev):
-    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
-    ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
-    return ev.tangent if isinstance(ev, Evaluation) else ev.K
-
-
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):
     return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), success=converged,
                         iterations=iterations, residual_norms=np.array(res),
@@ -300,30 +333,50 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     """
     integer("increments", increments)
     u, history, residuals, last_ev = u0.copy(), [], [], None
+    stability, switches, judged = [], [], [None]
     total_iter = 0
+    check = options.stability != "off"
+    ends = (f_start, f_end, rest_start, rest_end)
 
     def attempt(t_try):
         nonlocal total_iter
         res = newton(system, u, f_start + t_try * (f_end - f_start),
                      rest_start + t_try * (rest_end - rest_start), options)
         total_iter += res.iterations
+        last = stability[-1] if stability else None
+        judged[:] = [None]
+        if res.success and check and res.evaluation is not None:
+            res, judged[0] = judge(system, res, t_try, ends, options, switches)
+        elif (not res.success and options.stability == "switch" and last is not None
+                and last.negative == 0 and last.mode is not None):
+            # the last state is critical (a singular tangent: Cholesky failed, no negative
+            # eigenvalue), e.g. exactly at a bifurcation: leave it along its critical mode
+            res = leave_critical(system, res, u, last, t_try, ends, options, switches)
+            if res.success:
+                judged[0] = state_stability(_tangent(res.evaluation), options.linear_solver)
         return res.success, res
 
     def accept(t, res):
         nonlocal u, last_ev
+        st = judged[0]
+        if st is not None and not st.stable and options.stability == "check" and (
+                not stability or stability[-1] is None or stability[-1].stable):
+            switches.append(BranchSwitch(t, st, u_from=res.u))            # stability lost
         u, last_ev = res.u, res.evaluation
         history.append((t, u, res.iterations))
         residuals.append(res.residual_norms)
+        stability.append(st)
         return callback is not None and callback(t, u)
     run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts)
+    extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
                f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}")
         logger.info(msg)          # data: the caller decides (a step fails, a search moves on)
         return PathResult(False, "failed", msg, u, run.t, total_iter, run.cuts, history,
-                          residuals, last_ev)
+                          residuals, last_ev, **extra)
     if run.status == "stopped":
         return PathResult(False, "stopped", f"stopped by callback at t = {run.t:.6g}", u, run.t,
-                          total_iter, run.cuts, history, residuals, last_ev)
+                          total_iter, run.cuts, history, residuals, last_ev, **extra)
     return PathResult(True, "converged", "converged", u, 1.0, total_iter, run.cuts, history,
-                      residuals, last_ev)
+                      residuals, last_ev, **extra)

@@ -22,10 +22,18 @@ import scipy.sparse as sp
 
 from .._result import ResultFiles
 from ..linalg.ladder import factorize
-from ..linalg.small_solve import as_dense
+from ..linalg.small_solve import as_dense, positive_definite
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
-__all__ = ["Stability", "tangent_stability", "DENSE_LIMIT"]
+__all__ = ["Stability", "tangent_stability", "state_stability", "NEGATIVE_RTOL", "DENSE_LIMIT"]
+
+#: An eigenvalue counts as negative below ``-NEGATIVE_RTOL * n * eps * |K|`` (|K| the largest
+#: diagonal entry): a few hundred times the error bound of a symmetric eigensolver, so the
+#: round-off around the zero eigenvalue of a mechanism (a sheet held only by its own
+#: stiffness along a rigid-body or folding motion) never reads as a loss of stability, while
+#: the negative eigenvalues of the heated flat waterbomb (-1e-4 N/m against diagonal entries
+#: of ~1e3 N/m) are 1e6 times above it.
+NEGATIVE_RTOL = 100.0
 
 
 
@@ -49,8 +57,8 @@ class Stability(ResultFiles):
     """
 
     negative: int
-    lowest: float
-    mode: np.ndarray
+    lowest: float | None
+    mode: np.ndarray | None
     exact: bool = True
 
     @property
@@ -69,6 +77,8 @@ class Stability(ResultFiles):
     @property
     def message(self) -> str:
         bound = "" if self.exact else "at least "
+        if self.lowest is None:
+            return "positive definite (Cholesky); lowest eigenvalue not computed"
         return (f"{bound}{self.negative} negative eigenvalue(s); lowest eigenvalue "
                 f"{self.lowest:.6g} N/m")
 
@@ -82,10 +92,13 @@ class Stability(ResultFiles):
         """|cos| of the angle between the critical mode and the load derivative ``q``
         (1: a limit-point mode, 0: a bifurcation mode); nan if ``q`` is zero."""
         nq = float(np.linalg.norm(q))
+        if self.mode is None:
+            return float("nan")
         return abs(float(self.mode @ q)) / nq if nq > 0 else float("nan")
 
 
-def tangent_stability(K, k: int = 6, linear_solver: str = "auto") -> Stability:
+def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
+                      rtol: float = 0.0) -> Stability:
     """Inertia and lowest eigenpair of the symmetric reduced tangent ``K`` (n_free, n_free).
 
     Parameters
@@ -96,14 +109,19 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto") -> Stability:
     linear_solver : {"auto", "dense", "pardiso", "superlu"}
         Backend of the shift-invert factorisation of large systems
         (:func:`~simulator.linalg.ladder.factorize`).
+    rtol : float
+        An eigenvalue counts as negative below ``-rtol * n * eps * max |K_ii|`` (0: below 0,
+        exactly, as the continuation's bisection to a critical point needs;
+        :func:`state_stability` uses :data:`NEGATIVE_RTOL`).
     """
     n = K.shape[0]
     if n == 0:
         return Stability(0, float("inf"), np.zeros(0))
+    tol = rtol * _negative_tolerance(K)
     if n <= DENSE_LIMIT:
         A = as_dense(K)
         w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
-        return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], True)
+        return Stability(int(np.sum(w < -tol)), float(w[0]), V[:, 0], True)
     import scipy.sparse.linalg as spla
 
     diag = np.abs(K.diagonal())
@@ -117,4 +135,38 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto") -> Stability:
         w, V = spla.eigsh(K, k=min(k, n - 1), sigma=shift, which="LM", OPinv=op)
     order = np.argsort(w)
     w, V = w[order], V[:, order]
-    return Stability(int(np.sum(w < 0)), float(w[0]), V[:, 0], False)
+    return Stability(int(np.sum(w < -tol)), float(w[0]), V[:, 0], False)
+
+
+def _negative_tolerance(K) -> float:
+    """``n * eps * max |K_ii|`` [N/m]: the unit of the tolerance on negative eigenvalues."""
+    d = np.abs(K.diagonal()) if sp.issparse(K) else np.abs(np.diagonal(np.asarray(K)))
+    return K.shape[0] * np.finfo(float).eps * float(d.max(initial=0.0))
+
+
+def state_stability(K, linear_solver: str = "auto") -> Stability:
+    """Stability of an equilibrium from its reduced tangent ``K`` (n_free, n_free) [N/m],
+    cheaply where it is stable.
+
+    One factorisation first, as Newton's for the same tangent (LAPACK's Cholesky for the dense
+    tangent of a small model; for a sparse one the inertia of the ladder's symmetric
+    factorisation, :attr:`~simulator.linalg.ladder.Factor.inertia`: dense Cholesky, PARDISO's
+    or SuperLU's L D L^T with diagonal pivots): a positive definite
+    tangent is stable (``lowest`` and ``mode`` None: not computed). Otherwise, or where the
+    factorisation gives no inertia, :func:`tangent_stability` (the eigenvalues, with the
+    critical mode). This is the check every quasi-static step makes of each accepted state.
+    """
+    n = K.shape[0]
+    if n == 0:
+        return Stability(0, float("inf"), np.zeros(0))
+    if isinstance(K, np.ndarray):                  # the dense tangent of a small model
+        if positive_definite(K):
+            return Stability(0, None, None, True)
+        return tangent_stability(K, linear_solver=linear_solver, rtol=NEGATIVE_RTOL)
+    try:
+        inertia = factorize(sp.csr_matrix(K), kind="symmetric", backend=linear_solver).inertia
+    except (RuntimeError, np.linalg.LinAlgError):         # exactly singular
+        inertia = None
+    if inertia is not None and inertia[1] == 0 and inertia[2] == 0:
+        return Stability(0, None, None, True)
+    return tangent_stability(K, linear_solver=linear_solver, rtol=NEGATIVE_RTOL)

@@ -99,6 +99,10 @@ class StepOutcome:
     events : tuple of Event
         Limit points, bifurcations and snaps on the step's path (:mod:`simulator.events`),
         in path order (a snap after the limit point it starts at).
+    stable : bool or None
+        Whether the end state is a stable equilibrium (positive definite tangent), where the
+        step checked it (``NewtonOptions.stability``); None if it did not (time integration,
+        ``stability="off"``).
     """
 
     success: bool
@@ -118,6 +122,7 @@ class StepOutcome:
     evaluation: object = None
     velocity: np.ndarray | None = None
     events: tuple = ()
+    stable: bool | None = None
 
 
 #: The recorders made while :func:`watch_recorders` is active (the step's records so far,
@@ -157,6 +162,7 @@ class StepRecorder:
         self._velocity: list = []
         self._columns: dict[str, list] = {}
         self.events: list = []
+        self.stable: bool | None = None
 
     def __len__(self) -> int:
         return len(self._rows["load_factor"])
@@ -176,12 +182,35 @@ class StepRecorder:
             if len(values) < len(self):
                 values.append(None)
 
-    def add_path(self, path, temperature, power) -> None:
-        """Record every accepted increment of a :class:`~simulator.solvers.newton.PathResult`."""
+    def add_path(self, path, temperature, power, load_factor=None) -> None:
+        """Record every accepted increment of a :class:`~simulator.solvers.newton.PathResult`,
+        with its stability and its unstable states as events (:meth:`note_stability`);
+        ``load_factor(t)`` maps the path's parameter to the step's (default: the same)."""
         self.iterations += path.iterations
         self.cuts += path.cuts
+        scale = (lambda t: t) if load_factor is None else load_factor
+        self.note_stability(path, temperature, power, scale, before=len(self))
         for (t, u, its), res in zip(path.history, path.residual_norms):
-            self.record(t, u, temperature, power, its, res)
+            self.record(scale(t), u, temperature, power, its, res)
+
+    def note_stability(self, path, temperature, power, load_factor, before=None) -> None:
+        """Take the stability of a :class:`~simulator.solvers.newton.PathResult`'s last
+        accepted state (:attr:`stable`) and its branch switches as events
+        (:func:`~simulator.events.branch_event`), before its increments are recorded:
+        ``load_factor(t)`` maps its path parameter to the step's; the path's first increment
+        is record ``before`` (default: the next one)."""
+        from ..events import branch_event
+
+        first = len(self) if before is None else before
+        times = [t for t, _, _ in path.history]
+        for sw in path.switches:
+            if not sw.switched and self.stable is False:
+                continue                       # still unstable: lost once, one event
+            k = first + (times.index(sw.t) if sw.t in times else len(times) - 1)
+            self.events.append(branch_event(sw, load_factor(sw.t), k, power, temperature))
+            self.stable = sw.switched
+        if path.stable is not None:
+            self.stable = path.stable
 
     def last_state(self) -> SimulationState:
         """The start state with the displacements, temperatures and powers of the last accepted
@@ -197,7 +226,14 @@ class StepRecorder:
 
     def finish(self, success: bool, status: str, message: str, state: SimulationState,
                f_ext: np.ndarray, evaluation=None) -> StepOutcome:
-        """The frozen outcome of the step."""
+        """The frozen outcome of the step. A step that would succeed on an end state known
+        to be unstable (:attr:`stable` False) ends with status "unstable" instead: no step calls
+        an unstable equilibrium converged."""
+        if success and self.stable is False:
+            lost = [e.message for e in self.events if e.kind == "stability_lost"]
+            success, status = False, "unstable"
+            message = ("ends on an unstable equilibrium (its tangent stiffness has a negative "
+                       "eigenvalue)" + (f"; {lost[-1]}" if lost else ""))
         s0 = self.start
         n, C = s0.u.shape, s0.crease_power.shape
         rows = self._rows
@@ -212,7 +248,8 @@ class StepRecorder:
             residual_norms=tuple(self._residuals),
             columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation,
             velocity=self._velocities(n), events=tuple(sorted(  # along the path (stable)
-                self.events, key=lambda e: (e.increment is None, e.increment or 0))))
+                self.events, key=lambda e: (e.increment is None, e.increment or 0))),
+            stable=self.stable)
 
     def _velocities(self, shape) -> np.ndarray | None:
         if all(v is None for v in self._velocity):

@@ -124,6 +124,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             if agreed:
                 break
         u, spring, evaluation = path.u, rest, path.evaluation
+        rec.note_stability(path, temp, power, lambda t, s=s: (s - 1 + t) / n_inc)
         rec.record(s / n_inc, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
         context.report(s, n_inc)

@@ -88,8 +88,7 @@ def _resume(context, mid, lam, f_end, rest_end, increments, end_state) -> StepOu
     path = follow_path(context.system, mid.u, mid.applied_load.ravel(), f_end,
                        mid.spring_rest, rest_end, n, context.options)
     rec = StepRecorder(mid)
-    rec.add_path(path, mid.temperature, mid.crease_power)
-    rec._rows["load_factor"] = [lam + (1 - lam) * t for t in rec._rows["load_factor"]]
+    rec.add_path(path, mid.temperature, mid.crease_power, lambda t: lam + (1 - lam) * t)
     new = end_state(path.u, lam + (1 - lam) * path.t)
     return rec.finish(path.success, path.status, path.message, new, new.applied_load.ravel(),
                       path.evaluation)

@@ -1,0 +1,139 @@
+"""Stability of the states load control accepts, and where an unstable one goes (theory 6.12).
+
+:func:`~simulator.solvers.newton.follow_path` judges every converged increment with
+:func:`judge` (one Cholesky factorisation where the state is stable,
+:func:`~simulator.solvers.stability.state_stability`). An unstable state at a bifurcation
+(critical mode orthogonal to the load derivative) is left for the stable state it falls to
+along its critical mode (:func:`~simulator.solvers.descent.choose_branch`), and an increment
+that fails from a critical state (a singular tangent) starts from there
+(:func:`leave_critical`); each is a :class:`BranchSwitch`. States past a limit point (mode
+along the load) are kept for the steps' limit-point handling (:mod:`simulator.steps.limit`).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..mechanics.equilibrium import assembled_tangent as _tangent
+from .descent import choose_branch
+from .load_path import LoadPath
+from .path_trace import BIFURCATION_ALIGNMENT
+from .stability import state_stability
+
+__all__ = ["BranchSwitch", "judge", "leave_critical"]
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class BranchSwitch:
+    """An accepted equilibrium found unstable by load control, and where it was left.
+
+    Attributes
+    ----------
+    t : float
+        Path parameter of the increment (the state was stable at the previous one).
+    unstable : Stability of the state load control converged to
+    choice : BranchChoice or None
+        The pushes along the critical mode and the branch taken
+        (:func:`~simulator.solvers.descent.choose_branch`); None when not tried ("check") or
+        when the model is too large for the descent.
+    stability : Stability or None
+        Of the state reached (None: none reached, the path stays on the unstable state).
+    u_from : (n_nodes, 3) the unstable state's displacements [m]
+    """
+
+    t: float
+    unstable: object
+    choice: object = None
+    stability: object = None
+    u_from: np.ndarray | None = None
+
+    @property
+    def switched(self) -> bool:
+        """True if a stable state was reached."""
+        return self.stability is not None and self.stability.stable
+
+    def describe(self) -> str:
+        """The switch in words (for messages and events)."""
+        st = self.unstable
+        head = (f"equilibrium unstable at path parameter {self.t:.6g} ({st.negative} negative "
+                f"eigenvalue(s), lowest {st.lowest:.3g} N/m)" if st.negative else
+                f"load control failed from a critical equilibrium (singular tangent) at path "
+                f"parameter {self.t:.6g}")
+        c = self.choice
+        if not self.switched:
+            why = "no stable state found along the critical mode" if c is not None else \
+                "not left (NewtonOptions.stability='check' or too large for the descent)"
+            return f"{head}: {why}"
+        if c.tie:
+            how = ("two branches of equal energy: took the critical mode's positive sign; "
+                   "NewtonOptions(branch='other') takes the other")
+        elif c.gap is None:
+            how = "the only branch the pushes reached"
+        else:
+            how = (f"took the branch of {'lower' if c.gap > 0 else 'higher'} energy "
+                   f"({abs(c.gap):.3g} J from the other; NewtonOptions(branch="
+                   f"'{'other' if c.gap > 0 else 'lower'}') takes the other)")
+        return f"{head}: left along its critical mode to a stable branch, {how}"
+
+
+def judge(system, res, t, ends, options, switches):
+    """``(res, stability)`` of a converged Newton result ``res`` at ``t``. With
+    ``options.stability == "switch"`` an unstable one whose critical mode is orthogonal to the
+    load derivative (a bifurcation: |cos| below
+    :data:`~simulator.solvers.path_trace.BIFURCATION_ALIGNMENT`) is left for the stable state
+    it falls to (:func:`_fall`; :class:`BranchSwitch` appended to ``switches``) where one is
+    reached; one whose mode is along it (load control passed a limit point onto the unstable
+    branch) is kept, recorded unstable: the step's limit-point handling (arc length past the
+    snap, :mod:`simulator.steps.limit`) takes it from the failure that follows, and a step
+    that ends there does not succeed."""
+    st = state_stability(_tangent(res.evaluation), options.linear_solver)
+    if st.stable or options.stability != "switch":
+        return res, st
+    if st.load_alignment(_path(system, ends).at(res.u, t).q) >= BIFURCATION_ALIGNMENT:
+        return res, st       # past a limit point: the step's limit-point handling decides
+    landed, ev, sw = _fall(system, res.u, st, t, ends, options)
+    switches.append(sw)
+    if landed is None:
+        return res, st
+    return replace(res, u=np.asarray(sw.choice.u, float).reshape(-1, 3), evaluation=ev), landed
+
+
+def leave_critical(system, res, u, st, t, ends, options, switches):
+    """A failed Newton result ``res`` at ``t`` from the critical state ``u`` (stability
+    ``st``: singular, with its mode): the stable state at ``t`` that ``u`` falls to along the
+    mode, as a successful result, or ``res`` unchanged."""
+    landed, ev, sw = _fall(system, u, st, t, ends, options)
+    if landed is None:
+        return res
+    switches.append(sw)
+    return replace(res, u=np.asarray(sw.choice.u, float).reshape(-1, 3), evaluation=ev,
+                   success=True, message="converged (left a critical state along its mode)")
+
+
+def _path(system, ends):
+    """The :class:`~simulator.solvers.load_path.LoadPath` of :func:`follow_path`'s ends
+    ``(f_start, f_end, rest_start, rest_end)``."""
+    f_start, f_end, rest_start, rest_end = ends
+    return LoadPath(system, f_start, f_end - f_start, rest_start, rest_end - rest_start)
+
+
+def _fall(system, u, st, t, ends, options):
+    """``(stability, evaluation, BranchSwitch)`` of the stable state at ``t`` that ``u``
+    (n_nodes, 3) falls to along the critical mode of ``st``; stability and evaluation None
+    where none is reached."""
+    path = _path(system, ends)
+    choice = choose_branch(path, u, t, st.mode, options, options.branch)
+    if choice is None or choice.u is None:
+        sw = BranchSwitch(t, st, choice, u_from=u)
+        logger.info("%s", sw.describe())
+        return None, None, sw
+    ev = system.evaluate(choice.u, path.rest(t))
+    landed = state_stability(_tangent(ev), options.linear_solver)
+    sw = BranchSwitch(t, st, choice, landed, u)
+    logger.info("%s", sw.describe())
+    return (landed, ev, sw) if landed.stable else (None, None, sw)

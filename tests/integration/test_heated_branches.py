@@ -1,0 +1,90 @@
+"""A flat sheet heated from a bifurcation: the fold reached does not depend on the step count,
+every end state is stable, and the switch is an event (issue 28; theory 6.12).
+
+The waterbomb base (a 20 mm square, 8 triangles around the centre, midlines M, diagonals V,
+the paper's SU-8/Au stack) heated on every crease: load control without the stability check
+stayed on the symmetric, unstable nearly flat state for small increments and jumped to a folded
+branch for large ones (0.35 deg or 7.2 deg on the midlines at 20 mW).
+"""
+
+import numpy as np
+import pytest
+
+import simulator as S
+
+L = 10.0
+
+
+def _waterbomb():
+    outer = [(L, 0), (L, L), (0, L), (-L, L), (-L, 0), (-L, -L), (0, -L), (L, -L)]
+    verts = [[0.0, 0.0, 0.0]] + [[x, y, 0.0] for x, y in outer]
+    edges = [[0, 1 + i] for i in range(8)] + [[1 + i, 1 + (i + 1) % 8] for i in range(8)]
+    return {"file_spec": 1.1, "frame_unit": "mm", "vertices_coords": verts,
+            "faces_vertices": [[0, 1 + i, 1 + (i + 1) % 8] for i in range(8)],
+            "edges_vertices": edges,
+            "edges_assignment": ["M" if i % 2 == 0 else "V" for i in range(8)] + ["B"] * 8}
+
+
+@pytest.fixture(scope="module")
+def waterbomb():
+    stack = S.get_stack("su8-au")
+    geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
+                       crease_thickness=stack.crease_thickness,
+                       panel_thickness=stack.panel_thickness)
+    heated = geo.pattern.creases.tolist()
+    return S.stack_model(geo.pattern, stack, heated), heated
+
+
+def _heat(model, heated, mw, n, **options):
+    return S.simulate(model, [S.Heat({c: mw * 1e-3 for c in heated}, increments=n)],
+                      options=S.NewtonOptions(**options))
+
+
+@pytest.mark.parametrize("mw", [5.0, 20.0])
+def test_the_fold_does_not_depend_on_the_step_count(waterbomb, mw):
+    model, heated = waterbomb
+    folds = []
+    for n in (25, 50, 100, 200, 400):
+        res = _heat(model, heated, mw, n)
+        assert res.success and res.status == "converged", (n, res.message)
+        assert res.stable is True and res.steps[-1].stable is True
+        folds.append(np.degrees(res.fold_angle[-1]))
+    folds = np.array(folds)
+    assert np.ptp(folds, axis=0).max() < 1.0, folds
+    # folded, both crease families in their assigned directions (M up, V down here)
+    assert folds[0][0] > 1.0 and folds[0][1] < -2.0
+
+
+def test_the_switch_is_an_event_and_in_meta(waterbomb, tmp_path):
+    import json
+
+    model, heated = waterbomb
+    res = _heat(model, heated, 20.0, 50)
+    switches = [e for e in res.events if e.kind == "branch_switch"]
+    assert len(switches) == 1
+    e = switches[0]
+    assert e.step == "heat" and 0 < e.load_factor <= 0.02 and e.jump > 1e-6
+    assert "NewtonOptions(branch='other')" in e.message
+    res.save(tmp_path)
+    meta = json.loads((tmp_path / "meta.json").read_text())
+    assert meta["stable"] is True and meta["steps"][0]["stable"] is True
+    assert [m["kind"] for m in meta["events"]] == ["branch_switch"]
+
+
+def test_without_the_switch_the_unstable_end_is_not_called_converged(waterbomb):
+    model, heated = waterbomb
+    res = _heat(model, heated, 20.0, 50, stability="check")
+    assert not res.success and res.status == "unstable" and res.stable is False
+    assert [e.kind for e in res.events] == ["stability_lost"]
+    assert "unstable" in res.message
+
+
+def test_the_other_branch_is_stable_and_different(waterbomb):
+    model, heated = waterbomb
+    lower = _heat(model, heated, 20.0, 50)
+    other = _heat(model, heated, 20.0, 50, branch="other")
+    assert other.success and other.stable is True
+    a, b = np.degrees(lower.fold_angle[-1]), np.degrees(other.fold_angle[-1])
+    assert np.abs(a - b).max() > 5.0
+    (e,), = [[x for x in other.events if x.kind == "branch_switch"]]
+    assert "branch='lower'" in e.message

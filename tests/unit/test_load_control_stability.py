@@ -1,0 +1,122 @@
+"""Load control checks every accepted state and leaves an unstable one (theory 6.12).
+
+The pitchfork of tests/unit/test_branch_switch.py (node with free DOFs x, y, energy
+E = x^2/2 + (1 - x) y^2/2 + y^4/4, load lambda along x): the fundamental branch y = 0 is exactly
+invariant under Newton, stable up to lambda = 1 and unstable after; the stable branches are
+x = 1 + y^2, lambda = 1 + y^2 / 2. Load control to lambda = 1.5 must end on them (y = +-1,
+x = 2) whatever the increment count, and report the switch.
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from simulator.linalg.ladder import factorize
+from simulator.solvers.newton import NewtonOptions, follow_path
+from simulator.solvers.stability import state_stability, tangent_stability
+
+
+class Pitchfork:
+    """Two nodes, node 0 fixed, node 1 free in x and y (the EquilibriumSystem interface)."""
+
+    size, max_step = 1.0, None
+
+    def __init__(self):
+        self.nodes = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+        self.free, self.n_dof = np.array([3, 4]), 6
+
+    def evaluate(self, u, rest, hessian=True):
+        x, y = u[1, 0], u[1, 1]
+        f = np.zeros(6)
+        f[3], f[4] = x - 0.5 * y**2, y * (1 - x) + y**3
+        K = np.array([[1.0, -y], [-y, 1 - x + 3 * y**2]]) if hessian else None
+        e = 0.5 * x**2 + 0.5 * (1 - x) * y**2 + 0.25 * y**4
+        return SimpleNamespace(f_int=f, K=K, energies={"toy": e})
+
+
+def _run(increments, **options):
+    f_end = np.zeros(6)
+    f_end[3] = 1.5
+    return follow_path(Pitchfork(), np.zeros((2, 3)), np.zeros(6), f_end, np.zeros(0),
+                       np.zeros(0), increments, NewtonOptions(**options))
+
+
+@pytest.mark.parametrize("increments", [2, 3, 7, 15, 40])  # 3, 15: through lambda = 1
+def test_load_control_ends_on_the_stable_branch_at_any_increment_count(increments):
+    res = _run(increments)
+    assert res.success and res.stable is True
+    x, y = res.u[1, 0], res.u[1, 1]
+    # a tie (E is even in y): the critical mode's positive sign, y > 0
+    assert y == pytest.approx(1.0, rel=1e-8) and x == pytest.approx(2.0, rel=1e-8)
+    sw, = res.switches
+    assert sw.switched and sw.choice.tie and sw.choice.sign == 1
+    if increments % 3:                       # the first state past lambda = 1: unstable
+        assert sw.t > 2 / 3 and sw.unstable.negative == 1
+    else:               # an increment ends exactly at lambda = 1 (a singular tangent): the
+        assert sw.t == pytest.approx(2 / 3 + 1 / increments)    # next one leaves it
+        assert sw.unstable.negative == 0 and sw.unstable.lowest == 0.0
+    assert "NewtonOptions(branch='other')" in sw.describe()
+
+
+def test_the_other_branch_on_request():
+    res = _run(10, branch="other")
+    assert res.success and res.stable is True
+    assert res.u[1, 1] == pytest.approx(-1.0, rel=1e-8)
+
+
+def test_check_only_reports_the_unstable_state():
+    res = _run(10, stability="check")
+    assert res.u[1, 1] == 0.0 and res.u[1, 0] == pytest.approx(1.5)
+    assert res.stable is False
+    assert [s.switched for s in res.switches] == [False] and res.switches[0].t == 0.7
+
+
+def test_off_checks_nothing():
+    res = _run(10, stability="off")
+    assert res.stable is None and res.switches == [] and res.u[1, 1] == 0.0
+
+
+def test_options_are_checked():
+    with pytest.raises(Exception, match="NewtonOptions.stability"):
+        NewtonOptions(stability="yes")
+    with pytest.raises(Exception, match="NewtonOptions.branch"):
+        NewtonOptions(branch="upper")
+
+
+def _spd(n, seed=0):
+    a = np.random.default_rng(seed).normal(size=(n, n))
+    return a @ a.T + n * np.eye(n)
+
+
+def test_state_stability_is_cheap_on_a_positive_definite_tangent_and_exact_otherwise():
+    K = _spd(30)
+    st = state_stability(K)
+    assert st.stable and st.lowest is None and st.mode is None
+    K[0, 0] = -5.0 * K[0, 0]
+    st = state_stability(K)
+    w = np.linalg.eigvalsh(K)
+    assert not st.stable and st.negative == int(np.sum(w < 0))
+    assert st.lowest == pytest.approx(w[0])
+
+
+def test_a_mechanism_zero_eigenvalue_is_not_a_loss_of_stability():
+    # rank-deficient positive semi-definite: the zero eigenvalue with round-off
+    a = np.random.default_rng(1).normal(size=(40, 39))
+    K = a @ a.T
+    assert np.linalg.eigvalsh(K)[0] < 1e-12
+    assert state_stability(K).stable
+    assert tangent_stability(K, rtol=100.0).stable
+
+
+def test_superlu_gives_the_inertia_of_a_symmetric_indefinite_matrix():
+    n = 900
+    A = sp.random(n, n, density=0.01, random_state=3)
+    A = (A + A.T + sp.diags(np.linspace(-3.0, 50.0, n))).tocsr()
+    w = np.linalg.eigvalsh(A.toarray())
+    factor = factorize(A, kind="symmetric", backend="superlu")
+    assert factor.backend.startswith("superlu")
+    assert factor.inertia == (int(np.sum(w > 0)), int(np.sum(w < 0)), 0)
+    st = state_stability(A, linear_solver="superlu")
+    assert st.negative == int(np.sum(w < 0)) or not st.exact
