@@ -72,6 +72,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.stability": ("Stability", "tangent_stability"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
+    ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
+                       "crease_limit_temperatures"),
     ".thermal.fixed_shape": ("FixedShapeTemperatures", "fixed_shape_temperatures",
                              "boundary_panel_plane"),
     ".thermal.transient": ("REFERENCE_THETA", "DEFAULT_THETA", "ThetaStepper", "TransientHeatResult",
@@ -107,6 +109,9 @@ __all__ = [
     # time schedules of mechanical drives (Dynamics, ElectroThermal)
     "Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
     "PiecewiseLinearSignal",
+    # the crease temperature limit (1.2 T_g, judged on the crease centre-line mean)
+    "TemperatureLimit", "TemperatureVerdict", "crease_limit_temperatures", "TG_FACTOR",
+    "LIMIT_MEASURES",
     # heat loss: calibrating the chain model to the boundary-integral model or the FE
     "calibrate_environment", "CalibrationResult",
     # steady temperatures of a fixed shape under the chain, integral or FE loss model

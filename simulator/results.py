@@ -24,6 +24,7 @@ from ._table import step_array, write_csv
 from ._version import __version__
 from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
+from .thermal.limit import crease_limit_temperatures
 
 __all__ = ["StepResult", "SimulationResult"]
 
@@ -214,8 +215,9 @@ class SimulationResult:
     @cached_property
     def crease_temperature_centre_line(self) -> np.ndarray:
         """(m, C) mean of the 3 centre-line nodes (A, B, Ctr) of each crease [deg C]: the
-        measure the 1.2 T_g design limit is checked on (theory 5.4)."""
-        return self.history["temperature"][:, self.model.mesh.crease_nodes[:, 4:7]].mean(axis=2)
+        measure the 1.2 T_g design limit is judged on (theory 5.4;
+        :class:`~simulator.thermal.limit.TemperatureLimit`)."""
+        return crease_limit_temperatures(self.history["temperature"].T, self.model.mesh).T
 
     @cached_property
     def crease_temperature_max(self) -> np.ndarray:

@@ -87,7 +87,7 @@ import pandas as pd
 
 from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, evaluate_gripper,
                                     gripper_model)
-from simulator import simulate, solve_fe3d
+from simulator import crease_limit_temperatures, simulate, solve_fe3d
 from simulator.cases import get_case
 from simulator.model.bimorph import crease_temperature_weights
 from simulator.thermal.fixed_shape import boundary_panel_plane
@@ -138,8 +138,9 @@ def _actuation(mesh, T) -> np.ndarray:
 
 
 def _centre(mesh, T) -> np.ndarray:
-    """(C,) centre-line means (A, B, Ctr) [degC] of nodal temperatures ``T``."""
-    return T[mesh.crease_nodes[:, 4:7]].mean(axis=1)
+    """(C,) centre-line means (A, B, Ctr) [degC] of nodal temperatures ``T``: the measure of
+    the 1.2 T_g limit (:func:`simulator.crease_limit_temperatures`)."""
+    return crease_limit_temperatures(T, mesh)
 
 
 def _rise_error(value, fe, room):

@@ -121,6 +121,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from simulator import crease_limit_temperatures
 from simulator.model.bimorph import crease_temperature_weights
 from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
@@ -179,7 +180,7 @@ def crease_measures(mesh, temperature) -> dict:
     hottest of the 7 crease nodes), from node temperatures (n,) [deg C]."""
     t = np.asarray(temperature, float)[mesh.crease_nodes]
     return {"T_crease": t @ crease_temperature_weights(), "T_max": t[:, 6],
-            "T_ave": t[:, 4:7].mean(axis=1), "T_hottest": t.max(axis=1)}
+            "T_ave": crease_limit_temperatures(temperature, mesh), "T_hottest": t.max(axis=1)}
 
 
 def substrate_plane(model, x) -> tuple:

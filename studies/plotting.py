@@ -21,7 +21,8 @@ from studies.figure_notes import (FULL_STAMP, LINESTYLES, PALETTE, QUICK_STAMP, 
                                   stamp_full, stamp_quick)
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
-from simulator import SU8
+from design.devices.limits import SU8_LIMIT
+from simulator import crease_limit_temperatures
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",
@@ -34,8 +35,9 @@ POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [d
                                "temperature_max [degC]")
 _T_LABEL = "temperature [°C]"
 #: The paper's crease temperature limit, 1.2 T_g of SU-8 [deg C] (252 deg C): above it the
-#: polymer softens. Every plot showing temperature marks values above it.
-T_LIMIT = 1.2 * SU8.glass_transition
+#: polymer softens. Every plot showing temperature marks values above it
+#: (:data:`design.devices.limits.SU8_LIMIT`, judged on the crease centre-line mean).
+T_LIMIT = SU8_LIMIT.value
 _LIMIT_LABEL = f"above 1.2 T_g = {T_LIMIT:.0f} °C"
 _FACE_LABEL = "temperature [°C] (facet: its hottest node)"
 #: The one temperature the 1.2 T_g limit is checked on, in the design problems and in every
@@ -61,7 +63,7 @@ def centre_line_temperatures(temperature, mesh) -> np.ndarray:
     ndarray (C,) or (m, C)
     """
     t = np.asarray(temperature, float)
-    return t[..., np.asarray(mesh.crease_nodes)[:, 4:7]].mean(axis=-1)
+    return crease_limit_temperatures(t.T, mesh).T
 
 
 def share_3d_scale(axes, points, z_stretch: float = 1.0) -> str:
@@ -157,15 +159,18 @@ def _temperature_colorbar(fig, ax, mappable, shrink=0.7):
 
 def _mark_hot_creases(ax, x_mm, temperature, mesh) -> int:
     """Circle the creases whose :data:`T_MEASURE` temperature is above 1.2 T_g (at their
-    centre node) in a 3-D axes and state the hottest crease's value beside the hottest node's;
-    returns how many creases are above."""
+    centre node) in a 3-D axes and state the verdict (the hottest crease's centre-line mean
+    against the limit) with the hottest node as information; returns how many creases are
+    above."""
     t = np.asarray(temperature, float)
     if not len(mesh.crease_nodes):
         return 0
     centre = centre_line_temperatures(t, mesh)
     hot = centre > T_LIMIT
-    text = (f"hottest crease {centre.max():.0f} °C (centre line), hottest node "
-            f"{t[np.asarray(mesh.crease_nodes)].max():.0f} °C")
+    v = SU8_LIMIT.judge(t, mesh)
+    text = (f"crease {v.crease}: centre-line mean {v.temperature:.0f} °C "
+            f"{'≤' if v.success else '>'} 1.2 T_g = {T_LIMIT:.0f} °C; hottest node "
+            f"{v.hottest_node:.0f} °C (information)")
     if hot.any():
         p = x_mm[np.asarray(mesh.crease_nodes)[hot, 6]]
         ax.computed_zorder = False          # the circles stay in front of the facets

@@ -10,8 +10,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from simulator import (ConvergenceError, Model, ParameterError, SimulationState, SolverError,
-                       fold_angles, initial_state)
+from simulator import (LIMIT_MEASURES, ConvergenceError, Model, ParameterError, SimulationState,
+                       SolverError, crease_limit_temperatures, fold_angles, initial_state)
 # Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
 # operator and the crease temperature weights for the influence matrices; a Newton re-solve
 # of the equilibrium system with moved crease rest angles for the fold sensitivities). These
@@ -28,10 +28,9 @@ __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation", "TEMPE
 
 #: What the temperature limit bounds: ``"centre_line"``, the mean of each crease's three
 #: centre-line nodes (A, B, Ctr; the documented measure of the 1.2 T_g limit, theory 5.4, as
-#: in every design problem and figure), or ``"crease_max"``, every crease node (stricter).
-TEMPERATURE_MEASURES = ("centre_line", "crease_max")
-#: Columns of ``BarHingeMesh.crease_nodes`` on the crease's centre line (A, B, Ctr).
-_CENTRE_LINE_NODES = slice(4, 7)
+#: in every design problem and figure), or ``"crease_max"``, every crease node (stricter);
+#: :data:`simulator.LIMIT_MEASURES`.
+TEMPERATURE_MEASURES = tuple(LIMIT_MEASURES)
 
 
 def _heater_table(model: Model, heaters) -> dict:
@@ -87,24 +86,24 @@ def limit_temperatures(model: Model, node_values: np.ndarray,
 
     ``node_values`` (n,) or (n, k) (temperatures [deg C], or rises per heater watt [K/W]);
     returns (C,) or (C, k) for ``"centre_line"`` (the mean of each crease's centre-line nodes
-    A, B, Ctr: a linear functional, so the LP stays linear) or (C * 7,) or (C * 7, k) for
-    ``"crease_max"`` (every crease node, rows of ``mesh.crease_nodes``).
+    A, B, Ctr, :func:`simulator.crease_limit_temperatures`: a linear functional, so the LP
+    stays linear) or (C * 7,) or (C * 7, k) for ``"crease_max"`` (every crease node, rows of
+    ``mesh.crease_nodes``: their maximum is bounded by bounding each).
     """
-    return _of_crease_nodes(np.asarray(node_values)[model.mesh.crease_nodes],
-                            _check_measure(measure))
+    values = np.asarray(node_values)
+    if _check_measure(measure) == "centre_line":
+        return crease_limit_temperatures(values, model.mesh)
+    return values[model.mesh.crease_nodes].reshape(-1, *values.shape[1:])
 
 
-def _of_crease_nodes(nodes: np.ndarray, measure: str) -> np.ndarray:
-    """The limit measure from values at the crease nodes, (C, 7) or (C, 7, k)."""
-    if measure == "centre_line":
-        return nodes[:, _CENTRE_LINE_NODES].mean(axis=1)
-    return nodes.reshape(-1, *nodes.shape[2:])
-
-
-def _limit_rows(H: np.ndarray, measure: str) -> np.ndarray:
+def _limit_rows(model: Model, H: np.ndarray, measure: str) -> np.ndarray:
     """Rows of the limit measure per heater watt from ``H`` (C * 7, k), the rise of every
     crease node (:func:`influence_matrices`)."""
-    return _of_crease_nodes(H.reshape(-1, 7, H.shape[1]), measure)
+    if measure == "crease_max":
+        return H
+    rise = np.zeros((model.mesh.n_nodes, H.shape[1]))
+    rise[model.mesh.crease_nodes.ravel()] = H
+    return limit_temperatures(model, rise, measure)
 
 
 def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
@@ -222,7 +221,7 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
     step = np.array([float(v) for v in dict(targets).values()]) - folds
     rise_limit = temperature_limit - limit_temperatures(model, state.temperature,
                                                         temperature_measure)
-    p, _, status = _solve_lp(A, step, band, _limit_rows(H, temperature_measure), rise_limit,
+    p, _, status = _solve_lp(A, step, band, _limit_rows(model, H, temperature_measure), rise_limit,
                              _weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
         raise SolverError(f"linear_allocation: LP not solved ({status}).")

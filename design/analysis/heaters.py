@@ -48,7 +48,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simulator import (ConvergenceError, Heat, Model, NewtonOptions, ParameterError,
-                       SimulationState, fold_angles, initial_state, simulate)
+                       SimulationState, TemperatureLimit, TemperatureVerdict, fold_angles,
+                       initial_state, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import integer, non_negative, positive
 
@@ -184,6 +185,12 @@ class _Allocation:
     max_node_temperature: float = math.nan
     history: list = field(default_factory=list)
     state: SimulationState | None = None
+    verdict: TemperatureVerdict | None = None     # of the last simulated round
+
+    def temperature_note(self) -> str:
+        """``; last round: crease 3: centre-line mean 249.80 degC <= limit = 252 degC`` (the
+        verdict of the last simulated round; empty if none)."""
+        return "" if self.verdict is None else f"; last round: {self.verdict.message}"
 
     @property
     def total_power(self) -> float:
@@ -207,6 +214,7 @@ class _Rounds:
         self.limit, self.max_power, self.increments, self.options = (limit, max_power,
                                                                      increments, options)
         self.measure = out.temperature_measure
+        self.verdict_limit = TemperatureLimit(limit, measure=self.measure)
         self.rise_limit = limit - limit_temperatures(model, state.temperature, self.measure)
         if np.any(self.rise_limit <= 0):
             raise ParameterError(f"temperature_limit = {limit!r} degC is not above the start "
@@ -223,7 +231,7 @@ class _Rounds:
         """``A``, ``H`` and the folds at ``state`` (heated with ``p_cur``); the folds are kept
         continuous with ``previous`` through +-pi (atan2 wraps)."""
         self.A, self.H_nodes, folds = _linear_model(self.model, state, self.table, self.rows)
-        self.H = _limit_rows(self.H_nodes, self.measure)    # what the limit bounds, per watt
+        self.H = _limit_rows(self.model, self.H_nodes, self.measure)  # the limit's measure per W
         if previous is not None:
             folds = previous + (folds - previous + np.pi) % (2 * np.pi) - np.pi
         self.folds = folds
@@ -262,9 +270,9 @@ class _Rounds:
         self.radius = self.radius * (2.0 if miss <= 0.25 * moved + tol else
                                      0.5 if miss > 0.75 * moved else 1.0)
         out.achieved = dict(zip(out.targets, map(float, reached)))
-        out.max_temperature = float(limit_temperatures(self.model, res.state.temperature,
-                                                       self.measure).max())
-        out.max_node_temperature = float(res.state.temperature[mesh.crease_nodes].max())
+        out.verdict = self.verdict_limit.judge(res.state.temperature, mesh)
+        out.max_temperature = out.verdict.temperature
+        out.max_node_temperature = out.verdict.hottest_node
         error = np.maximum(np.abs(reached - goal) - self.band, 0.0)
         out.history.append({"round": out.rounds, "total_power [mW]": 1e3 * out.total_power,
                             "worst_fold_error [deg]": math.degrees(error.max()),
@@ -275,6 +283,7 @@ class _Rounds:
         logger.info("heater allocation round %d: %.4g mW, fold error %.3g deg beyond the band, "
                     "model miss %.3g deg, %.4g degC", out.rounds, 1e3 * out.total_power,
                     math.degrees(error.max()), math.degrees(miss), out.max_temperature)
+        # the LP puts the limit's measure on the limit; 1e-6 K of it is rounding, not a miss
         met = (error.max() <= tol and miss <= tol and out.max_temperature <= self.limit + 1e-6)
         return met, excess
 
@@ -375,7 +384,8 @@ def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _A
                 out.message = (f"round {out.rounds}: the heaters ({len(out.heaters)} circuits) "
                                f"and limits ({limits}) leave the folds "
                                f"{math.degrees(excess):.3g} deg (sum over targets) from "
-                               f"{100 * k / stages:.0f}% of the targets")
+                               f"{100 * k / stages:.0f}% of the targets"
+                               + out.temperature_note())
                 logger.warning(out.message)
                 return out
         else:
@@ -383,12 +393,14 @@ def _run_stages(run: _Rounds, fold0, target, stages, max_rounds, fold_tol) -> _A
     else:
         out.status = "converged"
         out.message = (f"targets met within {math.degrees(band + fold_tol):.3g} deg in "
-                       f"{out.rounds} rounds: {1e3 * out.total_power:.4g} mW")
+                       f"{out.rounds} rounds: {1e3 * out.total_power:.4g} mW"
+                       + out.temperature_note())
         return out
     out.message = (f"targets not met within {math.degrees(band + fold_tol):.3g} deg after "
                    f"{max_rounds} rounds" + (f" (worst fold error "
                                              f"{out.history[-1]['worst_fold_error [deg]']:.3g} "
-                                             "deg)" if out.history else ""))
+                                             "deg)" if out.history else "")
+                   + out.temperature_note())
     logger.warning(out.message)
     return out
 

@@ -224,7 +224,9 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
         power cap, ``failed``: a simulation failure), ``feasible``, stage and total powers
         [mW] (NaN, an empty CSV cell, when not met), temperatures [degC],
         ``margin <constraint> [-]``
-        (``-g``, positive when satisfied), ``simulations``, ``message``, ``wall_time [s]``.
+        (``-g``, positive when satisfied), ``simulations``, ``message`` (of an infeasible point:
+        the crease, its temperature and the limit, e.g. ``both stages met; not feasible: crease
+        2: centre-line mean 281.02 degC > 1.2 T_g = 252 degC``), ``wall_time [s]``.
         Everything except :data:`TIMING_COLUMNS` is the same whatever the executor.
     """
     import pandas as pd
@@ -272,8 +274,10 @@ class RobustGripperProblem(DesignProblem):
 
     Objective: the largest total power [W] over the residual folds. Constraints: the size
     bounds and ``temperature`` = the largest temperature constraint over the residual folds
-    (the limit must hold at every one). Not successful if any residual fold is not (message
-    names them; status ``"failed"`` if a simulation failed at one, else ``"not_met"``).
+    (the limit must hold at every one; the message of an infeasible design names, per residual
+    fold above the limit, the crease, its temperature and the limit). Not successful if any
+    residual fold is not (message names them; status ``"failed"`` if a simulation failed at
+    one, else ``"not_met"``).
     Metrics per residual fold: ``total_power@-10deg [mW]``, ``assembly_power@... [mW]``,
     ``grip_power@... [mW]``, ``temperature@... [degC]`` (``@base=-10deg,arm=0deg`` per
     group; powers None when not met), plus the worst ``total_power [mW]`` and
@@ -325,8 +329,10 @@ class RobustGripperProblem(DesignProblem):
         constraints = dict(self.space.bound_margins(values))
         if temps:
             constraints["temperature"] = max(temps)
+        hot = [f"residual fold {label}: {ev.message}" for label, ev in evs
+               if ev.success and not ev.feasible]          # names crease, temperature, limit
         message = ("; ".join(f"residual fold {label}: {ev.message}" for label, ev in bad)
-                   if bad else f"all {len(evs)} residual folds met")
+                   if bad else "; ".join([f"all {len(evs)} residual folds met"] + hot))
         failure = None if not bad else ("failed" if any(ev.status == "failed" for _, ev in bad)
                                         else "not_met")
         return (math.inf if bad else objective), constraints, metrics, failure, message

@@ -1,16 +1,15 @@
 """What a finished simulation printed by the CLI says besides its status: the events of its steps
-(snaps, limit points: typed records, :class:`simulator.Event`), the hottest crease and any
-crossing of the design limit 1.2 T_g of the crease material.
+(snaps, limit points: typed records, :class:`simulator.Event`) and the verdict on the design
+limit 1.2 T_g of the crease material.
 
 Creases are named by their crease id (the pattern's edge id), as in ``creases.csv``, the FOLD
-files and the viewer. The temperature is the hottest of a crease's 7 nodes
-(``temperature_max [degC]`` of ``creases.csv``): the conservative measure, the one the limit is
-checked on here.
+files and the viewer. The limit is judged, as everywhere, on the crease centre-line mean (the
+mean of its nodes A, B, Ctr; theory 5.4, :class:`simulator.TemperatureLimit`), the hottest
+crease over all records counting; the hottest of its nodes (``temperature_max [degC]`` of
+``creases.csv``) follows as information.
 """
 
 from __future__ import annotations
-
-from .precheck import TG_FACTOR
 
 __all__ = ["summary_lines"]
 
@@ -35,39 +34,32 @@ def _event_line(event, crease_ids) -> str:
 
 
 def _temperature_lines(result) -> list:
-    """The hottest crease over all records and the first record above 1.2 T_g, if any."""
+    """The verdict on the 1.2 T_g limit over all records (the crease centre-line mean, theory
+    5.4), then the hottest node as information; none if the crease material has no T_g."""
     import numpy as np
 
-    tmax = result.crease_temperature_max                         # (records, C) [degC]
-    if tmax.size == 0 or not np.isfinite(tmax).any():
+    from simulator import TemperatureLimit
+
+    mesh, h = result.model.mesh, result.history
+    limit = TemperatureLimit.of_material(mesh.pattern.crease_material)
+    if limit is None or not len(mesh.crease_ids) or not np.isfinite(h["temperature"]).any():
         return []
-    h, ids = result.history, result.model.mesh.crease_ids
-    rec, row = np.unravel_index(int(np.nanargmax(tmax)), tmax.shape)
-    hottest = float(tmax[rec, row])
-    lines = [f"hottest crease: crease {int(ids[row])} at {hottest:.1f} degC (hottest of its 7 "
-             f"nodes; record {rec}, step {h['stage_name'][rec]})"]
-    material = result.model.mesh.pattern.crease_material
-    tg = getattr(material, "glass_transition", None)
-    if tg is None:
-        return lines
-    limit = TG_FACTOR * tg
-    above = np.flatnonzero((tmax > limit).any(axis=1))
-    if len(above):
-        first = int(above[0])
-        crease = int(ids[int(np.argmax(tmax[first]))])
-        total = 1e3 * float(np.sum(h["power"][first]))
-        lines.append(f"above {TG_FACTOR:g} T_g = {limit:.0f} degC of the crease material from "
-                     f"record {first} (step {h['stage_name'][first]}, {total:.4g} mW in all, "
-                     f"crease {crease} first): the design limit is exceeded")
-    else:
-        lines.append(f"below {TG_FACTOR:g} T_g = {limit:.0f} degC of the crease material "
-                     "throughout")
+    v = limit.judge(h["temperature"], mesh)
+    where = lambda rec: f"record {rec}, step {h['stage_name'][rec]}"  # noqa: E731
+    lines = [f"temperature limit {'met' if v.success else 'exceeded'}: {v.message} "
+             f"(hottest crease on that measure, {where(v.record)})"]
+    if v.first_record is not None:
+        first = v.first_record
+        lines.append(f"the centre-line mean first exceeds {limit.text} at {where(first)} "
+                     f"({1e3 * np.sum(h['power'][first]):.4g} mW in all), on crease "
+                     f"{v.first_crease}")
+    lines.append(v.information(where(v.hottest_node_record)))
     return lines
 
 
 def summary_lines(result) -> list:
     """Lines for the CLI summary of a :class:`simulator.SimulationResult`: one per event
-    (``event: ...``), then the hottest crease and the 1.2 T_g check (a model without a
+    (``event: ...``), then the verdict on the 1.2 T_g limit and the hottest node (a model without a
     thermal part, e.g. concentrated hinges, or without thermal records: none)."""
     ids = result.model.mesh.crease_ids
     lines = [f"event: {_event_line(e, ids)}" for e in result.events]

@@ -1,4 +1,6 @@
-"""``etorigami gripper evaluate``: the power to assemble, then grip, of one gripper design.
+"""``etorigami gripper evaluate``: the power to assemble, then grip, of one gripper design, and
+the verdict on the 1.2 T_g limit, judged on the crease centre-line mean as by ``run`` and the
+design problems (:meth:`~design.devices.gripper.GripperResult.temperature_verdict`).
 
 Lengths are given in micrometres and the residual fold in degrees.
 """
@@ -38,21 +40,27 @@ def _gripper_evaluate(args) -> int:
     design = _design(args)
     t0 = time.perf_counter()
     res = evaluate_gripper(design, mode=args.mode)
+    verdict = res.temperature_verdict()
     out = res.to_dict()
-    out["wall_time [s]"] = round(time.perf_counter() - t0, 3)
+    out.update({"temperature_limit [degC]": verdict.limit.value,
+                "temperature_status": verdict.status, "temperature_verdict": verdict.message,
+                "wall_time [s]": round(time.perf_counter() - t0, 3)})
     ok = res.success
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return 0 if ok else 1
     print(f"gripper W={args.W:g} L1={args.L1:g} L2={args.L2:g} La={args.La:g} um, residual "
           f"fold {args.residual_fold:g} deg ({args.mode}, {args.loss_model} heat loss): "
-          f"{'met' if ok else 'NOT MET'} - {res.message}")
+          f"{'met' if ok else 'NOT MET'} - {res.message}"
+          + ("" if verdict.success else "; the temperature limit is exceeded"))
     for stage in ("assembly", "grip"):
         print(f"  {stage:<9} {_mw(out[f'{stage}_power [mW]'])} per crease   "
               f"{out[f'{stage}_temperature [degC]']:7.2f} degC   "
               f"{out[f'{stage}_simulations']:4d} simulations")
-    print(f"  total     {_mw(out['total_power [mW]'])}   max crease temperature "
-          f"{out['max_crease_temperature [degC]']:.2f} degC   ({out['wall_time [s]']:.2f} s)")
+    print(f"  total     {_mw(out['total_power [mW]'])}   ({out['wall_time [s]']:.2f} s)")
+    print(f"temperature limit {verdict.status}: {verdict.message} (the stages' heated creases "
+          "at their stopping powers)")
+    print(verdict.information())
     return 0 if ok else 1
 
 

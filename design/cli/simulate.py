@@ -185,16 +185,21 @@ def _run(args) -> int:
 
 def _last_record_table(result, model) -> str:
     """The creases at the last record (crease, power, fold angle, temperatures), printed as
-    pandas would print those rows of ``creases.csv`` (without importing pandas)."""
+    pandas would print those rows of ``creases.csv`` (without importing pandas), with the
+    centre-line mean ``temperature_centre [degC]``, what the 1.2 T_g limit is judged on,
+    before the hottest node ``temperature_max [degC]``."""
     from ._text_table import format_table
 
     columns = result.to_columns()
     last = columns["step"] == columns["step"].max()
-    names = ["crease", "power [mW]", "fold_angle [deg]", "temperature [degC]",
-             "temperature_max [degC]"]
     if model.thermal is None and getattr(model.mesh, "sharp", False):
         names = ["crease", "fold_angle [deg]"]            # concentrated hinges: not heated
-    return format_table({n: columns[n][last] for n in names})
+        return format_table({n: columns[n][last] for n in names})
+    table = {n: columns[n][last] for n in ("crease", "power [mW]", "fold_angle [deg]",
+                                           "temperature [degC]")}
+    table["temperature_centre [degC]"] = result.crease_temperature_centre_line[-1]
+    table["temperature_max [degC]"] = columns["temperature_max [degC]"][last]
+    return format_table(table)
 
 
 def _save_interrupted(result, out_dir, meta, where) -> int:

@@ -76,8 +76,22 @@ def _sweep(args) -> int:
     cols = [c for c in frame.columns if c.startswith("residual_fold") or c in (
         "W [um]", "La [um]", "L1 [um]", "L2 [um]", "total_power [mW]", "feasible", "success")]
     print(frame[cols].to_string(index=False))
+    for line in _reasons(frame, cols):
+        print(line)
     print(f"{len(frame)} points written to {out / 'sweep.csv'}")
     return 0
+
+
+def _reasons(frame, cols) -> list:
+    """One line per point that is not feasible: its residual folds and why (the crease, its
+    temperature and the limit; or why the criterion was not met)."""
+    folds = [c for c in cols if c.startswith("residual_fold")]
+    lines = []
+    for i, row in frame[~frame["feasible"].astype(bool)].iterrows():
+        at = ", ".join(f"{c[:-len(' [deg]')].replace('_', ' ')} {row[c]:g} deg"
+                       for c in folds)
+        lines.append(f"point {i} ({at}): {row['status']}: {row['message']}")
+    return lines
 
 
 def _uncertainty(args) -> int:

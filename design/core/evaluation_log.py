@@ -380,7 +380,7 @@ class EvaluationRun:
                             " (from log)" if reused else "", ev.objective, ev.status
                             + (f" (max g = {ev.max_violation:.3g})"
                                if ev.status == "infeasible" else ""),
-                            "" if ev.success else f" - {ev.message}")
+                            "" if ev.feasible else f" - {ev.message}")
                 if self.callback is not None:
                     self.callback(ev)
         return [self.cache[k] for k in keys]

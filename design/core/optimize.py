@@ -344,7 +344,8 @@ def _result(run: EvaluationRun, method, outcome, counts, t0, options) -> Optimiz
     logged, (c0, r0) = run.logged, counts
     best = run.best()
     if best is not None and not best.feasible:
-        message += "; no feasible evaluation (the least-violating design is returned)"
+        message += ("; no feasible evaluation (the least-violating design is returned: "
+                    f"{best.message})")
     return OptimizationResult(
         method=method, x=dict(best.x) if best else {}, status=status, message=message,
         objective=best.objective if best else math.inf,

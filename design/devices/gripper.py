@@ -34,12 +34,13 @@ import numpy as np
 
 from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHingeParameters,
                        Bimorph, ContactParameters, Load, NewtonOptions, ParameterError, SelfFold,
-                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
-                       simulate)
+                       Supports, TemperatureLimit, TemperatureVerdict, ThermalParameters,
+                       build_mesh, example_patterns, make_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
+from .limits import SU8_LIMIT
 from .power_search import HeatingStage, bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
@@ -191,9 +192,10 @@ class StageResult(ResultFiles):
         if not met.
     temperature : float
         max of the centre-line mean temperatures of the stage's heated creases [deg C]
-        (the reference's measure).
+        (the measure of the 1.2 T_g limit, theory 5.4, on the reference's creases: those the
+        stage heats, at its stopping power; theory 10.6).
     max_crease_temperature : float
-        Hottest crease node of the whole gripper [deg C].
+        Hottest crease node of the whole gripper [deg C] (information beside ``temperature``).
     simulations : int
         Heating solves (calls) used by the search.
     increments : int
@@ -201,6 +203,8 @@ class StageResult(ResultFiles):
     snaps : tuple of Event
         The ``"snap"`` events (:class:`~simulator.events.Event`) on the way to the stopping
         power of a met stage (the ``" after a snap (...)"`` of the message); empty if none.
+    temperature_crease, hottest_node_crease : int or None
+        Crease ids of ``temperature`` and of ``max_crease_temperature``.
     """
 
     success: bool
@@ -213,6 +217,8 @@ class StageResult(ResultFiles):
     simulations: int
     increments: int
     snaps: tuple = ()
+    temperature_crease: int | None = None
+    hottest_node_crease: int | None = None
 
     def __post_init__(self):
         check_outcome(self, ("met",), STAGE_STATUSES[1:])
@@ -227,7 +233,9 @@ class StageResult(ResultFiles):
         return {"success": self.success, "status": self.status, "message": self.message,
                 "power_per_crease [mW]": power_if(self.success, self.power_per_crease, 1e3),
                 "measure": self.measure, "temperature [degC]": self.temperature,
+                "temperature_crease": self.temperature_crease,
                 "max_crease_temperature [degC]": self.max_crease_temperature,
+                "hottest_node_crease": self.hottest_node_crease,
                 "simulations": self.simulations, "increments": self.increments}
 
 
@@ -264,8 +272,19 @@ class GripperResult(ResultFiles):
 
     @property
     def max_temperature(self) -> float:
-        """Largest stopping temperature of the two stages [deg C] (reference measure)."""
+        """Largest stopping temperature of the two stages [deg C] (centre-line mean of the
+        stage's heated creases: the measure of the 1.2 T_g limit)."""
         return max(self.assembly.temperature, self.grip.temperature)
+
+    def temperature_verdict(self, limit: TemperatureLimit = SU8_LIMIT) -> TemperatureVerdict:
+        """The verdict on ``limit`` (default 1.2 T_g of SU-8 on the crease centre-line mean):
+        the stage whose stopping temperature on the limit's measure is the larger counts
+        (:attr:`StageResult.temperature`, or with ``"crease_max"`` its
+        ``max_crease_temperature``); the hottest node of the gripper is information."""
+        centre = max(self.assembly, self.grip, key=lambda s: s.temperature)
+        node = max(self.assembly, self.grip, key=lambda s: s.max_crease_temperature)
+        return TemperatureVerdict.of(limit, (centre.temperature, centre.temperature_crease),
+                                     (node.max_crease_temperature, node.hottest_node_crease))
 
     @property
     def message(self) -> str:
@@ -381,8 +400,8 @@ def _tip_distance(x) -> float:
 
 
 _STAGES = {
-    "assembly": (BASE_CREASES, _base_fold, lambda v: v > math.pi / 2, ((24, 25, 26), (30, 31, 32))),
-    "grip": (ARM_CREASES, _tip_distance, lambda v: v < 100e-6, ((33, 34, 35), (27, 28, 29))),
+    "assembly": (BASE_CREASES, _base_fold, lambda v: v > math.pi / 2),
+    "grip": (ARM_CREASES, _tip_distance, lambda v: v < 100e-6),
 }
 
 
@@ -390,7 +409,7 @@ class _Stage(HeatingStage):
     """Run one stage's heating trials from saved states (snaps followed by arc length)."""
 
     def __init__(self, model, name, callback=None, options=NewtonOptions()):
-        self.creases, self.measure_fn, self.met_fn, self.centre_lines = _STAGES[name]
+        self.creases, self.measure_fn, self.met_fn = _STAGES[name]
         super().__init__(model, self.creases, options)
         self.name, self.callback = name, callback
 
@@ -405,21 +424,28 @@ class _Stage(HeatingStage):
                 "max_crease_temperature [degC]": tmax})
         return state, ok, msg
 
+    def temperatures(self, state) -> tuple:
+        """``(heated, gripper)``: :class:`~simulator.TemperatureVerdict` of the stage's heated
+        creases (their centre-line mean: the limit's measure) and of all creases (the
+        gripper's hottest node)."""
+        mesh, t = self.model.mesh, state.temperature
+        return SU8_LIMIT.judge(t, mesh, self.creases), SU8_LIMIT.judge(t, mesh)
+
     def look(self, state):
-        x = self.model.mesh.nodes + state.u
-        value = self.measure_fn(x)
-        t = state.temperature
-        temp = max(float(t[list(c)].mean()) for c in self.centre_lines)
-        return value, self.met_fn(value), temp, float(t[self.model.mesh.crease_nodes].max())
+        value = self.measure_fn(self.model.mesh.nodes + state.u)
+        heated, gripper = self.temperatures(state)
+        return value, self.met_fn(value), heated.temperature, gripper.hottest_node
 
     def result(self, status, power, state, message):
-        value, _, temp, tmax = self.look(state)
+        value = self.measure_fn(self.model.mesh.nodes + state.u)
+        heated, gripper = self.temperatures(state)
         met = status == "met"
         if met:
             message = self.after_snaps(message, state)
-        return StageResult(met, status, message, power if met else None, value, temp, tmax,
-                           self.simulations, self.increments,
-                           self.snap_events(state) if met else ())
+        return StageResult(met, status, message, power if met else None, value,
+                           heated.temperature, gripper.hottest_node, self.simulations,
+                           self.increments, self.snap_events(state) if met else (),
+                           heated.crease, gripper.hottest_node_crease)
 
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",

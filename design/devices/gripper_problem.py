@@ -7,12 +7,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from simulator import ParameterError
+from simulator import TG_FACTOR, ParameterError
 
 from ..core.problem import DesignProblem
 from ..core.space import DesignSpace, Variable
 from .gripper import GripperDesign, check_fold, evaluate_gripper
-from .limits import SU8_TG
+from .limits import SU8_TG, TemperatureLimited
 
 __all__ = ["GripperProblem", "GRIPPER_SPACE"]
 
@@ -26,14 +26,18 @@ GRIPPER_SPACE = DesignSpace([
 
 
 @dataclass(frozen=True)
-class GripperProblem(DesignProblem):
+class GripperProblem(TemperatureLimited, DesignProblem):
     """Minimise the gripper's assembly + grip power per crease (paper section 6.3).
 
     Objective: ``total_power`` [W]. Constraints (g <= 0): the normalised size bounds and the
-    crease temperature limit ``(T - T_limit) / T_limit`` with ``T_limit = 1.2 T_g``; ``T`` is
-    the reference's measure (centre-line mean of the heated creases at the stopping power,
-    larger of the two stages) or, with ``temperature_measure="crease_max"``, the hottest crease
-    node. A design whose criterion is never met below the power cap is a failed evaluation.
+    crease temperature limit ``(T - T_limit) / T_limit`` with ``T_limit = 1.2 T_g``, from
+    :meth:`~design.devices.gripper.GripperResult.temperature_verdict`
+    (the verdict ``gripper evaluate`` prints); ``T`` is the measure of the limit (theory 5.4:
+    centre-line mean of the heated creases at the stopping power, larger of the two stages)
+    or, with ``temperature_measure="crease_max"``, the hottest crease node. A design whose
+    criterion is never met below the power cap is a failed evaluation; an evaluated design
+    above the limit is infeasible, and its message names the crease, its temperature and the
+    limit.
 
     Parameters
     ----------
@@ -58,7 +62,7 @@ class GripperProblem(DesignProblem):
     residual_fold: float = 0.0
     residual_fold_groups: tuple = ()
     glass_transition: float = SU8_TG
-    temperature_factor: float = 1.2
+    temperature_factor: float = TG_FACTOR
     temperature_measure: str = "centre_line"
     power_cap: float = 40e-3
     base: GripperDesign = GripperDesign()
@@ -68,9 +72,7 @@ class GripperProblem(DesignProblem):
     name: str = "gripper"
 
     def __post_init__(self):
-        if self.temperature_measure not in ("centre_line", "crease_max"):
-            raise ParameterError(f"temperature_measure = {self.temperature_measure!r}; use "
-                                 "'centre_line' or 'crease_max'.")
+        _ = self.limit                               # checks temperature_measure
         if self.mode not in ("bisect", "staircase"):
             raise ParameterError(f"mode = {self.mode!r}; use 'bisect' or 'staircase'.")
         for name in ("power_step", "max_power_step"):
@@ -91,10 +93,6 @@ class GripperProblem(DesignProblem):
         given = dict(self.residual_fold_groups)
         return {g: float(given.get(g, self.residual_fold)) for g in ("base", "arm")}
 
-    @property
-    def temperature_limit(self) -> float:
-        return self.temperature_factor * self.glass_transition
-
     def design(self, values: dict) -> GripperDesign:
         folds = self.group_folds()
         return replace(self.base, residual_fold=self.residual_fold,
@@ -104,17 +102,16 @@ class GripperProblem(DesignProblem):
         res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap,
                                step=self.power_step, max_step=self.max_power_step)
         d = res.to_dict()
-        temp = res.max_temperature if self.temperature_measure == "centre_line" \
-            else d["max_crease_temperature [degC]"]
+        verdict, message = self._judge(res)
         constraints = dict(self.space.bound_margins(values))
-        constraints["temperature"] = (temp - self.temperature_limit) / self.temperature_limit
+        constraints["temperature"] = verdict.constraint
         metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]")
                    and not k.startswith(("residual_fold", "loss_model", "integral_refinement"))
                    and k not in ("success", "status", "message", "mode")}
-        metrics["temperature [degC]"] = temp
+        metrics["temperature [degC]"] = verdict.temperature
         return (res.total_power, constraints, metrics, None if res.success else res.status,
-                res.message)
+                message)
 
     def settings(self) -> dict:
         folds = self.group_folds()

@@ -14,15 +14,16 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator import (Model, ParameterError, PatternError, build_mesh, example_patterns,
-                       miura_fold_signs, miura_sheet_model, simulate)
+from simulator import (TG_FACTOR, Model, ParameterError, PatternError, TemperatureLimit,
+                       TemperatureVerdict, build_mesh, example_patterns, miura_fold_signs,
+                       miura_sheet_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import in_range, integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
 from ..core.problem import DesignProblem
-from .limits import SU8_TG
+from .limits import SU8_LIMIT, SU8_TG, TemperatureLimited
 from ..core.space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
@@ -145,6 +146,8 @@ class LiftPowerResult(ResultFiles):
         (the ``" after a snap (...)"`` of the message); empty if none or not met
     temperature : centre-line mean of the hottest crease there [deg C] (the measure of the
         1.2 T_g limit; theory 5.4)
+    temperature_crease, hottest_node_crease : crease ids of ``temperature`` and of
+        ``max_crease_temperature`` (None if unknown)
     """
 
     success: bool
@@ -158,6 +161,8 @@ class LiftPowerResult(ResultFiles):
     n_creases: int
     snaps: tuple = ()
     temperature: float = math.nan
+    temperature_crease: int | None = None
+    hottest_node_crease: int | None = None
 
     def __post_init__(self):
         check_outcome(self, ("met",), ("not_met", "failed"))
@@ -167,6 +172,12 @@ class LiftPowerResult(ResultFiles):
                                  "power, an unreached one None.")
 
     _csv_name = "lift_power.csv"
+
+    def temperature_verdict(self, limit: TemperatureLimit = SU8_LIMIT) -> TemperatureVerdict:
+        """The verdict on ``limit`` (default 1.2 T_g of SU-8 on the crease centre-line mean)
+        at the power found (at the last trial if not met)."""
+        return TemperatureVerdict.of(limit, (self.temperature, self.temperature_crease),
+                                     (self.max_crease_temperature, self.hottest_node_crease))
 
     def to_dict(self) -> dict:
         """Flat summary, keys ``name [unit]`` (powers None when not met)."""
@@ -191,12 +202,12 @@ class _LiftStage(HeatingStage):
         """(lift [m], target met, hottest crease's centre-line mean [deg C], hottest crease
         node [deg C])."""
         lift = float(state.u[self.nodes, 2].mean())
-        t, cn = state.temperature, self.model.mesh.crease_nodes
-        return lift, lift >= self.target, float(t[cn[:, 4:7]].mean(axis=1).max()), \
-            float(t[cn].max())
+        v = SU8_LIMIT.judge(state.temperature, self.model.mesh)
+        return lift, lift >= self.target, v.temperature, v.hottest_node
 
     def result(self, status, power, state, message):
-        lift, _, temp, tmax = self.look(state)
+        lift = float(state.u[self.nodes, 2].mean())
+        v = SU8_LIMIT.judge(state.temperature, self.model.mesh)
         met = status == "met"
         p = power if met else None
         if not met:
@@ -205,8 +216,9 @@ class _LiftStage(HeatingStage):
         if met:
             message = self.after_snaps(message, state)
         return LiftPowerResult(met, status, message, p, power_if(met, p, len(self.creases)),
-                               lift, tmax, self.simulations, len(self.creases),
-                               self.snap_events(state) if met else (), temp)
+                               lift, v.hottest_node, self.simulations, len(self.creases),
+                               self.snap_events(state) if met else (), v.temperature, v.crease,
+                               v.hottest_node_crease)
 
 
 def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
@@ -254,7 +266,7 @@ MIURA_SPACE = DesignSpace([
 
 
 @dataclass(frozen=True)
-class MiuraProblem(DesignProblem):
+class MiuraProblem(TemperatureLimited, DesignProblem):
     """Minimise the total power that lifts the Miura lifter's free end by ``target_lift``.
 
     Objective: total power of all heated creases [W]. Constraints (g <= 0): the normalised
@@ -279,7 +291,7 @@ class MiuraProblem(DesignProblem):
     step: float = 0.1e-3
     tol: float = 0.01e-3
     glass_transition: float = SU8_TG
-    temperature_factor: float = 1.2
+    temperature_factor: float = TG_FACTOR
     base: MiuraDesign = MiuraDesign()
     space: DesignSpace = field(default=MIURA_SPACE, compare=False)
     name: str = "miura"
@@ -288,13 +300,7 @@ class MiuraProblem(DesignProblem):
     def __post_init__(self):
         if self.mode not in ("bisect", "staircase"):
             raise ParameterError(f"mode = {self.mode!r}; use 'bisect' or 'staircase'.")
-        if self.temperature_measure not in ("centre_line", "crease_max"):
-            raise ParameterError(f"temperature_measure = {self.temperature_measure!r}; use "
-                                 "'centre_line' or 'crease_max'.")
-
-    @property
-    def temperature_limit(self) -> float:
-        return self.temperature_factor * self.glass_transition
+        _ = self.limit                               # checks temperature_measure
 
     def design(self, values: dict) -> MiuraDesign:
         return replace(self.base, **values)
@@ -303,13 +309,12 @@ class MiuraProblem(DesignProblem):
         res = lift_power(self.design(values), self.target_lift, mode=self.mode, step=self.step,
                          tol=self.tol, power_cap=self.power_cap)
         constraints = dict(self.space.bound_margins(values))
-        t = res.temperature if self.temperature_measure == "centre_line" \
-            else res.max_crease_temperature
-        constraints["temperature"] = (t - self.temperature_limit) / self.temperature_limit
+        verdict, message = self._judge(res)
+        constraints["temperature"] = verdict.constraint
         metrics = {k: v for k, v in res.to_dict().items()
                    if k not in ("success", "status", "message")}
         return (res.total_power, constraints, metrics, None if res.success else res.status,
-                res.message)
+                message)
 
     def settings(self) -> dict:
         return {"problem": self.name, "mode": self.mode, "target_lift [m]": self.target_lift,

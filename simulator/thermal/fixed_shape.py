@@ -218,10 +218,11 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
 
 def _result(model, T, q, tm, rt, wall_time):
     from ..model.bimorph import crease_temperature_weights
+    from .limit import crease_limit_temperatures
 
     cn = model.mesh.crease_nodes
     return FixedShapeTemperatures(
         True, 0, "solved", temperature=T, crease_temperature=T[cn] @ crease_temperature_weights(),
         crease_temperature_max=T[cn].max(axis=1), crease_t_ctr=T[cn[:, 6]],
-        crease_t_ave=T[cn[:, 4:7]].mean(axis=1), heat_input=float(q.sum()),
+        crease_t_ave=crease_limit_temperatures(T, model.mesh), heat_input=float(q.sum()),
         room_temperature=rt, loss_model=tm.params.loss_model, thermal=tm.params, wall_time=wall_time)

@@ -69,9 +69,14 @@ def test_run_summary_names_hottest_crease_and_the_tg_limit(tmp_path, capsys):
                  "--out", str(tmp_path / "r"), "-q"]) == 0
     text = capsys.readouterr()
     lines = text.out.splitlines()
-    hottest = [line for line in lines if line.startswith("hottest crease: crease 2 at ")]
-    assert len(hottest) == 1 and "degC" in hottest[0]
-    assert any(line.startswith("above 1.2 T_g = 252 degC") for line in lines), text.out
+    verdict = [line for line in lines if line.startswith("temperature limit exceeded: crease 2: "
+                                                         "centre-line mean ")]
+    assert len(verdict) == 1 and "degC > 1.2 T_g = 252 degC" in verdict[0], text.out
+    assert any(line.startswith("the centre-line mean first exceeds 1.2 T_g = 252 degC at "
+                               "record ") for line in lines), text.out
+    hottest = [line for line in lines if line.startswith("hottest node ")]
+    assert len(hottest) == 1 and hottest[0].endswith(
+        "information: the limit is judged on the crease centre-line mean)"), text.out
 
 
 def test_summary_names_each_event_with_power_and_jump():

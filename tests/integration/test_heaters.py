@@ -8,7 +8,7 @@ import pytest
 from design.analysis.heaters import allocate_heaters, influence_matrices, limit_temperatures
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
-from simulator import Heat, simulate
+from simulator import Heat, TemperatureLimit, simulate
 from simulator.state import thermal_model
 
 P_REF = 6e-3          # W per crease that made the target shape
@@ -171,7 +171,14 @@ def test_limit_between_centre_line_and_hottest_node_separates_the_measures(folde
     assert res.max_temperature <= 127.0 < res.max_node_temperature
     assert res.max_temperature == pytest.approx(
         float(limit_temperatures(model, res.state.temperature).max()), abs=0)
+    verdict = TemperatureLimit(127.0).judge(res.state.temperature, model.mesh)   # the one verdict
+    assert verdict.success and res.message.endswith(f"; last round: {verdict.message}")
+    assert verdict.message.endswith("degC <= limit = 127 degC")
     strict = allocate_heaters(model, targets, state=start, increments=30,
                               temperature_limit=127.0, temperature_measure="crease_max")
     assert strict.status == "infeasible" and "127 degC (crease_max)" in strict.message
     assert strict.max_temperature == strict.max_node_temperature
+    last = TemperatureLimit(127.0, measure="crease_max").judge(strict.state.temperature,
+                                                               model.mesh)
+    assert strict.message.endswith(f"; last round: {last.message}")
+    assert f"hottest node {strict.max_temperature:.2f} degC" in last.message

@@ -64,11 +64,14 @@ def _results(run):
         True, "converged", "targets met", {"h1": (2,)}, np.array([1e-3]), 2, {2: 0.3},
         achieved={2: 0.3}, max_temperature=60.0, temperature_limit=200.0,
         history=({"round": 1, "total_power [mW]": 1.0},))
+    yield "TemperatureVerdict", simulator.TemperatureVerdict(
+        simulator.TemperatureLimit(252.0, "1.2 T_g"), 5, 250.06, 266.67, 5)
 
 
 NAMES = ["SimulationResult", "StepResult", "ContinuationResult", "DynamicsResult",
          "TransientHeatResult", "ModesResult", "Stability", "Evaluation", "OptimizationResult",
-         "StageResult", "GripperResult", "LiftPowerResult", "HeaterAllocation"]
+         "StageResult", "GripperResult", "LiftPowerResult", "HeaterAllocation",
+         "TemperatureVerdict"]
 
 
 def test_every_public_result_type_is_covered(run):

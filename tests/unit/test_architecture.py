@@ -78,8 +78,7 @@ DESIGN_SIMULATOR_INTERNALS = {
     # at each record (the element-family interface of that system is not public)
     ("design/cli/simulate.py", "simulator.state"),
     # the run's heating pre-check: one steady solve of the thermal operator at the end power
-    # and the crease temperature weights (as the heater LP)
-    ("design/cli/precheck.py", "simulator.model.bimorph"),
+    # (as the heater LP)
     ("design/cli/precheck.py", "simulator.state"),
 }
 

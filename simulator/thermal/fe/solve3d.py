@@ -376,13 +376,14 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     T = T + rt
     cn = mesh.crease_nodes
     from ...model.bimorph import crease_temperature_weights
+    from ..limit import crease_limit_temperatures
 
     info = FEMeshInfo(level, len(pts), len(tets), A.shape[0], min(h_c, h_p) * scale,
                       box_factor * scale, box_factor, far_field, err, time.perf_counter() - t0)
     return FE3DResult(True, 1 if warns else 0, warns[0] if warns else "converged",
                       temperature=T, crease_temperature=T[cn] @ crease_temperature_weights(),
                       crease_temperature_max=T[cn].max(axis=1), crease_t_ctr=T[cn[:, 6]],
-                      crease_t_ave=T[cn[:, 4:7]].mean(axis=1), heat_input=float(q.sum()),
+                      crease_t_ave=crease_limit_temperatures(T, mesh), heat_input=float(q.sum()),
                       room_temperature=rt, mesh=info, warnings=warns)
 
 
