@@ -69,7 +69,8 @@ __getattr__, __dir__ = _attach(__name__, {
                "StepContext", "StepOutcome", "StepRecorder", "TransientHeat"),
     ".solvers.continuation": ("ContinuationResult", "CriticalPoint", "displacement_control", "mgdcm"),
     ".solvers.load_path": ("LoadPath",),
-    ".solvers.stability": ("Stability", "tangent_stability"),
+    ".solvers.stability": ("Stability", "tangent_stability", "state_stability"),
+    ".solvers.equilibrium_check": ("EQUILIBRIUM_RTOL", "EquilibriumCheck", "check_equilibrium"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
@@ -126,6 +127,8 @@ __all__ = [
     "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
     "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability", "Event",
     "EVENT_KINDS",
+    # analyses about a given state check that it is an equilibrium
+    "state_stability", "check_equilibrium", "EquilibriumCheck", "EQUILIBRIUM_RTOL",
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases

@@ -64,6 +64,9 @@ class StepResult(ResultFiles):
     stable : bool or None
         Whether the step's end state is a stable equilibrium, where the step checked it
         (quasi-static steps, ``NewtonOptions.stability`` not "off"); else None.
+    first_increment : int
+        Number of the first record: 1, or 0 for a time-domain step, whose first record is its
+        start state (the state the previous step left, at the step's start time).
     """
 
     name: str
@@ -87,21 +90,31 @@ class StepResult(ResultFiles):
     velocity_history: np.ndarray | None = None
     events: tuple = ()
     stable: bool | None = None
+    first_increment: int = 1
 
     @property
     def increments(self) -> int:
+        """Number of records (accepted increments, plus the start record of a time-domain
+        step)."""
         return len(self.load_factor)
+
+    @property
+    def increment_numbers(self) -> np.ndarray:
+        """(m,) ``increment`` of every record: 1, 2, ... (0, 1, ... for a time-domain step,
+        record 0 being its start)."""
+        return np.arange(self.first_increment, self.first_increment + self.increments)
 
     _csv_name = "step.csv"
 
     def to_frame(self):
-        """One row per accepted increment: ``increment``, ``load_factor``, ``iterations``,
-        ``power [mW]`` (largest crease power), ``max_temperature [degC]`` (hottest node), then
-        the step-specific columns (e.g. ``time [s]``, ``stable``)."""
+        """One row per record: ``increment`` (0 = the start of a time-domain step),
+        ``load_factor``, ``iterations``, ``power [mW]`` (largest crease power),
+        ``max_temperature [degC]`` (hottest node), then the step-specific columns (e.g.
+        ``time [s]``, ``stable``)."""
         import pandas as pd
 
         return pd.DataFrame({
-            "increment": np.arange(1, self.increments + 1), "load_factor": self.load_factor,
+            "increment": self.increment_numbers, "load_factor": self.load_factor,
             "iterations": self.increment_iterations,
             "power [mW]": 1e3 * np.max(self.power_history, axis=1, initial=0.0),
             "max_temperature [degC]": np.max(self.temperature_history, axis=1, initial=-np.inf),
@@ -117,6 +130,13 @@ class SimulationResult:
     """Results of all steps of :func:`~simulator.simulation.simulate` and the final state.
 
     ``initial_state`` is the state before the first step (record 0 of the history).
+
+    Time: a time-domain step (:class:`~simulator.steps.Dynamics`,
+    :class:`~simulator.steps.TransientHeat`, :class:`~simulator.steps.ElectroThermal`) records
+    its start state first, at its start time (``time [s]`` = 0 unless an earlier time-domain
+    step advanced the clock), so its time series begins where its time begins; the records of
+    quasi-static steps have no time (None, empty in CSV), nor has the initial record unless
+    the first step is a time-domain one (then it is that step's start, at its time).
     """
 
     steps: list
@@ -159,11 +179,14 @@ class SimulationResult:
     def history(self) -> dict:
         """Per-record arrays (record 0 = initial state, then every accepted increment).
 
-        Keys: ``stage`` (step index, -1 for the initial record), ``stage_name``, ``increment``,
+        Keys: ``stage`` (step index, -1 for the initial record), ``stage_name``, ``increment``
+        (0 for the initial record and for the start record of a time-domain step),
         ``u`` (m, n, 3) [m], ``velocity`` (m, n, 3) [m/s] (zero on quasi-static records),
         ``temperature`` (m, n) [deg C], ``power`` (m, C) [W],
         ``iterations`` (m,), ``columns`` (dict of the steps' step-specific columns, each a list
-        of m values with None for records of steps without that column).
+        of m values with None for records of steps without that column: ``time [s]`` is None
+        on quasi-static records and on the initial record, unless the first step is a
+        time-domain one, which starts on it).
         """
         s0 = self.initial_state
         stage, names, inc = [-1], ["initial"], [0]
@@ -175,7 +198,7 @@ class SimulationResult:
                         else step.velocity_history)
             stage += [k] * m
             names += [step.name] * m
-            inc += list(range(1, m + 1))
+            inc += list(step.increment_numbers)
             u += list(step.u_history)
             temp += list(step.temperature_history)
             power += list(step.power_history)
@@ -185,8 +208,8 @@ class SimulationResult:
             for name, values in step.columns.items():
                 col = columns.setdefault(name, [None] * len(stage))
                 col[stage.index(k):stage.index(k) + step.increments] = list(values)
-        if "time [s]" in columns:                   # the clock at the start: the first record
-            columns["time [s]"][0] = float(s0.time)
+        if "time [s]" in columns and "time [s]" in self.steps[0].columns:
+            columns["time [s]"][0] = float(s0.time)   # the start of a first time-domain step
         return {"stage": np.array(stage), "stage_name": np.array(names), "increment": np.array(inc),
                 "u": np.array(u), "velocity": np.array(vel), "temperature": np.array(temp),
                 "power": np.array(power),
@@ -239,8 +262,10 @@ class SimulationResult:
         steps); :class:`~simulator.steps.TransientHeat` adds ``mean_power [mW]``, the power
         averaged over the time step ending at the record (what the heat equation integrated:
         a square wave switched off at t = 5 ms has ``power [mW]`` 0 there, while its
-        ``mean_power [mW]`` over 4-5 ms is the on-power). ``time [s]`` of the initial record is
-        the start time of the simulation (0 unless given a state).
+        ``mean_power [mW]`` over 4-5 ms is the on-power; empty on the step's start record, where
+        no time step ends). ``time [s]`` is empty on quasi-static records and on the initial
+        record unless the first step is a time-domain one; a time-domain step's first record
+        (``increment`` 0) is its start state at its start time.
         """
         import pandas as pd
 
@@ -297,7 +322,7 @@ class SimulationResult:
                         k = e.increment
                         event[k] = e.kind if event[k] is None else f"{event[k]}; {e.kind}"
                 data = {"step": np.arange(record, record + m), "stage": [step.name] * m,
-                        "increment": np.arange(1, m + 1), "load_factor": step.load_factor,
+                        "increment": step.increment_numbers, "load_factor": step.load_factor,
                         "power [mW]": 1e3 * step.power_history.max(axis=1, initial=0.0),
                         "event": event}
                 for name, values in step.columns.items():
@@ -316,7 +341,7 @@ class SimulationResult:
 
         Columns: ``step`` (record index of the first record past the event, as in
         :meth:`to_frame` and :meth:`path_frame`; empty if none was recorded past it),
-        ``stage`` (step name), ``increment`` (of the step, from 1), ``kind``,
+        ``stage`` (step name), ``increment`` (of the step, as in :meth:`to_frame`), ``kind``,
         ``load_factor``, ``power [mW]`` (largest crease power), ``total_power [mW]``,
         ``displacement [um]`` (of the monitored ``node``), ``node``, ``jump [um]`` (snaps),
         ``temperature_max [degC]``, ``message``.
@@ -326,7 +351,8 @@ class SimulationResult:
         first = np.cumsum([1] + [s.increments for s in self.steps])   # record of increment 0
         um = lambda v: None if v is None else 1e6 * v  # noqa: E731
         rows = [{"step": None if e.increment is None else int(first[k] + e.increment),
-                 "stage": s.name, "increment": None if e.increment is None else e.increment + 1,
+                 "stage": s.name, "increment": None if e.increment is None
+                 else e.increment + s.first_increment,
                  "kind": e.kind, "load_factor": e.load_factor,
                  "power [mW]": 1e3 * max(e.power_per_crease, default=0.0),
                  "total_power [mW]": 1e3 * e.total_power,

@@ -133,4 +133,5 @@ def _step_result(step: Step, outcome: StepOutcome, context: StepContext, wall,
         residual_norms=list(outcome.residual_norms), reactions=reactions,
         energies=ev.energies, wall_time=wall, settings=step.describe(), columns=outcome.columns,
         velocity_history=outcome.velocity, stable=outcome.stable,
+        first_increment=outcome.first_increment,
         events=tuple(replace(e, step=step.name, step_index=index) for e in outcome.events))

@@ -134,19 +134,21 @@ def _static(model, state, creases, power):
 
 
 def pulse(device: Device, schedule, duration: float, dt_max: float = DT_MAX):
-    """Times [s], measure and mean heated-crease temperature [deg C] (record 0 = start) of
-    one :class:`~simulator.steps.ElectroThermal` run of ``duration`` [s] driven by
-    ``schedule`` on the device's circuit (the step settings of the case)."""
+    """Times [s] from the start, measure and mean heated-crease temperature [deg C] of the
+    records of one :class:`~simulator.steps.ElectroThermal` run of ``duration`` [s] driven by
+    ``schedule`` on the device's circuit (the step settings of the case); record 0 is the
+    step's start (the device's state)."""
     step = dataclasses.replace(get_case(CASE).steps[-1], power={device.creases: schedule},
                                duration=duration, dt=dt_max, dt_min=1e-6, dt_max=dt_max)
     res = simulate(device.model, [step], state=device.state)
     if not res.success:
         raise RuntimeError(f"{device.label}: {res.message}")
-    t = np.r_[device.state.time, res.steps[0].columns[T]] - device.state.time
-    x = device.model.mesh.nodes[None] + res.history["u"]
+    records = res.history["stage"] == 0                    # the step's, from its start
+    t = res.steps[0].columns[T] - device.state.time
+    x = device.model.mesh.nodes[None] + res.history["u"][records]
     rows = [device.model.mesh.crease_row_of(c) for c in device.creases]
     return t, np.array([device.measure(xk) for xk in x]), \
-        res.crease_temperature[:, rows].mean(axis=1)
+        res.crease_temperature[records][:, rows].mean(axis=1)
 
 
 def step_metrics(t, y, temp, t_on) -> dict:

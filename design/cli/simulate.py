@@ -214,7 +214,7 @@ def _save_interrupted(result, out_dir, meta, where) -> int:
     step = result.steps[-1]
     at = (f", step {step.name!r} at increment {where['done']} of {where['total']}"
           if where else f", step {step.name!r}")
-    n = len(result.history["stage"]) - 1
+    n = int((result.history["increment"] > 0).sum())     # not the start records (0)
     print(f"interrupted: {n} accepted increment{'s' if n != 1 else ''} saved in {out} as a "
           f"partial result (status \"interrupted\"{at}); run the same command again to start "
           "over", file=sys.stderr, flush=True)

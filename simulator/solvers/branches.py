@@ -2,7 +2,7 @@
 
 :func:`~simulator.solvers.newton.follow_path` judges every converged increment with
 :func:`judge` (one Cholesky factorisation where the state is stable,
-:func:`~simulator.solvers.stability.state_stability`). An unstable state at a bifurcation
+:func:`~simulator.solvers.stability.quick_stability`). An unstable state at a bifurcation
 (critical mode orthogonal to the load derivative) is left for the stable state it falls to
 along its critical mode (:func:`~simulator.solvers.descent.choose_branch`), and an increment
 that fails from a critical state (a singular tangent) starts from there
@@ -21,7 +21,7 @@ from ..mechanics.equilibrium import assembled_tangent as _tangent
 from .descent import choose_branch
 from .load_path import LoadPath
 from .path_trace import BIFURCATION_ALIGNMENT
-from .stability import state_stability
+from .stability import quick_stability
 
 __all__ = ["BranchSwitch", "judge", "leave_critical"]
 
@@ -91,7 +91,7 @@ def judge(system, res, t, ends, options, switches):
     branch) is kept, recorded unstable: the step's limit-point handling (arc length past the
     snap, :mod:`simulator.steps.limit`) takes it from the failure that follows, and a step
     that ends there does not succeed."""
-    st = state_stability(_tangent(res.evaluation), options.linear_solver)
+    st = quick_stability(_tangent(res.evaluation), options.linear_solver)
     if st.stable or options.stability != "switch":
         return res, st
     if st.load_alignment(_path(system, ends).at(res.u, t).q) >= BIFURCATION_ALIGNMENT:
@@ -133,7 +133,7 @@ def _fall(system, u, st, t, ends, options):
         logger.info("%s", sw.describe())
         return None, None, sw
     ev = system.evaluate(choice.u, path.rest(t))
-    landed = state_stability(_tangent(ev), options.linear_solver)
+    landed = quick_stability(_tangent(ev), options.linear_solver)
     sw = BranchSwitch(t, st, choice, landed, u)
     logger.info("%s", sw.describe())
     return (landed, ev, sw) if landed.stable else (None, None, sw)

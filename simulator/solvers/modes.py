@@ -16,6 +16,11 @@ shift-invert solver, refined by Rayleigh quotients, is more precise at the low e
 Zero modes (rigid-body motions of an under-supported model, mechanisms) are kept and flagged;
 a negative eigenvalue means the state is unstable, and its "frequency" is reported as
 ``-sqrt(-omega^2) / (2 pi)`` so that it stands out in tables.
+
+The state must be an equilibrium (:mod:`simulator.solvers.equilibrium_check`): one that is not
+(a loosely converged self-fold, a state in the middle of a motion) is analysed with a WARNING
+and status "not in equilibrium" (its residual in the message and in ``equilibrium``), refused,
+or re-converged first (``equilibrium=``).
 """
 
 from __future__ import annotations
@@ -37,7 +42,8 @@ from ..linalg.ladder import check_backend, factorize
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 from ..model.mass import check_masses, lumped_masses
 from ..model.model import Model
-from ..state import SimulationState, equilibrium_system, initial_state
+from ..state import SimulationState, equilibrium_system
+from .equilibrium_check import EquilibriumCheck, analysis_state, checked_state
 
 __all__ = ["ModesResult", "natural_modes"]
 
@@ -57,7 +63,9 @@ class ModesResult(ResultFiles):
     Attributes
     ----------
     success, status, message
-        status "converged", or "failed" when the eigensolver did not converge.
+        status "converged", "not in equilibrium" (the modes were computed, about a state
+        that is not an equilibrium: see ``equilibrium`` and the message), or "failed" when the
+        eigensolver did not converge.
     eigenvalue : (k,) omega^2 [(rad/s)^2]
     frequency : (k,) omega / (2 pi) [Hz]; negative for unstable (negative-eigenvalue) modes
     shapes : (k, n_nodes, 3) M-orthonormal mode shapes [m / sqrt(kg)], zero on fixed DOFs
@@ -66,6 +74,10 @@ class ModesResult(ResultFiles):
     masses : (n_nodes,) lumped nodal masses [kg]
     solver : "dense" or "shift-invert"
     wall_time : float [s]
+    state : SimulationState
+        The state linearised about (the re-converged one with ``equilibrium="reconverge"``).
+    equilibrium : EquilibriumCheck
+        Its force residual (``residual_norm`` [N], ``relative``, ``in_equilibrium``).
     """
 
     success: bool
@@ -80,10 +92,16 @@ class ModesResult(ResultFiles):
     wall_time: float
     model: Model = field(repr=False, default=None)
     state: SimulationState = field(repr=False, default=None)
+    equilibrium: EquilibriumCheck | None = field(repr=False, default=None)
 
     @property
     def count(self) -> int:
         return len(self.eigenvalue)
+
+    @property
+    def residual_norm(self) -> float | None:
+        """Force residual of the state [N] (None if not checked)."""
+        return None if self.equilibrium is None else self.equilibrium.residual_norm
 
     def to_frame(self):
         """One row per mode: ``mode`` (1-based), ``frequency [Hz]``,
@@ -99,7 +117,8 @@ class ModesResult(ResultFiles):
 
     def _meta(self) -> dict:
         return {"solver": self.solver, "count": self.count, "wall_time [s]": self.wall_time,
-                "total_mass [kg]": float(self.masses.sum()), "model": self.model.to_dict()}
+                "total_mass [kg]": float(self.masses.sum()), "model": self.model.to_dict(),
+                "equilibrium": None if self.equilibrium is None else self.equilibrium.to_dict()}
 
     def save(self, directory, metadata: dict | None = None) -> pathlib.Path:
         """Write ``modes.csv``, ``modes.npz`` (shapes, reference nodes, displacements of the
@@ -113,7 +132,8 @@ class ModesResult(ResultFiles):
 
 
 def natural_modes(model: Model, state: SimulationState | None = None, count: int = 10,
-                  method: str = "auto", masses=None, linear_solver: str = "auto") -> ModesResult:
+                  method: str = "auto", masses=None, linear_solver: str = "auto",
+                  equilibrium: str = "warn") -> ModesResult:
     """The ``count`` lowest natural modes of ``model`` linearised about ``state``.
 
     Parameters
@@ -131,19 +151,20 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
         Default :func:`~simulator.model.mass.lumped_masses` (needs material densities).
     linear_solver : {"auto", "dense", "pardiso", "superlu"}
         Backend of the shift-invert factorisation (:func:`~simulator.linalg.ladder.factorize`).
+    equilibrium : {"warn", "raise", "reconverge"}
+        When the state is not an equilibrium (force residual above
+        :data:`~simulator.solvers.equilibrium_check.EQUILIBRIUM_RTOL` of max K_ii times the
+        model size): "warn" analyses it with a logged WARNING and status "not in
+        equilibrium"; "raise" refuses it (ParameterError); "reconverge" first solves for the
+        equilibrium at the state's rest angles and dead loads (Newton, default options) and
+        analyses that.
 
     Returns
     -------
     ModesResult
     """
     t0 = time.perf_counter()
-    if not isinstance(model, Model):
-        raise ParameterError(f"natural_modes: model is a {type(model).__name__}; build one with "
-                             "make_model(...).")
-    state = initial_state(model) if state is None else state
-    if not isinstance(state, SimulationState):
-        raise ParameterError(f"natural_modes: state is a {type(state).__name__}; give a "
-                             "SimulationState (e.g. result.state) or None.")
+    state = checked_state(model, state, "natural_modes")
     if method not in ("auto", "dense", "sparse"):
         raise ParameterError(f"natural_modes: method = {method!r}; use 'auto', 'dense' or "
                              "'sparse'.")
@@ -153,7 +174,8 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
     integer("natural_modes: count", count, 1, n_free, hint="at most the number of free DOFs")
     m = lumped_masses(model.mesh) if masses is None else np.asarray(masses, float)
     check_masses(model, m)
-    K = system.evaluate(state.u, state.spring_rest, hessian=True).K
+    state, check, ev = analysis_state(model, state, equilibrium, "natural_modes")
+    K = ev.K
     mf = np.repeat(m, 3)[system.free]
     dense = method == "dense" or (method == "auto" and n_free <= DENSE_LIMIT)
     scale = float(np.max(K.diagonal() / mf))
@@ -172,12 +194,16 @@ def natural_modes(model: Model, state: SimulationState | None = None, count: int
         message += f"; {int(zero.sum())} zero-frequency (rigid-body or mechanism) mode(s)"
     if (lam < 0).any() and not zero[lam < 0].all():
         message += "; negative eigenvalues: the state is unstable"
+    if not check.in_equilibrium and status == "converged":
+        status = "not in equilibrium"
+    if not check.in_equilibrium or check.reconverged_from is not None:
+        message += f"; state {check.message}"
     wall = time.perf_counter() - t0
     logger.info("natural_modes: %d modes, %s solver, %d free DOFs, %.3g s", len(lam),
                 "dense" if dense else "shift-invert", n_free, wall)
-    return ModesResult(status == "converged", status, message, lam, freq,
+    return ModesResult(status != "failed", status, message, lam, freq,
                        shapes.reshape(len(lam), -1, 3), zero, m,
-                       "dense" if dense else "shift-invert", wall, model, state)
+                       "dense" if dense else "shift-invert", wall, model, state, check)
 
 
 def _shift_invert(K, mf, count, scale, linear_solver="auto"):

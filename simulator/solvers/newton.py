@@ -26,7 +26,7 @@ from ..linalg.ladder import check_backend, solve as linear_solve
 from .branches import BranchSwitch, judge, leave_critical
 from .descent import BRANCHES
 from .nonlinear import iterate, march
-from .stability import state_stability
+from .stability import quick_stability
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "BranchSwitch", "newton",
            "follow_path", "STABILITY_ACTIONS"]
@@ -81,7 +81,7 @@ class NewtonOptions:
     stability : {"switch", "check", "off"}
         What load control does with the stability of every accepted state
         (:func:`follow_path`): "switch" (default) checks it (one Cholesky factorisation of the
-        tangent, the eigenvalues only where it fails: :func:`~simulator.solvers.stability.state_stability`)
+        tangent, the eigenvalues only where it fails: :func:`~simulator.solvers.stability.quick_stability`)
         and leaves an unstable equilibrium, such as the symmetric state of a flat sheet heated
         at a bifurcation, for the stable branch it falls to along its critical mode
         (:func:`~simulator.solvers.descent.choose_branch`; theory 6.9); "check" checks and
@@ -353,7 +353,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
             # eigenvalue), e.g. exactly at a bifurcation: leave it along its critical mode
             res = leave_critical(system, res, u, last, t_try, ends, options, switches)
             if res.success:
-                judged[0] = state_stability(_tangent(res.evaluation), options.linear_solver)
+                judged[0] = quick_stability(_tangent(res.evaluation), options.linear_solver)
         return res.success, res
 
     def accept(t, res):

@@ -9,12 +9,17 @@ orthogonal to it.
 Small systems (up to :data:`DENSE_LIMIT` free DOFs) are analysed densely (all eigenvalues, so
 the count is exact); large ones by shift-invert Lanczos (``eigsh`` near zero), which finds the
 ``k`` eigenvalues closest to zero, so a count of ``k`` is a lower bound.
+
+:func:`state_stability` analyses a given state (its tangent at its displacements and rest
+angles) after checking that it is an equilibrium (:mod:`simulator.solvers.equilibrium_check`):
+the inertia of the tangent about a state out of equilibrium says nothing about a physical
+state.
 """
 
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
@@ -25,7 +30,8 @@ from ..linalg.ladder import factorize
 from ..linalg.small_solve import as_dense, positive_definite
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
-__all__ = ["Stability", "tangent_stability", "state_stability", "NEGATIVE_RTOL", "DENSE_LIMIT"]
+__all__ = ["Stability", "tangent_stability", "state_stability", "quick_stability",
+           "NEGATIVE_RTOL", "DENSE_LIMIT"]
 
 #: An eigenvalue counts as negative below ``-NEGATIVE_RTOL * n * eps * |K|`` (|K| the largest
 #: diagonal entry): a few hundred times the error bound of a symmetric eigensolver, so the
@@ -54,12 +60,17 @@ class Stability(ResultFiles):
     mode : (n_free,) unit eigenvector of the lowest eigenvalue
     exact : bool
         True if all eigenvalues were computed (dense), False for the ``k`` nearest to zero.
+    equilibrium : EquilibriumCheck or None
+        The force residual of the state (:func:`state_stability`; None for a bare tangent).
+        About a state out of equilibrium the status is "not in equilibrium" and the message
+        gives the residual.
     """
 
     negative: int
     lowest: float | None
     mode: np.ndarray | None
     exact: bool = True
+    equilibrium: object = None
 
     @property
     def stable(self) -> bool:
@@ -71,7 +82,14 @@ class Stability(ResultFiles):
         return True
 
     @property
+    def in_equilibrium(self) -> bool | None:
+        """Whether the state was an equilibrium (None for a bare tangent)."""
+        return None if self.equilibrium is None else self.equilibrium.in_equilibrium
+
+    @property
     def status(self) -> str:
+        if self.in_equilibrium is False:
+            return "not in equilibrium"
         return "stable" if self.stable else "unstable"
 
     @property
@@ -79,14 +97,21 @@ class Stability(ResultFiles):
         bound = "" if self.exact else "at least "
         if self.lowest is None:
             return "positive definite (Cholesky); lowest eigenvalue not computed"
-        return (f"{bound}{self.negative} negative eigenvalue(s); lowest eigenvalue "
+        text = (f"{bound}{self.negative} negative eigenvalue(s); lowest eigenvalue "
                 f"{self.lowest:.6g} N/m")
+        eq = self.equilibrium
+        if eq is not None and (not eq.in_equilibrium or eq.reconverged_from is not None):
+            text += f"; state {eq.message}"
+        return text
 
     _csv_name = "stability.csv"
 
     def _row(self) -> dict:
+        eq = self.equilibrium
         return {"stable": self.stable, "negative_eigenvalues": self.negative,
-                "lowest_eigenvalue [N/m]": self.lowest, "exact": self.exact}
+                "lowest_eigenvalue [N/m]": self.lowest, "exact": self.exact,
+                "in_equilibrium": self.in_equilibrium,
+                "residual_norm [N]": None if eq is None else eq.residual_norm}
 
     def load_alignment(self, q: np.ndarray) -> float:
         """|cos| of the angle between the critical mode and the load derivative ``q``
@@ -112,7 +137,7 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     rtol : float
         An eigenvalue counts as negative below ``-rtol * n * eps * max |K_ii|`` (0: below 0,
         exactly, as the continuation's bisection to a critical point needs;
-        :func:`state_stability` uses :data:`NEGATIVE_RTOL`).
+        :func:`quick_stability` uses :data:`NEGATIVE_RTOL`).
     """
     n = K.shape[0]
     if n == 0:
@@ -144,7 +169,7 @@ def _negative_tolerance(K) -> float:
     return K.shape[0] * np.finfo(float).eps * float(d.max(initial=0.0))
 
 
-def state_stability(K, linear_solver: str = "auto") -> Stability:
+def quick_stability(K, linear_solver: str = "auto") -> Stability:
     """Stability of an equilibrium from its reduced tangent ``K`` (n_free, n_free) [N/m],
     cheaply where it is stable.
 
@@ -170,3 +195,32 @@ def state_stability(K, linear_solver: str = "auto") -> Stability:
     if inertia is not None and inertia[1] == 0 and inertia[2] == 0:
         return Stability(0, None, None, True)
     return tangent_stability(K, linear_solver=linear_solver, rtol=NEGATIVE_RTOL)
+
+
+def state_stability(model, state=None, k: int = 6, linear_solver: str = "auto",
+                    equilibrium: str = "warn") -> Stability:
+    """Stability of ``state`` (default the initial state): :func:`tangent_stability` of the
+    reduced tangent at its displacements and spring rest angles, after checking that it is an
+    equilibrium.
+
+    Parameters
+    ----------
+    model : Model
+    state : SimulationState, optional
+    k, linear_solver
+        As :func:`tangent_stability`.
+    equilibrium : {"warn", "raise", "reconverge"}
+        When the state is not an equilibrium: analyse it with a logged WARNING (status "not in
+        equilibrium"), refuse it (ParameterError) or re-converge it first (Newton at its rest
+        angles and dead loads), as :func:`~simulator.solvers.modes.natural_modes`.
+
+    Returns
+    -------
+    Stability
+        With ``equilibrium`` (the state's force residual) set.
+    """
+    from .equilibrium_check import analysis_state, checked_state
+
+    state = checked_state(model, state, "state_stability")
+    state, check, ev = analysis_state(model, state, equilibrium, "state_stability")
+    return replace(tangent_stability(ev.K, k, linear_solver), equilibrium=check)

@@ -103,6 +103,10 @@ class StepOutcome:
         Whether the end state is a stable equilibrium (positive definite tangent), where the
         step checked it (``NewtonOptions.stability``); None if it did not (time integration,
         ``stability="off"``).
+    first_increment : int
+        Number of the first record: 1 (the first accepted increment), or 0 when the first
+        record is the step's start state (time-domain steps,
+        :meth:`StepRecorder.record_start`).
     """
 
     success: bool
@@ -123,6 +127,7 @@ class StepOutcome:
     velocity: np.ndarray | None = None
     events: tuple = ()
     stable: bool | None = None
+    first_increment: int = 1
 
 
 #: The recorders made while :func:`watch_recorders` is active (the step's records so far,
@@ -146,7 +151,8 @@ class StepRecorder:
     """Collects the records of a running step and builds its :class:`StepOutcome`.
 
     ``events`` is the list of :class:`~simulator.events.Event` records found so far (their
-    ``increment`` indexes the records of this recorder).
+    ``increment`` indexes the records of this recorder). ``first_increment`` is the number of
+    the first record (1; 0 after :meth:`record_start`).
     """
 
     def __init__(self, state: SimulationState):
@@ -163,6 +169,7 @@ class StepRecorder:
         self._columns: dict[str, list] = {}
         self.events: list = []
         self.stable: bool | None = None
+        self.first_increment = 1
 
     def __len__(self) -> int:
         return len(self._rows["load_factor"])
@@ -181,6 +188,20 @@ class StepRecorder:
         for name, values in self._columns.items():
             if len(values) < len(self):
                 values.append(None)
+
+    def record_start(self, temperature=None, power=None, *, velocity=None, **columns) -> None:
+        """Record the step's start state as its first record, increment 0 (path parameter 0,
+        no iterations): what a time-domain step records at its start time, so that its time
+        series begins on the state the previous steps left, not on their first record.
+        ``temperature`` and ``power`` default to the start state's; ``columns`` carry
+        ``time [s]`` (the start time) and the step's other columns at the start."""
+        if len(self):
+            raise RuntimeError("StepRecorder.record_start: the start must be the first record.")
+        s0 = self.start
+        self.first_increment = 0
+        self.record(0.0, s0.u, s0.temperature if temperature is None else temperature,
+                    s0.crease_power if power is None else power, 0, velocity=velocity,
+                    **columns)
 
     def add_path(self, path, temperature, power, load_factor=None) -> None:
         """Record every accepted increment of a :class:`~simulator.solvers.newton.PathResult`,
@@ -246,10 +267,10 @@ class StepRecorder:
             power=np.array(rows["power"], float).reshape(-1, *C),
             increment_iterations=np.array(rows["increment_iterations"], int),
             residual_norms=tuple(self._residuals),
-            columns={k: np.array(v) for k, v in self._columns.items()}, evaluation=evaluation,
+            columns={k: _column(v) for k, v in self._columns.items()}, evaluation=evaluation,
             velocity=self._velocities(n), events=tuple(sorted(  # along the path (stable)
                 self.events, key=lambda e: (e.increment is None, e.increment or 0))),
-            stable=self.stable)
+            stable=self.stable, first_increment=self.first_increment)
 
     def _velocities(self, shape) -> np.ndarray | None:
         if all(v is None for v in self._velocity):
@@ -276,6 +297,16 @@ class Step(ABC):
     def describe(self) -> dict:
         """The step's parameters, JSON-able, with units in the keys (for ``meta.json``)."""
         return {}
+
+
+def _column(values: list) -> np.ndarray:
+    """A step column as an array: numeric, or an object array when some records lack a
+    per-crease value (None beside (C,) arrays)."""
+    if any(v is None for v in values) and any(np.ndim(v) == 1 for v in values):
+        out = np.empty(len(values), dtype=object)
+        out[:] = values
+        return out
+    return np.array(values)
 
 
 def check_increments(step, name: str = "increments") -> None:

@@ -63,10 +63,11 @@ class Dynamics(Step):
 
     Notes
     -----
-    Every record carries the columns ``time [s]`` (time of the simulation, continuing from
-    earlier dynamic steps), ``kinetic_energy [J]``, ``strain_energy [J]``,
-    ``dissipated_energy [J]``, ``external_work [J]`` and ``numerical_dissipation [J]`` (energies
-    and work counted from the start of the step).
+    The first record (increment 0) is the start state at the start time (its velocities those
+    the step starts with). Every record carries the columns ``time [s]`` (time of the
+    simulation, continuing from earlier time-domain steps), ``kinetic_energy [J]``,
+    ``strain_energy [J]``, ``dissipated_energy [J]``, ``external_work [J]`` and
+    ``numerical_dissipation [J]`` (energies and work counted from the start of the step).
     """
 
     duration: float
@@ -113,9 +114,12 @@ class Dynamics(Step):
         rec = StepRecorder(state)
         rec.iterations, rec.cuts = int(res.iterations.sum()), res.cuts
         energies = res.energies
-        for k in range(1, len(res.time)):
+        for k in range(len(res.time)):                 # record 0: the start, at its time
             columns = {"time [s]": state.time + res.time[k],
                        **{name: float(e[k]) for name, e in energies.items()}}
+            if k == 0:
+                rec.record_start(velocity=res.v[0], **columns)
+                continue
             rec.record(res.time[k] / self.duration, res.u[k], state.temperature,
                        state.crease_power, int(res.iterations[k]), velocity=res.v[k],
                        **columns)

@@ -34,8 +34,10 @@ in at most :data:`EASY_ITERATIONS` Newton iterations and a temperature change be
 end on a switching time does not change the step size. With ``dt_min = dt_max`` (the default:
 both equal ``dt``) every step is ``dt``.
 
-Every record carries ``time [s]`` (the simulation clock, ``SimulationState.time`` plus the time
-in the step), ``dt [s]``, and the energy bookkeeping since the start of the step:
+The first record (increment 0) is the start state at the start time (``dt [s]`` empty, the
+powers those at the start). Every record carries ``time [s]`` (the simulation clock,
+``SimulationState.time`` plus the time in the step), ``dt [s]`` (the time step ending at the
+record), and the energy bookkeeping since the start of the step:
 ``kinetic_energy [J]``, ``strain_energy [J]`` (bars, springs, contact at the current rest
 angles), ``dissipated_energy [J]`` (Rayleigh and air damping; empty for quasi-static
 mechanics), ``external_work [J]`` (dead loads), ``heat_in [J]`` (electrical heat put in, the
@@ -178,6 +180,9 @@ class ElectroThermal(Step):
         powers = CreasePowers(context.model.mesh, self.power, base=state.crease_power)
         switches = powers.schedules + drive.schedules
         rec = StepRecorder(state)
+        rec.record_start(power=powers(0.0), velocity=mech.velocity,
+                         **{"time [s]": state.time, "dt [s]": None, **mech.energies(),
+                            **heat.energies()})
         dt_min, dt_max = self.bounds
         t, h, k, temp = 0.0, float(self.dt), 0, state.temperature
         target, rest = state.crease_rest, state.spring_rest
@@ -308,8 +313,10 @@ class _MechanicsPart:
             self.motion = self.integ.initial_state(state.u, state.node_velocity, self.f,
                                                    state.spring_rest, 0.0)
             self.u, self.evaluation = self.motion.u, self.motion.evaluation
-        else:
-            self.u, self.evaluation = state.u, None
+        else:                                       # (for the energies of the start record)
+            self.u = state.u
+            self.evaluation = context.system.evaluate(state.u, state.spring_rest,
+                                                      hessian=False)
         self.rest = state.spring_rest
 
     @property

@@ -4,8 +4,10 @@
 :mod:`simulator.thermal.transient` over ``duration`` seconds, with time-varying crease or circuit
 powers (:mod:`simulator.thermal.schedules`) added on top of the state's crease powers. The shape
 is the state's shape for the whole step and the crease rest angles are not updated (heat
-only; the thermo-mechanical coupling is a later step). Each record carries ``time [s]`` (the simulation clock,
-``SimulationState.time``, continued by every time-domain step) and the energy bookkeeping since the start of the step: ``heat_in [J]``
+only; the thermo-mechanical coupling is a later step). The first record (increment 0) is the
+start state at the start time. Each record carries ``time [s]`` (the simulation clock,
+``SimulationState.time``, continued by every time-domain step) and the energy bookkeeping since
+the start of the step: ``heat_in [J]``
 (heat put in), ``heat_out [J]`` (heat lost to room temperature) and ``heat_stored [J]``
 (change of the heat stored above room temperature); ``heat_stored = heat_in - heat_out``.
 """
@@ -72,14 +74,16 @@ class TransientHeat(Step):
             state.room_temperature, state.temperature, self.record_every,
             callback=lambda k, n, t, T: context.report(k, n))
         rec = StepRecorder(state)
-        for k in range(1, len(result.time)):
-            rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
-                       result.power[k], 0, (), **{
-                           "time [s]": state.time + result.time[k],
-                           "mean_power [mW]": 1e3 * result.mean_power[k],
-                           "heat_in [J]": result.heat_in[k],
-                           "heat_out [J]": result.heat_out[k],
-                           "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]})
+        for k in range(len(result.time)):              # record 0: the start, at its time
+            columns = {"time [s]": state.time + result.time[k],     # no step ends at 0:
+                       "mean_power [mW]": None if k == 0 else 1e3 * result.mean_power[k],
+                       "heat_in [J]": result.heat_in[k], "heat_out [J]": result.heat_out[k],
+                       "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]}
+            if k == 0:
+                rec.record_start(result.temperature[0], result.power[0], **columns)
+            else:
+                rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
+                           result.power[k], 0, (), **columns)
         end = replace(state, temperature=result.temperature[-1], crease_power=result.power[-1],
                       time=state.time + float(result.time[-1]))
         return rec.finish(result.success, result.status, result.message, end,

@@ -189,8 +189,9 @@ def test_dynamics_step_releases_a_loaded_panel(fold):
     assert result.success
     step = result.steps[1]
     cols = step.columns
-    assert len(cols["time [s]"]) == step.increments == 40
-    assert cols["time [s]"][-1] == pytest.approx(T)
+    assert len(cols["time [s]"]) == step.increments == 41        # the start and 40 steps
+    assert cols["time [s]"][0] == 0.0 and cols["time [s]"][-1] == pytest.approx(T)
+    np.testing.assert_array_equal(step.u_history[0], result.steps[0].state.u)
     e0 = result.steps[0].energies
     total = cols["kinetic_energy [J]"] + cols["strain_energy [J]"]
     # fold amplitude ~2.7 deg: the trapezoidal rule conserves energy only to O(nonlinearity)

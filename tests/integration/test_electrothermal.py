@@ -54,8 +54,12 @@ def test_reaches_the_static_fold_and_cools_back(prepared, response):
 def test_energy_and_time_columns(response):
     cols = response.steps[0].columns
     t = cols["time [s]"]
-    assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(1.2)
-    np.testing.assert_allclose(np.diff(np.r_[0.0, t]), cols["dt [s]"], rtol=1e-9, atol=1e-15)
+    assert t[0] == 0.0 and np.all(np.diff(t) > 0) and t[-1] == pytest.approx(1.2)
+    assert cols["dt [s]"][0] is None                           # the start record: no step
+    dt = cols["dt [s]"][1:].astype(float)
+    np.testing.assert_allclose(np.diff(t), dt, rtol=1e-9, atol=1e-15)
+    for name in ("heat_in [J]", "heat_out [J]", "dissipated_energy [J]", "external_work [J]"):
+        assert cols[name][0] == 0.0                             # counted from the start
     # the heat put in is the integral of the power, exactly (mean power per step)
     assert cols["heat_in [J]"][-1] == pytest.approx(P * 0.6, rel=1e-12)
     # nearly all of it has left again after cooling
@@ -63,7 +67,7 @@ def test_energy_and_time_columns(response):
     assert np.all(cols["kinetic_energy [J]"] >= 0) and np.all(cols["strain_energy [J]"] >= 0)
     dissipated = cols["dissipated_energy [J]"]        # trapezoidal estimate: ~monotone
     assert dissipated[-1] > 0 and np.all(np.diff(dissipated) >= -1e-3 * dissipated[-1])
-    assert 1e-5 <= cols["dt [s]"].min() and cols["dt [s]"].max() <= 1e-2 * (1 + 1e-12)
+    assert 1e-5 <= dt.min() and dt.max() <= 1e-2 * (1 + 1e-12)
 
 
 def test_identical_between_runs_and_csv_has_time(prepared, response, tmp_path):
@@ -83,11 +87,12 @@ def test_quasi_static_mechanics_and_fixed_steps(prepared):
     res = simulate(case.model, [step], state=state)
     assert res.success, res.message
     cols = res.steps[0].columns
-    np.testing.assert_allclose(cols["dt [s]"], 2e-3)
-    assert len(cols["dt [s]"]) == 20
+    assert cols["dt [s]"][0] is None                           # the start record
+    np.testing.assert_allclose(cols["dt [s]"][1:].astype(float), 2e-3)
+    assert len(cols["dt [s]"]) == 21
     assert np.all(cols["kinetic_energy [J]"] == 0) and res.state.velocity is None
     assert all(v is None for v in cols["dissipated_energy [J]"])
-    assert _fold_deg(res)[9] > _fold_deg(res)[0] + 5          # heated: folds up
+    assert _fold_deg(res)[10] > _fold_deg(res)[0] + 5         # heated: folds up
 
 
 def test_shape_tolerance_keeps_the_assembly(prepared):
@@ -111,7 +116,8 @@ def test_square_wave_and_record_every(prepared):
                           record_every=5)
     res = simulate(case.model, [step], state=state)
     assert res.success, res.message
-    np.testing.assert_allclose(res.steps[0].columns["time [s]"], [0.005, 0.01, 0.015, 0.02])
+    np.testing.assert_allclose(res.steps[0].columns["time [s]"],
+                               [0.0, 0.005, 0.01, 0.015, 0.02])
     assert res.steps[0].columns["heat_in [J]"][-1] == pytest.approx(P * 0.01, rel=1e-12)
 
 

@@ -4,15 +4,18 @@ reference reports them, and its self-fold, whose targets are a rigid fold (mirro
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import logging
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from simulator import (Dynamics, DynamicsOptions, Material, Pattern, SelfFold, Supports,
-                       natural_modes, simulate)
+from simulator import (EQUILIBRIUM_RTOL, Dynamics, DynamicsOptions, Material, NewtonOptions,
+                       ParameterError, Pattern, SelfFold, Supports, check_equilibrium,
+                       natural_modes, simulate, state_stability)
 from simulator.model.mass import lumped_masses
 from simulator.model.sharp import SharpHingeParameters, sharp_model
 from simulator.schedules import SineSignal
@@ -113,3 +116,91 @@ def test_driven_dynamics_runs_from_the_folded_state(model):
     static = 5 * math.degrees(dyn["amplitude_rad"])
     assert static < swing < static / (2 * zeta), (swing, static)
     assert 300.0 < f1 < 400.0
+
+
+# ------------------------------------------------------------- states out of equilibrium
+@pytest.fixture(scope="module")
+def folded_states(model):
+    """The self-folded mirror converged (default Newton) and under-converged by the
+    reference's loop with its loose tolerance (1e-5 N: "converged", bar strains ~1e-7)."""
+    tight = simulate(model, [self_fold(model)])
+    loose = simulate(model, [self_fold(model)],
+                     options=NewtonOptions(reference_loop=True, atol=1e-5))
+    assert tight.success and loose.success
+    return tight.state, loose.state
+
+
+def test_modes_of_an_under_converged_state_warn_with_the_residual(model, folded_states,
+                                                                   caplog):
+    tight, loose = folded_states
+    with caplog.at_level(logging.WARNING, logger="simulator"):
+        good = natural_modes(model, tight, count=2)
+    assert not caplog.records
+    assert good.status == "converged" and good.equilibrium.in_equilibrium
+    assert good.equilibrium.relative < 1e-15 and "equilibrium" not in good.message
+    with caplog.at_level(logging.WARNING, logger="simulator"):
+        bad = natural_modes(model, loose, count=2)
+    assert [r.levelname for r in caplog.records] == ["WARNING"]
+    assert "not in equilibrium" in caplog.records[0].getMessage()
+    assert bad.success and bad.status == "not in equilibrium"
+    assert 1e-4 < bad.residual_norm < 1e-2                         # [N], about 8e-4
+    assert bad.equilibrium.relative > 1e4 * EQUILIBRIUM_RTOL
+    assert f"{bad.residual_norm:.3g} N" in bad.message
+    # what the warning is about: the first frequency is 2.3 times the equilibrium's
+    assert bad.frequency[0] > 2 * good.frequency[0]
+    assert 300.0 < good.frequency[0] < 400.0
+
+
+def test_reconverge_restores_the_equilibrium_frequency(model, folded_states):
+    tight, loose = folded_states
+    good = natural_modes(model, tight, count=3)
+    again = natural_modes(model, loose, count=3, equilibrium="reconverge")
+    assert again.status == "converged" and again.equilibrium.in_equilibrium
+    assert again.equilibrium.reconverged_from > 1e-4 and again.equilibrium.iterations >= 1
+    assert "re-converging from" in again.message
+    np.testing.assert_allclose(again.frequency, good.frequency, rtol=1e-6)
+    assert again.state is not loose and again.state.velocity is None
+
+
+def test_refusing_a_state_out_of_equilibrium_names_the_residual(model, folded_states):
+    _, loose = folded_states
+    with pytest.raises(ParameterError, match=r"not in equilibrium: force residual 0\.000\d+ N"):
+        natural_modes(model, loose, count=1, equilibrium="raise")
+    with pytest.raises(ParameterError, match="not in equilibrium"):
+        state_stability(model, loose, equilibrium="raise")
+    with pytest.raises(ParameterError, match="equilibrium = 'ignore'; use 'warn'"):
+        natural_modes(model, loose, count=1, equilibrium="ignore")
+
+
+def test_stability_of_a_state_checks_its_equilibrium(model, folded_states, caplog):
+    tight, loose = folded_states
+    good = state_stability(model, tight)
+    assert good.status == "stable" and good.in_equilibrium
+    with caplog.at_level(logging.WARNING, logger="simulator"):
+        bad = state_stability(model, loose)
+    assert bad.status == "not in equilibrium" and bad.in_equilibrium is False
+    assert "state_stability" in caplog.records[0].getMessage()
+    row = bad.to_frame().iloc[0]
+    assert row["residual_norm [N]"] == pytest.approx(bad.equilibrium.residual_norm)
+    assert not row["in_equilibrium"]
+    fixed = state_stability(model, loose, equilibrium="reconverge")
+    assert fixed.status == "stable" and fixed.lowest == pytest.approx(good.lowest, rel=1e-6)
+
+
+def test_equilibrium_threshold_separates_the_reference_loop_from_round_off(model,
+                                                                          folded_states):
+    """The documented numbers of EQUILIBRIUM_RTOL: the reference loop at its tolerances of
+    1e-6 and 1e-5 N leaves rho = 2e-8 to 3e-8; at 1e-8 N it converges to round-off; near the
+    equilibrium the first eigenvalue moves by about 3e8 rho (relative)."""
+    rho = {}
+    for atol in (1e-8, 1e-6, 1e-5):
+        state = simulate(model, [self_fold(model)],
+                         options=NewtonOptions(reference_loop=True, atol=atol)).state
+        rho[atol] = check_equilibrium(model, state).relative
+    assert rho[1e-8] < 1e-15 < EQUILIBRIUM_RTOL < 1e-8 < rho[1e-6] < rho[1e-5] < 1e-7
+    tight, loose = folded_states
+    near = dataclasses.replace(tight, u=tight.u + 1e-4 * (loose.u - tight.u))
+    check = check_equilibrium(model, near)                       # rho about 3e-12: flagged
+    lam0, lam = (natural_modes(model, s, count=1).eigenvalue[0] for s in (tight, near))
+    assert 1e-12 < check.relative < 1e-11 and not check.in_equilibrium
+    assert 2e8 < (lam / lam0 - 1) / check.relative < 4e8

@@ -112,3 +112,30 @@ def test_shift_invert_in_nested_dissection_order_finds_the_same_modes(miura, mon
     assert used and used[0] is not None and nd.success
     assert ladder.last_backend() == "superlu-nd"
     np.testing.assert_allclose(nd.frequency, ref.frequency, rtol=1e-9)
+
+
+def test_a_moving_state_is_not_an_equilibrium(fold, tmp_path, caplog):
+    """Half a swing after a sudden fold the panel is far from rest: the modes about that state
+    say so (also in meta.json); the flat state before it is an equilibrium."""
+    import json
+    import logging
+
+    from simulator import Dynamics, check_equilibrium
+
+    flat = natural_modes(fold, count=2)
+    assert flat.status == "converged" and flat.equilibrium.in_equilibrium
+    assert flat.residual_norm < 1e-15                           # [N] unloaded: exactly 0
+    T = 1 / flat.frequency[0]
+    moving = simulate(fold, [Dynamics(duration=T / 4, dt=T / 40, folds={2: 0.2})]).state
+    check = check_equilibrium(fold, moving)
+    assert not check.in_equilibrium and check.status == "not in equilibrium"
+    with caplog.at_level(logging.WARNING, logger="simulator"):
+        res = natural_modes(fold, moving, count=2)
+    assert res.status == "not in equilibrium" and res.success
+    assert any("natural_modes" in r.getMessage() for r in caplog.records)
+    meta = json.loads((res.save(tmp_path) / "meta.json").read_text())
+    assert meta["status"] == "not in equilibrium"
+    assert meta["equilibrium"]["in_equilibrium"] is False
+    assert meta["equilibrium"]["residual_norm [N]"] == pytest.approx(check.residual_norm)
+    with pytest.raises(ParameterError, match="tolerance = 0"):
+        check_equilibrium(fold, moving, tolerance=0)

@@ -246,14 +246,16 @@ def test_transient_heat_step_in_simulate():
                                             dt=1e-3, record_every=5)])
     assert r.success, r.message
     step = r.steps[-1]
-    np.testing.assert_allclose(step.columns["time [s]"], np.arange(1, 11) * 5e-3)
+    np.testing.assert_allclose(step.columns["time [s]"], np.arange(0, 11) * 5e-3)
     np.testing.assert_allclose(step.columns["heat_stored [J]"],
                                step.columns["heat_in [J]"] - step.columns["heat_out [J]"],
                                rtol=1e-9)
     df = r.to_frame()
-    # time 0 on the initial record (issue 21); the two quasi-static Heat records have none
-    assert df["time [s]"].iloc[0] == 0.0
-    assert df["time [s]"].isna().sum() == 2 and df["time [s]"].max() == pytest.approx(0.05)
+    # the initial and the two quasi-static Heat records have no time (issue 28); the transient
+    # step begins on the state Heat left, at t = 0
+    assert df["time [s]"].isna().tolist() == [True] * 3 + [False] * 11
+    assert df["time [s]"].iloc[3] == 0.0 and df["time [s]"].max() == pytest.approx(0.05)
+    np.testing.assert_array_equal(step.temperature_history[0], r.steps[0].state.temperature)
     assert np.all(step.power_history >= 5e-3 - 1e-15)           # added on top of the 5 mW
     np.testing.assert_array_equal(r.state.temperature, step.temperature_history[-1])
     hot = case.model.mesh.crease_nodes[0, 6]                 # hotter on average than at 5 mW
@@ -276,8 +278,8 @@ def test_transient_result_saves(tmp_path):
     assert text[1].endswith(",,,,")                                 # no step values
     direct = integrate_heat(model, model.mesh.nodes, {2: StepPower(5e-3, t_off=0.01),
                                                       (2,): Ramp(1e-3, 0.02)}, 0.02, 2e-3)
-    np.testing.assert_allclose(r.steps[0].temperature_history, direct.temperature[1:],
-                               rtol=1e-12)
+    np.testing.assert_allclose(r.steps[0].temperature_history, direct.temperature,
+                               rtol=1e-12)                       # record 0: the start
 
 
 # ---------------------------------------------------------------- errors

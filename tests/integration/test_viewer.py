@@ -82,6 +82,23 @@ def test_crane_500_increment_page_under_5_MB(crane_dir, tmp_path):
     assert len(small.encode()) < 200_000
 
 
+def test_records_without_time_are_null_in_the_page(tmp_path):
+    """Quasi-static records have no time (NaN in the table): the page's data stays strict
+    JSON (null, not NaN) and the time-domain step begins at t = 0."""
+    from simulator import Heat, TransientHeat, simulate
+
+    model = get_case("single_fold", thermal_steps=2).model
+    simulate(model, [Heat({2: 1e-4}, increments=2),
+                     TransientHeat({2: 1e-3}, duration=0.01, dt=5e-3)]).save(tmp_path)
+    html = viewer_html(load_viewer_data(tmp_path))
+    text = re.search(r'id="data" type="application/json">(.*?)</script>', html, re.S).group(1)
+
+    def no_nan(name):
+        raise AssertionError(f"{name} in the page data")
+    data = json.loads(text, parse_constant=no_nan)
+    assert data["time"] == [None, None, None, 0.0, 0.005, 0.01]
+
+
 @pytest.mark.slow
 def test_real_crane_500_increments_page_under_5_MB(tmp_path):
     case = get_case("crane")

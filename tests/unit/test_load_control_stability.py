@@ -15,7 +15,7 @@ import scipy.sparse as sp
 
 from simulator.linalg.ladder import factorize
 from simulator.solvers.newton import NewtonOptions, follow_path
-from simulator.solvers.stability import state_stability, tangent_stability
+from simulator.solvers.stability import quick_stability, tangent_stability
 
 
 class Pitchfork:
@@ -90,12 +90,12 @@ def _spd(n, seed=0):
     return a @ a.T + n * np.eye(n)
 
 
-def test_state_stability_is_cheap_on_a_positive_definite_tangent_and_exact_otherwise():
+def test_quick_stability_is_cheap_on_a_positive_definite_tangent_and_exact_otherwise():
     K = _spd(30)
-    st = state_stability(K)
+    st = quick_stability(K)
     assert st.stable and st.lowest is None and st.mode is None
     K[0, 0] = -5.0 * K[0, 0]
-    st = state_stability(K)
+    st = quick_stability(K)
     w = np.linalg.eigvalsh(K)
     assert not st.stable and st.negative == int(np.sum(w < 0))
     assert st.lowest == pytest.approx(w[0])
@@ -106,7 +106,7 @@ def test_a_mechanism_zero_eigenvalue_is_not_a_loss_of_stability():
     a = np.random.default_rng(1).normal(size=(40, 39))
     K = a @ a.T
     assert np.linalg.eigvalsh(K)[0] < 1e-12
-    assert state_stability(K).stable
+    assert quick_stability(K).stable
     assert tangent_stability(K, rtol=100.0).stable
 
 
@@ -118,5 +118,5 @@ def test_superlu_gives_the_inertia_of_a_symmetric_indefinite_matrix():
     factor = factorize(A, kind="symmetric", backend="superlu")
     assert factor.backend.startswith("superlu")
     assert factor.inertia == (int(np.sum(w > 0)), int(np.sum(w < 0)), 0)
-    st = state_stability(A, linear_solver="superlu")
+    st = quick_stability(A, linear_solver="superlu")
     assert st.negative == int(np.sum(w < 0)) or not st.exact

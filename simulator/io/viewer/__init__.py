@@ -25,6 +25,7 @@ import base64
 import html
 import json
 import logging
+import math
 import pathlib
 from importlib import resources
 
@@ -183,7 +184,8 @@ def _payload(data: dict, max_bytes: int) -> dict:
         "crease_temperature": (None if data["crease_temperature"] is None
                                else _b64(data["crease_temperature"][rec], "<f4")),
         "stage": data["stage"][rec].tolist(), "increment": data["increment"][rec].tolist(),
-        "time": None if data["time"] is None else data["time"][rec].tolist(),
+        "time": None if data["time"] is None else      # records without time: null
+        [t if math.isfinite(t) else None for t in data["time"][rec].tolist()],
     }
 
 

@@ -158,7 +158,8 @@
     let tmin = Infinity, tmax = -Infinity, ptot = 0;
     for (let n = 0; n < N; n++) { tmin = Math.min(tmin, temp[n]); tmax = Math.max(tmax, temp[n]); }
     for (let c = 0; c < C; c++) ptot += power[rec * C + c];
-    const time = D.time ? " \u00b7 t " + fmt(D.time[rec], 4) + " s" : "";
+    const time = D.time && D.time[rec] !== null ? " \u00b7 t " + fmt(D.time[rec], 4) + " s"
+      : "";                                          // quasi-static records have no time
     el("record").textContent = "record " + D.records[rec] + "/" + (D.n_records - 1) + " \u00b7 " +
       D.stage[rec] + " increment " + D.increment[rec] + time + " \u00b7 total power (all creases) " +
       fmt(ptot, 2) + " mW \u00b7 nodes " + fmt(tmin, 1) + "\u2013" + fmt(tmax, 1) + " \u00b0C";
