@@ -15,7 +15,7 @@ import math
 from ._common import CLIError, length_um, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
-           "heater_names"]
+           "heater_names", "refuse_creaseless"]
 
 _NS = "etorigami:"
 
@@ -68,6 +68,13 @@ def heater_names(geo) -> dict:
     return {k: tuple(sorted(v)) for k, v in out.items()}
 
 
+def refuse_creaseless(path, pattern, what: str) -> None:
+    """Refuse, in one line, a run of a pattern without a crease (``what``: heat or fold)."""
+    if not len(pattern.creases):
+        raise CLIError(f"{path} has no crease to {what}: its edges are all boundary (B) or "
+                       "flat (F, J) edges; draw the creases as M, V or U edges")
+
+
 def select_creases(spec: str, geo) -> list:
     """Crease ids of ``--heat``: all, M, V (or M,V), ids, heater names (comma separated)."""
     pattern = geo.pattern
@@ -117,6 +124,7 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     if geo.crease_model == "sharp":
         raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
                        "needs creases with a width; fold it with --fold WHICH=DEG instead")
+    refuse_creaseless(path, geo.pattern, "heat")
     if heating.heat is None or heating.power is None:
         missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
                                   ("--power MW", heating.power)) if v is None]
@@ -165,14 +173,22 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     print(f"  start shape: {shape}")
     for note in geo.notes:
         print(f"  note: {note}")
+    if geo.crease_model == "sharp" and not len(pattern.creases):
+        print("  a run: none, the pattern has no crease to fold (only boundary and flat edges)")
+        return 0
     if geo.crease_model == "sharp":
         check_sharp(args, geo, sharp or {}, needs)
         print("  a run needs: " + "; ".join(needs))
         print(f"  e.g. etorigami run {args.file} --crease-model sharp --fold all=90 --out DIR")
         return 0
     mesh = build_mesh(pattern)
-    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
-          f"(checked with crease width {pattern.crease_width[pattern.creases].min() * 1e6:g} um)")
+    widths = pattern.crease_width[pattern.creases]
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs"
+          + (f" (checked with crease width {widths.min() * 1e6:g} um)" if len(widths) else ""))
+    if not len(widths):
+        print("  a run: none, the pattern has no crease to heat or fold (only boundary and flat "
+              "edges)")
+        return 0
     print(f"  physical parameters from layer stack {stack.summary()}")
     print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]))
     print(f"  e.g. etorigami run {args.file} --heat all --power 2 --out DIR")

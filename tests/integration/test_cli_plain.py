@@ -88,3 +88,20 @@ def test_check_of_every_file_is_a_summary_or_one_line(path, capsys):
             "fully_folded.fold", "crease_too_wide.fold", "sheets_touching_at_a_vertex.fold")
     else:
         assert "valid FOLD" in out
+
+
+def test_a_file_without_creases_is_checked_and_refused_in_one_line(tmp_path, capsys):
+    """Issue 28: check crashed (zero-size minimum) and the sharp check printed a nan width on a
+    valid file without creases; a run of it is refused in CLI terms."""
+    path = str(DATA / "no_creases.fold")
+    for flags in ([], ["--crease-model", "sharp"]):
+        assert main(["check", path, *flags]) == 0
+        out, err = capsys.readouterr()
+        assert "valid FOLD crease pattern" in out and "creases 0" in out
+        assert "no crease to" in out and "nan" not in out and err == ""
+    for flags, what in ((["--heat", "all", "--power", "1"], "heat"), ([], "heat"),
+                        (["--crease-model", "sharp", "--fold", "all=30"], "fold")):
+        assert main(["run", path, *flags, "--out", str(tmp_path / "r"), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and f"has no crease to {what}" in err, err
+        assert "M, V or U edges" in err and "SharpHingeParameters" not in err

@@ -182,6 +182,13 @@ def main():
         "edges_vertices": [[0, 1], [1, 2], [2, 0], [2, 3], [3, 0], [2, 4], [4, 5], [5, 2],
                            [5, 6], [6, 2]],
         "edges_assignment": ["B", "B", "V", "B", "B", "B", "B", "M", "B", "B"]})
+    _write("no_creases.fold", {
+        "frame_unit": "mm", "frame_title": "a square sheet without creases (boundary edges and "
+        "one flat F diagonal)",
+        "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1]],
+        "faces_vertices": [[0, 1, 2], [0, 2, 3]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+        "edges_assignment": ["B", "B", "B", "B", "F"]})
 
 
 if __name__ == "__main__":
