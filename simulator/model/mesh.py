@@ -27,7 +27,7 @@ import numpy as np
 from .._arrays import read_only
 from ..errors import PatternError
 from ..geometry.pattern import Pattern
-from ..geometry.polygons import area_vectors, centroids, fan_normals, rings
+from ..geometry.polygons import area_vectors, centroids, fan_normals, on_segment, rings
 
 __all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind"]
 
@@ -332,7 +332,8 @@ def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.n
     out[crease_in & ~crease_out] += shift_in[crease_in & ~crease_out]
     out[crease_out & ~crease_in] += shift_out[crease_out & ~crease_in]
     out[both] += (w_out[:, None] / 2 * u_in + w_in[:, None] / 2 * u_out)[both]
-    straight = (sin < 1e-6) & (np.einsum("ij,ij->i", u_in, u_out) < 0) & (crease_in | crease_out)
+    straight = ((sin < 1e-6) | on_segment(X, X[prev], X[nxt], pattern.size)) \
+        & (np.einsum("ij,ij->i", u_in, u_out) < 0) & (crease_in | crease_out)
     if straight.any():
         normal = area_vectors(X, pattern.corner_sizes)[rings(pattern.corner_sizes).owner]
         inward = np.cross(normal, u_out)

@@ -155,6 +155,25 @@ def test_box_pleat_grid_merges_its_f_triangulation_into_five_panels():
     heated(load("box_pleat_grid.fold"), increments=2)
 
 
+def test_a_vertex_picometres_off_a_crease_line_is_merged_and_a_straight_corner():
+    """Issue 28: a vertex 15 pm off a straight crease line (single-precision rounding of an
+    editor export) is merged as one on it, and kept (--keep-collinear) it is a straight corner:
+    the pattern meshes at its full crease width (was: 'at most about 0.26 um fit')."""
+    data = load("box_pleat_off_line_vertex.fold")
+    geo = geometry(data)
+    assert geo.pattern.n_vertices == 6 and len(geo.pattern.creases) == 1
+    assert "1 vertices in the middle of straight crease lines merged away" in geo.notes
+    kept = geometry(data, merge_collinear=False).pattern
+    assert kept.n_vertices == 7 and len(kept.creases) == 2
+    build_mesh(kept)
+    heated(data, increments=2)
+    from simulator.geometry.polygons import STRAIGHT_TOL, on_segment
+
+    a, b = np.zeros(3), np.array([0.0, 1.0, 0.0])
+    for off, on in ((0.5 * STRAIGHT_TOL, True), (2 * STRAIGHT_TOL, False)):
+        assert on_segment(np.array([off, 0.3, 0.0]), a, b, 1.0) == on
+
+
 # ------------------------------------------------------------------ orientation
 @pytest.mark.parametrize("name", ["zigzag_folded.fold", "strip_folded.fold",
                                   "touching_points.fold"])
