@@ -15,6 +15,7 @@ import math
 import pathlib
 
 from ._common import CLIError, length_um, power_mw
+from ._terms import cli_spelling
 
 __all__ = ["add_file_commands", "add_reader_options", "fold_case", "is_fold_file",
            "reader_options"]
@@ -25,6 +26,7 @@ def is_fold_file(name: str) -> bool:
     return name.lower().endswith(".fold") or pathlib.Path(name).is_file()
 
 
+@cli_spelling()
 def fold_case(path: str, overrides: list | None, options: dict | None = None):
     """``(name, model, steps, parameters)`` of a FOLD file with ``--set`` overrides.
 
@@ -175,6 +177,7 @@ def _export(args) -> int:
     return 0
 
 
+@cli_spelling()
 def _check(args) -> int:
     import numpy as np
 

@@ -104,6 +104,14 @@ def select_creases(spec: str, geo) -> list:
     return out
 
 
+def print_notes(geo) -> None:
+    """What the reader repaired or recognised, one ``note:`` line each, in CLI spelling."""
+    from ._terms import cli_terms
+
+    for note in geo.notes:
+        print(f"  note: {cli_terms(note)}")
+
+
 def stack_reader_options(stack, options: dict) -> dict:
     """Reader keywords: the stack's crease / panel values unless the flags give them."""
     out = {"crease_width": stack.crease_width, "crease_thickness": stack.crease_thickness,
@@ -119,8 +127,7 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     stack = get_stack(heating.stack)
     print(f"layer stack {stack.summary()}")
     geo = parse_fold(data, **stack_reader_options(stack, options))
-    for note in geo.notes:
-        print(f"  note: {note}")
+    print_notes(geo)
     if geo.crease_model == "sharp":
         raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
                        "needs creases with a width; fold it with --fold WHICH=DEG instead")
@@ -171,8 +178,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     shape = "flat" if not len(fold) or np.abs(fold).max() < 1e-6 else \
         f"folded, start fold angles {fold.min():.1f} to {fold.max():.1f} deg"
     print(f"  start shape: {shape}")
-    for note in geo.notes:
-        print(f"  note: {note}")
+    print_notes(geo)
     if geo.crease_model == "sharp" and not len(pattern.creases):
         print("  a run: none, the pattern has no crease to fold (only boundary and flat edges)")
         return 0

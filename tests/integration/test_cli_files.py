@@ -117,3 +117,37 @@ def test_every_malformed_file_is_one_line_and_exit_2_at_the_cli(tmp_path, capsys
         assert main(["check", str(path)]) == 2, name
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("etorigami: error: FOLD"), (name, err)
+
+
+def test_fold_refusals_and_notes_speak_cli_options_not_python_keywords(tmp_path, capsys):
+    """Issue 28: run said unit_scale= (the Python keyword) where the option is --unit-scale;
+    every library message of a FOLD file's check or run is spelled in options."""
+    unit_less = tmp_path / "square.fold"
+    unit_less.write_text(json.dumps({
+        "vertices_coords": [[0, 0], [2, 0], [2, 1], [0, 1], [1, 0], [1, 1]],
+        "faces_vertices": [[0, 4, 5, 3], [4, 1, 2, 5]]}))
+    data = ROOT / "tests" / "data" / "fold"
+    refusals = [
+        (["run", str(unit_less), "--heat", "all", "--power", "1"], "pass --unit-scale METRES"),
+        (["run", str(data / "t_junction.fold"), "--unit-scale", "1e-3", "--heat", "all",
+          "--power", "1"], "so --unit-scale is not used"),
+        (["run", str(data / "fully_folded.fold"), "--heat", "all", "--power", "1"],
+         "(--frame creasePattern, or export it)")]
+    for command, expected in refusals:
+        assert main([*command, "--out", str(tmp_path / "r"), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert expected in err and "\n" not in err, err
+        assert not any(k in err for k in ("unit_scale", "frame=", "lay_flat", "crease_width"))
+    assert main(["check", str(data / "origami_simulator_xz.fold")]) == 0
+    out, err = capsys.readouterr()
+    assert "note: flat sheet standing" in out and "--lay-flat lays it in x-y" in out
+    assert "lay_flat" not in out + err
+
+
+def test_the_map_from_keywords_to_options_is_applied_word_by_word():
+    from design.cli._terms import cli_terms
+
+    assert cli_terms("pass unit_scale=<metres per unit>; so unit_scale is unused") == (
+        "pass --unit-scale METRES; so --unit-scale is unused")
+    assert cli_terms("my_crease_width and edges_etorigami:width") == (
+        "my_crease_width and edges_etorigami:width")

@@ -286,6 +286,18 @@ def test_crease_wider_than_its_panel_is_refused_with_the_limit():
     build_mesh(parse_fold(data, crease_width=90e-6).pattern)
 
 
+def test_creases_too_wide_for_many_panels_name_them_all_in_a_capped_list():
+    """Issue 28: every panel too small is named (the first ten, then a count), not the first."""
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+
+    pattern = miura_sheet_pattern(1e-3, 1e-3, math.radians(60), 4, 4, W=2e-3)
+    with pytest.raises(PatternError, match=r"^panel\(s\) \[0, 1, 2, 3, 4, 7, 8, 11, 12, 13, and "
+                       r"2 more\] vanish.* the tightest, panel 1 .* at most about 857.4 um fit;"
+                       r" reduce the crease widths \(crease_width\)") as info:
+        build_mesh(pattern)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400
+
+
 def test_sharp_crease_request_is_routed_to_the_hinge_model():
     data = load("single_crease_60.fold")
     assert parse_fold(data, crease_model="sharp", **PHYS).crease_model == "sharp"
@@ -311,7 +323,8 @@ def test_mesh_quality_check_names_the_crease():
 # ------------------------------------------------------------------ every file
 EXPECTED_REFUSALS = {"fully_folded.fold": "+-180 deg", "crease_too_wide.fold": "at most about",
                      "sheets_touching_at_a_vertex.fold": "joined to it by no crease",
-                     "no_creases.fold": "no crease to heat"}
+                     "no_creases.fold": "no crease to heat",
+                     "accordion_folded_flat.fold": "and 34 more] are at +-180 deg"}
 
 
 @pytest.mark.parametrize("path", sorted(DATA.glob("*.fold")), ids=lambda p: p.name)

@@ -191,6 +191,9 @@ def main():
         "edges_assignment": ["B", "B", "B", "B", "F"]})
 
     _write("box_pleat_off_line_vertex.fold", off_line_vertex())
+    pleats = [180.0 if k % 2 == 0 else -180.0 for k in range(39)]
+    _write("accordion_folded_flat.fold", _fold(*strip([1.0] * 40, pleats), frame_title=(
+        "a 40-panel accordion folded flat: 39 creases at +-180 deg (a long list to name)")))
 
 
 def off_line_vertex(off=1.5e-8):
