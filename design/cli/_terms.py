@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import re
 
 from ._common import CLIError
 
@@ -38,15 +37,32 @@ TERMS = (
         "unit_scale", "lay_flat", "crease_model", "fold_stiffness", "panel_bending_width",
         "panel_mesh", "crease_width", "crease_thickness", "panel_thickness")),
 )
-_PATTERN = re.compile("|".join(
-    (r"\b" if py[0].isalnum() else "") + re.escape(py) + (r"\b" if py[-1].isalnum() else "")
-    for py, _ in TERMS))
-_CLI = dict(TERMS)
+
+
+def _word(ch: str) -> bool:
+    return ch.isalnum() or ch == "_"
+
+
+def _at(message: str, i: int, py: str) -> bool:
+    """True if ``py`` stands at ``message[i]`` as a whole word (where it starts or ends with
+    one: ``crease_width`` is not in ``my_crease_width``)."""
+    if not message.startswith(py, i):
+        return False
+    before = i > 0 and _word(message[i - 1]) and _word(py[0])
+    j = i + len(py)
+    after = j < len(message) and _word(message[j]) and _word(py[-1])
+    return not (before or after)
 
 
 def cli_terms(message: str) -> str:
-    """``message`` with every Python spelling of :data:`TERMS` replaced by its CLI option."""
-    return _PATTERN.sub(lambda m: _CLI[m.group(0)], message)
+    """``message`` with every Python spelling of :data:`TERMS` replaced by its CLI option
+    (the first term that stands at a place wins, so the specific forms go first)."""
+    out, i = [], 0
+    while i < len(message):
+        hit = next(((py, cli) for py, cli in TERMS if _at(message, i, py)), None)
+        out.append(message[i] if hit is None else hit[1])
+        i += 1 if hit is None else len(hit[0])
+    return "".join(out)
 
 
 class _TermsFilter(logging.Filter):

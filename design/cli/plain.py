@@ -12,18 +12,20 @@ from __future__ import annotations
 
 import math
 
-from ._common import CLIError, length_um, power_mw
+from ._common import CLIError, distinct, length_um, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
-           "heater_names", "refuse_creaseless"]
+           "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK"]
 
 _NS = "etorigami:"
+#: The layer stack of a plain pattern when ``--stack`` is not given.
+DEFAULT_STACK = "su8-au"
 
 
 def add_plain_options(parser, heating: bool = True) -> None:
     """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
     ``--heat``, ``--power``, ``--fix-panel``."""
-    parser.add_argument("--stack", default="su8-au", metavar="NAME",
+    parser.add_argument("--stack", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
                              "(default su8-au, the paper's SU-8/Au bimorph; see "
                              "simulator.STACKS)")
@@ -42,6 +44,13 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
+
+
+def chosen_stack(name):
+    """The layer stack of ``--stack`` (default :data:`DEFAULT_STACK`)."""
+    from simulator import get_stack
+
+    return get_stack(DEFAULT_STACK if name is None else name)
 
 
 def frame_option(text):
@@ -104,12 +113,24 @@ def select_creases(spec: str, geo) -> list:
     return out
 
 
-def print_notes(geo) -> None:
-    """What the reader repaired or recognised, one ``note:`` line each, in CLI spelling."""
+def print_notes(geo, stack=None) -> None:
+    """What the reader repaired or recognised, one ``note:`` line each, in CLI spelling; with
+    the layer ``stack``, also the values that the file or the flags give instead of it."""
     from ._terms import cli_terms
 
     for note in geo.notes:
         print(f"  note: {cli_terms(note)}")
+    pattern = geo.pattern
+    instead = [] if stack is None else [
+        f"{name} {distinct(values)} um" for name, values, nominal in (
+            ("crease width", pattern.crease_width[pattern.creases], stack.crease_width),
+            ("crease thickness", pattern.crease_thickness[pattern.creases],
+             stack.crease_thickness),
+            ("panel thickness", pattern.panel_thickness, stack.panel_thickness))
+        if len(values) and any(abs(v - nominal) > 1e-9 * nominal for v in values)]
+    if instead:
+        print(f"  note: used instead of the stack's values (from the file or the flags): "
+              f"{', '.join(instead)}")
 
 
 def stack_reader_options(stack, options: dict) -> dict:
@@ -122,12 +143,12 @@ def stack_reader_options(stack, options: dict) -> dict:
 
 def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     """``(model, steps, parameters)`` of a plain pattern heated from the flags."""
-    from simulator import Heat, get_stack, parse_fold, stack_model
+    from simulator import Heat, parse_fold, stack_model
 
-    stack = get_stack(heating.stack)
+    stack = chosen_stack(heating.stack)
     print(f"layer stack {stack.summary()}")
     geo = parse_fold(data, **stack_reader_options(stack, options))
-    print_notes(geo)
+    print_notes(geo, stack)
     if geo.crease_model == "sharp":
         raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
                        "needs creases with a width; fold it with --fold WHICH=DEG instead")
@@ -151,12 +172,11 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import (build_mesh, central_panel, check_supported, get_stack, parse_fold,
-                           start_fold_angles)
+    from simulator import build_mesh, central_panel, check_supported, parse_fold, start_fold_angles
 
     from .sharp import check_sharp
 
-    stack = get_stack(args.stack)
+    stack = chosen_stack(args.stack)
     needs = []
     unit = data.get("frame_unit", "unit")
     if unit == "unit" and "unit_scale" not in options:
@@ -178,7 +198,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     shape = "flat" if not len(fold) or np.abs(fold).max() < 1e-6 else \
         f"folded, start fold angles {fold.min():.1f} to {fold.max():.1f} deg"
     print(f"  start shape: {shape}")
-    print_notes(geo)
+    print_notes(geo, stack)
     if geo.crease_model == "sharp" and not len(pattern.creases):
         print("  a run: none, the pattern has no crease to fold (only boundary and flat edges)")
         return 0

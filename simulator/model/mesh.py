@@ -360,8 +360,9 @@ def _crease_up(pattern: Pattern) -> np.ndarray:
     up = top[p[:, 0]] + top[p[:, 1]]
     flat = np.flatnonzero(np.linalg.norm(up, axis=1) < 2e-3)        # |fold| > ~179.9 deg
     if len(flat):
-        raise PatternError(f"crease(s) {capped(pattern.creases[flat].tolist(), 5)} are folded flat "
-                           f"(+-180 deg) in the start shape; {OPEN_START}.")
+        ids = capped(pattern.creases[flat].tolist(), 5)
+        raise PatternError(f"crease(s) {ids} are folded flat (+-180 deg) in the start shape; "
+                           f"{OPEN_START}.")
     return up
 
 

@@ -133,8 +133,8 @@ def check_supported(pattern: Pattern, panel: int, what: str = "fixed panel") -> 
     free = unsupported_panels(pattern, panel)
     if free:
         raise ParameterError(
-            f"{what} {panel}: panels {capped(free)} are joined to it by no crease (a separate sheet, "
-            "or one touching it at a vertex only), so they would float free (a mechanism): "
+            f"{what} {panel}: panels {capped(free)} are joined to it by no crease (a separate "
+            "sheet, or one touching it at a vertex only), so they would float free (a mechanism): "
             "give one sheet joined by creases, or split the file into one file per sheet.")
 
 

@@ -131,3 +131,16 @@ def test_the_crease_width_refusal_names_every_panel_and_the_option(tmp_path, cap
     assert "\n" not in err and "panel(s) [0, 1, 2, 3, 4, 5, 6, 7, 8] vanish" in err
     assert "at most about 857.4 um fit" in err and "(--crease-width UM" in err
     assert "crease_width" not in err
+
+
+def test_values_the_file_gives_instead_of_the_stack_are_named(capsys):
+    """Issue 28: the stack line printed 200 um while the file's own crease widths were used."""
+    assert main(["check", str(DATA / "crease_too_wide.fold")]) == 2
+    out = capsys.readouterr().out
+    assert "note: used instead of the stack's values (from the file or the flags): crease " \
+           "width 300 um" in out
+    assert main(["check", MIURA, "--crease-width", "100", "--panel-thickness", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "crease width 100 um, panel thickness 20 um" in out
+    assert main(["check", MIURA]) == 0
+    assert "used instead" not in capsys.readouterr().out

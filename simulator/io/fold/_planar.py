@@ -77,8 +77,9 @@ def merge_straight(coords, faces, edges, letters, same) -> tuple:
 
     Collinear is judged relative to the pattern's extent
     (:data:`~simulator.geometry.polygons.STRAIGHT_TOL`): a vertex that an editor's rounding put
-    picometres off the line is merged too. ``faces`` are the panels (after F / J merging); a vertex is dropped when it is a corner of
-    exactly two panels and has exactly two crease edges (F / J edges not counted).
+    picometres off the line is merged too. ``faces`` are the panels (after F / J merging); a
+    vertex is dropped when it is a corner of exactly two panels and has exactly two crease
+    edges (F / J edges not counted).
 
     ``same(i, j)`` says whether file edges i and j carry the same data. Returns the new faces
     and, per file edge, the pair of kept vertices it now belongs to (or None when unchanged).
