@@ -115,13 +115,14 @@ def select_creases(spec: str, geo) -> list:
 
 def print_notes(geo, stack=None) -> None:
     """What the reader repaired or recognised, one ``note:`` line each, in CLI spelling; with
-    the layer ``stack``, also the values that the file or the flags give instead of it."""
+    the layer ``stack``, also the values that the file or the flags give instead of it
+    (compliant creases; a sharp read's stiffness rules are printed by :func:`.sharp.check_sharp`)."""
     from ._terms import cli_terms
 
     for note in geo.notes:
         print(f"  note: {cli_terms(note)}")
     pattern = geo.pattern
-    instead = [] if stack is None else [
+    instead = [] if stack is None or geo.crease_model == "sharp" else [
         f"{name} {distinct(values)} um" for name, values, nominal in (
             ("crease width", pattern.crease_width[pattern.creases], stack.crease_width),
             ("crease thickness", pattern.crease_thickness[pattern.creases],
@@ -199,9 +200,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
         f"folded, start fold angles {fold.min():.1f} to {fold.max():.1f} deg"
     print(f"  start shape: {shape}")
     print_notes(geo, stack)
-    if geo.crease_model == "sharp" and not len(pattern.creases):
-        print("  a run: none, the pattern has no crease to fold (only boundary and flat edges)")
-        return 0
+    refuse_creaseless(args.file, pattern, "heat or fold")
     if geo.crease_model == "sharp":
         check_sharp(args, geo, sharp or {}, needs)
         print("  a run needs: " + "; ".join(needs))
@@ -209,12 +208,8 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
         return 0
     mesh = build_mesh(pattern)
     widths = pattern.crease_width[pattern.creases]
-    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs"
-          + (f" (checked with crease width {widths.min() * 1e6:g} um)" if len(widths) else ""))
-    if not len(widths):
-        print("  a run: none, the pattern has no crease to heat or fold (only boundary and flat "
-              "edges)")
-        return 0
+    print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
+          f"(checked with crease width {widths.min() * 1e6:g} um)")
     print(f"  physical parameters from layer stack {stack.summary()}")
     print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]))
     print(f"  e.g. etorigami run {args.file} --heat all --power 2 --out DIR")

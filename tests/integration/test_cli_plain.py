@@ -86,7 +86,7 @@ def test_check_of_every_file_is_a_summary_or_one_line(path, capsys):
     if code == 2:
         assert len(err.strip().splitlines()) == 1 and path.name in (
             "fully_folded.fold", "crease_too_wide.fold", "sheets_touching_at_a_vertex.fold",
-            "accordion_folded_flat.fold")
+            "accordion_folded_flat.fold", "no_creases.fold")
     else:
         assert "valid FOLD" in out
 
@@ -96,10 +96,10 @@ def test_a_file_without_creases_is_checked_and_refused_in_one_line(tmp_path, cap
     valid file without creases; a run of it is refused in CLI terms."""
     path = str(DATA / "no_creases.fold")
     for flags in ([], ["--crease-model", "sharp"]):
-        assert main(["check", path, *flags]) == 0
+        assert main(["check", path, *flags]) == 2            # check refuses what run refuses
         out, err = capsys.readouterr()
-        assert "valid FOLD crease pattern" in out and "creases 0" in out
-        assert "no crease to" in out and "nan" not in out and err == ""
+        assert "valid FOLD crease pattern" in out and "creases 0" in out and "nan" not in out
+        assert err.count("\n") == 1 and "has no crease to heat or fold" in err, err
     for flags, what in ((["--heat", "all", "--power", "1"], "heat"), ([], "heat"),
                         (["--crease-model", "sharp", "--fold", "all=30"], "fold")):
         assert main(["run", path, *flags, "--out", str(tmp_path / "r"), "-q"]) == 2
