@@ -269,6 +269,22 @@ def test_fully_folded_crease_in_a_folded_shape_is_named_by_the_mesh():
         build_mesh(p)
 
 
+def test_many_fully_folded_creases_are_named_in_a_short_line():
+    """Issue 28: the +-180 deg refusal of a folded form caps its crease list (the first five)
+    and names the crease-pattern frame; it ran to 10,986 characters on an 8 x 8 maze."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_files", DATA / "make_files.py")
+    make = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make)
+    pleat = make.strip([1.0] * 30, [179.95 if k % 2 else -179.95 for k in range(29)])
+    pattern = geometry(make._fold(*pleat)).pattern
+    with pytest.raises(PatternError, match=r"^crease\(s\) \[\d+, \d+, \d+, \d+, \d+, and 24 "
+                       r"more\] are folded flat .*frame='creasePattern'") as info:
+        build_mesh(pattern)
+    assert len(str(info.value)) < 250
+
+
 def test_sheet_in_another_plane_is_reported_and_laid_flat_on_request():
     data = load("origami_simulator_xz.fold")
     geo = geometry(data)
