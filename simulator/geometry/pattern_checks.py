@@ -68,7 +68,7 @@ def check_geometry(pattern: Pattern) -> None:
         i, j = pair
         flat = _folded_flat_note(pattern)
         raise PatternError(f"vertices {i} and {j} coincide at {v[i].tolist()}" + (
-            f": {flat}; if not folded flat, merge the two vertices." if flat else
+            f": {flat}; if not folded flat, merge them into one vertex." if flat else
             "; merge them into one vertex and use it in both panels."))
     c, a, b, panel = pattern._fan_triangles()
     sizes = pattern.corner_sizes
@@ -108,7 +108,7 @@ def _folded_flat_note(pattern: Pattern) -> str:
     flat = folded_flat_creases(pattern)
     if not len(flat):
         return ""
-    return f"crease(s) {capped(flat.tolist(), 5)} are at +-180 deg (folded flat); {OPEN_START}"
+    return f"crease(s) {capped(flat.tolist(), 5)} are at +-180 deg; {OPEN_START}"
 
 
 def _raise_self_intersecting(pattern: Pattern, i: int) -> None:
