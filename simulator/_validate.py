@@ -23,7 +23,10 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["is_number", "number", "finite", "positive", "non_negative", "in_range",
-           "probability", "integer", "one_of", "array"]
+           "probability", "integer", "one_of", "array", "capped", "CAP"]
+
+#: Items a message lists at most (the rest are counted), so that a refusal stays one short line.
+CAP = 10
 
 _REALS = (int, float, np.integer, np.floating)
 _all = np.logical_and.reduce          # with axis=None: ndarray.all() without its Python wrapper
@@ -142,3 +145,11 @@ def _array_fail(field, shape, unit, hint, finite_values, got):
     hint = f"; {hint}" if hint else ""
     kind = "a finite array" if finite_values else "an array"
     raise ParameterError(f"{field} must be {kind} of shape {want}{unit}; got {got}{hint}.")
+
+
+def capped(items, cap: int = CAP, fmt=str) -> str:
+    """``[a, b, c]``, or the first ``cap`` items and a count of the rest:
+    ``[a, b, and 12 more]``, for messages that name many items."""
+    items = list(items)
+    shown = ", ".join(fmt(x) for x in items[:cap])
+    return f"[{shown}]" if len(items) <= cap else f"[{shown}, and {len(items) - cap} more]"

@@ -14,7 +14,7 @@ import math
 import os
 import pathlib
 
-__all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "progress_bar",
+__all__ = ["CLIError", "length_um", "power_mw", "fold_deg", "floats", "distinct", "progress_bar",
            "add_parallel_options", "executor", "kernel_backend", "saved_rows", "resume_message",
            "check_output", "add_quiet_option", "resuming_line", "BestSoFar", "show_progress", "EXIT_INTERRUPTED", "RESIDUAL_LIMIT_DEG", "PLAUSIBLE_LENGTH_UM",
            "MAX_POWER_MW"]
@@ -71,6 +71,12 @@ def fold_deg(flag: str, value: float, *, within: float | None = None) -> float:
     if within is not None and abs(value) > within:
         raise CLIError(f"{flag} = {value:g} deg must be within -{within:g} to {within:g} deg")
     return math.radians(value)
+
+
+def distinct(values, scale: float = 1e6) -> str:
+    """The distinct ``values`` times ``scale`` (default: metres to um), 4 significant digits,
+    ascending, joined by '/': ``"21/500"``."""
+    return "/".join(sorted({f"{v * scale:.4g}" for v in values}, key=float))
 
 
 def floats(flag: str, text: str) -> list:

@@ -15,6 +15,7 @@ import math
 import pathlib
 
 from ._common import CLIError, length_um, power_mw
+from ._terms import cli_spelling
 
 __all__ = ["add_file_commands", "add_reader_options", "fold_case", "is_fold_file",
            "reader_options"]
@@ -25,19 +26,22 @@ def is_fold_file(name: str) -> bool:
     return name.lower().endswith(".fold") or pathlib.Path(name).is_file()
 
 
+@cli_spelling()
 def fold_case(path: str, overrides: list | None, options: dict | None = None):
     """``(name, model, steps, parameters)`` of a FOLD file with ``--set`` overrides.
 
-    A model file runs its own steps; a plain crease pattern (no ``etorigami:`` fields), or any
-    file given ``--heat``, is heated from the flags with a layer stack (:mod:`.plain`).
+    A model file runs its own steps, or, given ``--heat``, its own model heated from the flags
+    (:mod:`.model_heat`); a plain crease pattern (no ``etorigami:`` steps) is heated from the
+    flags with a layer stack (:mod:`.plain`).
     Overrides: ``power.<crease id or heater name>=MW`` sets the power added by the last heating
     step on that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the
     increments of its heating steps.
     """
     from simulator import load_fold_json, parse_fold, read_model
 
+    from .model_heat import model_file_heat_case, refuse_unheatable
     from .plain import heater_names, is_plain, plain_case
-    from .sharp import is_sharp_request, refuse_heated_sharp, sharp_case
+    from .sharp import is_sharp_request, sharp_case
 
     options = dict(options or {})
     heating = options.pop("_heating", None)
@@ -48,11 +52,13 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
                                      or is_plain(data))
     if drive and (is_sharp_request(options) or getattr(heating, "fold", None)):
         model, steps, params, geo = sharp_case(path, data, options, sharp, heating)
-    elif drive:
+    elif drive and is_plain(data):
         model, steps, params, geo = plain_case(path, data, options, heating)
+    elif drive:
+        model, steps, params, geo = model_file_heat_case(path, data, options, sharp, heating)
     else:
         model, steps = read_model(path, **options, **sharp)
-        refuse_heated_sharp(model, steps, path)
+        refuse_unheatable(model, steps, path)
         params = {}
     names = {}
     if any(not o.partition("=")[0].strip()[len("power."):].isdigit()
@@ -175,6 +181,7 @@ def _export(args) -> int:
     return 0
 
 
+@cli_spelling()
 def _check(args) -> int:
     import numpy as np
 

@@ -12,18 +12,20 @@ from __future__ import annotations
 
 import math
 
-from ._common import CLIError, length_um, power_mw
+from ._common import CLIError, distinct, length_um, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
-           "heater_names"]
+           "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK"]
 
 _NS = "etorigami:"
+#: The layer stack of a plain pattern when ``--stack`` is not given.
+DEFAULT_STACK = "su8-au"
 
 
 def add_plain_options(parser, heating: bool = True) -> None:
     """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
     ``--heat``, ``--power``, ``--fix-panel``."""
-    parser.add_argument("--stack", default="su8-au", metavar="NAME",
+    parser.add_argument("--stack", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
                              "(default su8-au, the paper's SU-8/Au bimorph; see "
                              "simulator.STACKS)")
@@ -42,6 +44,13 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
+
+
+def chosen_stack(name):
+    """The layer stack of ``--stack`` (default :data:`DEFAULT_STACK`)."""
+    from simulator import get_stack
+
+    return get_stack(DEFAULT_STACK if name is None else name)
 
 
 def frame_option(text):
@@ -66,6 +75,13 @@ def heater_names(geo) -> dict:
         if isinstance(name, str) and e >= 0 and geo.pattern.is_crease[e]:
             out.setdefault(name, []).append(e)
     return {k: tuple(sorted(v)) for k, v in out.items()}
+
+
+def refuse_creaseless(path, pattern, what: str) -> None:
+    """Refuse, in one line, a run of a pattern without a crease (``what``: heat or fold)."""
+    if not len(pattern.creases):
+        raise CLIError(f"{path} has no crease to {what}: its edges are all boundary (B) or "
+                       "flat (F, J) edges; draw the creases as M, V or U edges")
 
 
 def select_creases(spec: str, geo) -> list:
@@ -97,6 +113,27 @@ def select_creases(spec: str, geo) -> list:
     return out
 
 
+def print_notes(geo, stack=None) -> None:
+    """What the reader repaired or recognised, one ``note:`` line each, in CLI spelling; with
+    the layer ``stack``, also the values that the file or the flags give instead of it
+    (compliant creases; a sharp read's stiffness rules are printed by :func:`.sharp.check_sharp`)."""
+    from ._terms import cli_terms
+
+    for note in geo.notes:
+        print(f"  note: {cli_terms(note)}")
+    pattern = geo.pattern
+    instead = [] if stack is None or geo.crease_model == "sharp" else [
+        f"{name} {distinct(values)} um" for name, values, nominal in (
+            ("crease width", pattern.crease_width[pattern.creases], stack.crease_width),
+            ("crease thickness", pattern.crease_thickness[pattern.creases],
+             stack.crease_thickness),
+            ("panel thickness", pattern.panel_thickness, stack.panel_thickness))
+        if len(values) and any(abs(v - nominal) > 1e-9 * nominal for v in values)]
+    if instead:
+        print(f"  note: used instead of the stack's values (from the file or the flags): "
+              f"{', '.join(instead)}")
+
+
 def stack_reader_options(stack, options: dict) -> dict:
     """Reader keywords: the stack's crease / panel values unless the flags give them."""
     out = {"crease_width": stack.crease_width, "crease_thickness": stack.crease_thickness,
@@ -107,16 +144,16 @@ def stack_reader_options(stack, options: dict) -> dict:
 
 def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     """``(model, steps, parameters)`` of a plain pattern heated from the flags."""
-    from simulator import Heat, get_stack, parse_fold, stack_model
+    from simulator import Heat, parse_fold, stack_model
 
-    stack = get_stack(heating.stack)
+    stack = chosen_stack(heating.stack)
     print(f"layer stack {stack.summary()}")
     geo = parse_fold(data, **stack_reader_options(stack, options))
-    for note in geo.notes:
-        print(f"  note: {note}")
+    print_notes(geo, stack)
     if geo.crease_model == "sharp":
         raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
                        "needs creases with a width; fold it with --fold WHICH=DEG instead")
+    refuse_creaseless(path, geo.pattern, "heat")
     if heating.heat is None or heating.power is None:
         missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
                                   ("--power MW", heating.power)) if v is None]
@@ -136,12 +173,11 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import (build_mesh, central_panel, check_supported, get_stack, parse_fold,
-                           start_fold_angles)
+    from simulator import build_mesh, central_panel, check_supported, parse_fold, start_fold_angles
 
     from .sharp import check_sharp
 
-    stack = get_stack(args.stack)
+    stack = chosen_stack(args.stack)
     needs = []
     unit = data.get("frame_unit", "unit")
     if unit == "unit" and "unit_scale" not in options:
@@ -163,16 +199,17 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     shape = "flat" if not len(fold) or np.abs(fold).max() < 1e-6 else \
         f"folded, start fold angles {fold.min():.1f} to {fold.max():.1f} deg"
     print(f"  start shape: {shape}")
-    for note in geo.notes:
-        print(f"  note: {note}")
+    print_notes(geo, stack)
+    refuse_creaseless(args.file, pattern, "heat or fold")
     if geo.crease_model == "sharp":
         check_sharp(args, geo, sharp or {}, needs)
         print("  a run needs: " + "; ".join(needs))
         print(f"  e.g. etorigami run {args.file} --crease-model sharp --fold all=90 --out DIR")
         return 0
     mesh = build_mesh(pattern)
+    widths = pattern.crease_width[pattern.creases]
     print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
-          f"(checked with crease width {pattern.crease_width[pattern.creases].min() * 1e6:g} um)")
+          f"(checked with crease width {widths.min() * 1e6:g} um)")
     print(f"  physical parameters from layer stack {stack.summary()}")
     print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]))
     print(f"  e.g. etorigami run {args.file} --heat all --power 2 --out DIR")

@@ -105,9 +105,9 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     """``(model, steps, parameters, geo)`` of a FOLD file run with sharp creases and a
     ``--fold`` drive (the layer stack gives the crease data the flags and the file lack)."""
     from simulator import (SelfFold, Supports, central_panel, check_supported, fold_to_model,
-                           get_stack, parse_fold, sharp_model)
+                           parse_fold, sharp_model)
 
-    from .plain import stack_reader_options
+    from .plain import chosen_stack, refuse_creaseless, stack_reader_options
 
     if getattr(args, "heat", None) is not None:
         raise CLIError(f"--heat {args.heat}: {path} is read with sharp creases (concentrated "
@@ -115,13 +115,14 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     if not getattr(args, "fold", None):
         raise CLIError(f"{path} read with sharp creases needs a mechanical drive: --fold "
                        "WHICH=DEG (e.g. --fold all=90; heating needs crease widths)")
-    stack = get_stack(args.stack)
+    stack = chosen_stack(args.stack)
     reader = stack_reader_options(stack, options)
     if parse_fold(data, **reader).crease_model != "sharp":
         raise CLIError(f"--fold drives sharp creases, but {path} is read with compliant creases; "
                        "add --crease-model sharp (compliant creases are driven by --heat)")
     reader["crease_model"] = "sharp"
     geo = parse_fold(data, **reader)
+    refuse_creaseless(path, geo.pattern, "fold")
     read, _ = fold_to_model(data, **reader, **sharp)
     pattern = read.mesh.pattern
     panel = central_panel(pattern) if args.fix_panel is None else \

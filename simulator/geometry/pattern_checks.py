@@ -8,13 +8,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._validate import capped
 from ..errors import PatternError
 from .polygons import area_vectors, fan_normals
 
 if TYPE_CHECKING:
     from .pattern import Pattern
 
-__all__ = ["check_geometry"]
+__all__ = ["check_geometry", "OPEN_START"]
+
+#: What a compliant crease at +-180 deg in the start shape needs (the refusals of a pattern
+#: folded flat end with it).
+OPEN_START = ("a compliant crease needs an open start: use the flat crease pattern "
+              "(frame='creasePattern', or export it) or open them below 180 deg")
 
 logger = logging.getLogger(__name__)
 
@@ -60,8 +66,10 @@ def check_geometry(pattern: Pattern) -> None:
                     *pair)
     elif pair is not None:
         i, j = pair
-        raise PatternError(f"vertices {i} and {j} coincide at {v[i].tolist()}; merge them into one "
-                           "vertex and use it in both panels" + _folded_flat_note(pattern) + ".")
+        flat = _folded_flat_note(pattern)
+        raise PatternError(f"vertices {i} and {j} coincide at {v[i].tolist()}" + (
+            f": {flat}; if not folded flat, merge them into one vertex." if flat else
+            "; merge them into one vertex and use it in both panels."))
     c, a, b, panel = pattern._fan_triangles()
     sizes = pattern.corner_sizes
     starts = np.cumsum(sizes) - sizes
@@ -100,10 +108,7 @@ def _folded_flat_note(pattern: Pattern) -> str:
     flat = folded_flat_creases(pattern)
     if not len(flat):
         return ""
-    return (f"; or, if the sheet is folded flat: crease(s) {flat.tolist()} (vertices "
-            f"{pattern.edges[flat].tolist()}) are at +-180 deg, and a compliant crease needs an "
-            "open start shape: start from the crease pattern (FOLD: the creasePattern frame, "
-            "with the folded frame's angles as targets) or open these creases below 180 deg")
+    return f"crease(s) {capped(flat.tolist(), 5)} are at +-180 deg; {OPEN_START}"
 
 
 def _raise_self_intersecting(pattern: Pattern, i: int) -> None:

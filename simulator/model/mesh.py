@@ -25,9 +25,11 @@ from functools import cached_property
 import numpy as np
 
 from .._arrays import read_only
+from .._validate import capped
 from ..errors import PatternError
 from ..geometry.pattern import Pattern
-from ..geometry.polygons import area_vectors, centroids, fan_normals, rings
+from ..geometry.pattern_checks import OPEN_START
+from ..geometry.polygons import area_vectors, centroids, fan_normals, on_segment, rings
 
 __all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind"]
 
@@ -332,7 +334,8 @@ def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.n
     out[crease_in & ~crease_out] += shift_in[crease_in & ~crease_out]
     out[crease_out & ~crease_in] += shift_out[crease_out & ~crease_in]
     out[both] += (w_out[:, None] / 2 * u_in + w_in[:, None] / 2 * u_out)[both]
-    straight = (sin < 1e-6) & (np.einsum("ij,ij->i", u_in, u_out) < 0) & (crease_in | crease_out)
+    straight = ((sin < 1e-6) | on_segment(X, X[prev], X[nxt], pattern.size)) \
+        & (np.einsum("ij,ij->i", u_in, u_out) < 0) & (crease_in | crease_out)
     if straight.any():
         normal = area_vectors(X, pattern.corner_sizes)[rings(pattern.corner_sizes).owner]
         inward = np.cross(normal, u_out)
@@ -357,12 +360,9 @@ def _crease_up(pattern: Pattern) -> np.ndarray:
     up = top[p[:, 0]] + top[p[:, 1]]
     flat = np.flatnonzero(np.linalg.norm(up, axis=1) < 2e-3)        # |fold| > ~179.9 deg
     if len(flat):
-        ids = pattern.creases[flat].tolist()
-        raise PatternError(
-            f"crease(s) {ids} are folded flat (+-180 deg) in the start shape; a compliant crease "
-            "needs an open start shape: start from the crease pattern (FOLD: the creasePattern "
-            "frame, with the folded frame's angles as targets) or open these creases below "
-            "180 deg.")
+        ids = capped(pattern.creases[flat].tolist(), 5)
+        raise PatternError(f"crease(s) {ids} are folded flat (+-180 deg) in the start shape; "
+                           f"{OPEN_START}.")
     return up
 
 
@@ -404,24 +404,31 @@ def _shrunk_ok(pattern: Pattern, X: np.ndarray, corners: np.ndarray) -> np.ndarr
 
 def _check_shrunk_panels(pattern: Pattern, corners: np.ndarray) -> None:
     """Crease widths must leave every shrunk panel with positive area, the same orientation,
-    and its corners inside the panel; the message gives the widths that would fit."""
+    and its corners inside the panel; the message names every panel that fails (capped) and
+    the widths that would fit."""
     X = pattern.vertices[pattern.corner_vertices]
     ok = _shrunk_ok(pattern, X, corners)
     if ok.all():
         return
-    p = int(np.flatnonzero(~ok)[0])
-    lo, hi = 0.0, 1.0                  # the corner shifts are linear in the widths
+    ring = rings(pattern.corner_sizes)
+    lo, hi = np.zeros(len(ok)), np.ones(len(ok))   # the corner shifts are linear in the widths
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _shrunk_ok(pattern, X, X + mid * (corners - X))[p] else (lo, mid)
-    edges = np.unique(pattern.corner_edges[rings(pattern.corner_sizes).owner == p])
-    ids = [int(e) for e in edges if pattern.is_crease[e]]
-    w = pattern.crease_width[ids]
+        fits = _shrunk_ok(pattern, X, X + mid[ring.owner, None] * (corners - X))
+        lo, hi = np.where(fits, mid, lo), np.where(fits, hi, mid)
+    bad = np.flatnonzero(~ok)
+    creases = {int(p): [int(e) for e in np.unique(pattern.corner_edges[ring.owner == p])
+                        if pattern.is_crease[e]] for p in bad}
+    fit = {p: 0.99 * lo[p] * pattern.crease_width[ids].min() for p, ids in creases.items()}
+    p = min(fit, key=fit.get)                      # the tightest panel, in detail
+    w = pattern.crease_width[creases[p]]
+    across = np.ptp(X[ring.owner == p], axis=0).max()
     raise PatternError(
-        f"panel {p} vanishes, turns inside out or has corners outside itself after shrinking by "
-        f"half the crease widths: its creases {ids} are {_um(w)} um wide, at most about "
-        f"{_um(0.99 * lo * w)} um fit (panel {p} is {_um(np.ptp(X[rings(pattern.corner_sizes).owner == p], axis=0).max())} um across); "
-        "reduce the widths of its creases or enlarge the panel.")
+        f"panel(s) {capped(bad.tolist())} vanish, turn inside out or have corners outside "
+        f"themselves after shrinking by half the crease widths; the tightest, panel {p} "
+        f"({_um(across)} um across): its creases {creases[p]} are {_um(w)} um wide, at most about "
+        f"{_um(0.99 * lo[p] * w)} um fit; reduce the crease widths (crease_width) or "
+        "enlarge the panels.")
 
 
 def _um(x) -> str:

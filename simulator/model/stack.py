@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .._validate import capped
 from ..errors import ParameterError
 from ..geometry.pattern import Pattern
 from ..thermal.steady import REFERENCE_BETA, ThermalParameters
@@ -131,11 +132,9 @@ def check_supported(pattern: Pattern, panel: int, what: str = "fixed panel") -> 
     """Raise :class:`ParameterError` naming the panels that clamping ``panel`` leaves free."""
     free = unsupported_panels(pattern, panel)
     if free:
-        shown = str(free) if len(free) <= 8 else \
-            f"[{', '.join(map(str, free[:8]))}, ...] ({len(free)} in all)"
         raise ParameterError(
-            f"{what} {panel}: panels {shown} are joined to it by no crease (a separate sheet, "
-            "or one touching it at a vertex only), so they would float free (a mechanism): "
+            f"{what} {panel}: panels {capped(free)} are joined to it by no crease (a separate "
+            "sheet, or one touching it at a vertex only), so they would float free (a mechanism): "
             "give one sheet joined by creases, or split the file into one file per sheet.")
 
 

@@ -117,3 +117,82 @@ def test_every_malformed_file_is_one_line_and_exit_2_at_the_cli(tmp_path, capsys
         assert main(["check", str(path)]) == 2, name
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("etorigami: error: FOLD"), (name, err)
+
+
+def test_fold_refusals_and_notes_speak_cli_options_not_python_keywords(tmp_path, capsys):
+    """Issue 28: run said unit_scale= (the Python keyword) where the option is --unit-scale;
+    every library message of a FOLD file's check or run is spelled in options."""
+    unit_less = tmp_path / "square.fold"
+    unit_less.write_text(json.dumps({
+        "vertices_coords": [[0, 0], [2, 0], [2, 1], [0, 1], [1, 0], [1, 1]],
+        "faces_vertices": [[0, 4, 5, 3], [4, 1, 2, 5]]}))
+    data = ROOT / "tests" / "data" / "fold"
+    refusals = [
+        (["run", str(unit_less), "--heat", "all", "--power", "1"], "pass --unit-scale METRES"),
+        (["run", str(data / "t_junction.fold"), "--unit-scale", "1e-3", "--heat", "all",
+          "--power", "1"], "so --unit-scale is not used"),
+        (["run", str(data / "fully_folded.fold"), "--heat", "all", "--power", "1"],
+         "(--frame creasePattern, or export it)")]
+    for command, expected in refusals:
+        assert main([*command, "--out", str(tmp_path / "r"), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert expected in err and "\n" not in err, err
+        assert not any(k in err for k in ("unit_scale", "frame=", "lay_flat", "crease_width"))
+    assert main(["check", str(data / "origami_simulator_xz.fold")]) == 0
+    out, err = capsys.readouterr()
+    assert "note: flat sheet standing" in out and "--lay-flat lays it in x-y" in out
+    assert "lay_flat" not in out + err
+
+
+def test_the_map_from_keywords_to_options_is_applied_word_by_word():
+    from design.cli._terms import cli_terms
+
+    assert cli_terms("pass unit_scale=<metres per unit>; so unit_scale is unused") == (
+        "pass --unit-scale METRES; so --unit-scale is unused")
+    assert cli_terms("my_crease_width and edges_etorigami:width") == (
+        "my_crease_width and edges_etorigami:width")
+
+
+def test_a_model_file_given_heat_keeps_its_own_layer_stack(tmp_path, capsys):
+    """Issue 28: --heat on a model file dropped its bimorph, air and supports for the default
+    stack and printed the stack's 200 um / 10 um; now the file's own model is heated and its
+    values are printed."""
+    path = tmp_path / "single.fold"
+    assert main(["export", "single_fold", "--out", str(path)]) == 0
+    capsys.readouterr()
+    flags = ["--set", "thermal_steps=10", "-q"]
+    assert main(["run", str(path), "--heat", "all", "--power", "30", *flags, "--out",
+                 str(tmp_path / "heat")]) == 0
+    out = capsys.readouterr().out
+    assert "model file's own parameters: heated creases 200 um wide, 0.5 um thick" in out
+    assert "0.1 um at 39.5 GPa" in out and "air 750 um at 0.6 W/(m K)" in out
+    assert "layer stack" not in out and "19 fixed degrees of freedom" in out
+    # the same run as the file's own heating step at that power
+    assert main(["run", str(path), "--set", "power.2=30", *flags, "--out",
+                 str(tmp_path / "own")]) == 0
+    a = pd.read_csv(tmp_path / "heat" / "creases.csv")
+    b = pd.read_csv(tmp_path / "own" / "creases.csv")
+    pd.testing.assert_frame_equal(a, b)
+    meta = json.loads((tmp_path / "heat" / "meta.json").read_text())
+    assert meta["overrides"]["model_file_parameters"] is True
+    for extra, expected in ((["--stack", "su8-au"], "--stack applies to plain crease patterns"),
+                            (["--fix-panel", "0"], "drop --fix-panel")):
+        assert main(["run", str(path), "--heat", "all", "--power", "1", *extra, "--out",
+                     str(tmp_path / "x")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert expected in err and "\n" not in err
+
+
+def test_a_model_file_that_heats_without_thermal_parameters_is_refused_in_file_terms(
+        tmp_path, capsys):
+    path = tmp_path / "single.fold"
+    assert main(["export", "single_fold", "--out", str(path)]) == 0
+    data = json.loads(path.read_text())
+    del data["etorigami:thermal"]
+    path.write_text(json.dumps(data))
+    capsys.readouterr()
+    for extra in ([], ["--heat", "all", "--power", "1"]):
+        assert main(["run", str(path), *extra, "--out", str(tmp_path / "r"), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "has no thermal parameters" in err and "add etorigami:thermal" in err
+        assert "\n" not in err and "ThermalParameters" not in err

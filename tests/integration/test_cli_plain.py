@@ -85,6 +85,62 @@ def test_check_of_every_file_is_a_summary_or_one_line(path, capsys):
     assert code in (0, 2) and "Traceback" not in out + err
     if code == 2:
         assert len(err.strip().splitlines()) == 1 and path.name in (
-            "fully_folded.fold", "crease_too_wide.fold", "sheets_touching_at_a_vertex.fold")
+            "fully_folded.fold", "crease_too_wide.fold", "sheets_touching_at_a_vertex.fold",
+            "accordion_folded_flat.fold", "no_creases.fold")
     else:
         assert "valid FOLD" in out
+
+
+def test_a_file_without_creases_is_checked_and_refused_in_one_line(tmp_path, capsys):
+    """Issue 28: check crashed (zero-size minimum) and the sharp check printed a nan width on a
+    valid file without creases; a run of it is refused in CLI terms."""
+    path = str(DATA / "no_creases.fold")
+    for flags in ([], ["--crease-model", "sharp"]):
+        assert main(["check", path, *flags]) == 2            # check refuses what run refuses
+        out, err = capsys.readouterr()
+        assert "valid FOLD crease pattern" in out and "creases 0" in out and "nan" not in out
+        assert err.count("\n") == 1 and "has no crease to heat or fold" in err, err
+    for flags, what in ((["--heat", "all", "--power", "1"], "heat"), ([], "heat"),
+                        (["--crease-model", "sharp", "--fold", "all=30"], "fold")):
+        assert main(["run", path, *flags, "--out", str(tmp_path / "r"), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and f"has no crease to {what}" in err, err
+        assert "M, V or U edges" in err and "SharpHingeParameters" not in err
+
+
+def test_a_sheet_folded_flat_is_refused_in_one_short_line_with_the_frame_option(tmp_path,
+                                                                                capsys):
+    """Issue 28: the +-180 deg refusal ran to 10,986 characters on an 8 x 8 maze and did not
+    say --frame creasePattern; now the creases are capped and the option is named."""
+    path = str(DATA / "accordion_folded_flat.fold")
+    for command in (["check", path], ["run", path, "--heat", "all", "--power", "1", "--out",
+                                      str(tmp_path / "r"), "-q"]):
+        assert main(command) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and len(err) < 340, len(err)
+        assert "crease(s) [2, 5, 8, 11, 14, and 34 more] are at +-180 deg" in err
+        assert "--frame creasePattern" in err and "frame=" not in err
+
+
+def test_the_crease_width_refusal_names_every_panel_and_the_option(tmp_path, capsys):
+    """Issue 28: every panel too small for the crease width is named (capped), with the CLI
+    option that fixes it."""
+    assert main(["run", MIURA, "--crease-width", "5000", "--heat", "all", "--power", "1",
+                 "--out", str(tmp_path / "r"), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "panel(s) [0, 1, 2, 3, 4, 5, 6, 7, 8] vanish" in err
+    assert "at most about 857.4 um fit" in err and "(--crease-width UM" in err
+    assert "crease_width" not in err
+
+
+def test_values_the_file_gives_instead_of_the_stack_are_named(capsys):
+    """Issue 28: the stack line printed 200 um while the file's own crease widths were used."""
+    assert main(["check", str(DATA / "crease_too_wide.fold")]) == 2
+    out = capsys.readouterr().out
+    assert "note: used instead of the stack's values (from the file or the flags): crease " \
+           "width 300 um" in out
+    assert main(["check", MIURA, "--crease-width", "100", "--panel-thickness", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "crease width 100 um, panel thickness 20 um" in out
+    assert main(["check", MIURA]) == 0
+    assert "used instead" not in capsys.readouterr().out

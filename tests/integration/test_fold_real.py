@@ -155,6 +155,25 @@ def test_box_pleat_grid_merges_its_f_triangulation_into_five_panels():
     heated(load("box_pleat_grid.fold"), increments=2)
 
 
+def test_a_vertex_picometres_off_a_crease_line_is_merged_and_a_straight_corner():
+    """Issue 28: a vertex 15 pm off a straight crease line (single-precision rounding of an
+    editor export) is merged as one on it, and kept (--keep-collinear) it is a straight corner:
+    the pattern meshes at its full crease width (was: 'at most about 0.26 um fit')."""
+    data = load("box_pleat_off_line_vertex.fold")
+    geo = geometry(data)
+    assert geo.pattern.n_vertices == 6 and len(geo.pattern.creases) == 1
+    assert "1 vertices in the middle of straight crease lines merged away" in geo.notes
+    kept = geometry(data, merge_collinear=False).pattern
+    assert kept.n_vertices == 7 and len(kept.creases) == 2
+    build_mesh(kept)
+    heated(data, increments=2)
+    from simulator.geometry.polygons import STRAIGHT_TOL, on_segment
+
+    a, b = np.zeros(3), np.array([0.0, 1.0, 0.0])
+    for off, on in ((0.5 * STRAIGHT_TOL, True), (2 * STRAIGHT_TOL, False)):
+        assert on_segment(np.array([off, 0.3, 0.0]), a, b, 1.0) == on
+
+
 # ------------------------------------------------------------------ orientation
 @pytest.mark.parametrize("name", ["zigzag_folded.fold", "strip_folded.fold",
                                   "touching_points.fold"])
@@ -250,6 +269,22 @@ def test_fully_folded_crease_in_a_folded_shape_is_named_by_the_mesh():
         build_mesh(p)
 
 
+def test_many_fully_folded_creases_are_named_in_a_short_line():
+    """Issue 28: the +-180 deg refusal of a folded form caps its crease list (the first five)
+    and names the crease-pattern frame; it ran to 10,986 characters on an 8 x 8 maze."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_files", DATA / "make_files.py")
+    make = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make)
+    pleat = make.strip([1.0] * 30, [179.95 if k % 2 else -179.95 for k in range(29)])
+    pattern = geometry(make._fold(*pleat)).pattern
+    with pytest.raises(PatternError, match=r"^crease\(s\) \[\d+, \d+, \d+, \d+, \d+, and 24 "
+                       r"more\] are folded flat .*frame='creasePattern'") as info:
+        build_mesh(pattern)
+    assert len(str(info.value)) < 250
+
+
 def test_sheet_in_another_plane_is_reported_and_laid_flat_on_request():
     data = load("origami_simulator_xz.fold")
     geo = geometry(data)
@@ -265,6 +300,18 @@ def test_crease_wider_than_its_panel_is_refused_with_the_limit():
     data = load("crease_too_wide.fold")
     del data["edges_etorigami:width"]
     build_mesh(parse_fold(data, crease_width=90e-6).pattern)
+
+
+def test_creases_too_wide_for_many_panels_name_them_all_in_a_capped_list():
+    """Issue 28: every panel too small is named (the first ten, then a count), not the first."""
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+
+    pattern = miura_sheet_pattern(1e-3, 1e-3, math.radians(60), 4, 4, W=2e-3)
+    with pytest.raises(PatternError, match=r"^panel\(s\) \[0, 1, 2, 3, 4, 7, 8, 11, 12, 13, and "
+                       r"2 more\] vanish.* the tightest, panel 1 .* at most about 857.4 um fit;"
+                       r" reduce the crease widths \(crease_width\)") as info:
+        build_mesh(pattern)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400
 
 
 def test_sharp_crease_request_is_routed_to_the_hinge_model():
@@ -291,7 +338,9 @@ def test_mesh_quality_check_names_the_crease():
 
 # ------------------------------------------------------------------ every file
 EXPECTED_REFUSALS = {"fully_folded.fold": "+-180 deg", "crease_too_wide.fold": "at most about",
-                     "sheets_touching_at_a_vertex.fold": "joined to it by no crease"}
+                     "sheets_touching_at_a_vertex.fold": "joined to it by no crease",
+                     "no_creases.fold": "no crease to heat",
+                     "accordion_folded_flat.fold": "and 34 more] are at +-180 deg"}
 
 
 @pytest.mark.parametrize("path", sorted(DATA.glob("*.fold")), ids=lambda p: p.name)

@@ -70,8 +70,13 @@ def test_a_sharp_read_without_crease_data_names_what_is_missing():
         fold_to_model(data, crease_model="sharp", panel_thickness=10e-6)
     msg = str(info.value)
     assert "no crease width and crease thickness" in msg and "\n" not in msg
-    assert "--fold-stiffness" in msg and "--panel-bending-width UM" in msg
-    assert "--crease-width UM" in msg
+    assert "fold_stiffness=<N m/rad/m>" in msg and "panel_bending_width=<m>" in msg
+    assert "crease_width=<m>" in msg and "--" not in msg         # the library speaks Python
+    from design.cli._terms import cli_terms                       # the CLI its options
+
+    cli = cli_terms(msg)
+    assert "--fold-stiffness" in cli and "--panel-bending-width UM" in cli
+    assert "--crease-width UM" in cli and "=<" not in cli
     model, _ = fold_to_model(data, crease_model="sharp", fold_stiffness=2e-6, **STIFF)
     assert model.params.fold_stiffness == {int(c): 2e-6 for c in model.mesh.pattern.creases}
     with pytest.raises(ParameterError, match="apply to sharp creases only"):
@@ -192,13 +197,14 @@ def test_run_of_a_sharp_pattern_from_flags(tmp_path, capsys):
     (["--crease-model", "sharp", "--fold", "all=200"], "in (-180, 180)"),
     (["--fold", "all=60"], "add --crease-model sharp"),
     (["--fold-stiffness", "1e-6", "--heat", "all", "--power", "1"], "add --crease-model sharp"),
-    (["--crease-width", "0", "--fold", "all=60"], "pass fold_stiffness=<N m/rad/m> (CLI "
-     "--fold-stiffness N_M_PER_RAD_M)"),
+    (["--crease-width", "0", "--fold", "all=60"], "pass --fold-stiffness N_M_PER_RAD_M and "
+     "--panel-bending-width UM"),
 ])
 def test_cli_refusals_are_one_line(tmp_path, capsys, flags, expected):
     assert main(["run", MIURA, *flags, "--out", str(tmp_path / "r"), "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert expected in err and "\n" not in err and "Traceback" not in err
+    assert "=<" not in err and "stiffness=" not in err          # CLI spelling (issue 28)
 
 
 def test_cli_refuses_mixed_widths_and_heating_width_zero_files(tmp_path, capsys):

@@ -70,8 +70,7 @@ def _crease_values(data, field, geo, edge, default, key) -> np.ndarray:
     if raw is None:
         if default is None:
             _fail(field, f"missing: give the {key.replace('_', ' ')} of every crease [m] in the "
-                  f"file or pass {key}=... to the reader (CLI: --{key.replace('_', '-')} UM or "
-                  "--stack NAME).")
+                  f"file or pass {key}=<m>.")
         return np.full(geo.n_edges, float(default))
     out = np.zeros(geo.n_edges)
     for i, e in enumerate(edge):
@@ -104,8 +103,7 @@ def panel_fields(data, groups, panel_thickness, material) -> dict:
     for g, t in enumerate(thick):
         if t is None:
             _fail(f"faces_{NS}thickness", "missing: give every face a thickness [m] in the file "
-                  "or pass panel_thickness=... to the reader (CLI: --panel-thickness UM or "
-                  "--stack NAME).")
+                  "or pass panel_thickness=<m>.")
         if not (_is_number(t) and math.isfinite(t) and t > 0):
             _fail(f"faces_{NS}thickness[{groups[g][0]}]", f"{t!r} must be a positive length in "
                   "metres.")

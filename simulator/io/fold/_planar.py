@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ...geometry.polygons import on_segment
 from ._common import fail
 
 logger = logging.getLogger(__name__)
@@ -74,8 +75,11 @@ def _signed_area(p: np.ndarray) -> float:
 def merge_straight(coords, faces, edges, letters, same) -> tuple:
     """Drop vertices in the middle of a straight crease line (two creases, collinear, alike).
 
-    ``faces`` are the panels (after F / J merging); a vertex is dropped when it is a corner of
-    exactly two panels and has exactly two crease edges (F / J edges not counted).
+    Collinear is judged relative to the pattern's extent
+    (:data:`~simulator.geometry.polygons.STRAIGHT_TOL`): a vertex that an editor's rounding put
+    picometres off the line is merged too. ``faces`` are the panels (after F / J merging); a
+    vertex is dropped when it is a corner of exactly two panels and has exactly two crease
+    edges (F / J edges not counted).
 
     ``same(i, j)`` says whether file edges i and j carry the same data. Returns the new faces
     and, per file edge, the pair of kept vertices it now belongs to (or None when unchanged).
@@ -99,9 +103,7 @@ def merge_straight(coords, faces, edges, letters, same) -> tuple:
             continue
         a = edges[i][0] if edges[i][1] == v else edges[i][1]
         b = edges[j][0] if edges[j][1] == v else edges[j][1]
-        da, db = coords[a] - coords[v], coords[b] - coords[v]
-        if np.linalg.norm(np.cross(da, db)) <= 1e-9 * size * (np.linalg.norm(da) + np.linalg.norm(db)) \
-                and da @ db < 0:
+        if on_segment(coords[v], coords[a], coords[b], size):
             drop[v] = (i, j)
     if not drop:
         return faces, [None] * len(edges)

@@ -190,7 +190,7 @@ def fold_to_model(data: dict, *, fold_stiffness=None, panel_bending_width=None,
     given = [k for k, v in sharp.items() if v is not None]
     if given:
         raise ParameterError(f"{', '.join(given)} apply to sharp creases only; pass "
-                             "crease_model='sharp' (CLI --crease-model sharp) or drop them.")
+                             "crease_model='sharp' or drop them.")
     data = geo.data                                   # the chosen frame
     mesh = build_mesh(geo.pattern)
     nodes = data.get(f"{NS}mesh_nodes")

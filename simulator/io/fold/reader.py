@@ -291,7 +291,7 @@ def _plane(coords, lay_flat: bool, notes: list):
         return lay_in_xy(coords)
     notes.append(f"flat sheet standing in the plane with normal {np.round(n, 6).tolist()} (not "
                  "x-y; e.g. an Origami Simulator export, y up): it is simulated standing, "
-                 "lay_flat=True (CLI --lay-flat) lays it in x-y")
+                 "lay_flat=True lays it in x-y")
     logger.warning("FOLD: %s", notes[-1])
     return coords
 

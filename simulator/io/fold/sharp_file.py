@@ -6,13 +6,15 @@ The fold stiffness per unit crease length [N m/rad/m] comes, crease by crease, f
 object ``etorigami:sharp_hinge`` (``{"fold_stiffness", "panel_bending_width", "panel_mesh"}``),
 else from the default rule ``E t^3 / (12 W)`` of the crease, which needs the crease width and
 thickness. The panel bending width [m] comes from the reader, the object, or the mean crease
-width. What is missing is named in one error, in the reader's terms and the CLI's flags.
+width. What is missing is named in one error, in the reader's keywords (the CLI says its
+options, :mod:`design.cli._terms`).
 """
 
 from __future__ import annotations
 
 import math
 
+from ..._validate import capped
 from ...errors import ParameterError
 from ...model.sharp import SharpHingeParameters
 from ._common import NS, fail, is_number
@@ -22,10 +24,9 @@ __all__ = ["sharp_hinge_parameters", "SHARP_FIELDS"]
 #: Keys of ``etorigami:sharp_hinge``.
 SHARP_FIELDS = ("fold_stiffness", "panel_bending_width", "panel_mesh")
 
-_FLAGS = {"fold_stiffness": "fold_stiffness=<N m/rad/m> (CLI --fold-stiffness N_M_PER_RAD_M)",
-          "panel_bending_width": "panel_bending_width=<m> (CLI --panel-bending-width UM)",
-          "crease_width": "crease_width=<m> (CLI --crease-width UM)",
-          "crease_thickness": "crease_thickness=<m> (CLI --crease-thickness UM)"}
+_FLAGS = {"fold_stiffness": "fold_stiffness=<N m/rad/m>",
+          "panel_bending_width": "panel_bending_width=<m>",
+          "crease_width": "crease_width=<m>", "crease_thickness": "crease_thickness=<m>"}
 
 
 def sharp_hinge_parameters(geo, fold_stiffness=None, panel_bending_width=None,
@@ -68,7 +69,7 @@ def _refuse(geo, needs) -> None:
     missing = " and ".join(m.replace("_", " ") for m in geo.sharp_missing)
     what = {"fold_stiffness": "the fold stiffness per length (E t^3/(12 W)) of creases {}",
             "panel_bending_width": "the panel bending width (the mean crease width)"}
-    cannot = " or ".join(what[n].format(c) for n, c in needs)
+    cannot = " or ".join(what[n].format(capped(c or ())) for n, c in needs)
     give = " and ".join(_FLAGS[n] for n, _ in needs)
     data = ", ".join(_FLAGS[m] for m in geo.sharp_missing)
     raise ParameterError(f"sharp creases: the file gives no {missing}, so the default rules cannot "

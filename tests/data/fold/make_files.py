@@ -182,6 +182,32 @@ def main():
         "edges_vertices": [[0, 1], [1, 2], [2, 0], [2, 3], [3, 0], [2, 4], [4, 5], [5, 2],
                            [5, 6], [6, 2]],
         "edges_assignment": ["B", "B", "V", "B", "B", "B", "B", "M", "B", "B"]})
+    _write("no_creases.fold", {
+        "frame_unit": "mm", "frame_title": "a square sheet without creases (boundary edges and "
+        "one flat F diagonal)",
+        "vertices_coords": [[0, 0], [1, 0], [1, 1], [0, 1]],
+        "faces_vertices": [[0, 1, 2], [0, 2, 3]],
+        "edges_vertices": [[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]],
+        "edges_assignment": ["B", "B", "B", "B", "F"]})
+
+    _write("box_pleat_off_line_vertex.fold", off_line_vertex())
+    pleats = [180.0 if k % 2 == 0 else -180.0 for k in range(39)]
+    _write("accordion_folded_flat.fold", _fold(*strip([1.0] * 40, pleats), frame_title=(
+        "a 40-panel accordion folded flat: 39 creases at +-180 deg (a long list to name)")))
+
+
+def off_line_vertex(off=1.5e-8):
+    """Two F-triangulated squares joined by a valley crease at x = 0.5 whose line has an extra
+    vertex 10 um from its end, ``off`` mm (15 pm) beside the line: the rounding of an editor
+    that keeps coordinates in single precision (an Origami Simulator box-pleat export)."""
+    verts = [[0, 0], [0.5, 0], [1, 0], [1, 1], [0.5, 1], [0, 1], [0.5 + off, 0.01]]
+    faces = [[0, 1, 6], [0, 6, 5], [5, 6, 4], [1, 2, 6], [2, 3, 6], [6, 3, 4]]
+    edges = [[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [0, 5], [1, 6], [4, 6], [0, 6], [5, 6],
+             [2, 6], [3, 6]]
+    assign = ["B"] * 6 + ["V", "V"] + ["F"] * 4
+    return {"frame_unit": "mm", "frame_title": "crease line with a vertex 15 pm off it "
+            "(single-precision rounding of an editor export)", "vertices_coords": verts,
+            "faces_vertices": faces, "edges_vertices": edges, "edges_assignment": assign}
 
 
 if __name__ == "__main__":
