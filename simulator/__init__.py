@@ -61,7 +61,8 @@ __getattr__, __dir__ = _attach(__name__, {
                          "StepPower"),
     ".model.properties": ("BarHingeParameters",),
     ".results": ("SimulationResult", "StepResult"),
-    ".events": ("EVENT_KINDS", "Event"),
+    ".events": ("EVENT_KINDS", "Event", "crossing_event"),
+    ".mechanics.crossing": ("crease_crossings", "node_crossings"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
     ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
@@ -121,6 +122,8 @@ __all__ = [
     "ArcLengthLoad", "DisplacementControl", "LoadPath", "mgdcm", "displacement_control",
     "ContinuationResult", "CriticalPoint", "Stability", "tangent_stability", "Event",
     "EVENT_KINDS",
+    # panels passing through each other between two states
+    "crossing_event", "crease_crossings", "node_crossings",
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases

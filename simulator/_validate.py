@@ -23,7 +23,7 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["is_number", "number", "finite", "positive", "non_negative", "in_range",
-           "probability", "integer", "one_of", "array"]
+           "probability", "integer", "one_of", "array", "listed"]
 
 _REALS = (int, float, np.integer, np.floating)
 _all = np.logical_and.reduce          # with axis=None: ndarray.all() without its Python wrapper
@@ -142,3 +142,11 @@ def _array_fail(field, shape, unit, hint, finite_values, got):
     hint = f"; {hint}" if hint else ""
     kind = "a finite array" if finite_values else "an array"
     raise ParameterError(f"{field} must be {kind} of shape {want}{unit}; got {got}{hint}.")
+
+
+def listed(items, shown: int = 8) -> str:
+    """``a, b, c`` for at most ``shown`` items, else the first ``shown`` and ``... (n in all)``:
+    a message naming every offending item in a capped list."""
+    items = list(items)
+    text = ", ".join(map(str, items[:shown]))
+    return text if len(items) <= shown else f"{text}, ... ({len(items)} in all)"

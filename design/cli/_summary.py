@@ -10,6 +10,8 @@ checked on here.
 
 from __future__ import annotations
 
+from simulator._validate import listed
+
 from .precheck import TG_FACTOR
 
 __all__ = ["summary_lines"]
@@ -31,7 +33,12 @@ def _event_line(event, crease_ids) -> str:
         text += f" (node {event.node})"
     if event.temperature_max is not None:
         text += f", hottest node {event.temperature_max:.0f} degC"
+    if event.creases:
+        text += f"; creases {listed(event.creases)} folded past +-180 deg"
+    if event.panels:
+        text += f"; panels {listed(event.panels)} passed through each other"
     return text
+
 
 
 def _temperature_lines(result) -> list:

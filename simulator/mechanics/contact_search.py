@@ -45,11 +45,13 @@ class ContactSearch:
         self.static = None
         if n_pairs <= STATIC_PAIR_LIMIT:
             p, t = np.divmod(np.arange(n_pairs), len(self.tri))
-            ok = self._admissible(p, t)
+            ok = self.admissible(p, t)
             self.static = (p[ok], t[ok])
 
-    def _admissible(self, p: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """Exclusion rules of the reference: other panel, no shared pattern vertex."""
+    def admissible(self, p: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Whether point p and fan triangle t (index arrays into :attr:`points`, the fan
+        triangles) may touch: the exclusion rules of the reference (other panel, no shared
+        pattern vertex)."""
         v = self.point_vertex[p]
         shared = (v[:, None] == self.tri_vertex[t]).any(axis=1) & (v >= 0)
         return (self.point_panel[p] != self.tri_panel[t]) & ~shared
@@ -82,7 +84,7 @@ class ContactSearch:
             found = tree_p.sparse_distance_matrix(tree_t, radius.max() + self.d0_max,
                                                   output_type="ndarray")
             p, t = found["i"].astype(int), found["j"].astype(int)
-            ok = self._admissible(p, t)
+            ok = self.admissible(p, t)
             p, t = p[ok], t[ok]
         dist = np.linalg.norm(xp[p] - centre[t], axis=1)
         near = dist <= radius[t] + self.point_d0[p]
@@ -97,3 +99,4 @@ class ContactSearch:
             return None
         p, t = self.static
         return np.column_stack([self.points[p], self.tri[t]])
+

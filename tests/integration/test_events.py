@@ -46,7 +46,8 @@ def test_event_is_a_frozen_critical_point_with_si_fields():
     assert d["jump [m]"] == 3e-4 and d["kind"] == "snap" and d["total_power [W]"] == 3e-3
     assert e.to_dict()["power_per_crease [W]"] == [1e-3, 2e-3]
     json.dumps(d)
-    assert set(EVENT_KINDS) == {"limit_point", "bifurcation", "stability_change", "snap"}
+    assert set(EVENT_KINDS) == {"limit_point", "bifurcation", "stability_change", "snap",
+                                "panel_crossing"}
 
 
 @pytest.mark.parametrize("kwargs, match", [
