@@ -45,7 +45,7 @@ __getattr__, __dir__ = _attach(__name__, {
                    "Material"),
     ".model.mass": ("lumped_masses",),
     ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
-                     "unsupported_panels", "check_supported"),
+                     "unsupported_panels", "check_supported", "plain_contact"),
     ".geometry.orientation": ("start_fold_angles",),
     ".model.mesh": ("BarHingeMesh", "build_mesh"),
     ".model.sharp": ("SharpHingeParameters", "sharp_model"),
@@ -94,7 +94,7 @@ __all__ = [
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # plain crease patterns: layer stacks and fold signs of a start shape
     "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "unsupported_panels",
-    "check_supported", "start_fold_angles",
+    "check_supported", "start_fold_angles", "plain_contact",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",

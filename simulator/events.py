@@ -212,9 +212,9 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
         parts.append("panel corner or centre nodes passed through panels: " + listed(
             [f"node {n} (panel {o}) through panel {q}" for (n, q), o in zip(pairs, own)]))
     message = (f"panels passed through each other in increment {increment + 1} (load factor "
-               f"{load_factor:.6g}): {'; '.join(parts)}. Switch panel contact on "
-               "(simulator.ContactParameters; the etorigami CLI's default for plain patterns) "
-               "to keep them apart")
+               f"{load_factor:.6g}): {'; '.join(parts)}. Panel contact keeps them apart: "
+               "leave out --no-contact (etorigami run), or give the model contact "
+               "(stack_model(..., contact=True), simulator.plain_contact(pattern))")
     panels = np.unique(np.r_[mesh.node_panel[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else ()
     return Event("panel_crossing", float(load_factor), increment, power_per_crease=power,
                  temperature_max=None if temperature is None else float(np.max(temperature)),

@@ -15,7 +15,7 @@ import numpy as np
 from ..model.mesh import BarHingeMesh
 from ..model.model import ContactParameters
 
-__all__ = ["ContactSearch"]
+__all__ = ["ContactSearch", "closest_pair"]
 
 #: Above this many admissible (point, triangle) pairs the k-d tree search is used.
 STATIC_PAIR_LIMIT = 50_000
@@ -100,3 +100,19 @@ class ContactSearch:
         p, t = self.static
         return np.column_stack([self.points[p], self.tri[t]])
 
+
+def closest_pair(mesh: BarHingeMesh, x: np.ndarray, distance: float) -> tuple | None:
+    """The admissible (point, fan triangle) pair nearest at positions ``x`` (n_nodes, 3) [m]
+    if it is within ``distance`` [m]: ``(gap [m], node, panel of the triangle)``, else None
+    (e.g. a start shape in which contact of that activation distance would already push)."""
+    from .elements.contact import point_triangle_distance
+
+    search = ContactSearch(mesh, ContactParameters(d0_corner=distance, d0_centre=distance))
+    conn, _, _ = search.candidates(x)
+    if not len(conn):
+        return None
+    gap = point_triangle_distance(x[conn[:, 0]], x[conn[:, 1:]])[0]
+    k = int(np.argmin(gap))
+    if gap[k] > distance:
+        return None
+    return float(gap[k]), int(conn[k, 0]), int(mesh.node_panel[conn[k, 1]])
