@@ -22,7 +22,7 @@ import numpy as np
 
 from ..model.mesh import BarHingeMesh
 from ..model.model import ContactParameters
-from .contact_search import ContactSearch
+from .contact_search import STATIC_PAIR_LIMIT, ContactSearch
 from .elements._vec import cross, dot
 from .kinematics import fold_angles
 
@@ -35,8 +35,6 @@ INSIDE_MARGIN = 1e-6
 _BISECTIONS = 30
 #: Barycentric slack of the first-order pre-selection of pairs that :func:`_plane_time` locates.
 _NEAR = 0.5
-#: Point-triangle pairs tested densely below this many, else pruned by a k-d tree.
-_DENSE_PAIRS = 50_000
 
 _SEARCHES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -113,7 +111,7 @@ def _swept_pairs(search: ContactSearch, x0, x1) -> tuple[np.ndarray, np.ndarray]
     tc = corners.mean(axis=1)
     tr = np.linalg.norm(corners - tc[:, None], axis=2).max(axis=1)
     n_p, n_t = len(pc), len(tc)
-    if n_p * n_t <= _DENSE_PAIRS:
+    if n_p * n_t <= STATIC_PAIR_LIMIT:                 # all pairs, as contact's search
         p, t = np.divmod(np.arange(n_p * n_t), n_t)
     else:
         from scipy.spatial import cKDTree  # large meshes only; slow to import
