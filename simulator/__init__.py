@@ -45,7 +45,7 @@ __getattr__, __dir__ = _attach(__name__, {
                    "Material"),
     ".model.mass": ("lumped_masses",),
     ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
-                     "unsupported_panels", "check_supported"),
+                     "unsupported_panels", "check_supported", "plain_contact"),
     ".geometry.orientation": ("start_fold_angles",),
     ".model.mesh": ("BarHingeMesh", "build_mesh"),
     ".model.sharp": ("SharpHingeParameters", "sharp_model"),
@@ -61,7 +61,8 @@ __getattr__, __dir__ = _attach(__name__, {
                          "StepPower"),
     ".model.properties": ("BarHingeParameters",),
     ".results": ("SimulationResult", "StepResult"),
-    ".events": ("EVENT_KINDS", "Event"),
+    ".events": ("EVENT_KINDS", "Event", "crossing_event"),
+    ".mechanics.crossing": ("crease_crossings", "node_crossings"),
     ".simulation": ("simulate",),
     ".state": ("ROOM_TEMPERATURE", "SimulationState", "initial_state"),
     ".steps": ("AmbientTemperature", "ArcLengthLoad", "DisplacementControl",
@@ -96,7 +97,7 @@ __all__ = [
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # plain crease patterns: layer stacks and fold signs of a start shape
     "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "unsupported_panels",
-    "check_supported", "start_fold_angles",
+    "check_supported", "start_fold_angles", "plain_contact",
     # steps and the facade
     "Step", "StepContext", "StepOutcome", "StepRecorder", "SelfFold", "Load", "Gravity", "Heat",
     "AmbientTemperature", "simulate", "NewtonOptions", "SimulationState",
@@ -129,6 +130,8 @@ __all__ = [
     "EVENT_KINDS",
     # analyses about a given state check that it is an equilibrium
     "state_stability", "check_equilibrium", "EquilibriumCheck", "EQUILIBRIUM_RTOL",
+    # panels passing through each other between two states
+    "crossing_event", "crease_crossings", "node_crossings",
     # coupled electro-thermal dynamics
     "ElectroThermal",
     # results and cases

@@ -147,9 +147,11 @@ def _array_fail(field, shape, unit, hint, finite_values, got):
     raise ParameterError(f"{field} must be {kind} of shape {want}{unit}; got {got}{hint}.")
 
 
-def capped(items, cap: int = CAP, fmt=str) -> str:
+def capped(items, cap: int = CAP, fmt=str, brackets: bool = True) -> str:
     """``[a, b, c]``, or the first ``cap`` items and a count of the rest:
-    ``[a, b, and 12 more]``, for messages that name many items."""
+    ``[a, b, and 12 more]``, for messages that name many items (``brackets`` False: without
+    the brackets)."""
     items = list(items)
     shown = ", ".join(fmt(x) for x in items[:cap])
-    return f"[{shown}]" if len(items) <= cap else f"[{shown}, and {len(items) - cap} more]"
+    text = shown if len(items) <= cap else f"{shown}, and {len(items) - cap} more"
+    return f"[{text}]" if brackets else text

@@ -7,7 +7,9 @@ point (``on_limit_point="continue"`` of :class:`~simulator.steps.Heat`,
 their path as :class:`Event` records, next to the human-readable message: the
 :class:`~simulator.solvers.path_trace.CriticalPoint` located by the continuation (limit point,
 bifurcation, stability change) with what the step knows there (crease powers, the monitored
-node, its hottest temperature), and for a snap the jump load control makes. A step stopped at a
+node, its hottest temperature), for a snap the jump load control makes, and for a panel
+crossing (:func:`crossing_event`) the creases that folded past +-180 deg and the panels a node
+passed through. A step stopped at a
 limit point (``on_limit_point="stop"``) records the limit point its probe found. The events are
 on :attr:`StepResult.events <simulator.results.StepResult.events>` and
 :attr:`SimulationResult.events <simulator.results.SimulationResult.events>`, in
@@ -22,15 +24,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validate import capped
 from .errors import ParameterError
 from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
 
-__all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event"]
+__all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event",
+           "crossing_event"]
 
-#: Kinds of :class:`Event`: those of a critical point, ``"snap"``, and the two of an accepted
+#: Kinds of :class:`Event`: those of a critical point, ``"snap"``, the two of an accepted
 #: load-controlled state found unstable (:func:`branch_event`): ``"branch_switch"`` (left for
-#: a stable branch along its critical mode) and ``"stability_lost"`` (not left).
-EVENT_KINDS = CRITICAL_KINDS + ("snap", "branch_switch", "stability_lost")
+#: a stable branch along its critical mode) and ``"stability_lost"`` (not left), and
+#: ``"panel_crossing"`` (:func:`crossing_event`).
+EVENT_KINDS = CRITICAL_KINDS + ("snap", "branch_switch", "stability_lost", "panel_crossing")
 
 
 @dataclass(frozen=True)
@@ -39,10 +44,13 @@ class Event(CriticalPoint):
 
     Attributes
     ----------
-    kind : {"limit_point", "bifurcation", "stability_change", "snap"}
+    kind : {"limit_point", "bifurcation", "stability_change", "snap", "branch_switch",
+            "stability_lost", "panel_crossing"}
         A ``"snap"`` starts at a load-factor maximum (a ``"limit_point"`` event of the same
         step at the same load factor) and ends where the path crosses that load factor again
-        moving forward: the jump load control would make there.
+        moving forward: the jump load control would make there. A ``"panel_crossing"``
+        (:func:`crossing_event`): between the increment before ``increment`` and ``increment``
+        panels passed through each other (``creases``, ``panels``).
     load_factor : float
         The step's path parameter there (0 at its start, 1 at its end; the load factor of an
         :class:`~simulator.steps.ArcLengthLoad` or :class:`~simulator.steps.DisplacementControl`).
@@ -77,6 +85,11 @@ class Event(CriticalPoint):
         :func:`~simulator.simulation.simulate`).
     message : str
         The event in words, as it appears in the step's message.
+    creases : tuple of int
+        Panel crossing: crease ids (``mesh.crease_ids``) whose fold angle passed +-180 deg.
+    panels : tuple of int
+        Panel crossing: the panels of which a corner or centre node passed through another
+        panel, and those it passed through (ascending).
     """
 
     increment: int | None = None
@@ -87,6 +100,8 @@ class Event(CriticalPoint):
     step: str | None = None
     step_index: int | None = None
     message: str = ""
+    creases: tuple = ()
+    panels: tuple = ()
 
     def __post_init__(self):
         if self.kind not in EVENT_KINDS:
@@ -97,6 +112,8 @@ class Event(CriticalPoint):
                                  "number.")
         object.__setattr__(self, "power_per_crease",
                            tuple(float(p) for p in np.ravel(self.power_per_crease)))
+        for name in ("creases", "panels"):
+            object.__setattr__(self, name, tuple(int(i) for i in np.ravel(getattr(self, name))))
 
     @property
     def total_power(self) -> float:
@@ -114,7 +131,8 @@ class Event(CriticalPoint):
                 {str(int(c)): v for c, v in zip(crease_ids, p)},
                 "total_power [W]": self.total_power, "displacement [m]": self.displacement,
                 "node": self.node, "jump [m]": self.jump,
-                "temperature_max [degC]": self.temperature_max, "message": self.message}
+                "temperature_max [degC]": self.temperature_max, "creases": list(self.creases),
+                "panels": list(self.panels), "message": self.message}
 
 
 def event_at(point: CriticalPoint, path, power, temperature, offset: int | None = 0,
@@ -170,3 +188,60 @@ def branch_event(switch, load_factor: float, increment: int, power, temperature)
                  power_per_crease=power, temperature_max=float(np.max(temperature)), node=node,
                  jump=jump, message=switch.describe().replace(
                      f"path parameter {switch.t:.6g}", f"load factor {load_factor:.6g}"))
+
+
+def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power=(),
+                   temperature=None) -> Event | None:
+    """The ``"panel_crossing"`` :class:`Event` of an accepted increment, or None if no panels
+    passed through each other since the previous one.
+
+    Intended call site: a quasi-static step loop, right after it records an accepted
+    increment (``rec.record(...)``), with the displacements before and after it; on an event
+    the step appends it to ``rec.events`` and stops (it does not continue through panels)::
+
+        event = crossing_event(mesh, u_prev, u, increment=len(rec) - 1, load_factor=lam,
+                               power=power, temperature=temp)
+
+    Tests (:mod:`simulator.mechanics.crossing`): a crease's fold angle passing +-180 deg
+    (:func:`~simulator.mechanics.crossing.crease_crossings`) and a panel corner or centre node
+    passing through another panel (:func:`~simulator.mechanics.crossing.node_crossings`).
+    Panel contact (:class:`~simulator.ContactParameters`) is what prevents both; this is the
+    check for models run without it.
+
+    Parameters
+    ----------
+    mesh : BarHingeMesh
+    u_prev, u : (n_nodes, 3) displacements [m] at the previous accepted increment (the step's
+        start state for its first) and at this one
+    increment : int
+        Index (0-based) of this increment in the step's records (:attr:`Event.increment`).
+    load_factor : float
+        The step's path parameter at this increment.
+    power : (C,) crease powers there [W], optional
+    temperature : (n_nodes,) node temperatures there [deg C], optional
+    """
+    from .mechanics.crossing import crease_crossings, node_crossings
+
+    x0, x1 = mesh.nodes + np.asarray(u_prev, float), mesh.nodes + np.asarray(u, float)
+    creases = mesh.crease_ids[crease_crossings(mesh, x0, x1)]
+    pairs = node_crossings(mesh, x0, x1)
+    if not len(creases) and not len(pairs):
+        return None
+    parts = []
+    if len(creases):
+        ids = capped(creases.tolist(), brackets=False)
+        parts.append(f"crease{'s' * (len(creases) > 1)} {ids} folded past +-180 deg")
+    if len(pairs):
+        own = mesh.node_panel[pairs[:, 0]]
+        parts.append("panel corner or centre nodes passed through panels: " + capped(
+            [f"node {n} (panel {o}) through panel {q}" for (n, q), o in zip(pairs, own)],
+            brackets=False))
+    message = (f"panels passed through each other in increment {increment + 1} (load factor "
+               f"{load_factor:.6g}): {'; '.join(parts)}. Panel contact keeps them apart: "
+               "leave out --no-contact (etorigami run), or give the model contact "
+               "(stack_model(..., contact=True), simulator.plain_contact(pattern))")
+    panels = np.unique(np.r_[mesh.node_panel[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else ()
+    return Event("panel_crossing", float(load_factor), increment, power_per_crease=power,
+                 temperature_max=None if temperature is None else float(np.max(temperature)),
+                 message=message, creases=creases, panels=panels)
+

@@ -11,6 +11,8 @@ crease over all records counting; the hottest of its nodes (``temperature_max [d
 
 from __future__ import annotations
 
+from simulator._validate import capped
+
 __all__ = ["summary_lines"]
 
 
@@ -30,7 +32,12 @@ def _event_line(event, crease_ids) -> str:
         text += f" (node {event.node})"
     if event.temperature_max is not None:
         text += f", hottest node {event.temperature_max:.0f} degC"
+    if event.creases:
+        text += f"; creases {capped(event.creases, brackets=False)} folded past +-180 deg"
+    if event.panels:
+        text += f"; panels {capped(event.panels, brackets=False)} passed through each other"
     return text
+
 
 
 def _temperature_lines(result) -> list:

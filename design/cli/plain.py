@@ -5,11 +5,13 @@ A named layer stack (:data:`simulator.STACKS`, default ``su8-au``, the paper's S
 supplies the physical parameters the file lacks; ``--crease-width`` / ``--crease-thickness`` /
 ``--panel-thickness`` [um] override it. ``run FILE.fold --heat all|M|V|IDS|NAMES --power MW``
 makes the chosen creases actuators folding in their assigned directions, clamps one panel
-(``--fix-panel``, default the central one) and heats them in ``--thermal-steps`` increments.
+(``--fix-panel``, default the central one), switches panel contact on (``--no-contact``: off;
+:func:`simulator.plain_contact`) and heats them in ``--thermal-steps`` increments.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from ._common import CLIError, distinct, length_um, power_mw
@@ -24,7 +26,7 @@ DEFAULT_STACK = "su8-au"
 
 def add_plain_options(parser, heating: bool = True) -> None:
     """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
-    ``--heat``, ``--power``, ``--fix-panel``."""
+    ``--heat``, ``--power``, ``--fix-panel``, ``--contact`` / ``--no-contact``."""
     parser.add_argument("--stack", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
                              "(default su8-au, the paper's SU-8/Au bimorph; see "
@@ -44,6 +46,10 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
+        parser.add_argument("--contact", action=argparse.BooleanOptionalAction, default=True,
+                            help="panel contact of a heated plain pattern (default on: panels "
+                                 "never pass through each other; --no-contact: off, a run "
+                                 "stops with an event where they would)")
 
 
 def chosen_stack(name):
@@ -161,11 +167,30 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
                        f"needs {' and '.join(missing)}")
     heated = select_creases(heating.heat, geo)
     watts = power_mw("--power", heating.power)
-    model = stack_model(geo.pattern, stack, heated, heating.fix_panel)
+    contact = getattr(heating, "contact", True)
+    model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact)
+    print(f"  {contact_line(model, contact)}")
     steps = (Heat({c: watts for c in heated}, increments=200),)
     params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,
-              "heated_creases": heated}
+              "heated_creases": heated, "contact": contact}
     return model, steps, params, geo
+
+
+def contact_line(model, asked: bool) -> str:
+    """What the run does about panels passing through each other, in one line."""
+    from simulator import ParameterError, plain_contact
+
+    crossing = "a run stops with an event where panels pass through each other"
+    if model.contact is not None:
+        return (f"panel contact: on, from {model.contact.d0_corner * 1e6:.3g} um (creases "
+                "stay within +-180 deg; --no-contact: off)")
+    if not asked:
+        return f"panel contact: off (--no-contact); {crossing}"
+    try:
+        plain_contact(model.mesh.pattern, model.params, required=True)
+    except ParameterError as error:
+        return f"panel contact: off: {str(error).rstrip('.')}; {crossing}"
+    return f"panel contact: off; {crossing}"
 
 
 def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> int:

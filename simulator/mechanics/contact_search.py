@@ -15,7 +15,7 @@ import numpy as np
 from ..model.mesh import BarHingeMesh
 from ..model.model import ContactParameters
 
-__all__ = ["ContactSearch"]
+__all__ = ["ContactSearch", "closest_pair"]
 
 #: Above this many admissible (point, triangle) pairs the k-d tree search is used.
 STATIC_PAIR_LIMIT = 50_000
@@ -45,11 +45,13 @@ class ContactSearch:
         self.static = None
         if n_pairs <= STATIC_PAIR_LIMIT:
             p, t = np.divmod(np.arange(n_pairs), len(self.tri))
-            ok = self._admissible(p, t)
+            ok = self.admissible(p, t)
             self.static = (p[ok], t[ok])
 
-    def _admissible(self, p: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """Exclusion rules of the reference: other panel, no shared pattern vertex."""
+    def admissible(self, p: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Whether point p and fan triangle t (index arrays into :attr:`points`, the fan
+        triangles) may touch: the exclusion rules of the reference (other panel, no shared
+        pattern vertex)."""
         v = self.point_vertex[p]
         shared = (v[:, None] == self.tri_vertex[t]).any(axis=1) & (v >= 0)
         return (self.point_panel[p] != self.tri_panel[t]) & ~shared
@@ -82,7 +84,7 @@ class ContactSearch:
             found = tree_p.sparse_distance_matrix(tree_t, radius.max() + self.d0_max,
                                                   output_type="ndarray")
             p, t = found["i"].astype(int), found["j"].astype(int)
-            ok = self._admissible(p, t)
+            ok = self.admissible(p, t)
             p, t = p[ok], t[ok]
         dist = np.linalg.norm(xp[p] - centre[t], axis=1)
         near = dist <= radius[t] + self.point_d0[p]
@@ -97,3 +99,20 @@ class ContactSearch:
             return None
         p, t = self.static
         return np.column_stack([self.points[p], self.tri[t]])
+
+
+def closest_pair(mesh: BarHingeMesh, x: np.ndarray, distance: float) -> tuple | None:
+    """The admissible (point, fan triangle) pair nearest at positions ``x`` (n_nodes, 3) [m]
+    if it is within ``distance`` [m]: ``(gap [m], node, panel of the triangle)``, else None
+    (e.g. a start shape in which contact of that activation distance would already push)."""
+    from .elements.contact import point_triangle_distance
+
+    search = ContactSearch(mesh, ContactParameters(d0_corner=distance, d0_centre=distance))
+    conn, _, _ = search.candidates(x)
+    if not len(conn):
+        return None
+    gap = point_triangle_distance(x[conn[:, 0]], x[conn[:, 1:]])[0]
+    k = int(np.argmin(gap))
+    if gap[k] > distance:
+        return None
+    return float(gap[k]), int(conn[k, 0]), int(mesh.node_panel[conn[k, 1]])

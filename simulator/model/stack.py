@@ -4,11 +4,13 @@ A crease pattern drawn in an editor gives geometry and fold directions only. A
 :class:`LayerStack` supplies the rest (crease width, the bimorph's two layers, panel thickness,
 the air around it), so that :func:`stack_model` turns any pattern into a heatable model: every
 chosen crease becomes an actuator that folds in its assigned direction (M / V, or the sign of
-its start fold for U), one panel is clamped.
+its start fold for U), one panel is clamped, and panel contact (:func:`plain_contact`) keeps
+the panels from passing through each other.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 
@@ -20,11 +22,15 @@ from ..geometry.pattern import Pattern
 from ..thermal.steady import REFERENCE_BETA, ThermalParameters
 from .bimorph import Actuators, Bimorph
 from .mesh import build_mesh
-from .model import Model, Supports, make_model
+from .model import ContactParameters, Model, Supports, make_model
 from .properties import BarHingeParameters
 
 __all__ = ["LayerStack", "STACKS", "get_stack", "stack_model", "actuation_signs",
-           "central_panel"]
+           "central_panel", "plain_contact", "plain_contact_distance"]
+
+#: Activation distance of :func:`plain_contact` over the gap between the two panels of the
+#: widest crease folded to 180 deg.
+CONTACT_GAP_MARGIN = 1.15
 
 
 @dataclass(frozen=True)
@@ -138,8 +144,59 @@ def check_supported(pattern: Pattern, panel: int, what: str = "fixed panel") -> 
             "give one sheet joined by creases, or split the file into one file per sheet.")
 
 
+def plain_contact(pattern: Pattern, params: BarHingeParameters | None = None, *,
+                  required: bool = False) -> ContactParameters | None:
+    """Panel contact that keeps every crease of a plain pattern within (-180, 180) deg, or None
+    where the start shape does not allow it.
+
+    A bar-and-hinge crease of width W folded to 180 deg holds its two panels parallel at the gap
+    ``W cos(pi f / 2)`` (0.71 W for the centre-line share f = 0.5: its fold lines take 1/4, 1/2
+    and 1/4 of the fold). Contact that starts :data:`CONTACT_GAP_MARGIN` times farther out than
+    the widest crease's gap (0.81 W, :func:`plain_contact_distance`) stops the panels before
+    they turn past parallel, and holds stacked panels about that far apart; stiffness and step
+    limit as :class:`~simulator.model.model.ContactParameters`' defaults.
+
+    None if a panel corner or centre node starts within that distance of another panel
+    (touching or stacked paper in a folded start shape): contact would push them apart before
+    any load. Such a model runs without contact, and a step reports panels passing through each
+    other as an event (:func:`~simulator.events.crossing_event`). ``required=True`` raises
+    :class:`~simulator.errors.ParameterError` naming that node and panel instead.
+    """
+    return _plain_contact(build_mesh(pattern), params or BarHingeParameters(), required)
+
+
+def plain_contact_distance(pattern: Pattern, params: BarHingeParameters | None = None) -> float:
+    """Activation distance [m] of :func:`plain_contact`: :data:`CONTACT_GAP_MARGIN` times the
+    gap ``W cos(pi f / 2)`` of the widest crease folded to 180 deg."""
+    width = float(np.max(pattern.crease_width[pattern.creases], initial=0.0))
+    if not width > 0:
+        raise ParameterError("plain_contact: the pattern has no crease with a width (sharp "
+                             "creases have no panel contact).")
+    f = (params or BarHingeParameters()).centre_line_share
+    return CONTACT_GAP_MARGIN * width * math.cos(math.pi * f / 2)
+
+
+def _plain_contact(mesh, params: BarHingeParameters,
+                   required: bool = False) -> ContactParameters | None:
+    """:func:`plain_contact` of the pattern of ``mesh``."""
+    from ..mechanics.contact_search import closest_pair
+
+    d0 = plain_contact_distance(mesh.pattern, params)
+    near = closest_pair(mesh, mesh.nodes, d0)
+    if near is None:
+        return ContactParameters(d0_corner=d0, d0_centre=d0)
+    if required:
+        gap, node, panel = near
+        raise ParameterError(
+            f"node {node} (panel {int(mesh.node_panel[node])}) starts {gap * 1e6:.3g} um from "
+            f"panel {panel}, within the {d0 * 1e6:.3g} um at which panel contact acts "
+            "(touching or stacked paper): contact would push them apart before any load.")
+    return None
+
+
 def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
-                fixed_panel: int | None = None) -> Model:
+                fixed_panel: int | None = None,
+                contact: bool | ContactParameters | None = True) -> Model:
     """A heatable model of a pattern with a layer stack.
 
     Parameters
@@ -151,6 +208,10 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
         Crease ids that are actuators (each folds in its :func:`actuation_signs` direction).
     fixed_panel : int, optional
         The clamped panel; default the panel whose centroid is nearest the pattern's centre.
+    contact : bool, ContactParameters or None
+        Panel contact: True (default) :func:`plain_contact` (off where the start shape holds
+        panels closer than its activation distance), False or None off (a step then reports
+        panels passing through each other as a ``"panel_crossing"`` event), or the parameters.
     """
     if not isinstance(stack, LayerStack):
         raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
@@ -169,4 +230,8 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                                 env_conductivity=stack.env_conductivity,
                                 dissipation_angle=REFERENCE_BETA)
     supports = Supports({int(i): "xyz" for i in mesh.panel_nodes(fixed_panel)})
-    return make_model(mesh, supports, BarHingeParameters(), thermal=thermal, actuators=actuators)
+    params = BarHingeParameters()
+    if contact is True:
+        contact = _plain_contact(mesh, params)
+    return make_model(mesh, supports, params, thermal=thermal, actuators=actuators,
+                      contact=contact)

@@ -1,0 +1,101 @@
+"""Panels passing through each other between two states (issue 28 item 3): a strip of two panels
+folded rigidly about its crease through 180 deg."""
+
+import numpy as np
+import pytest
+
+from simulator import (EVENT_KINDS, Event, Pattern, build_mesh, crease_crossings, crossing_event,
+                       fold_angles, node_crossings)
+from simulator.errors import ParameterError
+
+
+@pytest.fixture(scope="module")
+def strip():
+    """Panel 0: 1 x 2 mm (y in [0, 2] mm); panel 1: 1 x 1 mm (y in [-1, 0] mm); crease 1 on
+    y = 0, 200 um wide. Folded, panel 1's centre lands inside panel 0 (off its fan spokes)."""
+    v = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
+    pattern = Pattern(v, [[0, 1, 2, 3], [0, 4, 5, 1]], crease_width=200e-6,
+                      crease_thickness=1e-6, panel_thickness=10e-6)
+    return build_mesh(pattern)
+
+
+def folded(mesh, deg):
+    """Node positions with every node on panel 1's side (y < 0) turned by ``deg`` about the
+    crease's centre line (the x axis)."""
+    X, t = mesh.nodes, np.radians(deg)
+    x = X.copy()
+    side = X[:, 1] < -1e-12
+    y, z = X[side, 1], X[side, 2]
+    x[side, 1], x[side, 2] = y * np.cos(t) - z * np.sin(t), y * np.sin(t) + z * np.cos(t)
+    return x
+
+
+def test_fold_angle_wraps_at_180_deg(strip):
+    """The premise: fold_angles lies in (-pi, pi], so 181 deg reads as -179 deg."""
+    a = np.degrees([fold_angles(strip, folded(strip, d))[0] for d in (-179, 179, 181)])
+    assert abs(abs(a[1]) - 179) < 1e-9 and a[1] == pytest.approx(-a[2])
+    assert a[0] == pytest.approx(-a[1])
+
+
+@pytest.mark.parametrize("before, after, crossed", [
+    (179, 181, True), (181, 179, True),        # through 180 deg, and back
+    (-179, -181, True), (170, 179, False), (-60, 60, False), (0, 1, False),
+    (100, 260, True)])                         # fold angle 100 -> -100 deg, the short way
+def test_crease_crossing_is_a_fold_angle_passing_180_deg(strip, before, after, crossed):
+    rows = crease_crossings(strip, folded(strip, before), folded(strip, after))
+    assert rows.tolist() == ([0] if crossed else [])
+
+
+def test_a_panel_centre_passing_through_the_other_panel_is_found(strip):
+    pairs = node_crossings(strip, folded(strip, 179), folded(strip, 181))
+    assert pairs.tolist() == [[strip.panel_center[1], 0]]
+    assert node_crossings(strip, folded(strip, 181), folded(strip, 179)).tolist() == \
+        pairs.tolist()
+
+
+@pytest.mark.parametrize("before, after", [(0, 1), (170, 179), (90, 170), (-30, 30)])
+def test_no_node_crossing_while_the_panels_stay_apart(strip, before, after):
+    assert node_crossings(strip, folded(strip, before), folded(strip, after)).shape == (0, 2)
+
+
+def test_no_crossing_from_the_flat_sheet_whatever_the_noise(strip):
+    """A flat sheet: every point lies in every panel's plane, so signed distances change sign
+    at random; none is inside another panel."""
+    x = strip.nodes + 1e-12 * np.random.default_rng(0).standard_normal(strip.nodes.shape)
+    assert node_crossings(strip, strip.nodes, x).shape == (0, 2)
+    assert crease_crossings(strip, strip.nodes, x).size == 0
+
+
+def test_crossing_event_names_the_crease_and_the_panels(strip):
+    u0, u1 = folded(strip, 179) - strip.nodes, folded(strip, 181) - strip.nodes
+    event = crossing_event(strip, u0, u1, increment=4, load_factor=0.25,
+                           power=[3e-3], temperature=np.full(strip.n_nodes, 80.0))
+    assert isinstance(event, Event) and event.kind == "panel_crossing" in EVENT_KINDS
+    assert event.creases == (1,) and event.panels == (0, 1)      # crease id, not the row
+    assert event.increment == 4 and event.load_factor == 0.25
+    assert event.power_per_crease == (3e-3,) and event.temperature_max == 80.0
+    assert "crease 1 folded past +-180 deg" in event.message
+    assert "increment 5" in event.message and "contact" in event.message
+    d = event.to_dict([1])
+    assert d["creases"] == [1] and d["panels"] == [0, 1] and d["kind"] == "panel_crossing"
+
+
+def test_no_event_without_a_crossing(strip):
+    u0, u1 = folded(strip, 90) - strip.nodes, folded(strip, 100) - strip.nodes
+    assert crossing_event(strip, u0, u1, increment=0, load_factor=0.1) is None
+
+
+def test_event_kind_is_still_checked():
+    with pytest.raises(ParameterError, match="Event.kind = 'crossing'"):
+        Event("crossing", 0.5, 1)
+
+
+def test_the_cli_summary_line_names_the_creases_and_panels(strip):
+    from design.cli._summary import _event_line
+
+    u0, u1 = folded(strip, 179) - strip.nodes, folded(strip, 181) - strip.nodes
+    event = crossing_event(strip, u0, u1, increment=4, load_factor=0.25, power=[3e-3])
+    line = _event_line(event, strip.crease_ids)
+    assert line.startswith("panel crossing at 3 mW in all (crease 1: 3 mW)")
+    assert line.endswith("; creases 1 folded past +-180 deg; panels 0, 1 passed through each "
+                         "other")
