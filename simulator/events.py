@@ -191,7 +191,7 @@ def branch_event(switch, load_factor: float, increment: int, power, temperature)
 
 
 def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power=(),
-                   temperature=None) -> Event | None:
+                   temperature=None, nodes: bool = True) -> Event | None:
     """The ``"panel_crossing"`` :class:`Event` of an accepted increment, or None if no panels
     passed through each other since the previous one.
 
@@ -219,12 +219,15 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
         The step's path parameter at this increment.
     power : (C,) crease powers there [W], optional
     temperature : (n_nodes,) node temperatures there [deg C], optional
+    nodes : bool
+        Also test panel corners and centres passing through panels (about 1-2 ms a call); the
+        steps' loops test the creases only (tens of microseconds), every increment.
     """
     from .mechanics.crossing import crease_crossings, node_crossings
 
     x0, x1 = mesh.nodes + np.asarray(u_prev, float), mesh.nodes + np.asarray(u, float)
     creases = mesh.crease_ids[crease_crossings(mesh, x0, x1)]
-    pairs = node_crossings(mesh, x0, x1)
+    pairs = node_crossings(mesh, x0, x1) if nodes else np.zeros((0, 2), int)
     if not len(creases) and not len(pairs):
         return None
     parts = []

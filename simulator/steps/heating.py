@@ -24,6 +24,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
+from ..events import crossing_event
 from ..solvers.newton import follow_path
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
@@ -98,6 +99,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     u, spring, f = state.u, state.spring_rest, state.applied_load.ravel()
     x_start = mesh.nodes + state.u
     rec = StepRecorder(state)
+    u_prev = state.u
     n_inc = len(powers)
     temp, target, evaluation = state.temperature, state.crease_rest, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
@@ -127,6 +129,15 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         rec.note_stability(path, temp, power, lambda t, s=s: (s - 1 + t) / n_inc)
         rec.record(s / n_inc, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
+        crossing = crossing_event(mesh, u_prev, u, increment=len(rec) - 1,
+                                  load_factor=s / n_inc, power=power, temperature=temp,
+                                  nodes=False)
+        if crossing is not None:
+            rec.events.append(crossing)
+            return rec.finish(False, "panel_crossing", crossing.message,
+                              at_rest(state, u=u, spring_rest=spring, temperature=temp),
+                              f, evaluation)
+        u_prev = u
         context.report(s, n_inc)
     end = at_rest(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
                   crease_power=np.asarray(powers[-1], float), room_temperature=float(ambient[-1]))

@@ -235,7 +235,8 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     ----------
     context : StepContext
     start : SimulationState at the start of the step
-    outcome : StepOutcome of the load-controlled part (returned unchanged if it succeeded)
+    outcome : StepOutcome of the load-controlled part (returned unchanged if it succeeded, was
+        stopped, or ended on a panel crossing or an unstable state: no limit point to pass)
     path : LoadPath whose load factor is the step's path parameter (0 at the start, 1 at the
         end); ``outcome.state`` lies on it at the last recorded load factor
     increments : int
@@ -259,7 +260,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     load control from that point), then load control resumes (message "jump from load factor
     ...", the load factor where it resumed).
     """
-    if outcome.success or outcome.status == "stopped":
+    if outcome.success or outcome.status in ("stopped", "panel_crossing", "unstable"):
         return outcome
     if action == "stop":        # a step failing in its first increment stays "failed"
         return _probe(context, start, outcome, path, increments, powers) \

@@ -8,12 +8,13 @@ persist into later steps (theory 6.4, 6.5).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .._validate import finite
 from ..errors import ParameterError
+from ..events import crossing_event
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
 from ..solvers.newton import follow_path
@@ -65,19 +66,33 @@ def node_vectors(value, n: int, step: str, name: str) -> np.ndarray:
     return out
 
 
-def _follow(context: StepContext, state, f_start, f_end, rest_end, increments):
+def _follow(context: StepContext, state, f_start, f_end, rest_end, increments,
+            load_factor=None):
     """Follow the load / rest-angle path; returns (path, recorder) with every increment
-    recorded (temperatures and powers unchanged)."""
-    total = increments
+    recorded (temperatures and powers unchanged; ``load_factor(t)`` maps the path's parameter
+    to the step's). A crease folding past +-180 deg stops the path with a "panel_crossing"
+    event (:func:`~simulator.events.crossing_event`)."""
+    total, mesh, seen = increments, context.model.mesh, [state.u]
+    scale = (lambda t: t) if load_factor is None else load_factor
+    crossings = []
 
     def callback(t, u):
         context.report(min(total, round(t * total)), total)
-        return False
+        event = crossing_event(mesh, seen[-1], u, increment=len(seen) - 1,
+                               load_factor=scale(t), power=state.crease_power,
+                               temperature=state.temperature, nodes=False)
+        seen.append(u)
+        if event is not None:
+            crossings.append(event)
+        return event is not None
 
     path = follow_path(context.system, state.u, f_start, f_end, state.spring_rest, rest_end,
                        increments, context.options, callback=callback)
     rec = StepRecorder(state)
-    rec.add_path(path, state.temperature, state.crease_power)
+    rec.add_path(path, state.temperature, state.crease_power, load_factor)
+    if crossings:
+        rec.events += crossings
+        path = replace(path, status="panel_crossing", message=crossings[0].message)
     return path, rec
 
 
@@ -85,10 +100,8 @@ def _resume(context, mid, lam, f_end, rest_end, increments, end_state) -> StepOu
     """Load control from a converged state ``mid`` at load factor ``lam`` to the end of the
     step (after a snap passed by arc length); records carry the step's load factor."""
     n = max(1, round((1 - lam) * increments))
-    path = follow_path(context.system, mid.u, mid.applied_load.ravel(), f_end,
-                       mid.spring_rest, rest_end, n, context.options)
-    rec = StepRecorder(mid)
-    rec.add_path(path, mid.temperature, mid.crease_power, lambda t: lam + (1 - lam) * t)
+    path, rec = _follow(context, mid, mid.applied_load.ravel(), f_end, rest_end, n,
+                        lambda t: lam + (1 - lam) * t)
     new = end_state(path.u, lam + (1 - lam) * path.t)
     return rec.finish(path.success, path.status, path.message, new, new.applied_load.ravel(),
                       path.evaluation)

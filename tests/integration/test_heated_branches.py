@@ -88,3 +88,42 @@ def test_the_other_branch_is_stable_and_different(waterbomb):
     assert np.abs(a - b).max() > 5.0
     (e,), = [[x for x in other.events if x.kind == "branch_switch"]]
     assert "branch='lower'" in e.message
+
+
+@pytest.fixture(scope="module")
+def small_waterbomb():
+    """The waterbomb drawn 2 mm wide: at 20 mW per crease its midlines fold towards 180 deg."""
+    stack = S.get_stack("su8-au")
+    data = _waterbomb()
+    data["vertices_coords"] = [[0.1 * x for x in v] for v in data["vertices_coords"]]
+    geo = S.parse_fold(data, crease_width=stack.crease_width,
+                       crease_thickness=stack.crease_thickness,
+                       panel_thickness=stack.panel_thickness)
+    heated = geo.pattern.creases.tolist()
+    return geo.pattern, stack, heated
+
+
+def test_without_contact_a_crease_passing_180_deg_stops_the_step_with_an_event(small_waterbomb):
+    pattern, stack, heated = small_waterbomb
+    model = S.stack_model(pattern, stack, heated, contact=False)
+    res = _heat(model, heated, 20.0, 50)
+    assert not res.success and res.status == "panel_crossing"
+    (e,) = [x for x in res.events if x.kind == "panel_crossing"]
+    assert e.creases == (0, 5, 9, 13) and "folded past +-180 deg" in e.message
+    # the step stops at the increment where they crossed: its record is the last
+    assert e.increment == res.steps[0].increments - 1
+
+
+def test_with_contact_no_crease_passes_180_deg_at_any_step_count(small_waterbomb):
+    pattern, stack, heated = small_waterbomb
+    model = S.stack_model(pattern, stack, heated)                 # contact on by default
+    assert model.contact is not None
+    ends = []
+    for n in (50, 200):
+        res = _heat(model, heated, 20.0, n)
+        assert res.success and res.stable is True, res.message
+        folds = np.degrees(res.fold_angle)
+        assert np.abs(folds).max() < 180.0
+        ends.append(folds[-1])
+    assert np.abs(ends[0] - ends[1]).max() < 1.0
+    assert np.abs(ends[0]).max() > 150.0                  # folded far: contact was needed
