@@ -6,7 +6,7 @@ named cause, or "converged" on a state the run knows to be unstable.)
 
 Method: for each ``*.fold`` file, in a subprocess with a timeout, ``etorigami check FILE`` and
 ``etorigami run FILE --heat all --power P --out TMP --quiet`` (the default frame, as the CLI
-reads it). A file in FOLD's default ``frame_unit`` 'unit' gets ``--unit-scale S`` (default
+reads it). A file in FOLD's default ``frame_unit`` 'unit' gets ``--unit-scale S`` in both (default
 1e-2: a unit square becomes a 10 mm sheet, the size of the drawn patterns of
 ``studies/pattern_robustness``; at 1e-3 most public patterns are refused for their crease widths
 before the solver is reached). The subprocess inherits ``PYTHONPATH``, so
@@ -165,10 +165,11 @@ def _unit_args(path, unit_scale):
 
 def run_file(path, out, power=2.0, timeout=120.0, unit_scale=1e-2):
     """One row of the table (a dict with ``FIELDS``) for one FOLD file."""
-    check = run_cli(["check", path], timeout)
+    units = _unit_args(path, unit_scale)
+    check = run_cli(["check", path, *units], timeout)
     t0 = time.perf_counter()
     run = run_cli(["run", path, "--heat", "all", "--power", power, "--out", out, "--quiet",
-                   *_unit_args(path, unit_scale)], timeout)
+                   *units], timeout)
     seconds = time.perf_counter() - t0
     outcome, message = classify(check, run, out)
     return {"file": path.name, "outcome": outcome, "check_exit": check[0], "run_exit": run[0],
