@@ -1,4 +1,4 @@
-"""Run every FOLD file of a folder through ``etorigami check`` and ``etorigami run`` (issues 20, 28).
+"""Run every FOLD file of a folder through ``etorigami check`` and ``run`` (issues 20, 28).
 
 Question: does every FOLD file of the ecosystem either run heated or get refused in one line
 that says what to change? (Issue 28: none may end in a traceback, a NaN, an exit 1 without a
@@ -139,7 +139,8 @@ def classify(check, run, out=None):
     if tb or "Traceback (most recent call last)" in text:
         return "traceback", (_lines(tb[0]) if tb else [""])[-1][:200]
     if _has_nan(text, out if r_rc == 0 else None):
-        return "nan", next((ln for ln in _lines(text) if _NAN.search(ln)), "NaN in creases.csv")[:200]
+        first = next((ln for ln in _lines(text) if _NAN.search(ln)), "NaN in creases.csv")
+        return "nan", first[:200]
     if r_rc == 0:
         meta = _read_meta(out)
         unstable = meta.get("status") == "converged" and final_state_unstable(meta)

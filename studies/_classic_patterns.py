@@ -154,7 +154,8 @@ def miura_sheet(a=1.0, b=1.0, gamma_deg=60.0, m=3, n=3):
             odd_one = other[zig(j + 1)] if i % 2 else other[zig(j)]
             creases.append((vid(i, j), vid(i, j + 1), odd_one))
     outline = ([vid(i, 0) for i in range(m + 1)] + [vid(m, j) for j in range(1, n + 1)]
-               + [vid(i, n) for i in range(m - 1, -1, -1)] + [vid(0, j) for j in range(n - 1, 0, -1)])
+               + [vid(i, n) for i in range(m - 1, -1, -1)]
+               + [vid(0, j) for j in range(n - 1, 0, -1)])
     return crease_pattern(f"Miura-ori {m} x {n}", xy, creases, outline)
 
 

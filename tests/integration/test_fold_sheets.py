@@ -57,7 +57,8 @@ def test_corpus_script_classifies_outcomes(tmp_path):
     gave_up = "p: failed (step 'heat': gave up ... no convergence in 30 iterations) in 1 s"
     assert classify(ok, (1, gave_up, "")) == ("exit1-no-cause", gave_up)
     assert classify(ok, (1, "p: failed (a limit point at 3 mW) in 1 s", ""))[0] == "failed-named"
-    assert classify(ok, (1, "", "Traceback (most recent call last):\nValueError: v"))[0] == "traceback"
+    tb = "Traceback (most recent call last):\nValueError: v"
+    assert classify(ok, (1, "", tb))[0] == "traceback"
     crash = (1, "", "Traceback (most recent call last):\nValueError: zero-size")
     assert classify(crash, (2, "", "etorigami: error: x")) == ("traceback", "ValueError: zero-size")
     assert classify((None, "", ""), ok) == ("timeout", "check")
