@@ -48,21 +48,45 @@ def _corpus_module():
     return mod
 
 
-def test_corpus_script_classifies_outcomes():
+def test_corpus_script_classifies_outcomes(tmp_path):
     classify = _corpus_module().classify
-    ok = (0, "")
-    assert classify(ok, (0, "converged"))[0] == "ran"
-    assert classify((2, "etorigami: error: x"), (2, "etorigami: error: x"))[0] == "refused"
-    assert classify(ok, (2, "etorigami: error: x"))[0] == "check-ok-run-fails"
-    assert classify(ok, (1, "failed (tangent stiffness is singular)"))[0] == "singular"
-    assert classify(ok, (1, "Traceback (most recent call last):\nValueError"))[0] == "traceback"
-    assert classify((None, ""), ok)[0] == "hang"
-    assert classify(ok, (0, "fold angle nan"))[0] == "nan"
+    ok = (0, "", "")
+    assert classify(ok, (0, "converged", ""))[0] == "ran"
+    assert classify(ok, (2, "", "etorigami: error: x\n"))[0] == "refused"
+    assert classify(ok, (2, "", "etorigami: error: x\nmore\n"))[0] == "refused-multiline"
+    gave_up = "p: failed (step 'heat': gave up ... no convergence in 30 iterations) in 1 s"
+    assert classify(ok, (1, gave_up, "")) == ("exit1-no-cause", gave_up)
+    assert classify(ok, (1, "p: failed (a limit point at 3 mW) in 1 s", ""))[0] == "failed-named"
+    tb = "Traceback (most recent call last):\nValueError: v"
+    assert classify(ok, (1, "", tb))[0] == "traceback"
+    crash = (1, "", "Traceback (most recent call last):\nValueError: zero-size")
+    assert classify(crash, (2, "", "etorigami: error: x")) == ("traceback", "ValueError: zero-size")
+    assert classify((None, "", ""), ok) == ("timeout", "check")
+    assert classify(ok, (0, "fold angle nan", ""))[0] == "nan"
+    assert classify(ok, (0, "Nanami.fold converged", ""))[0] == "ran"
+    (tmp_path / "creases.csv").write_text("crease,fold_angle [deg]\n0,nan\n")
+    assert classify(ok, (0, "", ""), tmp_path)[0] == "nan"
+
+
+def test_corpus_script_reads_stability_from_meta_defensively(tmp_path):
+    mod = _corpus_module()
+    assert not mod.final_state_unstable({"status": "converged", "steps": [{"name": "heat"}]})
+    assert not mod.final_state_unstable({"steps": []})
+    assert mod.final_state_unstable({"steps": [{"stability": {"stable": False}}]})
+    assert mod.final_state_unstable({"steps": [{"stable": True}, {"stability": "unstable"}]})
+    assert mod.final_state_unstable({"steps": [{"n_negative_eigenvalues": 1}]})
+    assert not mod.final_state_unstable({"steps": [{"stable": False}, {"stable": True}]})
+    (tmp_path / "meta.json").write_text('{"status": "converged", "steps": [{"stable": false}]}')
+    assert mod.classify((0, "", ""), (0, "", ""), tmp_path)[0] == "unstable-converged"
 
 
 def test_corpus_script_runs_a_folder(tmp_path, capsys):
     import shutil
     shutil.copy(TOUCHING, tmp_path / "a.fold")
-    assert _corpus_module().main([str(tmp_path), "--out", str(tmp_path / "o")]) == 0
+    csv = tmp_path / "t.csv"
+    assert _corpus_module().main(["--dir", str(tmp_path), "--out", str(tmp_path / "o"),
+                                  "--csv", str(csv)]) == 0
     out = capsys.readouterr().out
     assert "a.fold" in out and "refused" in out and "1 files, 0 bad outcomes" in out
+    assert "refused by run after check passed: 0" in out
+    assert csv.read_text().splitlines()[1].startswith("a.fold,refused,2,2,")
