@@ -15,6 +15,12 @@ from simulator._validate import capped
 
 __all__ = ["summary_lines"]
 
+#: What the CLI adds to the line of an unstable state met by load control.
+_BRANCH_NOTES = {
+    "branch_switch": "; left the unstable state for the stable branch of lower energy along its "
+                     "critical mode (--branch other takes the other)",
+    "stability_lost": "; the state stays unstable (not left: --stability switch leaves it)"}
+
 
 def _event_line(event, crease_ids) -> str:
     """``snap in step heat at 9.215 mW in all (crease 2: 9.215 mW), jump 51.0 um (node 7)``."""
@@ -32,6 +38,7 @@ def _event_line(event, crease_ids) -> str:
         text += f" (node {event.node})"
     if event.temperature_max is not None:
         text += f", hottest node {event.temperature_max:.0f} degC"
+    text += _BRANCH_NOTES.get(event.kind, "")
     if event.creases:
         text += f"; creases {capped(event.creases, brackets=False)} folded past +-180 deg"
     if event.panels:

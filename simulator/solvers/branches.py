@@ -81,7 +81,7 @@ class BranchSwitch:
         return f"{head}: left along its critical mode to a stable branch, {how}"
 
 
-def judge(system, res, t, ends, options, switches):
+def judge(system, res, t, ends, options, switches, locate: bool = False):
     """``(res, stability)`` of a converged Newton result ``res`` at ``t``. With
     ``options.stability == "switch"`` an unstable one whose critical mode is orthogonal to the
     load derivative (a bifurcation: |cos| below
@@ -90,12 +90,22 @@ def judge(system, res, t, ends, options, switches):
     reached; one whose mode is along it (load control passed a limit point onto the unstable
     branch) is kept, recorded unstable: the step's limit-point handling (arc length past the
     snap, :mod:`simulator.steps.limit`) takes it from the failure that follows, and a step
-    that ends there does not succeed."""
+    that ends there does not succeed.
+
+    ``locate``: the loss of stability at a bifurcation is still to be located (the state
+    before was stable and the increment is longer than the path's location tolerance): the
+    result is refused (failed, so that the increment is halved) instead of left, and the
+    branch is chosen at the first unstable state of an increment within the tolerance, the
+    same point whatever the increments (theory 6.12)."""
     st = quick_stability(_tangent(res.evaluation), options.linear_solver)
     if st.stable or options.stability != "switch":
         return res, st
     if st.load_alignment(_path(system, ends).at(res.u, t).q) >= BIFURCATION_ALIGNMENT:
         return res, st       # past a limit point: the step's limit-point handling decides
+    if locate:
+        return replace(res, success=False, message=(
+            "the equilibrium turned unstable within the increment (a bifurcation): halving it "
+            "to locate where")), st
     landed, ev, sw = _fall(system, res.u, st, t, ends, options)
     switches.append(sw)
     if landed is None:

@@ -35,6 +35,10 @@ logger = logging.getLogger(__name__)
 
 #: Values of ``NewtonOptions.stability``.
 STABILITY_ACTIONS = ("switch", "check", "off")
+#: Load control locates a loss of stability at a bifurcation to this fraction of a step's
+#: path (by halving the increment in which it happens: 1e-4 takes at most 9 halvings of the
+#: 25-increment heating, within the 10 of ``NewtonOptions.max_cuts``) before it leaves it.
+LOCATE_TOL = 1e-4
 
 
 @dataclass(frozen=True)
@@ -323,17 +327,27 @@ def _newton_result(u, converged, iterations, res, cor, message, ev=None):
 
 def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, f_end: np.ndarray,
                 rest_start: np.ndarray, rest_end: np.ndarray, increments: int,
-                options: NewtonOptions = NewtonOptions(), callback=None) -> PathResult:
+                options: NewtonOptions = NewtonOptions(), callback=None,
+                locate_tol: float = LOCATE_TOL) -> PathResult:
     """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
 
     The path is split into ``increments`` equal increments. A failed increment is halved
     (up to ``options.max_cuts`` times in a row); after a success the increment doubles
     again up to its nominal size. ``callback(t, u)``, if given, is called after every
     accepted increment and may return True to stop early (status "stopped").
+
+    Every converged increment is checked for stability (``options.stability``,
+    :func:`~simulator.solvers.branches.judge`). Where the equilibrium turns unstable at a
+    bifurcation the increment is halved until it is at most ``locate_tol`` (in t; the callers
+    whose t spans only part of a step scale it so that it is :data:`LOCATE_TOL` of the step),
+    and the state is left for a stable branch there, so that the branch taken does not depend
+    on the increments.
     """
     integer("increments", increments)
     u, history, residuals, last_ev = u0.copy(), [], [], None
-    stability, switches, judged = [], [], [None]
+    stability, switches, judged, t_now = [], [], [None], [0.0]
+    # (located no finer than the cuts allow: march gives up after max_cuts halvings in a row)
+    tol = max(locate_tol, 0.5 ** (options.max_cuts - 1) / increments)
     total_iter = 0
     check = options.stability != "off"
     ends = (f_start, f_end, rest_start, rest_end)
@@ -346,7 +360,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         last = stability[-1] if stability else None
         judged[:] = [None]
         if res.success and check and res.evaluation is not None:
-            res, judged[0] = judge(system, res, t_try, ends, options, switches)
+            prev = stability[-1] if stability else None
+            locate = (prev is None or prev.stable) and t_try - t_now[0] > tol * (1 + 1e-9)
+            res, judged[0] = judge(system, res, t_try, ends, options, switches, locate)
         elif (not res.success and options.stability == "switch" and last is not None
                 and last.negative == 0 and last.mode is not None):
             # the last state is critical (a singular tangent: Cholesky failed, no negative
@@ -358,6 +374,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
 
     def accept(t, res):
         nonlocal u, last_ev
+        t_now[0] = t
         st = judged[0]
         if st is not None and not st.stable and options.stability == "check" and (
                 not stability or stability[-1] is None or stability[-1].stable):

@@ -25,7 +25,7 @@ from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from ..events import crossing_event
-from ..solvers.newton import follow_path
+from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
@@ -84,14 +84,17 @@ class _Coupling:
 
 
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
-                       coupling: _Coupling = _Coupling()) -> StepOutcome:
+                       coupling: _Coupling = _Coupling(), lam=None) -> StepOutcome:
     """The paper's three-step loop over increments s = 1..S (theory 6.6).
 
     Per increment: node temperatures for crease powers ``powers[s]`` (S, C) [W] and room
     temperature ``ambient[s]`` [deg C] on the current shape; crease rest angles from the
     Timoshenko bimorph (temperature change since the start of the step); equilibrium by
     Newton with step cutting. Returns the outcome with one record per increment; stops at the
-    first increment whose equilibrium fails (status "failed").
+    first increment whose equilibrium fails (status "failed") or in which a crease folds past
+    +-180 deg (status "panel_crossing", with its event). ``lam`` (S + 1,): the step's load
+    factor at the start and after every increment (default ``s / S``), for the records and
+    events of a step that resumes part-way.
     """
     model, tm = context.model, context.thermal
     mesh = model.mesh
@@ -108,7 +111,8 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
         for _ in range(coupling.max_iterations if iterated else 1):
             target, rest = actuate(temp)
-            path = follow_path(context.system, u, f, f, spring, rest, 1, context.options)
+            path = follow_path(context.system, u, f, f, spring, rest, 1, context.options,
+                               locate_tol=LOCATE_TOL * n_inc)
             rec.iterations += path.iterations
             rec.cuts += path.cuts
             if not path.success:
@@ -126,17 +130,22 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             if agreed:
                 break
         u, spring, evaluation = path.u, rest, path.evaluation
-        rec.note_stability(path, temp, power, lambda t, s=s: (s - 1 + t) / n_inc)
-        rec.record(s / n_inc, u, temp, np.asarray(power, float), path.iterations,
+        lam0, lam1 = (s - 1) / n_inc, s / n_inc
+        if lam is not None:
+            lam0, lam1 = lam[s - 1], lam[s]
+        rec.note_stability(path, temp, power,
+                           lambda t, a=lam0, b=lam1: a + t * (b - a))
+        rec.record(lam1, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
         crossing = crossing_event(mesh, u_prev, u, increment=len(rec) - 1,
-                                  load_factor=s / n_inc, power=power, temperature=temp,
+                                  load_factor=lam1, power=power, temperature=temp,
                                   nodes=False)
         if crossing is not None:
             rec.events.append(crossing)
             return rec.finish(False, "panel_crossing", crossing.message,
-                              at_rest(state, u=u, spring_rest=spring, temperature=temp),
-                              f, evaluation)
+                              at_rest(state, u=u, spring_rest=spring, temperature=temp,
+                                      crease_rest=target, crease_power=np.asarray(power, float),
+                                      room_temperature=float(room)), f, evaluation)
         u_prev = u
         context.report(s, n_inc)
     end = at_rest(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
@@ -228,9 +237,9 @@ class Heat(Step):
         def resume(mid, lam):
             n = max(1, round((1 - lam) * self.increments))
             s = lam + (1 - lam) * np.arange(1, n + 1)[:, None] / n
-            out = coupled_increments(context, mid, state.crease_power + s * dP,
-                                     np.full(n, state.room_temperature), _coupling(self))
-            return replace(out, load_factor=s[:len(out.load_factor), 0])
+            return coupled_increments(context, mid, state.crease_power + s * dP,
+                                      np.full(n, state.room_temperature), _coupling(self),
+                                      lam=np.concatenate([[lam], s[:, 0]]))
 
         return continue_past_limit(context, state, outcome, path, self.increments,
                                    self.on_limit_point, path.state_at, resume, path.powers)

@@ -86,6 +86,9 @@ SWITCH_BRANCHES = False
 RESTART_AT_STABILITY_LOSS = True
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
+#: Statuses of a load-controlled outcome that end the step as they are: stopped by a callback,
+#: a crease folded past +-180 deg, an end state known to be unstable (no limit point to pass).
+_NOT_LIMITS = ("stopped", "panel_crossing", "unstable")
 
 
 def check_on_limit_point(step) -> None:
@@ -183,9 +186,15 @@ class HeatPath(LoadPath):
 
 
 def _replay(rec: StepRecorder, outcome: StepOutcome) -> None:
-    """Copy the records of a (failed) load-controlled outcome into ``rec``."""
+    """Copy the records of a (failed) load-controlled outcome into ``rec``, with its events
+    (their increments counted in ``rec``) and the stability of its end."""
     rec.iterations += outcome.iterations
     rec.cuts += outcome.cuts
+    offset = len(rec)
+    rec.events += [e if e.increment is None else replace(e, increment=e.increment + offset)
+                   for e in outcome.events]
+    if outcome.stable is not None:
+        rec.stable = outcome.stable
     for k in range(len(outcome.load_factor)):
         rec.record(outcome.load_factor[k], outcome.u[k], outcome.temperature[k],
                    outcome.power[k], int(outcome.increment_iterations[k]),
@@ -260,7 +269,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     load control from that point), then load control resumes (message "jump from load factor
     ...", the load factor where it resumed).
     """
-    if outcome.success or outcome.status in ("stopped", "panel_crossing", "unstable"):
+    if outcome.success or outcome.status in _NOT_LIMITS:
         return outcome
     if action == "stop":        # a step failing in its first increment stays "failed"
         return _probe(context, start, outcome, path, increments, powers) \
@@ -288,7 +297,7 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                               state.applied_load.ravel(), res.evaluation)
         current, origin = resume(state, lam1), (state.u, lam1)
         _replay(rec, current)
-        if current.success or current.status == "stopped":
+        if current.success or current.status in _NOT_LIMITS:
             notes.append(f"load control from load factor {lam1:.6g}: {current.message}")
             return rec.finish(current.success, current.status, "; ".join(notes),
                               current.state, current.f_ext, current.evaluation)
