@@ -146,7 +146,7 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     if n <= DENSE_LIMIT:
         A = as_dense(K)
         w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
-        return Stability(int(np.sum(w < -tol)), float(w[0]), V[:, 0], True)
+        return Stability(int(np.sum(w < -tol)), float(w[0]), _critical_mode(w, V), True)
     import scipy.sparse.linalg as spla
 
     diag = np.abs(K.diagonal())
@@ -161,6 +161,25 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     order = np.argsort(w)
     w, V = w[order], V[:, order]
     return Stability(int(np.sum(w < -tol)), float(w[0]), V[:, 0], False)
+
+
+#: Eigenvalues within this (relative) of the lowest share its eigenspace (a symmetric
+#: structure's repeated eigenvalue).
+DEGENERATE_RTOL = 1e-6
+
+
+def _critical_mode(w, V) -> np.ndarray:
+    """The lowest eigenvector, made independent of the eigensolver's choice of basis where the
+    lowest eigenvalue is repeated (a symmetric pattern): the projection onto that eigenspace of
+    the unit vector of the DOF it moves most (the first such DOF), normalised."""
+    k = int(np.sum(w - w[0] <= DEGENERATE_RTOL * max(abs(w[0]), 1e-300)))
+    if k < 2:
+        return V[:, 0]
+    B = V[:, :k]
+    reach = np.einsum("ij,ij->i", B, B)
+    j = int(np.flatnonzero(reach >= (1 - 1e-8) * reach.max())[0])
+    m = B @ B[j]
+    return m / np.linalg.norm(m)
 
 
 def _negative_tolerance(K) -> float:
