@@ -308,6 +308,29 @@ def test_sheet_in_another_plane_is_reported_and_laid_flat_on_request():
     assert "laid in x-y" in flat.notes[0]
 
 
+def test_gravity_is_the_explicit_direction_of_the_model_axes():
+    """Gravity (-z by default) is the one orientation-dependent load: laid flat, the x-z sheet
+    hangs towards its bottom side; kept standing, it does the same with gravity given along
+    its bottom side (+y here: its faces run counter-clockwise about -y)."""
+    from simulator import Gravity
+
+    data = load("origami_simulator_xz.fold")
+
+    def sag(lay_flat, **direction):
+        pattern = geometry(data, lay_flat=lay_flat).pattern
+        model = stack_model(pattern, STACK, pattern.creases[:1].tolist())
+        result = simulate(model, [Gravity(increments=2, **direction)])
+        assert result.success, result.message
+        return np.degrees(result.fold_angle[-1])
+
+    flat = sag(True)
+    assert np.all(flat < -1)                 # the outer panels hang down: mountain folds
+    np.testing.assert_allclose(sag(False, direction=(0, 2, 0)), flat, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sag(False, direction=(0, -1, 0)), -flat, rtol=0, atol=1e-9)
+    with pytest.raises(ParameterError, match=r"Gravity.direction = \(0, 0, 0\) has no"):
+        Gravity(direction=(0, 0, 0))
+
+
 def test_crease_wider_than_its_panel_is_refused_with_the_limit():
     with pytest.raises(EtorigamiError, match=r"panel 1 .*300 um wide, at most about 99 um fit"):
         build_mesh(parse_fold(load("crease_too_wide.fold")).pattern)
