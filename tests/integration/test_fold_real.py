@@ -299,13 +299,28 @@ def test_many_fully_folded_creases_are_named_in_a_short_line():
     assert len(str(info.value)) < 250
 
 
-def test_sheet_in_another_plane_is_reported_and_laid_flat_on_request():
+def test_sheet_in_another_plane_is_laid_flat_unless_its_file_has_axes_of_its_own():
+    """Laid in x-y by default, top side up (the side its faces run counter-clockwise around);
+    lay_flat=False, or data given in the file's axes (a model file's steps), keep it
+    standing, with a warning note."""
+    from simulator.geometry.polygons import area_vectors
+
     data = load("origami_simulator_xz.fold")
     geo = geometry(data)
-    assert "standing in the plane with normal [0.0, -1.0, 0.0]" in geo.notes[0]
-    flat = geometry(data, lay_flat=True)
-    assert np.abs(flat.pattern.vertices[:, 2]).max() < 1e-15
-    assert "laid in x-y" in flat.notes[0]
+    assert geo.notes[0].startswith("flat sheet in the plane with normal [0.0, -1.0, 0.0] laid "
+                                   "in x-y, top side up")
+    p = geo.pattern
+    assert np.abs(p.vertices[:, 2]).max() == 0
+    assert np.all(area_vectors(p.vertices[p.corner_vertices], p.corner_sizes)[:, 2] > 0)
+    standing = geometry(data, lay_flat=False)
+    assert "standing in the plane with normal [0.0, -1.0, 0.0]" in standing.notes[0]
+    assert "as asked (lay_flat=False); lay_flat=True lays it in x-y" in standing.notes[0]
+    assert np.ptp(standing.pattern.vertices[:, 2]) > 0
+    model_file = {**data, "etorigami:steps": [{"type": "Gravity"}]}
+    kept = geometry(model_file)
+    assert "since its etorigami:steps are given in the file's axes" in kept.notes[0]
+    assert np.ptp(kept.pattern.vertices[:, 2]) > 0
+    assert "laid in x-y" in geometry(model_file, lay_flat=True).notes[0]
 
 
 def test_gravity_is_the_explicit_direction_of_the_model_axes():
@@ -329,6 +344,23 @@ def test_gravity_is_the_explicit_direction_of_the_model_axes():
     np.testing.assert_allclose(sag(False, direction=(0, -1, 0)), -flat, rtol=0, atol=1e-9)
     with pytest.raises(ParameterError, match=r"Gravity.direction = \(0, 0, 0\) has no"):
         Gravity(direction=(0, 0, 0))
+
+
+def test_a_flat_miura_turned_in_space_heats_as_the_one_in_x_y():
+    """Issue 28: a flat tessellation turned in space, run standing, differed from the one in
+    x-y; laid flat by default, turned and mirrored copies heat alike to 1e-9 deg."""
+    data = load("miura_3x3_plain.fold")
+    reference = np.degrees(heated(data, power=5e-3, increments=10))
+    assert np.abs(reference).max() > 5
+    rng = np.random.default_rng(29)
+    mirror = np.diag([1.0, 1.0, -1.0])
+    for _ in range(2):
+        R = random_rotation(rng)
+        for M in (R, R @ mirror):
+            moved = transformed(data, M)
+            assert "laid in x-y, top side up" in geometry(moved).notes[0]
+            np.testing.assert_allclose(np.degrees(heated(moved, power=5e-3, increments=10)),
+                                       reference, rtol=0, atol=1e-9)
 
 
 def test_crease_wider_than_its_panel_is_refused_with_the_limit():
