@@ -21,6 +21,7 @@ __all__ = ["TERMS", "cli_terms", "cli_spelling"]
 TERMS = (
     ("unit_scale=<metres per unit>", "--unit-scale METRES"),
     ("lay_flat=True", "--lay-flat"),
+    ("lay_flat=False", "--no-lay-flat"),
     ("merge_collinear=False", "--keep-collinear"),
     ("frame='creasePattern'", "--frame creasePattern"),
     ("NewtonOptions(branch='other')", "--branch other"),

@@ -105,9 +105,9 @@ def _apply_overrides(path, steps, overrides, names, params) -> list:
 def reader_options(args) -> dict:
     """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale``, the
     ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um],
-    ``--frame``, ``--lay-flat``, ``--keep-collinear`` and ``--crease-model`` (and, under
-    ``_heating``, the flags that drive a plain pattern; under ``_sharp``, the model keywords
-    of sharp creases, :mod:`.sharp`)."""
+    ``--frame``, ``--lay-flat`` / ``--no-lay-flat``, ``--keep-collinear`` and
+    ``--crease-model`` (and, under ``_heating``, the flags that drive a plain pattern; under
+    ``_sharp``, the model keywords of sharp creases, :mod:`.sharp`)."""
     from .plain import frame_option
     from .sharp import sharp_options
 
@@ -128,8 +128,8 @@ def reader_options(args) -> dict:
     out["_sharp"] = sharp_options(args)
     if getattr(args, "frame", None) is not None:
         out["frame"] = frame_option(args.frame)
-    if getattr(args, "lay_flat", False):
-        out["lay_flat"] = True
+    if getattr(args, "lay_flat", None) is not None:
+        out["lay_flat"] = args.lay_flat
     if getattr(args, "keep_collinear", False):
         out["merge_collinear"] = False
     if hasattr(args, "heat"):

@@ -34,8 +34,10 @@ def add_plain_options(parser, heating: bool = True) -> None:
     parser.add_argument("--frame", metavar="INDEX|CLASS",
                         help="FOLD frame to read: an index (0 = key frame) or creasePattern / "
                              "foldedForm")
-    parser.add_argument("--lay-flat", action="store_true",
-                        help="lay a flat sheet drawn in another plane (e.g. x-z) in x-y")
+    parser.add_argument("--lay-flat", action=argparse.BooleanOptionalAction, default=None,
+                        help="lay a flat sheet drawn in another plane (e.g. x-z) in x-y, top "
+                             "side up (default for a plain pattern; a model file stays in its "
+                             "own axes); --no-lay-flat keeps it standing")
     parser.add_argument("--keep-collinear", action="store_true",
                         help="keep vertices in the middle of straight crease lines")
     if heating:

@@ -107,7 +107,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     from simulator import (SelfFold, Supports, central_panel, check_supported, fold_to_model,
                            parse_fold, sharp_model)
 
-    from .plain import chosen_stack, refuse_creaseless, stack_reader_options
+    from .plain import chosen_stack, print_notes, refuse_creaseless, stack_reader_options
 
     if getattr(args, "heat", None) is not None:
         raise CLIError(f"--heat {args.heat}: {path} is read with sharp creases (concentrated "
@@ -122,6 +122,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
                        "add --crease-model sharp (compliant creases are driven by --heat)")
     reader["crease_model"] = "sharp"
     geo = parse_fold(data, **reader)
+    print_notes(geo)
     refuse_creaseless(path, geo.pattern, "fold")
     read, _ = fold_to_model(data, **reader, **sharp)
     pattern = read.mesh.pattern

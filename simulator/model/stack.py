@@ -116,9 +116,14 @@ def actuation_signs(pattern: Pattern) -> np.ndarray:
 
 
 def central_panel(pattern: Pattern) -> int:
-    """The panel whose vertex centroid is nearest the pattern's (the default clamped panel)."""
+    """The panel whose vertex centroid is nearest the pattern's (the default clamped panel).
+
+    Of panels equally near (within 1e-9 of the pattern size: the four of a Miura vertex, the
+    eight of a waterbomb base), the lowest id: a round-off tie-break would clamp another
+    panel, and give another answer, when the sheet lies elsewhere in space."""
     centres = np.array([pattern.vertices[list(p)].mean(axis=0) for p in pattern.panels])
-    return int(np.argmin(np.linalg.norm(centres - pattern.vertices.mean(axis=0), axis=1)))
+    d = np.linalg.norm(centres - pattern.vertices.mean(axis=0), axis=1)
+    return int(np.flatnonzero(d <= d.min() + 1e-9 * pattern.size)[0])
 
 
 def unsupported_panels(pattern: Pattern, panel: int) -> list[int]:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .._validate import finite
+from .._validate import array, finite
 from ..errors import ParameterError
 from ..events import crossing_event
 from ..solvers.load_path import LoadPath
@@ -232,6 +232,12 @@ class Gravity(Step):
     panels : sequence of int or None
         Panels that carry weight (default all; supported panels only add reactions).
     increments : int
+    direction : (3,) sequence of float
+        Direction of gravity in the model's axes (any length; default -z): the one quantity of
+        a plain pattern that depends on how it lies in space. A flat FOLD sheet drawn in
+        another plane is laid in x-y with its top side up (:func:`~simulator.read_fold`,
+        ``lay_flat``), so -z pulls towards its bottom side; a sheet kept standing needs its
+        gravity given here.
     """
 
     g: float = STANDARD_GRAVITY
@@ -239,17 +245,24 @@ class Gravity(Step):
     panels: tuple | None = None
     increments: int = 50
     name: str = "gravity"
+    direction: tuple = (0.0, 0.0, -1.0)
 
     def __post_init__(self):
         check_increments(self)
         finite("Gravity.g", self.g, "m/s^2")
         finite("Gravity.scale", self.scale)
+        d = array("Gravity.direction", self.direction, (3,))
+        if not np.any(d):
+            raise ParameterError("Gravity.direction = (0, 0, 0) has no direction; give a "
+                                 "non-zero 3-vector, e.g. (0, 0, -1) (the default, -z).")
 
     def run(self, context: StepContext, state) -> StepOutcome:
-        load = Load(self.scale * gravity_loads(context.model.mesh, self.g, panels=self.panels),
-                    self.increments)
+        load = Load(self.scale * gravity_loads(context.model.mesh, self.g, self.direction,
+                                               panels=self.panels), self.increments)
         return load.run(context, state)
 
     def describe(self) -> dict:
+        d = np.asarray(self.direction, float)
         return {"g [m/s^2]": self.g, "scale": self.scale, "increments": self.increments,
-                "panels": None if self.panels is None else list(self.panels)}
+                "panels": None if self.panels is None else list(self.panels),
+                "direction": (d / np.linalg.norm(d)).tolist()}

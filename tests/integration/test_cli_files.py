@@ -140,8 +140,12 @@ def test_fold_refusals_and_notes_speak_cli_options_not_python_keywords(tmp_path,
         assert not any(k in err for k in ("unit_scale", "frame=", "lay_flat", "crease_width"))
     assert main(["check", str(data / "origami_simulator_xz.fold")]) == 0
     out, err = capsys.readouterr()
-    assert "note: flat sheet standing" in out and "--lay-flat lays it in x-y" in out
-    assert "lay_flat" not in out + err
+    assert "note: flat sheet in the plane" in out and "--no-lay-flat keeps it standing" in out
+    assert main(["check", str(data / "origami_simulator_xz.fold"), "--no-lay-flat"]) == 0
+    more, more_err = capsys.readouterr()
+    assert "note: flat sheet standing" in more and "--lay-flat lays it in x-y" in more
+    assert "(--no-lay-flat)" in more
+    assert "lay_flat" not in out + err + more + more_err
 
 
 def test_the_map_from_keywords_to_options_is_applied_word_by_word():

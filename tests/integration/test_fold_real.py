@@ -20,7 +20,7 @@ from simulator.geometry.orientation import start_fold_angles
 from simulator.io.fold.reader import load_fold_json, parse_fold
 from simulator.mechanics.kinematics import fold_angles
 from simulator.model.mesh import build_mesh
-from simulator.model.stack import STACKS, stack_model
+from simulator.model.stack import STACKS, central_panel, stack_model
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"
 STACK = STACKS["su8-au"]
@@ -201,6 +201,20 @@ def test_upside_down_single_crease_has_the_same_physics():
     assert ha[0] > math.radians(60)            # heating folds the valley further
 
 
+def test_the_default_clamped_panel_does_not_depend_on_where_the_sheet_lies():
+    """Issue 28: the eight panels of a waterbomb base are equally near its centre, and round-off
+    chose panel 0, 1 or 6 to clamp by how the sheet lay in space, and with it the answer
+    (heated 20 mW: 9e-4 deg; a Miura vertex folded sharp: 1.6e-3 deg; a flapping bird: 0.1
+    deg). Of equally near panels the lowest id is clamped."""
+    from test_panel_crossing import waterbomb
+
+    data = waterbomb()
+    assert central_panel(geometry(data).pattern) == 0
+    rng = np.random.default_rng(28)
+    for _ in range(8):
+        assert central_panel(geometry(transformed(data, random_rotation(rng))).pattern) == 0
+
+
 def test_flat_patterns_keep_the_reference_convention_whatever_their_winding():
     """A flat pattern's top side is +z (clockwise panels get orientation -1)."""
     data = load("miura_3x3_plain.fold")
@@ -285,13 +299,68 @@ def test_many_fully_folded_creases_are_named_in_a_short_line():
     assert len(str(info.value)) < 250
 
 
-def test_sheet_in_another_plane_is_reported_and_laid_flat_on_request():
+def test_sheet_in_another_plane_is_laid_flat_unless_its_file_has_axes_of_its_own():
+    """Laid in x-y by default, top side up (the side its faces run counter-clockwise around);
+    lay_flat=False, or data given in the file's axes (a model file's steps), keep it
+    standing, with a warning note."""
+    from simulator.geometry.polygons import area_vectors
+
     data = load("origami_simulator_xz.fold")
     geo = geometry(data)
-    assert "standing in the plane with normal [0.0, -1.0, 0.0]" in geo.notes[0]
-    flat = geometry(data, lay_flat=True)
-    assert np.abs(flat.pattern.vertices[:, 2]).max() < 1e-15
-    assert "laid in x-y" in flat.notes[0]
+    assert geo.notes[0].startswith("flat sheet in the plane with normal [0.0, -1.0, 0.0] laid "
+                                   "in x-y, top side up")
+    p = geo.pattern
+    assert np.abs(p.vertices[:, 2]).max() == 0
+    assert np.all(area_vectors(p.vertices[p.corner_vertices], p.corner_sizes)[:, 2] > 0)
+    standing = geometry(data, lay_flat=False)
+    assert "standing in the plane with normal [0.0, -1.0, 0.0]" in standing.notes[0]
+    assert "as asked (lay_flat=False); lay_flat=True lays it in x-y" in standing.notes[0]
+    assert np.ptp(standing.pattern.vertices[:, 2]) > 0
+    model_file = {**data, "etorigami:steps": [{"type": "Gravity"}]}
+    kept = geometry(model_file)
+    assert "since its etorigami:steps are given in the file's axes" in kept.notes[0]
+    assert np.ptp(kept.pattern.vertices[:, 2]) > 0
+    assert "laid in x-y" in geometry(model_file, lay_flat=True).notes[0]
+
+
+def test_gravity_is_the_explicit_direction_of_the_model_axes():
+    """Gravity (-z by default) is the one orientation-dependent load: laid flat, the x-z sheet
+    hangs towards its bottom side; kept standing, it does the same with gravity given along
+    its bottom side (+y here: its faces run counter-clockwise about -y)."""
+    from simulator import Gravity
+
+    data = load("origami_simulator_xz.fold")
+
+    def sag(lay_flat, **direction):
+        pattern = geometry(data, lay_flat=lay_flat).pattern
+        model = stack_model(pattern, STACK, pattern.creases[:1].tolist())
+        result = simulate(model, [Gravity(increments=2, **direction)])
+        assert result.success, result.message
+        return np.degrees(result.fold_angle[-1])
+
+    flat = sag(True)
+    assert np.all(flat < -1)                 # the outer panels hang down: mountain folds
+    np.testing.assert_allclose(sag(False, direction=(0, 2, 0)), flat, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sag(False, direction=(0, -1, 0)), -flat, rtol=0, atol=1e-9)
+    with pytest.raises(ParameterError, match=r"Gravity.direction = \(0, 0, 0\) has no"):
+        Gravity(direction=(0, 0, 0))
+
+
+def test_a_flat_miura_turned_in_space_heats_as_the_one_in_x_y():
+    """Issue 28: a flat tessellation turned in space, run standing, differed from the one in
+    x-y; laid flat by default, turned and mirrored copies heat alike to 1e-9 deg."""
+    data = load("miura_3x3_plain.fold")
+    reference = np.degrees(heated(data, power=5e-3, increments=10))
+    assert np.abs(reference).max() > 5
+    rng = np.random.default_rng(29)
+    mirror = np.diag([1.0, 1.0, -1.0])
+    for _ in range(2):
+        R = random_rotation(rng)
+        for M in (R, R @ mirror):
+            moved = transformed(data, M)
+            assert "laid in x-y, top side up" in geometry(moved).notes[0]
+            np.testing.assert_allclose(np.degrees(heated(moved, power=5e-3, increments=10)),
+                                       reference, rtol=0, atol=1e-9)
 
 
 def test_crease_wider_than_its_panel_is_refused_with_the_limit():

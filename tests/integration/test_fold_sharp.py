@@ -190,6 +190,31 @@ def test_run_of_a_sharp_pattern_from_flags(tmp_path, capsys):
     assert meta["overrides"]["crease_model"] == "sharp"
 
 
+def test_a_flat_miura_turned_in_space_folds_sharp_as_the_one_in_x_y(tmp_path, capsys):
+    """Issue 28: a flat tessellation turned in space folded differently as a sharp model; laid
+    flat by default (one note line), turned and mirrored copies fold alike to 1e-9 deg."""
+    def folded(path, name):
+        assert main(["run", str(path), "--crease-model", "sharp", "--fold", "all=90", "--out",
+                     str(tmp_path / name), "-q"]) == 0
+        table = pd.read_csv(tmp_path / name / "creases.csv")
+        return capsys.readouterr().out, table.groupby("crease")["fold_angle [deg]"].last()
+
+    _, reference = folded(MIURA, "flat")
+    assert reference.abs().min() > 60
+    rng = np.random.default_rng(30)
+    R = random_rotation(rng)
+    for k, M in enumerate((R, R @ np.diag([1.0, 1.0, -1.0]))):
+        path = tmp_path / f"turned_{k}.fold"
+        path.write_text(json.dumps(transformed(load("miura_3x3_plain.fold"), M)))
+        out, fold = folded(path, f"turned_{k}")
+        notes = [line for line in out.splitlines() if "laid in x-y" in line]
+        assert len(notes) == 1 and notes[0].startswith("  note: flat sheet in the plane with "
+                                                       "normal [")
+        assert notes[0].endswith("top side up (its faces counter-clockwise seen from +z), the "
+                                 "frame of the results; --no-lay-flat keeps it standing")
+        np.testing.assert_allclose(fold.to_numpy(), reference.to_numpy(), rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("flags, expected", [
     (["--crease-model", "sharp", "--heat", "all", "--power", "1"], "heating needs creases "
      "with a width"),

@@ -1,6 +1,6 @@
 """Geometry repairs of FOLD input: faces of a flat crease pattern from its planar graph,
 vertices in the middle of a straight crease line merged away, a flat sheet in another plane
-recognised (and laid in x-y on request)."""
+recognised and laid in x-y, its top side up."""
 
 from __future__ import annotations
 
@@ -9,10 +9,16 @@ import math
 
 import numpy as np
 
-from ...geometry.polygons import on_segment
-from ._common import fail
+from ...geometry.polygons import area_vectors, on_segment
+from ._common import NS, fail
 
 logger = logging.getLogger(__name__)
+
+#: Fields whose values are given in the file's own axes (loading steps, with their forces and
+#: gravity along -z; supports by direction; mesh node positions): a flat sheet in another
+#: plane than x-y that has one of them stays where it is unless ``lay_flat=True``.
+FRAME_FIELDS = (f"{NS}steps", f"{NS}supports", f"faces_{NS}support", f"vertices_{NS}support",
+                f"{NS}mesh_nodes")
 
 
 def plane_normal(coords: np.ndarray, tol: float = 1e-9):
@@ -35,8 +41,7 @@ def faces_from_edges(coords: np.ndarray, edges: np.ndarray) -> list:
     if normal is None:
         fail("faces_vertices", "missing, and the file is folded (not flat), so its faces cannot "
              "be derived from the edges; add faces_vertices (or read its crease-pattern frame).")
-    if normal[2] < 0 or (normal[2] == 0 and (normal[1] < 0 or (normal[1] == 0 and normal[0] < 0))):
-        normal = -normal
+    normal = _upward(normal)
     u = np.cross(normal, [1.0, 0, 0] if abs(normal[0]) < 0.9 else [0, 1.0, 0])
     u /= np.linalg.norm(u)
     xy = np.column_stack([coords @ u, coords @ np.cross(normal, u)])
@@ -129,20 +134,74 @@ def _walk(v, came_from, drop, edges):
     return v
 
 
-def lay_in_xy(coords: np.ndarray) -> np.ndarray:
-    """Rotate flat ``coords`` (n, 3) into the x-y plane (z = 0), keeping their winding's side."""
+def _upward(normal: np.ndarray) -> np.ndarray:
+    """``normal`` or its opposite: the one with z > 0 (z = 0: y > 0, then x > 0)."""
+    n = normal
+    return -n if n[2] < 0 or (n[2] == 0 and (n[1] < 0 or (n[1] == 0 and n[0] < 0))) else n
+
+
+def top_normal(coords: np.ndarray, faces, normal: np.ndarray) -> np.ndarray:
+    """Unit normal (3,) of the top side of a flat sheet in the plane of ``normal``: the side
+    its faces run counter-clockwise around (FOLD's winding; by the faces' total vector area,
+    which a rigid rotation carries along). Without faces, or with faces wound half each way,
+    the side :func:`_upward` picks."""
+    if faces:
+        sizes = np.array([len(f) for f in faces])
+        along = area_vectors(coords[np.concatenate(faces)], sizes) @ normal
+        if abs(along.sum()) > 1e-9 * np.abs(along).sum():
+            return normal if along.sum() > 0 else -normal
+    return _upward(normal)
+
+
+def lay_in_xy(coords: np.ndarray, up: np.ndarray | None = None) -> np.ndarray:
+    """Rotate flat ``coords`` (n, 3) into the x-y plane (z = 0), centred on their centroid:
+    the least rotation that turns the unit normal ``up`` (default: :func:`_upward` of the
+    plane's normal) to +z, so a sheet standing in x-z turns about x."""
     n = plane_normal(coords)
     if n is None:
         return coords
-    if n[2] < 0:
-        n = -n
+    n = _upward(n) if up is None else np.asarray(up, float)
     axis = np.cross(n, [0.0, 0.0, 1.0])
     s, c = np.linalg.norm(axis), n[2]
-    if s < 1e-15:
+    if s < 1e-15 and c > 0:
         return coords
-    k = axis / s
+    k = axis / s if s >= 1e-15 else np.array([1.0, 0.0, 0.0])     # upside down: about x
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     R = np.eye(3) + s * K + (1 - c) * K @ K
     out = (coords - coords.mean(axis=0)) @ R.T
     out[:, 2] = 0.0
+    return out
+
+
+def lay_flat_sheet(coords, faces, lay_flat: bool | None, data: dict, notes: list):
+    """``coords`` (n, 3) [m], or, for a flat sheet in another plane than x-y, laid in x-y top
+    side up (:func:`lay_in_xy`, :func:`top_normal` of the given ``faces`` or None): where
+    ``lay_flat`` is True, or None and the file ``data`` has no :func:`_frame_bound` field;
+    else kept standing with a warning. One line in ``notes`` says which."""
+    n = plane_normal(coords)
+    if n is None or abs(abs(n[2]) - 1) < 1e-9:
+        return coords
+    bound = _frame_bound(data)
+    normal = np.round(n, 6).tolist()
+    if lay_flat or (lay_flat is None and not bound):
+        notes.append(f"flat sheet in the plane with normal {normal} laid in x-y, top side up "
+                     "(its faces counter-clockwise seen from +z), the frame of the results; "
+                     "lay_flat=False keeps it standing")
+        logger.info("FOLD: %s", notes[-1])
+        return lay_in_xy(coords, top_normal(coords, faces, n))
+    why = "as asked (lay_flat=False)" if lay_flat is False else \
+        f"since its {', '.join(bound)} are given in the file's axes"
+    notes.append(f"flat sheet standing in the plane with normal {normal} (not x-y): simulated "
+                 f"standing, {why}; lay_flat=True lays it in x-y")
+    logger.warning("FOLD: %s", notes[-1])
+    return coords
+
+
+def _frame_bound(data: dict) -> list:
+    """The fields of ``data`` given in the file's own axes (:data:`FRAME_FIELDS`, a thermal
+    ``substrate_plane``)."""
+    out = [f for f in FRAME_FIELDS if data.get(f) not in (None, [], {})]
+    thermal = data.get(f"{NS}thermal")
+    if isinstance(thermal, dict) and thermal.get("substrate_plane"):
+        out.append(f"{NS}thermal.substrate_plane")
     return out

@@ -27,10 +27,10 @@ from ._common import is_number as _is_number
 from ._data import OWN_FIELDS, edge_fields, geometry_pattern, metadata_fields, panel_fields
 from ._frames import select_frame
 from ._merge import merge_flat_faces
-from ._planar import faces_from_edges, lay_in_xy, merge_straight, plane_normal
+from ._planar import FRAME_FIELDS, faces_from_edges, lay_flat_sheet, merge_straight
 
 __all__ = ["read_fold", "fold_to_pattern", "parse_fold", "load_fold_json", "FoldGeometry",
-           "check_crease_model", "SHARP_PLACEHOLDER", "UNITS", "NS"]
+           "check_crease_model", "SHARP_PLACEHOLDER", "UNITS", "NS", "FRAME_FIELDS"]
 
 logger = logging.getLogger(__name__)
 
@@ -122,8 +122,13 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
     merge_collinear : bool
         Merge away vertices in the middle of a straight crease line (two alike creases,
         collinear), default True; T-junctions are meshed with straight corners.
-    lay_flat : bool
-        Rotate a flat sheet that lies in another plane (e.g. x-z) into x-y.
+    lay_flat : bool or None
+        A flat sheet in another plane than x-y (e.g. x-z): None (default) lays it in x-y, its
+        top side up (the side its faces run counter-clockwise around), unless the file gives
+        data in its own axes (:data:`FRAME_FIELDS`, or a thermal ``substrate_plane``); True
+        always lays it in x-y, False never. Laid flat, a rotated copy of a sheet has the
+        answer of the sheet drawn in x-y (up to a turn within the plane), and gravity acts
+        towards its bottom side.
     crease_model : {"compliant", "sharp"}
         Compliant creases with a width (default), or ``"sharp"`` (concentrated hinges; also
         chosen by ``crease_width=0`` or width 0 on every crease in ``edges_etorigami:width``).
@@ -135,7 +140,7 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
 
 def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickness=None,
                panel_thickness=None, material: Material | None = None, frame=None,
-               merge_collinear: bool = True, lay_flat: bool = False,
+               merge_collinear: bool = True, lay_flat: bool | None = None,
                crease_model: str = "compliant") -> FoldGeometry:
     """Validate a FOLD dict and build the pattern and the index maps (:class:`FoldGeometry`)."""
     if not isinstance(data, dict):
@@ -144,7 +149,8 @@ def parse_fold(data: dict, *, unit_scale=None, crease_width=None, crease_thickne
     data = select_frame(data, frame)
     notes = []
     coords = _coords(data) * _scale(data, unit_scale)
-    coords = _plane(coords, lay_flat, notes)
+    given = _faces(data, len(coords)) if data.get("faces_vertices") is not None else None
+    coords = lay_flat_sheet(coords, given, lay_flat, data, notes)
     if data.get("faces_vertices") is None and data.get("edges_vertices") is not None:
         raw = _index_pairs(data, len(coords))
         data = {**data, "faces_vertices": faces_from_edges(coords, raw)}
@@ -279,21 +285,6 @@ def _alike(data, letters, angles, i, j) -> bool:
                 and len(value) > max(i, j) and value[i] != value[j]:
             return False
     return True
-
-
-def _plane(coords, lay_flat: bool, notes: list):
-    """Flat coordinates in a plane other than x-y: reported, and laid in x-y on request."""
-    n = plane_normal(coords)
-    if n is None or abs(abs(n[2]) - 1) < 1e-9:
-        return coords
-    if lay_flat:
-        notes.append(f"flat sheet in the plane with normal {np.round(n, 6).tolist()} laid in x-y")
-        return lay_in_xy(coords)
-    notes.append(f"flat sheet standing in the plane with normal {np.round(n, 6).tolist()} (not "
-                 "x-y; e.g. an Origami Simulator export, y up): it is simulated standing, "
-                 "lay_flat=True lays it in x-y")
-    logger.warning("FOLD: %s", notes[-1])
-    return coords
 
 
 def _index_pairs(data, n_vertices) -> np.ndarray:
