@@ -24,7 +24,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
-from ..events import crossing_event
+from ..events import CrossingWatch
 from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
@@ -102,7 +102,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     u, spring, f = state.u, state.spring_rest, state.applied_load.ravel()
     x_start = mesh.nodes + state.u
     rec = StepRecorder(state)
-    u_prev = state.u
+    watch = CrossingWatch(mesh, state.u)
     n_inc = len(powers)
     temp, target, evaluation = state.temperature, state.crease_rest, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
@@ -137,16 +137,13 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                            lambda t, a=lam0, b=lam1: a + t * (b - a))
         rec.record(lam1, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
-        crossing = crossing_event(mesh, u_prev, u, increment=len(rec) - 1,
-                                  load_factor=lam1, power=power, temperature=temp,
-                                  nodes=False)
+        crossing = watch.check(u, len(rec) - 1, lam1, power, temp)
         if crossing is not None:
             rec.events.append(crossing)
             return rec.finish(False, "panel_crossing", crossing.message,
                               at_rest(state, u=u, spring_rest=spring, temperature=temp,
                                       crease_rest=target, crease_power=np.asarray(power, float),
                                       room_temperature=float(room)), f, evaluation)
-        u_prev = u
         context.report(s, n_inc)
     end = at_rest(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
                   crease_power=np.asarray(powers[-1], float), room_temperature=float(ambient[-1]))

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._validate import array, finite
 from ..errors import ParameterError
-from ..events import crossing_event
+from ..events import CrossingWatch
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
 from ..solvers.newton import follow_path
@@ -72,16 +72,14 @@ def _follow(context: StepContext, state, f_start, f_end, rest_end, increments,
     recorded (temperatures and powers unchanged; ``load_factor(t)`` maps the path's parameter
     to the step's). A crease folding past +-180 deg stops the path with a "panel_crossing"
     event (:func:`~simulator.events.crossing_event`)."""
-    total, mesh, seen = increments, context.model.mesh, [state.u]
+    total, watch = increments, CrossingWatch(context.model.mesh, state.u)
     scale = (lambda t: t) if load_factor is None else load_factor
-    crossings = []
+    crossings, accepted = [], [0]
 
     def callback(t, u):
         context.report(min(total, round(t * total)), total)
-        event = crossing_event(mesh, seen[-1], u, increment=len(seen) - 1,
-                               load_factor=scale(t), power=state.crease_power,
-                               temperature=state.temperature, nodes=False)
-        seen.append(u)
+        event = watch.check(u, accepted[0], scale(t), state.crease_power, state.temperature)
+        accepted[0] += 1
         if event is not None:
             crossings.append(event)
         return event is not None
