@@ -261,11 +261,13 @@ PATTERNS = {"waterbomb_base": waterbomb_base, "square_twist": square_twist,
             "huffman_tessellation": huffman_tessellation, "flapping_bird": flapping_bird}
 
 #: Powers per heated crease [mW] that fold each pattern meaningfully, heated with ``--heat all``
-#: (largest |fold angle| at the three powers on main a57a509, SU-8/Au stack, 200 um creases:
-#: waterbomb 28 / 56 / 114 deg, square twist 11 / 22 / 46, Miura vertex 17 / 35 / 70,
-#: Miura 3 x 3 ~17 / 44 / 89, Huffman ~18 / 46 / 93, flapping bird 19 / ~38 / 77; the top
-#: power is the one for ``--quick``). The hottest crease node passes the 1.2 T_g = 252 degC
-#: limit at the top power of the square twist (285 degC) and the flapping bird (453 degC).
+#: (SU-8/Au stack, 200 um creases). Largest |fold angle| at the three powers on main 4e62691
+#: (stable branch; the same at 25 and 200 increments): waterbomb 28 / 56 / 114 deg, square twist
+#: 11 / 22 / 46, Miura vertex 17 / 35 / 70, Miura 3 x 3 17 / 44 / 89, Huffman 18 / 46 / 93,
+#: flapping bird 19 / 38 / ~77. On a57a509 the waterbomb and the square twist stay near flat
+#: (2 - 6 deg, unstable at the top power) or jump branch with the increment count. The top power
+#: is the one for ``--quick``. The hottest crease node passes the 1.2 T_g = 252 degC limit at the
+#: top power of the square twist (285 degC) and the flapping bird (453 degC).
 POWERS_MW = {"waterbomb_base": (5.0, 10.0, 20.0), "square_twist": (5.0, 10.0, 20.0),
              "miura_vertex": (5.0, 10.0, 20.0), "miura_3x3": (2.0, 5.0, 10.0),
              "huffman_tessellation": (2.0, 5.0, 10.0), "flapping_bird": (5.0, 10.0, 20.0)}
