@@ -210,9 +210,7 @@ def _dense_factor(A: np.ndarray, kind: str) -> Factor | None:
         inertia = (n, 0, 0)
     else:
         def inertia():
-            d = np.linalg.eigvalsh(scipy.linalg.ldl(A)[1])
-            tol = n * np.finfo(float).eps * max(float(np.abs(d).max(initial=0.0)), 1e-300)
-            return int(np.sum(d > tol)), int(np.sum(d < -tol)), int(np.sum(np.abs(d) <= tol))
+            return _signs(np.linalg.eigvalsh(scipy.linalg.ldl(A)[1]))
     return Factor(factor, "dense", n, inertia)
 
 
@@ -243,9 +241,13 @@ def _superlu_inertia(lu) -> tuple[int, int, int] | None:
     (the factors then say nothing of the inertia)."""
     if not np.array_equal(lu.perm_r, lu.perm_c):
         return None
-    d = lu.U.diagonal()
-    n = len(d)
-    tol = n * np.finfo(float).eps * max(float(np.abs(d).max(initial=0.0)), 1e-300)
+    return _signs(lu.U.diagonal())
+
+
+def _signs(d: np.ndarray) -> tuple[int, int, int]:
+    """(positive, negative, zero) counts of the pivots or eigenvalues ``d`` of a factorised
+    symmetric matrix, zero meaning within ``n eps max |d|``."""
+    tol = len(d) * np.finfo(float).eps * max(float(np.abs(d).max(initial=0.0)), 1e-300)
     return int(np.sum(d > tol)), int(np.sum(d < -tol)), int(np.sum(np.abs(d) <= tol))
 
 
