@@ -74,10 +74,21 @@ class Actuators:
     delta_alpha : mapping {crease id: delta_alpha [1/K]}
         Signed expansion mismatch of each actuated crease (alpha_SU8 - alpha_Au = 38e-6 /K in
         the paper; negative values fold the other way). Unlisted creases are passive.
+    scatter : float
+        Relative scatter of the actuation from crease to crease, >= 0 and < 0.5 (default 0,
+        the reference's identical creases): each crease's rotation per kelvin is multiplied by
+        ``1 + scatter z``, ``z`` a standard normal draw per crease id from ``seed``. It is the
+        imperfection a fabricated sheet has. Without it, a symmetric pattern heated from a
+        bifurcation takes the branch of its critical mode's sign (theory 6.12); with a small
+        one (1e-4 changes the folds by about 1e-4 of themselves) the branch the draws favour.
+    seed : int
+        Seed of the scatter's draws (another seed: another of the equal branches).
     """
 
     bimorph: Bimorph
     delta_alpha: Mapping = field(default_factory=dict)
+    scatter: float = 0.0
+    seed: int = 0
 
     def __post_init__(self):
         if not isinstance(self.bimorph, Bimorph):
@@ -85,6 +96,15 @@ class Actuators:
                                  "Bimorph(E1, t1, E2, t2) (delta_alpha is the second argument).")
         for c, v in dict(self.delta_alpha).items():
             finite(f"Actuators: delta_alpha of crease {c}", v, "1/K")
+        finite("Actuators.scatter", self.scatter, "(a fraction)")
+        if not 0.0 <= self.scatter < 0.5:
+            raise ParameterError(
+                f"Actuators.scatter = {self.scatter!r}: the relative scatter of the creases' "
+                "actuation must be >= 0 and < 0.5 (1e-4 selects a branch, 0.05 is a fabricated "
+                "sheet's scatter).")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) \
+                or self.seed < 0:
+            raise ParameterError(f"Actuators.seed = {self.seed!r}: give an integer >= 0.")
 
     def delta_alpha_array(self, mesh) -> np.ndarray:
         """(C,) expansion mismatch per crease row of a mesh (0 for passive creases)."""
@@ -96,11 +116,23 @@ class Actuators:
     def rotation_per_kelvin(self, mesh) -> np.ndarray:
         """(C,) rest-angle change per kelvin of crease temperature rise [rad/K]: kappa/dT x W."""
         width = mesh.pattern.crease_width[mesh.crease_ids]
-        return self.bimorph.curvature(self.delta_alpha_array(mesh), 1.0) * width
+        rot = self.bimorph.curvature(self.delta_alpha_array(mesh), 1.0) * width
+        return rot if self.scatter == 0 else rot * self.scatter_factors(mesh)
+
+    def scatter_factors(self, mesh) -> np.ndarray:
+        """(C,) factor ``1 + scatter z`` of each crease row's actuation (:attr:`scatter`): the
+        draws are made per crease id (the same crease gets the same factor in any mesh of the
+        pattern)."""
+        ids = np.asarray(mesh.crease_ids, int)
+        z = np.random.default_rng(int(self.seed)).standard_normal(int(ids.max(initial=-1)) + 1)
+        return 1.0 + self.scatter * z[ids]
 
     def to_dict(self) -> dict:
-        return {"bimorph": self.bimorph.to_dict(),
-                "delta_alpha [1/K]": {str(k): float(v) for k, v in dict(self.delta_alpha).items()}}
+        out = {"bimorph": self.bimorph.to_dict(),
+               "delta_alpha [1/K]": {str(k): float(v) for k, v in dict(self.delta_alpha).items()}}
+        if self.scatter:
+            out |= {"scatter": float(self.scatter), "seed": int(self.seed)}
+        return out
 
 
 def crease_temperature_weights() -> np.ndarray:

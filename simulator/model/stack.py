@@ -201,7 +201,8 @@ def _plain_contact(mesh, params: BarHingeParameters,
 
 def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                 fixed_panel: int | None = None,
-                contact: bool | ContactParameters | None = True) -> Model:
+                contact: bool | ContactParameters | None = True,
+                scatter: float = 0.0, seed: int = 0) -> Model:
     """A heatable model of a pattern with a layer stack.
 
     Parameters
@@ -217,6 +218,12 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
         Panel contact: True (default) :func:`plain_contact` (off where the start shape holds
         panels closer than its activation distance), False or None off (a step then reports
         panels passing through each other as a ``"panel_crossing"`` event), or the parameters.
+    scatter, seed : float, int
+        Relative scatter of the heated creases' actuation and its seed
+        (:attr:`~simulator.model.bimorph.Actuators.scatter`, default 0: identical creases):
+        a fabricated sheet's imperfection; with it a symmetric pattern takes the one of its
+        equal branches that the draws favour (another seed, another branch) instead of the
+        one the critical mode's sign picks.
     """
     if not isinstance(stack, LayerStack):
         raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
@@ -230,7 +237,8 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
     sign = actuation_signs(pattern)
     actuators = Actuators(Bimorph(E1=stack.E_active, t1=stack.t_active, E2=stack.E_passive,
                                   t2=stack.t_passive),
-                          {c: stack.delta_alpha * float(sign[c]) for c in heated})
+                          {c: stack.delta_alpha * float(sign[c]) for c in heated},
+                          scatter=scatter, seed=seed)
     thermal = ThermalParameters(env_thickness=stack.env_thickness,
                                 env_conductivity=stack.env_conductivity,
                                 dissipation_angle=REFERENCE_BETA)

@@ -18,12 +18,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..mechanics.equilibrium import assembled_tangent as _tangent
-from .descent import choose_branch
+from .descent import _size, choose_branch
 from .load_path import LoadPath
 from .path_trace import BIFURCATION_ALIGNMENT
-from .stability import quick_stability
+from .stability import NEGATIVE_RTOL, quick_stability, tangent_stability
 
-__all__ = ["BranchSwitch", "judge", "leave_critical"]
+__all__ = ["BranchSwitch", "judge", "leave_critical", "leave_turn", "soft_mode"]
 
 logger = logging.getLogger(__name__)
 
@@ -60,10 +60,16 @@ class BranchSwitch:
     def describe(self) -> str:
         """The switch in words (for messages and events)."""
         st = self.unstable
-        head = (f"equilibrium unstable at path parameter {self.t:.6g} ({st.negative} negative "
-                f"eigenvalue(s), lowest {st.lowest:.3g} N/m)" if st.negative else
-                f"load control failed from a critical equilibrium (singular tangent) at path "
-                f"parameter {self.t:.6g}")
+        if st.negative:
+            head = (f"equilibrium unstable at path parameter {self.t:.6g} ({st.negative} "
+                    f"negative eigenvalue(s), lowest {st.lowest:.3g} N/m)")
+        elif st.lowest:
+            head = (f"a bifurcation passed between two stable states at path parameter "
+                    f"{self.t:.6g} (the path turned sharply; lowest eigenvalue before it "
+                    f"{st.lowest:.3g} N/m)")
+        else:
+            head = (f"load control failed from a critical equilibrium (singular tangent) at "
+                    f"path parameter {self.t:.6g}")
         c = self.choice
         if not self.switched:
             why = "no stable state found along the critical mode" if c is not None else \
@@ -111,6 +117,57 @@ def judge(system, res, t, ends, options, switches, locate: bool = False):
     if landed is None:
         return res, st
     return replace(res, u=np.asarray(sw.choice.u, float).reshape(-1, 3), evaluation=ev), landed
+
+
+#: |cos| between the softest mode and the path's direction above which a sharp turn is taken
+#: for the approach to a fold of the path (it already moves mostly along the mode) rather
+#: than for a symmetric bifurcation passed (measured: 0.002-0.62 at the square twist's
+#: bifurcations, 0.98-1.0 at the heated Miura's approach to its snap).
+SLOPE_ALIGNMENT = 0.7
+
+
+#: Two equilibria closer than this fraction of the model size are the same state.
+SAME_STATE = 1e-7
+
+
+def soft_mode(system, u, ev, t0, ends, options, slope=None):
+    """Stability (with the critical mode) of the stable state ``u`` at ``t0`` (evaluation
+    ``ev``, or None) whose next increment turned sharply, if its softest mode is orthogonal to
+    the load derivative (|cos| below
+    :data:`~simulator.solvers.path_trace.BIFURCATION_ALIGNMENT`) and not along the path's
+    direction ``slope`` (n_nodes, 3) (|cos| below :data:`SLOPE_ALIGNMENT`): a symmetric
+    bifurcation ahead, the path not yet moving along the mode; None otherwise (a
+    limit point or an asymmetric critical point ahead, which the path approaches along the
+    mode: it turns because it is about to snap, which the steps' limit-point handling
+    takes)."""
+    if ev is None:
+        ev = system.evaluate(u, _path(system, ends).rest(t0))
+    st = tangent_stability(_tangent(ev), linear_solver=options.linear_solver, rtol=NEGATIVE_RTOL)
+    if st.mode is None or st.load_alignment(_path(system, ends).at(u, t0).q) >= \
+            BIFURCATION_ALIGNMENT:
+        return None
+    if slope is not None and st.load_alignment(np.asarray(slope).ravel()[system.free]) >= \
+            SLOPE_ALIGNMENT:
+        return None
+    return st
+
+
+def leave_turn(system, res, u, st, t, ends, options, switches):
+    """``(res, stability)``: a converged stable Newton result ``res`` at ``t`` whose increment
+    from the stable state ``u`` (stability ``st``, with its softest mode, from
+    :func:`soft_mode`) turned sharply, within the location tolerance: a bifurcation passed
+    between two stable states, Newton taking the branch its round-off favoured. Replaced by the
+    stable state at ``t`` that ``u`` falls to along its softest mode (:func:`_fall`, the same
+    choice as at an unstable state); ``res`` unchanged where none is reached."""
+    landed, ev1, sw = _fall(system, u, st, t, ends, options)
+    if landed is None:
+        switches.append(sw)
+        return res, quick_stability(_tangent(res.evaluation), options.linear_solver)
+    u1 = np.asarray(sw.choice.u, float).reshape(-1, 3)
+    if np.max(np.abs(u1 - res.u)) <= SAME_STATE * _size(system):
+        return res, landed                 # Newton's state is the chosen one: no switch
+    switches.append(sw)
+    return replace(res, u=u1, evaluation=ev1), landed
 
 
 def leave_critical(system, res, u, st, t, ends, options, switches):

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -23,7 +23,7 @@ from ..mechanics.equilibrium import EquilibriumSystem, Evaluation, assembled_tan
 from .._validate import integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
-from .branches import BranchSwitch, judge, leave_critical
+from .branches import BranchSwitch, judge, leave_critical, leave_turn, soft_mode
 from .descent import BRANCHES
 from .nonlinear import iterate, march
 from .stability import quick_stability
@@ -325,10 +325,23 @@ def _newton_result(u, converged, iterations, res, cor, message, ev=None):
                         correction_norms=np.array(cor), message=message, evaluation=ev)
 
 
+#: Largest departure of an increment's displacement from the path's direction so far, relative
+#: to the larger of the two (:func:`follow_path` halves increments that turn more).
+TURN_TOLERANCE = 0.5
+
+
+def _turns(u_new, u_old, slope, dt) -> bool:
+    """True if the increment ``u_new - u_old`` departs from ``slope * dt`` by more than
+    :data:`TURN_TOLERANCE` of the larger of the two."""
+    du, pred = u_new - u_old, slope * dt
+    scale = max(float(np.linalg.norm(du)), float(np.linalg.norm(pred)))
+    return scale > 0 and float(np.linalg.norm(du - pred)) > TURN_TOLERANCE * scale
+
+
 def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, f_end: np.ndarray,
                 rest_start: np.ndarray, rest_end: np.ndarray, increments: int,
                 options: NewtonOptions = NewtonOptions(), callback=None,
-                locate_tol: float = LOCATE_TOL) -> PathResult:
+                locate_tol: float = LOCATE_TOL, previous=None) -> PathResult:
     """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
 
     The path is split into ``increments`` equal increments. A failed increment is halved
@@ -342,10 +355,21 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     whose t spans only part of a step scale it so that it is :data:`LOCATE_TOL` of the step),
     and the state is left for a stable branch there, so that the branch taken does not depend
     on the increments.
+
+    An increment whose converged state turns away from the path's direction so far (the
+    secant of the last accepted increment; ``previous = (dt, u)``: the state ``u`` a length
+    ``dt`` of path parameter before ``u0``, for the first) by more than
+    :data:`TURN_TOLERANCE` is halved in the same way: near a bifurcation that the states on
+    either side of it both pass as stable, Newton may otherwise jump to whichever branch its
+    increment reaches.
     """
     integer("increments", increments)
     u, history, residuals, last_ev = u0.copy(), [], [], None
     stability, switches, judged, t_now = [], [], [None], [0.0]
+    jumped = [False]               # the attempt being accepted switched branch
+    soft_memo = [None, None]       # (t, soft_mode) of the last accepted state
+    slope = [None if previous is None or previous[0] <= 0 else
+             (u0 - np.asarray(previous[1], float).reshape(-1, 3)) / previous[0]]
     # (located no finer than the cuts allow: march gives up after max_cuts halvings in a row)
     tol = max(locate_tol, 0.5 ** (options.max_cuts - 1) / increments)
     total_iter = 0
@@ -359,21 +383,51 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         total_iter += res.iterations
         last = stability[-1] if stability else None
         judged[:] = [None]
+        jumped[0] = False
         if res.success and check and res.evaluation is not None:
             prev = stability[-1] if stability else None
             locate = (prev is None or prev.stable) and t_try - t_now[0] > tol * (1 + 1e-9)
+            n_switches = len(switches)
             res, judged[0] = judge(system, res, t_try, ends, options, switches, locate)
+            if len(switches) > n_switches:
+                jumped[0] = True                        # a switch: no direction to keep
+            elif res.success and judged[0].stable and slope[0] is not None and \
+                    _turns(res.u, u, slope[0], t_try - t_now[0]) and \
+                    (soft := _soft(t_now[0])) is not None:
+                if t_try - t_now[0] > tol * (1 + 1e-9):
+                    res = replace(res, success=False, message=(
+                        "the path turned sharply within the increment (a bifurcation "
+                        "passed): halving it"))
+                elif options.stability == "switch":
+                    # located: Newton crossed the bifurcation by itself, to the branch its
+                    # round-off favoured; take the one the critical mode's choice gives
+                    res, judged[0] = leave_turn(system, res, u, soft, t_try, ends, options,
+                                                switches)
+                    jumped[0] = True
         elif (not res.success and options.stability == "switch" and last is not None
                 and last.negative == 0 and last.mode is not None):
             # the last state is critical (a singular tangent: Cholesky failed, no negative
             # eigenvalue), e.g. exactly at a bifurcation: leave it along its critical mode
             res = leave_critical(system, res, u, last, t_try, ends, options, switches)
             if res.success:
+                jumped[0] = True
                 judged[0] = quick_stability(_tangent(res.evaluation), options.linear_solver)
         return res.success, res
 
+    def _soft(t0):
+        """The softest mode of the last accepted state if a bifurcation lies ahead of it
+        (:func:`~simulator.solvers.branches.soft_mode`), computed once per state."""
+        if soft_memo[0] != t0:
+            soft_memo[:] = [t0, soft_mode(system, u, last_ev, t0, ends, options, slope[0])]
+        return soft_memo[1]
+
     def accept(t, res):
         nonlocal u, last_ev
+        if jumped[0]:
+            slope[0] = None
+        elif t > t_now[0]:
+            slope[0] = (res.u - u) / (t - t_now[0])
+        jumped[0] = False
         t_now[0] = t
         st = judged[0]
         if st is not None and not st.stable and options.stability == "check" and (

@@ -104,7 +104,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     rec = StepRecorder(state)
     watch = CrossingWatch(mesh, state.u)
     n_inc = len(powers)
-    temp, target, evaluation = state.temperature, state.crease_rest, None
+    temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     for s, (power, room) in enumerate(zip(powers, ambient), start=1):
         q = tm.heat_vector(power)
@@ -112,7 +112,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         for _ in range(coupling.max_iterations if iterated else 1):
             target, rest = actuate(temp)
             path = follow_path(context.system, u, f, f, spring, rest, 1, context.options,
-                               locate_tol=LOCATE_TOL * n_inc)
+                               locate_tol=LOCATE_TOL * n_inc, previous=previous)
             rec.iterations += path.iterations
             rec.cuts += path.cuts
             if not path.success:
@@ -129,6 +129,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             temp = new_temp
             if agreed:
                 break
+        previous = None if path.switches else (1.0, u)     # the direction the path came
         u, spring, evaluation = path.u, rest, path.evaluation
         lam0, lam1 = (s - 1) / n_inc, s / n_inc
         if lam is not None:

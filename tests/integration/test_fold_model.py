@@ -185,6 +185,10 @@ MODEL_ERRORS = [
      r"etorigami:supports: .*directions 'xq'"),
     (lambda d: d.__setitem__("etorigami:bimorph", {"E1": 1e9}),
      r"etorigami:bimorph: .*missing"),
+    (lambda d: d.__setitem__("etorigami:actuation_scatter", {"scatter": 0.7}),
+     r"etorigami:actuation_scatter: .*scatter = 0.7"),
+    (lambda d: d.__setitem__("etorigami:actuation_scatter", {"spread": 0.1}),
+     r"etorigami:actuation_scatter: .*spread"),
 ]
 
 
@@ -227,3 +231,19 @@ def test_written_model_is_independent_of_heat_key_form(tmp_path):
     _, steps = read_model(tmp_path / "d.fold")
     heat = [s for s in steps if isinstance(s, Heat)][0]
     assert dict(heat.power) == dict(case.steps[-1].power)
+
+
+def test_actuation_scatter_round_trips_through_a_model_file(tmp_path):
+    """etorigami:actuation_scatter: written only when set, read back into Actuators."""
+    from dataclasses import replace
+
+    case = get_case("double_fold", thermal_steps=2)
+    plain = json.loads(write_model(case.model, case.steps, tmp_path / "a.fold").read_text())
+    assert "etorigami:actuation_scatter" not in plain
+    model = replace(case.model, actuators=replace(case.model.actuators, scatter=2e-3, seed=7))
+    data = json.loads(write_model(model, case.steps, tmp_path / "b.fold").read_text())
+    assert data["etorigami:actuation_scatter"] == {"scatter": 2e-3, "seed": 7}
+    back, _ = read_model(tmp_path / "b.fold")
+    assert back.actuators.scatter == 2e-3 and back.actuators.seed == 7
+    np.testing.assert_array_equal(back.actuators.rotation_per_kelvin(back.mesh),
+                                  model.actuators.rotation_per_kelvin(model.mesh))

@@ -120,9 +120,11 @@ def test_with_contact_no_crease_passes_180_deg_at_any_step_count(small_waterbomb
     assert np.abs(ends[0]).max() > 150.0                  # folded far: contact was needed
 
 
-@pytest.mark.parametrize("mw", [20.0, pytest.param(10.0, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("mw", [5.0, 20.0, pytest.param(10.0, marks=pytest.mark.slow)])
 def test_the_square_twist_folds_the_same_at_any_step_count(mw):
-    """The classic 4-fold square twist (studies/_classic_patterns.py), every crease heated."""
+    """The classic 4-fold square twist (studies/_classic_patterns.py), every crease heated.
+    At 5 mW it breaks its symmetry twice without load control ever accepting an unstable state
+    (a copy turned by 90 deg at 400 increments before the turn check of theory 6.12)."""
     from studies._classic_patterns import square_twist
     from studies.pattern_robustness import heat, heated_model
 
@@ -133,4 +135,4 @@ def test_the_square_twist_folds_the_same_at_any_step_count(mw):
         assert res.success and res.stable is True, (n, res.message)
         ends.append(np.degrees(res.fold_angle[-1]))
     assert np.ptp(np.array(ends), axis=0).max() < 1.0, np.array(ends)
-    assert np.abs(ends[0]).max() > 20.0
+    assert np.abs(ends[0]).max() > mw                 # folded: 11, 22, 46 deg at 5, 10, 20 mW

@@ -54,6 +54,10 @@ def test_weights_sum_to_one():
     (lambda: Bimorph(-1, 1e-7, 2e9, 4e-7), "E1"),
     (lambda: Bimorph(1e9, 0.0, 2e9, 4e-7), "t1"),
     (lambda: Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {2: float("nan")}), "crease 2"),
+    (lambda: Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {2: 1e-5}, scatter=0.5), "scatter = 0.5"),
+    (lambda: Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {2: 1e-5}, scatter=-1e-4), "scatter"),
+    (lambda: Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {2: 1e-5}, scatter=1e-4, seed=-1),
+     "seed = -1"),
 ])
 def test_bad_input(make, match):
     with pytest.raises(ParameterError, match=match):
@@ -64,3 +68,19 @@ def test_unknown_actuated_crease():
     act = Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {7: 1e-5})
     with pytest.raises(ValueError, match="boundary edge"):
         act.delta_alpha_array(build_mesh(single_fold_pattern()))
+
+
+def test_actuation_scatter_is_seeded_per_crease_and_zero_by_default():
+    """Actuators.scatter (theory 6.12): each crease's rotation per kelvin times 1 + scatter z,
+    one standard normal draw per crease id from the seed; none by default."""
+    mesh = build_mesh(single_fold_pattern())
+    bim = Bimorph(1e9, 1e-7, 2e9, 4e-7)
+    base = Actuators(bim, {2: 1e-5}).rotation_per_kelvin(mesh)
+    a = Actuators(bim, {2: 1e-5}, scatter=1e-3, seed=3)
+    z = np.random.default_rng(3).standard_normal(mesh.crease_ids.max() + 1)[mesh.crease_ids]
+    np.testing.assert_allclose(a.rotation_per_kelvin(mesh), base * (1 + 1e-3 * z), rtol=1e-15)
+    assert np.all(a.rotation_per_kelvin(mesh) != base)
+    other = Actuators(bim, {2: 1e-5}, scatter=1e-3, seed=4).rotation_per_kelvin(mesh)
+    assert np.all(other != a.rotation_per_kelvin(mesh))
+    assert a.to_dict()["scatter"] == 1e-3 and a.to_dict()["seed"] == 3
+    assert "scatter" not in Actuators(bim, {2: 1e-5}).to_dict()

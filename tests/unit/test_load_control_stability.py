@@ -120,3 +120,79 @@ def test_superlu_gives_the_inertia_of_a_symmetric_indefinite_matrix():
     assert factor.inertia == (int(np.sum(w > 0)), int(np.sum(w < 0)), 0)
     st = quick_stability(A, linear_solver="superlu")
     assert st.negative == int(np.sum(w < 0)) or not st.exact
+
+
+# ------------------------------------------- a bifurcation passed between two stable states
+def test_an_increment_that_turns_sharply_is_measured_against_the_path_direction():
+    from simulator.solvers.newton import TURN_TOLERANCE, _turns
+
+    u0 = np.zeros((2, 3))
+    slope = np.zeros((2, 3))
+    slope[1, 0] = 1.0                                   # the path went along x
+    ahead, aside = u0.copy(), u0.copy()
+    ahead[1, 0], aside[1] = 0.1, [0.1, 0.1, 0.0]
+    assert not _turns(ahead, u0, slope, 0.1)           # straight on
+    assert _turns(aside, u0, slope, 0.1)               # |(0, 0.1)| / |(0.1, 0.1)| = 0.71
+    tilt = u0.copy()
+    tilt[1] = [0.1, 0.1 * TURN_TOLERANCE * 0.9, 0.0]
+    assert not _turns(tilt, u0, slope, 0.1)
+
+
+def _ends(lam):
+    f = np.zeros(6)
+    f[3] = lam
+    return (np.zeros(6), f, np.zeros(0), np.zeros(0))
+
+
+def test_a_turn_before_a_bifurcation_is_left_along_the_soft_mode_and_not_before_a_limit():
+    """At x = lambda = 0.99 the pitchfork's fundamental state is stable, its soft mode (y)
+    orthogonal to the load (x): a bifurcation lies ahead. An increment to lambda = 1.2 that
+    Newton took to the y < 0 branch is replaced by the branch the critical mode's choice
+    gives (a tie: y > 0), recorded as a switch."""
+    from simulator.solvers.branches import leave_turn, soft_mode
+    from simulator.solvers.newton import newton
+
+    system, opts = Pitchfork(), NewtonOptions()
+    u = np.zeros((2, 3))
+    u[1, 0] = 0.99
+    st = soft_mode(system, u, None, 0.99, _ends(1.0), opts)
+    assert st is not None and st.lowest == pytest.approx(0.01)
+    assert abs(st.mode[1]) == pytest.approx(1.0)
+    start = u.copy()
+    start[1, 1] = -0.5
+    f = np.zeros(6)
+    f[3] = 1.2
+    below = newton(system, start, f, np.zeros(0), opts)
+    assert below.success and below.u[1, 1] < -0.5             # Newton's branch: y < 0
+    switches = []
+    res, landed = leave_turn(system, below, u, st, 1.2, _ends(1.0), opts, switches)
+    assert landed.stable and res.u[1, 1] == pytest.approx(np.sqrt(0.4), rel=1e-8)
+    (sw,) = switches
+    assert sw.switched and sw.choice.tie
+    assert "a bifurcation passed between two stable states" in sw.describe()
+
+
+class Fold:
+    """One free DOF x with E = x^2/2 - x^3/3 under a load along x: a limit point at x = 1/2
+    (lambda = 1/4), where the soft mode is along the load."""
+
+    size, max_step = 1.0, None
+
+    def __init__(self):
+        self.nodes = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+        self.free, self.n_dof = np.array([3]), 6
+
+    def evaluate(self, u, rest, hessian=True):
+        x = u[1, 0]
+        f = np.zeros(6)
+        f[3] = x - x**2
+        return SimpleNamespace(f_int=f, K=np.array([[1.0 - 2 * x]]) if hessian else None,
+                               energies={"toy": 0.5 * x**2 - x**3 / 3})
+
+
+def test_a_turn_before_a_limit_point_is_left_to_the_limit_point_handling():
+    from simulator.solvers.branches import soft_mode
+
+    u = np.zeros((2, 3))
+    u[1, 0] = 0.45
+    assert soft_mode(Fold(), u, None, 1.0, _ends(0.2475), NewtonOptions()) is None

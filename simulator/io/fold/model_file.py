@@ -66,6 +66,9 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
         out[f"{NS}bimorph"] = dataclasses.asdict(model.actuators.bimorph)
         da = {int(k): float(v) for k, v in dict(model.actuators.delta_alpha).items()}
         out[f"edges_{NS}delta_alpha"] = [da.get(e) for e in range(pattern.n_edges)]
+        if model.actuators.scatter:
+            out[f"{NS}actuation_scatter"] = {"scatter": float(model.actuators.scatter),
+                                             "seed": int(model.actuators.seed)}
     steps = tuple(steps)
     circuits = _circuits(steps, pattern.n_edges)
     if circuits:
@@ -219,7 +222,7 @@ def _sharp_file_model(geo, given: dict):
 
     data = geo.data
     params = sharp_hinge_parameters(geo, **given)
-    for field in (f"{NS}contact", f"{NS}thermal", f"{NS}bimorph"):
+    for field in (f"{NS}contact", f"{NS}thermal", f"{NS}bimorph", f"{NS}actuation_scatter"):
         if data.get(field) is not None:
             fail(field, "is given, but the file is read with sharp creases (concentrated "
                  "hinges), which have no crease area to heat, actuate or touch; give the "
@@ -282,7 +285,10 @@ def _actuators(data, geo):
     bimorph = _guard(f"{NS}bimorph", lambda: Bimorph(**_obj(data, f"{NS}bimorph")))
     da = _crease_values(data, f"edges_{NS}delta_alpha", geo, "a number in 1/K",
                         lambda v: is_number(v) and math.isfinite(v))
-    return Actuators(bimorph, {e: float(v) for e, v in da.items()})
+    scatter = dict(_obj(data, f"{NS}actuation_scatter")) if f"{NS}actuation_scatter" in data \
+        else {}
+    return _guard(f"{NS}actuation_scatter", lambda: Actuators(
+        bimorph, {e: float(v) for e, v in da.items()}, **scatter))
 
 
 def _crease_values(data, field, geo, allowed: str, ok) -> dict:
