@@ -275,13 +275,16 @@ class CrossingWatch:
         u = np.asarray(u, float)
         a = self._angles.known(u)
         event = None
-        if np.any(np.abs(a - self.a) > np.pi):
+        if len(a) and np.fmax.reduce(np.abs(a - self.a)) > np.pi:     # (NaN: not one)
             event = crossing_event(self.mesh, self.u, u, increment=increment,
                                    load_factor=load_factor, power=power,
                                    temperature=temperature, nodes=False)
         self.u, self.a = u, a
         return event
 
+
+# numpy >= 2: vecdot is a ufunc, with less overhead than einsum on small arrays
+_dot = getattr(np, "vecdot", None) or (lambda u, v: np.einsum("...i,...i->...", u, v))
 
 #: Fold angles kept per mesh by :class:`_CreaseAngles` (states; fewer on meshes where this many
 #: copies of the displacements would exceed :data:`_KEPT_BYTES`).
@@ -291,15 +294,18 @@ _KEPT_BYTES = 4 << 20
 
 class _CreaseAngles:
     """Fold angles [rad] (C,) of a mesh's creases at displacements u (n_nodes, 3) [m]: the
-    index arrays of :func:`~simulator.mechanics.kinematics.fold_angles` restricted to the
-    panels next to a crease and laid out for a few whole-array operations (the gathers of
-    both factors of every cross product at once), built once per mesh (:func:`_crease_angles`),
-    and the angles of the last states asked for.
+    numbers of :func:`~simulator.mechanics.kinematics.fold_angles` (up to round-off) from
+    index arrays built once per mesh (:func:`_crease_angles`) for a few whole-array
+    operations, and the angles of the last states asked for (:meth:`known`).
 
-    The fold angle ``atan2(t2 (N1 x N2) . A, t1 t2 (N1 . N2) |A|)`` with N1, N2 the panels'
-    fan-sum normals (Newell's method about the centre node) not normalised (a positive factor
-    of both arguments does not change atan2), A the crease axis (corner ``prev`` minus corner
-    ``q1`` of panel 1) and t1, t2 the panels' top sides.
+    The fold angle is ``atan2((n1 x n2) . t1 A, (n1 . n2) |A|)`` with n1, n2 the top-side
+    normals of the crease's panels, A its axis (corner ``prev`` minus corner ``q1`` of panel
+    1) and t1 the top side of panel 1. Here: only the panels next to a crease; their normals
+    are fan sums (Newell's method about the centre node) left unnormalised (a positive
+    factor of both arguments does not change atan2), turned to the top side by running the
+    fan backwards (a panel whose top side is its back); t1 A by taking the axis's corners
+    the other way round; every cross product ``a x b = a' b'' - a'' b'`` (', '': the
+    components cycled once, twice) from one gather of the cycled coordinates.
     """
 
     def __init__(self, mesh):
@@ -313,29 +319,31 @@ class _CreaseAngles:
             return
         s = mesh.panel_corner_start
         p1, p2 = mesh.crease_panels.T
+        top = mesh.pattern.panel_orientation
         panels, local = np.unique(np.r_[p1, p2], return_inverse=True)
         sizes = np.diff(s)[panels]
         corners = np.concatenate([np.arange(s[p], s[p + 1]) for p in panels])
         r = rings(sizes)
         centre = mesh.panel_center[panels][r.owner]
-        nxt = corners[r.nxt]
-        perm1, perm2 = np.array([1, 2, 0]), np.array([2, 0, 1])
-
-        def flat(nodes, perm):
-            return 3 * nodes[:, None] + perm
-        # fan cross products (c - o) x (c_next - o) = a1 b2 - a2 b1 with a1 = (c - o)[perm1]...
-        self._fan = np.stack([flat(corners, perm1), flat(corners, perm2),
-                              flat(nxt, perm1), flat(nxt, perm2)])
-        self._fan_o = np.stack([flat(centre, perm1), flat(centre, perm2)] * 2)
-        self._start = np.cumsum(sizes) - sizes
-        k1, k2 = local[:len(p1)], local[len(p1):]
-        self._normals = np.stack([flat(k1, perm1), flat(k1, perm2), flat(k2, perm1),
-                                  flat(k2, perm2)])
+        nxt = corners[np.where(top[panels][r.owner] > 0, r.nxt, r.prev)]
         q1 = mesh.crease_edge_bars[:, 0]               # edge bar q ends at corner node q
         prev = rings(np.diff(s)).prev[q1]
-        self._axis = (prev, q1)
-        top = mesh.pattern.panel_orientation
-        self._t2, self._t12 = top[p2].astype(float), (top[p1] * top[p2]).astype(float)
+        head, tail = np.where(top[p1] > 0, prev, q1), np.where(top[p1] > 0, q1, prev)
+        cyc = (np.array([1, 2, 0]), np.array([2, 0, 1]))
+
+        def flat(nodes, k):
+            return 3 * nodes[:, None] + cyc[k]
+        n_fan = len(corners)
+        # rows: corner', corner'', next', next'' (fan vectors from the centre), then the axis
+        self._at = np.concatenate([flat(corners, 0), flat(corners, 1), flat(nxt, 0),
+                                   flat(nxt, 1), 3 * head[:, None] + np.arange(3)])
+        self._from = np.concatenate([flat(centre, 0), flat(centre, 1)] * 2
+                                    + [3 * tail[:, None] + np.arange(3)])
+        self._fan = tuple(slice(k * n_fan, (k + 1) * n_fan) for k in range(4))
+        self._axis = slice(4 * n_fan, None)
+        self._start = np.cumsum(sizes) - sizes
+        k1, k2 = local[:len(p1)], local[len(p1):]
+        self._normals = np.stack([flat(k1, 0), flat(k1, 1), flat(k2, 0), flat(k2, 1)])
 
     def __call__(self, u) -> np.ndarray:
         mesh = self.mesh
@@ -344,13 +352,13 @@ class _CreaseAngles:
             from .mechanics.kinematics import fold_angles
             return fold_angles(mesh, x)
         xf = x.ravel()
-        g = xf[self._fan] - xf[self._fan_o]                      # (4, S', 3)
-        n = np.add.reduceat(g[0] * g[3] - g[1] * g[2], self._start, axis=0).ravel()
-        m = n[self._normals]                                      # (4, C, 3): N1, N2 permuted
-        axis = x[self._axis[0]] - x[self._axis[1]]
-        y = np.einsum("ij,ij->i", m[0] * m[3] - m[1] * m[2], axis)
-        c = np.einsum("ij,ij->i", m[0], m[2]) * np.sqrt(np.einsum("ij,ij->i", axis, axis))
-        return np.arctan2(self._t2 * y, self._t12 * c)
+        g = xf[self._at] - xf[self._from]
+        a1, a2, b1, b2 = (g[k] for k in self._fan)
+        n = np.add.reduceat(a1 * b2 - a2 * b1, self._start, axis=0).ravel()
+        m = n[self._normals]                      # n1', n1'', n2', n2'' of every crease
+        axis = g[self._axis]
+        y = _dot(m[0] * m[3] - m[1] * m[2], axis)
+        return np.arctan2(y, _dot(m[0], m[2]) * np.sqrt(_dot(axis, axis)))
 
     def known(self, u) -> np.ndarray:
         """The angles at ``u``, from those kept when the same displacements were asked for."""
