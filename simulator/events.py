@@ -311,11 +311,12 @@ class _CreaseAngles:
     def __init__(self, mesh):
         from .geometry.polygons import rings
 
-        self.sharp = bool(getattr(mesh, "sharp", False))
-        self.mesh = mesh
+        self.mesh, self.nodes = mesh, mesh.nodes
         self.kept = {}
         self.room = max(1, min(_KEPT_STATES, _KEPT_BYTES // max(1, 24 * mesh.n_nodes)))
-        if self.sharp or not mesh.n_creases:
+        # concentrated hinges, or no crease: fold_angles itself
+        self.plain = bool(getattr(mesh, "sharp", False)) or not mesh.n_creases
+        if self.plain:
             return
         s = mesh.panel_corner_start
         p1, p2 = mesh.crease_panels.T
@@ -339,26 +340,26 @@ class _CreaseAngles:
                                    flat(nxt, 1), 3 * head[:, None] + np.arange(3)])
         self._from = np.concatenate([flat(centre, 0), flat(centre, 1)] * 2
                                     + [3 * tail[:, None] + np.arange(3)])
-        self._fan = tuple(slice(k * n_fan, (k + 1) * n_fan) for k in range(4))
+        self._fan = (slice(0, 4 * n_fan), (4, n_fan, 3))
         self._axis = slice(4 * n_fan, None)
         self._start = np.cumsum(sizes) - sizes
         k1, k2 = local[:len(p1)], local[len(p1):]
         self._normals = np.stack([flat(k1, 0), flat(k1, 1), flat(k2, 0), flat(k2, 1)])
 
     def __call__(self, u) -> np.ndarray:
-        mesh = self.mesh
-        x = mesh.nodes + u
-        if self.sharp or not mesh.n_creases:
+        x = self.nodes + u
+        if self.plain:
             from .mechanics.kinematics import fold_angles
-            return fold_angles(mesh, x)
+            return fold_angles(self.mesh, x)
         xf = x.ravel()
         g = xf[self._at] - xf[self._from]
-        a1, a2, b1, b2 = (g[k] for k in self._fan)
+        fan, shape = self._fan
+        a1, a2, b1, b2 = g[fan].reshape(shape)
         n = np.add.reduceat(a1 * b2 - a2 * b1, self._start, axis=0).ravel()
-        m = n[self._normals]                      # n1', n1'', n2', n2'' of every crease
+        n1, n1_, n2, n2_ = n[self._normals]       # n1', n1'', n2', n2'' of every crease
         axis = g[self._axis]
-        y = _dot(m[0] * m[3] - m[1] * m[2], axis)
-        return np.arctan2(y, _dot(m[0], m[2]) * np.sqrt(_dot(axis, axis)))
+        y = _dot(n1 * n2_ - n1_ * n2, axis)
+        return np.arctan2(y, _dot(n1, n2) * np.sqrt(_dot(axis, axis)))
 
     def known(self, u) -> np.ndarray:
         """The angles at ``u``, from those kept when the same displacements were asked for."""

@@ -196,11 +196,13 @@ def positive_definite(A, backend: str = "auto", *, dense_limit: int | None = Non
     The test a stability check makes of every accepted state
     (:func:`~simulator.solvers.stability.quick_stability`): one factorisation, no solve.
     """
+    if type(A) is np.ndarray:                     # a dense tangent: LAPACK, as Newton's
+        return A.shape[0] == 0 or _dense_positive_definite(A)
     check_backend(backend)
     n = A.shape[0]
     if n == 0:
         return True
-    if type(A) is np.ndarray or _is_dense(A, backend, dense_limit):    # (an array: dense)
+    if _is_dense(A, backend, dense_limit):
         return _dense_positive_definite(as_dense(A))
     A = _canonical(A)
     for rung in _sparse_rungs(n, "symmetric", backend):
