@@ -24,6 +24,8 @@ Tasks (``--tasks`` chooses; ``--quick`` drops ``cd_full`` and ``newton_1e5``):
 * ``cd_full`` - the paper's coordinate descent, 15 cycles, serial (~40 s per side).
 * ``single_crease`` - single crease over the substrate, residual fold -10 deg, gravity and
   contact, 250 heating increments to 100 mW.
+* ``miura_heat`` - the Miura lifter of 3 x 3 cells (a medium model on the sparse ladder:
+  PARDISO or SuperLU), 100 heating increments to 4 mW per crease (below its snap).
 * ``newton_1e3`` / ``newton_1e4`` / ``newton_1e5`` - one Newton iteration (assembly of forces
   and tangent plus the linear solve, best of 3) on flat Miura sheets of about 1e3, 1e4 and 1e5
   nodes; the growth exponent of the time with node count is printed under the table.
@@ -86,6 +88,17 @@ t0 = time.perf_counter()
 res = get_case("single_fold", gravity=True, residual_fold_deg=-10.0, thermal_steps={steps}).run()
 _T = time.perf_counter() - t0
 _R = [round(float(np.degrees(res.fold_angle[-1]).ravel()[0]), 6)]
+"""
+
+_MIURA = """
+import time
+import numpy as np
+from simulator.cases import get_case
+get_case("miura_lifter", cells_x=3, cells_y=3, thermal_steps=2).run()                  # warm-up
+t0 = time.perf_counter()
+res = get_case("miura_lifter", cells_x=3, cells_y=3, thermal_steps=100, power_mW=4.0).run()
+_T = time.perf_counter() - t0
+_R = [round(1e6 * float(np.max(np.abs(res.state.u))), 6)]
 """
 
 _NEWTON = """
@@ -181,6 +194,7 @@ TASKS = (
     Task("gripper_eval", *_same(_GRIPPER)),
     Task("cd_full", *_same(_CD), heavy=True),
     Task("single_crease", *_same(_CREASE.replace("{steps}", "250"))),
+    Task("miura_heat", *_same(_MIURA)),
     Task("newton_1e3", *_newton(10)),
     Task("newton_1e4", *_newton(30)),
     Task("newton_1e5", *_newton(96), heavy=True),

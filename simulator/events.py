@@ -20,6 +20,7 @@ never the messages.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -253,57 +254,28 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
 class CrossingWatch:
     """The crease test of :func:`crossing_event` for a step loop, cheaply: it keeps the fold
     angles of the last accepted state (the numbers of
-    :func:`~simulator.mechanics.kinematics.fold_angles`, computed with the cross products
-    written out: about a quarter of its time) and calls :func:`crossing_event` (creases only)
-    only where one of them changed by more than pi.
+    :func:`~simulator.mechanics.kinematics.fold_angles` up to round-off, from the normals of
+    the creases' panels only, with the cross products written out on gathered coordinates:
+    :class:`_CreaseAngles`) and calls :func:`crossing_event` (creases only) only where one
+    of them changed by more than pi.
 
     ``CrossingWatch(mesh, u0)``; ``check(u, increment, load_factor, power, temperature)``
-    after each accepted increment: the :class:`Event` or None.
+    after each accepted increment: the :class:`Event` or None. The angles of the last few
+    states checked on a mesh are kept (by their displacements' bytes), so a step that starts
+    where an earlier one ended (the trials of a power search restart from saved states) does
+    not compute its start angles again.
     """
 
     def __init__(self, mesh, u0):
-        from .geometry.polygons import rings
-
         self.mesh, self.u = mesh, np.asarray(u0, float)
-        self.sharp = bool(getattr(mesh, "sharp", False))
-        if not self.sharp and mesh.n_creases:
-            s = mesh.panel_corner_start
-            sizes = np.diff(s)
-            r = rings(sizes)
-            top = mesh.pattern.panel_orientation
-            self._n = s[-1]
-            self._owner, self._nxt = r.owner, r.nxt
-            self._start = np.cumsum(sizes) - sizes
-            self._p1, self._p2 = mesh.crease_panels.T
-            self._t1, self._t2 = top[self._p1, None], top[self._p2, None]
-            q1 = mesh.crease_edge_bars[:, 0]
-            self._q1, self._prev = q1, r.prev[q1]
-        self.a = self._angles(self.u)
-
-    def _angles(self, u):
-        from .mechanics.kinematics import fold_angles
-
-        mesh = self.mesh
-        x = mesh.nodes + u
-        if self.sharp or not mesh.n_creases:
-            return fold_angles(mesh, x)
-        c = x[:self._n]
-        o = x[mesh.panel_center][self._owner]
-        a, b = c - o, c[self._nxt] - o
-        fan = _cross(a, b)
-        n = np.add.reduceat(fan, self._start, axis=0)
-        n /= np.sqrt(np.einsum("ij,ij->i", n, n))[:, None]
-        n1, n2 = n[self._p1] * self._t1, n[self._p2] * self._t2
-        axis = (x[self._prev] - x[self._q1]) * self._t1
-        return np.arctan2(np.einsum("ij,ij->i", _cross(n1, n2), axis),
-                          np.einsum("ij,ij->i", n1, n2) * np.sqrt(
-                              np.einsum("ij,ij->i", axis, axis)))
+        self._angles = _crease_angles(mesh)
+        self.a = self._angles.known(self.u)
 
     def check(self, u, increment: int, load_factor: float, power=(), temperature=None):
         u = np.asarray(u, float)
-        a = self._angles(u)
+        a = self._angles.known(u)
         event = None
-        if np.any(np.abs(a - self.a) > np.pi):
+        if len(a) and np.fmax.reduce(np.abs(a - self.a)) > np.pi:     # (NaN: not one)
             event = crossing_event(self.mesh, self.u, u, increment=increment,
                                    load_factor=load_factor, power=power,
                                    temperature=temperature, nodes=False)
@@ -311,10 +283,102 @@ class CrossingWatch:
         return event
 
 
-def _cross(a, b):
-    """Row-wise cross products of (n, 3) arrays (``np.cross`` without its axis handling)."""
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
+# numpy >= 2: vecdot is a ufunc, with less overhead than einsum on small arrays
+_dot = getattr(np, "vecdot", None) or (lambda u, v: np.einsum("...i,...i->...", u, v))
+
+#: Fold angles kept per mesh by :class:`_CreaseAngles` (states; fewer on meshes where this many
+#: copies of the displacements would exceed :data:`_KEPT_BYTES`).
+_KEPT_STATES = 8
+_KEPT_BYTES = 4 << 20
+
+
+class _CreaseAngles:
+    """Fold angles [rad] (C,) of a mesh's creases at displacements u (n_nodes, 3) [m]: the
+    numbers of :func:`~simulator.mechanics.kinematics.fold_angles` (up to round-off) from
+    index arrays built once per mesh (:func:`_crease_angles`) for a few whole-array
+    operations, and the angles of the last states asked for (:meth:`known`).
+
+    The fold angle is ``atan2((n1 x n2) . t1 A, (n1 . n2) |A|)`` with n1, n2 the top-side
+    normals of the crease's panels, A its axis (corner ``prev`` minus corner ``q1`` of panel
+    1) and t1 the top side of panel 1. Here: only the panels next to a crease; their normals
+    are fan sums (Newell's method about the centre node) left unnormalised (a positive
+    factor of both arguments does not change atan2), turned to the top side by running the
+    fan backwards (a panel whose top side is its back); t1 A by taking the axis's corners
+    the other way round; every cross product ``a x b = a' b'' - a'' b'`` (', '': the
+    components cycled once, twice) from one gather of the cycled coordinates.
+    """
+
+    def __init__(self, mesh):
+        from .geometry.polygons import rings
+
+        self.mesh, self.nodes = mesh, mesh.nodes
+        self.kept = {}
+        self.room = max(1, min(_KEPT_STATES, _KEPT_BYTES // max(1, 24 * mesh.n_nodes)))
+        # concentrated hinges, or no crease: fold_angles itself
+        self.plain = bool(getattr(mesh, "sharp", False)) or not mesh.n_creases
+        if self.plain:
+            return
+        s = mesh.panel_corner_start
+        p1, p2 = mesh.crease_panels.T
+        top = mesh.pattern.panel_orientation
+        panels, local = np.unique(np.r_[p1, p2], return_inverse=True)
+        sizes = np.diff(s)[panels]
+        corners = np.concatenate([np.arange(s[p], s[p + 1]) for p in panels])
+        r = rings(sizes)
+        centre = mesh.panel_center[panels][r.owner]
+        nxt = corners[np.where(top[panels][r.owner] > 0, r.nxt, r.prev)]
+        q1 = mesh.crease_edge_bars[:, 0]               # edge bar q ends at corner node q
+        prev = rings(np.diff(s)).prev[q1]
+        head, tail = np.where(top[p1] > 0, prev, q1), np.where(top[p1] > 0, q1, prev)
+        cyc = (np.array([1, 2, 0]), np.array([2, 0, 1]))
+
+        def flat(nodes, k):
+            return 3 * nodes[:, None] + cyc[k]
+        n_fan = len(corners)
+        # rows: corner', corner'', next', next'' (fan vectors from the centre), then the axis
+        self._at = np.concatenate([flat(corners, 0), flat(corners, 1), flat(nxt, 0),
+                                   flat(nxt, 1), 3 * head[:, None] + np.arange(3)])
+        self._from = np.concatenate([flat(centre, 0), flat(centre, 1)] * 2
+                                    + [3 * tail[:, None] + np.arange(3)])
+        self._fan = (slice(0, 4 * n_fan), (4, n_fan, 3))
+        self._axis = slice(4 * n_fan, None)
+        self._start = np.cumsum(sizes) - sizes
+        k1, k2 = local[:len(p1)], local[len(p1):]
+        self._normals = np.stack([flat(k1, 0), flat(k1, 1), flat(k2, 0), flat(k2, 1)])
+
+    def __call__(self, u) -> np.ndarray:
+        x = self.nodes + u
+        if self.plain:
+            from .mechanics.kinematics import fold_angles
+            return fold_angles(self.mesh, x)
+        xf = x.ravel()
+        g = xf[self._at] - xf[self._from]
+        fan, shape = self._fan
+        a1, a2, b1, b2 = g[fan].reshape(shape)
+        n = np.add.reduceat(a1 * b2 - a2 * b1, self._start, axis=0).ravel()
+        n1, n1_, n2, n2_ = n[self._normals]       # n1', n1'', n2', n2'' of every crease
+        axis = g[self._axis]
+        y = _dot(n1 * n2_ - n1_ * n2, axis)
+        return np.arctan2(y, _dot(n1, n2) * np.sqrt(_dot(axis, axis)))
+
+    def known(self, u) -> np.ndarray:
+        """The angles at ``u``, from those kept when the same displacements were asked for."""
+        key = u.tobytes()
+        a = self.kept.get(key)
+        if a is None:
+            a = self(u)
+            if len(self.kept) >= self.room:
+                del self.kept[next(iter(self.kept))]
+            self.kept[key] = a
+        return a
+
+
+_ANGLES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _crease_angles(mesh) -> _CreaseAngles:
+    """The :class:`_CreaseAngles` of a mesh (built on first use)."""
+    angles = _ANGLES.get(mesh)
+    if angles is None:
+        angles = _ANGLES[mesh] = _CreaseAngles(mesh)
+    return angles

@@ -431,6 +431,11 @@ class _Stage(HeatingStage):
         mesh, t = self.model.mesh, state.temperature
         return SU8_LIMIT.judge(t, mesh, self.creases), SU8_LIMIT.judge(t, mesh)
 
+    def met(self, state) -> bool:
+        """The stage's criterion alone (the searches' question after every trial; the
+        temperatures are judged where they are reported: :meth:`look`, :meth:`result`)."""
+        return bool(self.met_fn(self.measure_fn(self.model.mesh.nodes + state.u)))
+
     def look(self, state):
         value = self.measure_fn(self.model.mesh.nodes + state.u)
         heated, gripper = self.temperatures(state)

@@ -198,6 +198,10 @@ class _LiftStage(HeatingStage):
         super().__init__(model, creases)
         self.nodes, self.target = nodes, target
 
+    def met(self, state) -> bool:
+        """Whether the target lift is reached (without the temperatures :meth:`look` judges)."""
+        return float(state.u[self.nodes, 2].mean()) >= self.target
+
     def look(self, state):
         """(lift [m], target met, hottest crease's centre-line mean [deg C], hottest crease
         node [deg C])."""

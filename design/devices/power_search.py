@@ -4,7 +4,9 @@ Both strategies work on a *stage* object with three methods:
 
 * ``heat(state, dp, increments=1, coupling="staggered") -> (state, ok, message)``: add power
   ``dp`` [W] per heated crease from a saved simulation state;
-* ``look(state) -> (measure, met, temperature, max_crease_temperature)``;
+* ``look(state) -> (measure, met, temperature, max_crease_temperature)``, and ``met(state)``
+  (the criterion alone, what the searches ask after every trial: :meth:`HeatingStage.met`
+  takes it from ``look``, a stage may give it without judging temperatures);
 * ``result(status, power, state, message)``: the stage's result object; ``status`` is
   ``"met"`` (the criterion holds at ``power``), ``"not_met"`` (not below the power cap) or
   ``"failed"`` (a heating simulation failed at ``power``).
@@ -117,6 +119,11 @@ class HeatingStage:
                                             self.snap_events(state) + trial.snaps)
         return trial.state, trial.success, trial.message
 
+    def met(self, state) -> bool:
+        """Whether the criterion holds at ``state`` (``look(state)[1]``; a subclass may tell it
+        without the temperatures ``look`` also judges)."""
+        return bool(self.look(state)[1])
+
     def _kept(self, state) -> tuple:
         kept = self._snaps.get(id(state))
         return kept if kept is not None and kept[0] is state else (state, (), ())
@@ -149,7 +156,7 @@ def staircase_search(stage, state, step, cap):
         if not ok:
             return stage.result("failed", power, state, f"simulation failed at "
                                                         f"{power * 1e3:.2f} mW: {msg}"), state
-        if stage.look(state)[1]:
+        if stage.met(state):
             return stage.result("met", power, state, "criterion met"), state
     return stage.result("not_met", power, state, f"criterion not met below the power cap "
                                                  f"{cap * 1e3:.3g} mW per crease"), state
@@ -177,7 +184,7 @@ def bisect_search(stage, state, step, tol, cap, max_step, coupling="staggered"):
                 continue
             return stage.result("failed", hi, trial, f"simulation failed at {hi * 1e3:.3g} mW: "
                                                      f"{msg}"), trial
-        if stage.look(trial)[1]:
+        if stage.met(trial):
             hi_state = trial
             break
         if hi >= cap - 1e-15:
@@ -187,7 +194,7 @@ def bisect_search(stage, state, step, tol, cap, max_step, coupling="staggered"):
     while hi - lo > tol:                                   # bisect the crossing
         mid = 0.5 * (lo + hi)
         trial, ok, msg = stage.heat(lo_state, mid - lo, coupling=coupling)
-        if ok and stage.look(trial)[1]:
+        if ok and stage.met(trial):
             hi, hi_state = mid, trial
         elif ok:
             lo, lo_state = mid, trial

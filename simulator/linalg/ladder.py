@@ -45,9 +45,10 @@ import scipy.sparse as sp
 
 from . import linsolve, pardiso, thresholds
 from .small_solve import DenseFactor, as_dense, solve_dense
+from .small_solve import positive_definite as _dense_positive_definite
 
-__all__ = ["Factor", "factorize", "solve", "BACKENDS", "KINDS", "check_backend",
-           "last_backend"]
+__all__ = ["Factor", "factorize", "solve", "positive_definite", "BACKENDS", "KINDS",
+           "check_backend", "last_backend"]
 
 logger = logging.getLogger(__name__)
 
@@ -179,6 +180,64 @@ def factorize(A, kind: str = "symmetric", backend: str = "auto", *,
                 A, factor.solve, _KEPT_RTOL)):
             return _chosen(factor)
     raise AssertionError("unreachable: the last rung is always kept")
+
+
+def positive_definite(A, backend: str = "auto", *, dense_limit: int | None = None) -> bool:
+    """Whether the symmetric ``A`` (sparse or dense) is positive definite, from the pivots of
+    one symmetric factorisation of the ladder: the rungs of :func:`factorize` (kind
+    "symmetric"), without the solve of a vector of ones with which it tests factors it keeps.
+
+    True when every pivot of the first rung that gives them is positive: an L D L^T
+    factorisation with D > 0 is a Cholesky factorisation, backward stable, so ``A`` is
+    numerically positive definite in the sense of LAPACK's Cholesky of a dense matrix (the
+    dense rung is that). False when a pivot is not positive (by Sylvester's law ``A`` has an
+    eigenvalue <= 0) and where the factors cannot tell: PARDISO perturbed a pivot, SuperLU
+    left the diagonal or hit an exactly zero pivot, or only the partial-pivoting rung is left.
+    The test a stability check makes of every accepted state
+    (:func:`~simulator.solvers.stability.quick_stability`): one factorisation, no solve.
+    """
+    if type(A) is np.ndarray:                     # a dense tangent: LAPACK, as Newton's
+        return A.shape[0] == 0 or _dense_positive_definite(A)
+    check_backend(backend)
+    n = A.shape[0]
+    if n == 0:
+        return True
+    if _is_dense(A, backend, dense_limit):
+        return _dense_positive_definite(as_dense(A))
+    A = _canonical(A)
+    for rung in _sparse_rungs(n, "symmetric", backend):
+        inertia = _pivot_signs(rung, A)
+        if inertia is not None:
+            return inertia[0] == n
+    return False
+
+
+def _pivot_signs(rung: str, A) -> tuple[int, int, int] | None:
+    """(positive, negative, zero) pivot counts of ``A`` (canonical CSR) by a symmetric
+    factorisation of the ``rung``, or None where it cannot tell (see
+    :func:`positive_definite`)."""
+    if rung == "pardiso":
+        handle = linsolve.pardiso_handle(A)
+        if handle is None:
+            return None
+        try:
+            handle.factorize(A)
+        except pardiso.PardisoError as exc:
+            logger.debug("PARDISO failed (%s)", str(exc))
+            return None
+        if handle.perturbed_pivots:
+            return None
+        pos, neg = handle.positive_eigenvalues, handle.negative_eigenvalues
+        return pos, neg, A.shape[0] - pos - neg
+    try:
+        if rung == "superlu-nd":
+            lu = linsolve.nd_factors(A)
+            return None if lu is None else _superlu_inertia(lu.lu)
+        if rung == "superlu-mmd":
+            return _superlu_inertia(_mmd(A.tocsc()))
+    except RuntimeError:                                  # an exactly zero pivot
+        return None
+    return None                                           # partial pivoting: no inertia
 
 
 def _canonical(A) -> sp.csr_matrix:

@@ -45,8 +45,9 @@ def as_dense(K) -> np.ndarray:
 
 def positive_definite(K: np.ndarray) -> bool:
     """True if LAPACK's Cholesky factorisation of the dense symmetric ``K`` (upper triangle)
-    succeeds: K is numerically positive definite."""
-    return _dpotrf(K, lower=0, clean=0)[1] == 0
+    succeeds: K is numerically positive definite. (``K.T`` with the lower triangle: the same
+    entries, in the Fortran order LAPACK reads without a transposing copy of a C-ordered K.)"""
+    return _dpotrf(K.T, lower=1, clean=0)[1] == 0
 
 
 def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):

@@ -153,16 +153,14 @@ def spring_rest_angles(mesh: BarHingeMesh, crease_rest: np.ndarray,
     its springs' initial angles and from :func:`initial_crease_rest`, so that its initial
     rest angles give back the start shape.
     """
-    rest0, base = _initial_rest(mesh)
+    rest0, base, lines = _initial_rest(mesh)
     rho = np.asarray(crease_rest, dtype=float) - rest0
     out = base.copy()
-    cs = mesh.crease_springs
-    if getattr(mesh, "sharp", False):           # one fold spring per crease (theory 2.6)
-        out[cs[:, 0]] += rho
+    if lines is None:                           # one fold spring per crease (theory 2.6)
+        out[mesh.crease_springs[:, 0]] += rho
         return out
     f = params.centre_line_share
-    out[cs[:, :2]] += (rho * (1 - f) / 2)[:, None]
-    out[cs[:, 4:6]] += (rho * f)[:, None]
+    out[lines] += rho[:, None] * np.array([(1 - f) / 2, (1 - f) / 2, f, f])
     return out
 
 
@@ -180,7 +178,9 @@ _INITIAL: "weakref.WeakKeyDictionary[BarHingeMesh, tuple]" = weakref.WeakKeyDict
 
 
 def _initial_rest(mesh: BarHingeMesh) -> tuple:
-    """(crease rest (C,), spring base angles (ns,)) of the reference geometry, cached per mesh."""
+    """(crease rest (C,), spring base angles (ns,)) of the reference geometry, and the springs
+    of each crease's fold lines (C, 4) (edge line 1, edge line 2, the centre line's two
+    halves; None for concentrated hinges), cached per mesh."""
     cached = _INITIAL.get(mesh)
     if cached is None:
         fold = fold_angles(mesh, mesh.nodes) if mesh.n_creases else np.zeros(0)
@@ -189,5 +189,8 @@ def _initial_rest(mesh: BarHingeMesh) -> tuple:
         base = np.full(len(mesh.springs), np.pi)
         springs = mesh.crease_springs[folded].ravel()
         base[springs] = fold_angle(mesh.nodes[mesh.springs[springs]])
-        cached = _INITIAL[mesh] = (rest0, base)
+        lines = None if getattr(mesh, "sharp", False) else (
+            np.ascontiguousarray(mesh.crease_springs[:, [0, 1, 4, 5]]) if mesh.n_creases
+            else np.zeros((0, 4), dtype=int))
+        cached = _INITIAL[mesh] = (rest0, base, lines)
     return cached

@@ -103,6 +103,12 @@ def judge(system, res, t, ends, options, switches, locate: bool = False):
     result is refused (failed, so that the increment is halved) instead of left, and the
     branch is chosen at the first unstable state of an increment within the tolerance, the
     same point whatever the increments (theory 6.12)."""
+    # The tangent of the accepted state itself (its evaluation, assembled by the residual
+    # check that accepted it), factorised once more: Newton's last factorisation is of the
+    # iterate before, whose correction was not below tolerance (the residual criterion stops
+    # on the residual that follows it; an increment converged in one correction leaves only
+    # the previous accepted state's tangent). Judged there, a loss of stability would be seen
+    # one correction late and located off the increment it happens in.
     st = quick_stability(_tangent(res.evaluation), options.linear_solver)
     if st.stable or options.stability != "switch":
         return res, st

@@ -26,8 +26,8 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._result import ResultFiles
-from ..linalg.ladder import factorize
-from ..linalg.small_solve import as_dense, positive_definite
+from ..linalg.ladder import factorize, positive_definite
+from ..linalg.small_solve import as_dense
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
 __all__ = ["Stability", "tangent_stability", "state_stability", "quick_stability",
@@ -192,28 +192,23 @@ def quick_stability(K, linear_solver: str = "auto") -> Stability:
     """Stability of an equilibrium from its reduced tangent ``K`` (n_free, n_free) [N/m],
     cheaply where it is stable.
 
-    One factorisation first, as Newton's for the same tangent (LAPACK's Cholesky for the dense
-    tangent of a small model; for a sparse one the inertia of the ladder's symmetric
-    factorisation, :attr:`~simulator.linalg.ladder.Factor.inertia`: dense Cholesky, PARDISO's
-    or SuperLU's L D L^T with diagonal pivots): a positive definite
+    One factorisation first, as Newton's for the same tangent, and no solve
+    (:func:`~simulator.linalg.ladder.positive_definite`: LAPACK's Cholesky for the dense
+    tangent of a small model; for a sparse one the signs of the pivots of PARDISO's or
+    SuperLU's L D L^T with diagonal pivots): a positive definite
     tangent is stable (``lowest`` and ``mode`` None: not computed). Otherwise, or where the
     factorisation gives no inertia, :func:`tangent_stability` (the eigenvalues, with the
     critical mode). This is the check every quasi-static step makes of each accepted state.
     """
-    n = K.shape[0]
-    if n == 0:
+    if K.shape[0] == 0:
         return Stability(0, float("inf"), np.zeros(0))
-    if isinstance(K, np.ndarray):                  # the dense tangent of a small model
-        if positive_definite(K):
-            return Stability(0, None, None, True)
-        return tangent_stability(K, linear_solver=linear_solver, rtol=NEGATIVE_RTOL)
-    try:
-        inertia = factorize(sp.csr_matrix(K), kind="symmetric", backend=linear_solver).inertia
-    except (RuntimeError, np.linalg.LinAlgError):         # exactly singular
-        inertia = None
-    if inertia is not None and inertia[1] == 0 and inertia[2] == 0:
-        return Stability(0, None, None, True)
+    if positive_definite(K, linear_solver):
+        return _STABLE
     return tangent_stability(K, linear_solver=linear_solver, rtol=NEGATIVE_RTOL)
+
+
+#: The outcome of a positive definite tangent (immutable, shared).
+_STABLE = Stability(0, None, None, True)
 
 
 def state_stability(model, state=None, k: int = 6, linear_solver: str = "auto",

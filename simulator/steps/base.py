@@ -220,6 +220,12 @@ class StepRecorder:
         (:func:`~simulator.events.branch_event`), before its increments are recorded:
         ``load_factor(t)`` maps its path parameter to the step's; the path's first increment
         is record ``before`` (default: the next one)."""
+        if path.switches:
+            self._note_switches(path, temperature, power, load_factor, before)
+        if path.stable is not None:
+            self.stable = path.stable
+
+    def _note_switches(self, path, temperature, power, load_factor, before) -> None:
         from ..events import branch_event
 
         first = len(self) if before is None else before
@@ -230,8 +236,6 @@ class StepRecorder:
             k = first + (times.index(sw.t) if sw.t in times else len(times) - 1)
             self.events.append(branch_event(sw, load_factor(sw.t), k, power, temperature))
             self.stable = sw.switched
-        if path.stable is not None:
-            self.stable = path.stable
 
     def last_state(self) -> SimulationState:
         """The start state with the displacements, temperatures and powers of the last accepted

@@ -15,8 +15,8 @@ _spec.loader.exec_module(bench)
 
 def test_task_list_covers_issue_13():
     assert bench.TASK_NAMES == ("startup_version", "startup_import", "first_run", "gripper_eval",
-                                "cd_full", "single_crease", "newton_1e3", "newton_1e4",
-                                "newton_1e5")
+                                "cd_full", "single_crease", "miura_heat", "newton_1e3",
+                                "newton_1e4", "newton_1e5")
     for task in bench.TASKS:                      # every snippet reports through the footer
         assert "_T" in task.old and "_T" in task.new
     newton = {t.name: t for t in bench.TASKS}["newton_1e4"]

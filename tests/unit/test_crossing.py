@@ -99,3 +99,34 @@ def test_the_cli_summary_line_names_the_creases_and_panels(strip):
     assert line.startswith("panel crossing at 3 mW in all (crease 1: 3 mW)")
     assert line.endswith("; creases 1 folded past +-180 deg; panels 0, 1 passed through each "
                          "other")
+
+
+@pytest.mark.parametrize("before, after, crossed", [
+    (179, 181, True), (181, 179, True), (-179, -181, True), (170, 179, False),
+    (-60, 60, False), (0, 1, False), (100, 260, True)])
+def test_the_step_loops_watch_finds_what_crease_crossings_finds(strip, before, after, crossed):
+    from simulator.events import CrossingWatch
+
+    watch = CrossingWatch(strip, folded(strip, before) - strip.nodes)
+    event = watch.check(folded(strip, after) - strip.nodes, 3, 0.5)
+    assert (event is not None) == crossed
+    if crossed:
+        assert event.creases == (1,) and event.increment == 3
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test_the_watchs_fold_angles_are_fold_angles(flip):
+    """On panels of either top side (the second panel drawn the other way round): the
+    watch's angles are those of fold_angles to round-off, and kept per state."""
+    from simulator.events import _crease_angles
+
+    v = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
+    second = [1, 5, 4, 0] if flip else [0, 4, 5, 1]
+    mesh = build_mesh(Pattern(v, [[0, 1, 2, 3], second], crease_width=200e-6,
+                              crease_thickness=1e-6, panel_thickness=10e-6))
+    angles = _crease_angles(mesh)
+    rng = np.random.default_rng(5)
+    for deg in (-170, -30, 0, 45, 179):
+        u = folded(mesh, deg) - mesh.nodes + rng.normal(size=mesh.nodes.shape) * 1e-6
+        assert angles(u) == pytest.approx(fold_angles(mesh, mesh.nodes + u), abs=1e-12)
+        assert angles.known(u) is angles.known(u.copy())

@@ -108,6 +108,23 @@ def test_inertia_counts_the_negative_eigenvalues(backend):
     assert factorize(_spd(300), backend="superlu").inertia == (300, 0, 0)
 
 
+@pytest.mark.parametrize("backend", ["auto", "dense", "superlu"]
+                         + (["pardiso"] if pardiso.available() else []))
+def test_positive_definite_from_the_pivots_of_one_factorisation(backend, monkeypatch):
+    for n in (20, 300):
+        assert ladder.positive_definite(_spd(n), backend)
+        assert ladder.positive_definite(_spd(n).toarray(), backend)
+        assert not ladder.positive_definite(_indefinite(n, seed=4), backend)
+    near = _spd(300).tolil()
+    near[5, 5] = 0.0
+    w = np.linalg.eigvalsh(near.toarray())
+    assert ladder.positive_definite(near.tocsr(), backend) == bool(w[0] > 0)
+    # no solve: the ladder's test of kept factors is not made
+    monkeypatch.setattr(ladder.linsolve, "solves_ones", lambda *a, **k: 1 / 0)
+    assert ladder.positive_definite(_spd(300), backend)
+    assert ladder.positive_definite(sp.csr_matrix((0, 0)), backend)
+
+
 def test_ill_conditioned_dense_systems_are_rejected_only_on_request():
     A = np.array([[1.0, 1.0], [1.0, 1.0]])
     b = np.array([1.0, 2.0])
