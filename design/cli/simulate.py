@@ -13,6 +13,7 @@ import time
 from simulator import __version__
 
 from ._common import fold_deg, progress_bar
+from ._terms import cli_terms
 
 __all__ = ["add_simulate_commands", "demo_run", "heating_table",
            "threshold_power"]
@@ -175,7 +176,8 @@ def _run(args) -> int:
     if result.status == "interrupted":
         return _save_interrupted(result, args.out, meta, where)
     out = result.save(args.out, meta)
-    print(f"{name}: {result.status} ({result.message}) in {time.perf_counter() - t0:.1f} s; "
+    print(f"{name}: {result.status} ({cli_terms(result.message)}) in "
+          f"{time.perf_counter() - t0:.1f} s; "
           f"results in {out}")
     print(_last_record_table(result, model))
     for line in summary_lines(result):

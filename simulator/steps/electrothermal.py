@@ -58,6 +58,7 @@ import numpy as np
 from .._validate import integer, non_negative, one_of, positive
 from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
+from ..events import CrossingWatch
 from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
 from ..schedules import next_switch
@@ -180,6 +181,7 @@ class ElectroThermal(Step):
         powers = CreasePowers(context.model.mesh, self.power, base=state.crease_power)
         switches = powers.schedules + drive.schedules
         rec = StepRecorder(state)
+        watch = CrossingWatch(context.model.mesh, state.u)
         rec.record_start(power=powers(0.0), velocity=mech.velocity,
                          **{"time [s]": state.time, "dt [s]": None, **mech.energies(),
                             **heat.energies()})
@@ -209,12 +211,18 @@ class ElectroThermal(Step):
             t, k, temp, target, rest = t + h_try, k + 1, new_temp, new_target, new_rest
             rec.iterations += report.iterations
             rec.cuts += report.cuts
-            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12):
+            crossing = watch.check(mech.u, len(rec), t / self.duration, powers(t), temp)
+            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12) or crossing:
                 rec.record(t / self.duration, mech.u, temp, powers(t), report.iterations,
                            np.concatenate(report.residual_norms) if report.residual_norms
                            else (), velocity=mech.velocity,
                            **{"time [s]": state.time + t, "dt [s]": h_try,
                                        **mech.energies(), **heat.energies()})
+            if crossing is not None:                  # panels through each other: stop
+                rec.events.append(crossing)                  # (recorded above)
+                status, message = "panel_crossing", f"at t = {state.time + t:.6g} s: " + \
+                    crossing.message
+                break
             context.report(k, k + math.ceil((self.duration - t) / h_try - 1e-9))
             if change > self.temperature_step:
                 h = max(dt_min, h_try / 2)

@@ -144,3 +144,27 @@ def test_values_the_file_gives_instead_of_the_stack_are_named(capsys):
     assert "crease width 100 um, panel thickness 20 um" in out
     assert main(["check", MIURA]) == 0
     assert "used instead" not in capsys.readouterr().out
+
+
+def test_a_flat_start_at_a_bifurcation_at_the_cli_in_cli_words(tmp_path, capsys):
+    """Issue 28: the waterbomb base heated from flat. By default the run reaches a stable
+    folded state; with --stability check it ends "unstable" (exit 1) with a "stability lost"
+    event, and its status line names the CLI option, not NewtonOptions."""
+    import sys
+
+    sys.path.insert(0, str(pathlib.Path(__file__).parent))
+    from test_heated_branches import _waterbomb
+
+    path = tmp_path / "waterbomb.fold"
+    path.write_text(json.dumps(_waterbomb()))
+    common = ["run", str(path), "--heat", "all", "--power", "20", "--set", "thermal_steps=50",
+              "-q"]
+    assert main(common + ["--out", str(tmp_path / "a")]) == 0
+    out = capsys.readouterr().out
+    assert "waterbomb: converged" in out and "stability lost" not in out
+    assert main(common + ["--stability", "check", "--out", str(tmp_path / "b")]) == 1
+    out = capsys.readouterr().out
+    status = [line for line in out.splitlines() if line.startswith("waterbomb")][0]
+    assert ": unstable (" in status and "--stability check" in status
+    assert "event: stability lost in step heat" in out and "--stability switch leaves it" in out
+    assert "NewtonOptions" not in out

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from design.cli import main
-from simulator import (Heat, ParameterError, Pattern, crease_crossings, get_stack,
-                       load_fold_json, node_crossings, parse_fold, plain_contact, simulate,
-                       stack_model)
+from simulator import (Dynamics, ElectroThermal, Heat, ParameterError, Pattern,
+                       crease_crossings, get_stack, load_fold_json, node_crossings, parse_fold,
+                       plain_contact, simulate, stack_model)
 
 STACK = get_stack("su8-au")
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"
@@ -124,3 +124,30 @@ def test_the_cli_heats_plain_patterns_with_contact_unless_told_not_to(tmp_path):
         meta = json.loads((out / "meta.json").read_text())
         assert (meta["model"]["contact"] is not None) is on
         assert meta["overrides"]["contact"] is on
+
+
+@pytest.mark.parametrize("make", [
+    lambda: ElectroThermal(power={1: 40e-3}, duration=0.5, dt=1e-3, mechanics="quasi_static"),
+    lambda: Dynamics(duration=2e-3, dt=2e-5, folds={1: math.radians(179)}),
+], ids=["electro_thermal", "dynamics"])
+def test_time_domain_steps_stop_where_a_crease_passes_180_deg(make):
+    """The strip without contact heated hard in time (ElectroThermal), or its crease driven
+    to 179 deg suddenly (Dynamics: it overshoots): the step stops at the first time step in
+    which the crease passes +-180 deg, with the event on its last record."""
+    model = stack_model(strip(), STACK, [1], contact=False)
+    res = simulate(model, [make()])
+    assert not res.success and res.status == "panel_crossing", res.message
+    (event,) = res.events
+    assert event.kind == "panel_crossing" and event.creases == (1,)
+    assert event.increment == res.steps[0].increments - 1
+    assert "folded past +-180 deg" in res.message and " s: panels passed" in res.message
+    mesh, x = model.mesh, model.mesh.nodes + res.history["u"]
+    assert crossings(mesh, x)[0] == [(len(x) - 2, 0)]
+
+
+def test_heated_in_time_with_contact_the_crease_stops_short_of_180_deg():
+    model = stack_model(strip(), STACK, [1])
+    res = simulate(model, [ElectroThermal(power={1: 40e-3}, duration=0.05, dt=1e-3,
+                                          mechanics="quasi_static")])
+    assert res.success and res.events == ()
+    assert np.all(np.abs(res.fold_angle) < math.pi) and np.degrees(res.fold_angle[-1, 0]) > 170
