@@ -63,8 +63,9 @@ from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
 from ..schedules import next_switch
 from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
-from ..thermal.transient import (DEFAULT_THETA, ThetaStepper, check_theta, check_time_step,
-                              free_heat_input, heat_system, initial_rise)
+from ..thermal.transient import (DEFAULT_THETA, ThetaStepper, check_quasi_static_medium,
+                                 check_theta, check_time_step, free_heat_input, heat_system,
+                                 initial_rise)
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from ..model.properties import spring_rest_angles
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
@@ -268,6 +269,7 @@ class _HeatPart:
         self.tm, self.theta, self.tol = context.thermal, step.theta, step.shape_tol
         self.room, self.n = state.room_temperature, context.model.mesh.n_nodes
         x = context.model.mesh.nodes + state.u
+        check_quasi_static_medium(self.tm, x, step.dt, "ElectroThermal")
         self._assemble(x)
         self.assemblies = 1
         self.rise = initial_rise(self.tm, x, state.temperature, self.room)

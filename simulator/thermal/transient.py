@@ -51,7 +51,8 @@ from .steady import ThermalModel
 
 __all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
            "theta_step", "TransientHeatResult", "integrate_heat", "environment_profile",
-           "free_heat_input", "initial_rise", "check_time_step", "check_theta"]
+           "free_heat_input", "initial_rise", "check_time_step", "check_theta",
+           "medium_diffusion_time", "check_quasi_static_medium"]
 
 logger = logging.getLogger(__name__)
 
@@ -154,10 +155,8 @@ def heat_system(tm: ThermalModel, x) -> HeatSystem:
             f"ThermalParameters: env_density = {prm.env_density!r} kg/m^3 and env_specific_heat "
             f"= {prm.env_specific_heat!r} J/(kg K): transient heat transfer with an environment "
             "needs both > 0 (e.g. **AIR.environment() or **WATER.environment()).")
-    if tm.integral is not None and not getattr(tm, "_told_transient", False):
-        tm._told_transient = True
-        logger.info("transient heat uses the chain environment model (env_thickness, layers, "
-                    "dissipation_angle): loss_model 'integral' is for steady heat only")
+    if tm.integral is not None:
+        return _integral_heat_system(tm, x)
     fixed = _dirichlet_mask(tm)
     free = np.flatnonzero(~fixed)
     K = tm.conductivity_matrix(x).tocsc()
@@ -167,6 +166,60 @@ def heat_system(tm: ThermalModel, x) -> HeatSystem:
                              "node needs a triangle with thickness, density and specific heat.")
     outflow = -np.asarray(K[np.flatnonzero(fixed)][:, free].sum(axis=0)).ravel()
     return HeatSystem(K[free][:, free].tocsc(), C, free, outflow)
+
+
+def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
+    """:class:`HeatSystem` of the integral loss model (theory 8.1): the structure nodes only
+    (the chain layers are not unknowns), the sheet's T3 conduction plus the loss conductance
+    ``L`` of the medium taken as quasi-static (its heat capacity neglected:
+    :func:`medium_diffusion_time` says when that holds), the nodes held by the steady model
+    (:meth:`~simulator.thermal.steady.ThermalModel.held_nodes`) at room temperature."""
+    mesh, n = tm.mesh, tm.mesh.n_nodes
+    x = np.asarray(x, float)
+    Kt, area = tm._conduction(x)
+    tri = mesh.triangles
+    rows, cols = np.repeat(tri, 3, axis=1).ravel(), np.tile(tri, (1, 3)).ravel()
+    K = sp.coo_matrix((Kt.ravel(), (rows, cols)), shape=(n, n)).toarray()
+    sheet = tm.integral.nodes
+    K[np.ix_(sheet, sheet)] += tm.integral_loss_matrix(x)
+    free = np.setdiff1d(np.arange(n), tm.held_nodes(x))
+    solid = _volumetric_capacity(tm) * tm.thickness * area / 3
+    C = np.bincount(tri.ravel(), np.repeat(solid, 3), minlength=n)[free]
+    if np.any(C <= 0):
+        raise ParameterError(f"node {int(free[np.argmin(C)])} has no heat capacity: every "
+                             "node needs a triangle with thickness, density and specific heat.")
+    Kff = K[np.ix_(free, free)]
+    # heat leaving the free nodes per kelvin of each one's rise: into the held nodes and the
+    # medium (the column sums: the rows of the conduction alone sum to zero)
+    return HeatSystem(sp.csc_matrix(Kff), C, free, Kff.sum(axis=0))
+
+
+def medium_diffusion_time(tm: ThermalModel, x) -> float:
+    """Diffusion time [s] of the medium over the device, ``D^2 rho_env c_env / k_env`` (D the
+    largest extent of the sheet at positions ``x`` (n, 3) [m]): the integral loss model in time
+    takes the medium as quasi-static, exact for changes slower than this (theory 8.1); inf
+    without a medium heat capacity."""
+    prm = tm.params
+    D = float(np.ptp(np.asarray(x, float), axis=0).max())
+    rho_c = prm.env_density * prm.env_specific_heat
+    return D * D * rho_c / prm.env_conductivity if prm.env_conductivity > 0 else 0.0
+
+
+def check_quasi_static_medium(tm: ThermalModel, x, dt: float, owner: str) -> None:
+    """WARNING (once per call) where the integral loss model is integrated in time with a time
+    step ``dt`` [s] shorter than :func:`medium_diffusion_time`: the medium then lags the sheet,
+    which the quasi-static loss neglects (it loses less heat early on than the medium would
+    take, so the sheet heats faster at first; the steady state is exact)."""
+    if tm.integral is None:
+        return
+    tau = medium_diffusion_time(tm, x)
+    if dt < tau:
+        logger.warning(
+            "%s with loss_model 'integral': the medium is taken as quasi-static; its diffusion "
+            "time over the device, %.3g ms, exceeds the time step %.3g ms, so during the first "
+            "~%.3g ms the sheet heats faster than it would (the medium's heat capacity is "
+            "neglected); the steady state is exact (theory 8.1)", owner, 1e3 * tau, 1e3 * dt,
+            1e3 * tau)
 
 
 def free_heat_input(tm: ThermalModel, free: np.ndarray, power) -> np.ndarray:
@@ -377,6 +430,7 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=DEFAULT_THETA, 
     shape = x if callable(x) else (lambda t, _x=np.asarray(x, float): _x)
     n_steps = max(1, math.ceil(t_end / dt * (1 - 1e-12)))
     run = _HeatRun(tm, shape, powers, t_end / n_steps, theta, room, T0)
+    check_quasi_static_medium(tm, shape(0.0), run.h, "integrate_heat")
     status, message, k = run.steps(t_end, n_steps, record_every, callback)
     logger.info("integrate_heat: %s (%d steps of %g s, theta %g, %d assemblies)", status, k,
                 run.h, theta, run.assemblies)
