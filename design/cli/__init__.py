@@ -94,15 +94,66 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    held = _HeldWarnings(active=not args.verbose)
+    refused = False
     try:
         check_output("--out", getattr(args, "out", None), getattr(args, "out_kind", "dir"))
         with kernel_backend(short=getattr(args, "short", False)):
             return args.func(args)
     except KeyboardInterrupt:
+        held.release()
         return _interrupted(args)
     except (EtorigamiError, CLIError) as exc:
+        refused = True
         print(f"etorigami: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:                       # output piped into e.g. `head`
+        refused = True
         sys.stderr.close()
         return 0
+    finally:
+        held.close(release=not refused)
+
+
+class _HeldWarnings(logging.Filter):
+    """Warnings on stderr held until the command ends: printed when it gives a result (or is
+    interrupted), dropped when it is refused, whose one line is then all of stderr (a WARNING
+    says that a result is affected, and a refused command has none; what the FOLD reader
+    repaired is printed on stdout as its notes). Not with ``--verbose``, whose log lines show
+    progress as it happens; only on the handlers that write to stderr."""
+
+    def __init__(self, active: bool = True):
+        super().__init__()
+        self.records, self.handlers = [], []
+        if not active:
+            return
+        for handler in logging.getLogger().handlers:
+            if getattr(handler, "stream", None) in (sys.stderr, sys.__stderr__):
+                handler.addFilter(self)
+                self.handlers.append(handler)
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        for handler in self.handlers:             # the handler's other filters first (CLI
+            if self in handler.filters and all(   # spelling of the reader's warnings)
+                    f.filter(record) for f in handler.filters if f is not self):
+                self.records.append((handler, record))
+                break
+        return False
+
+    def release(self) -> None:
+        """Print the held warnings now, and every later one as it comes."""
+        for handler in self.handlers:
+            handler.removeFilter(self)
+        records, self.records = self.records, []
+        for handler, record in records:
+            if record.levelno >= handler.level:
+                handler.emit(record)
+
+    def close(self, release: bool) -> None:
+        if release:
+            self.release()
+        for handler in self.handlers:
+            handler.removeFilter(self)
+        self.records, self.handlers = [], []

@@ -101,3 +101,52 @@ def test_summary_names_each_event_with_power_and_jump():
     line, = summary_lines(Result())
     assert line == ("event: snap in step heat at 9.215 mW in all (crease 4: 9.215 mW), jump "
                     "51 um (node 7), hottest node 458 degC")
+
+
+def test_a_refusal_is_the_only_line_on_stderr_even_after_a_reader_warning(tmp_path):
+    """Issue 28 (FOLD corpus: fold's box.fold and simple.fold): the reader's WARNING that
+    creases are folded against their assignment came before the one-line refusal; a refused
+    run has no result for a warning to qualify (the reader's note is on stdout), so stderr is
+    the refusal alone. The reader is made to warn on a shipped file (in a fresh process, with
+    the CLI's own logging set-up), then the run is refused."""
+    path = REPO / "tests" / "data" / "fold" / "zigzag_folded.fold"
+    argv = ["run", str(path), "--heat", "999", "--power", "1", "--out", str(tmp_path / "r"),
+            "-q"]
+    code = ("import logging, sys\n"
+            "import simulator.io.fold.reader as reader\n"
+            "def note(pattern, notes):\n"
+            "    notes.append('creases [2] are folded against their assignment')\n"
+            "    reader.logger.warning('FOLD: %s', notes[-1])\n"
+            "reader._note_sign_mismatch = note\n"
+            "from design.cli import main\n"
+            f"sys.exit(main({argv!r}))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=ENV, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 2
+    assert "note: creases [2] are folded against their assignment" in out.stdout
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("etorigami: error: "), out.stderr
+    assert "999 is not a crease" in lines[0]
+
+
+def test_a_warning_of_a_run_with_a_result_is_still_printed(tmp_path, caplog):
+    """The held warnings of a command that ends normally are printed (at its end)."""
+    import logging
+
+    from design import cli
+
+    handler = logging.StreamHandler(sys.stderr)
+    logging.getLogger().addHandler(handler)
+    try:
+        held = cli._HeldWarnings()
+        assert handler in held.handlers
+        logging.getLogger("simulator.test").warning("affects the result")
+        assert held.records and held.records[0][1].getMessage() == "affects the result"
+        held.close(release=True)
+        assert not held.records and held not in handler.filters
+        held = cli._HeldWarnings()
+        logging.getLogger("simulator.test").warning("dropped")
+        held.close(release=False)
+        assert held not in handler.filters
+    finally:
+        logging.getLogger().removeHandler(handler)

@@ -196,3 +196,30 @@ def test_a_turn_before_a_limit_point_is_left_to_the_limit_point_handling():
     u = np.zeros((2, 3))
     u[1, 0] = 0.45
     assert soft_mode(Fold(), u, None, 1.0, _ends(0.2475), NewtonOptions()) is None
+
+
+class Mechanism(Pitchfork):
+    """Node 1 held by a spring along x only: y is a zero-stiffness mode (a mechanism)."""
+
+    def evaluate(self, u, rest, hessian=True):
+        x = u[1, 0]
+        f = np.zeros(6)
+        f[3] = x
+        K = np.array([[1.0, 0.0], [0.0, 0.0]]) if hessian else None
+        return SimpleNamespace(f_int=f, K=K, energies={"toy": 0.5 * x**2})
+
+
+def test_a_path_that_gives_up_names_the_critical_state_it_gave_up_at():
+    """Issue 28 (FOLD corpus: Rabbit Ear's crane-cp, flat-folder's Pig and Kirby ended 'gave up
+    at t = ...: no convergence' with no cause): the message says what the last state is, here
+    critical (a zero eigenvalue) with its mode across the load."""
+    f_end = np.zeros(6)
+    f_end[3] = 1.0
+    res = follow_path(Mechanism(), np.zeros((2, 3)), np.zeros(6), f_end, np.zeros(0),
+                      np.zeros(0), 4, NewtonOptions())
+    assert not res.success and res.status == "failed"
+    assert "the state there is critical, a bifurcation" in res.message
+    assert "lowest eigenvalue 0 N/m, zero within round-off" in res.message
+    off = follow_path(Mechanism(), np.zeros((2, 3)), np.zeros(6), f_end, np.zeros(0),
+                      np.zeros(0), 4, NewtonOptions(stability="off"))
+    assert "critical" not in off.message                   # not analysed: checks nothing
