@@ -128,7 +128,7 @@ def judge(system, res, t, ends, options, switches, locate: bool = False):
 #: |cos| between the softest mode and the path's direction above which a sharp turn is taken
 #: for the approach to a fold of the path (it already moves mostly along the mode) rather
 #: than for a symmetric bifurcation passed (measured: 0.002-0.62 at the square twist's
-#: bifurcations, 0.98-1.0 at the heated Miura's approach to its snap).
+#: bifurcations, 0.90-1.0 at the heated Miura's approach to its snap).
 SLOPE_ALIGNMENT = 0.7
 
 
