@@ -27,6 +27,11 @@ Outcome classes, the first that applies:
 ``exit1-no-cause``     exit 1 whose message names none (e.g. "gave up ... no convergence");
 ``other``              any other exit code.
 
+The public corpus of issue 28 (171 files: FOLD examples, robbykraft/Origami, Rabbit Ear's test
+files, Origami Simulator box pleats, flat-folder) is not in the repository; its files are listed
+in ``benchmarks/fold_corpus_sources.tsv`` (local name, then ``owner/repo@commit:path``), from
+which it can be fetched again.
+
 Outputs: a table (file, outcome, exit codes, run time, the refusal or failure message) and the
 count per class on stdout; ``--csv FILE`` writes the same table.
 
