@@ -18,12 +18,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..mechanics.equilibrium import assembled_tangent as _tangent
-from .descent import _size, choose_branch
-from .load_path import LoadPath
+from .descent import choose_branch
+from .load_path import LoadPath, model_size
 from .path_trace import BIFURCATION_ALIGNMENT
-from .stability import NEGATIVE_RTOL, quick_stability, tangent_stability
+from .stability import NEGATIVE_RTOL, negative_tolerance, quick_stability, tangent_stability
 
-__all__ = ["BranchSwitch", "judge", "leave_critical", "leave_turn", "soft_mode"]
+__all__ = ["BranchSwitch", "judge", "leave_critical", "leave_turn", "soft_mode",
+           "gave_up_at"]
 
 logger = logging.getLogger(__name__)
 
@@ -146,16 +147,53 @@ def soft_mode(system, u, ev, t0, ends, options, slope=None):
     limit point or an asymmetric critical point ahead, which the path approaches along the
     mode: it turns because it is about to snap, which the steps' limit-point handling
     takes)."""
-    if ev is None:
-        ev = system.evaluate(u, _path(system, ends).rest(t0))
-    st = tangent_stability(_tangent(ev), linear_solver=options.linear_solver, rtol=NEGATIVE_RTOL)
-    if st.mode is None or st.load_alignment(_path(system, ends).at(u, t0).q) >= \
-            BIFURCATION_ALIGNMENT:
+    st, _, align = _eigen_state(system, u, ev, t0, ends, options)
+    if st.mode is None or align >= BIFURCATION_ALIGNMENT:
         return None
     if slope is not None and st.load_alignment(np.asarray(slope).ravel()[system.free]) >= \
             SLOPE_ALIGNMENT:
         return None
     return st
+
+
+def gave_up_at(system, u, ev, t, ends, options) -> str:
+    """What the last accepted state ``u`` at ``t`` (evaluation ``ev``, or None) of a path that
+    gave up is, for its message (theory 6.12): critical (lowest eigenvalue zero within
+    round-off, ``NEGATIVE_RTOL n eps max|K_ii|``), a limit point or a bifurcation by its mode's
+    alignment with the load derivative; unstable; or stable, Newton not converging from it.
+    One eigen-analysis, at the failure; "" for a model without free DOFs."""
+    st, K, align = _eigen_state(system, u, ev, t, ends, options)
+    if st is None:
+        return ""
+    stiffest = float(np.max(np.abs(K.diagonal())))
+    zero = NEGATIVE_RTOL * negative_tolerance(K)
+    if st.negative:
+        return (f"; the state there is unstable ({st.negative} negative eigenvalue(s), lowest "
+                f"{st.lowest:.3g} N/m)")
+    if st.lowest > zero:
+        return (f"; the state there is stable (lowest eigenvalue {st.lowest:.3g} N/m) and "
+                "Newton does not converge from it")
+    kind = (f"a limit point (its mode along the load, |cos| {align:.2f}): the load cannot rise "
+            "past it on this branch" if align >= BIFURCATION_ALIGNMENT else
+            f"a bifurcation (its mode across the load, |cos| {align:.2f})")
+    return (f"; the state there is critical, {kind}: lowest eigenvalue {st.lowest:.3g} N/m, "
+            f"zero within round-off ({zero:.3g} N/m against the stiffest diagonal entry "
+            f"{stiffest:.3g} N/m)")
+
+
+def _eigen_state(system, u, ev, t, ends, options):
+    """``(stability, tangent, |cos| of its mode with the load derivative)`` of the state ``u``
+    at ``t`` (evaluation ``ev``, or None: evaluated at the path's rest angles there), by
+    :func:`~simulator.solvers.stability.tangent_stability`; ``(None, K, nan)`` without free
+    DOFs."""
+    path = _path(system, ends)
+    if ev is None:
+        ev = system.evaluate(u, path.rest(t))
+    K = _tangent(ev)
+    if K.shape[0] == 0:
+        return None, K, float("nan")
+    st = tangent_stability(K, linear_solver=options.linear_solver, rtol=NEGATIVE_RTOL)
+    return st, K, st.load_alignment(path.at(u, t).q)
 
 
 def leave_turn(system, res, u, st, t, ends, options, switches):
@@ -170,7 +208,7 @@ def leave_turn(system, res, u, st, t, ends, options, switches):
         switches.append(sw)
         return res, quick_stability(_tangent(res.evaluation), options.linear_solver)
     u1 = np.asarray(sw.choice.u, float).reshape(-1, 3)
-    if np.max(np.abs(u1 - res.u)) <= SAME_STATE * _size(system):
+    if np.max(np.abs(u1 - res.u)) <= SAME_STATE * model_size(system):
         return res, landed                 # Newton's state is the chosen one: no switch
     switches.append(sw)
     return replace(res, u=u1, evaluation=ev1), landed
@@ -189,7 +227,8 @@ def leave_critical(system, res, u, st, t, ends, options, switches):
 
 
 def _path(system, ends):
-    """The :class:`~simulator.solvers.load_path.LoadPath` of :func:`follow_path`'s ends
+    """The :class:`~simulator.solvers.load_path.LoadPath` of
+    :func:`~simulator.solvers.newton.follow_path`'s ends
     ``(f_start, f_end, rest_start, rest_end)``."""
     f_start, f_end, rest_start, rest_end = ends
     return LoadPath(system, f_start, f_end - f_start, rest_start, rest_end - rest_start)

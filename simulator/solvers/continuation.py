@@ -40,7 +40,7 @@ import numpy as np
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from .displacement_control import displacement_control  # noqa: F401  (re-exported)
-from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, _size,
+from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, model_size,
                         _tangent)
 from .newton import NewtonOptions
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace, _lost_peak
@@ -198,7 +198,7 @@ class _ArcLengthRun:
         self.max_ds = 4 * arc_length if max_arc_length is None else max(max_arc_length,
                                                                          arc_length)
         self.min_ds = arc_length / 2 ** options.max_cuts
-        self.free, self.size = path.free, _size(path.system)
+        self.free, self.size = path.free, model_size(path.system)
         self.c_t, self.v_t = (None, None) if target_displacement is None else (  # c . u = v
             np.asarray(target_displacement[0], float).ravel(), float(target_displacement[1]))
         self.u, self.lam = np.array(u0, float).reshape(-1, 3), float(lam0)

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from ..linalg.ladder import factorize
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT
 from ..linalg.small_solve import as_dense
-from .load_path import _Constraint, _correct, _size
+from .load_path import _Constraint, _correct, model_size
 
 __all__ = ["DESCENT_DOF_LIMIT", "BRANCHES", "BranchChoice", "descend", "switch_branch",
            "choose_branch"]
@@ -63,7 +63,7 @@ def _minimise(path, u, lam, max_iter):
     Up to :data:`~simulator.linalg.thresholds.EIGEN_DENSE_LIMIT` free DOFs the damped tangent
     is factorised densely (Cholesky: it fails where the damping is not yet enough), above by
     the ladder's symmetric factorisation, whose inertia says the same."""
-    free, size = path.free, _size(path.system)
+    free, size = path.free, model_size(path.system)
     path.at(u, lam)                             # a heating path: temperatures on this shape
     energy, f = _energy_of(path, lam)
     v = np.array(u, float).ravel()
@@ -125,7 +125,7 @@ def descend(path, u, lam, options, max_iter=300, start=None, rounds=ROUNDS):
     """
     if len(path.free) > DESCENT_DOF_LIMIT:
         return None
-    size = _size(path.system)
+    size = model_size(path.system)
     v = np.array(u, float).ravel()
     for _ in range(rounds):
         out = start if start is not None else _minimise(path, v.reshape(-1, 3), lam, max_iter)
@@ -191,7 +191,7 @@ def choose_branch(path, u, lam, mode, options, prefer: str = "lower",
     mode = np.asarray(mode, float)
     big = np.flatnonzero(np.abs(mode) >= 0.5 * np.max(np.abs(mode)))
     mode = mode if mode[big[0]] > 0 else -mode
-    push = PUSH * _size(path.system) / float(np.max(np.abs(mode)))
+    push = PUSH * model_size(path.system) / float(np.max(np.abs(mode)))
     ends = []
     for sign in (1.0, -1.0):
         v = np.array(u, float).ravel()

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import finite, integer
 from ..errors import ParameterError
-from .load_path import _Constraint, _correct, _flat, _size, _tangent
+from .load_path import _Constraint, _correct, _flat, model_size, _tangent
 from .newton import NewtonOptions
 from .nonlinear import march
 from .path_trace import ContinuationResult, PathTrace
@@ -45,7 +45,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
         If ``c`` weighs supported DOFs or the reference load does not move ``c . u``.
     """
     integer("increments", increments)
-    free, size = path.free, _size(path.system)
+    free, size = path.free, model_size(path.system)
     c = np.asarray(c, float).ravel()
     mask = np.ones(len(c), bool)
     mask[free] = False

@@ -20,7 +20,7 @@ from ..mechanics.equilibrium import assembled_tangent as _assembled_tangent
 from .nonlinear import iterate
 from ..linalg.ladder import solve
 
-__all__ = ["LoadPath", "PathPoint"]
+__all__ = ["LoadPath", "PathPoint", "model_size"]
 
 #: Largest rest-angle change [rad] of the difference that gives ``q`` (:meth:`LoadPath.at`):
 #: small against the half turn between a spring's rest angle and its kink, large enough that
@@ -118,7 +118,8 @@ class _Constraint:
         return (self.value - self.c @ v - self.c @ ur) / (self.c @ uq)
 
 
-def _size(system) -> float:
+def model_size(system) -> float:
+    """Largest extent [m] of a system's reference nodes (the scale of its steps and pushes)."""
     mesh = getattr(getattr(system, "model", None), "mesh", None)
     nodes = mesh.nodes if mesh is not None else getattr(system, "nodes")
     return float(np.max(np.ptp(nodes, axis=0)))

@@ -23,12 +23,10 @@ from ..mechanics.equilibrium import EquilibriumSystem, Evaluation, assembled_tan
 from .._validate import integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
-from .branches import (BranchSwitch, _path as _branch_path, judge, leave_critical, leave_turn,
-                       soft_mode)
+from .branches import BranchSwitch, gave_up_at, judge, leave_critical, leave_turn, soft_mode
 from .descent import BRANCHES
-from .path_trace import BIFURCATION_ALIGNMENT
 from .nonlinear import iterate, march
-from .stability import NEGATIVE_RTOL, quick_stability, tangent_stability
+from .stability import quick_stability
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "BranchSwitch", "newton",
            "follow_path", "STABILITY_ACTIONS"]
@@ -370,12 +368,12 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     stability, switches, judged, t_now = [], [], [None], [0.0]
     jumped = [False]               # the attempt being accepted switched branch
     soft_memo = [None, None]       # (t, soft_mode) of the last accepted state
-    slope = [None if previous is None or previous[0] <= 0 else
+    check = options.stability != "off"
+    slope = [None if not check or previous is None or previous[0] <= 0 else
              (u0 - np.asarray(previous[1], float).reshape(-1, 3)) / previous[0]]
     # (located no finer than the cuts allow: march gives up after max_cuts halvings in a row)
     tol = max(locate_tol, 0.5 ** (options.max_cuts - 1) / increments)
     total_iter = 0
-    check = options.stability != "off"
     ends = (f_start, f_end, rest_start, rest_end)
 
     def attempt(t_try):
@@ -427,7 +425,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         nonlocal u, last_ev
         if jumped[0]:
             slope[0] = None
-        elif t > t_now[0]:
+        elif check and t > t_now[0]:
             slope[0] = (res.u - u) / (t - t_now[0])
         jumped[0] = False
         t_now[0] = t
@@ -445,8 +443,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
                f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}"
-               + (_where_it_gave_up(system, u, last_ev, rest_start, ends, run.t, options)
-                  if check else ""))
+               + (gave_up_at(system, u, last_ev, run.t, ends, options) if check else ""))
         logger.info(msg)          # data: the caller decides (a step fails, a search moves on)
         return PathResult(False, "failed", msg, u, run.t, total_iter, run.cuts, history,
                           residuals, last_ev, **extra)
@@ -456,29 +453,3 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     return PathResult(True, "converged", "converged", u, 1.0, total_iter, run.cuts, history,
                       residuals, last_ev, **extra)
 
-
-def _where_it_gave_up(system, u, ev, rest_start, ends, t, options) -> str:
-    """What the last accepted state of a failed path is, for the message (theory 6.12): a
-    critical state (lowest eigenvalue zero within round-off, NEGATIVE_RTOL n eps max|K_ii|),
-    named a limit point or a bifurcation by its mode's alignment with the load derivative,
-    or a stable one that Newton does not converge from. One eigen-analysis, at the failure."""
-    ev = ev if ev is not None else system.evaluate(u, rest_start)
-    K = _tangent(ev)
-    if K.shape[0] == 0:
-        return ""
-    st = tangent_stability(K, linear_solver=options.linear_solver, rtol=NEGATIVE_RTOL)
-    stiffest = float(np.max(np.abs(K.diagonal())))
-    zero = NEGATIVE_RTOL * K.shape[0] * np.finfo(float).eps * stiffest
-    if st.negative:
-        return (f"; the state there is unstable ({st.negative} negative eigenvalue(s), lowest "
-                f"{st.lowest:.3g} N/m)")
-    if st.lowest > zero:
-        return (f"; the state there is stable (lowest eigenvalue {st.lowest:.3g} N/m) and "
-                "Newton does not converge from it")
-    align = st.load_alignment(_branch_path(system, ends).at(u, t).q)
-    kind = (f"a limit point (its mode along the load, |cos| {align:.2f}): the load cannot rise "
-            "past it on this branch" if align >= BIFURCATION_ALIGNMENT else
-            f"a bifurcation (its mode across the load, |cos| {align:.2f})")
-    return (f"; the state there is critical, {kind}: lowest eigenvalue {st.lowest:.3g} N/m, "
-            f"zero within round-off ({zero:.3g} N/m against the stiffest diagonal entry "
-            f"{stiffest:.3g} N/m)")

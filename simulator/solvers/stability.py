@@ -31,7 +31,7 @@ from ..linalg.small_solve import as_dense
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
 __all__ = ["Stability", "tangent_stability", "state_stability", "quick_stability",
-           "NEGATIVE_RTOL", "DENSE_LIMIT"]
+           "NEGATIVE_RTOL", "DENSE_LIMIT", "negative_tolerance"]
 
 #: An eigenvalue counts as negative below ``-NEGATIVE_RTOL * n * eps * |K|`` (|K| the largest
 #: diagonal entry): a few hundred times the error bound of a symmetric eigensolver, so the
@@ -142,7 +142,7 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     n = K.shape[0]
     if n == 0:
         return Stability(0, float("inf"), np.zeros(0))
-    tol = rtol * _negative_tolerance(K)
+    tol = rtol * negative_tolerance(K)
     if n <= DENSE_LIMIT:
         A = as_dense(K)
         w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
@@ -182,7 +182,7 @@ def _critical_mode(w, V) -> np.ndarray:
     return m / np.linalg.norm(m)
 
 
-def _negative_tolerance(K) -> float:
+def negative_tolerance(K) -> float:
     """``n * eps * max |K_ii|`` [N/m]: the unit of the tolerance on negative eigenvalues."""
     d = np.abs(K.diagonal()) if sp.issparse(K) else np.abs(np.diagonal(np.asarray(K)))
     return K.shape[0] * np.finfo(float).eps * float(d.max(initial=0.0))

@@ -42,7 +42,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..solvers.load_path import LoadPath, _Constraint, _correct, _size
+from ..solvers.load_path import LoadPath, _Constraint, _correct, model_size
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from ..events import event_at, monitored_node
@@ -408,7 +408,7 @@ def _on_path(context, path, u, lam, direction):
     c = c / np.linalg.norm(c)
     held = _Constraint(c, float(c @ np.asarray(u, float).ravel()[path.free]))
     ok, u1, lam1, _, its, _, _ = _correct(path, u, lam, held, context.options,
-                                          _size(path.system))
+                                          model_size(path.system))
     return (u1, float(lam1), True) if ok and its > 0 else (u, lam, False)
 
 
