@@ -4,7 +4,7 @@ A short command (``etorigami run``) writes its ``creases.csv`` from here, so it 
 importing pandas (about a quarter of a second). The text is pandas' own (``DataFrame.to_csv(
 index=False)``, checked byte for byte in ``tests/unit/test_table.py``): floats as numpy writes
 them (``astype(str)``, the shortest repr, ``nan`` empty), integers and booleans by ``str``,
-strings as given, ``None`` empty, fields quoted by :mod:`csv` as needed. Columns whose types
+strings as given, ``None`` empty, fields quoted by the ``csv`` module as needed. Columns whose types
 pandas would infer otherwise (a mix of numbers and strings, say) are not written here:
 :func:`write_csv` returns False and the caller uses pandas.
 """

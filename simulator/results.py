@@ -406,8 +406,8 @@ TRIANGLE_CREASE, TRIANGLE_PANEL, TRIANGLE_SUBSTRATE = 0, 1, 2
 
 
 def triangle_kinds(model) -> np.ndarray:
-    """(nt,) uint8 kind of every mesh triangle: :data:`TRIANGLE_CREASE`,
-    :data:`TRIANGLE_PANEL` or :data:`TRIANGLE_SUBSTRATE` (the panels the thermal model holds at
+    """(nt,) uint8 kind of every mesh triangle: ``TRIANGLE_CREASE`` (0),
+    ``TRIANGLE_PANEL`` (1) or ``TRIANGLE_SUBSTRATE`` (2) (the panels the thermal model holds at
     room temperature, ``ThermalParameters.boundary_panels``: the substrate or heat sink)."""
     mesh = model.mesh
     kind = np.where(mesh.triangle_crease >= 0, TRIANGLE_CREASE, TRIANGLE_PANEL).astype(np.uint8)

@@ -281,6 +281,8 @@ class EquilibriumSystem:
         u : (n_nodes, 3) displacements from the mesh nodes [m]
         spring_rest : (n_springs,) spring rest angles [rad]
 
+        Notes
+        -----
         With the fused kernel (:attr:`uses_fused`) ``tangent`` is dense; ``K`` is CSR either way.
         """
         if self.uses_fused:

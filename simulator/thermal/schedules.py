@@ -55,7 +55,7 @@ def _positive(owner, name, value, unit):
 
 class PowerSchedule(Schedule):
     """Power [W] as a function of time [s] (a non-negative :class:`~simulator.schedules.Schedule`);
-    subclasses implement :meth:`_values` and :meth:`_energy`."""
+    subclasses implement ``_values`` and ``_energy``."""
 
     @abstractmethod
     def _energy(self, t: np.ndarray) -> np.ndarray:
