@@ -79,10 +79,11 @@ class Actuators:
         the reference's identical creases): each crease's rotation per kelvin is multiplied by
         ``1 + scatter z``, ``z`` a standard normal draw per crease id from ``seed``. It is the
         imperfection a fabricated sheet has. Without it, a symmetric pattern heated from a
-        bifurcation takes the branch of its critical mode's sign (theory 6.12); with a small
-        one (1e-4 changes the folds by about 1e-4 of themselves) the branch the draws favour.
+        bifurcation takes the branch of its critical mode's sign, the same at any step count
+        (theory 6.12); with a small one (1e-4 changes the folds by about 1e-4 of themselves) the
+        branch taken can change with the seed, and with the step count.
     seed : int
-        Seed of the scatter's draws (another seed: another of the equal branches).
+        Seed of the scatter's draws.
     """
 
     bimorph: Bimorph

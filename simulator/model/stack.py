@@ -221,9 +221,9 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
     scatter, seed : float, int
         Relative scatter of the heated creases' actuation and its seed
         (:attr:`~simulator.model.bimorph.Actuators.scatter`, default 0: identical creases):
-        a fabricated sheet's imperfection; with it a symmetric pattern takes the one of its
-        equal branches that the draws favour (another seed, another branch) instead of the
-        one the critical mode's sign picks.
+        a fabricated sheet's imperfection; with it the branch a symmetric pattern takes can
+        change with the seed and with the step count (theory 6.12), without it the critical
+        mode's sign picks it, the same at any step count.
     """
     if not isinstance(stack, LayerStack):
         raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
