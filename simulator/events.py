@@ -30,13 +30,15 @@ from .errors import ParameterError
 from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
 
 __all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event",
-           "crossing_event", "CrossingWatch"]
+           "crossing_event", "CrossingWatch", "crossing_stop", "stops", "renumbered"]
 
 #: Kinds of :class:`Event`: those of a critical point, ``"snap"``, the two of an accepted
 #: load-controlled state found unstable (:func:`branch_event`): ``"branch_switch"`` (left for
-#: a stable branch along its critical mode) and ``"stability_lost"`` (not left), and
-#: ``"panel_crossing"`` (:func:`crossing_event`).
-EVENT_KINDS = CRITICAL_KINDS + ("snap", "branch_switch", "stability_lost", "panel_crossing")
+#: a stable branch along its critical mode) and ``"stability_lost"`` (not left),
+#: ``"panel_crossing"`` (:func:`crossing_event`) and ``"fold_past_flat"`` (a crease of finite
+#: width folded past 180 deg, its panels still apart: :class:`CrossingWatch`).
+EVENT_KINDS = CRITICAL_KINDS + ("snap", "branch_switch", "stability_lost", "panel_crossing",
+                                "fold_past_flat")
 
 
 @dataclass(frozen=True)
@@ -51,7 +53,10 @@ class Event(CriticalPoint):
         step at the same load factor) and ends where the path crosses that load factor again
         moving forward: the jump load control would make there. A ``"panel_crossing"``
         (:func:`crossing_event`): between the increment before ``increment`` and ``increment``
-        panels passed through each other (``creases``, ``panels``).
+        panels passed through each other (``creases``, ``panels``). A ``"fold_past_flat"``:
+        between them the creases ``creases`` of finite width folded on past 180 deg with no
+        panel through another (the step goes on; fold angles are reported in (-180, 180] deg,
+        so such a crease's angle wraps to near -180 deg).
     load_factor : float
         The step's path parameter there (0 at its start, 1 at its end; the load factor of an
         :class:`~simulator.steps.ArcLengthLoad` or :class:`~simulator.steps.DisplacementControl`).
@@ -87,7 +92,9 @@ class Event(CriticalPoint):
     message : str
         The event in words, as it appears in the step's message.
     creases : tuple of int
-        Panel crossing: crease ids (``mesh.crease_ids``) whose fold angle passed +-180 deg.
+        Panel crossing, fold past flat: crease ids (``mesh.crease_ids``) whose fold angle
+        passed +-180 deg (a panel crossing of a mesh with creases of finite width: those
+        folded past 180 deg when the panels met).
     panels : tuple of int
         Panel crossing: the panels of which a corner or centre node passed through another
         panel, and those it passed through (ascending).
@@ -192,7 +199,8 @@ def branch_event(switch, load_factor: float, increment: int, power, temperature)
 
 
 def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power=(),
-                   temperature=None, nodes: bool = True) -> Event | None:
+                   temperature=None, nodes: bool = True, creases: bool = True,
+                   past_flat=()) -> Event | None:
     """The ``"panel_crossing"`` :class:`Event` of an accepted increment, or None if no panels
     passed through each other since the previous one.
 
@@ -202,6 +210,8 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
 
         event = crossing_event(mesh, u_prev, u, increment=len(rec) - 1, load_factor=lam,
                                power=power, temperature=temp)
+
+    The steps' loops use :class:`CrossingWatch`, which applies the test that fits the mesh.
 
     Tests (:mod:`simulator.mechanics.crossing`): a crease's fold angle passing +-180 deg
     (:func:`~simulator.mechanics.crossing.crease_crossings`) and a panel corner or centre node
@@ -221,25 +231,36 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
     power : (C,) crease powers there [W], optional
     temperature : (n_nodes,) node temperatures there [deg C], optional
     nodes : bool
-        Also test panel corners and centres passing through panels (about 1-2 ms a call); the
-        steps' loops test the creases only (tens of microseconds), every increment.
+        Test panel corners and centres passing through panels (about 1-2 ms a call).
+    creases : bool
+        Count a fold angle passing +-180 deg as a crossing (tens of microseconds): on a mesh
+        of sharp creases the panels pass through each other there; a crease of finite width
+        folds on past 180 deg with its panels apart (:class:`CrossingWatch` then tests nodes).
+    past_flat : crease ids (``mesh.crease_ids``) known to be folded past 180 deg, named with
+        a node crossing (optional)
     """
     from .mechanics.crossing import crease_crossings, node_crossings
 
     x0, x1 = mesh.nodes + np.asarray(u_prev, float), mesh.nodes + np.asarray(u, float)
-    creases = mesh.crease_ids[crease_crossings(mesh, x0, x1)]
+    crossed = mesh.crease_ids[crease_crossings(mesh, x0, x1)] if creases else \
+        np.zeros(0, int)
     pairs = node_crossings(mesh, x0, x1) if nodes else np.zeros((0, 2), int)
-    if not len(creases) and not len(pairs):
+    if not len(crossed) and not len(pairs):
         return None
     parts = []
-    if len(creases):
-        ids = capped(creases.tolist(), brackets=False)
-        parts.append(f"crease{'s' * (len(creases) > 1)} {ids} folded past +-180 deg")
+    if len(crossed):
+        ids = capped(crossed.tolist(), brackets=False)
+        parts.append(f"crease{'s' * (len(crossed) > 1)} {ids} folded past +-180 deg")
     if len(pairs):
         own = mesh.node_panel[pairs[:, 0]]
         parts.append("panel corner or centre nodes passed through panels: " + capped(
             [f"node {n} (panel {o}) through panel {q}" for (n, q), o in zip(pairs, own)],
             brackets=False))
+        past = [int(c) for c in past_flat]
+        if past and not len(crossed):
+            crossed = np.asarray(past, int)
+            parts.append(f"crease{'s' * (len(past) > 1)} {capped(past, brackets=False)} "
+                         "folded past 180 deg")
     message = (f"panels passed through each other in increment {increment + 1} (load factor "
                f"{load_factor:.6g}): {'; '.join(parts)}. Panel contact keeps them apart: "
                "leave out --no-contact (etorigami run), or give the model contact "
@@ -247,40 +268,136 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
     panels = np.unique(np.r_[mesh.node_panel[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else ()
     return Event("panel_crossing", float(load_factor), increment, power_per_crease=power,
                  temperature_max=None if temperature is None else float(np.max(temperature)),
-                 message=message, creases=creases, panels=panels)
+                 message=message, creases=crossed, panels=panels)
 
+
+#: :class:`CrossingWatch` tests panel corners and centres against panels (a finite-width
+#: crease's panels can meet) while a crease is folded past 180 deg or its fold angle is
+#: within this much of it [rad] (the start state of a step may be past flat already) ...
+NEAR_FLAT = math.radians(30)
+#: ... and after an increment that turned a crease by more than this [rad] (a motion the
+#: increment does not resolve: a panel may have swung through another).
+LARGE_TURN = math.radians(90)
 
 
 class CrossingWatch:
-    """The crease test of :func:`crossing_event` for a step loop, cheaply: it keeps the fold
-    angles of the last accepted state (the numbers of
+    """Panels passing through each other in a step loop, checked after each accepted
+    increment; cheaply while every crease is far from flat.
+
+    It keeps the fold angles of the last accepted state (the numbers of
     :func:`~simulator.mechanics.kinematics.fold_angles` up to round-off, from the normals of
     the creases' panels only, with the cross products written out on gathered coordinates:
-    :class:`_CreaseAngles`) and calls :func:`crossing_event` (creases only) only where one
-    of them changed by more than pi.
+    :class:`_CreaseAngles`), and how many times each has wrapped past +-180 deg (at the start
+    from :func:`~simulator.mechanics.kinematics.crease_rotations`, which does not wrap).
+
+    * Sharp creases (concentrated hinges): a fold angle passing +-180 deg is a
+      ``"panel_crossing"`` (:func:`crossing_event`, creases only): the panels meet there.
+    * Creases of finite width ``W``: the panels are still about ``0.71 W`` apart when they
+      turn parallel and a crease can fold on past 180 deg (theory 3.5). Its first passing is a
+      ``"fold_past_flat"`` event (the step goes on), and while any crease is past flat or
+      within :data:`NEAR_FLAT` of it (and after an increment that turned a crease by more
+      than :data:`LARGE_TURN`), each increment is tested for panel corner and centre nodes
+      passing through panels (:func:`crossing_event`, nodes only, 1-2 ms): a
+      ``"panel_crossing"``, which names the creases past flat.
 
     ``CrossingWatch(mesh, u0)``; ``check(u, increment, load_factor, power, temperature)``
-    after each accepted increment: the :class:`Event` or None. The angles of the last few
-    states checked on a mesh are kept (by their displacements' bytes), so a step that starts
-    where an earlier one ended (the trials of a power search restart from saved states) does
-    not compute its start angles again.
+    after each accepted increment: the :class:`Event` or None; a step stops on a
+    ``"panel_crossing"`` (:func:`stops`) and records a ``"fold_past_flat"``. The angles of the
+    last few states checked on a mesh are kept (by their displacements' bytes), so a step that
+    starts where an earlier one ended (the trials of a power search restart from saved states)
+    does not compute its start angles again.
     """
 
     def __init__(self, mesh, u0):
         self.mesh, self.u = mesh, np.asarray(u0, float)
         self._angles = _crease_angles(mesh)
         self.a = self._angles.known(self.u)
+        self.sharp = bool(getattr(mesh, "sharp", False))
+        self.turns = np.zeros(len(self.a), int)
+        if len(self.a) and not self.sharp:
+            # whether a crease starts past flat: its rotation, summed over its fold lines,
+            # does not wrap (crease_rotations), where the panel-to-panel angle does
+            from .mechanics.kinematics import crease_rotations
+
+            rot = crease_rotations(mesh, mesh.nodes + self.u)
+            with np.errstate(invalid="ignore"):
+                self.turns = np.nan_to_num(np.rint((rot - self.a) / (2 * np.pi))).astype(int)
 
     def check(self, u, increment: int, load_factor: float, power=(), temperature=None):
         u = np.asarray(u, float)
         a = self._angles.known(u)
         event = None
-        if len(a) and np.fmax.reduce(np.abs(a - self.a)) > np.pi:     # (NaN: not one)
-            event = crossing_event(self.mesh, self.u, u, increment=increment,
-                                   load_factor=load_factor, power=power,
-                                   temperature=temperature, nodes=False)
+        if len(a):
+            d = a - self.a
+            with np.errstate(invalid="ignore"):
+                wrapped = np.abs(d) > np.pi                       # (NaN: not wrapped)
+            kw = dict(increment=increment, load_factor=load_factor, power=power,
+                      temperature=temperature)
+            if self.sharp:
+                if wrapped.any():
+                    event = crossing_event(self.mesh, self.u, u, nodes=False, **kw)
+            else:
+                self.turns[wrapped] -= np.sign(d[wrapped]).astype(int)
+                past = self.turns != 0
+                turn = np.fmax.reduce(np.abs(np.where(wrapped, 2 * np.pi - np.abs(d), d)))
+                if past.any() or np.fmax.reduce(np.abs(a)) > np.pi - NEAR_FLAT or \
+                        turn > LARGE_TURN:
+                    event = crossing_event(self.mesh, self.u, u, creases=False,
+                                           past_flat=self.mesh.crease_ids[past], **kw)
+                newly = wrapped & past
+                if event is None and newly.any():
+                    event = _past_flat(self.mesh, np.flatnonzero(newly), a, **kw)
         self.u, self.a = u, a
         return event
+
+
+def stops(event) -> bool:
+    """Whether a step stops on an event of :class:`CrossingWatch` (a ``"panel_crossing"``;
+    a ``"fold_past_flat"`` is recorded and the step goes on)."""
+    return event is not None and event.kind == "panel_crossing"
+
+
+def _past_flat(mesh, rows, a, *, increment, load_factor, power, temperature) -> Event:
+    """The ``"fold_past_flat"`` event of crease rows ``rows`` (fold angles ``a`` [rad])."""
+    ids = mesh.crease_ids[rows]
+    angles = ", ".join(f"{np.degrees(x):.1f} deg" for x in a[rows[:3]])
+    message = (f"crease{'s' * (len(ids) > 1)} {capped(ids.tolist(), brackets=False)} folded "
+               f"past 180 deg in increment {increment + 1} (load factor {load_factor:.6g}); "
+               "no panel passed through another (the crease's width holds its panels apart): "
+               "the step goes on. Fold angles are reported in (-180, 180] deg: "
+               f"{angles} here (360 deg more). Panel contact from the crease's gap "
+               "(simulator.plain_contact) stops creases short of 180 deg")
+    return Event("fold_past_flat", float(load_factor), increment, power_per_crease=power,
+                 temperature_max=None if temperature is None else float(np.max(temperature)),
+                 message=message, creases=ids)
+
+
+def renumbered(event: Event, increment: int) -> Event:
+    """``event`` of :class:`CrossingWatch` at record ``increment`` (its field and its message's
+    "in increment N"), for a loop that learns the record index after the check."""
+    from dataclasses import replace
+
+    old = f"in increment {event.increment + 1} (" if event.increment is not None else None
+    message = event.message.replace(old, f"in increment {increment + 1} (", 1) if old else \
+        event.message
+    return replace(event, increment=int(increment), message=message)
+
+
+def crossing_stop(mesh, u0, then=None):
+    """A ``callback(lam, u)`` for the path followers (:func:`~simulator.solvers.continuation.mgdcm`,
+    :func:`~simulator.solvers.displacement_control.displacement_control`) that stops them
+    (returns True) at the first accepted point where panels passed through each other since
+    the previous one (:class:`CrossingWatch`, from displacements ``u0``), else returns
+    ``then(lam, u)`` (False without ``then``). The events themselves are made where the points
+    are recorded (:func:`~simulator.steps.limit.record_continuation`), which knows their
+    record indices."""
+    watch = CrossingWatch(mesh, u0)
+
+    def callback(lam, u):
+        if stops(watch.check(u, 0, lam)):
+            return True
+        return bool(then(lam, u)) if then is not None else False
+    return callback
 
 
 # numpy >= 2: vecdot is a ufunc, with less overhead than einsum on small arrays

@@ -41,6 +41,8 @@ def _event_line(event, crease_ids) -> str:
     text += _BRANCH_NOTES.get(event.kind, "")
     if event.creases:
         text += f"; creases {capped(event.creases, brackets=False)} folded past +-180 deg"
+    if event.kind == "fold_past_flat":
+        text += " (their panels still apart: the run goes on)"
     if event.panels:
         text += f"; panels {capped(event.panels, brackets=False)} passed through each other"
     return text

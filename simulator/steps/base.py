@@ -174,6 +174,11 @@ class StepRecorder:
     def __len__(self) -> int:
         return len(self._rows["load_factor"])
 
+    @property
+    def last_u(self) -> np.ndarray:
+        """(n_nodes, 3) displacements [m] of the last record (the start state's if none)."""
+        return self._rows["u"][-1] if len(self) else self.start.u
+
     def record(self, load_factor: float, u, temperature, power, iterations: int = 0,
                residual_norms=(), *, velocity=None, **columns) -> None:
         """Add one accepted increment; ``velocity`` (n_nodes, 3) [m/s] for time-integration

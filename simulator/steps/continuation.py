@@ -23,6 +23,7 @@ from ..solvers.continuation import mgdcm
 from ..solvers.displacement_control import displacement_control
 from .._validate import finite, positive
 from ..errors import ParameterError
+from ..events import crossing_stop
 from ..solvers.load_path import LoadPath
 from ..model.model import _AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
@@ -138,12 +139,11 @@ class ArcLengthLoad(Step):
                     max_increments=self.max_increments,
                     target_load_factor=self.target_load_factor, target_displacement=target,
                     monitor=c, options=context.options, max_arc_length=self.max_arc_length,
-                    callback=_progress(context, self.max_increments))
+                    callback=_progress(context, state, self.max_increments))
         rec = StepRecorder(state)
-        record_continuation(rec, res, state.temperature, state.crease_power, c)
-        new = at_rest(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
-        return rec.finish(res.success, res.status, res.message, new, new.applied_load.ravel(),
-                          res.evaluation)
+        crossing = record_continuation(rec, res, state.temperature, state.crease_power, c,
+                                       mesh=context.model.mesh)
+        return _finish(rec, res, state, P, crossing)
 
     def describe(self) -> dict:
         return {"reference_load [N]": Load(self.forces).load_sum(), "arc_length": self.arc_length,
@@ -154,12 +154,29 @@ class ArcLengthLoad(Step):
                                                               str(self.monitor[1])]}
 
 
-def _progress(context, total):
-    def callback(lam, u, count=[0]):
+def _progress(context, state, total):
+    """The path follower's callback: progress, and a stop where a crease passes +-180 deg."""
+    count = [0]
+
+    def progress(lam, u):
         count[0] += 1
         context.report(min(count[0], total), total)
         return False
-    return callback
+    return crossing_stop(context.model.mesh, state.u, progress)
+
+
+def _finish(rec, res, state, P, crossing) -> StepOutcome:
+    """The step's outcome at the last accepted point of ``res``, or at the point where a crease
+    passed +-180 deg (``crossing``, its event; status "panel_crossing")."""
+    if crossing is None:
+        u, lam, success, status, message = res.u, res.load_factor, res.success, res.status, \
+            res.message
+    else:
+        u, lam, success, status = rec.last_u, crossing.load_factor, False, "panel_crossing"
+        message = crossing.message
+    new = at_rest(state, u=u, applied_load=state.applied_load + lam * P)
+    evaluation = res.evaluation if np.array_equal(u, res.u) else None
+    return rec.finish(success, status, message, new, new.applied_load.ravel(), evaluation)
 
 
 @dataclass(frozen=True)
@@ -206,14 +223,13 @@ class DisplacementControl(Step):
         path = LoadPath(context.system, state.applied_load.ravel(), P.ravel(), state.spring_rest)
         res = displacement_control(path, state.u, 0.0, c, self.target,
                                    increments=self.increments, options=context.options,
-                                   callback=_progress(context, self.increments))
+                                   callback=_progress(context, state, self.increments))
         rec = StepRecorder(state)
         along = float(P[self.node] @ d)
-        record_continuation(rec, res, state.temperature, state.crease_power, c,
-                            extra=lambda lam: {"reaction [N]": lam * along})
-        new = at_rest(state, u=res.u, applied_load=state.applied_load + res.load_factor * P)
-        return rec.finish(res.success, res.status, res.message, new, new.applied_load.ravel(),
-                          res.evaluation)
+        crossing = record_continuation(rec, res, state.temperature, state.crease_power, c,
+                                       extra=lambda lam: {"reaction [N]": lam * along},
+                                       mesh=context.model.mesh)
+        return _finish(rec, res, state, P, crossing)
 
     def describe(self) -> dict:
         return {"node": self.node, "direction": str(self.direction),

@@ -25,7 +25,7 @@ from ..solvers.dynamics import integrate
 from ..solvers.dynamics_options import DynamicsOptions
 from .._validate import integer, positive
 from ..errors import ParameterError
-from ..events import CrossingWatch, crossing_event
+from ..events import CrossingWatch, renumbered, stops
 from ..model.properties import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
@@ -103,17 +103,17 @@ class Dynamics(Step):
         v0 = state.node_velocity if self.velocity is None \
             else node_vectors(self.velocity, n, "Dynamics", "velocity")
         total = max(1, int(np.ceil(self.duration / self.dt * (1 - 1e-12))))
-        done, crossed = [0], []
+        done, found = [0], []
         watch = CrossingWatch(model.mesh, state.u)
 
         def callback(motion):
             done[0] += 1
             context.report(done[0], total)
-            u_prev = watch.u
-            event = watch.check(motion.u, 0, motion.time / self.duration)
-            if event is not None:                    # panels through each other: stop
-                crossed.append((u_prev, motion.u, motion.time / self.duration))
-            return event is not None
+            event = watch.check(motion.u, 0, motion.time / self.duration,
+                                state.crease_power, state.temperature)
+            if event is not None:          # panels through each other: stop (and record)
+                found.append((event, motion.time))
+            return stops(event)
 
         res = integrate(context.system, state.u, v0, self.duration, self.dt, f_ext, rest,
                         self.options, record_every=self.record_every, callback=callback)
@@ -130,13 +130,13 @@ class Dynamics(Step):
                        state.crease_power, int(res.iterations[k]), velocity=res.v[k],
                        **columns)
         status, message = res.status, res.message
-        if crossed:                       # the event of the last record (the stop state)
-            u_prev, u_end, lam = crossed[0]
-            event = crossing_event(model.mesh, u_prev, u_end, increment=len(rec) - 1,
-                                   load_factor=lam, nodes=False)
+        for event, time in found:          # at the first record at or after it
+            k = min(int(np.searchsorted(res.time, time * (1 - 1e-12))), len(rec) - 1)
+            event = renumbered(event, k)
             rec.events.append(event)
-            status = "panel_crossing"
-            message = f"at t = {state.time + res.time[-1]:.6g} s: {event.message}"
+            if stops(event):               # the last record (the stop state)
+                status = "panel_crossing"
+                message = f"at t = {state.time + res.time[-1]:.6g} s: {event.message}"
         end = res.state
         if drive.force_terms:               # the drives' values at the end persist
             load = drive.load(end.time)
@@ -145,8 +145,8 @@ class Dynamics(Step):
         new = replace(state, u=end.u, velocity=end.v, applied_load=load.reshape(n, 3),
                       crease_rest=crease_rest, spring_rest=spring_rest,
                       time=state.time + end.time)
-        return rec.finish(res.success and not crossed, status, message, new, load.ravel(),
-                          end.evaluation)
+        return rec.finish(res.success and status != "panel_crossing", status, message, new,
+                          load.ravel(), end.evaluation)
 
     def describe(self) -> dict:
         return {"duration [s]": self.duration, "dt [s]": self.dt,

@@ -58,7 +58,7 @@ import numpy as np
 from .._validate import integer, non_negative, one_of, positive
 from ..solvers.dynamics_options import DynamicsOptions
 from ..errors import ParameterError
-from ..events import CrossingWatch
+from ..events import CrossingWatch, stops
 from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
 from ..schedules import next_switch
@@ -219,8 +219,9 @@ class ElectroThermal(Step):
                            else (), velocity=mech.velocity,
                            **{"time [s]": state.time + t, "dt [s]": h_try,
                                        **mech.energies(), **heat.energies()})
-            if crossing is not None:                  # panels through each other: stop
-                rec.events.append(crossing)                  # (recorded above)
+            if crossing is not None:                  # (recorded above)
+                rec.events.append(crossing)
+            if stops(crossing):                       # panels through each other: stop
                 status, message = "panel_crossing", f"at t = {state.time + t:.6g} s: " + \
                     crossing.message
                 break

@@ -24,7 +24,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
-from ..events import CrossingWatch
+from ..events import CrossingWatch, stops
 from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
@@ -141,6 +141,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         crossing = watch.check(u, len(rec) - 1, lam1, power, temp)
         if crossing is not None:
             rec.events.append(crossing)
+        if stops(crossing):
             return rec.finish(False, "panel_crossing", crossing.message,
                               at_rest(state, u=u, spring_rest=spring, temperature=temp,
                                       crease_rest=target, crease_power=np.asarray(power, float),

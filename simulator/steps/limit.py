@@ -45,7 +45,7 @@ from ..errors import ParameterError
 from ..solvers.load_path import LoadPath, _Constraint, _correct, model_size
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
-from ..events import event_at, monitored_node
+from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
 from .base import StepOutcome, StepRecorder
 
 __all__ = ["LIMIT_POINT_ACTIONS", "HeatPath", "check_on_limit_point",
@@ -100,19 +100,36 @@ def check_on_limit_point(step) -> None:
 
 
 def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=None,
-                        extra=None) -> None:
+                        extra=None, *, mesh) -> Event | None:
     """Record every accepted point of a ContinuationResult with its stability columns, and
-    its critical points as events (:class:`~simulator.events.Event`).
+    its critical points as events (:class:`~simulator.events.Event`), up to the first point
+    where panels of ``mesh`` passed through each other since the point before (the last
+    record of ``rec``, or the step's start for its first; :class:`~simulator.events.
+    CrossingWatch`): that point is recorded with its ``"panel_crossing"`` event, which is
+    returned (None if none crossed); the points after it and their critical points are not.
+    A crease of finite width folding past 180 deg on the way is a ``"fold_past_flat"`` event.
 
     ``powers(lam)`` gives the crease powers of a point (default ``power``); ``extra(lam)`` more
     named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none).
     """
     node, offset = monitored_node(c), len(rec)
+    watch = CrossingWatch(mesh, rec.last_u)
+    crossing, recorded, found = None, len(res.history), []
+    for k, (lam, u, _) in enumerate(res.history):
+        temp = res.temperatures[k] if res.temperatures[k] is not None else temperature
+        event = watch.check(u, offset + k, lam, power if powers is None else powers(lam), temp)
+        if event is not None:
+            found.append(event)
+        if stops(event):
+            crossing, recorded = event, k + 1
+            break
     rec.events += [event_at(p, res, power if powers is None else powers(p.load_factor),
-                            temperature, offset, node) for p in res.critical_points]
+                            temperature, offset, node) for p in res.critical_points
+                   if p.increment < recorded]
     rec.iterations += res.iterations
     rec.cuts += res.cuts
-    for k, ((lam, u, its), norms) in enumerate(zip(res.history, res.residual_norms)):
+    for k, ((lam, u, its), norms) in enumerate(zip(res.history[:recorded],
+                                                   res.residual_norms)):
         st = res.stability[k] if res.stability else None
         temp = res.temperatures[k] if res.temperatures[k] is not None else temperature
         cols = {} if st is None else {"stable": st.stable, "negative_eigenvalues": st.negative,
@@ -122,7 +139,8 @@ def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=No
         if extra is not None:
             cols.update(extra(lam))
         rec.record(lam, u, temp, power if powers is None else powers(lam), its, norms, **cols)
-
+    rec.events += found
+    return crossing
 
 
 class HeatPath(LoadPath):
@@ -283,8 +301,11 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                                  None if k else start.u)
         texts = []
         for res in parts:
-            record_continuation(rec, res, current.state.temperature,
-                                current.state.crease_power, c, powers=powers)
+            crossing = record_continuation(rec, res, current.state.temperature,
+                                           current.state.crease_power, c, powers=powers,
+                                           mesh=context.model.mesh)
+            if crossing is not None:     # the arc length stopped where panels crossed
+                return _crossed(rec, res, crossing, end_state, notes)
             texts.append(res.message + _snap_text(rec, res, c, powers))
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
@@ -303,6 +324,15 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                               current.state, current.f_ext, current.evaluation)
     return rec.finish(False, "failed", "; ".join(notes) + f"; more than {MAX_SNAPS} snaps",
                       current.state, current.f_ext, current.evaluation)
+
+
+def _crossed(rec, res, crossing, end_state, notes) -> StepOutcome:
+    """The outcome of a continuation stopped by a panel crossing (its last record)."""
+    state = end_state(rec.last_u, crossing.load_factor)
+    evaluation = res.evaluation if np.array_equal(res.u, rec.last_u) else None
+    return rec.finish(False, "panel_crossing", "; ".join(
+        notes + [f"arc length: {crossing.message}"]), state, state.applied_load.ravel(),
+        evaluation)
 
 
 def _continuation(context, origin, outcome, path, increments, c, u0=None):
@@ -345,7 +375,8 @@ def _restart(context, origin, located, path, c):
                  max_increments=CONTINUATION_INCREMENTS, target_load_factor=1.0, monitor=c,
                  options=context.options, step_norm=step, stability=True, until_stable=True,
                  direction=u_u - u_s, prior=(u_s, lam_s), resolution=ARC_LOAD_STEP / RESOLVE,
-                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE)
+                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE,
+                 callback=crossing_stop(context.model.mesh, u_u))
 
 
 def _arc(context, origin, outcome, path, increments, c, until_stable, locate=False):
@@ -390,7 +421,8 @@ def _arc(context, origin, outcome, path, increments, c, until_stable, locate=Fal
                  target_load_factor=1.0, monitor=c, options=context.options,
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
-                 direction=recent, prior=prior, callback=None if until_stable else turned,
+                 direction=recent, prior=prior,
+                 callback=crossing_stop(context.model.mesh, u0, None if until_stable else turned),
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
                  switch_branches=until_stable and SWITCH_BRANCHES,
                  locate_stability_loss=locate,

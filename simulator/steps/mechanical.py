@@ -14,7 +14,7 @@ import numpy as np
 
 from .._validate import array, finite
 from ..errors import ParameterError
-from ..events import CrossingWatch
+from ..events import CrossingWatch, stops
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
 from ..solvers.newton import follow_path
@@ -82,15 +82,16 @@ def _follow(context: StepContext, state, f_start, f_end, rest_end, increments,
         accepted[0] += 1
         if event is not None:
             crossings.append(event)
-        return event is not None
+        return stops(event)
 
     path = follow_path(context.system, state.u, f_start, f_end, state.spring_rest, rest_end,
                        increments, context.options, callback=callback)
     rec = StepRecorder(state)
     rec.add_path(path, state.temperature, state.crease_power, load_factor)
-    if crossings:
-        rec.events += crossings
-        path = replace(path, status="panel_crossing", message=crossings[0].message)
+    rec.events += crossings
+    stopped = [e for e in crossings if stops(e)]
+    if stopped:
+        path = replace(path, status="panel_crossing", message=stopped[0].message)
     return path, rec
 
 

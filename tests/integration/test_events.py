@@ -47,7 +47,8 @@ def test_event_is_a_frozen_critical_point_with_si_fields():
     assert e.to_dict()["power_per_crease [W]"] == [1e-3, 2e-3]
     json.dumps(d)
     assert set(EVENT_KINDS) == {"limit_point", "bifurcation", "stability_change", "snap",
-                                "branch_switch", "stability_lost", "panel_crossing"}
+                                "branch_switch", "stability_lost", "panel_crossing",
+                                "fold_past_flat"}
 
 
 @pytest.mark.parametrize("kwargs, match", [

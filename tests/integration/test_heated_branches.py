@@ -94,14 +94,20 @@ def small_waterbomb():
     return geo.pattern, stack, heated
 
 
-def test_without_contact_a_crease_passing_180_deg_stops_the_step_with_an_event(small_waterbomb):
+def test_without_contact_creases_past_180_deg_are_events_and_panels_meeting_stops_the_step(
+        small_waterbomb):
+    """The midlines pass 180 deg (an event: their 200 um creases hold the panels apart), then
+    panels meet: the step stops there, naming the creases past flat and the panels."""
     pattern, stack, heated = small_waterbomb
     model = S.stack_model(pattern, stack, heated, contact=False)
     res = _heat(model, heated, 20.0, 50)
     assert not res.success and res.status == "panel_crossing"
+    (past,) = [x for x in res.events if x.kind == "fold_past_flat"]
     (e,) = [x for x in res.events if x.kind == "panel_crossing"]
-    assert e.creases == (0, 5, 9, 13) and "folded past +-180 deg" in e.message
-    # the step stops at the increment where they crossed: its record is the last
+    assert past.creases == (0, 5, 9, 13) and "folded past 180 deg" in past.message
+    assert past.increment < e.increment and set(past.creases) <= set(e.creases)
+    assert e.panels and "passed through panels" in e.message
+    # the step stops at the increment where panels met: its record is the last
     assert e.increment == res.steps[0].increments - 1
 
 

@@ -4,8 +4,8 @@ folded rigidly about its crease through 180 deg."""
 import numpy as np
 import pytest
 
-from simulator import (EVENT_KINDS, Event, Pattern, build_mesh, crease_crossings, crossing_event,
-                       fold_angles, node_crossings)
+from simulator import (EVENT_KINDS, Event, Pattern, build_mesh, build_sharp_mesh,
+                       crease_crossings, crossing_event, fold_angles, node_crossings)
 from simulator.errors import ParameterError
 
 
@@ -22,12 +22,7 @@ def strip():
 def folded(mesh, deg):
     """Node positions with every node on panel 1's side (y < 0) turned by ``deg`` about the
     crease's centre line (the x axis)."""
-    X, t = mesh.nodes, np.radians(deg)
-    x = X.copy()
-    side = X[:, 1] < -1e-12
-    y, z = X[side, 1], X[side, 2]
-    x[side, 1], x[side, 2] = y * np.cos(t) - z * np.sin(t), y * np.sin(t) + z * np.cos(t)
-    return x
+    return _turn(mesh.nodes, deg)
 
 
 def test_fold_angle_wraps_at_180_deg(strip):
@@ -101,17 +96,73 @@ def test_the_cli_summary_line_names_the_creases_and_panels(strip):
                          "other")
 
 
-@pytest.mark.parametrize("before, after, crossed", [
-    (179, 181, True), (181, 179, True), (-179, -181, True), (170, 179, False),
-    (-60, 60, False), (0, 1, False), (100, 260, True)])
-def test_the_step_loops_watch_finds_what_crease_crossings_finds(strip, before, after, crossed):
+@pytest.mark.parametrize("before, after, kind", [
+    (179, 181, "panel_crossing"), (181, 179, "panel_crossing"),
+    (-179, -181, "panel_crossing"), (170, 179, None), (-60, 60, None), (0, 1, None),
+    (100, 260, "fold_past_flat")])
+def test_the_step_loops_watch_finds_what_crease_crossings_finds(strip, before, after, kind):
+    """Panel 1 turned rigidly about the crease's centre line: its centre passes through
+    panel 0 where the fold passes 180 deg (as with a sharp crease), a panel crossing. In one
+    increment from 100 to 260 deg (turning down through -z and up past 180 deg) its nodes
+    move on straight lines that pass through the crease, not through panel 0: the crease
+    folded past 180 deg."""
     from simulator.events import CrossingWatch
 
     watch = CrossingWatch(strip, folded(strip, before) - strip.nodes)
     event = watch.check(folded(strip, after) - strip.nodes, 3, 0.5)
-    assert (event is not None) == crossed
-    if crossed:
+    assert (None if event is None else event.kind) == kind
+    if kind:
         assert event.creases == (1,) and event.increment == 3
+    if kind == "panel_crossing":
+        assert event.panels == (0, 1)
+
+
+def lifted(mesh, deg, h):
+    """Node positions with panel 1's side turned by ``deg`` about the line y = 0, z = ``h``
+    [m] (positive ``deg`` turns it down, towards -z: ``h`` < 0 puts the axis on that side):
+    the crease's arc of a crease of finite width, whose panels are 2 |h| apart when
+    parallel."""
+    return _turn(mesh.nodes - [0, 0, h], deg) + [0, 0, h]
+
+
+def _turn(X, deg):
+    t, x = np.radians(deg), X.copy()
+    side = X[:, 1] < -1e-12
+    y, z = X[side, 1], X[side, 2]
+    x[side, 1], x[side, 2] = y * np.cos(t) - z * np.sin(t), y * np.sin(t) + z * np.cos(t)
+    return x
+
+
+def test_a_wide_crease_folds_past_flat_with_an_event_until_its_panels_meet(strip):
+    """A crease of finite width: past 180 deg the panels are still apart ("fold_past_flat",
+    once, naming the crease; the step goes on); turning further, panel 1's far corners reach
+    panel 0 ("panel_crossing", naming the crease past flat and both panels). A watch started
+    past flat tests the nodes too; a sharp mesh's crease passing 180 deg is a crossing."""
+    from simulator.events import CrossingWatch, stops
+
+    h = -50e-6                                     # panels 100 um apart when parallel
+    watch = CrossingWatch(strip, lifted(strip, 170, h) - strip.nodes)
+    kinds = []
+    for deg in (175, 179, 181, 183, 185, 190, 200):
+        e = watch.check(lifted(strip, deg, h) - strip.nodes, deg, deg / 200)
+        kinds.append(None if e is None else e.kind)
+        if e is not None:
+            assert e.creases == (1,)
+        if stops(e):
+            assert e.panels == (0, 1) and "crease 1 folded past 180 deg" in e.message
+            break
+    # panel 1's centre (0.55 mm from the axis) reaches panel 0 at 180 + asin(2 |h| / 0.55 mm)
+    # = 190.5 deg (its corners, on the edges of panel 0, are not counted: grazing)
+    assert kinds == [None, None, "fold_past_flat", None, None, None, "panel_crossing"]
+    e = CrossingWatch(strip, lifted(strip, 183, h) - strip.nodes).check(
+        lifted(strip, 200, h) - strip.nodes, 1, 0.1)
+    assert stops(e)
+    v = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
+    sharp = build_sharp_mesh(Pattern(v, [[0, 1, 2, 3], [0, 4, 5, 1]], crease_width=200e-6,
+                                     crease_thickness=1e-6, panel_thickness=10e-6))
+    e = CrossingWatch(sharp, folded(sharp, 179) - sharp.nodes).check(
+        folded(sharp, 181) - sharp.nodes, 1, 0.1)
+    assert stops(e) and e.creases == (1,)
 
 
 @pytest.mark.parametrize("flip", [False, True])
