@@ -74,6 +74,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.equilibrium_check": ("EQUILIBRIUM_RTOL", "EquilibriumCheck", "check_equilibrium"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
+    ".thermal.measures": ("CREASE_MEASURES", "crease_temperatures"),
     ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
                        "crease_limit_temperatures"),
     ".thermal.fixed_shape": ("FixedShapeTemperatures", "fixed_shape_temperatures",
@@ -114,6 +115,8 @@ __all__ = [
     # the crease temperature limit (1.2 T_g, judged on the crease centre-line mean)
     "TemperatureLimit", "TemperatureVerdict", "crease_limit_temperatures", "TG_FACTOR",
     "LIMIT_MEASURES",
+    # each crease's temperature measures (actuation, centre line, centre, hottest node)
+    "crease_temperatures", "CREASE_MEASURES",
     # heat loss: calibrating the chain model to the boundary-integral model or the FE
     "calibrate_environment", "CalibrationResult",
     # steady temperatures of a fixed shape under the chain, integral or FE loss model

@@ -22,9 +22,8 @@ import numpy as np
 from ._result import ResultFiles, _git_hash, _jsonable
 from ._table import step_array, write_csv
 from ._version import __version__
-from .model.bimorph import crease_temperature_weights
 from .mechanics.kinematics import crease_rotations, fold_angles
-from .thermal.limit import crease_limit_temperatures
+from .thermal.measures import crease_temperatures
 
 __all__ = ["StepResult", "SimulationResult"]
 
@@ -230,22 +229,21 @@ class SimulationResult:
     @cached_property
     def crease_temperature(self) -> np.ndarray:
         """(m, C) crease temperature used for actuation [deg C] (7-node weighted mean)."""
-        t = self.history["temperature"][:, self.model.mesh.crease_nodes]
-        if t.shape[2] != 7:                 # concentrated hinges: the two hinge nodes
-            return t.mean(axis=2)
-        return t @ crease_temperature_weights()
+        return crease_temperatures(self.history["temperature"].T, self.model.mesh).T
 
     @cached_property
     def crease_temperature_centre_line(self) -> np.ndarray:
         """(m, C) mean of the 3 centre-line nodes (A, B, Ctr) of each crease [deg C]: the
         measure the 1.2 T_g design limit is judged on (theory 5.4;
         :class:`~simulator.thermal.limit.TemperatureLimit`)."""
-        return crease_limit_temperatures(self.history["temperature"].T, self.model.mesh).T
+        return crease_temperatures(self.history["temperature"].T, self.model.mesh,
+                                   "centre_line").T
 
     @cached_property
     def crease_temperature_max(self) -> np.ndarray:
         """(m, C) hottest of the 7 crease nodes (2 hinge nodes of a sharp crease) [deg C]."""
-        return self.history["temperature"][:, self.model.mesh.crease_nodes].max(axis=2)
+        return crease_temperatures(self.history["temperature"].T, self.model.mesh,
+                                   "crease_max").T
 
     def to_frame(self):
         """Long table: one row per record and crease.

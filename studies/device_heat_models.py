@@ -87,9 +87,8 @@ import pandas as pd
 
 from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, evaluate_gripper,
                                     gripper_model)
-from simulator import crease_limit_temperatures, simulate, solve_fe3d
+from simulator import crease_limit_temperatures, crease_temperatures, simulate, solve_fe3d
 from simulator.cases import get_case
-from simulator.model.bimorph import crease_temperature_weights
 from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
@@ -134,7 +133,7 @@ def integral_model(model, refinement: int = DEFAULT_M):
 
 def _actuation(mesh, T) -> np.ndarray:
     """(C,) actuation temperatures [degC] (theory 5.1) of nodal temperatures ``T`` (n,)."""
-    return T[mesh.crease_nodes] @ crease_temperature_weights()
+    return crease_temperatures(T, mesh)
 
 
 def _centre(mesh, T) -> np.ndarray:

@@ -121,8 +121,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from simulator import crease_limit_temperatures
-from simulator.model.bimorph import crease_temperature_weights
+from simulator import crease_temperatures
 from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
@@ -178,9 +177,9 @@ def crease_measures(mesh, temperature) -> dict:
     """Per crease row (C,) [deg C]: ``T_crease`` (7-node actuation temperature), ``T_max``
     (centre node Ctr), ``T_ave`` (mean of the centre line A, B, Ctr) and ``T_hottest`` (the
     hottest of the 7 crease nodes), from node temperatures (n,) [deg C]."""
-    t = np.asarray(temperature, float)[mesh.crease_nodes]
-    return {"T_crease": t @ crease_temperature_weights(), "T_max": t[:, 6],
-            "T_ave": crease_limit_temperatures(temperature, mesh), "T_hottest": t.max(axis=1)}
+    return {name: crease_temperatures(temperature, mesh, measure) for name, measure in (
+        ("T_crease", "actuation"), ("T_max", "centre"), ("T_ave", "centre_line"),
+        ("T_hottest", "crease_max"))}
 
 
 def substrate_plane(model, x) -> tuple:

@@ -11,12 +11,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from simulator import (LIMIT_MEASURES, ConvergenceError, Model, ParameterError, SimulationState,
-                       SolverError, crease_limit_temperatures, fold_angles, initial_state)
+                       SolverError, crease_limit_temperatures, crease_temperatures,
+                       fold_angles, initial_state)
 # Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
 # operator and the crease temperature weights for the influence matrices; a Newton re-solve
 # of the equilibrium system with moved crease rest angles for the fold sensitivities). These
 # are solver internals, not a user's API (tests/unit/test_architecture.py lists them).
-from simulator.model.bimorph import crease_temperature_weights
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import newton
 from simulator.state import equilibrium_system, thermal_model
@@ -67,9 +67,8 @@ def influence_matrices(model: Model, x: np.ndarray, heaters: Mapping) -> tuple:
             B[mesh.crease_row_of(c), j] = 1.0
     Q = np.column_stack([tm.heat_vector(b) for b in B.T])
     rise = tm.solve(x, Q, room_temperature=0.0)                  # (n, k), linear in Q
-    nodes = rise[mesh.crease_nodes]                               # (C, 7, k)
-    G = np.einsum("cwk,w->ck", nodes, crease_temperature_weights())
-    return G, nodes.reshape(-1, len(heaters))
+    G = crease_temperatures(rise, mesh)                           # (C, k)
+    return G, rise[mesh.crease_nodes].reshape(-1, len(heaters))
 
 
 def _check_measure(measure) -> str:

@@ -17,7 +17,7 @@ temperature and shape agree. :class:`AmbientTemperature` ramps the room temperat
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 

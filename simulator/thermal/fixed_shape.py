@@ -19,6 +19,7 @@ import numpy as np
 from .._result import ResultFiles
 from .._validate import array, integer, one_of
 from ..errors import ParameterError
+from .measures import crease_temperatures
 from .parameters import ThermalParameters
 from .steady import ThermalModel
 
@@ -29,10 +30,19 @@ __all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel
 _COPLANAR = 1e-6
 
 
+def crease_measures(T, mesh) -> dict:
+    """The crease temperature fields of :class:`CreaseTemperatureTable` from node temperatures
+    ``T`` (n,) [deg C] (:func:`~simulator.thermal.measures.crease_temperatures`)."""
+    return {name: crease_temperatures(T, mesh, measure) for name, measure in (
+        ("crease_temperature", "actuation"), ("crease_temperature_max", "crease_max"),
+        ("crease_t_ctr", "centre"), ("crease_t_ave", "centre_line"))}
+
+
 class CreaseTemperatureTable:
     """``to_frame`` of a result with the crease temperature fields ``temperature``,
     ``crease_temperature``, ``crease_temperature_max``, ``crease_t_ctr``, ``crease_t_ave``
-    (this module's result and :class:`~simulator.thermal.fe.FE3DResult`)."""
+    (this module's result and :class:`~simulator.thermal.fe.FE3DResult`; the fields:
+    :func:`crease_measures`)."""
 
     def to_frame(self):
         """One row per crease: ``crease [-]`` and the four crease temperatures [degC]."""
@@ -54,7 +64,7 @@ class FixedShapeTemperatures(CreaseTemperatureTable, ResultFiles):
 
     Attributes
     ----------
-    success, status, message : outcome (status 0 solved).
+    success, status, message : outcome (status ``"converged"``: solved).
     temperature : (n,) array, node temperatures [deg C].
     crease_temperature : (C,) array, 7-node weighted mean (the actuation temperature) [deg C].
     crease_temperature_max : (C,) array, hottest of the 7 crease nodes [deg C].
@@ -68,7 +78,7 @@ class FixedShapeTemperatures(CreaseTemperatureTable, ResultFiles):
     """
 
     success: bool
-    status: int
+    status: str
     message: str
     temperature: np.ndarray
     crease_temperature: np.ndarray
@@ -217,12 +227,7 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
 
 
 def _result(model, T, q, tm, rt, wall_time):
-    from ..model.bimorph import crease_temperature_weights
-    from .limit import crease_limit_temperatures
-
-    cn = model.mesh.crease_nodes
     return FixedShapeTemperatures(
-        True, 0, "solved", temperature=T, crease_temperature=T[cn] @ crease_temperature_weights(),
-        crease_temperature_max=T[cn].max(axis=1), crease_t_ctr=T[cn[:, 6]],
-        crease_t_ave=crease_limit_temperatures(T, model.mesh), heat_input=float(q.sum()),
-        room_temperature=rt, loss_model=tm.params.loss_model, thermal=tm.params, wall_time=wall_time)
+        True, "converged", "solved", temperature=T, **crease_measures(T, model.mesh),
+        heat_input=float(q.sum()), room_temperature=rt, loss_model=tm.params.loss_model,
+        thermal=tm.params, wall_time=wall_time)

@@ -27,6 +27,7 @@ import numpy as np
 from .._result import ResultFiles
 from .._validate import finite, one_of, positive
 from ..errors import ParameterError
+from .measures import crease_temperatures
 
 __all__ = ["TG_FACTOR", "LIMIT_MEASURES", "crease_limit_temperatures", "TemperatureLimit",
            "TemperatureVerdict"]
@@ -37,8 +38,6 @@ TG_FACTOR = 1.2
 #: What a limit can be judged on: ``"centre_line"`` (the documented measure, theory 5.4) or
 #: ``"crease_max"`` (the hottest crease node), with the words messages use for them.
 LIMIT_MEASURES = {"centre_line": "centre-line mean", "crease_max": "hottest node"}
-#: Columns of ``BarHingeMesh.crease_nodes`` (N11, N12, N21, N22, A, B, Ctr) on the centre line.
-_CENTRE_LINE = slice(4, 7)
 #: What a hottest node shown beside a verdict on the centre line says of itself.
 _INFORMATION = "information: the limit is judged on the crease centre-line mean"
 
@@ -67,13 +66,7 @@ def crease_limit_temperatures(node_values, mesh, measure: str = "centre_line") -
     -------
     ndarray (C,) or (C, ...), in ``mesh.crease_ids`` order
     """
-    _check_measure(measure)
-    nodes = np.asarray(node_values, dtype=float)[np.asarray(mesh.crease_nodes)]  # (C, w, ...)
-    if measure == "crease_max":
-        return nodes.max(axis=1)
-    if nodes.shape[1] == 7:
-        nodes = nodes[:, _CENTRE_LINE]
-    return nodes.mean(axis=1)
+    return crease_temperatures(node_values, mesh, _check_measure(measure))
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import pytest
 from design.analysis.heaters import allocate_heaters, influence_matrices, limit_temperatures
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
-from simulator import Heat, TemperatureLimit, simulate
+from simulator import Heat, TemperatureLimit, crease_temperatures, simulate
 from simulator.state import thermal_model
 
 P_REF = 6e-3          # W per crease that made the target shape
@@ -157,7 +157,7 @@ def test_limit_measure_is_the_centre_line_mean_of_the_results(folded):
     rise = np.zeros((model.mesh.n_nodes, 2))
     rise[model.mesh.crease_nodes.ravel()] = H
     np.testing.assert_allclose(limit_temperatures(model, rise),
-                               H.reshape(-1, 7, 2)[:, 4:7].mean(axis=1), rtol=1e-15)
+                               crease_temperatures(rise, model.mesh, "centre_line"), rtol=1e-15)
 
 
 def test_limit_between_centre_line_and_hottest_node_separates_the_measures(folded):

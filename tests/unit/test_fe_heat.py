@@ -36,7 +36,7 @@ def test_sphere_is_exact_to_the_faceting_and_converges(far_field, exact):
 
 def test_disk_conducts_8ka_within_2_percent():
     r = fe_disk(2e-3, 0.026, level=0, accuracy=0.03)
-    assert r.success and r.status == 0
+    assert r.success and r.status == "converged"
     assert r.conductance == pytest.approx(8 * 0.026 * 2e-3, rel=0.02)
     assert r.free_space_ratio > 1.0           # the Dirichlet principle: the FE bounds from above
     assert r.free_space_ratio == pytest.approx(_disk(0), rel=1e-6)    # scale-free
@@ -74,7 +74,7 @@ def test_2d_section_is_hotter_with_a_larger_box():
 def test_coarse_mesh_for_the_stated_accuracy_warns(caplog):
     with caplog.at_level(logging.WARNING, logger="simulator.thermal.fe"):
         r = fe_disk(1.0, 1.0, level=0, accuracy=0.005)
-    assert r.success and r.status == 1 and "accuracy" in r.message and r.warnings
+    assert r.success and r.status == "accuracy_warning" and "accuracy" in r.message and r.warnings
     assert any("refine the mesh" in m for m in caplog.messages)
 
 

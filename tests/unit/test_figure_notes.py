@@ -7,7 +7,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from design.devices.miura import MiuraProblem
-from simulator import ParameterError, get_case
+from simulator import ParameterError, crease_temperatures, get_case
 from studies import plotting
 from studies.figure_notes import PALETTE, environment_note, figure_style, note_assumptions
 
@@ -74,7 +74,7 @@ def test_centre_line_temperature_is_the_mean_of_a_b_ctr():
     res = get_case("single_fold", thermal_steps=5, power_mW=20.0).run()
     mesh = res.model.mesh
     t = res.history["temperature"]
-    expected = t[:, mesh.crease_nodes[:, 4:7]].mean(axis=2)
+    expected = crease_temperatures(t.T, mesh, "centre_line").T
     np.testing.assert_array_equal(res.crease_temperature_centre_line, expected)
     np.testing.assert_array_equal(plotting.centre_line_temperatures(t, mesh), expected)
     assert np.all(res.crease_temperature_centre_line <= res.crease_temperature_max + 1e-12)

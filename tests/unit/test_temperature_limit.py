@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from simulator import (SU8, LIMIT_MEASURES, ParameterError, PatternError, TemperatureLimit,
-                       TemperatureVerdict, crease_limit_temperatures, get_case)
+                       TemperatureVerdict, crease_limit_temperatures, crease_temperatures,
+                       get_case)
 
 LIMIT = TemperatureLimit.of_glass_transition(SU8.glass_transition)
 
@@ -24,7 +25,7 @@ def test_the_measure_is_the_mean_of_a_b_ctr_or_the_hottest_node(single_fold):
     mesh, t = single_fold.model.mesh, single_fold.state.temperature
     cn = mesh.crease_nodes
     np.testing.assert_array_equal(crease_limit_temperatures(t, mesh),
-                                  t[cn[:, 4:7]].mean(axis=1))
+                                  crease_temperatures(t, mesh, "centre_line"))
     np.testing.assert_array_equal(crease_limit_temperatures(t, mesh, "crease_max"),
                                   t[cn].max(axis=1))
     rises = np.column_stack([t - 21.0, 2 * (t - 21.0)])          # (n, k): linear, columnwise

@@ -54,7 +54,8 @@ class FEDiskResult(ResultFiles):
 
     Attributes
     ----------
-    success, status, message : outcome (status 0 ok, 1 accuracy warning, 2 failed).
+    success, status, message : outcome (status ``"converged"``, ``"accuracy_warning"`` (solved; a
+        check of its accuracy failed: ``warnings``) or ``"failed"``).
     conductance : float or None, Q / dT [W/K] (None if failed).
     radius, k_medium : float, disk radius [m], medium conductivity [W/(m K)].
     height : float or None, distance to the isothermal plane [m].
@@ -65,7 +66,7 @@ class FEDiskResult(ResultFiles):
     """
 
     success: bool
-    status: int
+    status: str
     message: str
     conductance: float | None
     radius: float
@@ -95,7 +96,8 @@ class FE3DResult(CreaseTemperatureTable, ResultFiles):
 
     Attributes
     ----------
-    success, status, message : outcome (status 0 ok, 1 accuracy warning, 2 failed).
+    success, status, message : outcome (status ``"converged"``, ``"accuracy_warning"`` (solved; a
+        check of its accuracy failed: ``warnings``) or ``"failed"``).
     temperature : (n,) array or None, bar-and-hinge node temperatures [deg C].
     crease_temperature : (C,) array, 7-node weighted mean (the actuation temperature, as
         :attr:`simulator.SimulationResult.crease_temperature`) [deg C].
@@ -109,7 +111,7 @@ class FE3DResult(CreaseTemperatureTable, ResultFiles):
     """
 
     success: bool
-    status: int
+    status: str
     message: str
     temperature: np.ndarray | None = None
     crease_temperature: np.ndarray | None = None
@@ -142,7 +144,7 @@ class FE2DResult(ResultFiles):
     """
 
     success: bool
-    status: int
+    status: str
     message: str
     x: np.ndarray | None = None
     temperature: np.ndarray | None = None

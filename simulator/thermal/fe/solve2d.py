@@ -121,5 +121,6 @@ def solve_fe2d(lengths, kt, heat, k_medium: float, *, fixed_ends: bool = True,
     t_mid = np.interp(0.5 * (xe[:-1] + xe[1:]), xline, tline)
     info = FEMeshInfo(level, len(pts), len(tris), basis.N, h * scale, R * scale, box_factor,
                       "dirichlet", err, time.perf_counter() - t0)
-    return FE2DResult(True, 1 if warns else 0, warns[0] if warns else "converged", x=xe,
-                      temperature=t_ends, segment_temperature=t_mid, mesh=info, warnings=warns)
+    return FE2DResult(True, "accuracy_warning" if warns else "converged",
+                      warns[0] if warns else "converged", x=xe, temperature=t_ends,
+                      segment_temperature=t_mid, mesh=info, warnings=warns)

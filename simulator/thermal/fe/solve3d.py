@@ -74,7 +74,7 @@ def _accuracy_warnings(level, box_factor, far_field, accuracy, what):
 
 def _failed(cls, exc, **kw):
     logger.warning("FE solution failed: %s", exc)
-    return cls(success=False, status=2, message=f"FE solution failed: {exc}", **kw)
+    return cls(success=False, status="failed", message=f"FE solution failed: {exc}", **kw)
 
 
 def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
@@ -99,7 +99,7 @@ def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
         Condition on the outer sphere (module notes).
     accuracy : float
         Stated relative accuracy [-]; a coarser level or smaller box is warned about
-        (logging WARNING and ``result.warnings``, status 1).
+        (logging WARNING and ``result.warnings``, status ``"accuracy_warning"``).
     extrapolate : bool
         Richardson extrapolation ``2 Q_level - Q_(level-1)`` (the error is first order in the
         mesh size, halved per level; level >= 1): about 0.02 % at level 2 in free space.
@@ -141,7 +141,8 @@ def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
     h_min = _gmsh.level_sizes(level)[0] * radius * min(1.0, 4 * (height or radius) / radius)
     mesh = FEMeshInfo(level, len(pts), len(tets), A.shape[0], h_min, R, box_factor, far_field,
                       err, time.perf_counter() - t0)
-    return FEDiskResult(True, 1 if warns else 0, warns[0] if warns else "converged",
+    return FEDiskResult(True, "accuracy_warning" if warns else "converged",
+                        warns[0] if warns else "converged",
                         conductance=Q, radius=radius, k_medium=k_medium, height=height,
                         mesh=mesh, warnings=warns, levels=(Q,))
 
@@ -179,8 +180,8 @@ def fe_sphere(radius: float, k_medium: float, *, box_factor: float = 4.0, level:
     mesh = FEMeshInfo(level, len(pts), len(tets), A.shape[0], _gmsh.level_sizes(level)[1]
                       * radius, box_factor * radius, box_factor, far_field,
                       MESH_ERROR[level], time.perf_counter() - t0)
-    return FEDiskResult(True, 0, "converged", conductance=Q, radius=radius, k_medium=k_medium,
-                        mesh=mesh)
+    return FEDiskResult(True, "converged", "converged", conductance=Q, radius=radius,
+                        k_medium=k_medium, mesh=mesh)
 
 
 # ---------------------------------------------------------------------------- sheets
@@ -374,16 +375,13 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     except Exception as exc:                                      # noqa: BLE001 - as data
         return _failed(FE3DResult, exc, room_temperature=rt)
     T = T + rt
-    cn = mesh.crease_nodes
-    from ...model.bimorph import crease_temperature_weights
-    from ..limit import crease_limit_temperatures
+    from ..fixed_shape import crease_measures
 
     info = FEMeshInfo(level, len(pts), len(tets), A.shape[0], min(h_c, h_p) * scale,
                       box_factor * scale, box_factor, far_field, err, time.perf_counter() - t0)
-    return FE3DResult(True, 1 if warns else 0, warns[0] if warns else "converged",
-                      temperature=T, crease_temperature=T[cn] @ crease_temperature_weights(),
-                      crease_temperature_max=T[cn].max(axis=1), crease_t_ctr=T[cn[:, 6]],
-                      crease_t_ave=crease_limit_temperatures(T, mesh), heat_input=float(q.sum()),
+    return FE3DResult(True, "accuracy_warning" if warns else "converged",
+                      warns[0] if warns else "converged",
+                      temperature=T, **crease_measures(T, mesh), heat_input=float(q.sum()),
                       room_temperature=rt, mesh=info, warnings=warns)
 
 
