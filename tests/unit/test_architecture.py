@@ -70,7 +70,6 @@ DESIGN_SIMULATOR_INTERNALS = {
     # the heater LP linearises the solver: the steady thermal operator and crease temperature
     # weights (influence matrices), a Newton re-solve with moved crease rest angles (fold
     # sensitivities); solver internals, not a user's API
-    ("design/analysis/_heater_lp.py", "simulator.model.bimorph"),
     ("design/analysis/_heater_lp.py", "simulator.model.properties"),
     ("design/analysis/_heater_lp.py", "simulator.solvers.newton"),
     ("design/analysis/_heater_lp.py", "simulator.state"),
