@@ -73,6 +73,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.stability": ("Stability", "tangent_stability", "state_stability"),
     ".solvers.equilibrium_check": ("EQUILIBRIUM_RTOL", "EquilibriumCheck", "check_equilibrium"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
+    ".thermal.loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.measures": ("CREASE_MEASURES", "crease_temperatures"),
     ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
@@ -95,6 +96,8 @@ __all__ = [
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
+    # heat loss to the medium: the paper's chains or the calibration-free integral, a substrate
+    "ChainLoss", "IntegralLoss", "Substrate", "HEAT_LOSS_MODELS",
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # plain crease patterns: layer stacks and fold signs of a start shape
     "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "unsupported_panels",

@@ -87,16 +87,16 @@ import pandas as pd
 
 from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, evaluate_gripper,
                                     gripper_model)
-from simulator import crease_limit_temperatures, crease_temperatures, simulate, solve_fe3d
+from simulator import (IntegralLoss, Substrate, crease_limit_temperatures, crease_temperatures,
+                       simulate, solve_fe3d)
 from simulator.cases import get_case
-from simulator.thermal.fixed_shape import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import PAPER_DEVICES
 from studies.gripper_shapes import _cd_csv, _cd_cycles, gripper_states
 from studies.miura_lifter import lift_um
 
-__all__ = ["main", "plot", "run", "integral_model", "substrate_plane"]
+__all__ = ["main", "plot", "run", "integral_model"]
 
 logger = logging.getLogger(__name__)
 
@@ -117,17 +117,11 @@ POWER, TEMP, TEMP_CL = "power [mW]", "temperature [degC]", "temperature_centre [
 
 
 # ----------------------------------------------------------------------------- models
-def substrate_plane(model) -> tuple:
-    """The plane of ``model``'s thermal boundary panels (point, normal into the structure's
-    side; 6 floats [m]), as ``solve_fe3d(substrate="model")`` takes it; () without any."""
-    return boundary_panel_plane(model, model.mesh.nodes)
-
-
 def integral_model(model, refinement: int = DEFAULT_M):
-    """``model`` with the integral heat loss (theory 4.7) over its substrate plane."""
-    thermal = dataclasses.replace(model.thermal, loss_model="integral",
-                                  integral_refinement=refinement,
-                                  substrate_plane=substrate_plane(model))
+    """``model`` with the integral heat loss (theory 4.7) over its substrate, the plane of its
+    thermal boundary panels (``Substrate()``, as ``solve_fe3d(substrate="model")`` takes it)."""
+    thermal = dataclasses.replace(model.thermal, loss=IntegralLoss(refinement=refinement),
+                                  substrate=Substrate())
     return dataclasses.replace(model, thermal=thermal)
 
 

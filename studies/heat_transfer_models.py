@@ -19,8 +19,8 @@ temperatures of that same shape from that same nodal heat (``ThermalModel.heat_v
 of a crease's power on N11, N12, N21, N22, 1/12 on A and B, 1/3 on Ctr). They share the sheet's
 T3 conduction and the room-temperature nodes; they differ only in how heat leaves the sheet.
 The chain model is the model's own ``ThermalParameters``; the integral model is the same
-parameters by ``dataclasses.replace(model.thermal, loss_model="integral",
-integral_refinement=m, integral_extrapolation=..., substrate_plane=...)`` in three variants:
+parameters by ``dataclasses.replace(model.thermal, loss=IntegralLoss(refinement=m,
+extrapolation=...), substrate=Substrate())`` in three variants:
 the default (m = 3, Richardson-extrapolated from m = 2 and 3), the plain m = 2 (the default
 before 6 Dec 2026) and the plain m = 8, with the isothermal substrate plane of the model's
 thermal boundary panels
@@ -121,13 +121,12 @@ import time
 import numpy as np
 import pandas as pd
 
-from simulator import crease_temperatures
-from simulator.thermal.fixed_shape import boundary_panel_plane
+from simulator import IntegralLoss, Substrate, crease_temperatures
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 
 __all__ = ["NAME", "ERROR_CSV", "run", "plot", "main", "error_table", "crease_measures",
-           "substrate_plane", "cases"]
+           "cases"]
 
 logger = logging.getLogger(__name__)
 
@@ -180,14 +179,6 @@ def crease_measures(mesh, temperature) -> dict:
     return {name: crease_temperatures(temperature, mesh, measure) for name, measure in (
         ("T_crease", "actuation"), ("T_max", "centre"), ("T_ave", "centre_line"),
         ("T_hottest", "crease_max"))}
-
-
-def substrate_plane(model, x) -> tuple:
-    """The isothermal substrate plane of the model's thermal boundary panels at positions
-    ``x`` (n, 3) [m], as ``ThermalParameters.substrate_plane`` (a point and the unit normal
-    towards the rest of the structure), or () without boundary panels
-    (:func:`simulator.thermal.fixed_shape.boundary_panel_plane`, the FE's ``substrate="model"``)."""
-    return boundary_panel_plane(model, x)
 
 
 # ----------------------------------------------------------------------------- cases
@@ -289,10 +280,10 @@ def _fe(model, x, q, levels):
 def _solutions(model, x, q, kind, quick):
     """[(model label, refinement, FE level, T (n,), wall [s], success, message)]."""
     rows = [("chain", None, None, *_steady(model, x, q), True, "converged")]
-    plane = substrate_plane(model, x)
     for m, extrapolated in (REFINEMENTS_QUICK if quick else REFINEMENTS)[kind]:
-        T, wall = _steady(model, x, q, loss_model="integral", integral_refinement=m,
-                          integral_extrapolation=extrapolated, substrate_plane=plane)
+        T, wall = _steady(model, x, q, loss=IntegralLoss(refinement=m,
+                                                         extrapolation=extrapolated),
+                          substrate=Substrate())
         rows.append(("integral", (m, extrapolated), None, T, wall, True, "converged"))
     try:
         import gmsh  # noqa: F401

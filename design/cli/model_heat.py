@@ -85,7 +85,10 @@ def model_summary(model, heated) -> str:
         line += f"; creases {capped(passive)} are no actuators: heated, they do not fold"
     line += f"; panels {distinct(pattern.panel_thickness)} um"
     if thermal is not None:
-        line += (f"; air {thermal.env_thickness * 1e6:.4g} um at {thermal.env_conductivity:.4g} "
-                 "W/(m K)")
+        loss = thermal.loss
+        what = (f"chains, t_env {loss.thickness * 1e6:.4g} um" if loss.model == "chain" else
+                f"integral, m = {loss.refinement}")
+        name = thermal.medium.name if thermal.medium.name != "custom" else "the medium"
+        line += f"; heat loss: {what}, to {name} at {thermal.env_conductivity:.4g} W/(m K)"
     fixed = int(model.fixed_mask.sum()) if hasattr(model, "fixed_mask") else 0
     return line + f"; supports: {fixed} fixed degrees of freedom"

@@ -33,9 +33,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHingeParameters,
-                       Bimorph, ContactParameters, Load, NewtonOptions, ParameterError, SelfFold,
-                       Supports, TemperatureLimit, TemperatureVerdict, ThermalParameters,
-                       build_mesh, example_patterns, make_model, simulate)
+                       Bimorph, ContactParameters, IntegralLoss, Load, NewtonOptions,
+                       ParameterError, SelfFold, Substrate, Supports, TemperatureLimit,
+                       TemperatureVerdict, ThermalParameters, build_mesh, example_patterns,
+                       make_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import integer, one_of, positive
 
@@ -356,8 +357,8 @@ def _loss_model(design: GripperDesign) -> dict:
     substrate panel's plane, ``undercut`` below the sheet, normal +z into the air)."""
     if design.loss_model == "chain":
         return {}
-    return {"loss_model": design.loss_model, "integral_refinement": design.integral_refinement,
-            "substrate_plane": (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)}
+    return {"loss": IntegralLoss(refinement=design.integral_refinement),
+            "substrate": Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))}
 
 
 def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):

@@ -21,6 +21,7 @@ from scipy.optimize import least_squares
 from .._result import ResultFiles
 from .._validate import array, in_range, positive
 from ..errors import ParameterError
+from .loss import Substrate
 from ..model.model import Model
 from .fixed_shape import resolve_substrate
 from .steady import ThermalModel
@@ -85,8 +86,10 @@ def _reference_solver(model: Model, reference, x, substrate):
     if callable(reference):
         return reference, "callable"
     if reference == "integral":
+        plane = resolve_substrate(model, x, substrate)
         prm = dataclasses.replace(model.thermal, loss_model="integral",
-                                  substrate_plane=resolve_substrate(model, x, substrate))
+                                  substrate=Substrate.plane(plane[:3], plane[3:]) if plane
+                                  else None)
         return (ThermalModel(model.mesh, prm, warn_no_plane=substrate is not None).solve,
                 "integral")
     if reference == "fe":
@@ -136,10 +139,11 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
         Range of beta [rad] searched, within [0, pi/2).
     t_env_bounds : (float, float), optional
         Range of t_env [m] (default: 0.01 to 100 times the model's t_env).
-    substrate : "model", None or (point, normal)
-        Isothermal substrate plane of the reference (integral model or FE): the model's
-        ``substrate_plane``, else the plane of its thermal boundary panels at ``x``
-        (``"model"``; none without either), none, or a given plane [m], as in
+    substrate : "model", Substrate, None or (point, normal)
+        Isothermal substrate plane of the reference (integral model or FE): the model's own
+        (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
+        boundary panels at ``x``, none without them), a :class:`~simulator.thermal.loss.
+        Substrate`, none, or a given plane [m], as in
         :func:`~simulator.thermal.fixed_shape.fixed_shape_temperatures`.
 
     Returns

@@ -20,15 +20,12 @@ from .._result import ResultFiles
 from .._validate import array, integer, one_of
 from ..errors import ParameterError
 from .measures import crease_temperatures
+from .loss import Substrate
 from .parameters import ThermalParameters
-from .steady import ThermalModel
+from .steady import ThermalModel, panels_plane
 
 __all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane",
            "CreaseTemperatureTable"]
-
-#: Boundary panels farther than this fraction of their extent from one plane are not coplanar.
-_COPLANAR = 1e-6
-
 
 def crease_measures(T, mesh) -> dict:
     """The crease temperature fields of :class:`CreaseTemperatureTable` from node temperatures
@@ -100,43 +97,31 @@ class FixedShapeTemperatures(CreaseTemperatureTable, ResultFiles):
 
 def boundary_panel_plane(model, x=None) -> tuple:
     """The plane of the model's thermal boundary panels at positions ``x`` (n, 3) [m] (default:
-    the mesh's), as ``ThermalParameters.substrate_plane`` (a point and the unit normal towards
-    the rest of the sheet, 6 floats), or () without boundary panels (the FE's
-    ``substrate="model"``): the substrate plane to give the integral heat loss of a model
-    with boundary panels, ``dataclasses.replace(model.thermal, loss_model="integral",
-    substrate_plane=boundary_panel_plane(model))``."""
+    the mesh's) as 6 floats, a point and the unit normal towards the rest of the sheet, or ()
+    without boundary panels: the plane the default substrate, ``Substrate()``, stands for
+    (:func:`~simulator.thermal.steady.panels_plane`)."""
     panels = tuple(model.thermal.boundary_panels) if model.thermal is not None else ()
-    if not panels:
-        return ()
-    mesh = model.mesh
-    x = mesh.nodes if x is None else np.asarray(x, float)
-    p = x[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
-    origin = p.mean(axis=0)
-    normal = np.linalg.svd(p - origin)[2][-1]
-    if np.abs((p - origin) @ normal).max() > _COPLANAR * np.ptp(p, axis=0).max():
-        raise ParameterError(f"the thermal boundary panels {panels} are not coplanar: there is "
-                             "no substrate plane to take from them; give the plane explicitly "
-                             "(ThermalParameters.substrate_plane, or substrate=(point, normal) "
-                             "or None where the function has that argument).")
-    if np.mean((x - origin) @ normal) < 0:
-        normal = -normal
-    return tuple(float(v) for v in np.concatenate([origin, normal]))
+    return panels_plane(model.mesh, panels, x)
 
 
 def resolve_substrate(model, x, substrate):
-    """``substrate`` ("model", None or (point, normal)) as a ``substrate_plane`` (6 floats or
-    ()): "model" is the model's own ``substrate_plane``, else its boundary panels' plane."""
-    if substrate is None:
-        return ()
+    """``substrate`` ("model", None, (point, normal) or a :class:`~simulator.thermal.loss.
+    Substrate`) as a plane of 6 floats, or () for none: "model" is the model's own
+    substrate (``ThermalParameters.substrate``: its plane, that of its boundary panels at
+    ``x``, or none)."""
     if isinstance(substrate, str):
         one_of("substrate", substrate, ("model",), hint=" (or None, or (point, normal))")
-        own = model.thermal.substrate_plane if model.thermal is not None else ()
-        return tuple(own) if own else boundary_panel_plane(model, x)
+        substrate = model.thermal.substrate if model.thermal is not None else None
+    if substrate is None:
+        return ()
+    if isinstance(substrate, Substrate):
+        return substrate.as_tuple() if not substrate.from_panels else \
+            boundary_panel_plane(model, x)
     try:
         point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
     except (TypeError, ValueError):
-        raise ParameterError(f"substrate = {substrate!r} must be 'model', None or a pair "
-                             "(point (3,), normal (3,)) [m].") from None
+        raise ParameterError(f"substrate = {substrate!r} must be 'model', None, a Substrate or "
+                             "a pair (point (3,), normal (3,)) [m].") from None
     return tuple(float(v) for v in np.concatenate([point, normal]))
 
 
@@ -178,11 +163,12 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
     state : SimulationState, optional
         Shape ``mesh.nodes + state.u`` and default power; ``positions`` (n, 3) [m] overrides
         the shape. Default: the mesh's nodes.
-    substrate : "model", None or (point, normal)
-        Isothermal substrate plane of the integral model and the FE: the model's
-        ``substrate_plane``, else that of its thermal boundary panels (``"model"``; none
-        without either), none, or a given plane [m]. The chain model ignores it (its
-        substrate is the boundary panels' distance cap).
+    substrate : "model", Substrate, None or (point, normal)
+        Isothermal substrate plane of the integral model and the FE: the model's own
+        (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
+        boundary panels, none without them), a :class:`~simulator.thermal.loss.Substrate`,
+        none, or a given plane [m]. The chain model ignores it (its substrate is the
+        boundary panels' distance cap).
     refinement : int, optional
         ``integral_refinement`` of the integral model (default: the model's).
     extrapolation : bool, optional
@@ -201,8 +187,9 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
     if getattr(model, "mesh", None) is None or getattr(model, "thermal", None) is None:
         raise ParameterError("fixed_shape_temperatures needs a Model with thermal parameters "
                              f"(got {type(model).__name__}).")
-    chain = ThermalModel(model.mesh, dataclasses.replace(model.thermal, loss_model="chain"))
-    x, q = _shape_and_heat(model, chain, state, positions, crease_power, heat)
+    own = ThermalModel(model.mesh, model.thermal,       # its heat input (any loss model)
+                       warn_no_plane=False)
+    x, q = _shape_and_heat(model, own, state, positions, crease_power, heat)
     if loss_model == "fe":
         from .fe import solve_fe3d
 
@@ -214,13 +201,14 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
     t0 = time.perf_counter()
     prm = dataclasses.replace(model.thermal, loss_model=loss_model)
     if loss_model == "integral":
+        plane = resolve_substrate(model, x, substrate)
         prm = dataclasses.replace(
-            prm, substrate_plane=resolve_substrate(model, x, substrate),
+            prm, substrate=Substrate.plane(plane[:3], plane[3:]) if plane else None,
             integral_refinement=prm.integral_refinement if refinement is None else refinement,
             integral_extrapolation=(prm.integral_extrapolation if extrapolation is None
                                     else extrapolation))
-    tm = chain if loss_model == "chain" else ThermalModel(model.mesh, prm,
-                                                          warn_no_plane=substrate is not None)
+    tm = own if prm == model.thermal and loss_model == "chain" else ThermalModel(
+        model.mesh, prm, warn_no_plane=substrate is not None)
     rt = prm.room_temperature if room_temperature is None else float(room_temperature)
     T = tm.solve(x, q, rt)
     return _result(model, T, q, tm, rt, time.perf_counter() - t0)

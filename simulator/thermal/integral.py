@@ -19,7 +19,7 @@ above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
 Sheet on the substrate: the rule of the 3-D FE reference (``solve_fe3d`` holds sheet nodes on
 the plane at room temperature and does not embed triangles lying in it). Nodes closer to the
 plane than :data:`TOUCH_TOLERANCE` times the sheet's extent touch the substrate
-(:meth:`IntegralLoss.touching`): the steady model holds them at room temperature, and the
+(:meth:`IntegralOperator.touching`): the steady model holds them at room temperature, and the
 sub-triangles lying in the plane are left out of ``S`` (there the layer and its image cancel:
 their rows and columns of ``S`` vanish, they carry heat straight into the substrate and none
 into the medium). Nodes below the plane are pressed onto it (a warning) for the operator.
@@ -41,7 +41,7 @@ from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
 
-__all__ = ["IntegralLoss", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE"]
+__all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE"]
 
 logger = logging.getLogger(__name__)
 
@@ -53,7 +53,7 @@ MAX_SUB_TRIANGLES = 4000
 TOUCH_TOLERANCE = 1e-9
 
 
-class IntegralLoss:
+class IntegralOperator:
     """Dense single-layer loss operator of one mesh's sheet, for any shape.
 
     Parameters
@@ -286,10 +286,10 @@ def _padded(heat, live, n_sub):
 
 @dataclass(frozen=True)
 class _Operator:
-    """One build of :class:`IntegralLoss`: the positions ``x`` (n, 3) [m] it was built at, the
+    """One build of :class:`IntegralOperator`: the positions ``x`` (n, 3) [m] it was built at, the
     loss conductance ``L`` (n_sheet, n_sheet) [W/K], ``heat(rise_sheet) -> (n_sub,)`` [W] and
-    :meth:`IntegralLoss._distances` [m] there with the scale of their allowed change
-    (:meth:`IntegralLoss._scale`)."""
+    :meth:`IntegralOperator._distances` [m] there with the scale of their allowed change
+    (:meth:`IntegralOperator._scale`)."""
 
     x: np.ndarray
     L: np.ndarray

@@ -1,6 +1,6 @@
 """Combinations of the integral heat-loss operator at several refinements (theory 4.7).
 
-:class:`~simulator.thermal.integral.IntegralLoss` is the collocated single-layer operator at one
+:class:`~simulator.thermal.integral.IntegralOperator` is the collocated single-layer operator at one
 refinement ``m``; its error is of first order in ``1 / m`` (the flux density's edge
 singularity). Two combinations make it accurate at a fraction of the cost of a fine ``m``:
 
@@ -25,7 +25,7 @@ import logging
 
 import numpy as np
 
-from .integral import IntegralLoss
+from .integral import IntegralOperator
 
 __all__ = ["ExtrapolatedLoss", "CorrectedLoss", "coarse_refinement", "integral_operator"]
 
@@ -39,13 +39,13 @@ def coarse_refinement(m: int) -> int:
 
 
 class ExtrapolatedLoss:
-    """Richardson extrapolation ``(m L_m - c L_c) / (m - c)`` of two :class:`IntegralLoss`.
+    """Richardson extrapolation ``(m L_m - c L_c) / (m - c)`` of two :class:`IntegralOperator`.
 
     Both are built at the same shapes: the fine one's criterion (``shape_tol``) decides, and a
     rebuild of the fine operator rebuilds the coarse one at the same positions.
     """
 
-    def __init__(self, fine: IntegralLoss, coarse: IntegralLoss, m: int, c: int):
+    def __init__(self, fine: IntegralOperator, coarse: IntegralOperator, m: int, c: int):
         if not int(m) > int(c) >= 1:
             raise ValueError(f"ExtrapolatedLoss needs m > c >= 1, got m = {m}, c = {c}")
         self.fine, self.coarse, self.m, self.c = fine, coarse, int(m), int(c)
@@ -93,16 +93,16 @@ class CorrectedLoss:
 
     Parameters
     ----------
-    accurate : IntegralLoss or ExtrapolatedLoss
+    accurate : IntegralOperator or ExtrapolatedLoss
         The accurate operator (has ``rebuild(x)``).
-    base : IntegralLoss
+    base : IntegralOperator
         The cheap operator (m = 1), rebuilt at its ``shape_tol``; rebuilt at ``x0`` whenever
         the accurate one is, so that ``L(x0) = L_acc(x0)``.
     tol : float
         Relative change of ``L_base`` that triggers an accurate rebuild, > 0.
     """
 
-    def __init__(self, accurate, base: IntegralLoss, tol: float):
+    def __init__(self, accurate, base: IntegralOperator, tol: float):
         self.accurate, self.base, self.tol = accurate, base, float(tol)
         self.nodes = base.nodes
         self._accurate0 = self._base0 = None
@@ -134,7 +134,7 @@ class CorrectedLoss:
         if self._accurate0 is not None:
             Lb = self.base.loss_matrix(x)
             # not refreshed where the m = 1 operator is not positive definite: the sheet passes
-            # through itself and the model is not reliable there (IntegralLoss warns once)
+            # through itself and the model is not reliable there (IntegralOperator warns once)
             if self.change(Lb) <= self.tol or not self.base.last_definite:
                 return self._accurate0 + (Lb - self._base0)
         self._accurate0 = self.accurate.rebuild(x)
@@ -144,16 +144,17 @@ class CorrectedLoss:
         return self._accurate0
 
 
-def integral_operator(triangles, n_nodes, params):
+def integral_operator(triangles, n_nodes, params, plane=None):
     """The integral loss operator of :class:`~simulator.thermal.parameters.ThermalParameters`
-    ``params`` on the sheet ``triangles``: an :class:`IntegralLoss` at ``integral_refinement``
-    built at ``integral_shape_tol``, an :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
-    m, k, plane = params.integral_refinement, params.env_conductivity, params.plane
+    ``params`` on the sheet ``triangles`` over the substrate ``plane`` ((point, unit normal) or
+    None): an :class:`IntegralOperator` at ``integral_refinement`` built at
+    ``integral_shape_tol``, an :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
+    m, k = params.integral_refinement, params.env_conductivity
     correct = params.integral_correction_tol > 0 and (m > 1 or params.extrapolated)
     memo = [None, None]                      # the levels share the sheet's distances
 
     def level(r):
-        out = IntegralLoss(triangles, n_nodes, k, r, plane, params.integral_shape_tol)
+        out = IntegralOperator(triangles, n_nodes, k, r, plane, params.integral_shape_tol)
         out.distance_memo = memo
         return out
 

@@ -135,7 +135,8 @@ class IntegralLoss:
 
 
 def heat_loss_from_dict(value) -> ChainLoss | IntegralLoss:
-    """A heat loss from its :meth:`to_dict` form, or the object itself."""
+    """A heat loss from its ``to_dict()`` form (:meth:`ChainLoss.to_dict`,
+    :meth:`IntegralLoss.to_dict`), or the object itself."""
     if isinstance(value, (ChainLoss, IntegralLoss)):
         return value
     if not isinstance(value, dict) or value.get("model") not in HEAT_LOSS_MODELS:

@@ -1,17 +1,19 @@
-"""Parameters of the steady heat-transfer model (theory 4): the structure's environment
-(chain layers or the integral loss model of theory 4.7), room temperature and the medium.
-:class:`~simulator.thermal.steady.ThermalModel` builds the operators from them."""
+"""Parameters of the steady and transient heat-transfer models (theory 4): how the sheet loses
+heat (:class:`~simulator.thermal.loss.ChainLoss` or :class:`~simulator.thermal.loss.IntegralLoss`),
+the medium it loses it to (:class:`~simulator.geometry.materials.Fluid`), the
+:class:`~simulator.thermal.loss.Substrate`, room temperature and the nodes and panels held at
+it. :class:`~simulator.thermal.steady.ThermalModel` builds the operators from them."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import finite, in_range, integer, non_negative, one_of, positive
+from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
-from ..geometry.materials import AIR
+from ..geometry.materials import AIR, WATER, Fluid
+from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 
 __all__ = ["ThermalParameters", "REFERENCE_BETA"]
 
@@ -19,6 +21,17 @@ __all__ = ["ThermalParameters", "REFERENCE_BETA"]
 #: (0.348888... rad instead of 0.349066 rad; tan differs by 0.06 %). Use it to reproduce
 #: the reference's numbers; ``math.radians(20)`` is the physical value.
 REFERENCE_BETA = 20 / 180 * 3.14
+
+#: ``substrate`` not given: the plane of the model's thermal-boundary panels, if any.
+_PANELS = object()
+#: The fields of the chain and of the integral loss under their old names.
+_CHAIN_NAMES = {"env_thickness": "thickness", "layers": "layers",
+                "dissipation_angle": "dissipation_angle"}
+_INTEGRAL_NAMES = {"integral_refinement": "refinement",
+                   "integral_extrapolation": "extrapolation",
+                   "integral_shape_tol": "shape_tol", "integral_correction_tol": "correction_tol"}
+_MEDIUM_NAMES = {"env_conductivity": "thermal_conductivity", "env_density": "density",
+                 "env_specific_heat": "specific_heat"}
 
 
 def _ids(value, name):
@@ -32,157 +45,280 @@ def _ids(value, name):
     return ids
 
 
-def _plane(value):
-    """``substrate_plane`` as a tuple of 6 floats (a point and a non-zero normal) or ()."""
+def _medium(value, overrides: dict) -> Fluid:
+    """The medium from a :class:`Fluid` (or its dict) and the old ``env_*`` overrides; named
+    after a known fluid it equals, else ``"custom"``."""
+    if value is None:
+        base = AIR
+    elif isinstance(value, Fluid):
+        base = value
+    elif isinstance(value, dict):
+        try:
+            base = Fluid(**value)
+        except TypeError:
+            raise ParameterError(f"ThermalParameters.medium = {value!r}: give a Fluid (AIR, "
+                                 "WATER) or a dict with name, density, specific_heat, "
+                                 "thermal_conductivity.") from None
+    else:
+        raise ParameterError(f"ThermalParameters.medium = {value!r}: give a Fluid, e.g. "
+                             "simulator.AIR or simulator.WATER.")
+    values = {f: getattr(base, f) for f in ("density", "specific_heat", "thermal_conductivity")}
+    changed = {_MEDIUM_NAMES[k]: v for k, v in overrides.items() if v is not None}
+    for k, v in changed.items():
+        non_negative(f"ThermalParameters.{[o for o, n in _MEDIUM_NAMES.items() if n == k][0]}",
+                     v, {"density": "kg/m^3", "specific_heat": "J/(kg K)",
+                         "thermal_conductivity": "W/(m K)"}[k])
+    if all(float(values[k]) == float(v) for k, v in changed.items()):
+        return base
+    values.update({k: float(v) for k, v in changed.items()})
+    name = next((f.name for f in (AIR, WATER) if all(
+        getattr(f, k) == v for k, v in values.items())), "custom")
+    return Fluid(name, **values)
+
+
+def _build(cls, fields: dict, legacy: dict):
+    """``cls(**fields)``; an error about a field given under its old name (``legacy``: new ->
+    old name) names it as given: ``ThermalParameters.env_thickness = ...``."""
     try:
-        v = tuple(float(c) for c in value)
-    except (TypeError, ValueError):
-        v = None
-    if v is None or len(v) not in (0, 6) or not all(map(math.isfinite, v)) \
-            or (v and not any(v[3:])):
-        raise ParameterError(f"ThermalParameters.substrate_plane = {value!r} is invalid; give "
-                             "() or 6 finite numbers: a point (x, y, z) [m] and a non-zero "
-                             "normal (nx, ny, nz) pointing into the medium.")
-    return v
+        return cls(**fields)
+    except ParameterError as error:
+        text = str(error)
+        for new, old in legacy.items():
+            text = text.replace(f"{cls.__name__}.{new} ", f"ThermalParameters.{old} ")
+            text = text.replace(f"needs {new} ", f"needs {old} ")
+        raise ParameterError(text) from None
 
 
-@dataclass(frozen=True)
+def _loss(loss, loss_model, legacy: dict) -> ChainLoss | IntegralLoss:
+    """The heat loss from ``loss`` (object or dict), the old ``loss_model`` switch and the old
+    flat fields of either model (``legacy``, None where not given)."""
+    given = None if loss is None else heat_loss_from_dict(loss)
+    chain = {new: legacy[old] for old, new in _CHAIN_NAMES.items() if legacy[old] is not None}
+    integral = {new: legacy[old] for old, new in _INTEGRAL_NAMES.items()
+                if legacy[old] is not None}
+    old_chain = {new: old for old, new in _CHAIN_NAMES.items() if new in chain}
+    old_integral = {new: old for old, new in _INTEGRAL_NAMES.items() if new in integral}
+    if loss_model is not None:
+        model = one_of("ThermalParameters.loss_model", loss_model, HEAT_LOSS_MODELS,
+                       hint="or give loss=ChainLoss(thickness=...) / IntegralLoss()")
+    elif given is not None:
+        model = given.model
+    else:              # the old default: chains where their thickness is given
+        model = "chain" if "thickness" in chain else "integral"
+    if integral and model == "chain":      # checked all the same, as before
+        _build(IntegralLoss, integral, old_integral)
+    if chain and model == "integral":
+        _build(ChainLoss, {"thickness": 1.0} | chain, old_chain)
+    if model == "chain":
+        base = given.to_dict() if isinstance(given, ChainLoss) else {}
+        fields = {k: v for k, v in base.items() if k != "model"} | chain
+        if "thickness" not in fields:
+            raise ParameterError(
+                "ThermalParameters: the chain heat loss needs the medium thickness t_env: give "
+                "loss=ChainLoss(thickness=...) [m] (env_thickness=... in the old spelling; the "
+                "paper suggests 1.5 x the panel length), or use the calibration-free "
+                "loss=IntegralLoss(), which needs none.")
+        return _build(ChainLoss, fields, old_chain)
+    base = given.to_dict() if isinstance(given, IntegralLoss) else {}
+    return _build(IntegralLoss, {k: v for k, v in base.items() if k != "model"} | integral,
+                  old_integral)
+
+
+def _substrate(substrate, substrate_plane) -> Substrate | None:
+    """The substrate: the old ``substrate_plane`` (6 floats; () for none) where given, else
+    ``substrate`` (not given: the boundary panels' plane)."""
+    if substrate_plane is not None:
+        try:
+            v = tuple(float(c) for c in substrate_plane)
+        except (TypeError, ValueError):
+            v = None
+        if v is None or len(v) not in (0, 6):
+            raise ParameterError(f"ThermalParameters.substrate_plane = {substrate_plane!r} is "
+                                 "invalid; give () or 6 finite numbers: a point (x, y, z) [m] "
+                                 "and a non-zero normal (nx, ny, nz) pointing into the medium "
+                                 "(or substrate=Substrate.plane(point, normal)).")
+        return Substrate.from_value(v)
+    if substrate is _PANELS:
+        return Substrate()
+    return Substrate.from_value(substrate)
+
+
+@dataclass(frozen=True, init=False)
 class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
+    ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
+    boundary_panels=(), room_temperature_nodes=())``.
+
     Parameters
     ----------
-    env_thickness : float
-        Environment thickness t_env [m] between the structure and room temperature, > 0
-        (the paper suggests 1.5 x the panel length).
-    env_conductivity : float
-        Environment conductivity k_env [W/(m K)], >= 0 (air 0.026, water ~0.6).
-    layers : int
-        Number N of environment layers per node, >= 1.
-    dissipation_angle : float
-        Heat-spreading angle beta [rad] in [0, pi/2); :data:`REFERENCE_BETA` matches the reference.
+    loss : ChainLoss or IntegralLoss
+        How the sheet loses heat to the medium (:mod:`simulator.thermal.loss`): the paper's
+        fitted chains, ``ChainLoss(thickness=t_env)``, or the calibration-free
+        ``IntegralLoss()`` (default when no chain thickness is given). Each carries only its
+        own options. Transient and electro-thermal steps use the same loss (theory 8.1).
+    medium : Fluid
+        The medium: conductivity, and density and specific heat for the time domain
+        (:data:`~simulator.geometry.materials.AIR` by default,
+        :data:`~simulator.geometry.materials.WATER`).
+    substrate : Substrate or None
+        The isothermal substrate plane of the integral loss: ``Substrate()`` (default) the
+        plane of the thermal-boundary panels (none without such panels),
+        ``Substrate.plane(point, normal)`` an explicit one, None an unbounded medium. (The
+        chains cap their t_env at the distance to the boundary panels whatever it is.)
     room_temperature : float
-        Room temperature [deg C] of the far layer and of ``room_temperature_nodes``.
+        Room temperature [deg C] of the medium far away, the substrate and
+        ``room_temperature_nodes``.
     boundary_panels : tuple of int
-        Panel ids of thermal boundaries (substrate); their distance caps t_env.
+        Panel ids of thermal boundaries (on the substrate, at room temperature in the integral
+        model; their distance caps t_env in the chain model).
     room_temperature_nodes : tuple of int
-        Mesh node ids whose structure temperature is held at room temperature.
-    env_density : float
-        Environment density rho_env [kg/m^3], >= 0 (transient heat only; default air as in the
-        reference transient example, :data:`~simulator.geometry.materials.AIR`).
-    env_specific_heat : float
-        Environment specific heat c_env [J/(kg K)], >= 0 (transient heat only; default air).
-    loss_model : {"chain", "integral"}
-        Heat loss of the steady model: "chain" (the paper's fitted chains, using
-        ``env_thickness``, ``layers``, ``dissipation_angle``) or "integral" (the single-layer
-        potential of the sheet in the medium, :mod:`simulator.thermal.integral`: nothing to fit;
-        boundary panels, and nodes on the ``substrate_plane``, lie on the substrate at room
-        temperature). Transient and
-        electro-thermal steps always use the chains (they carry the medium's heat capacity).
-    integral_refinement : int
-        Sub-triangles per triangle edge m of the "integral" model (m^2 per mesh triangle),
-        1..16 (default 3).
-    integral_extrapolation : bool or None
-        "integral" model only: Richardson extrapolation of the loss conductance from the
-        refinements ``c = max(m // 2, 2)`` and ``m``, ``(m L_m - c L_c) / (m - c)``, which
-        removes the error of first order in ``1 / m`` (the flux density's edge singularity;
-        theory 4.7). Needs m >= 3 (the coarse level must be in the first-order regime: from
-        m = 1 it is not). False: the plain operator at ``m``. None (default): True from
-        m = 3 on, else False. On the strips and folded shapes of docs/heat_fe.md the default
-        (m = 3 extrapolated) is within 2.8 % of the converged 3-D FE (m = 4: 2.3 %) where the
-        plain m = 2 is up to 15 % hot.
-    integral_correction_tol : float
-        "integral" model only, >= 0 (default 0.1): the operator at ``integral_refinement``
-        (extrapolated or not) is rebuilt only when the cheap m = 1 operator, rebuilt at
-        ``integral_shape_tol``, has changed by more than this fraction of itself since the
-        last such build (largest absolute row sum), and follows the shape in between through
-        the change of the m = 1 operator: ``L(x) = L_m(x0) + L_1(x) - L_1(x0)`` (theory 4.7;
-        the default keeps the node temperatures within 2 % of a rebuild at every shape along
-        the gripper's power search, 0.44 % along the double fold's heating). 0: the operator
-        at ``integral_refinement`` itself is rebuilt at ``integral_shape_tol``. No effect with
-        m = 1 without extrapolation.
-    substrate_plane : tuple of 6 floats, or ()
-        "integral" model only: an isothermal substrate plane, a point (3,) [m] and a normal
-        (3,) pointing into the medium, in the global frame; () for an unbounded medium. A
-        model with ``boundary_panels`` (the substrate) wants their plane,
-        :func:`~simulator.thermal.fixed_shape.boundary_panel_plane`; without one the steady
-        model warns (once).
-    integral_shape_tol : float
-        "integral" model only: the dense operator is rebuilt when the distance between two
-        sheet nodes has changed since the last build by more than this fraction of the larger
-        of that distance and the mean sub-triangle diameter (or, with a substrate plane, a
-        node's height over it by more than this fraction of the height, at least 1 % of the
-        diameter), >= 0 (a rigid motion of the sheet changes none; 0: rebuilt on every change
-        of position). With ``integral_correction_tol`` > 0 (the default) this schedules the
-        m = 1 operator, and the accurate one follows ``integral_correction_tol``: for the
-        accurate operator at every shape set both to 0.
+        Mesh node ids whose temperature is held at room temperature.
+
+    Notes
+    -----
+    The old flat spellings are still accepted as keywords, and read as properties (deprecated):
+    ``env_thickness``, ``layers``, ``dissipation_angle`` (the chains'), ``loss_model``
+    ("chain" or "integral"), ``integral_refinement``, ``integral_extrapolation``,
+    ``integral_shape_tol``, ``integral_correction_tol`` (the integral loss'),
+    ``env_conductivity``, ``env_density``, ``env_specific_heat`` (the medium's) and
+    ``substrate_plane`` (6 floats, a point and a normal; () for none). Without ``loss`` or
+    ``loss_model``, a given ``env_thickness`` selects the chains (their old default). Those
+    of the model not selected are checked, and not kept.
     """
 
-    env_thickness: float
-    env_conductivity: float = 0.026
-    layers: int = 10
-    dissipation_angle: float = math.radians(20)
-    room_temperature: float = 21.0
-    boundary_panels: tuple = ()
-    room_temperature_nodes: tuple = ()
-    env_density: float = AIR.density
-    env_specific_heat: float = AIR.specific_heat
-    loss_model: str = "chain"
-    integral_refinement: int = 3
-    substrate_plane: tuple = ()
-    integral_shape_tol: float = 0.02
-    integral_extrapolation: bool | None = None
-    integral_correction_tol: float = 0.1
+    loss: ChainLoss | IntegralLoss
+    medium: Fluid
+    substrate: Substrate | None
+    room_temperature: float
+    boundary_panels: tuple
+    room_temperature_nodes: tuple
 
-    def __post_init__(self):
-        owner = "ThermalParameters"
-        for name, unit in (("env_density", "kg/m^3"), ("env_specific_heat", "J/(kg K)"),
-                           ("env_conductivity", "W/(m K)")):
-            non_negative(f"{owner}.{name}", getattr(self, name), unit)
-        positive(f"{owner}.env_thickness", self.env_thickness, "m")
-        in_range(f"{owner}.dissipation_angle", self.dissipation_angle, 0, math.pi / 2, "rad",
-                 hint="the range is [0, pi/2)", open_high=True)
-        finite(f"{owner}.room_temperature", self.room_temperature, "deg C")
-        integer(f"{owner}.layers", self.layers)
-        for name in ("boundary_panels", "room_temperature_nodes"):
-            object.__setattr__(self, name, _ids(getattr(self, name), name))
-        one_of(f"{owner}.loss_model", self.loss_model, ("chain", "integral"))
-        integer(f"{owner}.integral_refinement", self.integral_refinement, 1, 16)
-        non_negative(f"{owner}.integral_shape_tol", self.integral_shape_tol)
-        if self.integral_extrapolation is not None and not isinstance(
-                self.integral_extrapolation, (bool, np.bool_)):
-            raise ParameterError(f"{owner}.integral_extrapolation = "
-                                 f"{self.integral_extrapolation!r} must be True, False or None "
-                                 "(True from integral_refinement = 3 on).")
-        if self.integral_extrapolation is not None:
-            object.__setattr__(self, "integral_extrapolation", bool(self.integral_extrapolation))
-        if self.integral_extrapolation and self.integral_refinement < 3:
-            raise ParameterError(f"{owner}.integral_extrapolation = True needs "
-                                 f"integral_refinement >= 3, got {self.integral_refinement}: "
-                                 "the coarse level max(m // 2, 2) must be below m; use "
-                                 "integral_refinement=3 (or integral_extrapolation=False).")
-        non_negative(f"{owner}.integral_correction_tol", self.integral_correction_tol)
-        object.__setattr__(self, "substrate_plane", _plane(self.substrate_plane))
-        if self.loss_model == "integral" and not self.env_conductivity > 0:
-            raise ParameterError(f"{owner}.env_conductivity = {self.env_conductivity!r} W/(m K): "
-                                 "loss_model 'integral' needs a medium conductivity > 0.")
+    def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
+                 dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
+                 room_temperature_nodes=(), env_density=None, env_specific_heat=None,
+                 loss_model=None, integral_refinement=None, substrate_plane=None,
+                 integral_shape_tol=None, integral_extrapolation=None,
+                 integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS):
+        legacy = {"env_thickness": env_thickness, "layers": layers,
+                  "dissipation_angle": dissipation_angle,
+                  "integral_refinement": integral_refinement,
+                  "integral_extrapolation": integral_extrapolation,
+                  "integral_shape_tol": integral_shape_tol,
+                  "integral_correction_tol": integral_correction_tol}
+        loss = _loss(loss, loss_model, legacy)
+        medium = _medium(medium, {"env_conductivity": env_conductivity,
+                                  "env_density": env_density,
+                                  "env_specific_heat": env_specific_heat})
+        set_ = object.__setattr__
+        set_(self, "loss", loss)
+        set_(self, "medium", medium)
+        set_(self, "substrate", _substrate(substrate, substrate_plane))
+        set_(self, "room_temperature", finite("ThermalParameters.room_temperature",
+                                              room_temperature, "deg C"))
+        for name, value in (("boundary_panels", boundary_panels),
+                            ("room_temperature_nodes", room_temperature_nodes)):
+            set_(self, name, _ids(value, name))
+        if loss.model == "integral" and not medium.thermal_conductivity > 0:
+            raise ParameterError(f"ThermalParameters: the medium's conductivity "
+                                 f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
+                                 "needs a medium conductivity > 0.")
+
+    # ------------------------------------------------------------------ old flat spellings
+    @property
+    def loss_model(self) -> str:
+        """``"chain"`` or ``"integral"`` (``loss.model``)."""
+        return self.loss.model
+
+    def _chain(self) -> ChainLoss | None:
+        return self.loss if isinstance(self.loss, ChainLoss) else None
+
+    def _integral(self) -> IntegralLoss:
+        return self.loss if isinstance(self.loss, IntegralLoss) else _DEFAULT_INTEGRAL
+
+    @property
+    def env_thickness(self) -> float | None:
+        """The chains' t_env [m] (None with the integral loss)."""
+        chain = self._chain()
+        return None if chain is None else chain.thickness
+
+    @property
+    def layers(self) -> int:
+        """The chains' medium layers N (their default with the integral loss)."""
+        return (self._chain() or _DEFAULT_CHAIN).layers
+
+    @property
+    def dissipation_angle(self) -> float:
+        """The chains' dissipation angle beta [rad] (their default with the integral loss)."""
+        return (self._chain() or _DEFAULT_CHAIN).dissipation_angle
+
+    @property
+    def integral_refinement(self) -> int:
+        return self._integral().refinement
+
+    @property
+    def integral_extrapolation(self) -> bool | None:
+        return self._integral().extrapolation
+
+    @property
+    def integral_shape_tol(self) -> float:
+        return self._integral().shape_tol
+
+    @property
+    def integral_correction_tol(self) -> float:
+        return self._integral().correction_tol
 
     @property
     def extrapolated(self) -> bool:
-        """Whether the integral model extrapolates (``integral_extrapolation``, None: from
-        ``integral_refinement`` = 3 on)."""
-        if self.integral_extrapolation is None:
-            return self.integral_refinement >= 3
-        return self.integral_extrapolation
+        """Whether the integral loss extrapolates (:attr:`IntegralLoss.extrapolated`)."""
+        return self._integral().extrapolated
+
+    @property
+    def env_conductivity(self) -> float:
+        """The medium's conductivity k_env [W/(m K)]."""
+        return self.medium.thermal_conductivity
+
+    @property
+    def env_density(self) -> float:
+        """The medium's density [kg/m^3]."""
+        return self.medium.density
+
+    @property
+    def env_specific_heat(self) -> float:
+        """The medium's specific heat [J/(kg K)]."""
+        return self.medium.specific_heat
+
+    @property
+    def substrate_plane(self) -> tuple:
+        """An explicit substrate plane as 6 floats (point, normal); () for none or for the
+        boundary panels' plane (:attr:`substrate`)."""
+        return () if self.substrate is None else self.substrate.as_tuple()
 
     @property
     def plane(self):
-        """The substrate plane as ``(point (3,), unit normal (3,))``, or None."""
+        """The explicit substrate plane as ``(point (3,), unit normal (3,))``, or None."""
         if not self.substrate_plane:
             return None
         v = np.array(self.substrate_plane, float)
         return v[:3], v[3:] / np.linalg.norm(v[3:])
 
     def to_dict(self) -> dict:
-        """Plain-dict view for result metadata."""
-        return asdict(self)
+        """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
+        ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature
+        and the held panels and nodes. ``ThermalParameters(**d)`` reads it back."""
+        return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
+                "substrate": None if self.substrate is None else self.substrate.to_dict(),
+                "room_temperature": float(self.room_temperature),
+                "boundary_panels": list(self.boundary_panels),
+                "room_temperature_nodes": list(self.room_temperature_nodes)}
+
+    def describe(self) -> str:
+        """One line for figure footers and summaries: the loss, the medium, the substrate."""
+        sub = ("no substrate" if self.substrate is None else "substrate: the boundary panels' "
+               "plane" if self.substrate.from_panels else "substrate: a given plane")
+        return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
+                f"{self.env_conductivity:g} W/(m K); {sub}")
+
+
+_DEFAULT_CHAIN = ChainLoss(thickness=1.0)
+_DEFAULT_INTEGRAL = IntegralLoss()

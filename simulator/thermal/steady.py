@@ -35,7 +35,7 @@ from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
-from .integral import IntegralLoss
+from .integral import IntegralOperator
 from .integral_levels import integral_operator
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
@@ -50,6 +50,9 @@ _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
 _MIN_AIR_FRACTION = 1e-9
 
 
+#: Boundary panels farther than this fraction of their extent from one plane are not coplanar.
+_COPLANAR = 1e-6
+
 #: Whether :func:`_warn_no_plane` has spoken in this process (it speaks once).
 _NO_PLANE_WARNED = [False]
 
@@ -61,12 +64,47 @@ def _warn_no_plane(params) -> None:
         return
     _NO_PLANE_WARNED[0] = True
     logger.warning(
-        "loss_model='integral' with boundary_panels %s but no substrate_plane: the medium is "
+        "the integral heat loss with boundary_panels %s but substrate=None: the medium is "
         "taken as unbounded below the sheet, without the substrate's isothermal plane (the "
         "loss near the substrate is underestimated: the gripper's assembly power comes out "
-        "43 %% low at m = 2); give substrate_plane=boundary_panel_plane(model), the boundary "
-        "panels' plane, as the 3-D FE takes it (said once per process).",
+        "43 %% low at m = 2); the default substrate, Substrate(), is the boundary panels' "
+        "plane, as the 3-D FE takes it (said once per process).",
         tuple(params.boundary_panels))
+
+
+def substrate_plane(mesh, params, x=None):
+    """The substrate plane ``(point (3,), unit normal (3,))`` of ``params``
+    (:attr:`~simulator.thermal.parameters.ThermalParameters.substrate`) on ``mesh`` at positions
+    ``x`` (default: the mesh's): an explicit plane, the plane of the thermal-boundary panels
+    (``Substrate()``; None without boundary panels), or None (``substrate=None``)."""
+    sub = params.substrate
+    if sub is None:
+        return None
+    if not sub.from_panels:
+        return params.plane
+    v = panels_plane(mesh, params.boundary_panels, x)
+    return None if not v else (np.array(v[:3]), np.array(v[3:]))
+
+
+def panels_plane(mesh, panels, x=None) -> tuple:
+    """The plane of ``panels`` at positions ``x`` (n, 3) [m] (default: the mesh's) as 6 floats,
+    a point and the unit normal towards the rest of the sheet; () for no panels. Raises
+    :class:`ParameterError` if they are not coplanar."""
+    panels = tuple(panels)
+    if not panels:
+        return ()
+    x = mesh.nodes if x is None else np.asarray(x, float)
+    p = x[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
+    origin = p.mean(axis=0)
+    normal = np.linalg.svd(p - origin)[2][-1]
+    if np.abs((p - origin) @ normal).max() > _COPLANAR * np.ptp(p, axis=0).max():
+        raise ParameterError(f"the thermal boundary panels {panels} are not coplanar: there is "
+                             "no substrate plane to take from them; give the plane explicitly "
+                             "(ThermalParameters(substrate=Substrate.plane(point, normal)), or "
+                             "substrate=None for none).")
+    if np.mean((x - origin) @ normal) < 0:
+        normal = -normal
+    return tuple(float(v) for v in np.concatenate([origin, normal]))
 
 
 def heat_weights() -> np.ndarray:
@@ -82,8 +120,8 @@ class ThermalModel:
     mesh : BarHingeMesh
     params : ThermalParameters
     warn_no_plane : bool
-        With ``loss_model="integral"``, boundary panels and no ``substrate_plane``, warn (once
-        per process) at the first steady solve that the medium is unbounded below the sheet;
+        With the integral loss, boundary panels and ``substrate=None``, warn (once per
+        process) at the first steady solve that the medium is unbounded below the sheet;
         False where the caller chose no plane.
     """
 
@@ -118,16 +156,19 @@ class ThermalModel:
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
         #: the integral model's loss operator (:mod:`simulator.thermal.integral_levels`:
-        #: an :class:`IntegralLoss` at refinement m, or its Richardson extrapolation, or either
+        #: an :class:`IntegralOperator` at refinement m, or its Richardson extrapolation, or either
         #: corrected through the m = 1 operator between rebuilds)
         self.integral = None
+        #: the integral loss's substrate plane ``(point, unit normal)`` or None
+        self.plane = None
         if params.loss_model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
-            self.integral = integral_operator(tri[~self.is_boundary], n, params)
+            self.plane = substrate_plane(mesh, params)
+            self.integral = integral_operator(tri[~self.is_boundary], n, params, self.plane)
         #: warn at the first steady solve with the integral loss that boundary panels have no
-        #: substrate plane (``warn_no_plane=False``: the caller chose no plane)
+        #: substrate plane (``substrate=None``; ``warn_no_plane=False``: the caller chose none)
         self._warn_plane = (warn_no_plane and self.integral is not None
-                            and bool(params.boundary_panels) and not params.substrate_plane)
+                            and bool(params.boundary_panels) and self.plane is None)
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
@@ -138,12 +179,15 @@ class ThermalModel:
         self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
         #: k t of every triangle [W/K]
         self._kt = self.conductivity * self.thickness
-        # the model's arguments of the compiled kernel (simulator.thermal._thermal_jit), in its order
+        # the model's arguments of the compiled kernel (simulator.thermal._thermal_jit), in its
+        # order (the integral loss: conduction only, no chains)
+        chain = self.integral is None
         self._kernel_args = (
             np.array(tri, dtype=np.int64, order="C"), self.edge_lengths, self._kt,
-            self.is_boundary, self._cap_nodes.astype(np.int64), float(params.env_thickness),
-            math.tan(params.dissipation_angle), float(params.env_conductivity),
-            int(params.layers), _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
+            self.is_boundary, self._cap_nodes.astype(np.int64),
+            float(params.env_thickness) if chain else 1.0, math.tan(params.dissipation_angle),
+            float(params.env_conductivity) if chain else 0.0, int(params.layers),
+            _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
@@ -367,10 +411,12 @@ class ThermalModel:
         if compiled:
             K, g_eff, floored = _thermal_jit.thermal_element_data(self._kernel_args,
                                                                   self._positions(x))
-            if floored:
+            if floored and self.integral is None:
                 self._warn_floored()
             return K, g_eff
         K, area = self._conduction(x)
+        if self.integral is not None:              # no chains: the integral loss instead
+            return K, np.zeros(self.mesh.n_nodes)
         g = self.layer_conductance(x, area)
         with np.errstate(divide="ignore"):
             g_eff = np.where(np.all(g > 0, axis=1), 1 / np.sum(1 / g, axis=1), 0.0)
@@ -388,7 +434,7 @@ class ThermalModel:
     def held_nodes(self, x) -> np.ndarray:
         """Nodes the steady model holds at room temperature at positions ``x`` (n, 3) [m]:
         :attr:`fixed_nodes` and, in the integral model, the nodes touching the substrate plane
-        (:meth:`~simulator.thermal.integral.IntegralLoss.touching`)."""
+        (:meth:`~simulator.thermal.integral.IntegralOperator.touching`)."""
         if self.integral is None:
             return self.fixed_nodes
         return np.union1d(self.fixed_nodes, np.flatnonzero(self.integral.touching(x)))
@@ -423,7 +469,7 @@ class ThermalModel:
             return self._conductances(x, False)[1] * rise
         out = np.zeros(self.mesh.n_nodes)
         nodes = self.integral.nodes
-        if isinstance(self.integral, IntegralLoss):       # the plain operator alone
+        if isinstance(self.integral, IntegralOperator):       # the plain operator alone
             out[nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
         else:                            # the combined conductance the solve used
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]

@@ -169,7 +169,7 @@ def test_a_model_file_given_heat_keeps_its_own_layer_stack(tmp_path, capsys):
                  str(tmp_path / "heat")]) == 0
     out = capsys.readouterr().out
     assert "model file's own parameters: heated creases 200 um wide, 0.5 um thick" in out
-    assert "0.1 um at 39.5 GPa" in out and "air 750 um at 0.6 W/(m K)" in out
+    assert "0.1 um at 39.5 GPa" in out and "heat loss: chains, t_env 750 um, to the medium at 0.6 W/(m K)" in out
     assert "layer stack" not in out and "19 fixed degrees of freedom" in out
     # the same run as the file's own heating step at that power
     assert main(["run", str(path), "--set", "power.2=30", *flags, "--out",

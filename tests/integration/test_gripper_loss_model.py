@@ -6,7 +6,7 @@ import pytest
 
 from design import GripperProblem
 from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
-from simulator import ParameterError
+from simulator import ParameterError, Substrate
 
 #: Coordinate-descent cycle 9 (results/gripper_optimization): a fast evaluation.
 CYCLE9 = dict(W=290e-6, La=1150e-6, L1=550e-6, L2=550e-6)
@@ -27,9 +27,9 @@ def test_integral_design_uses_the_substrate_plane_under_the_sheet():
     chain = gripper_model(GripperDesign(**CYCLE9))[0].thermal
     assert (thermal.loss_model, thermal.integral_refinement) == ("integral", 4)
     assert thermal.substrate_plane == (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)
-    # everything else is the chain model's
-    assert dataclasses.replace(thermal, loss_model="chain", integral_refinement=3,
-                               substrate_plane=()) == chain
+    assert thermal.substrate == Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))
+    # everything else (medium, room temperature, held panels and nodes) is the chain model's
+    assert dataclasses.replace(thermal, loss=chain.loss, substrate=chain.substrate) == chain
     assert design.to_dict()["loss_model"] == "integral"
     assert design.to_dict()["integral_refinement"] == 4
 

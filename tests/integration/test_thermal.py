@@ -2,6 +2,7 @@
 
 import csv
 import math
+import json
 import pathlib
 
 import numpy as np
@@ -231,7 +232,12 @@ def test_parameters_normalised_and_serialisable():
     prm = ThermalParameters(env_thickness=1e-3, boundary_panels=[2],
                             room_temperature_nodes=np.array([0, 3]))
     assert prm.boundary_panels == (2,) and prm.room_temperature_nodes == (0, 3)
-    assert prm.to_dict()["env_thickness"] == 1e-3
+    d = prm.to_dict()
+    assert d["loss"] == {"model": "chain", "thickness": 1e-3, "layers": 10,
+                         "dissipation_angle": math.radians(20)}
+    assert d["medium"]["thermal_conductivity"] == 0.026 and d["substrate"] == "boundary_panels"
+    assert ThermalParameters(**d) == prm                     # read back (FOLD model files)
+    assert json.loads(json.dumps(d)) == d
 
 
 def test_unknown_ids():

@@ -57,14 +57,9 @@ def test_heat_then_electrothermal_keeps_the_integral_loss(fold):
     k = res.history["stage"]
     start, end = T[np.flatnonzero(k == len(pre))[-1]], T[-1]
     assert np.abs(end - start).max() < 5e-3 * start.max()           # (measured 0.22 %)
-    chains = S.simulate(case_model_with_chains(model), pre + [dataclasses.replace(heat,
-                                                                             increments=50)])
+    chains = S.simulate(S.get_case("single_fold").model,
+                        pre + [dataclasses.replace(heat, increments=50)])
     assert abs(chains.history["temperature"][-1].max() - room - start.max()) > 0.1 * start.max()
-
-
-def case_model_with_chains(model):
-    return dataclasses.replace(model, thermal=dataclasses.replace(model.thermal,
-                                                                  loss_model="chain"))
 
 
 def test_the_integral_heat_system_has_the_structure_nodes_only_and_conserves_heat(fold):

@@ -6,7 +6,9 @@ import json
 import numpy as np
 import pytest
 
+from simulator import IntegralLoss, Substrate
 from simulator.cases import get_case
+from simulator.thermal.steady import ThermalModel
 from studies import device_heat_models as study
 
 pytest.importorskip("skfem")
@@ -61,13 +63,14 @@ def test_fe_rows_compare_both_models_on_the_same_shapes(quick):
     assert (fe["chain_error [%]"] < 0).all()
 
 
-def test_substrate_plane_is_the_boundary_panels_plane():
+def test_the_integral_model_stands_on_the_boundary_panels_plane():
     model = get_case("double_fold", thermal_steps=1).model
-    plane = study.substrate_plane(model)
-    assert plane[2] == pytest.approx(-60e-6) and np.allclose(plane[3:], (0, 0, 1))
     thermal = study.integral_model(model, refinement=3).thermal
-    assert (thermal.loss_model, thermal.integral_refinement) == ("integral", 3)
-    assert study.substrate_plane(get_case("crane", thermal_steps=1).model) == ()
+    assert thermal.loss == IntegralLoss(refinement=3) and thermal.substrate == Substrate()
+    plane = ThermalModel(model.mesh, thermal).plane
+    assert plane[0][2] == pytest.approx(-60e-6) and np.allclose(plane[1], (0, 0, 1))
+    crane = get_case("crane", thermal_steps=1).model
+    assert ThermalModel(crane.mesh, study.integral_model(crane).thermal).plane is None
 
 
 def test_figure_redraws_from_the_csv(quick):

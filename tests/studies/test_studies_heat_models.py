@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
-from simulator import crease_temperatures, get_case
+from simulator import boundary_panel_plane, crease_temperatures, get_case
 from studies import heat_transfer_models as htm
 from studies.figure_notes import QUICK_STAMP
 
@@ -139,7 +139,7 @@ def test_crease_measures_pick_the_documented_nodes():
 
 def test_substrate_plane_is_the_boundary_panels_plane_facing_the_structure():
     model = get_case("double_fold").model
-    plane = np.array(htm.substrate_plane(model, model.mesh.nodes))
+    plane = np.array(boundary_panel_plane(model, model.mesh.nodes))
     p, n = plane[:3], plane[3:]
     assert np.linalg.norm(n) == pytest.approx(1.0)
     panel = np.unique(model.mesh.triangles[np.isin(model.mesh.triangle_panel,
@@ -147,7 +147,7 @@ def test_substrate_plane_is_the_boundary_panels_plane_facing_the_structure():
     np.testing.assert_allclose((model.mesh.nodes[panel] - p) @ n, 0.0, atol=1e-12)
     assert np.mean((model.mesh.nodes - p) @ n) >= 0
     strip = get_case("verification_strip").model
-    assert htm.substrate_plane(strip, strip.mesh.nodes) == ()
+    assert boundary_panel_plane(strip, strip.mesh.nodes) == ()
 
 
 def test_committed_full_run_holds_the_acceptance_and_draws_the_crane():

@@ -122,28 +122,36 @@ def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypa
 
 def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(caplog,
                                                                              monkeypatch):
-    """The steady model warns once per process, at its first solve with the integral loss;
-    not for the FE's or a transient run's use of the same parameters, nor where the caller
-    chose no plane."""
-    from simulator import fixed_shape_temperatures
+    """With boundary panels the default substrate is their plane (no warning). Told
+    ``substrate=None``, the steady model warns once per process, at its first solve with the
+    integral loss; not for the FE's or a transient run's use of the same parameters, nor
+    where the caller of fixed_shape_temperatures chose no plane."""
+    from simulator import boundary_panel_plane, fixed_shape_temperatures
     from simulator.cases import get_case
     from simulator.thermal import steady
 
     monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])
     model = get_case("double_fold", thermal_steps=2).model
-    prm = dataclasses.replace(model.thermal, loss_model="integral")
-    integral = dataclasses.replace(model, thermal=prm)
     q = ThermalModel(model.mesh, model.thermal).heat_vector(np.full(model.mesh.n_creases, 1e-3))
+    default = dataclasses.replace(model.thermal, loss_model="integral")
+    with caplog.at_level("WARNING"):
+        tm = ThermalModel(model.mesh, default)
+        tm.solve(model.mesh.nodes, q)
+    assert not [r for r in caplog.records if "substrate" in r.getMessage()]
+    plane = boundary_panel_plane(model)
+    np.testing.assert_allclose(np.concatenate(tm.plane), plane, atol=1e-15)
+    prm = dataclasses.replace(default, substrate=None)
+    integral = dataclasses.replace(model, thermal=prm)
     with caplog.at_level("WARNING"):
         fixed_shape_temperatures(integral, "integral", heat=q, substrate=None)
         tm = ThermalModel(model.mesh, prm)                   # built: not yet
         tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
-        assert not [r for r in caplog.records if "substrate_plane" in r.getMessage()]
+        assert not [r for r in caplog.records if "substrate=None" in r.getMessage()]
         tm.solve(model.mesh.nodes, q)
         ThermalModel(model.mesh, dataclasses.replace(prm, env_conductivity=0.03)).solve(
             model.mesh.nodes, q)
-    said = [r for r in caplog.records if "no substrate_plane" in r.getMessage()]
-    assert len(said) == 1 and "boundary_panel_plane(model)" in said[0].getMessage()
+    said = [r for r in caplog.records if "but substrate=None" in r.getMessage()]
+    assert len(said) == 1 and "Substrate(), is the boundary panels' plane" in said[0].getMessage()
 
 
 def test_non_coplanar_boundary_panels_name_the_way_out():
@@ -153,7 +161,7 @@ def test_non_coplanar_boundary_panels_name_the_way_out():
     bent = dataclasses.replace(model, thermal=dataclasses.replace(model.thermal,
                                                                   boundary_panels=(0, 3)))
     power = np.full(model.mesh.n_creases, 10e-3)
-    with pytest.raises(ParameterError, match="not coplanar.*substrate_plane"):
+    with pytest.raises(ParameterError, match=r"not coplanar.*Substrate\.plane\(point, normal\).*substrate=None"):
         calibrate_environment(bent, power)
     fit = calibrate_environment(bent, power, substrate=None)
     assert fit.success and np.isfinite(fit.rms_error)

@@ -14,7 +14,7 @@ from simulator.cases import verification_strip
 from simulator.linalg import _dense_jit
 from simulator.thermal import _single_layer_jit, integral
 from simulator.thermal._single_layer import collocation_matrix, subdivision, triangle_potential
-from simulator.thermal.integral import IntegralLoss
+from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
 
 TRI = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.0]])
@@ -38,7 +38,7 @@ def disk_mesh(a=1.0, rings=16, sectors=64, grading=2.0, z=0.0):
 
 def disk_conductance(k=0.026, a=1e-3, plane=None, **mesh):
     nodes, tris = disk_mesh(a, **mesh)
-    loss = IntegralLoss(tris, len(nodes), k, 1, plane)
+    loss = IntegralOperator(tris, len(nodes), k, 1, plane)
     return loss.loss_matrix(nodes).sum()
 
 
@@ -209,7 +209,7 @@ def test_dense_limit_is_refused_naming_the_limit_and_the_alternatives(monkeypatc
 
 def test_the_default_limit_refuses_a_fine_refinement():
     with pytest.raises(ParameterError, match="MAX_SUB_TRIANGLES = 4000"):
-        IntegralLoss(np.zeros((20, 3), int) + [0, 1, 2], 3, 0.026, 15)
+        IntegralOperator(np.zeros((20, 3), int) + [0, 1, 2], 3, 0.026, 15)
 
 
 @pytest.mark.parametrize("kw, match", [

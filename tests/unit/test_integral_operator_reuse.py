@@ -13,12 +13,12 @@ from simulator.cases import get_case, verification_strip
 from simulator.linalg import _dense_jit
 from simulator.state import thermal_model
 from simulator.thermal import _single_layer_jit
-from simulator.thermal.integral import IntegralLoss
+from simulator.thermal.integral import IntegralOperator
 
 
 def _sheet(plane=None, shape_tol=0.05):
     mesh = verification_strip().model.mesh
-    loss = IntegralLoss(mesh.triangles, mesh.n_nodes, 0.026, 2, plane, shape_tol)
+    loss = IntegralOperator(mesh.triangles, mesh.n_nodes, 0.026, 2, plane, shape_tol)
     return loss, mesh.nodes.copy()
 
 
@@ -141,7 +141,7 @@ def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percen
     for tol in (default, 0.0):
         thermal = dataclasses.replace(case.model.thermal, loss_model="integral",
                                       integral_refinement=2, integral_correction_tol=0.0,
-                                      integral_shape_tol=tol)
+                                      integral_shape_tol=tol, substrate=None)
         model = dataclasses.replace(case.model, thermal=thermal)
         result = simulate(model, case.steps)
         assert result.success, result.message

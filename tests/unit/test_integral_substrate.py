@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from simulator import (FixedShapeTemperatures, ParameterError, ThermalParameters,
+from simulator import (FixedShapeTemperatures, IntegralLoss, ParameterError, ThermalParameters,
                        fixed_shape_temperatures)
 from simulator.cases import verification_strip
-from simulator.thermal.integral import IntegralLoss
+from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -119,7 +119,7 @@ def test_extrapolated_loss_is_the_richardson_combination():
 
 def test_extrapolation_brings_the_disk_closer_to_8_k_a():
     nodes, tris = disk_mesh(1.0, rings=3, sectors=12, grading=1.0)
-    q = {m: IntegralLoss(tris, len(nodes), 1.0, m).loss_matrix(nodes).sum() / 8 for m in (2, 4)}
+    q = {m: IntegralOperator(tris, len(nodes), 1.0, m).loss_matrix(nodes).sum() / 8 for m in (2, 4)}
     assert abs(2 * q[4] - q[2] - 1) < 0.7 * abs(q[4] - 1)
 
 
@@ -128,8 +128,16 @@ def test_extrapolation_needs_a_refinement_of_3():
                        r"integral_refinement >= 3, got 2"):
         ThermalParameters(env_thickness=1e-3, integral_extrapolation=True,
                           integral_refinement=2)
-    with pytest.raises(ParameterError, match="integral_extrapolation = 'yes' must be True, False or None"):
+    with pytest.raises(ParameterError, match="integral_extrapolation = 'yes' must be True, "
+                       "False or None"):
         ThermalParameters(env_thickness=1e-3, integral_extrapolation="yes")
+    # the same refusals in the heat loss's own spelling
+    with pytest.raises(ParameterError, match=r"IntegralLoss.extrapolation = True needs "
+                       r"refinement >= 3, got 2"):
+        IntegralLoss(refinement=2, extrapolation=True)
+    with pytest.raises(ParameterError, match="IntegralLoss.extrapolation = 'yes' must be True, "
+                       "False or None"):
+        ThermalParameters(loss=IntegralLoss(extrapolation="yes"))
 
 
 # ------------------------------------------------------------------ fixed_shape_temperatures

@@ -199,9 +199,11 @@ def lay_flat_sheet(coords, faces, lay_flat: bool | None, data: dict, notes: list
 
 def _frame_bound(data: dict) -> list:
     """The fields of ``data`` given in the file's own axes (:data:`FRAME_FIELDS`, a thermal
-    ``substrate_plane``)."""
+    ``substrate`` plane, or ``substrate_plane`` in the old spelling)."""
     out = [f for f in FRAME_FIELDS if data.get(f) not in (None, [], {})]
     thermal = data.get(f"{NS}thermal")
     if isinstance(thermal, dict) and thermal.get("substrate_plane"):
         out.append(f"{NS}thermal.substrate_plane")
+    if isinstance(thermal, dict) and isinstance(thermal.get("substrate"), dict):
+        out.append(f"{NS}thermal.substrate")
     return out

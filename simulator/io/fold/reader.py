@@ -125,7 +125,7 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
     lay_flat : bool or None
         A flat sheet in another plane than x-y (e.g. x-z): None (default) lays it in x-y, its
         top side up (the side its faces run counter-clockwise around), unless the file gives
-        data in its own axes (:data:`FRAME_FIELDS`, or a thermal ``substrate_plane``); True
+        data in its own axes (:data:`FRAME_FIELDS`, or a thermal ``substrate`` plane); True
         always lays it in x-y, False never. Laid flat, a rotated copy of a sheet has the
         answer of the sheet drawn in x-y (up to a turn within the plane), and gravity acts
         towards its bottom side.

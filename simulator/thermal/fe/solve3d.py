@@ -186,30 +186,32 @@ def fe_sphere(radius: float, k_medium: float, *, box_factor: float = 4.0, level:
 
 # ---------------------------------------------------------------------------- sheets
 def _plane_frame(x, mesh, params, substrate):
-    """(origin (3,), rotation (3, 3) whose last row is the plane normal, has_plane)."""
-    if substrate is None:
-        return x.mean(axis=0), np.eye(3), False
+    """(origin (3,), rotation (3, 3) whose last row is the plane normal, has_plane) of the
+    substrate: ``"model"`` (the model's own, ``ThermalParameters.substrate``: its plane, that
+    of its boundary panels at ``x``, or none), a :class:`~simulator.thermal.loss.Substrate`,
+    None, or (point, normal)."""
+    from ..loss import Substrate
+    from ..steady import panels_plane
+
     if isinstance(substrate, str):
         if substrate != "model":
-            raise ParameterError(f"substrate = {substrate!r}; use 'model' (the plane of the "
-                                 "model's thermal boundary panels), None, or (point, normal).")
-        panels = tuple(params.boundary_panels) if params is not None else ()
-        if not panels:
-            return x.mean(axis=0), np.eye(3), False
-        tri = mesh.triangles[np.isin(mesh.triangle_panel, panels)]
-        p = x[np.unique(tri)]
-        origin = p.mean(axis=0)
-        normal = np.linalg.svd(p - origin)[2][-1]
-        if np.abs((p - origin) @ normal).max() > 1e-6 * np.ptp(p, axis=0).max():
-            raise ParameterError("the thermal boundary panels are not coplanar: the FE needs "
-                                 "one isothermal substrate plane; pass substrate=(point, normal).")
-    else:
-        try:
-            origin, normal = (np.asarray(v, float).reshape(3) for v in substrate)
-        except (TypeError, ValueError):
-            raise ParameterError(f"substrate = {substrate!r} must be 'model', None or a pair "
-                                 "(point (3,), normal (3,)) [m].") from None
-        normal = normal / np.linalg.norm(normal)
+            raise ParameterError(f"substrate = {substrate!r}; use 'model' (the model's own "
+                                 "substrate), a Substrate, None, or (point, normal).")
+        substrate = params.substrate if params is not None else None
+    if isinstance(substrate, Substrate):
+        if substrate.from_panels:
+            plane = panels_plane(mesh, params.boundary_panels if params is not None else (), x)
+            substrate = (plane[:3], plane[3:]) if plane else None
+        else:
+            substrate = (substrate.point, substrate.normal)
+    if substrate is None:
+        return x.mean(axis=0), np.eye(3), False
+    try:
+        origin, normal = (np.asarray(v, float).reshape(3) for v in substrate)
+    except (TypeError, ValueError):
+        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate, None or "
+                             "a pair (point (3,), normal (3,)) [m].") from None
+    normal = normal / np.linalg.norm(normal)
     if np.mean((x - origin) @ normal) < 0:
         normal = -normal
     e1 = np.cross(normal, [1.0, 0, 0] if abs(normal[0]) < 0.9 else [0, 1.0, 0])
@@ -328,9 +330,11 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     state : SimulationState, optional
         Shape (``mesh.nodes + state.u``) and default power; ``positions`` (n, 3) [m] overrides
         the shape. Default: the flat mesh.
-    substrate : "model", None or (point, normal)
-        Isothermal plane at room temperature: the plane of the model's thermal boundary
-        panels (``"model"``; none if it has none), none, or a given plane [m].
+    substrate : "model", Substrate, None or (point, normal)
+        Isothermal plane at room temperature: the model's own substrate (``"model"``,
+        ``ThermalParameters.substrate``: by default the plane of its thermal boundary panels,
+        none if it has none), a :class:`~simulator.thermal.loss.Substrate`, none, or a given
+        plane [m].
     room_temperature : float, optional
         [deg C], default ``model.thermal.room_temperature``.
     box_factor, level, far_field, accuracy
