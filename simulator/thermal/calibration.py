@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 from .._result import ResultFiles
 from .._validate import array, in_range, positive
 from ..errors import ParameterError
-from .loss import Substrate
+from .loss import ChainLoss, Substrate
 from ..model.model import Model
 from .fixed_shape import resolve_substrate
 from .steady import ThermalModel
@@ -78,6 +78,14 @@ class CalibrationResult(ResultFiles):
                 "env_thickness [m]": self.env_thickness, "rms_error [-]": self.rms_error,
                 "max_error [-]": self.max_error,
                 "initial_rms_error [-]": self.initial_rms_error}
+
+
+def _panel_length(mesh) -> float:
+    """Root of the mean panel area [m] (a panel length, for the chains' starting t_env)."""
+    tri = mesh.nodes[mesh.triangles]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    on_panel = mesh.triangle_panel >= 0
+    return float(np.sqrt(area[on_panel].sum() / max(mesh.pattern.n_panels, 1)))
 
 
 def _reference_solver(model: Model, reference, x, substrate):
@@ -138,7 +146,8 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     beta_bounds : (float, float)
         Range of beta [rad] searched, within [0, pi/2).
     t_env_bounds : (float, float), optional
-        Range of t_env [m] (default: 0.01 to 100 times the model's t_env).
+        Range of t_env [m] (default: 0.01 to 100 times the model's t_env; a model without
+        chains starts from 1.5 times the root of its mean panel area, the paper's suggestion).
     substrate : "model", Substrate, None or (point, normal)
         Isothermal substrate plane of the reference (integral model or FE): the model's own
         (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
@@ -154,7 +163,9 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     if not isinstance(model, Model) or model.thermal is None:
         raise ParameterError("calibrate_environment needs a Model with thermal parameters "
                              f"(got {type(model).__name__}).")
-    prm = dataclasses.replace(model.thermal, loss_model="chain")
+    chain = model.thermal.loss if model.thermal.loss_model == "chain" else ChainLoss(
+        thickness=1.5 * _panel_length(model.mesh))       # the paper's t_env = 1.5 L as start
+    prm = dataclasses.replace(model.thermal, loss=chain)
     if not prm.env_conductivity > 0:
         raise ParameterError("calibrate_environment: env_conductivity = 0: there is no "
                              "environment to calibrate.")

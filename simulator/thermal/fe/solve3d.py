@@ -252,6 +252,7 @@ def _sheet_prolongation(basis, doflocs, sheet_tris, parent, bh_tris, xs, n_nodes
 
 def _model_inputs(model, positions, state, crease_power, heat):
     """(positions (n, 3) [m], nodal heat (n,) [W], thermal parameters, thermal model)."""
+    from ..loss import ChainLoss
     from ..steady import ThermalModel, ThermalParameters
 
     mesh = getattr(model, "mesh", None)
@@ -261,9 +262,10 @@ def _model_inputs(model, positions, state, crease_power, heat):
     if positions is None:
         positions = mesh.nodes if state is None else mesh.nodes + np.asarray(state.u, float)
     x = array("positions", positions, (n, 3), "m")
-    params = model.thermal or ThermalParameters(env_thickness=1.0)
-    # the nodal heat and the sheet's conductances only: no loss model (the FE is the loss)
-    tm = ThermalModel(mesh, dataclasses.replace(params, loss_model="chain"))
+    params = model.thermal or ThermalParameters()
+    # the nodal heat and the sheet's conductances only: no loss model (the FE is the loss;
+    # the chains, whose t_env plays no part here, keep the integral operator unbuilt)
+    tm = ThermalModel(mesh, dataclasses.replace(params, loss=ChainLoss(thickness=1.0)))
     if heat is not None:
         if crease_power is not None:
             raise ParameterError("give crease_power or heat, not both.")
