@@ -108,12 +108,13 @@ class Iteration:
         Corrections applied (the evaluation index at which it stopped).
     residual_norms, correction_norms : lists of 2-norms [N], [m]
     message : str
-        "converged", "converged (correction at round-off level)", "converged (residual at
-        round-off level)" or why it failed.
+        "converged", "converged (correction at round-off level)", "converged (residual ... N
+        at its round-off level)" or why it failed.
     point : the problem's point (from ``evaluate``) at the final iterate
     reason : str
-        "converged", "not finite" (a residual), "no correction" (``correct`` said why) or
-        "max_iter" (no convergence in ``max_iter`` corrections).
+        "converged", "round-off" (converged: the best iterate's residual at its round-off
+        level, ``at_round_off``), "not finite" (a residual), "no correction" (``correct`` said
+        why) or "max_iter" (no convergence in ``max_iter`` corrections).
     best : tuple or None
         With ``keep_best`` and reason "max_iter" or "round-off": ``(rn, point, state)`` of the
         evaluation with the smallest residual norm (the first of equals), ``state`` what
