@@ -17,7 +17,8 @@ import math
 from ._common import CLIError, distinct, length_um, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
-           "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK"]
+           "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK",
+           "heat_failure_hint"]
 
 _NS = "etorigami:"
 #: The layer stack of a plain pattern when ``--stack`` is not given.
@@ -176,6 +177,34 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,
               "heated_creases": heated, "contact": contact}
     return model, steps, params, geo
+
+
+#: The crease width a plain pattern is retried with after load control gave up heating it, as a
+#: fraction of the width it had: the four flat-folder patterns of issue 28 (Pig, Kirby, Little
+#: Bird, Teddy Bear) at 10 mm give up at a critical state with the stack's 200 um creases and
+#: all run with 50 um (17-80 s), as with 200 um creases on a sheet ten times larger.
+NARROWER = 0.25
+
+
+def heat_failure_hint(params: dict, model, result, unit_scale) -> str:
+    """What to change, in CLI flags, when load control gave up heating a plain pattern with
+    compliant creases (status "failed") (``params`` of :func:`plain_case`, ``unit_scale`` the one given or None):
+    narrower creases against the panels (``--crease-width``, :data:`NARROWER` of the widest),
+    or, for a file in plain units, a larger sheet (``--unit-scale`` ten times larger); "" for
+    any other outcome."""
+    if "heat" not in params or result.success or result.status != "failed":
+        return ""                    # (status "failed": a heating step's equilibrium failed)
+    pattern = getattr(model.mesh, "pattern", None)
+    if pattern is None or getattr(model.mesh, "sharp", False) or not len(pattern.creases):
+        return ""
+    width = float(pattern.crease_width[pattern.creases].max()) * 1e6
+    if not width > 0:
+        return ""
+    text = (f"what to change: narrower creases against the panels, e.g. --crease-width "
+            f"{NARROWER * width:.3g} (now {width:.3g} um)")
+    if unit_scale is not None:
+        text += f", or a larger sheet, e.g. --unit-scale {10 * unit_scale:g} (now {unit_scale:g})"
+    return text
 
 
 def contact_line(model, asked: bool) -> str:

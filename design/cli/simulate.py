@@ -150,6 +150,7 @@ def _run(args) -> int:
     from ._summary import summary_lines
     from .case_params import case_overrides
     from .files import fold_case, is_fold_file, reader_options
+    from .plain import heat_failure_hint
     from .precheck import check_heating
 
     if is_fold_file(args.case):
@@ -176,9 +177,10 @@ def _run(args) -> int:
     if result.status == "interrupted":
         return _save_interrupted(result, args.out, meta, where)
     out = result.save(args.out, meta)
+    hint = heat_failure_hint(meta.get("overrides", {}), model, result, args.unit_scale)
     print(f"{name}: {result.status} ({cli_terms(result.message)}) in "
           f"{time.perf_counter() - t0:.1f} s; "
-          f"results in {out}")
+          f"results in {out}" + (f"; {hint}" if hint else ""))
     print(_last_record_table(result, model))
     for line in summary_lines(result):
         print(line)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..mechanics.equilibrium import assembled_tangent as _assembled_tangent
-from .nonlinear import iterate
+from .nonlinear import iterate, residual_at_round_off
 from ..linalg.ladder import solve
 
 __all__ = ["LoadPath", "PathPoint", "model_size"]
@@ -134,7 +134,11 @@ def _correct(path, u, lam, constraint, options, size):
     problem = _Bordered(path, u, lam, constraint, options.linear_solver)
     out = iterate(problem, max_iter=options.max_iter, atol=options.atol, rtol=options.rtol,
                   size=size, criterion=options.criterion,
-                  max_step=getattr(path.system, "max_step", None))
+                  max_step=getattr(path.system, "max_step", None),
+                  keep_best=lambda: (problem.u.copy(), problem.lam),
+                  at_round_off=residual_at_round_off(path.system, path.free))
+    if out.reason == "round-off":                  # the best iterate, at round-off level
+        problem.u, problem.lam = out.best[2]
     u = problem.u.reshape(-1, 3) if out.success else problem.u
     message = "converged" if out.success else out.message
     return out.success, u, problem.lam, out.point, out.iterations, out.residual_norms, message
