@@ -70,7 +70,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
           until_stable: bool = False, direction=None, prior=None,
           callback=None, resolution: float | None = None, switch_branches: bool = False,
           locate_stability_loss: bool | str = False,
-          lost_fold_jump: float | None = None) -> ContinuationResult:
+          lost_fold_jump: float | None = None, handover=None) -> ContinuationResult:
     """Trace the equilibrium path of ``path`` by MGDCM arc-length from ``(u0, lam0)``.
 
     Parameters
@@ -152,6 +152,13 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
         highest point reached, and end there with success (message "jump from load factor
         ..."; from the highest point itself if the descent fails).
+    handover : callable, optional
+        With ``until_stable``: ``handover(u, lam, point, stability)`` (the accepted point's
+        :class:`PathPoint` and :class:`~simulator.solvers.stability.Stability`, or None
+        without ``stability``) must also be True at the stable point where the run ends;
+        until it is, the run goes on along the stable branch (e.g. a heating path, where
+        load control cannot take over while its coupling diverges:
+        :meth:`~simulator.steps.limit.HeatPath.coupling_gain`).
     """
     _check_arc_length_settings(arc_length, max_arc_length, step_norm, max_increments,
                                fast_iterations, target_load_factor)
@@ -166,7 +173,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
                         until_stable=until_stable, direction=direction, prior=prior,
                         callback=callback, resolution=resolution,
                         switch_branches=switch_branches, lost_fold_jump=lost_fold_jump,
-                        locate_stability_loss=locate_stability_loss)
+                        locate_stability_loss=locate_stability_loss, handover=handover)
     return run.trace_path(max_increments)
 
 
@@ -189,8 +196,10 @@ class _ArcLengthRun:
     def __init__(self, path, u0, lam0, *, arc_length, max_arc_length, target_load_factor,
                  target_displacement, monitor, options, adapt, step_norm, fast_iterations,
                  stability, until_stable, direction, prior, callback, resolution=None,
-                 switch_branches=False, lost_fold_jump=None, locate_stability_loss=False):
+                 switch_branches=False, lost_fold_jump=None, locate_stability_loss=False,
+                 handover=None):
         self.path, self.options, self.arc_length = path, options, arc_length
+        self.handover = handover
         self.resolution, self.fine = resolution, False
         self.adapt, self.step_norm, self.until_stable = adapt, step_norm, until_stable
         self.direction, self.callback, self.lam_t = direction, callback, target_load_factor
@@ -400,11 +409,15 @@ class _ArcLengthRun:
 
     def stable_again(self, s) -> bool:
         """Note whether the load factor turned (sign ``s`` of the last step); True if
-        ``until_stable`` and the last point is stable beyond the load factor where it turned."""
+        ``until_stable`` and the last point is stable beyond the load factor where it turned
+        (and ``handover`` accepts it)."""
         self.turned = self.turned or s != self.sig0
         self.peak = self.peak if self.turned else self.lam
+        st = self.trace.stab[-1] if self.trace.stab else None
         return bool(self.until_stable and self.turned and (self.lam - self.peak) * self.sig0 > 0
-                    and (not self.trace.stab or self.trace.stab[-1].stable))
+                    and (st is None or st.stable)
+                    and (self.handover is None or
+                         self.handover(self.u, self.lam, self.trace.last, st)))
 
 
 def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):

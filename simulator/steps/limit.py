@@ -17,7 +17,9 @@ singular there and Newton stalls). :func:`continue_past_limit` is called by
   stretches, and a ``"snap"`` per snap). On a heating path the arc length stops where the
   tangent loses stability while the power still rises (located by bisection) and restarts
   there with settings of that point alone, so that the branch it follows past it, and the
-  snap, do not depend on the step's increments. If arc length fails after the load factor turned
+  snap, do not depend on the step's increments; and it hands back to load control only where
+  the coupling of the load-controlled increments converges (:data:`COUPLING_GAIN_LIMIT`),
+  going on along the stable branch until then. If arc length fails after the load factor turned
   back, the continuation driver jumps from the highest point reached to the equilibrium just
   above it that descent on the potential energy finds (where the snap lands; ``mgdcm``'s
   ``lost_fold_jump``), and load control resumes there.
@@ -42,7 +44,7 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..solvers.load_path import LoadPath, _Constraint, _correct, model_size
+from ..solvers.load_path import LoadPath, _Constraint, _correct, _solve, model_size
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
@@ -84,6 +86,23 @@ SWITCH_BRANCHES = False
 #: increment count followed different ones (the snap's jump 47.0 / 35.1 / 48.0 / 49.6 um at 30
 #: / 60 / 120 / 240 increments; 52.26 um at all four with the restart).
 RESTART_AT_STABILITY_LOSS = True
+#: Shape change (fraction of the model size) of the difference that gives
+#: :meth:`HeatPath.coupling_gain`.
+GAIN_PROBE = 1e-4
+#: On a heating path the continuation hands back to load control only at a stable point where
+#: the coupling's gain along the softest mode (:meth:`HeatPath.coupling_gain`) is below this
+#: in magnitude (``mgdcm``'s ``handover``); before, it goes on along the stable branch. Load
+#: control solves the temperatures on the shape of the increment before (staggered, or
+#: iterated to a fixed point by the same pass), which multiplies a shape error along the mode
+#: by the gain: above 1 in magnitude it diverges from the coupled path. Where the path
+#: turns stable again the lowest eigenvalue is near zero and the gain large: on the heated
+#: Miura (a = 0.5 mm, gamma = 45 deg) -41 at load factor 0.7745, the first stable point past
+#: its snap (eigenvalue 1.9e-6 N/m), -3.4 at 0.7788, -1.0 at 0.796, -0.5 at 0.829. Resumed
+#: at 0.7745, load control ended 50 um off the coupled path after one increment at 120
+#: increments; at 240 its second increment turned sharply at 0.7816, left along the soft
+#: mode for a state 338 um back (whose coupled equilibrium is on the unsnapped branch, at
+#: load factor 0.754) and the step failed. Half: the error at least halves per increment.
+COUPLING_GAIN_LIMIT = 0.5
 #: Load-control failures (snaps) passed by arc length at most within one step.
 MAX_SNAPS = 5
 #: Statuses of a load-controlled outcome that end the step as they are: stopped by a callback,
@@ -177,15 +196,46 @@ class HeatPath(LoadPath):
     def linearise(self, u):
         """Temperatures at lambda = 0 and per unit lambda on the shape ``u``; sets the
         rest angles ``rest0 + lambda R``. Returns (T0, dT, crease rest at 0, per unit)."""
+        T0, dT, c0, dc = self._on_shape(u)
+        self.rest0, self.R = self._spring_rest(c0, dc)
+        return T0, dT, c0, dc
+
+    def _on_shape(self, u):
+        """(T0, dT, crease rest at 0, per unit lambda) with the temperatures on ``u``."""
         room = self.start.room_temperature
         T = self.tm.solve(self.mesh.nodes + u, self.q, room)
         T0, dT = T[:, 0], T[:, 1] - room
         cn = self.mesh.crease_nodes
         c0 = self.start.crease_rest + self.rot * ((T0 - self.start.temperature)[cn] @ self.w)
-        dc = self.rot * (dT[cn] @ self.w)
-        self.rest0 = spring_rest_angles(self.mesh, c0, self.params)
-        self.R = spring_rest_angles(self.mesh, c0 + dc, self.params) - self.rest0
-        return T0, dT, c0, dc
+        return T0, dT, c0, self.rot * (dT[cn] @ self.w)
+
+    def _spring_rest(self, c0, dc):
+        """Spring rest angles at lambda = 0 and per unit lambda of crease rest ``c0 + lambda
+        dc``."""
+        rest0 = spring_rest_angles(self.mesh, c0, self.params)
+        return rest0, spring_rest_angles(self.mesh, c0 + dc, self.params) - rest0
+
+    def coupling_gain(self, u, lam, K, mode, linear_solver="auto") -> float:
+        """Amplification of a displacement error along ``mode`` (n_free,) by one pass of the
+        staggered coupling at the equilibrium ``u`` at ``lam`` (tangent ``K``): temperatures
+        solved on ``u + e mode`` and the equilibrium of their rest angles found from ``u``
+        (linearised: ``-mode . K^-1 df / e``, ``df`` the change of the internal force at
+        ``u`` [N]). Load control (either coupling: the iterated one repeats the same pass)
+        follows the coupled path only where it is below 1 in magnitude along the softest
+        mode; near a singular tangent it grows as the inverse of the lowest eigenvalue.
+        nan if the solve fails."""
+        mode = np.asarray(mode, float)
+        e = GAIN_PROBE * model_size(self.system) / float(np.max(np.abs(mode)))
+        shifted = np.array(u, float).ravel()
+        shifted[self.free] += e * mode
+        forces = []
+        for shape in (np.asarray(u, float), shifted.reshape(-1, 3)):
+            _, _, c0, dc = self._on_shape(shape)
+            rest0, R = self._spring_rest(c0, dc)
+            forces.append(self.system.evaluate(u, rest0 + lam * R, hessian=False)
+                          .f_int[self.free])
+        du = _solve(K, forces[0] - forces[1], linear_solver)
+        return float("nan") if du is None else float(mode @ du) / e
 
     def at(self, u, lam):
         if self.iterated or self._lin is None:
@@ -278,7 +328,8 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
     powers : callable ``lam -> (C,) powers [W]``, optional (heating steps)
 
     With "continue", arc length takes over from the last converged state until the path is
-    stable again beyond the snap (or reaches the end), then load control resumes; this repeats
+    stable again beyond the snap (or reaches the end), on a heating path at a point where the
+    coupling converges (:data:`COUPLING_GAIN_LIMIT`), then load control resumes; this repeats
     for up to :data:`MAX_SNAPS` failures. Where arc length fails after the load factor turned
     back (a branch that falls away from the step's end, or a corrector stalled in contact
     chatter on it), the step jumps from the highest point it reached to the equilibrium at
@@ -376,7 +427,8 @@ def _restart(context, origin, located, path, c):
                  options=context.options, step_norm=step, stability=True, until_stable=True,
                  direction=u_u - u_s, prior=(u_s, lam_s), resolution=ARC_LOAD_STEP / RESOLVE,
                  lost_fold_jump=ARC_LOAD_STEP / RESOLVE,
-                 callback=crossing_stop(context.model.mesh, u_u))
+                 callback=crossing_stop(context.model.mesh, u_u),
+                 handover=_handover(path, context.options))
 
 
 def _arc(context, origin, outcome, path, increments, c, until_stable, locate=False):
@@ -426,7 +478,24 @@ def _arc(context, origin, outcome, path, increments, c, until_stable, locate=Fal
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
                  switch_branches=until_stable and SWITCH_BRANCHES,
                  locate_stability_loss=locate,
-                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE if until_stable else None)
+                 lost_fold_jump=ARC_LOAD_STEP / RESOLVE if until_stable else None,
+                 handover=_handover(path, context.options) if until_stable else None)
+
+
+def _handover(path, options):
+    """``mgdcm``'s ``handover`` on a heating path (None on others): a stable point where
+    the coupling's gain along the softest mode (:meth:`HeatPath.coupling_gain`) is below
+    :data:`COUPLING_GAIN_LIMIT` in magnitude (or cannot be measured)."""
+    gain = getattr(path, "coupling_gain", None)
+    if gain is None:
+        return None
+
+    def converges(u, lam, point, st):
+        if st is None or st.mode is None or point is None:
+            return True
+        return not abs(gain(u, lam, point.K, st.mode, options.linear_solver)) >= \
+            COUPLING_GAIN_LIMIT
+    return converges
 
 
 def _on_path(context, path, u, lam, direction):

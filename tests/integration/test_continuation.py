@@ -94,6 +94,33 @@ def test_arc_length_ends_at_target_load_factor(path):
     assert z > H / np.sqrt(3)                            # on the first stable branch
 
 
+def test_until_stable_ends_where_the_handover_accepts_the_stable_point(path):
+    """``mgdcm(until_stable=True)`` ends at the first stable point past the snap; with
+    ``handover`` it goes on along the stable branch to the first one that it accepts, and
+    asks only at stable points past the snap, with each point's tangent and stability."""
+    kw = dict(arc_length=0.2, max_increments=400, target_load_factor=3 * F_LIMIT,
+              max_arc_length=0.4, until_stable=True)
+    first = mgdcm(path, np.zeros((3, 3)), **kw)
+    assert first.success and "stable again past the limit point" in first.message
+    assert F_LIMIT < first.load_factor < 1.5 * F_LIMIT
+    asked = []
+
+    def handover(u, lam, point, st):
+        assert st.stable and lam > F_LIMIT and point.K.shape == (2, 2)
+        assert st.lowest == pytest.approx(np.linalg.eigvalsh(point.K.toarray())[0])
+        asked.append((lam, u))
+        return lam >= 1.5 * F_LIMIT
+
+    res = mgdcm(path, np.zeros((3, 3)), handover=handover, **kw)
+    assert res.success and "stable again past the limit point" in res.message
+    assert 1.5 * F_LIMIT <= res.load_factor < 3 * F_LIMIT
+    assert asked[-1][0] == res.load_factor and np.array_equal(asked[-1][1], res.u)
+    assert [lam for lam, _ in asked[:-1]] == [h[0] for h in res.history[-len(asked):-1]]
+    assert asked[0][0] == first.load_factor           # the same trace up to there
+    z = H + res.u[2, 2]
+    assert load_of_height(z) == pytest.approx(res.load_factor, rel=1e-8)
+
+
 def test_displacement_control_traces_same_path(path):
     res = displacement_control(path, np.zeros((3, 3)), 0.0, DOWN, 2.5 * H, increments=100)
     assert res.success, res.message

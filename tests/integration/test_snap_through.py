@@ -192,9 +192,9 @@ def test_heated_miura_passes_its_snap():
 
     One snap below 11 mW, at 9.2 mW. Above it the coupled path has two small folds, near
     11.05 and 11.93 mW, which arc length passes as snaps of 1-5 um wherever load control
-    fails at them (30, 120, 240 increments before the restart at the loss of stability, and
-    60 increments since: load control resumes at load factor 0.7745 instead of 0.7755 and
-    meets them); they are at most a tenth of the main snap."""
+    fails at them (since the continuation hands back where the coupling converges, load
+    factor 0.8286, load control meets the one at 11.93 mW at 30, 60 and 120 increments);
+    they are at most a tenth of the main snap."""
     case = get_case("snap_through", variant="heated")
     res = case.run()
     assert res.success, res.message
@@ -292,12 +292,15 @@ def test_heated_miura_reaches_12_mw_at_120_increments():
     fold past 180 deg, each a "fold_past_flat" event (the design's 40 um contact does not
     act before their panels turn parallel, about 190 um apart; no panel passes through
     another): crease 14 in the snap (load factor 0.7676, its panels 151 um apart), crease 13
-    on the far branch, crease 10 in the last increment."""
+    on the far branch, crease 10 in the small snap at 11.93 mW (load factor 0.99095; in the
+    last increment, load factor 1, while load control resumed at 0.7745, where its
+    staggered coupling diverged, and stepped over that fold)."""
     res, snaps = _heated_miura_snap(120)
     assert res.success, res.message
     past = [(e.creases, e.load_factor) for e in res.events if e.kind == "fold_past_flat"]
     assert [c for c, _ in past] == [(14,), (13,), (10,)], past
-    assert past[0][1] == pytest.approx(0.7676, abs=1e-4) and past[2][1] == 1.0
+    assert past[0][1] == pytest.approx(0.7676, abs=1e-4)
+    assert past[2][1] == pytest.approx(0.99095, abs=1e-5)
     assert not [e for e in res.events if e.kind == "panel_crossing"]
     assert res.state.crease_power.max() == pytest.approx(12e-3)
     power, jump = max(snaps, key=lambda s: s[1])
@@ -314,11 +317,60 @@ def test_heated_miura_reaches_12_mw_at_120_increments():
     assert 1e6 * snap.jump == pytest.approx(52.26, abs=0.5) and snap.node == loss[0].node
 
 
+def _coupling_gain(res, k):
+    """(load factor, gain of the staggered coupling along the softest mode) of record ``k``
+    of the heated Miura's step (:meth:`~simulator.steps.limit.HeatPath.coupling_gain`)."""
+    from simulator.solvers.stability import tangent_stability
+    from simulator.steps.base import StepContext
+    from simulator.steps.heating import _rotation_per_kelvin
+    from simulator.steps.limit import HeatPath
+
+    step = res.steps[0]
+    start = res.initial_state
+    path = HeatPath(StepContext(res.model, NewtonOptions()), start,
+                    step.power_history[-1] - start.crease_power,
+                    _rotation_per_kelvin(res.model), iterated=True)
+    lam, u = float(step.load_factor[k]), step.u_history[k]
+    point = path.at(u, lam)
+    return lam, path.coupling_gain(u, lam, point.K, tangent_stability(point.K).mode)
+
+
+def test_heated_miura_hands_back_to_load_control_where_its_coupling_converges():
+    """Past the main snap the far branch turns stable at a bifurcation (load factor 0.77433):
+    at its first stable point the lowest eigenvalue is 1.9e-6 N/m and one pass of the
+    staggered coupling multiplies a shape error along the softest mode by -41 (measured),
+    so load control resumed there (as before) oscillated away from the coupled path (50 um
+    at 120 increments; at 240 a sharp turn, a branch switch back to the unsnapped side and
+    a failed step). The continuation now goes on along the stable branch until the gain is
+    below ``limit.COUPLING_GAIN_LIMIT`` (0.5) and hands back there (load factor 0.8286)."""
+    from simulator.steps.limit import COUPLING_GAIN_LIMIT
+
+    res, _ = _heated_miura_snap(120)
+    assert res.success, res.message
+    step = res.steps[0]
+    regained = next(e for e in step.events if e.kind == "bifurcation"
+                    and e.load_factor == pytest.approx(0.77433, abs=1e-4))
+    lam, gain = _coupling_gain(res, regained.increment)
+    assert step.columns["stable"][regained.increment] and lam == pytest.approx(0.7745, abs=2e-4)
+    assert gain < -10                                    # -41: load control cannot follow
+    text = "restarted there: stable again past the limit point at load factor "
+    back = float(step.message.split(text)[1].split(";")[0])
+    k = int(np.argmin(np.abs(step.load_factor - back)))
+    lam, gain = _coupling_gain(res, k)
+    assert lam == pytest.approx(back, rel=1e-5) and back == pytest.approx(0.8286, abs=1e-3)
+    assert abs(gain) < COUPLING_GAIN_LIMIT
+    assert step.load_factor[k + 1] > back                # load control resumed there
+    assert not [e for e in step.events if e.kind == "branch_switch"]
+
+
 #: Issue 18 item 3: the heated Miura must reach 12 mW whatever the increment count, with the
 #: same snap. Near 11.0 mW per crease (load factor ~0.92) the coupled path has a second fold
 #: from which arc length can follow a branch that turns back (and stall in contact chatter on
 #: it: 60 increments): the continuation then jumps from the highest point it reached to the
 #: equilibrium that damped Newton on the energy finds just above it, and load control goes on.
+#: Past the main snap the continuation hands back to load control only where the coupling of
+#: its increments converges (load factor 0.8286, ``limit.COUPLING_GAIN_LIMIT``): at 240
+#: increments, resumed at the first stable point (0.7745), load control failed.
 @pytest.mark.slow
 def test_heated_miura_snap_does_not_depend_on_increments():
     """Success, 12 mW and the main snap's power at 30, 60, 120 and 240 increments: within
@@ -342,6 +394,26 @@ def test_heated_miura_snap_jump_does_not_depend_on_increments():
     motion to that point."""
     _, jumps = _main_snaps()
     assert np.ptp(jumps) <= 10.0 and jumps.min() > 0
+
+
+@pytest.mark.slow
+def test_heated_miura_hands_back_at_the_same_point_at_any_increment_count():
+    """The issue's 240-increment run (failed before: load control, resumed at load factor
+    0.7745 where one pass of its coupling multiplies a shape error by -41, turned sharply at
+    0.7816, left along the soft mode for a state 338 um back, failed at 0.7844, and arc length
+    from there followed the unsnapped branch down to load factor -0.07): the continuation
+    past the main snap hands back to load control at the same point at 30, 60, 120 and 240
+    increments (0.82855, spread 2e-5 measured), and no load-controlled increment leaves
+    along a soft mode."""
+    backs = []
+    for n in (30, 60, 120, 240):
+        res, _ = _heated_miura_snap(n)
+        assert res.success, (n, res.message)
+        step = res.steps[0]
+        assert not [e for e in step.events if e.kind == "branch_switch"], n
+        text = "restarted there: stable again past the limit point at load factor "
+        backs.append(float(step.message.split(text)[1].split(";")[0]))
+    assert np.ptp(backs) <= 1e-4 and np.mean(backs) == pytest.approx(0.8286, abs=1e-3)
 
 
 def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
