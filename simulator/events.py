@@ -288,7 +288,8 @@ class CrossingWatch:
     :func:`~simulator.mechanics.kinematics.fold_angles` up to round-off, from the normals of
     the creases' panels only, with the cross products written out on gathered coordinates:
     :class:`_CreaseAngles`), and how many times each has wrapped past +-180 deg (at the start
-    from :func:`~simulator.mechanics.kinematics.crease_rotations`, which does not wrap).
+    from :func:`~simulator.mechanics.kinematics.crease_rotations`, which does not wrap, where
+    a fold angle is within :data:`NEAR_FLAT` of +-180 deg).
 
     * Sharp creases (concentrated hinges): a fold angle passing +-180 deg is a
       ``"panel_crossing"`` (:func:`crossing_event`, creases only): the panels meet there.
@@ -314,20 +315,23 @@ class CrossingWatch:
         self.a = self._angles.known(self.u)
         self.sharp = bool(getattr(mesh, "sharp", False))
         self.turns = np.zeros(len(self.a), int)
-        if len(self.a) and not self.sharp:
+        if len(self.a) and not self.sharp and _fmax(_abs(self.a)) > np.pi - NEAR_FLAT:
             # whether a crease starts past flat: its rotation, summed over its fold lines,
-            # does not wrap (crease_rotations), where the panel-to-panel angle does
-            from .mechanics.kinematics import crease_rotations
-
-            rot = crease_rotations(mesh, mesh.nodes + self.u)
-            with np.errstate(invalid="ignore"):
-                self.turns = np.nan_to_num(np.rint((rot - self.a) / (2 * np.pi))).astype(int)
+            # does not wrap (crease_rotations), where the panel-to-panel angle does (asked
+            # only where a fold angle is near +-180 deg: a start folded more than NEAR_FLAT
+            # past flat is not recognised)
+            self.turns = self._angles.turns(self.u).copy()
+        #: whether a crease is folded past flat (then nodes are tested every increment)
+        self._past = bool(self.turns.any())
 
     def check(self, u, increment: int, load_factor: float, power=(), temperature=None):
         u = np.asarray(u, float)
         a = self._angles.known(u)
         event = None
-        if len(a):
+        if len(a) and not self.sharp and not self._past and \
+                _fmax(_abs(a - self.a)) <= LARGE_TURN and _fmax(_abs(a)) <= np.pi - NEAR_FLAT:
+            pass                 # the common case: every crease far from flat, no large turn
+        elif len(a):
             d = a - self.a
             with np.errstate(invalid="ignore"):
                 wrapped = np.abs(d) > np.pi                       # (NaN: not wrapped)
@@ -339,6 +343,7 @@ class CrossingWatch:
             else:
                 self.turns[wrapped] -= np.sign(d[wrapped]).astype(int)
                 past = self.turns != 0
+                self._past = bool(past.any())
                 turn = np.fmax.reduce(np.abs(np.where(wrapped, 2 * np.pi - np.abs(d), d)))
                 if past.any() or np.fmax.reduce(np.abs(a)) > np.pi - NEAR_FLAT or \
                         turn > LARGE_TURN:
@@ -400,6 +405,9 @@ def crossing_stop(mesh, u0, then=None):
     return callback
 
 
+_fmax, _abs = np.fmax.reduce, np.abs        # (NaN-safe maximum: a NaN is not a large turn)
+
+
 # numpy >= 2: vecdot is a ufunc, with less overhead than einsum on small arrays
 _dot = getattr(np, "vecdot", None) or (lambda u, v: np.einsum("...i,...i->...", u, v))
 
@@ -429,7 +437,7 @@ class _CreaseAngles:
         from .geometry.polygons import rings
 
         self.mesh, self.nodes = mesh, mesh.nodes
-        self.kept = {}
+        self.kept, self.kept_turns = {}, {}
         self.room = max(1, min(_KEPT_STATES, _KEPT_BYTES // max(1, 24 * mesh.n_nodes)))
         # concentrated hinges, or no crease: fold_angles itself
         self.plain = bool(getattr(mesh, "sharp", False)) or not mesh.n_creases
@@ -488,6 +496,23 @@ class _CreaseAngles:
                 del self.kept[next(iter(self.kept))]
             self.kept[key] = a
         return a
+
+    def turns(self, u) -> np.ndarray:
+        """(C,) int: how many times each crease's fold angle has wrapped past +-180 deg at
+        ``u`` (from :func:`~simulator.mechanics.kinematics.crease_rotations`, which does not
+        wrap), kept per state as :meth:`known`."""
+        key = u.tobytes()
+        t = self.kept_turns.get(key)
+        if t is None:
+            from .mechanics.kinematics import crease_rotations
+
+            rot = crease_rotations(self.mesh, self.mesh.nodes + u)
+            with np.errstate(invalid="ignore"):
+                t = np.nan_to_num(np.rint((rot - self.known(u)) / (2 * np.pi))).astype(int)
+            if len(self.kept_turns) >= self.room:
+                del self.kept_turns[next(iter(self.kept_turns))]
+            self.kept_turns[key] = t
+        return t
 
 
 _ANGLES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()

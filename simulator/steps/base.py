@@ -219,18 +219,22 @@ class StepRecorder:
         for (t, u, its), res in zip(path.history, path.residual_norms):
             self.record(scale(t), u, temperature, power, its, res)
 
-    def note_stability(self, path, temperature, power, load_factor, before=None) -> None:
+    def note_stability(self, path, temperature, power, load_factor, before=None,
+                       one_record: bool = False) -> None:
         """Take the stability of a :class:`~simulator.solvers.newton.PathResult`'s last
         accepted state (:attr:`stable`) and its branch switches as events
         (:func:`~simulator.events.branch_event`), before its increments are recorded:
         ``load_factor(t)`` maps its path parameter to the step's; the path's first increment
-        is record ``before`` (default: the next one)."""
+        is record ``before`` (default: the next one). ``one_record``: the path is recorded as
+        one record, its end state (a heating increment, whose sub-increments after step cuts
+        are not recorded): its events are at that record."""
         if path.switches:
-            self._note_switches(path, temperature, power, load_factor, before)
+            self._note_switches(path, temperature, power, load_factor, before, one_record)
         if path.stable is not None:
             self.stable = path.stable
 
-    def _note_switches(self, path, temperature, power, load_factor, before) -> None:
+    def _note_switches(self, path, temperature, power, load_factor, before,
+                       one_record=False) -> None:
         from ..events import branch_event
 
         first = len(self) if before is None else before
@@ -238,7 +242,8 @@ class StepRecorder:
         for sw in path.switches:
             if not sw.switched and self.stable is False:
                 continue                       # still unstable: lost once, one event
-            k = first + (times.index(sw.t) if sw.t in times else len(times) - 1)
+            k = first if one_record else \
+                first + (times.index(sw.t) if sw.t in times else len(times) - 1)
             self.events.append(branch_event(sw, load_factor(sw.t), k, power, temperature))
             self.stable = sw.switched
 

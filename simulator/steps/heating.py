@@ -135,7 +135,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         if lam is not None:
             lam0, lam1 = lam[s - 1], lam[s]
         rec.note_stability(path, temp, power,
-                           lambda t, a=lam0, b=lam1: a + t * (b - a))
+                           lambda t, a=lam0, b=lam1: a + t * (b - a), one_record=True)
         rec.record(lam1, u, temp, np.asarray(power, float), path.iterations,
                    np.concatenate(path.residual_norms) if path.residual_norms else ())
         crossing = watch.check(u, len(rec) - 1, lam1, power, temp)

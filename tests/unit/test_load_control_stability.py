@@ -223,3 +223,27 @@ def test_a_path_that_gives_up_names_the_critical_state_it_gave_up_at():
     off = follow_path(Mechanism(), np.zeros((2, 3)), np.zeros(6), f_end, np.zeros(0),
                       np.zeros(0), 4, NewtonOptions(stability="off"))
     assert "critical" not in off.message                   # not analysed: checks nothing
+
+
+def test_a_heating_increment_records_its_branch_switch_at_its_own_record():
+    """A heating increment is one record whatever its sub-increments after step cuts (issue 28
+    follow-up): a loss of stability found in its second of three sub-increments is an event
+    at that record, not two records further on (``note_stability(one_record=True)``)."""
+    from simulator import get_case, simulate
+    from simulator.solvers.branches import BranchSwitch
+    from simulator.solvers.stability import Stability
+    from simulator.steps.base import StepRecorder
+
+    start = simulate(get_case("single_fold", thermal_steps=1).model, []).state
+    lost = BranchSwitch(0.5, Stability(negative=1, lowest=-2.0, mode=None))
+    path = SimpleNamespace(switches=[lost], stable=False,
+                           history=[(t, start.u, 1) for t in (0.25, 0.5, 1.0)])
+    for one_record, expected in ((True, 3), (False, 4)):
+        rec = StepRecorder(start)
+        for _ in range(3):                               # three increments recorded before
+            rec.record(0.0, start.u, start.temperature, start.crease_power)
+        rec.note_stability(path, start.temperature, start.crease_power,
+                           lambda t: 0.4 + 0.1 * t, one_record=one_record)
+        (event,) = rec.events
+        assert event.kind == "stability_lost" and event.load_factor == pytest.approx(0.45)
+        assert event.increment == expected and rec.stable is False
