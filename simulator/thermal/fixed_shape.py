@@ -23,6 +23,7 @@ from .measures import crease_temperatures
 from .loss import Substrate
 from .parameters import ThermalParameters
 from .steady import ThermalModel, panels_plane
+from .steady import resolve_substrate as steady_substrate
 
 __all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane",
            "CreaseTemperatureTable"]
@@ -109,20 +110,7 @@ def resolve_substrate(model, x, substrate):
     Substrate`) as a plane of 6 floats, or () for none: "model" is the model's own
     substrate (``ThermalParameters.substrate``: its plane, that of its boundary panels at
     ``x``, or none)."""
-    if isinstance(substrate, str):
-        one_of("substrate", substrate, ("model",), hint=" (or None, or (point, normal))")
-        substrate = model.thermal.substrate if model.thermal is not None else None
-    if substrate is None:
-        return ()
-    if isinstance(substrate, Substrate):
-        return substrate.as_tuple() if not substrate.from_panels else \
-            boundary_panel_plane(model, x)
-    try:
-        point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
-    except (TypeError, ValueError):
-        raise ParameterError(f"substrate = {substrate!r} must be 'model', None, a Substrate or "
-                             "a pair (point (3,), normal (3,)) [m].") from None
-    return tuple(float(v) for v in np.concatenate([point, normal]))
+    return steady_substrate(substrate, model.mesh, model.thermal, x)
 
 
 def _shape_and_heat(model, tm, state, positions, crease_power, heat):

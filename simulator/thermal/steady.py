@@ -30,7 +30,7 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
-from .._validate import array
+from .._validate import array, one_of
 from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
@@ -77,13 +77,38 @@ def substrate_plane(mesh, params, x=None):
     (:attr:`~simulator.thermal.parameters.ThermalParameters.substrate`) on ``mesh`` at positions
     ``x`` (default: the mesh's): an explicit plane, the plane of the thermal-boundary panels
     (``Substrate()``; None without boundary panels), or None (``substrate=None``)."""
-    sub = params.substrate
-    if sub is None:
+    v = resolve_substrate("model", mesh, params, x)
+    if not v:
         return None
-    if not sub.from_panels:
-        return params.plane
-    v = panels_plane(mesh, params.boundary_panels, x)
-    return None if not v else (np.array(v[:3]), np.array(v[3:]))
+    normal = np.array(v[3:])
+    return np.array(v[:3]), normal / np.linalg.norm(normal)
+
+
+def resolve_substrate(substrate, mesh, params, x=None) -> tuple:
+    """A substrate as a plane of 6 floats (a point and a normal into the medium [m]), or ()
+    for none: ``"model"`` is ``params.substrate`` (None ``params``: none), a
+    :class:`~simulator.thermal.loss.Substrate` its plane or that of the thermal-boundary panels
+    of ``params`` on ``mesh`` at positions ``x`` (default: the mesh's), None none, or a pair
+    (point (3,), normal (3,)). The one reading of a substrate: the steady model,
+    ``fixed_shape_temperatures``, ``calibrate_environment`` and ``solve_fe3d``."""
+    from .loss import Substrate
+
+    if isinstance(substrate, str):
+        one_of("substrate", substrate, ("model",), hint=" (or a Substrate, None, or (point, "
+                                                        "normal))")
+        substrate = params.substrate if params is not None else None
+    if substrate is None:
+        return ()
+    if isinstance(substrate, Substrate):
+        if not substrate.from_panels:
+            return substrate.as_tuple()
+        return panels_plane(mesh, params.boundary_panels if params is not None else (), x)
+    try:
+        point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
+    except (TypeError, ValueError):
+        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate, None or "
+                             "a pair (point (3,), normal (3,)) [m].") from None
+    return tuple(float(v) for v in np.concatenate([point, normal]))
 
 
 def panels_plane(mesh, panels, x=None) -> tuple:

@@ -190,27 +190,12 @@ def _plane_frame(x, mesh, params, substrate):
     substrate: ``"model"`` (the model's own, ``ThermalParameters.substrate``: its plane, that
     of its boundary panels at ``x``, or none), a :class:`~simulator.thermal.loss.Substrate`,
     None, or (point, normal)."""
-    from ..loss import Substrate
-    from ..steady import panels_plane
+    from ..steady import resolve_substrate
 
-    if isinstance(substrate, str):
-        if substrate != "model":
-            raise ParameterError(f"substrate = {substrate!r}; use 'model' (the model's own "
-                                 "substrate), a Substrate, None, or (point, normal).")
-        substrate = params.substrate if params is not None else None
-    if isinstance(substrate, Substrate):
-        if substrate.from_panels:
-            plane = panels_plane(mesh, params.boundary_panels if params is not None else (), x)
-            substrate = (plane[:3], plane[3:]) if plane else None
-        else:
-            substrate = (substrate.point, substrate.normal)
-    if substrate is None:
+    plane = resolve_substrate(substrate, mesh, params, x)
+    if not plane:
         return x.mean(axis=0), np.eye(3), False
-    try:
-        origin, normal = (np.asarray(v, float).reshape(3) for v in substrate)
-    except (TypeError, ValueError):
-        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate, None or "
-                             "a pair (point (3,), normal (3,)) [m].") from None
+    origin, normal = np.array(plane[:3]), np.array(plane[3:])
     normal = normal / np.linalg.norm(normal)
     if np.mean((x - origin) @ normal) < 0:
         normal = -normal
