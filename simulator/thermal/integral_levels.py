@@ -106,6 +106,7 @@ class CorrectedLoss:
         self.accurate, self.base, self.tol = accurate, base, float(tol)
         self.nodes = base.nodes
         self._accurate0 = self._base0 = None
+        self._near = None       # (node ids, their heights) under the cheap operator's scale
 
     @property
     def builds(self) -> int:
@@ -135,13 +136,50 @@ class CorrectedLoss:
             Lb = self.base.loss_matrix(x)
             # not refreshed where the m = 1 operator is not positive definite: the sheet passes
             # through itself and the model is not reliable there (IntegralOperator warns once)
-            if self.change(Lb) <= self.tol or not self.base.last_definite:
+            if (self.change(Lb) <= self.tol and not self._moved_near_plane(x)) or \
+                    not self.base.last_definite:
                 return self._accurate0 + (Lb - self._base0)
         self._accurate0 = self.accurate.rebuild(x)
+        self._near = self._near_plane(x)
         last = self.base.last_positions
         self._base0 = Lb if Lb is not None and np.array_equal(last, x) else self.base.rebuild(x)
         logger.debug("integral loss: accurate operator rebuilt (%d so far)", self.builds)
         return self._accurate0
+
+
+    def _near_plane(self, x):
+        """``(nodes, heights, floor)`` of the nodes closer to the substrate plane than the
+        cheap operator's mean sub-triangle diameter d at positions ``x`` (None without a
+        plane), with the height floor 1e-3 d."""
+        h, _ = self.base._heights(x)
+        if h is None:
+            return None
+        sub = self.base.sub_triangles(x)
+        d = float(np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1).mean())
+        near = np.flatnonzero(h < d)
+        return near, h[near], 1e-3 * d
+
+    def _moved_near_plane(self, x) -> bool:
+        """Whether a node that was closer to the substrate plane than the cheap operator's
+        sub-triangles at the last accurate build has changed its height by more than
+        :data:`NEAR_PLANE_RTOL` x ``tol`` of it (at least of 1e-3 sub-triangle diameters).
+
+        The cheap operator does not resolve a gap thinner than its sub-triangles, so the
+        correction's change is not seen through it there: on the double fold over its boundary
+        panels' plane the corrected temperatures drifted 1.7 % of the largest rise (0.31 %
+        with this test, 39 accurate builds over 93 shapes instead of 13)."""
+        if self._near is None or not len(self._near[0]):
+            return False
+        nodes, h0, floor = self._near
+        h, _ = self.base._heights(x)
+        return bool(np.any(np.abs(h[nodes] - h0) > NEAR_PLANE_RTOL * self.tol
+                           * np.maximum(h0, floor)))
+
+
+#: A height over the substrate plane under the cheap operator's sub-triangles may change by
+#: this fraction of ``integral_correction_tol`` before the accurate operator is rebuilt
+#: (:meth:`CorrectedLoss._moved_near_plane`; 2 % of the height at the default 0.1).
+NEAR_PLANE_RTOL = 0.2
 
 
 def integral_operator(triangles, n_nodes, params, plane=None):
