@@ -89,6 +89,6 @@ def model_summary(model, heated) -> str:
         what = (f"chains, t_env {loss.thickness * 1e6:.4g} um" if loss.model == "chain" else
                 f"integral, m = {loss.refinement}")
         name = thermal.medium.name if thermal.medium.name != "custom" else "the medium"
-        line += f"; heat loss: {what}, to {name} at {thermal.env_conductivity:.4g} W/(m K)"
+        line += f"; heat loss: {what}, to {name} at {thermal.medium.thermal_conductivity:.4g} W/(m K)"
     fixed = int(model.fixed_mask.sum()) if hasattr(model, "fixed_mask") else 0
     return line + f"; supports: {fixed} fixed degrees of freedom"

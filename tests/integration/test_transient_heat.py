@@ -317,7 +317,7 @@ def test_missing_density_and_bad_integration_inputs():
         integrate_heat(tm, mesh.nodes, {2: 1e-3}, 1.0, 0.1)
     tm = ThermalModel(build_mesh(single_fold_pattern()),
                       ThermalParameters(env_thickness=1e-3, env_density=0.0))
-    with pytest.raises(ParameterError, match="env_density"):
+    with pytest.raises(ParameterError, match="the medium.s density 0.0"):
         heat_system(tm, tm.mesh.nodes)
     tm = reference_04_model()
     x = tm.mesh.nodes

@@ -203,7 +203,7 @@ def test_boundary_panels_are_held_at_room_temperature():
 def test_dense_limit_is_refused_naming_the_limit_and_the_alternatives(monkeypatch):
     monkeypatch.setattr(integral, "MAX_SUB_TRIANGLES", 100)
     with pytest.raises(ParameterError, match=r"(?s)224 sub-triangles exceeds the dense-operator "
-                       r"limit MAX_SUB_TRIANGLES = 100.*loss_model='chain'.*3-D FE"):
+                       r"limit MAX_SUB_TRIANGLES = 100.*loss=ChainLoss.*3-D FE"):
         _strip(refinement=4)
 
 
