@@ -38,8 +38,7 @@ _INTEGRAL_NAMES = {"integral_refinement": "refinement",
                    "integral_shape_tol": "shape_tol", "integral_correction_tol": "correction_tol"}
 _MEDIUM_NAMES = {"env_conductivity": "thermal_conductivity", "env_density": "density",
                  "env_specific_heat": "specific_heat"}
-#: The old flat keywords (deprecated, issue 29), in the old positional order, and what to
-#: write instead.
+#: The old flat keywords (deprecated, issue 29) and what to write instead.
 _OLD_KEYWORDS = {
     **{old: f"loss=ChainLoss({new}=...), or params.with_loss({new}=...) on existing "
             "parameters" for old, new in _CHAIN_NAMES.items()},
