@@ -23,7 +23,7 @@ Run: ``python benchmarks/bench_loss_models.py`` (about a minute; ``--only grippe
 runs one of the two rows, and ``--overdriven`` adds its row unless ``--only gripper``): the
 integral model at its defaults (m = 3, Richardson-extrapolated, corrected between rebuilds);
 ``--refinement m``, ``--correction-tol``, ``--plain`` (the plain operator at m rebuilt at
-``integral_shape_tol``, the integral model before 6 Dec 2026).
+``IntegralLoss.shape_tol``, the integral model before 6 Dec 2026).
 """
 
 from __future__ import annotations
@@ -39,15 +39,15 @@ from simulator.cases import CRANE_POWER_MW, get_case
 
 
 def _settings(args) -> dict:
-    """The integral model's ThermalParameters fields from the options (empty: its defaults,
-    m = 3 Richardson-extrapolated from 2 and 3, corrected between rebuilds)."""
+    """The integral loss's fields (:class:`~simulator.IntegralLoss`) from the options (empty:
+    its defaults, m = 3 Richardson-extrapolated from 2 and 3, corrected between rebuilds)."""
     out = {}
     if args.refinement is not None:
-        out["integral_refinement"] = args.refinement
+        out["refinement"] = args.refinement
     if args.plain:
-        out.update(integral_extrapolation=False, integral_correction_tol=0.0)
+        out.update(extrapolation=False, correction_tol=0.0)
     if args.correction_tol is not None:
-        out["integral_correction_tol"] = args.correction_tol
+        out["correction_tol"] = args.correction_tol
     return out
 
 
@@ -68,19 +68,18 @@ def gripper_run(loss_model: str, settings: dict):
     """A function evaluating the start-design gripper (bisect) with one loss model: the
     device's own option ``GripperDesign(loss_model=...)``, whose integral model includes the
     substrate plane under the gripper (z = -undercut), as the device has; ``settings``: other
-    ThermalParameters fields of the integral model."""
+    fields of its integral loss."""
     design = gripper.GripperDesign(loss_model=loss_model,
-                                   **({"integral_refinement": settings["integral_refinement"]}
-                                      if "integral_refinement" in settings else {}))
-    extra = {k: v for k, v in settings.items() if k != "integral_refinement"}
+                                   **({"integral_refinement": settings["refinement"]}
+                                      if "refinement" in settings else {}))
+    extra = {k: v for k, v in settings.items() if k != "refinement"}
     if loss_model == "chain" or not extra:
         return lambda: gripper.evaluate_gripper(design, mode="bisect")
     original = gripper.gripper_model
 
     def model_with(design, *args, **kw):
         model, pre = original(design, *args, **kw)
-        thermal = dataclasses.replace(model.thermal, **extra)
-        return dataclasses.replace(model, thermal=thermal), pre
+        return dataclasses.replace(model, thermal=model.thermal.with_loss(**extra)), pre
 
     def run():
         gripper.gripper_model = model_with
@@ -98,8 +97,7 @@ def crane_run(loss_model: str, settings: dict, power_mW=None):
     case = get_case("crane", loss_model=loss_model, power_mW=power_mW)
     model = case.model
     if loss_model == "integral" and settings:
-        model = dataclasses.replace(model, thermal=dataclasses.replace(model.thermal,
-                                                                       **settings))
+        model = dataclasses.replace(model, thermal=model.thermal.with_loss(**settings))
     return lambda: simulate(model, case.steps)
 
 
@@ -112,12 +110,12 @@ def crane_overdriven(loss_model: str, settings: dict):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--refinement", type=int, default=None,
-                    help="integral_refinement m (default: the model's, 3)")
+                    help="the integral loss's refinement m (default: the model's, 3)")
     ap.add_argument("--plain", action="store_true",
-                    help="the plain operator at m, rebuilt at integral_shape_tol (no "
+                    help="the plain operator at m, rebuilt at its shape_tol (no "
                          "extrapolation, no correction: the integral model before 6 Dec 2026)")
     ap.add_argument("--correction-tol", type=float, default=None,
-                    help="integral_correction_tol (default: the model's, 0.1)")
+                    help="the integral loss's correction_tol (default: the model's, 0.1)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     ap.add_argument("--overdriven", action="store_true",

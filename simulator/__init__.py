@@ -34,8 +34,8 @@ __getattr__, __dir__ = _attach(__name__, {
     ".mechanics.kinematics": ("fold_angles",),
     ".mechanics.equilibrium": ("EquilibriumSystem",),
     ".mechanics.families": ("Configuration", "ElementFamily", "FamilyValues"),
-    ".errors": ("ConvergenceError", "EtorigamiError", "FoldFormatError", "ParameterError",
-                "PatternError", "SolverError"),
+    ".errors": ("ConvergenceError", "EtorigamiDeprecationWarning", "EtorigamiError",
+                "FoldFormatError", "ParameterError", "PatternError", "SolverError"),
     ".io.fold": ("FoldGeometry", "fold_to_model", "fold_to_pattern", "load_fold_json",
                  "model_to_fold", "parse_fold", "pattern_to_fold",
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
@@ -151,5 +151,5 @@ __all__ = [
     "miura_sheet_model", "miura_fold_signs", "single_fold_model",
     # errors
     "EtorigamiError", "ParameterError", "PatternError", "ConvergenceError", "FoldFormatError",
-    "SolverError",
+    "SolverError", "EtorigamiDeprecationWarning",
 ]

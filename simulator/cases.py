@@ -21,7 +21,7 @@ from .simulation import simulate
 from .solvers.dynamics_options import DynamicsOptions
 from .thermal.schedules import StepPower
 from .steps import ArcLengthLoad, ElectroThermal, Gravity, Heat, SelfFold
-from .geometry.materials import Material
+from .geometry.materials import AIR, Material
 from .model.mesh import build_mesh
 from .model.model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
 from .geometry.example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
@@ -29,6 +29,7 @@ from .geometry.example_patterns import (crane_pattern, double_fold_pattern, fold
                        with_substrate)
 from .model.properties import BarHingeParameters
 from .solvers.newton import NewtonOptions
+from .thermal.loss import ChainLoss, IntegralLoss
 from .thermal.steady import REFERENCE_BETA, ThermalParameters
 
 __all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
@@ -132,13 +133,15 @@ def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1
     pattern = strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=tc, panel_thickness=tp,
                             material=mat)
     if variant == "within":
-        thermal = ThermalParameters(env_thickness=1.0, env_conductivity=0.0, layers=1,
+        thermal = ThermalParameters(loss=ChainLoss(thickness=1.0, layers=1),
+                                    medium=AIR.with_properties(thermal_conductivity=0.0),
                                     room_temperature=0.0, room_temperature_nodes=(0, 3, 5, 6))
     else:
-        thermal = ThermalParameters(env_thickness=t_env, env_conductivity=0.026,
-                                    layers=_steps_int("layers", layers),
-                                    dissipation_angle=beta_deg / 180 * 3.14,
-                                    room_temperature=0.0, room_temperature_nodes=(0, 3, 5, 6))
+        thermal = ThermalParameters(loss=ChainLoss(thickness=t_env,
+                                                   layers=_steps_int("layers", layers),
+                                                   dissipation_angle=beta_deg / 180 * 3.14),
+                                    medium=AIR, room_temperature=0.0,
+                                    room_temperature_nodes=(0, 3, 5, 6))
     model = make_model(pattern, Supports.nodes([0, 1, 2, 3, 8, 9, 10, 11]), thermal=thermal)
     return Case("verification_strip", model, (Heat({2: 10 * W * L * tc}, increments=1),),
                 dict(variant=variant, W=W, L=L, L1=L1, L2=L2, tc=tc, tp=tp, beta_deg=beta_deg,
@@ -185,9 +188,10 @@ def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_
     _check(crease_width=crease_width, env_thickness=env_thickness, t_gold=t_gold, t_su8=t_su8)
     if not (isinstance(env_conductivity, (int, float)) and env_conductivity >= 0):
         raise ParameterError(f"env_conductivity = {env_conductivity!r} must be >= 0 W/(m K).")
-    thermal = ThermalParameters(env_thickness=env_thickness, env_conductivity=env_conductivity,
-                                dissipation_angle=REFERENCE_BETA, boundary_panels=(2,),
-                                room_temperature_nodes=room_nodes)
+    thermal = ThermalParameters(
+        loss=ChainLoss(thickness=env_thickness, dissipation_angle=REFERENCE_BETA),
+        medium=AIR.with_properties(thermal_conductivity=env_conductivity),
+        boundary_panels=(2,), room_temperature_nodes=room_nodes)
     actuators = Actuators(Bimorph(E1=E_gold, t1=t_gold, E2=2e9, t2=t_su8), {2: delta_alpha})
     model = single_fold_model(thermal=thermal, actuators=actuators, L=L, W=crease_width,
                               undercut=undercut, panel_thickness=panel_thickness,
@@ -298,9 +302,10 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
     """
     params = {k: v for k, v in locals().items()}
     pattern = double_fold_pattern()
-    thermal = ThermalParameters(env_thickness=600e-6, env_conductivity=env_conductivity,
-                                dissipation_angle=REFERENCE_BETA, boundary_panels=(3,),
-                                room_temperature_nodes=(0, 3))
+    thermal = ThermalParameters(
+        loss=ChainLoss(thickness=600e-6, dissipation_angle=REFERENCE_BETA),
+        medium=AIR.with_properties(thermal_conductivity=env_conductivity),
+        boundary_panels=(3,), room_temperature_nodes=(0, 3))
     actuators = Actuators(Bimorph(E1=0.7 * 79e9, t1=0.2e-6, E2=2e9, t2=0.9e-6),
                           {2: DELTA_ALPHA_AU_SU8, 5: DELTA_ALPHA_AU_SU8})
     supports = Supports({0: "z", 1: "z", 2: "yz", 3: "xyz", 12: "xyz", 13: "xyz", 14: "xyz",
@@ -378,8 +383,9 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
     signs = miura_fold_signs(a, b, gamma, m, n)
     actuators = Actuators(Bimorph(E1=50e9, t1=t_gold, E2=2e9, t2=t_su8),
                           {c: -50e-6 * s for c, s in signs.items()})
-    thermal = ThermalParameters(env_thickness=(a + b) / 2, env_conductivity=0.026,
-                                dissipation_angle=REFERENCE_BETA, boundary_panels=boundary)
+    thermal = ThermalParameters(
+        loss=ChainLoss(thickness=(a + b) / 2, dissipation_angle=REFERENCE_BETA), medium=AIR,
+        boundary_panels=boundary)
     mesh = build_mesh(pattern)
     # clamp the left end: every node of the first column of panels (x = 0 side)
     fixed = {int(i): "xyz" for p in range(n) for i in mesh.panel_nodes(p)}
@@ -457,8 +463,9 @@ def crane(deactivated: bool = False, power_mW: float | None = None, thermal_step
         del heat[8], heat[17]
         heat[9] = heat[11] = q / 2
     pattern = crane_pattern()
-    thermal = ThermalParameters(env_thickness=1e-3, env_conductivity=0.026,
-                                dissipation_angle=REFERENCE_BETA, loss_model=loss_model)
+    thermal = ThermalParameters(
+        loss=ChainLoss(thickness=1e-3, dissipation_angle=REFERENCE_BETA)
+        if loss_model == "chain" else IntegralLoss(), medium=AIR)
     actuators = Actuators(Bimorph(E1=50e9, t1=0.2e-6, E2=2e9, t2=0.8e-6),
                           {c - 1: 200e-6 * s for c, s in _CRANE_SIGN.items()})
     model = make_model(pattern, Supports({12: "xyz", 13: "yz", 15: "z", 17: "z"}),

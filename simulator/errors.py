@@ -5,7 +5,8 @@ Every error of the toolkit derives from :class:`EtorigamiError`. Bad user input 
 :class:`ValueError`, whose message names the offending item, the value given and how to fix it
 (see :mod:`simulator._validate`). A numerical method that fails on valid input raises a
 :class:`SolverError` or, on request, a :class:`ConvergenceError` (both :class:`RuntimeError`):
-changing the arguments is not the fix there.
+changing the arguments is not the fix there. An old spelling kept for one release warns
+with an :class:`EtorigamiDeprecationWarning` naming its replacement.
 """
 
 from __future__ import annotations
@@ -48,3 +49,10 @@ class SolverError(EtorigamiError, RuntimeError):
     Not a :class:`ValueError`: changing the arguments is not the fix. The message names the
     method and its status.
     """
+
+
+class EtorigamiDeprecationWarning(DeprecationWarning):
+    """An old spelling that still works for one release and then goes (e.g. the flat
+    ``ThermalParameters(env_thickness=...)`` keywords): the message names its replacement.
+    A :class:`DeprecationWarning`, so Python shows it where a script (``__main__``) uses the
+    old spelling; the test suite turns it into an error (``pyproject.toml``)."""

@@ -13,7 +13,7 @@ where they differ by more than 10 %, which one is closer to the 3-D finite-eleme
 Method
 ------
 * Models: each device's own chain parameters, and the same model with
-  ``ThermalParameters(loss_model="integral")`` (its defaults: ``integral_refinement`` m = 3,
+  ``loss=IntegralLoss()`` (its defaults: ``refinement`` m = 3,
   Richardson-extrapolated from m = 2 and 3, corrected between rebuilds; theory 4.7) over
   the isothermal substrate plane: the plane of the model's thermal boundary panel (the
   substrate), as the 3-D FE uses it (``substrate="model"``).

@@ -150,7 +150,8 @@ def strip_case(W, beta_deg=BETA, t_env=T_ENV, layers=LAYERS, k=0.3, k_env=0.026,
     mat = Material("structure", youngs_modulus=2e9, poisson_ratio=0.3, thermal_conductivity=k)
     pattern = strip_pattern(W=W, L=L_, L1=p["L1"], L2=p["L2"], crease_thickness=p["tc"],
                             panel_thickness=p["tp"], material=mat)
-    thermal = dataclasses.replace(base.model.thermal, env_conductivity=k_env)
+    thermal = dataclasses.replace(base.model.thermal, medium=base.model.thermal.medium
+                                  .with_properties(thermal_conductivity=k_env))
     model = make_model(pattern, base.model.supports, thermal=thermal)
     return dataclasses.replace(base, model=model, parameters={**p, "k": k, "k_env": k_env})
 

@@ -5,7 +5,7 @@ Question
 How far are the two steady heat-loss models of the simulator from an independent 3-D
 finite-element (FE) solution of conduction in the medium, on the shapes that matter? The
 chain model (theory 4.3-4.4) sends every node's heat through fitted 1-D chains (beta, t_env,
-N); the integral model (theory 4.7, ``ThermalParameters(loss_model="integral")``) solves the
+N); the integral model (theory 4.7, ``ThermalParameters(loss=IntegralLoss())``) solves the
 single-layer potential of the sheet in the medium with nothing to fit; the 3-D FE
 (``simulator.thermal.fe.solve_fe3d``, docs/heat_fe.md, optional extra ``[fe]``) meshes the
 medium around the sheet. Issue 19's acceptance: the integral model within 3 % of the 3-D FE
@@ -308,7 +308,7 @@ def _rows(labels, model, x, power, quick) -> list:
     fine = max((FE_LEVELS_QUICK if quick else FE_LEVELS)[kind])
     nan = dict.fromkeys((*MEASURES, "T_hottest"), np.full(mesh.n_creases, np.nan))
     const = {**labels, "k [W/(m K)]": mesh.pattern.crease_material.thermal_conductivity,
-             "k_env [W/(m K)]": model.thermal.env_conductivity}
+             "k_env [W/(m K)]": model.thermal.medium.thermal_conductivity}
     out = []
     for label, m, lv, T, wall, ok, msg in _solutions(model, x, q, kind, quick):
         if label == "FE" and lv != fine:

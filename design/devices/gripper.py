@@ -32,8 +32,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator import (REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators, BarHingeParameters,
-                       Bimorph, ContactParameters, IntegralLoss, Load, NewtonOptions,
+from simulator import (AIR, REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators,
+                       BarHingeParameters, Bimorph, ChainLoss, ContactParameters, IntegralLoss,
+                       Load, NewtonOptions,
                        ParameterError, SelfFold, Substrate, Supports, TemperatureLimit,
                        TemperatureVerdict, ThermalParameters, build_mesh, example_patterns,
                        make_model, simulate)
@@ -352,11 +353,13 @@ def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
 
 
 def _loss_model(design: GripperDesign) -> dict:
-    """The :class:`~simulator.ThermalParameters` fields of the design's heat-loss model: none
-    for the chains (their defaults), else the integral model over the substrate plane (the
-    substrate panel's plane, ``undercut`` below the sheet, normal +z into the air)."""
+    """The :class:`~simulator.ThermalParameters` fields of the design's heat-loss model: the
+    chains (t_env 1.5 x the mean arm length, the reference's beta; the substrate from the
+    boundary panels), else the integral model over the substrate plane (the substrate panel's
+    plane, ``undercut`` below the sheet, normal +z into the air)."""
     if design.loss_model == "chain":
-        return {}
+        return {"loss": ChainLoss(thickness=1.5 * (design.L1 + design.L2) / 2,
+                                  dissipation_angle=REFERENCE_BETA)}
     return {"loss": IntegralLoss(refinement=design.integral_refinement),
             "substrate": Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))}
 
@@ -370,10 +373,9 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     mesh = build_mesh(pattern)
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
-    thermal = ThermalParameters(env_thickness=1.5 * (design.L1 + design.L2) / 2,
-                                env_conductivity=design.env_conductivity, dissipation_angle=REFERENCE_BETA,
-                                boundary_panels=(5,), room_temperature_nodes=(37,),
-                                **_loss_model(design))
+    thermal = ThermalParameters(
+        medium=AIR.with_properties(thermal_conductivity=design.env_conductivity),
+        boundary_panels=(5,), room_temperature_nodes=(37,), **_loss_model(design))
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),

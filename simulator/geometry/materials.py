@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+from .._deprecation import warn_deprecated
 from .._validate import finite, in_range, non_negative, positive
+from ..errors import ParameterError
 
 __all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "SILICON", "AIR", "WATER"]
 
@@ -128,9 +130,30 @@ class Fluid:
         for field in ("density", "specific_heat", "thermal_conductivity"):
             non_negative(f"Fluid {self.name!r}: {field}", getattr(self, field), _UNITS[field])
 
+    def with_properties(self, **changes) -> Fluid:
+        """This fluid with some of ``density`` [kg/m^3], ``specific_heat`` [J/(kg K)],
+        ``thermal_conductivity`` [W/(m K)] changed: itself where none changes, else the known
+        fluid (:data:`AIR`, :data:`WATER`) it then equals, else a fluid named ``"custom"``;
+        e.g. ``ThermalParameters(medium=AIR.with_properties(thermal_conductivity=0.6))``."""
+        for field, value in changes.items():
+            if field not in _UNITS:
+                raise ParameterError(f"Fluid.with_properties: {field!r} is not a property of a "
+                                     f"fluid; give {', '.join(_UNITS)}.")
+            non_negative(f"Fluid.with_properties: {field}", value, _UNITS[field])
+        if all(float(getattr(self, k)) == float(v) for k, v in changes.items()):
+            return self
+        values = {k: getattr(self, k) for k in _UNITS} | {k: float(v) for k, v in changes.items()}
+        return next((f for f in (AIR, WATER) if all(getattr(f, k) == v
+                                                   for k, v in values.items())),
+                    None) or Fluid("custom", **values)
+
     def environment(self) -> dict:
-        """Keyword arguments of :class:`~simulator.thermal.parameters.ThermalParameters` for this fluid,
-        e.g. ``ThermalParameters(env_thickness=1e-3, **WATER.environment())``."""
+        """Deprecated: the old flat keywords of
+        :class:`~simulator.thermal.parameters.ThermalParameters` for this fluid; give
+        ``ThermalParameters(medium=fluid)``."""
+        warn_deprecated("Fluid.environment() is deprecated (it gives the old flat keywords "
+                        "env_conductivity, env_density, env_specific_heat); use "
+                        "ThermalParameters(medium=fluid).")
         return {"env_conductivity": self.thermal_conductivity, "env_density": self.density,
                 "env_specific_heat": self.specific_heat}
 

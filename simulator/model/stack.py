@@ -19,6 +19,8 @@ import numpy as np
 from .._validate import capped
 from ..errors import ParameterError
 from ..geometry.pattern import Pattern
+from ..geometry.materials import AIR
+from ..thermal.loss import ChainLoss
 from ..thermal.steady import REFERENCE_BETA, ThermalParameters
 from .bimorph import Actuators, Bimorph
 from .mesh import build_mesh
@@ -239,9 +241,9 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                                   t2=stack.t_passive),
                           {c: stack.delta_alpha * float(sign[c]) for c in heated},
                           scatter=scatter, seed=seed)
-    thermal = ThermalParameters(env_thickness=stack.env_thickness,
-                                env_conductivity=stack.env_conductivity,
-                                dissipation_angle=REFERENCE_BETA)
+    thermal = ThermalParameters(
+        loss=ChainLoss(thickness=stack.env_thickness, dissipation_angle=REFERENCE_BETA),
+        medium=AIR.with_properties(thermal_conductivity=stack.env_conductivity))
     supports = Supports({int(i): "xyz" for i in mesh.panel_nodes(fixed_panel)})
     params = BarHingeParameters()
     if contact is True:

@@ -40,8 +40,8 @@ class CalibrationResult(ResultFiles):
     success, status, message : bool, str, str
         ``status`` "converged" or "failed" (the optimiser's message).
     thermal : ThermalParameters
-        The model's parameters with the fitted ``dissipation_angle`` and ``env_thickness``
-        (``loss_model="chain"``).
+        The model's parameters with the chain loss of the fitted ``dissipation_angle`` and
+        ``thickness`` (``loss=ChainLoss(...)``).
     dissipation_angle : float
         Fitted beta [rad].
     env_thickness : float
@@ -95,7 +95,7 @@ def _reference_solver(model: Model, reference, x, substrate):
         return reference, "callable"
     if reference == "integral":
         plane = resolve_substrate(model, x, substrate)
-        prm = dataclasses.replace(model.thermal, loss_model="integral",
+        prm = dataclasses.replace(model.thermal.with_loss("integral"),
                                   substrate=Substrate.plane(plane[:3], plane[3:]) if plane
                                   else None)
         return (ThermalModel(model.mesh, prm, warn_no_plane=substrate is not None).solve,
@@ -163,18 +163,18 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     if not isinstance(model, Model) or model.thermal is None:
         raise ParameterError("calibrate_environment needs a Model with thermal parameters "
                              f"(got {type(model).__name__}).")
-    chain = model.thermal.loss if model.thermal.loss_model == "chain" else ChainLoss(
+    chain = model.thermal.loss if model.thermal.loss.model == "chain" else ChainLoss(
         thickness=1.5 * _panel_length(model.mesh))       # the paper's t_env = 1.5 L as start
     prm = dataclasses.replace(model.thermal, loss=chain)
-    if not prm.env_conductivity > 0:
-        raise ParameterError("calibrate_environment: env_conductivity = 0: there is no "
-                             "environment to calibrate.")
+    if not prm.medium.thermal_conductivity > 0:
+        raise ParameterError("calibrate_environment: the medium's conductivity is 0: there is "
+                             "no environment to calibrate.")
     mesh = model.mesh
     x = mesh.nodes if x is None else array("x", x, mesh.nodes.shape, "m")
     lo_b, hi_b = (in_range(f"beta_bounds[{i}]", b, 0, math.pi / 2, "rad", open_high=True)
                   for i, b in enumerate(beta_bounds))
     if t_env_bounds is None:
-        t_env_bounds = (0.01 * prm.env_thickness, 100 * prm.env_thickness)
+        t_env_bounds = (0.01 * prm.loss.thickness, 100 * prm.loss.thickness)
     lo_t, hi_t = (positive(f"t_env_bounds[{i}]", t, "m") for i, t in enumerate(t_env_bounds))
     if not (lo_b < hi_b and lo_t < hi_t):
         raise ParameterError(f"beta_bounds = {beta_bounds!r}, t_env_bounds = {t_env_bounds!r}: "
@@ -194,14 +194,12 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
 
     def rel_error(v):
         beta, t_env = v[0], math.exp(v[1])
-        tm = ThermalModel(mesh, dataclasses.replace(prm, dissipation_angle=beta,
-                                                    env_thickness=t_env))
+        tm = ThermalModel(mesh, prm.with_loss(dissipation_angle=beta, thickness=t_env))
         return (tm.solve(x, q)[nodes] - rt - target) / np.maximum(np.abs(target), 1e-300)
 
-    v0 = np.array([min(max(prm.dissipation_angle, lo_b), hi_b),
-                   math.log(min(max(prm.env_thickness, lo_t), hi_t))])
-    initial = float(np.sqrt(np.mean(rel_error([prm.dissipation_angle,
-                                               math.log(prm.env_thickness)]) ** 2)))
+    beta0, t_env0 = prm.loss.dissipation_angle, prm.loss.thickness
+    v0 = np.array([min(max(beta0, lo_b), hi_b), math.log(min(max(t_env0, lo_t), hi_t))])
+    initial = float(np.sqrt(np.mean(rel_error([beta0, math.log(t_env0)]) ** 2)))
     fit = least_squares(rel_error, v0, bounds=([lo_b, math.log(lo_t)], [hi_b, math.log(hi_t)]),
                         x_scale=[0.1, 1.0], diff_step=1e-4)
     err = fit.fun
@@ -211,7 +209,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     return CalibrationResult(
         success=bool(fit.success), status="converged" if fit.success else "failed",
         message=str(fit.message),
-        thermal=dataclasses.replace(prm, dissipation_angle=beta, env_thickness=t_env),
+        thermal=prm.with_loss(dissipation_angle=beta, thickness=t_env),
         dissipation_angle=beta, env_thickness=t_env,
         rms_error=float(np.sqrt(np.mean(err ** 2))), max_error=float(np.max(np.abs(err))),
         initial_rms_error=initial, reference=name)

@@ -158,9 +158,10 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
         none, or a given plane [m]. The chain model ignores it (its substrate is the
         boundary panels' distance cap).
     refinement : int, optional
-        ``integral_refinement`` of the integral model (default: the model's).
+        ``refinement`` of the integral loss (default: the model's, or
+        :class:`~simulator.thermal.loss.IntegralLoss`'s with the chains).
     extrapolation : bool, optional
-        ``integral_extrapolation`` of the integral model (default: the model's).
+        ``extrapolation`` of the integral loss (default: as for ``refinement``).
     fe_level : int
         Mesh level of the FE (0-3).
     room_temperature : float, optional
@@ -187,14 +188,14 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
                           substrate=(plane[:3], plane[3:]) if plane else None, level=fe_level,
                           room_temperature=room_temperature, accuracy=1.0)
     t0 = time.perf_counter()
-    prm = dataclasses.replace(model.thermal, loss_model=loss_model)
+    prm = model.thermal.with_loss(loss_model)
     if loss_model == "integral":
         plane = resolve_substrate(model, x, substrate)
+        changes = {k: v for k, v in (("refinement", refinement),
+                                     ("extrapolation", extrapolation)) if v is not None}
         prm = dataclasses.replace(
-            prm, substrate=Substrate.plane(plane[:3], plane[3:]) if plane else None,
-            integral_refinement=prm.integral_refinement if refinement is None else refinement,
-            integral_extrapolation=(prm.integral_extrapolation if extrapolation is None
-                                    else extrapolation))
+            prm.with_loss(**changes),
+            substrate=Substrate.plane(plane[:3], plane[3:]) if plane else None)
     tm = own if prm == model.thermal and loss_model == "chain" else ThermalModel(
         model.mesh, prm, warn_no_plane=substrate is not None)
     rt = prm.room_temperature if room_temperature is None else float(room_temperature)
@@ -205,5 +206,5 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
 def _result(model, T, q, tm, rt, wall_time):
     return FixedShapeTemperatures(
         True, "converged", "solved", temperature=T, **crease_measures(T, model.mesh),
-        heat_input=float(q.sum()), room_temperature=rt, loss_model=tm.params.loss_model,
+        heat_input=float(q.sum()), room_temperature=rt, loss_model=tm.params.loss.model,
         thermal=tm.params, wall_time=wall_time)

@@ -4,7 +4,7 @@ The medium (conductivity ``k_env``) around the thin sheet is unbounded and homog
 half space above an isothermal substrate plane (image method). Each conducting mesh triangle
 (boundary panels excepted: they lie on the substrate and their nodes are held at room
 temperature) is refined uniformly into ``m^2`` sub-triangles (``m =
-ThermalParameters.integral_refinement``); the sheet temperature rise on them is the linear
+IntegralLoss.refinement``); the sheet temperature rise on them is the linear
 interpolation of the nodal rises, ``M T`` at the sub-triangle centroids. The heat ``p_i`` [W]
 leaving sub-triangle ``i`` through both faces solves the collocated single-layer equation
 ``S p = M T`` with ``S_ij = V_ij / A_j`` (:func:`~simulator.thermal._single_layer.collocation_matrix`,
@@ -14,7 +14,7 @@ conduction is the dense ``L = M^T S^-1 M`` [W/K], symmetric positive definite.
 Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (memory
 ``~3 x 8 n_s^2`` bytes during assembly), Cholesky ``n_s^3 / 3`` flops, once per shape. Models
 above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
-``loss_model="chain"``, or the 3-D FE reference of :mod:`simulator.thermal.fe`).
+``loss=ChainLoss(thickness=...)``, or the 3-D FE reference of :mod:`simulator.thermal.fe`).
 
 Sheet on the substrate: the rule of the 3-D FE reference (``solve_fe3d`` holds sheet nodes on
 the plane at room temperature and does not embed triangles lying in it). Nodes closer to the
@@ -93,12 +93,12 @@ class IntegralOperator:
         self.n_sub = len(self.triangles) * len(bary_centroids)
         if self.n_sub > MAX_SUB_TRIANGLES:
             raise ParameterError(
-                f"ThermalParameters.loss_model = 'integral': {len(self.triangles)} triangles x "
-                f"{len(bary_centroids)} sub-triangles (integral_refinement = {refinement}) = "
+                f"the integral heat loss: {len(self.triangles)} triangles x "
+                f"{len(bary_centroids)} sub-triangles (IntegralLoss.refinement = {refinement}) = "
                 f"{self.n_sub} sub-triangles exceeds the dense-operator limit MAX_SUB_TRIANGLES = "
-                f"{MAX_SUB_TRIANGLES}; lower integral_refinement, or use the chain model "
-                "(loss_model='chain', calibrated by simulator.calibrate_environment) or the 3-D "
-                "FE reference (simulator.thermal.fe).")
+                f"{MAX_SUB_TRIANGLES}; lower the refinement, or use the chain model "
+                "(loss=ChainLoss(thickness=...), calibrated by simulator.calibrate_environment) "
+                "or the 3-D FE reference (simulator.thermal.fe).")
         self._bary = bary_vertices                                  # (s, 3, 3)
         s = len(bary_centroids)
         #: (n_sub, n_nodes) interpolation of nodal values at the sub-triangle centroids
@@ -223,10 +223,10 @@ class IntegralOperator:
         if not definite and not self._warned:
             self._warned = True
             logger.warning(
-                "loss_model='integral': the single-layer operator is not positive definite "
+                "the integral heat loss: the single-layer operator is not positive definite "
                 "at this shape: parts of the sheet are closer to each other than about a "
                 "sub-triangle diameter or pass through each other (a model without contact?); "
-                "the temperatures there are not reliable. Raise integral_refinement or add "
+                "the temperatures there are not reliable. Raise IntegralLoss.refinement or add "
                 "contact (said once per model).")
         size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
         d = self._distances(x)

@@ -5,11 +5,11 @@ refinement ``m``; its error is of first order in ``1 / m`` (the flux density's e
 singularity). Two combinations make it accurate at a fraction of the cost of a fine ``m``:
 
 * :class:`ExtrapolatedLoss`: Richardson extrapolation ``(m L_m - c L_c) / (m - c)`` of the
-  operators at ``m`` and ``c`` (``ThermalParameters.integral_extrapolation``), built together at
+  operators at ``m`` and ``c`` (``IntegralLoss.extrapolation``), built together at
   the same shapes;
 * :class:`CorrectedLoss`: the accurate operator (plain or extrapolated) rebuilt only when the
   cheap one (``m = 1``, rebuilt at the usual tolerance) has changed by a fraction of itself
-  (``ThermalParameters.integral_correction_tol``), and followed in between through the change
+  (``IntegralLoss.correction_tol``), and followed in between through the change
   of the cheap one, ``L(x) = L_acc(x0) + L_1(x) - L_1(x0)``. The correction ``L_acc - L_1`` is
   the discretisation error of ``L_1``: a near-field quantity that changes slowly with the
   shape, so it is refreshed rarely (theory 4.7 and docs/heat_fe.md measure how rarely, and
@@ -185,22 +185,24 @@ NEAR_PLANE_RTOL = 0.2
 def integral_operator(triangles, n_nodes, params, plane=None):
     """The integral loss operator of :class:`~simulator.thermal.parameters.ThermalParameters`
     ``params`` on the sheet ``triangles`` over the substrate ``plane`` ((point, unit normal) or
-    None): an :class:`IntegralOperator` at ``integral_refinement`` built at
-    ``integral_shape_tol``, an :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
-    m, k = params.integral_refinement, params.env_conductivity
-    correct = params.integral_correction_tol > 0 and (m > 1 or params.extrapolated)
+    None), whose ``loss`` is an :class:`~simulator.thermal.loss.IntegralLoss`: an
+    :class:`IntegralOperator` at its ``refinement`` built at its ``shape_tol``, an
+    :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
+    loss = params.loss
+    m, k = loss.refinement, params.medium.thermal_conductivity
+    correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
     memo = [None, None]                      # the levels share the sheet's distances
 
     def level(r):
-        out = IntegralOperator(triangles, n_nodes, k, r, plane, params.integral_shape_tol)
+        out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol)
         out.distance_memo = memo
         return out
 
     fine = level(m)
     accurate = fine
-    if params.extrapolated:
+    if loss.extrapolated:
         c = coarse_refinement(m)
         accurate = ExtrapolatedLoss(fine, level(c), m, c)
     if not correct:
         return accurate
-    return CorrectedLoss(accurate, level(1), params.integral_correction_tol)
+    return CorrectedLoss(accurate, level(1), loss.correction_tol)

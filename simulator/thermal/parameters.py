@@ -6,16 +6,22 @@ it. :class:`~simulator.thermal.steady.ThermalModel` builds the operators from th
 
 from __future__ import annotations
 
+import dataclasses
+import logging
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._deprecation import warn_deprecated
 from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
-from ..geometry.materials import AIR, WATER, Fluid
+from ..geometry.materials import AIR, Fluid
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 
 __all__ = ["ThermalParameters", "REFERENCE_BETA"]
+
+logger = logging.getLogger(__name__)
 
 #: The reference's default dissipation angle: 20 degrees converted with pi ~ 3.14
 #: (0.348888... rad instead of 0.349066 rad; tan differs by 0.06 %). Use it to reproduce
@@ -32,6 +38,30 @@ _INTEGRAL_NAMES = {"integral_refinement": "refinement",
                    "integral_shape_tol": "shape_tol", "integral_correction_tol": "correction_tol"}
 _MEDIUM_NAMES = {"env_conductivity": "thermal_conductivity", "env_density": "density",
                  "env_specific_heat": "specific_heat"}
+#: The old flat keywords (deprecated, issue 29) and what to write instead.
+_OLD_KEYWORDS = {
+    **{old: f"loss=ChainLoss({new}=...), or params.with_loss({new}=...) on existing "
+            "parameters" for old, new in _CHAIN_NAMES.items()},
+    "env_conductivity": "medium=AIR.with_properties(thermal_conductivity=...)",
+    **{old: f"loss=IntegralLoss({new}=...), or params.with_loss({new}=...) on existing "
+            "parameters" for old, new in _INTEGRAL_NAMES.items()},
+    "env_density": "medium=AIR.with_properties(density=...)",
+    "env_specific_heat": "medium=AIR.with_properties(specific_heat=...)",
+    "loss_model": "loss=ChainLoss(thickness=...) or loss=IntegralLoss(), or "
+                  "params.with_loss('chain' or 'integral') on existing parameters",
+    "substrate_plane": "substrate=Substrate.plane(point, normal), or substrate=None for none",
+}
+#: The old properties (deprecated) and what to read instead.
+_OLD_PROPERTIES = {
+    **{old: f"loss.{new} (of the chain loss)" for old, new in _CHAIN_NAMES.items()},
+    **{old: f"loss.{new} (of the integral loss)" for old, new in _INTEGRAL_NAMES.items()},
+    "extrapolated": "loss.extrapolated (of the integral loss)",
+    **{old: f"medium.{new}" for old, new in _MEDIUM_NAMES.items()},
+    "loss_model": "loss.model",
+    "substrate_plane": "substrate.as_tuple() (substrate None: no plane)",
+    "plane": "substrate.point and substrate.normal (an explicit Substrate.plane), or "
+             "simulator.boundary_panel_plane(model) (the boundary panels' plane)",
+}
 
 
 def _ids(value, name):
@@ -46,8 +76,8 @@ def _ids(value, name):
 
 
 def _medium(value, overrides: dict) -> Fluid:
-    """The medium from a :class:`Fluid` (or its dict) and the old ``env_*`` overrides; named
-    after a known fluid it equals, else ``"custom"``."""
+    """The medium from a :class:`Fluid` (or its dict) and the old ``env_*`` overrides
+    (:meth:`Fluid.with_properties`)."""
     if value is None:
         base = AIR
     elif isinstance(value, Fluid):
@@ -62,18 +92,12 @@ def _medium(value, overrides: dict) -> Fluid:
     else:
         raise ParameterError(f"ThermalParameters.medium = {value!r}: give a Fluid, e.g. "
                              "simulator.AIR or simulator.WATER.")
-    values = {f: getattr(base, f) for f in ("density", "specific_heat", "thermal_conductivity")}
     changed = {_MEDIUM_NAMES[k]: v for k, v in overrides.items() if v is not None}
     for k, v in changed.items():
         non_negative(f"ThermalParameters.{[o for o, n in _MEDIUM_NAMES.items() if n == k][0]}",
                      v, {"density": "kg/m^3", "specific_heat": "J/(kg K)",
                          "thermal_conductivity": "W/(m K)"}[k])
-    if all(float(values[k]) == float(v) for k, v in changed.items()):
-        return base
-    values.update({k: float(v) for k, v in changed.items()})
-    name = next((f.name for f in (AIR, WATER) if all(
-        getattr(f, k) == v for k, v in values.items())), "custom")
-    return Fluid(name, **values)
+    return base.with_properties(**changed)
 
 
 def _build(cls, fields: dict, legacy: dict):
@@ -113,15 +137,30 @@ def _loss(loss, loss_model, legacy: dict) -> ChainLoss | IntegralLoss:
         base = given.to_dict() if isinstance(given, ChainLoss) else {}
         fields = {k: v for k, v in base.items() if k != "model"} | chain
         if "thickness" not in fields:
-            raise ParameterError(
-                "ThermalParameters: the chain heat loss needs the medium thickness t_env: give "
-                "loss=ChainLoss(thickness=...) [m] (env_thickness=... in the old spelling; the "
-                "paper suggests 1.5 x the panel length), or use the calibration-free "
-                "loss=IntegralLoss(), which needs none.")
+            _no_thickness()
         return _build(ChainLoss, fields, old_chain)
     base = given.to_dict() if isinstance(given, IntegralLoss) else {}
     return _build(IntegralLoss, {k: v for k, v in base.items() if k != "model"} | integral,
                   old_integral)
+
+
+def _no_thickness():
+    raise ParameterError(
+        "ThermalParameters: the chain heat loss needs the medium thickness t_env: give "
+        "loss=ChainLoss(thickness=...) [m] (env_thickness=... in the old spelling; the "
+        "paper suggests 1.5 x the panel length), or use the calibration-free "
+        "loss=IntegralLoss(), which needs none.")
+
+
+def _old_property(name: str, read):
+    """A deprecated read-only property ``name``: warns, then ``read(params)``."""
+    def get(self):
+        warn_deprecated(f"ThermalParameters.{name} is deprecated; read "
+                        f"{_OLD_PROPERTIES[name]}.")
+        return read(self)
+
+    get.__doc__ = f"Deprecated: read ``{_OLD_PROPERTIES[name]}``."
+    return property(get)
 
 
 def _substrate(substrate, substrate_plane) -> Substrate | None:
@@ -148,19 +187,21 @@ class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
-    boundary_panels=(), room_temperature_nodes=())``.
+    boundary_panels=(), room_temperature_nodes=())``; give them by keyword.
 
     Parameters
     ----------
     loss : ChainLoss or IntegralLoss
         How the sheet loses heat to the medium (:mod:`simulator.thermal.loss`): the paper's
         fitted chains, ``ChainLoss(thickness=t_env)``, or the calibration-free
-        ``IntegralLoss()`` (default when no chain thickness is given). Each carries only its
-        own options. Transient and electro-thermal steps use the same loss (theory 8.1).
+        ``IntegralLoss()`` (the default). Each carries only its own options
+        (:meth:`with_loss` changes them). Transient and electro-thermal steps use the same
+        loss (theory 8.1).
     medium : Fluid
         The medium: conductivity, and density and specific heat for the time domain
         (:data:`~simulator.geometry.materials.AIR` by default,
-        :data:`~simulator.geometry.materials.WATER`).
+        :data:`~simulator.geometry.materials.WATER`; another conductivity:
+        ``AIR.with_properties(thermal_conductivity=...)``).
     substrate : Substrate or None
         The isothermal substrate plane of the integral loss: ``Substrate()`` (default) the
         plane of the thermal-boundary panels (none without such panels),
@@ -177,14 +218,19 @@ class ThermalParameters:
 
     Notes
     -----
-    The old flat spellings are still accepted as keywords, and read as properties (deprecated):
-    ``env_thickness``, ``layers``, ``dissipation_angle`` (the chains'), ``loss_model``
-    ("chain" or "integral"), ``integral_refinement``, ``integral_extrapolation``,
-    ``integral_shape_tol``, ``integral_correction_tol`` (the integral loss'),
-    ``env_conductivity``, ``env_density``, ``env_specific_heat`` (the medium's) and
-    ``substrate_plane`` (6 floats, a point and a normal; () for none). Without ``loss`` or
-    ``loss_model``, a given ``env_thickness`` selects the chains (their old default). Those
-    of the model not selected are checked, and not kept.
+    Old spellings (deprecated; they warn with an
+    :class:`~simulator.errors.EtorigamiDeprecationWarning` naming the new spelling, and go in
+    the next release): the flat keywords, also positional in this order, ``env_thickness``,
+    ``env_conductivity``, ``layers``, ``dissipation_angle`` (then ``room_temperature``,
+    ``boundary_panels``, ``room_temperature_nodes``), ``env_density``, ``env_specific_heat``,
+    ``loss_model`` ("chain" or "integral"), ``integral_refinement``, ``substrate_plane`` (6
+    floats, a point and a normal; () for none), ``integral_shape_tol``,
+    ``integral_extrapolation``, ``integral_correction_tol``; and the properties of those names
+    and ``extrapolated``, ``plane``. ``env_*`` are the medium's fields, ``env_thickness``,
+    ``layers``, ``dissipation_angle`` the chains' and ``integral_*`` the integral loss'.
+    Without ``loss`` or ``loss_model``, a given ``env_thickness`` selects the chains. Those of
+    the model not selected are checked, and not kept. :meth:`from_dict` reads the old flat
+    form without a warning (older FOLD model files).
     """
 
     loss: ChainLoss | IntegralLoss
@@ -200,20 +246,30 @@ class ThermalParameters:
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
                  integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS):
-        legacy = {"env_thickness": env_thickness, "layers": layers,
-                  "dissipation_angle": dissipation_angle,
-                  "integral_refinement": integral_refinement,
-                  "integral_extrapolation": integral_extrapolation,
-                  "integral_shape_tol": integral_shape_tol,
-                  "integral_correction_tol": integral_correction_tol}
-        loss = _loss(loss, loss_model, legacy)
-        medium = _medium(medium, {"env_conductivity": env_conductivity,
-                                  "env_density": env_density,
-                                  "env_specific_heat": env_specific_heat})
+        old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
+               "layers": layers, "dissipation_angle": dissipation_angle,
+               "env_density": env_density, "env_specific_heat": env_specific_heat,
+               "loss_model": loss_model, "integral_refinement": integral_refinement,
+               "substrate_plane": substrate_plane, "integral_shape_tol": integral_shape_tol,
+               "integral_extrapolation": integral_extrapolation,
+               "integral_correction_tol": integral_correction_tol}
+        for name in (k for k, v in old.items() if v is not None):
+            warn_deprecated(f"ThermalParameters({name}=...) is deprecated; use "
+                            f"{_OLD_KEYWORDS[name]}.")
+        self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
+                  room_temperature_nodes)
+
+    def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
+             room_temperature=21.0, boundary_panels=(), room_temperature_nodes=()):
+        """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
+        old = {k: old.get(k) for k in _OLD_KEYWORDS}
+        loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
+                                                                   *_INTEGRAL_NAMES)})
+        medium = _medium(medium, {k: old[k] for k in _MEDIUM_NAMES})
         set_ = object.__setattr__
         set_(self, "loss", loss)
         set_(self, "medium", medium)
-        set_(self, "substrate", _substrate(substrate, substrate_plane))
+        set_(self, "substrate", _substrate(substrate, old["substrate_plane"]))
         set_(self, "room_temperature", finite("ThermalParameters.room_temperature",
                                               room_temperature, "deg C"))
         for name, value in (("boundary_panels", boundary_panels),
@@ -224,88 +280,85 @@ class ThermalParameters:
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
                                  "needs a medium conductivity > 0.")
 
-    # ------------------------------------------------------------------ old flat spellings
-    @property
-    def loss_model(self) -> str:
-        """``"chain"`` or ``"integral"`` (``loss.model``)."""
-        return self.loss.model
+    @classmethod
+    def from_dict(cls, d: Mapping) -> ThermalParameters:
+        """Parameters from :meth:`to_dict`'s form; also the old flat form of older FOLD model
+        files and metadata (``env_thickness``, ``loss_model``, ...), read without a
+        deprecation warning (logged at INFO)."""
+        if not isinstance(d, Mapping):
+            raise ParameterError(f"ThermalParameters.from_dict({d!r}): give a dict, e.g. "
+                                 "ThermalParameters(...).to_dict().")
+        new = {k: v for k, v in d.items() if k not in _OLD_KEYWORDS}
+        fields = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(new) - set(fields))
+        if unknown:
+            raise ParameterError(f"ThermalParameters: unknown field(s) {', '.join(unknown)}; "
+                                 f"the fields are {', '.join(fields)} (older files: "
+                                 f"{', '.join(_OLD_KEYWORDS)}).")
+        old = {k: v for k, v in d.items() if k in _OLD_KEYWORDS}
+        if old:
+            logger.info("ThermalParameters read in the old flat form (%s); written as loss, "
+                        "medium and substrate from now on", ", ".join(old))
+        self = cls.__new__(cls)
+        self._set(old, **new)
+        return self
 
-    def _chain(self) -> ChainLoss | None:
-        return self.loss if isinstance(self.loss, ChainLoss) else None
+    def with_loss(self, model: str | None = None, **changes) -> ThermalParameters:
+        """These parameters with another heat loss: ``model`` ``"chain"`` or ``"integral"``
+        (default: the current loss's), and ``changes`` to its fields (:class:`ChainLoss`:
+        ``thickness``, ``layers``, ``dissipation_angle``; :class:`IntegralLoss`:
+        ``refinement``, ``extrapolation``, ``shape_tol``, ``correction_tol``). The current
+        loss's fields are kept where the model stays, else the new model's defaults, e.g.
+        ``params.with_loss(correction_tol=0.0)``, ``params.with_loss("integral")``."""
+        model = self.loss.model if model is None else one_of(
+            "ThermalParameters.with_loss: model", model, HEAT_LOSS_MODELS)
+        cls = ChainLoss if model == "chain" else IntegralLoss
+        unknown = sorted(set(changes) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise ParameterError(f"ThermalParameters.with_loss: {', '.join(unknown)} is not a "
+                                 f"field of {cls.__name__}; its fields are "
+                                 f"{', '.join(cls.__dataclass_fields__)}.")
+        if self.loss.model == model:
+            return dataclasses.replace(self, loss=dataclasses.replace(self.loss, **changes))
+        if model == "chain" and "thickness" not in changes:
+            _no_thickness()
+        return dataclasses.replace(self, loss=cls(**changes))
+
+    # ------------------------------------------------------------------ old flat spellings
+    def _chain(self) -> ChainLoss:
+        """The chain loss, or with the integral loss the chains' defaults (old properties)."""
+        return self.loss if isinstance(self.loss, ChainLoss) else _DEFAULT_CHAIN
 
     def _integral(self) -> IntegralLoss:
+        """The integral loss, or with the chains its defaults (old properties)."""
         return self.loss if isinstance(self.loss, IntegralLoss) else _DEFAULT_INTEGRAL
 
-    @property
-    def env_thickness(self) -> float | None:
-        """The chains' t_env [m] (None with the integral loss)."""
-        chain = self._chain()
-        return None if chain is None else chain.thickness
-
-    @property
-    def layers(self) -> int:
-        """The chains' medium layers N (their default with the integral loss)."""
-        return (self._chain() or _DEFAULT_CHAIN).layers
-
-    @property
-    def dissipation_angle(self) -> float:
-        """The chains' dissipation angle beta [rad] (their default with the integral loss)."""
-        return (self._chain() or _DEFAULT_CHAIN).dissipation_angle
-
-    @property
-    def integral_refinement(self) -> int:
-        return self._integral().refinement
-
-    @property
-    def integral_extrapolation(self) -> bool | None:
-        return self._integral().extrapolation
-
-    @property
-    def integral_shape_tol(self) -> float:
-        return self._integral().shape_tol
-
-    @property
-    def integral_correction_tol(self) -> float:
-        return self._integral().correction_tol
-
-    @property
-    def extrapolated(self) -> bool:
-        """Whether the integral loss extrapolates (:attr:`IntegralLoss.extrapolated`)."""
-        return self._integral().extrapolated
-
-    @property
-    def env_conductivity(self) -> float:
-        """The medium's conductivity k_env [W/(m K)]."""
-        return self.medium.thermal_conductivity
-
-    @property
-    def env_density(self) -> float:
-        """The medium's density [kg/m^3]."""
-        return self.medium.density
-
-    @property
-    def env_specific_heat(self) -> float:
-        """The medium's specific heat [J/(kg K)]."""
-        return self.medium.specific_heat
-
-    @property
-    def substrate_plane(self) -> tuple:
-        """An explicit substrate plane as 6 floats (point, normal); () for none or for the
-        boundary panels' plane (:attr:`substrate`)."""
-        return () if self.substrate is None else self.substrate.as_tuple()
-
-    @property
-    def plane(self):
-        """The explicit substrate plane as ``(point (3,), unit normal (3,))``, or None."""
-        if not self.substrate_plane:
-            return None
-        v = np.array(self.substrate_plane, float)
-        return v[:3], v[3:] / np.linalg.norm(v[3:])
+    loss_model = _old_property("loss_model", lambda p: p.loss.model)
+    env_thickness = _old_property("env_thickness", lambda p: p.loss.thickness
+                                  if isinstance(p.loss, ChainLoss) else None)
+    layers = _old_property("layers", lambda p: p._chain().layers)
+    dissipation_angle = _old_property("dissipation_angle", lambda p: p._chain().dissipation_angle)
+    integral_refinement = _old_property("integral_refinement",
+                                        lambda p: p._integral().refinement)
+    integral_extrapolation = _old_property("integral_extrapolation",
+                                           lambda p: p._integral().extrapolation)
+    integral_shape_tol = _old_property("integral_shape_tol", lambda p: p._integral().shape_tol)
+    integral_correction_tol = _old_property("integral_correction_tol",
+                                            lambda p: p._integral().correction_tol)
+    extrapolated = _old_property("extrapolated", lambda p: p._integral().extrapolated)
+    env_conductivity = _old_property("env_conductivity",
+                                     lambda p: p.medium.thermal_conductivity)
+    env_density = _old_property("env_density", lambda p: p.medium.density)
+    env_specific_heat = _old_property("env_specific_heat", lambda p: p.medium.specific_heat)
+    substrate_plane = _old_property("substrate_plane", lambda p: () if p.substrate is None
+                                    else p.substrate.as_tuple())
+    plane = _old_property("plane", lambda p: _plane(p.substrate))
 
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature
-        and the held panels and nodes. ``ThermalParameters(**d)`` reads it back."""
+        and the held panels and nodes. :meth:`from_dict` (or ``ThermalParameters(**d)``)
+        reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
                 "room_temperature": float(self.room_temperature),
@@ -317,7 +370,16 @@ class ThermalParameters:
         sub = ("no substrate" if self.substrate is None else "substrate: the boundary panels' "
                "plane" if self.substrate.from_panels else "substrate: a given plane")
         return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
-                f"{self.env_conductivity:g} W/(m K); {sub}")
+                f"{self.medium.thermal_conductivity:g} W/(m K); {sub}")
+
+
+def _plane(substrate: Substrate | None):
+    """An explicit substrate plane as ``(point (3,), unit normal (3,))``, else None (the old
+    ``plane`` property)."""
+    if substrate is None or substrate.from_panels:
+        return None
+    v = np.array(substrate.as_tuple(), float)
+    return v[:3], v[3:] / np.linalg.norm(v[3:])
 
 
 _DEFAULT_CHAIN = ChainLoss(thickness=1.0)

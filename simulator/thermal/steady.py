@@ -37,6 +37,7 @@ from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
 from .integral import IntegralOperator
 from .integral_levels import integral_operator
+from .loss import ChainLoss
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
@@ -49,6 +50,10 @@ _CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
 #: infinite conductance (the reference divides by zero there).
 _MIN_AIR_FRACTION = 1e-9
 
+
+#: The chains' defaults, which size the medium layers of the full system (unused) with the
+#: integral loss.
+_UNUSED_CHAINS = ChainLoss(thickness=1.0)
 
 #: Boundary panels farther than this fraction of their extent from one plane are not coplanar.
 _COPLANAR = 1e-6
@@ -180,13 +185,16 @@ class ThermalModel:
         fixed[list(params.room_temperature_nodes)] = True
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
+        #: the chain loss (:class:`~simulator.thermal.loss.ChainLoss`); with the integral loss
+        #: the chains' defaults, which size the (unused) medium layers of the full system
+        self.chains = params.loss if params.loss.model == "chain" else _UNUSED_CHAINS
         #: the integral model's loss operator (:mod:`simulator.thermal.integral_levels`:
         #: an :class:`IntegralOperator` at refinement m, or its Richardson extrapolation, or either
         #: corrected through the m = 1 operator between rebuilds)
         self.integral = None
         #: the integral loss's substrate plane ``(point, unit normal)`` or None
         self.plane = None
-        if params.loss_model == "integral":          # boundary panels lie on the substrate
+        if params.loss.model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
             self.plane = substrate_plane(mesh, params)
             self.integral = integral_operator(tri[~self.is_boundary], n, params, self.plane)
@@ -210,8 +218,9 @@ class ThermalModel:
         self._kernel_args = (
             np.array(tri, dtype=np.int64, order="C"), self.edge_lengths, self._kt,
             self.is_boundary, self._cap_nodes.astype(np.int64),
-            float(params.env_thickness) if chain else 1.0, math.tan(params.dissipation_angle),
-            float(params.env_conductivity) if chain else 0.0, int(params.layers),
+            float(self.chains.thickness) if chain else 1.0,
+            math.tan(self.chains.dissipation_angle),
+            float(params.medium.thermal_conductivity) if chain else 0.0, int(self.chains.layers),
             _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -229,7 +238,7 @@ class ThermalModel:
 
     def _check_solvable(self):
         """Without environment loss, every conducting component needs a room-temperature node."""
-        if self.params.env_conductivity > 0:
+        if self.params.medium.thermal_conductivity > 0:
             return
         n, tri = self.mesh.n_nodes, self.mesh.triangles
         live = tri[self.conductivity * self.thickness > 0]
@@ -242,13 +251,13 @@ class ThermalModel:
         if len(bad):
             node = int(np.flatnonzero(label == bad[0])[0])
             raise ParameterError(
-                f"node {node} has no heat path to room temperature (env_conductivity = 0 and no "
+                f"node {node} has no heat path to room temperature (medium conductivity 0 and no "
                 "room_temperature_nodes in its connected part): the temperatures are undefined.")
 
     @property
     def n_dof(self) -> int:
         """Size (N + 1) n of the full thermal system."""
-        return (self.params.layers + 1) * self.mesh.n_nodes
+        return (self.chains.layers + 1) * self.mesh.n_nodes
 
     # ------------------------------------------------------------------ element data
     def _positions(self, x) -> np.ndarray:
@@ -257,7 +266,7 @@ class ThermalModel:
 
     def _warn_floored(self):
         logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
-                       _MIN_AIR_FRACTION * self.params.env_thickness)
+                       _MIN_AIR_FRACTION * self.chains.thickness)
 
     def _conduction(self, x):
         """T3 matrices (n_tri, 3, 3) [W/K] and areas A_t (n_tri,) [m^2] at positions ``x``."""
@@ -309,23 +318,23 @@ class ThermalModel:
         t_air : (n_tri,) array
             Environment thickness [m], ``min(t_env, tcap)`` (floored, see the module notes).
         """
-        prm = self.params
+        chains = self.chains
         if area is None:
             area = self._conduction(x)[1]
-        t_env = prm.env_thickness
+        t_env = chains.thickness
         t_air = np.where(t_env < (cap := self.tcap(x)), t_env, cap)
         if np.any(t_air < _MIN_AIR_FRACTION * t_env):
             self._warn_floored()
             t_air = np.maximum(t_air, _MIN_AIR_FRACTION * t_env)
-        N = prm.layers
+        N = chains.layers
         s = (np.arange(1, N + 1) - 0.5) / N
         l_sum = self.edge_lengths.sum(axis=1)
-        spread = l_sum * t_air * math.tan(prm.dissipation_angle)
+        spread = l_sum * t_air * math.tan(chains.dissipation_angle)
         return (2 / 3) * area[:, None] + (2 / 3) * spread[:, None] * s, t_air
 
     def node_layer_sum(self, per_triangle) -> np.ndarray:
         """Sum a per-triangle, per-layer quantity (n_tri, N) onto every node's chain, (n, N)."""
-        N, tri = self.params.layers, self.mesh.triangles
+        N, tri = self.chains.layers, self.mesh.triangles
         nodes = np.repeat(tri, N, axis=1).ravel()
         layer = np.tile(np.arange(N), 3 * len(tri))
         flat = np.bincount(nodes * N + layer, np.repeat(per_triangle, 3, axis=0).ravel(),
@@ -335,13 +344,14 @@ class ThermalModel:
     def layer_conductance(self, x, area=None) -> np.ndarray:
         """Environment conductance of every node and layer [W/K], (n, N) (theory 4.3)."""
         a_q, t_air = self.environment_geometry(x, area)
-        N = self.params.layers
-        return self.node_layer_sum(self.params.env_conductivity * a_q * N / t_air[:, None])
+        N = self.chains.layers
+        k_env = self.params.medium.thermal_conductivity
+        return self.node_layer_sum(k_env * a_q * N / t_air[:, None])
 
     # ------------------------------------------------------------------ matrices
     @cached_property
     def _full_pattern(self) -> StiffnessPattern:
-        n, N = self.mesh.n_nodes, self.params.layers
+        n, N = self.mesh.n_nodes, self.chains.layers
         q = np.arange(N)
         chain = np.stack([(q * n)[None, :] + np.arange(n)[:, None],
                           ((q + 1) * n)[None, :] + np.arange(n)[:, None]], axis=-1).reshape(-1, 2)
@@ -466,9 +476,9 @@ class ThermalModel:
 
     def integral_loss_matrix(self, x) -> np.ndarray:
         """The integral model's loss conductance [W/K] on ``integral.nodes`` at positions
-        ``x`` (n, 3) [m]: ``L_m``, or with ``integral_extrapolation`` the Richardson
-        combination ``(m L_m - c L_c) / (m - c)``, ``c = max(m // 2, 2)``, and with
-        ``integral_correction_tol`` that operator corrected between rebuilds (theory 4.7)."""
+        ``x`` (n, 3) [m]: ``L_m``, or extrapolated (``IntegralLoss.extrapolation``) the
+        Richardson combination ``(m L_m - c L_c) / (m - c)``, ``c = max(m // 2, 2)``, and with
+        ``IntegralLoss.correction_tol`` that operator corrected between rebuilds (theory 4.7)."""
         return self.integral.loss_matrix(x)
 
     def _integral_loss(self, x):

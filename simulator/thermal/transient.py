@@ -99,17 +99,17 @@ def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     """Lumped heat capacity [J/K] of every unknown, ((N + 1) n,), at positions ``x`` (n, 3) [m].
 
     Index ``q * n + node`` as :meth:`ThermalModel.conductivity_matrix` (theory 7.2). With
-    ``env_conductivity = 0`` the environment is not in thermal contact and holds no heat.
+    a medium conductivity 0 the environment is not in thermal contact and holds no heat.
     """
-    prm, mesh = tm.params, tm.mesh
-    n, N = mesh.n_nodes, prm.layers
+    medium, mesh = tm.params.medium, tm.mesh
+    n, N = mesh.n_nodes, tm.chains.layers
     area = tm.triangle_areas(x)
     solid = _volumetric_capacity(tm) * tm.thickness * area / 3
     C = np.zeros((N + 1, n))
     C[0] = np.bincount(mesh.triangles.ravel(), np.repeat(solid, 3), minlength=n)
-    if prm.env_conductivity > 0:                   # k_env = 0: no environment in contact
+    if medium.thermal_conductivity > 0:            # k_env = 0: no environment in contact
         a_q, t_air = tm.environment_geometry(x, area)
-        rho_c = prm.env_density * prm.env_specific_heat
+        rho_c = medium.density * medium.specific_heat
         seg = tm.node_layer_sum(rho_c * a_q * t_air[:, None] / N)
         C[:-1] += 0.5 * seg.T
         C[1:] += 0.5 * seg.T
@@ -138,23 +138,23 @@ class HeatSystem:
 
 def _dirichlet_mask(tm: ThermalModel) -> np.ndarray:
     """Full-size mask of the unknowns held at room temperature."""
-    n, N = tm.mesh.n_nodes, tm.params.layers
+    n, N = tm.mesh.n_nodes, tm.chains.layers
     fixed = np.zeros((N + 1, n), bool)
     fixed[0, tm.chain_fixed_nodes] = True
     fixed[N] = True
-    if tm.params.env_conductivity == 0:
+    if tm.params.medium.thermal_conductivity == 0:
         fixed[1:] = True                   # layers decoupled from the structure: room temperature
     return fixed.ravel()
 
 
 def heat_system(tm: ThermalModel, x) -> HeatSystem:
     """Assemble :class:`HeatSystem` at positions ``x`` (n, 3) [m]."""
-    prm = tm.params
-    if prm.env_conductivity > 0 and not prm.env_density * prm.env_specific_heat > 0:
+    medium = tm.params.medium
+    if medium.thermal_conductivity > 0 and not medium.density * medium.specific_heat > 0:
         raise ParameterError(
-            f"ThermalParameters: env_density = {prm.env_density!r} kg/m^3 and env_specific_heat "
-            f"= {prm.env_specific_heat!r} J/(kg K): transient heat transfer with an environment "
-            "needs both > 0 (e.g. **AIR.environment() or **WATER.environment()).")
+            f"ThermalParameters: the medium's density {medium.density!r} kg/m^3 and specific "
+            f"heat {medium.specific_heat!r} J/(kg K): transient heat transfer with an "
+            "environment needs both > 0 (e.g. medium=AIR or medium=WATER).")
     if tm.integral is not None:
         return _integral_heat_system(tm, x)
     fixed = _dirichlet_mask(tm)
@@ -199,10 +199,11 @@ def medium_diffusion_time(tm: ThermalModel, x) -> float:
     largest extent of the sheet at positions ``x`` (n, 3) [m]): the integral loss model in time
     takes the medium as quasi-static, exact for changes slower than this (theory 8.1); inf
     without a medium heat capacity."""
-    prm = tm.params
+    medium = tm.params.medium
     D = float(np.ptp(np.asarray(x, float), axis=0).max())
-    rho_c = prm.env_density * prm.env_specific_heat
-    return D * D * rho_c / prm.env_conductivity if prm.env_conductivity > 0 else 0.0
+    rho_c = medium.density * medium.specific_heat
+    k_env = medium.thermal_conductivity
+    return D * D * rho_c / k_env if k_env > 0 else 0.0
 
 
 def check_quasi_static_medium(tm: ThermalModel, x, dt: float, owner: str) -> None:
@@ -215,7 +216,7 @@ def check_quasi_static_medium(tm: ThermalModel, x, dt: float, owner: str) -> Non
     tau = medium_diffusion_time(tm, x)
     if dt < tau:
         logger.warning(
-            "%s with loss_model 'integral': the medium is taken as quasi-static; its diffusion "
+            "%s with the integral heat loss: the medium is taken as quasi-static; its diffusion "
             "time over the device, %.3g ms, exceeds the time step %.3g ms, so during the first "
             "~%.3g ms the sheet heats faster than it would (the medium's heat capacity is "
             "neglected); the steady state is exact (theory 8.1)", owner, 1e3 * tau, 1e3 * dt,
@@ -236,13 +237,13 @@ def environment_profile(tm: ThermalModel, x, rise) -> np.ndarray:
     fraction ``sum_{s >= q} 1/g_s / sum_s 1/g_s`` of its node's rise (quasi-steady environment,
     used to start from a structure-only temperature such as a steady :class:`Heat` result).
     """
-    n, N = tm.mesh.n_nodes, tm.params.layers
+    n, N = tm.mesh.n_nodes, tm.chains.layers
     full = np.zeros((N + 1, n))
     full[0] = rise
     if tm.integral is not None:            # no chains: the structure nodes are the unknowns
         return full.ravel()
     g = tm.layer_conductance(x)
-    if tm.params.env_conductivity > 0:
+    if tm.params.medium.thermal_conductivity > 0:
         with np.errstate(divide="ignore"):
             r = np.where(g > 0, 1 / g, np.inf)
         tail = np.cumsum(r[:, ::-1], axis=1)[:, ::-1]           # sum_{s >= q}, q = 0..N-1

@@ -148,8 +148,8 @@ def test_crane_with_the_integral_heat_loss_folds_as_far_at_its_own_power(caplog)
     chain = get_case("crane", thermal_steps=100)
     case = get_case("crane", thermal_steps=100, loss_model="integral")
     assert chain.parameters["power_mW"] == 4.0 and case.parameters["power_mW"] == 0.7
-    assert case.model.thermal.loss_model == "integral"
-    assert chain.model.thermal.loss_model == "chain"
+    assert case.model.thermal.loss.model == "integral"
+    assert chain.model.thermal.loss.model == "chain"
     with caplog.at_level("WARNING"):
         res = case.run()
     assert res.success, res.message
@@ -230,6 +230,7 @@ def test_bad_case_parameters(name, kwargs, match):
 def test_heating_a_non_crease_and_unknown_boundary_panel():
     from simulator import Heat, simulate
     from simulator.model.model import make_model
+    from simulator.thermal.loss import ChainLoss
     from simulator.thermal.steady import ThermalParameters
     from simulator.errors import PatternError
     case = get_case("single_fold", thermal_steps=2)
@@ -240,7 +241,8 @@ def test_heating_a_non_crease_and_unknown_boundary_panel():
     with pytest.raises(ParameterError, match="below zero"):
         simulate(case.model, [Heat({2: -1e-3}, increments=1)])
     bad = make_model(case.model.mesh, case.model.supports,
-                     thermal=ThermalParameters(env_thickness=1e-3, boundary_panels=(7,)))
+                     thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3),
+                                               boundary_panels=(7,)))
     with pytest.raises(ParameterError, match="panel 7"):
         simulate(bad, [Heat({2: 1e-3}, increments=1)])
     with pytest.raises(ParameterError, match="no thermal parameters"):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import simulator
-from simulator import (ConvergenceError, EtorigamiError, Heat, ParameterError, SolverError,
-                       ThermalParameters, initial_state, simulate)
+from simulator import (ChainLoss, ConvergenceError, EtorigamiError, Heat, ParameterError,
+                       SolverError, ThermalParameters, initial_state, simulate)
 from simulator.cases import single_fold_model
 from simulator.state import thermal_model
 
@@ -24,15 +24,15 @@ def test_solver_error_is_not_an_input_error():
 def test_failed_lapack_thermal_solve_is_a_solver_error(monkeypatch):
     from simulator.linalg.small_solve import DenseFactor
 
-    model = single_fold_model(thermal=ThermalParameters(env_thickness=1e-3))
+    model = single_fold_model(thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)))
     tm = thermal_model(model)
     x = model.mesh.nodes
     q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
     good = tm.solve(x, q)
     monkeypatch.setattr(DenseFactor, "solve_info", lambda self, b: (b, 3))   # the dense rung
     with pytest.raises(SolverError, match="LAPACK dpotrs info 3"):
-        thermal_model(single_fold_model(thermal=ThermalParameters(env_thickness=1e-3))).solve(
-            x, q)
+        thermal_model(single_fold_model(
+            thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)))).solve(x, q)
     assert np.all(np.isfinite(good))
 
 
@@ -54,7 +54,7 @@ def test_unsolved_allocation_lp_is_a_solver_error(monkeypatch):
     monkeypatch.setattr(lp, "_linear_model", lambda model, state, table, rows:
                         (np.eye(1), np.ones((7, 1)), np.zeros(1)))
     monkeypatch.setattr(lp, "_check_targets", lambda model, targets, rot: [0])
-    model = single_fold_model(thermal=ThermalParameters(env_thickness=1e-3),
+    model = single_fold_model(thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)),
                               actuators=ACTUATORS)
     with pytest.raises(SolverError, match=r"LP not solved \(infeasible\)"):
         lp.linear_allocation(model, {2: 0.3})
@@ -68,7 +68,7 @@ def test_coupling_is_not_public():
 
 
 def test_heat_takes_its_coupling_settings_as_fields():
-    model = single_fold_model(thermal=ThermalParameters(env_thickness=1e-3),
+    model = single_fold_model(thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)),
                               actuators=ACTUATORS)
     staggered = simulate(model, [Heat({2: 2e-3}, increments=3)])
     iterated = simulate(model, [Heat({2: 2e-3}, increments=3, coupling="iterated",

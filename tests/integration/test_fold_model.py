@@ -79,7 +79,7 @@ def miura_3x3_mm() -> dict:
         "faces_etorigami:thickness": [10e-6] * len(faces),
         "faces_etorigami:support": ["xyz"] + [None] * (len(faces) - 1),
         "etorigami:bimorph": {"E1": 50e9, "t1": 0.2e-6, "E2": 2e9, "t2": 0.8e-6},
-        "etorigami:thermal": {"env_thickness": 1e-3},
+        "etorigami:thermal": {"loss": {"model": "chain", "thickness": 1e-3}},
         "etorigami:steps": [{"type": "Heat", "power": {"all": 2e-3}, "increments": 4}],
     }
 
@@ -120,7 +120,7 @@ def folded_pair(fold_deg: float) -> dict:
         "faces_etorigami:thickness": [10e-6, 10e-6],
         "faces_etorigami:support": ["xyz", None],
         "etorigami:bimorph": {"E1": 50e9, "t1": 0.2e-6, "E2": 2e9, "t2": 0.8e-6},
-        "etorigami:thermal": {"env_thickness": 1e-3},
+        "etorigami:thermal": {"loss": {"model": "chain", "thickness": 1e-3}},
         "etorigami:steps": [{"type": "Heat", "power": {"1": 0.0}, "increments": 2},
                             {"type": "Heat", "power": {"1": 5e-3}, "increments": 3}],
     }
@@ -179,8 +179,8 @@ MODEL_ERRORS = [
      r"edges_etorigami:delta_alpha\[0\]: 1e-05; give a number in 1/K on creases only"),
     (lambda d: d["edges_etorigami:heater"].__setitem__(5, 3),
      r"edges_etorigami:heater\[5\]: 3; give a circuit name \(string\) on creases only"),
-    (lambda d: d["etorigami:thermal"].__setitem__("env_thickness", -1),
-     r"etorigami:thermal: .*env_thickness"),
+    (lambda d: d["etorigami:thermal"]["loss"].__setitem__("thickness", -1),
+     r"etorigami:thermal: .*ChainLoss.thickness = -1"),
     (lambda d: d["faces_etorigami:support"].__setitem__(0, "xq"),
      r"etorigami:supports: .*directions 'xq'"),
     (lambda d: d.__setitem__("etorigami:bimorph", {"E1": 1e9}),

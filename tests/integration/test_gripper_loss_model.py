@@ -14,7 +14,7 @@ CYCLE9 = dict(W=290e-6, La=1150e-6, L1=550e-6, L2=550e-6)
 
 def test_default_design_keeps_the_chain_model_and_its_dict():
     model, _ = gripper_model(GripperDesign())
-    assert model.thermal.loss_model == "chain" and model.thermal.substrate_plane == ()
+    assert model.thermal.loss.model == "chain" and model.thermal.substrate == Substrate()
     assert "loss_model" not in GripperDesign().to_dict()
     assert "integral_refinement" not in GripperDesign(integral_refinement=3).to_dict()
     # with the integral model m is always named (its default changed from 2 to 3)
@@ -25,8 +25,8 @@ def test_integral_design_uses_the_substrate_plane_under_the_sheet():
     design = GripperDesign(**CYCLE9, loss_model="integral", integral_refinement=4)
     thermal = gripper_model(design)[0].thermal
     chain = gripper_model(GripperDesign(**CYCLE9))[0].thermal
-    assert (thermal.loss_model, thermal.integral_refinement) == ("integral", 4)
-    assert thermal.substrate_plane == (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)
+    assert (thermal.loss.model, thermal.loss.refinement) == ("integral", 4)
+    assert thermal.substrate.as_tuple() == (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)
     assert thermal.substrate == Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))
     # everything else (medium, room temperature, held panels and nodes) is the chain model's
     assert dataclasses.replace(thermal, loss=chain.loss, substrate=chain.substrate) == chain

@@ -10,9 +10,10 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from simulator.errors import ParameterError
-from simulator.geometry.materials import Material
+from simulator.geometry.materials import AIR, Material
 from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern, strip_pattern
+from simulator.thermal.loss import ChainLoss
 from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
@@ -35,18 +36,20 @@ def strip_model(k, W=0.4, L=1.0, tc=0.001, tp=0.01, L1=1.0, L2=1.0, **params):
 
 
 def verification01(**geometry):
-    return strip_model(1.0, env_conductivity=0.0, layers=1, env_thickness=1.0, **geometry)
+    return strip_model(1.0, loss=ChainLoss(thickness=1.0, layers=1),
+                       medium=AIR.with_properties(thermal_conductivity=0.0), **geometry)
 
 
 def verification02(W=0.4, L=1.0, beta=REFERENCE_BETA, t_env=3.0, N=10):
-    return strip_model(0.3, W=W, L=L, env_conductivity=0.026, dissipation_angle=beta,
-                       env_thickness=t_env, layers=N)
+    return strip_model(0.3, W=W, L=L, medium=AIR,
+                       loss=ChainLoss(thickness=t_env, layers=N, dissipation_angle=beta))
 
 
 def single_fold(boundary=(2,), **kw):
     mesh = build_mesh(single_fold_pattern())
-    prm = ThermalParameters(env_thickness=750e-6, env_conductivity=0.6, boundary_panels=boundary,
-                            room_temperature_nodes=(0, 3), dissipation_angle=REFERENCE_BETA, **kw)
+    prm = ThermalParameters(loss=ChainLoss(thickness=750e-6, dissipation_angle=REFERENCE_BETA),
+                            medium=AIR.with_properties(thermal_conductivity=0.6),
+                            boundary_panels=boundary, room_temperature_nodes=(0, 3), **kw)
     return mesh, ThermalModel(mesh, prm)
 
 
@@ -112,7 +115,7 @@ def test_single_fold_first_increment_matches_reference():
 def _full_solve(tm, x, q, rt):
     """Reference solve on the full (N+1)n system: K_FF T_F = q_F - K_FD T_D (theory 4.5)."""
     K = tm.conductivity_matrix(x).tocsr()
-    n, N = tm.mesh.n_nodes, tm.params.layers
+    n, N = tm.mesh.n_nodes, tm.params.loss.layers
     fixed = np.zeros(tm.n_dof, bool)
     fixed[N * n:] = True
     fixed[list(tm.params.room_temperature_nodes)] = True
@@ -130,7 +133,7 @@ def test_energy_balance_and_full_system(rt):
     K, T, qf, fixed = _full_solve(tm, x, q, rt)
     np.testing.assert_allclose(tm.solve(x, q, rt), T[:tm.mesh.n_nodes], rtol=1e-12, atol=1e-14)
     outflow = -(K @ T - qf)[fixed]              # heat leaving into the far layer and fixed nodes
-    n, N = tm.mesh.n_nodes, tm.params.layers
+    n, N = tm.mesh.n_nodes, tm.params.loss.layers
     far, nodes = outflow[-n:].sum(), outflow[:-n].sum()
     assert far > 0 and nodes > 0
     assert far + nodes == pytest.approx(q.sum(), rel=1e-9)
@@ -206,8 +209,10 @@ def test_uniform_strip_has_linear_profile():
     mat = Material("k", youngs_modulus=2e9, thermal_conductivity=k)
     mesh = build_mesh(strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=t,
                                     panel_thickness=t, material=mat))
-    tm = ThermalModel(mesh, ThermalParameters(env_thickness=1.0, env_conductivity=0.0, layers=3,
-                                              room_temperature=0.0, room_temperature_nodes=(5, 6)))
+    tm = ThermalModel(mesh, ThermalParameters(
+        loss=ChainLoss(thickness=1.0, layers=3),
+        medium=AIR.with_properties(thermal_conductivity=0.0), room_temperature=0.0,
+        room_temperature_nodes=(5, 6)))
     q = np.zeros(mesh.n_nodes)
     q[[0, 3]] = Q / 2
     T = tm.solve(mesh.nodes, q)
@@ -218,18 +223,30 @@ def test_uniform_strip_has_linear_profile():
 
 # ---------------------------------------------------------------- errors
 @pytest.mark.parametrize("field, value", [
-    ("env_thickness", 0.0), ("env_thickness", -1.0), ("env_thickness", math.nan),
-    ("env_conductivity", -0.1), ("layers", 0), ("layers", 2.5), ("dissipation_angle", -0.1),
-    ("dissipation_angle", math.pi / 2), ("room_temperature", math.inf),
-    ("boundary_panels", ("a",)), ("boundary_panels", (1.5,)), ("room_temperature_nodes", 3)])
+    ("thickness", 0.0), ("thickness", -1.0), ("thickness", math.nan), ("layers", 0),
+    ("layers", 2.5), ("dissipation_angle", -0.1), ("dissipation_angle", math.pi / 2)])
+def test_bad_chain_parameters(field, value):
+    kw = {"thickness": 1e-3, field: value}
+    with pytest.raises(ParameterError, match=f"ChainLoss.{field}"):
+        ThermalParameters(loss=ChainLoss(**kw))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("room_temperature", math.inf), ("boundary_panels", ("a",)), ("boundary_panels", (1.5,)),
+    ("room_temperature_nodes", 3)])
 def test_bad_parameters(field, value):
-    kw = {"env_thickness": 1e-3, field: value}
-    with pytest.raises(ParameterError, match=field):
-        ThermalParameters(**kw)
+    with pytest.raises(ParameterError, match=f"ThermalParameters.{field}"):
+        ThermalParameters(loss=ChainLoss(thickness=1e-3), **{field: value})
+
+
+def test_bad_medium():
+    with pytest.raises(ParameterError, match="thermal_conductivity = -0.1"):
+        ThermalParameters(loss=ChainLoss(thickness=1e-3),
+                          medium=AIR.with_properties(thermal_conductivity=-0.1))
 
 
 def test_parameters_normalised_and_serialisable():
-    prm = ThermalParameters(env_thickness=1e-3, boundary_panels=[2],
+    prm = ThermalParameters(loss=ChainLoss(thickness=1e-3), boundary_panels=[2],
                             room_temperature_nodes=np.array([0, 3]))
     assert prm.boundary_panels == (2,) and prm.room_temperature_nodes == (0, 3)
     d = prm.to_dict()
@@ -243,16 +260,18 @@ def test_parameters_normalised_and_serialisable():
 def test_unknown_ids():
     mesh = build_mesh(single_fold_pattern())
     with pytest.raises(ParameterError, match="panel 7"):
-        ThermalModel(mesh, ThermalParameters(env_thickness=1e-3, boundary_panels=(7,)))
+        ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=1e-3), boundary_panels=(7,)))
     with pytest.raises(ParameterError, match="node 99"):
-        ThermalModel(mesh, ThermalParameters(env_thickness=1e-3, room_temperature_nodes=(99,)))
+        ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=1e-3),
+                                             room_temperature_nodes=(99,)))
 
 
 def test_no_path_to_room_temperature():
     mesh = build_mesh(single_fold_pattern())        # substrate is a separate, unfixed part
     with pytest.raises(ParameterError, match="no heat path"):
-        ThermalModel(mesh, ThermalParameters(env_thickness=1e-3, env_conductivity=0.0,
-                                             room_temperature_nodes=(0,)))
+        ThermalModel(mesh, ThermalParameters(
+            loss=ChainLoss(thickness=1e-3), medium=AIR.with_properties(thermal_conductivity=0.0),
+            room_temperature_nodes=(0,)))
 
 
 def test_bad_inputs_to_methods():

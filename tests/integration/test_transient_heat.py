@@ -16,6 +16,7 @@ from simulator.model.mesh import build_mesh
 from simulator.geometry.pattern import Pattern
 from simulator.thermal.schedules import crease_power_function
 from simulator.state import thermal_model
+from simulator.thermal.loss import ChainLoss
 from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters
 from simulator.thermal.transient import REFERENCE_THETA, environment_profile, heat_system
 
@@ -32,10 +33,9 @@ def reference_04_model(room_temperature=0.0):
                               anchor_thickness=500e-6, crease_thickness=1e-6, panel_material=pan,
                               substrate_material=sub)
     mesh = build_mesh(dataclasses.replace(pat, crease_material=crease))
-    prm = ThermalParameters(env_thickness=1500e-6, env_conductivity=0.026,
-                            dissipation_angle=REFERENCE_BETA, boundary_panels=(2,),
-                            room_temperature_nodes=(0, 3), env_density=1.293,
-                            env_specific_heat=700.0, room_temperature=room_temperature)
+    prm = ThermalParameters(loss=ChainLoss(thickness=1500e-6, dissipation_angle=REFERENCE_BETA),
+                            medium=AIR, boundary_panels=(2,), room_temperature_nodes=(0, 3),
+                            room_temperature=room_temperature)
     return ThermalModel(mesh, prm)
 
 
@@ -49,9 +49,10 @@ def long_strip(panels=30, W=0.1, k=1.0, rho=1.0, c=1.0, t=0.01, width=0.5):
                               panel_thickness=t, panel_material=mat, crease_material=mat))
     x = mesh.nodes[:, 0]
     ends = tuple(int(i) for i in np.flatnonzero((x < 1e-12) | (x > P - 1e-12)))
-    return ThermalModel(mesh, ThermalParameters(env_thickness=1.0, env_conductivity=0.0,
-                                                layers=1, room_temperature=0.0,
-                                                room_temperature_nodes=ends))
+    return ThermalModel(mesh, ThermalParameters(
+        loss=ChainLoss(thickness=1.0, layers=1),
+        medium=AIR.with_properties(thermal_conductivity=0.0), room_temperature=0.0,
+        room_temperature_nodes=ends))
 
 
 # ---------------------------------------------------------------- capacity (theory 7.2)
@@ -70,10 +71,11 @@ def test_capacity_matches_reference_example():
 def test_capacity_totals_are_the_conduction_volumes():
     """Solid: sum rho c t A_t; environment (beta = 0): rho c of air times 2 A_t t_air."""
     mesh = build_mesh(single_fold_pattern())
-    tm = ThermalModel(mesh, ThermalParameters(env_thickness=300e-6, dissipation_angle=0.0))
+    tm = ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=300e-6,
+                                                             dissipation_angle=0.0)))
     x = mesh.nodes.copy()
     x[[4, 5, 6, 7, mesh.panel_center[1]], 2] += 40e-6            # any shape
-    C = capacity_vector(tm, x).reshape(tm.params.layers + 1, -1)
+    C = capacity_vector(tm, x).reshape(tm.params.loss.layers + 1, -1)
     area = tm.triangle_areas(x)
     rho_c = np.array([m.density * m.specific_heat for m in mesh.pattern.panel_material])
     solid = np.where(mesh.triangle_panel >= 0, rho_c[mesh.triangle_panel],
@@ -234,8 +236,9 @@ def test_fluids_and_materials_have_heat_data():
     for m in (SU8, SPR, SUBSTRATE, GOLD, SILICON):
         assert m.density > 0 and m.specific_heat > 0
     assert SU8.density * SU8.specific_heat == pytest.approx(2e6)
-    prm = ThermalParameters(env_thickness=1e-3, **WATER.environment())
-    assert (prm.env_conductivity, prm.env_density, prm.env_specific_heat) == (0.6, 998.0, 4182.0)
+    medium = ThermalParameters(loss=ChainLoss(thickness=1e-3), medium=WATER).medium
+    assert (medium.thermal_conductivity, medium.density, medium.specific_heat) == (0.6, 998.0,
+                                                                                   4182.0)
 
 
 # ---------------------------------------------------------------- the step
@@ -302,7 +305,7 @@ def test_transient_result_saves(tmp_path):
     (lambda: Ramp(1.0, duration=-1.0), "duration"),
     (lambda: Sine(2.0, 1.0, offset=1.0), "offset"),
     (lambda: Material("m", 2e9, specific_heat=-1.0), "specific_heat"),
-    (lambda: ThermalParameters(env_thickness=1e-3, env_density=-1.0), "env_density"),
+    (lambda: AIR.with_properties(density=-1.0), "density = -1.0"),
 ])
 def test_bad_inputs(make, match):
     with pytest.raises(ParameterError, match=match):
@@ -312,12 +315,13 @@ def test_bad_inputs(make, match):
 def test_missing_density_and_bad_integration_inputs():
     mat = Material("no-density", 2e9, thermal_conductivity=0.3)
     mesh = build_mesh(single_fold_pattern(panel_material=mat))
-    tm = ThermalModel(mesh, ThermalParameters(env_thickness=1e-3))
+    tm = ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=1e-3)))
     with pytest.raises(ParameterError, match="no-density.*density = 0.0"):
         integrate_heat(tm, mesh.nodes, {2: 1e-3}, 1.0, 0.1)
     tm = ThermalModel(build_mesh(single_fold_pattern()),
-                      ThermalParameters(env_thickness=1e-3, env_density=0.0))
-    with pytest.raises(ParameterError, match="env_density"):
+                      ThermalParameters(loss=ChainLoss(thickness=1e-3),
+                                        medium=AIR.with_properties(density=0.0)))
+    with pytest.raises(ParameterError, match="the medium.s density 0.0"):
         heat_system(tm, tm.mesh.nodes)
     tm = reference_04_model()
     x = tm.mesh.nodes

@@ -18,8 +18,9 @@ def fold():
     the heating, the heating step)."""
     case = S.get_case("single_fold")
     model = case.model
-    th = dataclasses.replace(model.thermal, loss_model="integral",
-                             substrate_plane=S.boundary_panel_plane(model))
+    plane = S.boundary_panel_plane(model)
+    th = dataclasses.replace(model.thermal.with_loss("integral"),
+                             substrate=S.Substrate.plane(plane[:3], plane[3:]))
     model = dataclasses.replace(model, thermal=th)
     heat = [s for s in case.steps if isinstance(s, S.Heat)][0]
     pre = [s for s in case.steps if not isinstance(s, S.Heat)]
@@ -87,9 +88,9 @@ def test_a_time_step_shorter_than_the_medium_diffusion_time_is_a_warning(fold, c
     tm = thermal_model(model)
     tau = medium_diffusion_time(tm, model.mesh.nodes)
     D = float(np.ptp(model.mesh.nodes, axis=0).max())
-    prm = model.thermal
-    assert tau == pytest.approx(D**2 * prm.env_density * prm.env_specific_heat
-                                / prm.env_conductivity)
+    medium = model.thermal.medium
+    assert tau == pytest.approx(D**2 * medium.density * medium.specific_heat
+                                / medium.thermal_conductivity)
     for dt, warned in ((0.5 * tau, True), (2 * tau, False)):
         caplog.clear()
         with caplog.at_level(logging.WARNING):

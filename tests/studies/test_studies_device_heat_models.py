@@ -98,7 +98,7 @@ def test_a_failing_model_is_a_row_not_an_exception(monkeypatch):
 
     def simulate(model, steps, **kw):
         res = real(model, steps, **kw)
-        return _Failed(res) if model.thermal.loss_model == "integral" else res
+        return _Failed(res) if model.thermal.loss.model == "integral" else res
 
     monkeypatch.setattr(study, "simulate", simulate)
     sweeps, fe, comparison = study._run_cases(True, 0, False)

@@ -19,14 +19,14 @@ def _strip():
 
 def test_recovers_the_parameters_of_a_chain_reference():
     model = _strip()
-    truth = ThermalModel(model.mesh, dataclasses.replace(
-        model.thermal, dissipation_angle=math.radians(35), env_thickness=1.2))
+    truth = ThermalModel(model.mesh, model.thermal.with_loss(
+        dissipation_angle=math.radians(35), thickness=1.2))
     res = calibrate_environment(model, [4e-3], reference=truth.solve)
     assert res.success and res.status == "converged" and res.reference == "callable"
     assert math.degrees(res.dissipation_angle) == pytest.approx(35, abs=0.05)
     assert res.env_thickness == pytest.approx(1.2, rel=1e-3)
     assert res.rms_error < 1e-5 < res.initial_rms_error
-    assert res.thermal.loss_model == "chain" and res.thermal.env_thickness == res.env_thickness
+    assert res.thermal.loss.model == "chain" and res.thermal.loss.thickness == res.env_thickness
 
 
 def test_fit_to_the_integral_model_reports_its_residual():
@@ -109,7 +109,8 @@ def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypa
         unbounded = calibrate_environment(model, power, substrate=None)   # asked for: silent
     assert not [r for r in caplog.records if "substrate_plane" in r.getMessage()]
     explicit = ThermalModel(model.mesh, dataclasses.replace(
-        model.thermal, loss_model="integral", substrate_plane=plane))
+        model.thermal.with_loss("integral"), substrate=simulator.Substrate.plane(plane[:3],
+                                                                                 plane[3:])))
     same = calibrate_environment(model, power, reference=explicit.solve)
     assert fit.rms_error == pytest.approx(same.rms_error, rel=1e-9)
     assert fit.env_thickness == pytest.approx(same.env_thickness, rel=1e-9)
@@ -133,7 +134,7 @@ def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(ca
     monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])
     model = get_case("double_fold", thermal_steps=2).model
     q = ThermalModel(model.mesh, model.thermal).heat_vector(np.full(model.mesh.n_creases, 1e-3))
-    default = dataclasses.replace(model.thermal, loss_model="integral")
+    default = model.thermal.with_loss("integral")
     with caplog.at_level("WARNING"):
         tm = ThermalModel(model.mesh, default)
         tm.solve(model.mesh.nodes, q)
@@ -148,8 +149,8 @@ def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(ca
         tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
         assert not [r for r in caplog.records if "substrate=None" in r.getMessage()]
         tm.solve(model.mesh.nodes, q)
-        ThermalModel(model.mesh, dataclasses.replace(prm, env_conductivity=0.03)).solve(
-            model.mesh.nodes, q)
+        ThermalModel(model.mesh, dataclasses.replace(prm, medium=prm.medium.with_properties(
+            thermal_conductivity=0.03))).solve(model.mesh.nodes, q)
     said = [r for r in caplog.records if "but substrate=None" in r.getMessage()]
     assert len(said) == 1 and "Substrate(), is the boundary panels' plane" in said[0].getMessage()
 

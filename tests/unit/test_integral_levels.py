@@ -22,7 +22,7 @@ from unit.test_integral_loss import disk_mesh
 
 def _strip_params(**kw):
     model = verification_strip().model
-    return model, dataclasses.replace(model.thermal, loss_model="integral", **kw)
+    return model, model.thermal.with_loss("integral", **kw)
 
 
 def test_coarse_refinement_is_half_at_least_two():
@@ -30,14 +30,13 @@ def test_coarse_refinement_is_half_at_least_two():
 
 
 def test_extrapolation_from_3_is_3_l3_minus_2_l2():
-    model, prm = _strip_params(integral_refinement=3, integral_extrapolation=True,
-                               integral_correction_tol=0.0)
+    model, prm = _strip_params(refinement=3, extrapolation=True, correction_tol=0.0)
     x = model.mesh.nodes
     tm = ThermalModel(model.mesh, prm)
     assert isinstance(tm.integral, ExtrapolatedLoss)
     tri = tm.integral.fine.triangles
-    plain = {m: IntegralOperator(tri, model.mesh.n_nodes, prm.env_conductivity, m).loss_matrix(x)
-             for m in (2, 3)}
+    k = prm.medium.thermal_conductivity
+    plain = {m: IntegralOperator(tri, model.mesh.n_nodes, k, m).loss_matrix(x) for m in (2, 3)}
     np.testing.assert_allclose(tm.integral_loss_matrix(x), 3 * plain[3] - 2 * plain[2],
                                rtol=1e-12, atol=1e-12 * np.abs(plain[3]).max())
 
@@ -52,14 +51,14 @@ def test_extrapolation_from_3_brings_the_disk_within_half_a_percent_of_8_k_a():
 
 
 def test_parameters_of_the_correction():
-    with pytest.raises(ParameterError, match="integral_correction_tol"):
-        ThermalParameters(env_thickness=1e-3, integral_correction_tol=-0.1)
-    assert ThermalParameters(loss_model="integral", integral_refinement=3,
-                             integral_extrapolation=True).integral_extrapolation
+    with pytest.raises(ParameterError, match="IntegralLoss.correction_tol"):
+        ThermalParameters(loss=IntegralLoss(correction_tol=-0.1))
+    assert ThermalParameters(loss=IntegralLoss(refinement=3,
+                                               extrapolation=True)).loss.extrapolation
 
 
 def test_correction_without_a_finer_level_is_the_plain_operator():
-    model, prm = _strip_params(integral_refinement=1, integral_correction_tol=0.5)
+    model, prm = _strip_params(refinement=1, correction_tol=0.5)
     op = integral_operator(model.mesh.triangles, model.mesh.n_nodes, prm)
     assert type(op) is IntegralOperator                    # the plain operator, not a composite
 
@@ -74,14 +73,14 @@ def _folded_double_fold(increments=20):
 def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between():
     model, folded = _folded_double_fold()
     x0 = model.mesh.nodes
-    prm = dataclasses.replace(model.thermal, loss_model="integral", integral_shape_tol=0.0,
+    prm = dataclasses.replace(model.thermal.with_loss("integral", shape_tol=0.0),
                               substrate=None)             # an unbounded medium
-    assert (prm.integral_refinement, prm.extrapolated, prm.integral_correction_tol) == (3, True,
-                                                                                       0.1)
+    assert (prm.loss.refinement, prm.loss.extrapolated, prm.loss.correction_tol) == (3, True,
+                                                                                     0.1)
     tm = ThermalModel(model.mesh, prm)
     op = tm.integral
     assert isinstance(op, CorrectedLoss)
-    fresh = ThermalModel(model.mesh, dataclasses.replace(prm, integral_correction_tol=0.0))
+    fresh = ThermalModel(model.mesh, prm.with_loss(correction_tol=0.0))
     np.testing.assert_allclose(op.loss_matrix(x0), fresh.integral_loss_matrix(x0), rtol=1e-12,
                                atol=1e-13)
     # a twentieth of the fold: the accurate operator is kept, the m = 1 one rebuilt
@@ -90,7 +89,7 @@ def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between
     assert (op.builds, op.base_builds) == (1, 2)
     assert 0 < op.change(op.base.loss_matrix(x1)) <= 0.1
     base = {x.tobytes(): IntegralOperator(op.base.triangles, model.mesh.n_nodes,
-                                      prm.env_conductivity, 1, None).loss_matrix(x)
+                                      prm.medium.thermal_conductivity, 1, None).loss_matrix(x)
             for x in (x0, x1)}
     expected = fresh.integral_loss_matrix(x0) + base[x1.tobytes()] - base[x0.tobytes()]
     np.testing.assert_allclose(L1, expected, rtol=1e-10, atol=1e-12 * np.abs(L1).max())
@@ -108,8 +107,7 @@ def _double_fold_drift(substrate):
     res = simulate(model, case.steps)
     assert res.success
     corrected = ThermalModel(model.mesh, prm)
-    accurate = ThermalModel(model.mesh, dataclasses.replace(
-        prm, loss=IntegralLoss(correction_tol=0.0, shape_tol=0.0)))
+    accurate = ThermalModel(model.mesh, prm.with_loss(correction_tol=0.0, shape_tol=0.0))
     q = corrected.heat_vector(np.full(model.mesh.n_creases, 10e-3))
     shapes = [model.mesh.nodes + u for u in np.unique(res.history["u"], axis=0)]
     shapes.sort(key=lambda x: np.abs(x - model.mesh.nodes).max())     # along the path
@@ -150,11 +148,10 @@ def test_corrected_operator_follows_a_sheet_approaching_the_substrate():
     accurate operator is rebuilt and the temperatures stay those of a rebuild at every shape
     (a criterion on node distances alone kept one build there and was 7.6 % off)."""
     model = verification_strip().model
-    prm = dataclasses.replace(model.thermal, loss_model="integral", room_temperature_nodes=(),
-                              substrate_plane=(0, 0, 0, 0, 0, 1))
+    prm = dataclasses.replace(model.thermal.with_loss("integral"), room_temperature_nodes=(),
+                              substrate=Substrate.plane((0, 0, 0), (0, 0, 1)))
     corrected = ThermalModel(model.mesh, prm)
-    accurate = ThermalModel(model.mesh, dataclasses.replace(prm, integral_correction_tol=0.0,
-                                                            integral_shape_tol=0.0))
+    accurate = ThermalModel(model.mesh, prm.with_loss(correction_tol=0.0, shape_tol=0.0))
     q = corrected.heat_vector([4e-3])
     worst = 0.0
     for lift in (0.2, 0.1, 0.05, 0.02, 0.01, 0.005, 0.0, 0.005, 0.02, 0.05, 0.1, 0.2, 0.4):
@@ -168,12 +165,12 @@ def test_corrected_operator_follows_a_sheet_approaching_the_substrate():
 
 
 def test_automatic_extrapolation_follows_the_refinement():
-    prm = ThermalParameters(loss_model="integral")
-    assert prm.integral_extrapolation is None and prm.extrapolated
-    two = dataclasses.replace(dataclasses.replace(prm, integral_refinement=4),
-                              integral_refinement=2)
-    assert not two.extrapolated and two.integral_extrapolation is None
-    assert not ThermalParameters(loss=IntegralLoss(refinement=4, extrapolation=False)).extrapolated
+    prm = ThermalParameters(loss=IntegralLoss())
+    assert prm.loss.extrapolation is None and prm.loss.extrapolated
+    two = prm.with_loss(refinement=4).with_loss(refinement=2)
+    assert not two.loss.extrapolated and two.loss.extrapolation is None
+    off = ThermalParameters(loss=IntegralLoss(refinement=4, extrapolation=False))
+    assert not off.loss.extrapolated
 
 
 def test_lapack_factorisation_matches_the_compiled_one():

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from simulator import ParameterError, ThermalParameters
+from simulator import (AIR, ChainLoss, IntegralLoss, ParameterError, Substrate,
+                       ThermalParameters)
 from simulator.cases import verification_strip
 from simulator.linalg import _dense_jit
 from simulator.thermal import _single_layer_jit, integral
@@ -144,13 +145,15 @@ def test_disk_near_a_plane_conducts_more_the_closer_it_gets():
 
 
 # ------------------------------------------------------------------ the model
-def _strip(refinement=2, room=(0, 3, 5, 6), **kw):
-    """The strip with the integral model at ``refinement``, rebuilt at every shape (no
-    correction between rebuilds: tests/unit/test_integral_levels.py)."""
+def _strip(refinement=2, room=(0, 3, 5, 6), substrate=None, **kw):
+    """The strip with the integral model at ``refinement`` (and the loss fields ``kw``),
+    rebuilt at every shape (no correction between rebuilds:
+    tests/unit/test_integral_levels.py), over ``substrate`` if given."""
     model = verification_strip().model
-    kw = {"integral_correction_tol": 0.0, **kw}
-    params = dataclasses.replace(model.thermal, loss_model="integral",
-                                 integral_refinement=refinement, room_temperature_nodes=room, **kw)
+    kw = {"correction_tol": 0.0, **kw}
+    params = dataclasses.replace(model.thermal.with_loss("integral", refinement=refinement, **kw),
+                                 room_temperature_nodes=room,
+                                 **({"substrate": substrate} if substrate else {}))
     tm = ThermalModel(model.mesh, params)
     q = tm.heat_vector(np.array([4e-3]))
     return tm, model.mesh.nodes, q
@@ -168,7 +171,7 @@ def test_symmetric_strip_has_symmetric_temperatures():
 
 @pytest.mark.parametrize("extrapolation", [False, True])
 def test_energy_balance_all_heat_leaves_through_the_potential(extrapolation):
-    tm, x, q = _strip(4, room=(), integral_extrapolation=extrapolation)
+    tm, x, q = _strip(4, room=(), extrapolation=extrapolation)
     T = tm.solve(x, q)
     loss = tm.environment_loss(x, T)
     assert loss.sum() == pytest.approx(q.sum(), rel=1e-9)
@@ -186,13 +189,13 @@ def test_refinement_converges():
 
 def test_substrate_plane_makes_the_sheet_cooler():
     free = np.max(_strip()[0].solve(*_strip()[1:]))
-    near = _strip(substrate_plane=(0, 0, -0.1, 0, 0, 1))
+    near = _strip(substrate=Substrate.plane((0, 0, -0.1), (0, 0, 1)))
     assert np.max(near[0].solve(*near[1:])) < free
 
 
 def test_boundary_panels_are_held_at_room_temperature():
     model = verification_strip().model
-    params = dataclasses.replace(model.thermal, loss_model="integral", boundary_panels=(0,))
+    params = dataclasses.replace(model.thermal.with_loss("integral"), boundary_panels=(0,))
     tm = ThermalModel(model.mesh, params)
     panel_nodes = np.unique(model.mesh.triangles[model.mesh.triangle_panel == 0])
     T = tm.solve(model.mesh.nodes, tm.heat_vector(np.array([4e-3])))
@@ -203,7 +206,7 @@ def test_boundary_panels_are_held_at_room_temperature():
 def test_dense_limit_is_refused_naming_the_limit_and_the_alternatives(monkeypatch):
     monkeypatch.setattr(integral, "MAX_SUB_TRIANGLES", 100)
     with pytest.raises(ParameterError, match=r"(?s)224 sub-triangles exceeds the dense-operator "
-                       r"limit MAX_SUB_TRIANGLES = 100.*loss_model='chain'.*3-D FE"):
+                       r"limit MAX_SUB_TRIANGLES = 100.*loss=ChainLoss.*3-D FE"):
         _strip(refinement=4)
 
 
@@ -212,20 +215,27 @@ def test_the_default_limit_refuses_a_fine_refinement():
         IntegralOperator(np.zeros((20, 3), int) + [0, 1, 2], 3, 0.026, 15)
 
 
-@pytest.mark.parametrize("kw, match", [
-    (dict(loss_model="fe"), r"loss_model = 'fe'.*'chain', 'integral'"),
-    (dict(integral_refinement=0), "integral_refinement"),
-    (dict(substrate_plane=(0, 0, 0)), r"substrate_plane = \(0, 0, 0\) is invalid"),
-    (dict(substrate_plane=(0, 0, 0, 0, 0, 0)), "non-zero normal"),
-    (dict(loss_model="integral", env_conductivity=0.0), "needs a medium conductivity > 0"),
+CHAIN = ThermalParameters(loss=ChainLoss(thickness=1e-3))
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: CHAIN.with_loss("fe"), r"model = 'fe'.*'chain', 'integral'"),
+    (lambda: CHAIN.with_loss("integral", refinement=0), "IntegralLoss.refinement = 0"),
+    (lambda: ThermalParameters(substrate=(0, 0, 0)), r"substrate = \(0, 0, 0\)"),
+    (lambda: ThermalParameters(substrate=Substrate.plane((0, 0, 0), (0, 0, 0))),
+     "non-zero normal"),
+    (lambda: ThermalParameters(loss=IntegralLoss(),
+                               medium=AIR.with_properties(thermal_conductivity=0.0)),
+     "needs a medium conductivity > 0"),
 ])
-def test_bad_parameters_are_named(kw, match):
+def test_bad_parameters_are_named(make, match):
     with pytest.raises(ParameterError, match=match):
-        ThermalParameters(env_thickness=1e-3, **kw)
+        make()
 
 
 def test_plane_is_normalised():
-    p = ThermalParameters(env_thickness=1e-3, substrate_plane=[0, 0, 1, 0, 0, 2]).plane
+    with pytest.deprecated_call(match=r"ThermalParameters.plane is deprecated"):
+        p = ThermalParameters(substrate=Substrate.plane((0, 0, 1), (0, 0, 2))).plane
     assert np.allclose(p[0], [0, 0, 1]) and np.allclose(p[1], [0, 0, 1])
 
 
@@ -237,7 +247,7 @@ def test_transient_heat_uses_the_integral_loss():
     from simulator.thermal.transient import heat_system
     model = get_case("single_fold").model
     x = model.mesh.nodes
-    tm = ThermalModel(model.mesh, dataclasses.replace(model.thermal, loss_model="integral"))
+    tm = ThermalModel(model.mesh, model.thermal.with_loss("integral"))
     system = heat_system(tm, x)
     chain = heat_system(ThermalModel(model.mesh, model.thermal), x)
     assert system.K.shape[0] < chain.K.shape[0] and system.free.max() < model.mesh.n_nodes
@@ -265,7 +275,7 @@ def test_disk_over_a_plane_agrees_with_converged_fe(h_over_a):
 @pytest.mark.slow
 @pytest.mark.parametrize("W", [0.4, 1.0])
 def test_strip_in_air_agrees_with_fe(W):
-    """SU-8 strip in air, integral_refinement 8 against the 3-D FE at level 2. Measured (2 Dec
+    """SU-8 strip in air, the integral loss at refinement 8 against the 3-D FE at level 2. Measured (2 Dec
     2026), T_max / T_ave errors: W/L 0.1 +3.1 / +3.2 %, 0.4 +1.4 / +2.9 %, 1.0 +0.2 / +2.6 %
     (the chain model: -12 / -4 %, -15 / +7 %, -26 / -7 %); FE level 1 -> 2 moves by ~1 %."""
     pytest.importorskip("skfem")
@@ -274,8 +284,7 @@ def test_strip_in_air_agrees_with_fe(W):
     from studies.heat_loss_calibration import strip_case
     model = strip_case(W, k=0.3, k_env=0.026, t_env=1.5).model
     power = 10 * W * 1e-3
-    tm = ThermalModel(model.mesh, dataclasses.replace(model.thermal, loss_model="integral",
-                                                      integral_refinement=8))
+    tm = ThermalModel(model.mesh, model.thermal.with_loss("integral", refinement=8))
     T = tm.solve(model.mesh.nodes, tm.heat_vector([power]))
     fe = solve_fe3d(model, [power], level=2, box_factor=4.0, accuracy=1.0)
     assert fe.success

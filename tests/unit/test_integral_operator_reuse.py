@@ -1,5 +1,5 @@
 """When the integral loss operator is kept and when rebuilt (simulator.thermal.integral): a rigid
-motion keeps it and equals a fresh build, a change beyond integral_shape_tol rebuilds it, the
+motion keeps it and equals a fresh build, a change beyond IntegralLoss.shape_tol rebuilds it, the
 substrate plane's height counts, and the compiled factorisation agrees with LAPACK."""
 
 import dataclasses
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from simulator import ThermalParameters, simulate
+from simulator import IntegralLoss, simulate
 from simulator.cases import get_case, verification_strip
 from simulator.linalg import _dense_jit
 from simulator.state import thermal_model
@@ -134,14 +134,13 @@ def test_compiled_signed_factor_solves_a_symmetric_indefinite_matrix():
 
 def test_a_kept_operator_changes_folding_temperatures_by_less_than_half_a_percent():
     """The double fold heated with the integral model: the operator kept within the default
-    integral_shape_tol against one rebuilt at every increment, at every increment."""
+    IntegralLoss.shape_tol against one rebuilt at every increment, at every increment."""
     case = get_case("double_fold", thermal_steps=40)
-    default = ThermalParameters(env_thickness=1.0).integral_shape_tol
+    default = IntegralLoss().shape_tol
     runs, builds = {}, {}
     for tol in (default, 0.0):
-        thermal = dataclasses.replace(case.model.thermal, loss_model="integral",
-                                      integral_refinement=2, integral_correction_tol=0.0,
-                                      integral_shape_tol=tol, substrate=None)
+        thermal = dataclasses.replace(case.model.thermal, substrate=None, loss=IntegralLoss(
+            refinement=2, correction_tol=0.0, shape_tol=tol))
         model = dataclasses.replace(case.model, thermal=thermal)
         result = simulate(model, case.steps)
         assert result.success, result.message

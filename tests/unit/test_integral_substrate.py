@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from simulator import (FixedShapeTemperatures, IntegralLoss, ParameterError, ThermalParameters,
-                       fixed_shape_temperatures)
+from simulator import (ChainLoss, FixedShapeTemperatures, IntegralLoss, ParameterError,
+                       Substrate, ThermalParameters, fixed_shape_temperatures)
 from simulator.cases import verification_strip
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
@@ -25,10 +25,10 @@ def _strip_model(**kw):
     """The strip over the plane z = 0 with the plain integral operator (m = 2 unless given;
     no correction between rebuilds unless given)."""
     model = verification_strip().model
-    kw = {"integral_refinement": 2, "integral_correction_tol": 0.0, **kw}
+    loss = IntegralLoss(**{"refinement": 2, "correction_tol": 0.0, **kw})
     return model, ThermalModel(model.mesh, dataclasses.replace(
-        model.thermal, loss_model="integral", room_temperature_nodes=(),
-        substrate_plane=(0, 0, 0, 0, 0, 1), **kw))
+        model.thermal, loss=loss, room_temperature_nodes=(),
+        substrate=Substrate.plane((0, 0, 0), (0, 0, 1))))
 
 
 def _lying_shape(model, lift=0.0):
@@ -99,16 +99,16 @@ def test_the_rule_is_the_fe_references():
 
 def test_no_plane_touches_nothing():
     model = verification_strip().model
-    tm = ThermalModel(model.mesh, dataclasses.replace(model.thermal, loss_model="integral"))
+    tm = ThermalModel(model.mesh, model.thermal.with_loss("integral"))
     assert not tm.integral.touching(model.mesh.nodes).any()
     assert np.array_equal(tm.held_nodes(model.mesh.nodes), tm.fixed_nodes)
 
 
 # ------------------------------------------------------------------ Richardson extrapolation
 def test_extrapolated_loss_is_the_richardson_combination():
-    model, tm = _strip_model(integral_refinement=4, integral_extrapolation=True)
+    model, tm = _strip_model(refinement=4, extrapolation=True)
     x = _lying_shape(model, 0.1)
-    plain = {m: _strip_model(integral_refinement=m, integral_extrapolation=False)[1]
+    plain = {m: _strip_model(refinement=m, extrapolation=False)[1]
              .integral.loss_matrix(x) for m in (2, 4)}
     np.testing.assert_allclose(tm.integral_loss_matrix(x), 2 * plain[4] - plain[2],
                                rtol=1e-12, atol=1e-12 * np.abs(plain[4]).max())
@@ -124,13 +124,14 @@ def test_extrapolation_brings_the_disk_closer_to_8_k_a():
 
 
 def test_extrapolation_needs_a_refinement_of_3():
+    # the old spelling's refusals name its fields
     with pytest.raises(ParameterError, match=r"integral_extrapolation = True needs "
-                       r"integral_refinement >= 3, got 2"):
-        ThermalParameters(env_thickness=1e-3, integral_extrapolation=True,
+                       r"integral_refinement >= 3, got 2"), pytest.deprecated_call():
+        ThermalParameters(loss=ChainLoss(thickness=1e-3), integral_extrapolation=True,
                           integral_refinement=2)
     with pytest.raises(ParameterError, match="integral_extrapolation = 'yes' must be True, "
-                       "False or None"):
-        ThermalParameters(env_thickness=1e-3, integral_extrapolation="yes")
+                       "False or None"), pytest.deprecated_call():
+        ThermalParameters(loss=ChainLoss(thickness=1e-3), integral_extrapolation="yes")
     # the same refusals in the heat loss's own spelling
     with pytest.raises(ParameterError, match=r"IntegralLoss.extrapolation = True needs "
                        r"refinement >= 3, got 2"):
@@ -161,10 +162,10 @@ def test_fixed_shape_integral_uses_the_boundary_panel_plane():
     x[:, 2] = 0.2 * np.maximum(x[:, 0] - 1.0, 0.0)
     r = fixed_shape_temperatures(model, "integral", [4e-3], positions=x, refinement=4,
                                  extrapolation=True)
-    assert r.thermal.substrate_plane == pytest.approx((0.5, 0.5, 0, 0, 0, 1), abs=1e-12)
-    assert r.thermal.integral_refinement == 4 and r.thermal.integral_extrapolation
+    assert r.thermal.substrate.as_tuple() == pytest.approx((0.5, 0.5, 0, 0, 0, 1), abs=1e-12)
+    assert r.thermal.loss.refinement == 4 and r.thermal.loss.extrapolation
     free = fixed_shape_temperatures(model, "integral", [4e-3], positions=x, substrate=None)
-    assert free.thermal.substrate_plane == ()
+    assert free.thermal.substrate is None
     assert r.crease_temperature[0] < free.crease_temperature[0]   # the substrate cools
 
 

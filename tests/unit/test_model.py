@@ -2,9 +2,9 @@
 
 import pytest
 
-from simulator import (REFERENCE_GRAVITY, SPR, SU8, Actuators, Bimorph, ContactParameters,
-                       Material, ParameterError, Supports, ThermalParameters, build_mesh,
-                       make_model)
+from simulator import (REFERENCE_GRAVITY, SPR, SU8, Actuators, Bimorph, ChainLoss,
+                       ContactParameters, Material, ParameterError, Supports, ThermalParameters,
+                       build_mesh, make_model)
 from simulator.geometry.example_patterns import single_fold_pattern
 
 
@@ -34,8 +34,8 @@ def test_make_model_accepts_every_documented_form(pattern):
     mesh = build_mesh(pattern)
     act = Actuators(Bimorph(E1=39.5e9, t1=0.1e-6, E2=2e9, t2=0.4e-6),
                     {int(mesh.crease_ids[0]): 38e-6})
-    m = make_model(mesh, {0: "xyz"}, contact=True, thermal=ThermalParameters(env_thickness=1e-3),
-                   actuators=act)
+    m = make_model(mesh, {0: "xyz"}, contact=True,
+                   thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)), actuators=act)
     assert isinstance(m.supports, Supports) and m.supports.fixed == {0: "xyz"}
     assert isinstance(m.contact, ContactParameters)
     assert make_model(pattern, Supports(), contact=False).contact is None

@@ -12,6 +12,8 @@ from simulator.mechanics.elements.contact import point_triangle_distance
 from simulator.mechanics.elements.springs import spring_kernel_backend
 from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
+from simulator.geometry.materials import AIR
+from simulator.thermal.loss import ChainLoss
 from simulator.thermal.steady import ThermalModel, ThermalParameters
 
 pytest.importorskip("numba")     # a test dependency (pyproject [test]); the kernel needs it
@@ -19,8 +21,9 @@ pytest.importorskip("numba")     # a test dependency (pyproject [test]); the ker
 
 def _single_fold(boundary=(2,)):
     mesh = build_mesh(single_fold_pattern())
-    prm = ThermalParameters(env_thickness=750e-6, env_conductivity=0.6, boundary_panels=boundary,
-                            room_temperature_nodes=(0, 3))
+    prm = ThermalParameters(loss=ChainLoss(thickness=750e-6),
+                            medium=AIR.with_properties(thermal_conductivity=0.6),
+                            boundary_panels=boundary, room_temperature_nodes=(0, 3))
     return mesh, ThermalModel(mesh, prm)
 
 
@@ -132,13 +135,16 @@ def test_background_compilation_fills_the_cache(tmp_path):
         from simulator.mechanics.elements.springs import spring_kernel_backend
         from simulator.geometry.example_patterns import single_fold_pattern
         from simulator.model.mesh import build_mesh
+        from simulator.geometry.materials import AIR
+        from simulator.thermal.loss import ChainLoss
         from simulator.thermal.steady import ThermalModel, ThermalParameters
         assert _thermal_jit.compile_in_background()                 # cold cache: started
         assert not _thermal_jit.compile_in_background()             # only once
         child = _thermal_jit._background
         mesh = build_mesh(single_fold_pattern())
-        tm = ThermalModel(mesh, ThermalParameters(env_thickness=750e-6, env_conductivity=0.6,
-                          boundary_panels=(2,), room_temperature_nodes=(0, 3)))
+        tm = ThermalModel(mesh, ThermalParameters(
+            loss=ChainLoss(thickness=750e-6), medium=AIR.with_properties(thermal_conductivity=0.6),
+            boundary_panels=(2,), room_temperature_nodes=(0, 3)))
         q = tm.heat_vector([1e-3])
         T1 = tm.solve(mesh.nodes, q)                                # waits, then loads
         assert _thermal_jit._background is None and child.returncode == 0

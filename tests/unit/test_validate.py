@@ -133,9 +133,14 @@ def _with(cls, **base):
 P, I, F = "positive", "integer", "finite"       # what a field must be (which values are wrong)
 BAD = {P: (-1.0, NAN, True), I: (-1, NAN, True), F: (NAN, math.inf, True)}
 CLASSES = {
-    "ThermalParameters": (_with(simulator.ThermalParameters, env_thickness=1e-3), {
-        "env_thickness": P, "env_conductivity": P, "env_density": P, "env_specific_heat": P,
-        "dissipation_angle": P, "layers": I, "room_temperature": F}),
+    "ThermalParameters": (_with(simulator.ThermalParameters), {"room_temperature": F}),
+    "ChainLoss": (_with(simulator.ChainLoss, thickness=1e-3), {
+        "thickness": P, "dissipation_angle": P, "layers": I}),
+    "IntegralLoss": (_with(simulator.IntegralLoss), {
+        "refinement": I, "shape_tol": P, "correction_tol": P}),
+    "Fluid": (_with(simulator.Fluid, name="f", density=1.0, specific_heat=1.0,
+                    thermal_conductivity=1.0), {
+        "density": P, "specific_heat": P, "thermal_conductivity": P}),
     "SharpHingeParameters": (_with(simulator.SharpHingeParameters), {
         "fold_stiffness": P, "panel_bending_width": P}),
     "StepSignal": (_with(simulator.StepSignal, value=0.1), {"value": F, "t_on": F,

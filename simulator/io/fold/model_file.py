@@ -275,7 +275,7 @@ def _thermal(data, geo):
     flags = array_field(data, f"faces_{NS}substrate", len(geo.face), "face") or ()
     raw["boundary_panels"] = tuple(sorted({int(geo.face[f]) for f, s in enumerate(flags) if s}))
     raw["room_temperature_nodes"] = tuple(raw.get("room_temperature_nodes", ()))
-    return _guard(f"{NS}thermal", lambda: ThermalParameters(**raw))
+    return _guard(f"{NS}thermal", lambda: ThermalParameters.from_dict(raw))
 
 
 def _actuators(data, geo):

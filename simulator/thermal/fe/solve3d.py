@@ -311,7 +311,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
         (:meth:`~simulator.thermal.steady.ThermalModel.heat_vector`); default
         ``state.crease_power``.
     k_medium : float, optional
-        Medium conductivity [W/(m K)]; default ``model.thermal.env_conductivity``.
+        Medium conductivity [W/(m K)]; default ``model.thermal.medium.thermal_conductivity``.
     heat : (n,) array, optional
         Nodal heat input [W] instead of ``crease_power``.
     state : SimulationState, optional
@@ -334,7 +334,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     _check_common(1.0 if k_medium is None else k_medium, box_factor, level, far_field, accuracy)
     t0 = time.perf_counter()
     x, q, params, tm = _model_inputs(model, positions, state, crease_power, heat)
-    k = float(params.env_conductivity if k_medium is None else k_medium)
+    k = float(params.medium.thermal_conductivity if k_medium is None else k_medium)
     positive("k_medium", k, "W/(m K)")
     rt = float(params.room_temperature if room_temperature is None else room_temperature)
     finite("room_temperature", rt, "deg C")

@@ -1,0 +1,23 @@
+"""Deprecated spellings: one warning, attributed to the user's line (not to the toolkit's own
+frames, nor to ``dataclasses.replace``, which calls ``__init__``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import warnings
+
+from .errors import EtorigamiDeprecationWarning
+
+__all__ = ["warn_deprecated"]
+
+
+def warn_deprecated(message: str) -> None:
+    """Warn with an :class:`~simulator.errors.EtorigamiDeprecationWarning` ``message`` at the
+    first frame outside the calling module and :mod:`dataclasses` (Python shows it once per
+    such line)."""
+    frame, level = sys._getframe(1), 2
+    skip = {frame.f_code.co_filename, dataclasses.__file__}
+    while frame.f_back is not None and frame.f_code.co_filename in skip:
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, EtorigamiDeprecationWarning, stacklevel=level)
