@@ -127,9 +127,11 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         eigenvalues than at the point before (with ``stability``), the increment is redone
         from the point before with at most this arc length, which from then on caps the
         adaptation wherever the load factor is within ``resolution`` of that point's (around
-        the limit point, and where the path crosses its load factor again). So the limit
-        point (and a snap's jump) is located at this resolution, whatever the arc length the
-        path arrived with. Default: no cap.
+        the limit point, and where the path crosses its load factor again): at ``resolution``,
+        or where the last increment changed the load factor by less than its arc length (a
+        flat fold) at the arc length that changes it by ``resolution`` at that rate. So the
+        limit point (and a snap's jump) is located at this resolution, whatever the arc length
+        the path arrived with. Default: no cap.
     switch_branches : bool
         Follow the stable branch at a loss of stability without a load-factor turn (with
         ``stability``): where the tangent gains a negative eigenvalue while the load factor
@@ -302,6 +304,7 @@ class _ArcLengthRun:
         """Take the converged point; the result if the path ends there (callback, target
         reached, stable again), else adapt the arc length and evaluate the path there."""
         back = (self.u, self.lam, self.sig, self.uhat_prev, self.pt)
+        taken = self.ds                          # (the arc length of this increment)
         self.u, self.lam, self.sig, self.uhat_prev = u1, lam1, s, uhat
         self.trace.accept(u1, lam1, pt1, its, res)
         if self.refine(s, back[2], end):      # redo it shorter from the point before
@@ -328,7 +331,7 @@ class _ArcLengthRun:
             self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
                 max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
         if self.fine and abs(lam1 - self.lam_fine) <= self.resolution:
-            self.ds = min(self.ds, self.resolution)
+            self.ds = min(self.ds, self.resolved(taken, lam1 - back[1]))
         self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
         return None
 
@@ -347,6 +350,16 @@ class _ArcLengthRun:
             return False
         self.ds = self.resolution
         return True
+
+    def resolved(self, ds: float, dlam: float) -> float:
+        """Cap of the arc length near a located limit point, after an increment of arc
+        length ``ds`` that changed the load factor by ``dlam``: ``resolution``, or the arc
+        length that changes the load factor by ``resolution`` at that increment's rate where
+        that is longer (a flat fold, whose load factor stays within ``resolution`` of the
+        limit point's over many times ``resolution`` of arc length)."""
+        if dlam == 0:
+            return self.max_ds
+        return min(self.max_ds, self.resolution * max(1.0, ds / abs(dlam)))
 
     def lost_stability(self) -> bool:
         """True if the tangent at the last accepted point has more negative eigenvalues than

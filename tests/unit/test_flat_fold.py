@@ -1,0 +1,70 @@
+"""Arc length at a flat fold: a limit point whose load factor stays near its maximum over a
+long stretch of the path (the gripper's arm tips snap at such a fold).
+
+A node with free DOFs (x, y) and internal force ``f_x = x (1 - x / L)^2``, ``f_y = y`` under
+a load lambda along x: the path ``lambda = x (1 - x / L)^2`` has its maximum 4 L / 27 at
+x = L / 3 and its minimum 0 at x = L; near the maximum ``lambda ~ 4 L / 27 - (x - L / 3)^2 / L``,
+so for a large L the load factor stays within a resolution r of the maximum over
+``2 sqrt(r L)`` of x: the arc length at the initial rate (x per unit lambda = 1) that capped
+its steps at r there took ``2 sqrt(L / r)`` increments (310 for L = 3000, r = 1/8).
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from simulator.solvers.continuation import LoadPath, mgdcm
+
+RESOLUTION = 1 / 8
+
+
+class Fold:
+    """Two nodes, node 0 fixed, node 1 free in x and y (the EquilibriumSystem interface)."""
+
+    def __init__(self, length):
+        self.L = length
+        self.nodes = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+        self.free, self.n_dof, self.max_step = np.array([3, 4]), 6, None
+
+    def load(self, x):
+        return x * (1 - x / self.L) ** 2
+
+    def evaluate(self, u, rest, hessian=True):
+        x, y, L = u[1, 0], u[1, 1], self.L
+        f = np.zeros(6)
+        f[3], f[4] = self.load(x), y
+        K = np.diag([1 - 4 * x / L + 3 * x**2 / L**2, 1.0]) if hessian else None
+        e = x**2 / 2 - 2 * x**3 / (3 * L) + x**4 / (4 * L**2) + y**2 / 2
+        return SimpleNamespace(f_int=f, K=K, energies={"toy": e})
+
+
+def fold_path(length):
+    P = np.zeros(6)
+    P[3] = 1.0
+    return LoadPath(Fold(length), np.zeros(6), P, np.zeros(0))
+
+
+def along_x():
+    c = np.zeros(6)
+    c[3] = 1.0
+    return c
+
+
+def test_a_flat_fold_is_passed_in_a_few_increments_and_located_at_the_resolution():
+    """L = 3000 from x = L/3 - 20 to L/3 + 20 (arc length 1, at most 4 per increment): 16
+    increments; with the arc length capped at the resolution while the load factor was within
+    it of the maximum's, 173. The maximum is still located well within the resolution."""
+    L = 3000.0
+    system = fold_path(L)
+    x0 = L / 3 - 20
+    u0 = np.zeros((2, 3))
+    u0[1, 0] = x0
+    res = mgdcm(system, u0, system.system.load(x0), arc_length=1.0, step_norm=1.0,
+                resolution=RESOLUTION, target_displacement=(along_x(), L / 3 + 20),
+                max_increments=1000, monitor=along_x())
+    assert res.success and len(res.history) < 30
+    (top,) = res.critical_points
+    assert top.kind == "limit_point" and top.maximum
+    assert top.load_factor == pytest.approx(4 * L / 27, abs=1e-3 * RESOLUTION)
+    assert top.displacement == pytest.approx(L / 3, abs=RESOLUTION)
