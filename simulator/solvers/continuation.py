@@ -150,7 +150,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         with settings that do not depend on how the path got there. Implied by
         ``switch_branches``.
     lost_fold_jump : float, optional
-        Where the run fails after passing a load-factor maximum above ``lam0``: land by
+        Where the run fails after passing a load-factor maximum above ``lam0`` (its arc
+        length cut below ``arc_length / 2 ** max_cuts``, or its increments used up): land by
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
         highest point reached, and end there with success (message "jump from load factor
         ..."; from the highest point itself if the descent fails).
@@ -239,8 +240,9 @@ class _ArcLengthRun:
                 return done
         if self.lam_t is None and self.c_t is None:
             return self.result(True, "converged", f"{max_increments} increments")
-        return self.result(False, "failed", f"target not reached in {max_increments} "
-                           f"increments (load factor {self.lam:.6g})")
+        msg = f"target not reached in {max_increments} increments (load factor {self.lam:.6g})"
+        res = self.result(False, "failed", msg)
+        return res if self.jump is None else self.jump_lost_fold(res, msg)
 
     def increment(self) -> ContinuationResult | None:
         """Predict and correct one increment; accept it, or halve the arc length for a retry.

@@ -68,3 +68,23 @@ def test_a_flat_fold_is_passed_in_a_few_increments_and_located_at_the_resolution
     assert top.kind == "limit_point" and top.maximum
     assert top.load_factor == pytest.approx(4 * L / 27, abs=1e-3 * RESOLUTION)
     assert top.displacement == pytest.approx(L / 3, abs=RESOLUTION)
+
+
+def test_a_run_that_runs_out_of_increments_past_a_maximum_jumps_where_the_snap_lands():
+    """``lost_fold_jump``: 40 increments end on the unstable branch past the maximum (x = 100,
+    L = 300); the run lands by energy descent on the far stable branch (x > L) at the
+    resolution above the highest point reached, with success."""
+    L = 300.0
+    system = fold_path(L)
+    res = mgdcm(system, np.zeros((2, 3)), arc_length=1.0, resolution=RESOLUTION,
+                target_load_factor=4 * L / 27 + 1, max_increments=40, monitor=along_x(),
+                lost_fold_jump=RESOLUTION)
+    assert res.success and "target not reached in 40 increments" in res.message
+    assert "jump from load factor" in res.message
+    peak = max(h[0] for h in res.history)
+    assert res.load_factor == pytest.approx(peak + RESOLUTION, rel=1e-12)
+    x = res.u[1, 0]
+    assert x > 4 * L / 3 and system.system.load(x) == pytest.approx(res.load_factor, rel=1e-9)
+    without = mgdcm(system, np.zeros((2, 3)), arc_length=1.0, resolution=RESOLUTION,
+                    target_load_factor=4 * L / 27 + 1, max_increments=40, monitor=along_x())
+    assert not without.success and without.status == "failed"
