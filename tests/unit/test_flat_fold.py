@@ -88,3 +88,36 @@ def test_a_run_that_runs_out_of_increments_past_a_maximum_jumps_where_the_snap_l
     without = mgdcm(system, np.zeros((2, 3)), arc_length=1.0, resolution=RESOLUTION,
                     target_load_factor=4 * L / 27 + 1, max_increments=40, monitor=along_x())
     assert not without.success and without.status == "failed"
+
+
+def _wiggle(stable):
+    """A continuation result: two maxima 2e-8 apart with a dip of 1e-8 between them (the
+    corrector's load factor at a flat top), then a fall by 0.13 and a rise past them;
+    ``stable`` per point."""
+    from simulator.solvers.path_trace import CriticalPoint
+
+    lams = (0.5, 0.52270001, 0.52270000, 0.52270002, 0.52269, 0.39, 0.45, 0.53)
+    u = [np.array([[0.0, 0, 0], [1e-6 * k, 0, 0]]) for k in range(len(lams))]
+    first = CriticalPoint("limit_point", 0.52270001, 2, 1e-6, maximum=True)
+    dip = CriticalPoint("limit_point", 0.52270000, 3, 2e-6, maximum=False)
+    second = CriticalPoint("limit_point", 0.52270002, 4, 3e-6, maximum=True)
+    low = CriticalPoint("limit_point", 0.39, 6, 5e-6, maximum=False)
+    return SimpleNamespace(history=[(lam, v, 2) for lam, v in zip(lams, u)],
+                           critical_points=(first, dip, second, low), jumps=(),
+                           stability=[SimpleNamespace(stable=s) for s in stable])
+
+
+def test_a_wiggle_of_the_load_factor_at_a_flat_top_is_no_snap():
+    """One snap, from the second maximum: the path from the first crosses its load factor
+    again on stable points within 1e-8 of it; from the second it falls by 0.13 (or, with a
+    drop above that, it is unstable on the way)."""
+    from simulator.steps.limit import _snaps
+
+    c = np.zeros(6)
+    c[3] = 1.0
+    res = _wiggle([True] * 4 + [False, False, True, True])
+    ((p, after),) = _snaps(res, c, drop=RESOLUTION / 100)
+    assert p is res.critical_points[2] and 6e-6 < after < 7e-6   # between 0.45 and 0.53
+    assert [q for q, _ in _snaps(res, c, drop=1.0)] == [p]       # unstable on the way
+    assert len(_snaps(res, c)) == 2                              # every turn, without a drop
+    assert _snaps(_wiggle([True] * 8), c, drop=1.0) == []        # stable, fell by < 1
