@@ -127,9 +127,11 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         eigenvalues than at the point before (with ``stability``), the increment is redone
         from the point before with at most this arc length, which from then on caps the
         adaptation wherever the load factor is within ``resolution`` of that point's (around
-        the limit point, and where the path crosses its load factor again). So the limit
-        point (and a snap's jump) is located at this resolution, whatever the arc length the
-        path arrived with. Default: no cap.
+        the limit point, and where the path crosses its load factor again): at ``resolution``,
+        or where the last increment changed the load factor by less than its arc length (a
+        flat fold) at the arc length that changes it by ``resolution`` at that rate. So the
+        limit point (and a snap's jump) is located at this resolution, whatever the arc length
+        the path arrived with. Default: no cap.
     switch_branches : bool
         Follow the stable branch at a loss of stability without a load-factor turn (with
         ``stability``): where the tangent gains a negative eigenvalue while the load factor
@@ -148,7 +150,8 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         with settings that do not depend on how the path got there. Implied by
         ``switch_branches``.
     lost_fold_jump : float, optional
-        Where the run fails after passing a load-factor maximum above ``lam0``: land by
+        Where the run fails after passing a load-factor maximum above ``lam0`` (its arc
+        length cut below ``arc_length / 2 ** max_cuts``, or its increments used up): land by
         energy descent (:func:`~simulator.solvers.descent.descend`) at this much above the
         highest point reached, and end there with success (message "jump from load factor
         ..."; from the highest point itself if the descent fails).
@@ -237,8 +240,9 @@ class _ArcLengthRun:
                 return done
         if self.lam_t is None and self.c_t is None:
             return self.result(True, "converged", f"{max_increments} increments")
-        return self.result(False, "failed", f"target not reached in {max_increments} "
-                           f"increments (load factor {self.lam:.6g})")
+        msg = f"target not reached in {max_increments} increments (load factor {self.lam:.6g})"
+        res = self.result(False, "failed", msg)
+        return res if self.jump is None else self.jump_lost_fold(res, msg)
 
     def increment(self) -> ContinuationResult | None:
         """Predict and correct one increment; accept it, or halve the arc length for a retry.
@@ -302,6 +306,7 @@ class _ArcLengthRun:
         """Take the converged point; the result if the path ends there (callback, target
         reached, stable again), else adapt the arc length and evaluate the path there."""
         back = (self.u, self.lam, self.sig, self.uhat_prev, self.pt)
+        taken = self.ds                          # (the arc length of this increment)
         self.u, self.lam, self.sig, self.uhat_prev = u1, lam1, s, uhat
         self.trace.accept(u1, lam1, pt1, its, res)
         if self.refine(s, back[2], end):      # redo it shorter from the point before
@@ -328,7 +333,7 @@ class _ArcLengthRun:
             self.ds = min(2 * self.ds, self.max_ds) if its <= self.fast else (
                 max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
         if self.fine and abs(lam1 - self.lam_fine) <= self.resolution:
-            self.ds = min(self.ds, self.resolution)
+            self.ds = min(self.ds, self.resolved(taken, lam1 - back[1]))
         self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
         return None
 
@@ -347,6 +352,16 @@ class _ArcLengthRun:
             return False
         self.ds = self.resolution
         return True
+
+    def resolved(self, ds: float, dlam: float) -> float:
+        """Cap of the arc length near a located limit point, after an increment of arc
+        length ``ds`` that changed the load factor by ``dlam``: ``resolution``, or the arc
+        length that changes the load factor by ``resolution`` at that increment's rate where
+        that is longer (a flat fold, whose load factor stays within ``resolution`` of the
+        limit point's over many times ``resolution`` of arc length)."""
+        if dlam == 0:
+            return self.max_ds
+        return min(self.max_ds, self.resolution * max(1.0, ds / abs(dlam)))
 
     def lost_stability(self) -> bool:
         """True if the tangent at the last accepted point has more negative eigenvalues than

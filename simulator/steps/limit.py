@@ -58,13 +58,18 @@ LIMIT_POINT_ACTIONS = ("stop", "continue")
 #: Arc-length increments at most of the probe that looks for a limit point after a failure
 #: (it stops as soon as the load factor turns).
 PROBE_INCREMENTS = 40
-#: Arc-length increments at most per snap with on_limit_point="continue".
-CONTINUATION_INCREMENTS = 200
+#: Arc-length increments at most per snap with on_limit_point="continue". At the arc length
+#: of ARC_LOAD_STEP (at most four times that) a run covers at most 16 load factors' worth of
+#: the load-controlled motion: the gripper's arm-tip snap (start design with a residual fold
+#: of 45 deg, first grip trial) takes 235, most of them on its unstable branch, which is long
+#: against the motion of the load-controlled part.
+CONTINUATION_INCREMENTS = 400
 #: Arc length of the continuation in load-factor units: the first predictor moves the
 #: displacements as far as the load-controlled part would over this load factor (the step's
 #: own increments play no part, so the traced snap does not depend on them).
 ARC_LOAD_STEP = 0.01
-#: Near a limit point the continuation's arc length is at most ARC_LOAD_STEP / RESOLVE
+#: Near a limit point the continuation's arc length is at most ARC_LOAD_STEP / RESOLVE, or at
+#: a flat fold what changes the load factor by that much
 #: (:func:`~simulator.solvers.continuation.mgdcm`'s ``resolution``): the snap's load factor and jump
 #: are located at that resolution.
 RESOLVE = 8
@@ -280,11 +285,16 @@ def _motion_monitor(u0, u) -> np.ndarray:
     return c
 
 
-def _snaps(res, c) -> list:
+def _snaps(res, c, drop=0.0) -> list:
     """[(critical point, displacement after)] of every snap: a limit point (maximum) where the
-    path turned back, and the point where it crosses that load factor again moving forward."""
+    path turned back, and the point where it crosses that load factor again moving forward,
+    if in between it was unstable (where ``res`` has the stability of every point) or fell by
+    more than ``drop`` [load factor]. Other turns are no snaps: at a flat top the corrector's
+    load factor wiggles (the gripper's arm tips: by 3e-9 and 4e-8 at its maximum, on stable
+    points, before the path falls by 0.13)."""
     lam = np.array([h[0] for h in res.history])
     m = np.array([float(c @ h[1].ravel()) for h in res.history])
+    stab = res.stability if len(res.stability) == len(lam) else None
     out, used = [], set()
     for before, after, kind in res.jumps:     # a branch switch: last stable to landed
         p = next(p for p in res.critical_points if p.kind == kind and
@@ -296,7 +306,9 @@ def _snaps(res, c) -> list:
             continue                                   # only maxima (the path heads up)
         for j in range(k + 1, len(lam)):
             if lam[j - 1] < p.load_factor <= lam[j]:
-                if j not in used:        # wiggles near one maximum land on the same segment
+                snapped = lam[k:j].min() < p.load_factor - drop or (
+                    stab is not None and not all(st.stable for st in stab[k:j]))
+                if snapped and j not in used:  # wiggles near one maximum land on one segment
                     a = (p.load_factor - lam[j - 1]) / (lam[j] - lam[j - 1])
                     out.append((p, m[j - 1] + a * (m[j] - m[j - 1])))
                     used.add(j)
@@ -540,7 +552,7 @@ def _snap_text(rec: StepRecorder, res, c, powers) -> str:
     step's message; adds their events to ``rec``, each a copy of its limit point's event."""
     limits = rec.events[len(rec.events) - len(res.critical_points):]
     text = []
-    for p, after in _snaps(res, c):
+    for p, after in _snaps(res, c, ARC_LOAD_STEP / RESOLVE):
         lam, before = p.load_factor, p.displacement
         text.append(f"snap at load factor {lam:.6g}"
                     + ("" if powers is None else f" ({1e3 * np.max(powers(lam)):.4g} mW per "
