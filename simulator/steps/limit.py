@@ -124,7 +124,7 @@ def check_on_limit_point(step) -> None:
 
 
 def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=None,
-                        extra=None, *, mesh) -> Event | None:
+                        extra=None, *, mesh, critical: list | None = None) -> Event | None:
     """Record every accepted point of a ContinuationResult with its stability columns, and
     its critical points as events (:class:`~simulator.events.Event`), up to the first point
     where panels of ``mesh`` passed through each other since the point before (the last
@@ -134,7 +134,10 @@ def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=No
     A crease of finite width folding past 180 deg on the way is a ``"fold_past_flat"`` event.
 
     ``powers(lam)`` gives the crease powers of a point (default ``power``); ``extra(lam)`` more
-    named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none).
+    named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none);
+    ``critical``, a list, receives the events of the recorded critical points too, in the
+    order of ``res.critical_points`` (the events of ``rec`` mix them with the crossing
+    watch's).
     """
     node, offset = monitored_node(c), len(rec)
     watch = CrossingWatch(mesh, rec.last_u)
@@ -147,9 +150,12 @@ def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=No
         if stops(event):
             crossing, recorded = event, k + 1
             break
-    rec.events += [event_at(p, res, power if powers is None else powers(p.load_factor),
-                            temperature, offset, node) for p in res.critical_points
-                   if p.increment < recorded]
+    events = [event_at(p, res, power if powers is None else powers(p.load_factor),
+                       temperature, offset, node) for p in res.critical_points
+              if p.increment < recorded]
+    rec.events += events
+    if critical is not None:
+        critical += events
     rec.iterations += res.iterations
     rec.cuts += res.cuts
     for k, ((lam, u, its), norms) in enumerate(zip(res.history[:recorded],
@@ -364,12 +370,13 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
                                  None if k else start.u)
         texts = []
         for res in parts:
+            limits = []
             crossing = record_continuation(rec, res, current.state.temperature,
                                            current.state.crease_power, c, powers=powers,
-                                           mesh=context.model.mesh)
+                                           mesh=context.model.mesh, critical=limits)
             if crossing is not None:     # the arc length stopped where panels crossed
                 return _crossed(rec, res, crossing, end_state, notes)
-            texts.append(res.message + _snap_text(rec, res, c, powers))
+            texts.append(res.message + _snap_text(rec, res, c, powers, limits))
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
@@ -547,10 +554,10 @@ def _probe(context, start, outcome, path, increments, powers=None) -> StepOutcom
                    events=outcome.events + (event,))
 
 
-def _snap_text(rec: StepRecorder, res, c, powers) -> str:
+def _snap_text(rec: StepRecorder, res, c, powers, limits) -> str:
     """The snaps of ``res`` (just recorded in ``rec`` by :func:`record_continuation`) for the
-    step's message; adds their events to ``rec``, each a copy of its limit point's event."""
-    limits = rec.events[len(rec.events) - len(res.critical_points):]
+    step's message; adds their events to ``rec``, each a copy of its limit point's event
+    (``limits``: the events of ``res.critical_points``, in their order)."""
     text = []
     for p, after in _snaps(res, c, ARC_LOAD_STEP / RESOLVE):
         lam, before = p.load_factor, p.displacement

@@ -218,6 +218,11 @@ def test_heated_miura_snap_is_an_event():
     # how finely the continuation resolves the snap (95 um at 30 increments today)
     assert any(e.kind == "limit_point" and e.load_factor == snap.load_factor
                for e in res.events)
+    # every snap is the copy of its own limit point, a maximum of the load factor (the copy
+    # was taken by position among the step's events, and fold_past_flat events recorded
+    # after the limit points shifted it onto a minimum: 0.988176 for the 11.93 mW snap)
+    maxima = {e.load_factor for e in res.events if e.kind == "limit_point" and e.maximum}
+    assert all(e.maximum and e.load_factor in maxima for e in snaps)
     row = res.events_frame().query("kind == 'snap'").iloc[0]
     assert row["power [mW]"] == pytest.approx(1e3 * max(snap.power_per_crease))
     assert row["total_power [mW]"] == pytest.approx(1e3 * snap.total_power)
