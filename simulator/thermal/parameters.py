@@ -14,6 +14,7 @@ from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
 from ..geometry.materials import AIR, WATER, Fluid
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
+from .monotone import CONDUCTIONS
 
 __all__ = ["ThermalParameters", "REFERENCE_BETA"]
 
@@ -148,7 +149,7 @@ class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
-    boundary_panels=(), room_temperature_nodes=())``.
+    boundary_panels=(), room_temperature_nodes=(), conduction=None)``.
 
     Parameters
     ----------
@@ -174,6 +175,13 @@ class ThermalParameters:
         model; their distance caps t_env in the chain model).
     room_temperature_nodes : tuple of int
         Mesh node ids whose temperature is held at room temperature.
+    conduction : {None, "t3", "monotone"}
+        The sheet's conduction (theory 4.2, 4.9): ``"t3"`` the mesh triangles' T3 elements (the
+        reference's), ``"monotone"`` the same P1 conduction on a finer triangulation of the
+        mesh nodes without positive couplings, condensed back to them (an M-matrix: under
+        heating no node below room temperature with the chains;
+        :mod:`~simulator.thermal.monotone`). None (default): ``"t3"``;
+        :attr:`conduction_method` says which is in force.
 
     Notes
     -----
@@ -193,13 +201,15 @@ class ThermalParameters:
     room_temperature: float
     boundary_panels: tuple
     room_temperature_nodes: tuple
+    conduction: str | None
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
                  room_temperature_nodes=(), env_density=None, env_specific_heat=None,
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
-                 integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS):
+                 integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
+                 conduction=None):
         legacy = {"env_thickness": env_thickness, "layers": layers,
                   "dissipation_angle": dissipation_angle,
                   "integral_refinement": integral_refinement,
@@ -219,10 +229,19 @@ class ThermalParameters:
         for name, value in (("boundary_panels", boundary_panels),
                             ("room_temperature_nodes", room_temperature_nodes)):
             set_(self, name, _ids(value, name))
+        set_(self, "conduction", None if conduction is None else one_of(
+            "ThermalParameters.conduction", conduction, CONDUCTIONS,
+            hint="or None: 't3'"))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
                                  "needs a medium conductivity > 0.")
+
+    @property
+    def conduction_method(self) -> str:
+        """The sheet conduction in force: :attr:`conduction`, or if None ``"t3"`` (theory
+        4.9)."""
+        return "t3" if self.conduction is None else self.conduction
 
     # ------------------------------------------------------------------ old flat spellings
     @property
@@ -304,13 +323,15 @@ class ThermalParameters:
 
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
-        ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature
-        and the held panels and nodes. ``ThermalParameters(**d)`` reads it back."""
+        ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
+        the held panels and nodes and the ``conduction`` (None: ``"t3"``).
+        ``ThermalParameters(**d)`` reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
                 "room_temperature": float(self.room_temperature),
                 "boundary_panels": list(self.boundary_panels),
-                "room_temperature_nodes": list(self.room_temperature_nodes)}
+                "room_temperature_nodes": list(self.room_temperature_nodes),
+                "conduction": self.conduction}
 
     def describe(self) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate."""

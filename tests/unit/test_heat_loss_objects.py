@@ -39,7 +39,7 @@ def test_thermal_parameters_from_the_objects_and_their_defaults():
     assert (p.loss_model, p.env_conductivity, p.env_thickness) == ("integral", 0.6, None)
     bare = ThermalParameters()                 # calibration-free: nothing to give
     assert bare.loss == IntegralLoss() and bare.medium is AIR and bare.substrate == Substrate()
-    assert len(dataclasses.fields(ThermalParameters)) == 6
+    assert len(dataclasses.fields(ThermalParameters)) == 7       # + the sheet's conduction
     with pytest.raises(ParameterError, match=r"the chain heat loss needs the medium thickness "
                                              r"t_env: give loss=ChainLoss\(thickness=\.\.\.\)"):
         ThermalParameters(loss_model="chain")
