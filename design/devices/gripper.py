@@ -103,7 +103,8 @@ class GripperDesign:
     integral_refinement : sub-triangles per triangle edge of the ``"integral"`` model
         (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 3:
         Richardson-extrapolated from 3 on, corrected between rebuilds; theory 4.7)
-    conduction : the sheet's conduction, ``"t3"``, ``"monotone"`` or None (default: T3;
+    conduction : the sheet's conduction, ``"t3"``, ``"monotone"`` or None (default: the loss
+        model's, T3 with the chains and monotone with the integral loss;
         :class:`~simulator.ThermalParameters` ``conduction``, theory 4.9)
     """
 
@@ -154,15 +155,16 @@ class GripperDesign:
         """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
         ``env_conductivity``, ``loss_model``, ``integral_refinement``, ``conduction``) only
         when they differ from their defaults, so that problem settings, and the hashes of
-        evaluation logs written before they existed, are kept; ``integral_refinement`` always
-        with the integral model (its default changed, so an older log of the integral model
-        never matches)."""
+        evaluation logs written before they existed, are kept; ``integral_refinement`` and
+        the conduction in force always with the integral model (their defaults changed, so an
+        older log of the integral model never matches)."""
         out = asdict(self)
         for name in _OPTIONAL:
             if out[name] == _OPTIONAL[name]:
                 del out[name]
         if self.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
             out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
+            out["conduction"] = self.conduction or "monotone"       # and its conduction, 7 Dec
         return out
 
     def crease_residual_folds(self) -> dict:

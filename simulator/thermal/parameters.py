@@ -180,8 +180,9 @@ class ThermalParameters:
         reference's), ``"monotone"`` the same P1 conduction on a finer triangulation of the
         mesh nodes without positive couplings, condensed back to them (an M-matrix: under
         heating no node below room temperature with the chains;
-        :mod:`~simulator.thermal.monotone`). None (default): ``"t3"``;
-        :attr:`conduction_method` says which is in force.
+        :mod:`~simulator.thermal.monotone`). None (default): ``"t3"`` with the chains (the
+        paper's model, on which they were fitted), ``"monotone"`` with the integral loss;
+        :attr:`conduction_method` says which.
 
     Notes
     -----
@@ -231,7 +232,7 @@ class ThermalParameters:
             set_(self, name, _ids(value, name))
         set_(self, "conduction", None if conduction is None else one_of(
             "ThermalParameters.conduction", conduction, CONDUCTIONS,
-            hint="or None: 't3'"))
+            hint="or None: 't3' with the chains, 'monotone' with the integral loss"))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
@@ -239,9 +240,11 @@ class ThermalParameters:
 
     @property
     def conduction_method(self) -> str:
-        """The sheet conduction in force: :attr:`conduction`, or if None ``"t3"`` (theory
-        4.9)."""
-        return "t3" if self.conduction is None else self.conduction
+        """The sheet conduction in force: :attr:`conduction`, or if None ``"t3"`` with the
+        chains and ``"monotone"`` with the integral loss (theory 4.9)."""
+        if self.conduction is not None:
+            return self.conduction
+        return "t3" if self.loss.model == "chain" else "monotone"
 
     # ------------------------------------------------------------------ old flat spellings
     @property
@@ -324,7 +327,7 @@ class ThermalParameters:
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
-        the held panels and nodes and the ``conduction`` (None: ``"t3"``).
+        the held panels and nodes and the ``conduction`` (None: the loss model's).
         ``ThermalParameters(**d)`` reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),

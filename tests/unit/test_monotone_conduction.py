@@ -227,8 +227,8 @@ def test_constant_fields_carry_no_heat(devices):
 def test_conduction_setting_defaults_and_round_trip():
     chain = ThermalParameters(env_thickness=1e-3)
     assert chain.conduction is None and chain.conduction_method == "t3"       # the paper's
-    assert ThermalParameters().conduction_method == "t3"
-    assert ThermalParameters(conduction="monotone").conduction_method == "monotone"
+    assert ThermalParameters().conduction_method == "monotone"                # integral loss
+    assert ThermalParameters(conduction="t3").conduction_method == "t3"
     given = ThermalParameters(env_thickness=1e-3, conduction="monotone")
     assert given.conduction_method == "monotone"
     assert ThermalParameters(**given.to_dict()) == given
