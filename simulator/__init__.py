@@ -74,6 +74,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.equilibrium_check": ("EQUILIBRIUM_RTOL", "EquilibriumCheck", "check_equilibrium"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
     ".thermal.loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
+    ".thermal.monotone": ("CONDUCTIONS",),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.measures": ("CREASE_MEASURES", "crease_temperatures"),
     ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
@@ -98,6 +99,8 @@ __all__ = [
     "Fluid", "GOLD", "SILICON", "AIR", "WATER",
     # heat loss to the medium: the paper's chains or the calibration-free integral, a substrate
     "ChainLoss", "IntegralLoss", "Substrate", "HEAT_LOSS_MODELS",
+    # the sheet's conduction: the reference's T3 or the monotone one (theory 4.9)
+    "CONDUCTIONS",
     "REFERENCE_GRAVITY", "REFERENCE_BETA", "fold_angles",
     # plain crease patterns: layer stacks and fold signs of a start shape
     "LayerStack", "STACKS", "get_stack", "stack_model", "central_panel", "unsupported_panels",

@@ -16,7 +16,9 @@ Method
   ``loss=IntegralLoss()`` (its defaults: ``refinement`` m = 3,
   Richardson-extrapolated from m = 2 and 3, corrected between rebuilds; theory 4.7) over
   the isothermal substrate plane: the plane of the model's thermal boundary panel (the
-  substrate), as the 3-D FE uses it (``substrate="model"``).
+  substrate), as the 3-D FE uses it (``substrate="model"``); all with the chains' T3 sheet
+  conduction (:data:`CONDUCTION`; the integral loss's default is the monotone one of theory
+  4.9), so that they differ in the heat loss only.
 * Gripper: the coordinate-descent designs of cycles 4 and 9
   (``results/gripper_optimization/gripper_optimization.csv``), evaluated as in that study
   (``evaluate_gripper``, bisect, the :class:`~design.GripperProblem` defaults) with
@@ -112,6 +114,10 @@ GRIPPER_REFINEMENTS = (DEFAULT_M, 2)
 STEPS, STEPS_QUICK = 250, 30
 MIURA, MIURA_QUICK = dict(cells_x=4, cells_y=2), dict(cells_x=2, cells_y=2)
 FOLDS = {1: 2, 2: 5}                      # double fold: fold number -> crease id
+#: The sheet conduction of every model here: the chains' T3, which the FE of the chain model
+#: uses too, so that the models differ in the heat loss only (not the integral loss's default
+#: monotone conduction, theory 4.9).
+CONDUCTION = "t3"
 GRIP_STATE_INCREMENTS = 10
 POWER, TEMP, TEMP_CL = "power [mW]", "temperature [degC]", "temperature_centre [degC]"
 
@@ -119,9 +125,12 @@ POWER, TEMP, TEMP_CL = "power [mW]", "temperature [degC]", "temperature_centre [
 # ----------------------------------------------------------------------------- models
 def integral_model(model, refinement: int = DEFAULT_M):
     """``model`` with the integral heat loss (theory 4.7) over its substrate, the plane of its
-    thermal boundary panels (``Substrate()``, as ``solve_fe3d(substrate="model")`` takes it)."""
+    thermal boundary panels (``Substrate()``, as ``solve_fe3d(substrate="model")`` takes it),
+    and the model's own sheet conduction (the chains' T3, which the FE of the chain model uses
+    too; not the integral loss's default monotone one, theory 4.9)."""
     thermal = dataclasses.replace(model.thermal, loss=IntegralLoss(refinement=refinement),
-                                  substrate=Substrate())
+                                  substrate=Substrate(),
+                                  conduction=model.thermal.conduction_method)
     return dataclasses.replace(model, thermal=thermal)
 
 
@@ -184,7 +193,8 @@ def _evaluate(cycle, powers, geometry, model, m):
     """Evaluate one design with one model; ``powers``: (measured, the descent's full-function
     power [mW]). Returns (GripperResult, ``gripper`` row)."""
     t0 = time.perf_counter()
-    res = evaluate_gripper(GripperDesign(**geometry, loss_model=model, integral_refinement=m))
+    res = evaluate_gripper(GripperDesign(**geometry, loss_model=model, integral_refinement=m,
+                                         conduction=CONDUCTION))
     d = res.to_dict()
     full = (2e3 * (res.assembly.power_per_crease + res.grip.power_per_crease)
             if res.success else None)
@@ -207,12 +217,14 @@ def _gripper_fe(cycle, geometry, results, level):
     Returns the ``fe`` rows and, per shape (model), {quantity: (that model's value on its
     re-simulated stopping state, the FE's value or FE-implied power there)}, powers in mW.
     """
-    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m))[0] for m in MODELS}
+    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m,
+                                             conduction=CONDUCTION))[0] for m in MODELS}
     case, rows, checks = f"gripper cycle {cycle}", [], {}
     room = models["chain"].thermal.room_temperature
     for shape, res in results.items():
         pa, pg = res.assembly.power_per_crease, res.grip.power_per_crease
-        model, states = gripper_states(GripperDesign(**geometry, loss_model=shape), pa, pg,
+        model, states = gripper_states(GripperDesign(**geometry, loss_model=shape,
+                                                     conduction=CONDUCTION), pa, pg,
                                        GRIP_STATE_INCREMENTS)
         mesh = model.mesh
         tm = ThermalModel(mesh, model.thermal)

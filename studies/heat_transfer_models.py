@@ -20,7 +20,9 @@ of a crease's power on N11, N12, N21, N22, 1/12 on A and B, 1/3 on Ctr). They sh
 T3 conduction and the room-temperature nodes; they differ only in how heat leaves the sheet.
 The chain model is the model's own ``ThermalParameters``; the integral model is the same
 parameters by ``dataclasses.replace(model.thermal, loss=IntegralLoss(refinement=m,
-extrapolation=...), substrate=Substrate())`` in three variants:
+extrapolation=...), substrate=Substrate(), conduction=...)`` (the chains' sheet conduction,
+T3, which the FE uses too, not the integral loss's default monotone one of theory 4.9) in
+three variants:
 the default (m = 3, Richardson-extrapolated from m = 2 and 3), the plain m = 2 (the default
 before 6 Dec 2026) and the plain m = 8, with the isothermal substrate plane of the model's
 thermal boundary panels
@@ -283,7 +285,7 @@ def _solutions(model, x, q, kind, quick):
     for m, extrapolated in (REFINEMENTS_QUICK if quick else REFINEMENTS)[kind]:
         T, wall = _steady(model, x, q, loss=IntegralLoss(refinement=m,
                                                          extrapolation=extrapolated),
-                          substrate=Substrate())
+                          substrate=Substrate(), conduction=model.thermal.conduction_method)
         rows.append(("integral", (m, extrapolated), None, T, wall, True, "converged"))
     try:
         import gmsh  # noqa: F401

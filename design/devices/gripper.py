@@ -32,12 +32,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from simulator import (AIR, REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators,
+from simulator import (AIR, CONDUCTIONS, REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators,
                        BarHingeParameters, Bimorph, ChainLoss, ContactParameters, IntegralLoss,
-                       Load, NewtonOptions,
-                       ParameterError, SelfFold, Substrate, Supports, TemperatureLimit,
-                       TemperatureVerdict, ThermalParameters, build_mesh, example_patterns,
-                       make_model, simulate)
+                       Load, NewtonOptions, ParameterError, SelfFold, Substrate, Supports,
+                       TemperatureLimit, TemperatureVerdict, ThermalParameters, build_mesh,
+                       example_patterns, make_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import integer, one_of, positive
 
@@ -104,6 +103,9 @@ class GripperDesign:
     integral_refinement : sub-triangles per triangle edge of the ``"integral"`` model
         (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 3:
         Richardson-extrapolated from 3 on, corrected between rebuilds; theory 4.7)
+    conduction : the sheet's conduction, ``"t3"``, ``"monotone"`` or None (default: the loss
+        model's, T3 with the chains and monotone with the integral loss;
+        :class:`~simulator.ThermalParameters` ``conduction``, theory 4.9)
     """
 
     W: float = 200e-6
@@ -123,6 +125,7 @@ class GripperDesign:
     env_conductivity: float = 0.026
     loss_model: str = "chain"
     integral_refinement: int = 3
+    conduction: str | None = None
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -133,8 +136,11 @@ class GripperDesign:
         object.__setattr__(self, "residual_fold_creases", tuple(sorted(folds)))
         one_of("GripperDesign.loss_model", self.loss_model, LOSS_MODELS)
         integer("GripperDesign.integral_refinement", self.integral_refinement, 1, 16)
+        if self.conduction is not None:
+            one_of("GripperDesign.conduction", self.conduction, CONDUCTIONS)
         for name, value in asdict(self).items():
-            if name in ("residual_fold_creases", "loss_model", "integral_refinement"):
+            if name in ("residual_fold_creases", "loss_model", "integral_refinement",
+                        "conduction"):
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -147,17 +153,18 @@ class GripperDesign:
 
     def to_dict(self) -> dict:
         """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
-        ``env_conductivity``, ``loss_model``, ``integral_refinement``) only when they differ
-        from their defaults, so that problem settings, and the hashes of evaluation logs
-        written before they existed, are kept; ``integral_refinement`` always with the
-        integral model (its default changed, so an older log of the integral model never
-        matches)."""
+        ``env_conductivity``, ``loss_model``, ``integral_refinement``, ``conduction``) only
+        when they differ from their defaults, so that problem settings, and the hashes of
+        evaluation logs written before they existed, are kept; ``integral_refinement`` and
+        the conduction in force always with the integral model (their defaults changed, so an
+        older log of the integral model never matches)."""
         out = asdict(self)
         for name in _OPTIONAL:
             if out[name] == _OPTIONAL[name]:
                 del out[name]
         if self.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
             out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
+            out["conduction"] = self.conduction or "monotone"       # and its conduction, 7 Dec
         return out
 
     def crease_residual_folds(self) -> dict:
@@ -321,9 +328,9 @@ class GripperResult(ResultFiles):
 
 
 _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
-          "integral_refinement": "-"}
+          "integral_refinement": "-", "conduction": "-"}
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
-             "loss_model": "chain", "integral_refinement": 3}
+             "loss_model": "chain", "integral_refinement": 3, "conduction": None}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
@@ -375,7 +382,8 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(
         medium=AIR.with_properties(thermal_conductivity=design.env_conductivity),
-        boundary_panels=(5,), room_temperature_nodes=(37,), **_loss_model(design))
+        boundary_panels=(5,), room_temperature_nodes=(37,), conduction=design.conduction,
+        **_loss_model(design))
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),

@@ -107,7 +107,8 @@ class GripperProblem(TemperatureLimited, DesignProblem):
         constraints["temperature"] = verdict.constraint
         metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]")
-                   and not k.startswith(("residual_fold", "loss_model", "integral_refinement"))
+                   and not k.startswith(("residual_fold", "loss_model", "integral_refinement",
+                                         "conduction"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = verdict.temperature
         return (res.total_power, constraints, metrics, None if res.success else res.status,

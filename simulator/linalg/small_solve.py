@@ -26,8 +26,8 @@ from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
 from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
-__all__ = ["as_dense", "solve_dense", "positive_definite", "DenseFactor", "SparseCholesky",
-           "pattern_of",
+__all__ = ["as_dense", "solve_dense", "positive_definite", "schur_complements", "DenseFactor",
+           "SparseCholesky", "pattern_of",
            "DENSE_LIMIT", "SPARSE_MIN"]
 
 _EPS = float(np.finfo(float).eps)
@@ -48,6 +48,16 @@ def positive_definite(K: np.ndarray) -> bool:
     succeeds: K is numerically positive definite. (``K.T`` with the lower triangle: the same
     entries, in the Fortran order LAPACK reads without a transposing copy of a C-ordered K.)"""
     return _dpotrf(K.T, lower=1, clean=0)[1] == 0
+
+
+def schur_complements(F: np.ndarray, k: int) -> np.ndarray:
+    """Schur complements ``F_oo - F_os F_ss^-1 F_so`` of a batch of small matrices ``F``
+    (p, m, m) onto their first ``k`` rows and columns, (p, k, k): the elimination of the last
+    ``m - k`` unknowns of each (``F_ss`` non-singular; numpy's batched LU)."""
+    F = np.asarray(F, float)
+    if F.shape[1] == k:
+        return F.copy()
+    return F[:, :k, :k] - F[:, :k, k:] @ np.linalg.solve(F[:, k:, k:], F[:, k:, :k])
 
 
 def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):

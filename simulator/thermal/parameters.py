@@ -18,6 +18,7 @@ from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
 from ..geometry.materials import AIR, Fluid
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
+from .monotone import CONDUCTIONS
 
 __all__ = ["ThermalParameters", "REFERENCE_BETA"]
 
@@ -187,7 +188,7 @@ class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
-    boundary_panels=(), room_temperature_nodes=())``; give them by keyword.
+    boundary_panels=(), room_temperature_nodes=(), conduction=None)``; give them by keyword.
 
     Parameters
     ----------
@@ -215,6 +216,14 @@ class ThermalParameters:
         model; their distance caps t_env in the chain model).
     room_temperature_nodes : tuple of int
         Mesh node ids whose temperature is held at room temperature.
+    conduction : {None, "t3", "monotone"}
+        The sheet's conduction (theory 4.2, 4.9): ``"t3"`` the mesh triangles' T3 elements (the
+        reference's), ``"monotone"`` the same P1 conduction on a finer triangulation of the
+        mesh nodes without positive couplings, condensed back to them (an M-matrix: under
+        heating no node below room temperature with the chains;
+        :mod:`~simulator.thermal.monotone`). None (default): ``"t3"`` with the chains (the
+        paper's model, on which they were fitted), ``"monotone"`` with the integral loss;
+        :attr:`conduction_method` says which.
 
     Notes
     -----
@@ -239,13 +248,15 @@ class ThermalParameters:
     room_temperature: float
     boundary_panels: tuple
     room_temperature_nodes: tuple
+    conduction: str | None
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
                  room_temperature_nodes=(), env_density=None, env_specific_heat=None,
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
-                 integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS):
+                 integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
+                 conduction=None):
         old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
                "layers": layers, "dissipation_angle": dissipation_angle,
                "env_density": env_density, "env_specific_heat": env_specific_heat,
@@ -257,10 +268,11 @@ class ThermalParameters:
             warn_deprecated(f"ThermalParameters({name}=...) is deprecated; use "
                             f"{_OLD_KEYWORDS[name]}.")
         self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
-                  room_temperature_nodes)
+                  room_temperature_nodes, conduction)
 
     def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
-             room_temperature=21.0, boundary_panels=(), room_temperature_nodes=()):
+             room_temperature=21.0, boundary_panels=(), room_temperature_nodes=(),
+             conduction=None):
         """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
         old = {k: old.get(k) for k in _OLD_KEYWORDS}
         loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
@@ -275,10 +287,21 @@ class ThermalParameters:
         for name, value in (("boundary_panels", boundary_panels),
                             ("room_temperature_nodes", room_temperature_nodes)):
             set_(self, name, _ids(value, name))
+        set_(self, "conduction", None if conduction is None else one_of(
+            "ThermalParameters.conduction", conduction, CONDUCTIONS,
+            hint="or None: 't3' with the chains, 'monotone' with the integral loss"))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
                                  "needs a medium conductivity > 0.")
+
+    @property
+    def conduction_method(self) -> str:
+        """The sheet conduction in force: :attr:`conduction`, or if None ``"t3"`` with the
+        chains and ``"monotone"`` with the integral loss (theory 4.9)."""
+        if self.conduction is not None:
+            return self.conduction
+        return "t3" if self.loss.model == "chain" else "monotone"
 
     @classmethod
     def from_dict(cls, d: Mapping) -> ThermalParameters:
@@ -356,14 +379,15 @@ class ThermalParameters:
 
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
-        ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature
-        and the held panels and nodes. :meth:`from_dict` (or ``ThermalParameters(**d)``)
-        reads it back."""
+        ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
+        the held panels and nodes and the ``conduction`` (None: the loss model's).
+        :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
                 "room_temperature": float(self.room_temperature),
                 "boundary_panels": list(self.boundary_panels),
-                "room_temperature_nodes": list(self.room_temperature_nodes)}
+                "room_temperature_nodes": list(self.room_temperature_nodes),
+                "conduction": self.conduction}
 
     def describe(self) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate."""

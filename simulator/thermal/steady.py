@@ -1,7 +1,9 @@
 """Steady heat conduction in the structure with loss to layered environment chains (theory 4).
 
 Every mesh triangle (crease and panel fans) is a linear T3 conduction element built
-from its REFERENCE edge lengths and the CURRENT angle at its first node. Each node
+from its REFERENCE edge lengths and the CURRENT angle at its first node (or, with
+``conduction="monotone"``, the M-matrix conduction of :mod:`simulator.thermal.monotone`
+at the current positions). Each node
 also owns a chain of ``N`` environment layers ending at room temperature; layer ``q``
 of a triangle's three nodes receives the conductance ``k_env A_q N / t_air`` with
 ``A_q = (2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N`` (the paper's heat-loss
@@ -38,6 +40,7 @@ from ..model.mesh import BarHingeMesh
 from .integral import IntegralOperator
 from .integral_levels import integral_operator
 from .loss import ChainLoss
+from .monotone import MonotoneConduction, monotone_conduction
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
@@ -205,9 +208,6 @@ class ThermalModel:
         #: nodes held at room temperature by the steady model
         self.fixed_nodes = np.flatnonzero(fixed)
         self.free_nodes = np.flatnonzero(~fixed)
-        free_index = np.full(n, -1)
-        free_index[self.free_nodes] = np.arange(len(self.free_nodes))
-        self._free_pattern = StiffnessPattern([tri], free_index, diagonal=self.free_nodes)
         self._check_solvable()
         self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
         #: k t of every triangle [W/K]
@@ -350,12 +350,45 @@ class ThermalModel:
 
     # ------------------------------------------------------------------ matrices
     @cached_property
+    def monotone(self) -> MonotoneConduction | None:
+        """The monotone conduction's triangulation (:mod:`simulator.thermal.monotone`), chosen
+        at the mesh's positions, where ``params.conduction_method`` is ``"monotone"``; else
+        None."""
+        if self.params.conduction_method != "monotone":
+            return None
+        mesh = self.mesh
+        region = np.where(mesh.triangle_panel >= 0, mesh.triangle_panel,
+                          -1 - mesh.triangle_crease)
+        out = monotone_conduction(mesh.nodes, mesh.triangles, region, self._kt)
+        logger.debug("monotone conduction: %d flips, %d Steiner points", out.flips,
+                     out.n_steiner)
+        return out
+
+    @cached_property
+    def _families(self) -> list:
+        """Mesh nodes of the conduction's element families: the triangles (T3), or the
+        monotone conduction's :attr:`~simulator.thermal.monotone.MonotoneConduction.families`."""
+        return [self.mesh.triangles] if self.monotone is None else self.monotone.families
+
+    def _element_values(self, x, K) -> list:
+        """Element matrices [W/K] of :attr:`_families` at positions ``x``, given the T3 matrices
+        ``K`` (n_tri, 3, 3) of the mesh triangles there."""
+        return [K] if self.monotone is None else self.monotone.element_values(x)
+
+    @cached_property
+    def _free_pattern(self) -> StiffnessPattern:
+        n = self.mesh.n_nodes
+        free_index = np.full(n, -1)
+        free_index[self.free_nodes] = np.arange(len(self.free_nodes))
+        return StiffnessPattern(self._families, free_index, diagonal=self.free_nodes)
+
+    @cached_property
     def _full_pattern(self) -> StiffnessPattern:
         n, N = self.mesh.n_nodes, self.chains.layers
         q = np.arange(N)
         chain = np.stack([(q * n)[None, :] + np.arange(n)[:, None],
                           ((q + 1) * n)[None, :] + np.arange(n)[:, None]], axis=-1).reshape(-1, 2)
-        return StiffnessPattern([self.mesh.triangles, chain], np.arange(self.n_dof))
+        return StiffnessPattern([*self._families, chain], np.arange(self.n_dof))
 
     def conductivity_matrix(self, x) -> sp.csr_matrix:
         """Full conductivity matrix [W/K], ((N + 1) n)^2, at node positions ``x`` (n, 3) [m].
@@ -365,7 +398,23 @@ class ThermalModel:
         K, area = self._conduction(x)
         g = self.layer_conductance(x, area).ravel()                         # node-major (n, N)
         pair = g[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
-        return self._full_pattern.matrix([K, pair])
+        return self._full_pattern.matrix([*self._element_values(x, K), pair])
+
+    def sheet_conduction(self, x) -> sp.csr_matrix:
+        """The sheet's conduction matrix [W/K], (n, n), at node positions ``x`` (n, 3) [m]:
+        the T3 elements or the monotone conduction (``params.conduction_method``, theory 4.2,
+        4.9);
+        no loss, no boundary conditions (every row sums to zero)."""
+        x = self._positions(x)
+        n = self.mesh.n_nodes
+        rows, cols, vals = [], [], []
+        for nodes, v in zip(self._families, self._element_values(x, self._conduction(x)[0])):
+            k = nodes.shape[1]
+            rows.append(np.repeat(nodes, k, axis=1).ravel())
+            cols.append(np.tile(nodes, (1, k)).ravel())
+            vals.append(np.ravel(v))
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                     np.concatenate(cols))), shape=(n, n))
 
     def heat_vector(self, crease_power) -> np.ndarray:
         """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (theory 4.6).
@@ -423,6 +472,7 @@ class ThermalModel:
                 and np.array_equal(last[1], x):
             return last[2]
         K, g_eff = self._conductances(x, compiled)
+        K = self._element_values(x, K)
         if self.integral is None:
             solver = self._factorize(K, g_eff[self.free_nodes])
         else:                            # nodes touching the substrate are held there
@@ -513,8 +563,9 @@ class ThermalModel:
     def _factorize(self, K, g_free, loss=None, held=None):
         """Factorise the free-node system (conduction plus condensed chains, or plus the
         integral model's dense ``loss``); returns its solver ``q_free -> rise_free``
-        (``held`` (n_free,) bool: free nodes eliminated with a zero rise, the integral model's
-        nodes touching the substrate).
+        (``K``: the list of element matrices of :attr:`_families`; ``held`` (n_free,) bool:
+        free nodes eliminated with a zero rise, the integral model's nodes touching the
+        substrate).
 
         By the factorisation ladder (:func:`~simulator.linalg.ladder.factorize`, kind
         "spd"): up to :data:`~simulator.linalg.thresholds.CONDUCTION_DENSE_LIMIT` free nodes
@@ -526,17 +577,17 @@ class ThermalModel:
         limit = thresholds.CONDUCTION_DENSE_LIMIT
         if loss is not None:             # the integral model: dense anyway
             pos, keep = self._dense_position
-            flat = np.concatenate([K.ravel(), g_free])[keep]
+            flat = np.concatenate([*(v.ravel() for v in K), g_free])[keep]
             A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free) + loss
             if held is None or not held.any():
                 return factorize(A, kind="spd", dense_limit=n_free).solve
             return _held_solver(A, ~held)
         if n_free <= limit:
             pos, keep = self._dense_position
-            flat = np.concatenate([K.ravel(), g_free])[keep]
+            flat = np.concatenate([*(v.ravel() for v in K), g_free])[keep]
             A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
         else:
-            A = self._free_pattern.matrix([K, g_free])
+            A = self._free_pattern.matrix([*K, g_free])
         return factorize(A, kind="spd", dense_limit=limit).solve
 
 

@@ -176,10 +176,9 @@ def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
     (:meth:`~simulator.thermal.steady.ThermalModel.held_nodes`) at room temperature."""
     mesh, n = tm.mesh, tm.mesh.n_nodes
     x = np.asarray(x, float)
-    Kt, area = tm._conduction(x)
+    area = tm.triangle_areas(x)
     tri = mesh.triangles
-    rows, cols = np.repeat(tri, 3, axis=1).ravel(), np.tile(tri, (1, 3)).ravel()
-    K = sp.coo_matrix((Kt.ravel(), (rows, cols)), shape=(n, n)).toarray()
+    K = tm.sheet_conduction(x).toarray()
     sheet = tm.integral.nodes
     K[np.ix_(sheet, sheet)] += tm.integral_loss_matrix(x)
     free = np.setdiff1d(np.arange(n), tm.held_nodes(x))

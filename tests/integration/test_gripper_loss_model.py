@@ -60,5 +60,21 @@ def test_problem_with_an_integral_base_design_records_it_but_not_as_a_metric():
     assert problem.settings()["base"]["loss_model"] == "integral"
     ev = problem.evaluate(problem.space.to_vector(CYCLE9))
     assert ev.success, ev.message
-    assert not any(k.startswith(("loss_model", "integral_refinement")) for k in ev.metrics)
+    assert not any(k.startswith(("loss_model", "integral_refinement", "conduction"))
+                   for k in ev.metrics)
     assert problem.settings() != GripperProblem().settings()
+
+
+def test_conduction_follows_the_loss_model_and_is_named_with_the_integral_model():
+    """The sheet conduction (theory 4.9): T3 with the chains, monotone with the integral loss,
+    named in the dict of an integral design so that older logs (T3) never match."""
+    assert "conduction" not in GripperDesign().to_dict()
+    assert gripper_model(GripperDesign())[0].thermal.conduction_method == "t3"
+    integral = GripperDesign(loss_model="integral")
+    assert integral.to_dict()["conduction"] == "monotone"
+    assert gripper_model(integral)[0].thermal.conduction_method == "monotone"
+    chosen = GripperDesign(conduction="monotone")
+    assert chosen.to_dict()["conduction"] == "monotone"
+    assert gripper_model(chosen)[0].thermal.conduction_method == "monotone"
+    with pytest.raises(ParameterError, match="GripperDesign.conduction = 'p1'"):
+        GripperDesign(conduction="p1")

@@ -77,8 +77,8 @@ def test_needs_thermal_parameters():
 
 def test_chains_cannot_represent_the_flat_crane():
     """Theory 4.8: on the flat crane at its 4 mW the case's chains are 81 % RMS off the
-    integral model; the best fit improves that but leaves 26 % (87 % at worst): seventeen
-    creases sharing the air of one sheet."""
+    integral model (monotone conduction, theory 4.9); the best fit improves that but leaves
+    26 % (86 % at worst): seventeen creases sharing the air of one sheet."""
     from simulator.cases import get_case
 
     case = get_case("crane")
@@ -86,8 +86,8 @@ def test_chains_cannot_represent_the_flat_crane():
     assert fit.success, fit.message
     assert fit.initial_rms_error == pytest.approx(0.81, abs=0.01)
     assert 0.2 < fit.rms_error < 0.3 and fit.max_error > 0.8
-    assert math.degrees(fit.dissipation_angle) == pytest.approx(5.3, abs=0.2)
-    assert fit.env_thickness == pytest.approx(23.8e-3, rel=0.02)
+    assert math.degrees(fit.dissipation_angle) == pytest.approx(5.1, abs=0.2)
+    assert fit.env_thickness == pytest.approx(20.2e-3, rel=0.02)
 
 
 def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypatch):

@@ -7,8 +7,8 @@ with the structure embedded as a surface of the mesh. The far field is a Robin c
 ``k du/dn + (c k / R) u = 0`` that is exact for the leading term of the far field (c = 1, a
 monopole ``1/r`` in free space; c = 2, a dipole over the plane) or, with
 ``far_field="dirichlet"``, room temperature on the sphere. The sheet's own conduction is the
-bar-and-hinge model's T3 conduction (sum of k t over the same triangles, reference edge lengths,
-current angles: :meth:`~simulator.thermal.steady.ThermalModel.structure_conductances`), and the
+bar-and-hinge model's (its T3 or monotone conduction, as its parameters say:
+:meth:`~simulator.thermal.steady.ThermalModel.sheet_conduction`), and the
 medium's dofs on the sheet follow the sheet's piecewise-linear temperature, so the FE and the
 chain model differ only in the heat lost to the medium.
 """
@@ -248,9 +248,11 @@ def _model_inputs(model, positions, state, crease_power, heat):
         positions = mesh.nodes if state is None else mesh.nodes + np.asarray(state.u, float)
     x = array("positions", positions, (n, 3), "m")
     params = model.thermal or ThermalParameters()
-    # the nodal heat and the sheet's conductances only: no loss model (the FE is the loss;
-    # the chains, whose t_env plays no part here, keep the integral operator unbuilt)
-    tm = ThermalModel(mesh, dataclasses.replace(params, loss=ChainLoss(thickness=1.0)))
+    # the nodal heat and the sheet's conduction only: no loss model (the FE is the loss;
+    # the chains, whose t_env plays no part here, keep the integral operator unbuilt), the
+    # model's own sheet conduction (T3 or monotone)
+    tm = ThermalModel(mesh, dataclasses.replace(params, loss=ChainLoss(thickness=1.0),
+                                                conduction=params.conduction_method))
     if heat is not None:
         if crease_power is not None:
             raise ParameterError("give crease_power or heat, not both.")
@@ -387,11 +389,8 @@ def _solve_reduced(A, P, on_sheet, fixed, tm, x, q, params, on_plane):
     E = sp.csr_matrix((np.ones(len(rest)), (rest, n + np.arange(len(rest)))),
                       shape=(A.shape[0], n + len(rest)))
     Z = (sp.hstack([P, sp.csr_matrix((A.shape[0], len(rest)))]) + E).tocsr()
-    K_sheet = tm.structure_conductances(x)[0]
-    tri = tm.mesh.triangles
-    rows = np.repeat(tri, 3, axis=1).ravel()
-    cols = np.tile(tri, (1, 3)).ravel()
-    Ks = sp.csr_matrix((K_sheet.ravel(), (rows, cols)), shape=(n + len(rest),) * 2)
+    Kn = tm.sheet_conduction(x).tocoo()
+    Ks = sp.csr_matrix((Kn.data, (Kn.row, Kn.col)), shape=(n + len(rest),) * 2)
     Ar = (Z.T @ A @ Z + Ks).tocsr()
     held = np.zeros(n + len(rest), bool)
     held[list(params.room_temperature_nodes)] = True
