@@ -27,6 +27,7 @@ import numpy as np
 
 from ._validate import capped
 from .errors import ParameterError
+from .mechanics._angles_jit import fold_angles_kernel, quiet_kernel
 from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
 
 __all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event",
@@ -312,7 +313,9 @@ class CrossingWatch:
     def __init__(self, mesh, u0):
         self.mesh, self.u = mesh, np.asarray(u0, float)
         self._angles = _crease_angles(mesh)
-        self.a = self._angles.known(self.u)
+        # the compiled kernels where numba is selected (None: numpy), chosen once per watch
+        self._kernel, self._quiet = fold_angles_kernel(), quiet_kernel()
+        self.a = self._angles.known(self.u, self._kernel)
         self.sharp = bool(getattr(mesh, "sharp", False))
         self.turns = np.zeros(len(self.a), int)
         if len(self.a) and not self.sharp and _fmax(_abs(self.a)) > np.pi - NEAR_FLAT:
@@ -320,16 +323,15 @@ class CrossingWatch:
             # does not wrap (crease_rotations), where the panel-to-panel angle does (asked
             # only where a fold angle is near +-180 deg: a start folded more than NEAR_FLAT
             # past flat is not recognised)
-            self.turns = self._angles.turns(self.u).copy()
+            self.turns = self._angles.turns(self.u, self._kernel).copy()
         #: whether a crease is folded past flat (then nodes are tested every increment)
         self._past = bool(self.turns.any())
 
     def check(self, u, increment: int, load_factor: float, power=(), temperature=None):
         u = np.asarray(u, float)
-        a = self._angles.known(u)
+        a = self._angles.known(u, self._kernel)
         event = None
-        if len(a) and not self.sharp and not self._past and \
-                _fmax(_abs(a - self.a)) <= LARGE_TURN and _fmax(_abs(a)) <= np.pi - NEAR_FLAT:
+        if len(a) and not self.sharp and not self._past and _quiet(a, self.a, self._quiet):
             pass                 # the common case: every crease far from flat, no large turn
         elif len(a):
             d = a - self.a
@@ -406,6 +408,18 @@ def crossing_stop(mesh, u0, then=None):
 
 
 _fmax, _abs = np.fmax.reduce, np.abs        # (NaN-safe maximum: a NaN is not a large turn)
+#: Largest fold angle [rad] of a crease far from flat (:data:`NEAR_FLAT`).
+_FAR = np.pi - NEAR_FLAT
+
+
+def _quiet(a, b, kernel=None) -> bool:
+    """Whether the fold angles ``a`` (C,) [rad] of a state are all far from flat and none
+    turned by more than :data:`LARGE_TURN` from those ``b`` (C,) of the state before (C >= 1):
+    by the compiled test ``kernel`` (:func:`~simulator.mechanics._angles_jit.quiet_kernel`)
+    if given, else numpy."""
+    if kernel is not None:
+        return kernel(a, b, LARGE_TURN, _FAR)
+    return _fmax(_abs(a - b)) <= LARGE_TURN and _fmax(_abs(a)) <= _FAR
 
 
 # numpy >= 2: vecdot is a ufunc, with less overhead than einsum on small arrays
@@ -430,7 +444,10 @@ class _CreaseAngles:
     factor of both arguments does not change atan2), turned to the top side by running the
     fan backwards (a panel whose top side is its back); t1 A by taking the axis's corners
     the other way round; every cross product ``a x b = a' b'' - a'' b'`` (', '': the
-    components cycled once, twice) from one gather of the cycled coordinates.
+    components cycled once, twice) from one gather of the cycled coordinates. Where numba is
+    selected the same formulas run compiled, in one call
+    (:mod:`simulator.mechanics._angles_jit`, the same angles to round-off):
+    :class:`CrossingWatch` passes its kernel.
     """
 
     def __init__(self, mesh):
@@ -470,12 +487,30 @@ class _CreaseAngles:
         self._start = np.cumsum(sizes) - sizes
         k1, k2 = local[:len(p1)], local[len(p1):]
         self._normals = np.stack([flat(k1, 0), flat(k1, 1), flat(k2, 0), flat(k2, 1)])
+        # the same in node numbers, for the compiled kernel (simulator.mechanics._angles_jit)
+        self._fan_nodes = np.ascontiguousarray(np.stack([corners, centre, nxt]), np.int64)
+        self._fan_start = np.r_[self._start, n_fan].astype(np.int64)
+        self._crease_rows = np.ascontiguousarray(np.stack([k1, k2, head, tail]), np.int64)
 
-    def __call__(self, u) -> np.ndarray:
+    def __call__(self, u, kernel=None) -> np.ndarray:
+        """The angles at ``u``: by the compiled ``kernel``
+        (:func:`~simulator.mechanics._angles_jit.fold_angles_kernel`) if given, else numpy
+        (:meth:`reference`)."""
         x = self.nodes + u
         if self.plain:
             from .mechanics.kinematics import fold_angles
             return fold_angles(self.mesh, x)
+        if kernel is None:
+            return self.reference(x)
+        a = np.empty(self._crease_rows.shape[1])
+        kernel(x, self._fan_nodes, self._fan_start, self._crease_rows,
+               np.empty((len(self._fan_start) - 1, 3)), a)
+        return a
+
+    def reference(self, x) -> np.ndarray:
+        """The fold angles [rad] (C,) at node positions ``x`` (n_nodes, 3) [m] by numpy (the
+        reference of the compiled kernel, and the path without numba); a mesh with creases
+        that are not sharp."""
         xf = x.ravel()
         g = xf[self._at] - xf[self._from]
         fan, shape = self._fan
@@ -486,21 +521,22 @@ class _CreaseAngles:
         y = _dot(n1 * n2_ - n1_ * n2, axis)
         return np.arctan2(y, _dot(n1, n2) * np.sqrt(_dot(axis, axis)))
 
-    def known(self, u) -> np.ndarray:
-        """The angles at ``u``, from those kept when the same displacements were asked for."""
+    def known(self, u, kernel=None) -> np.ndarray:
+        """The angles at ``u``, from those kept when the same displacements were asked for
+        (else computed as :meth:`__call__` does, with ``kernel``)."""
         key = u.tobytes()
         a = self.kept.get(key)
         if a is None:
-            a = self(u)
+            a = self(u, kernel)
             if len(self.kept) >= self.room:
                 del self.kept[next(iter(self.kept))]
             self.kept[key] = a
         return a
 
-    def turns(self, u) -> np.ndarray:
+    def turns(self, u, kernel=None) -> np.ndarray:
         """(C,) int: how many times each crease's fold angle has wrapped past +-180 deg at
         ``u`` (from :func:`~simulator.mechanics.kinematics.crease_rotations`, which does not
-        wrap), kept per state as :meth:`known`."""
+        wrap), kept per state as :meth:`known` (``kernel`` as there)."""
         key = u.tobytes()
         t = self.kept_turns.get(key)
         if t is None:
@@ -508,7 +544,8 @@ class _CreaseAngles:
 
             rot = crease_rotations(self.mesh, self.mesh.nodes + u)
             with np.errstate(invalid="ignore"):
-                t = np.nan_to_num(np.rint((rot - self.known(u)) / (2 * np.pi))).astype(int)
+                t = np.nan_to_num(np.rint((rot - self.known(u, kernel)) / (2 * np.pi))
+                                  ).astype(int)
             if len(self.kept_turns) >= self.room:
                 del self.kept_turns[next(iter(self.kept_turns))]
             self.kept_turns[key] = t

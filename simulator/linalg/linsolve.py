@@ -209,10 +209,23 @@ _cache: list[_Pattern] = []
 _lock = threading.Lock()
 
 
+def _same_array(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether ``a`` and ``b`` are one array, or both the whole of one array (scipy's CSR
+    constructor keeps ``indices[:nnz]``, a new view each time): the same numbers, known
+    without comparing them (as by identity: the array is taken not to change in place)."""
+    if a is b:
+        return True
+    base = a if a.base is None else a.base
+    return (base is (b if b.base is None else b.base) and isinstance(base, np.ndarray)
+            and a.shape == b.shape == base.shape and a.strides == b.strides == base.strides
+            and a.dtype == b.dtype == base.dtype)
+
+
 def _pattern_of(K) -> _Pattern | None:
     """The cache entry of the pattern of a square sparse ``K`` (made on first use), or None
     for a matrix without canonical format. The last few patterns are kept, matched by their
-    index arrays (identical objects, or equal ones: ~5 ms at 1e5 nodes)."""
+    index arrays (one array or whole views of one, :func:`_same_array`; else equal ones:
+    ~5 ms at 1e5 nodes)."""
     if not sp.issparse(K) or K.format != "csr":
         K = sp.csr_matrix(K)
     if not K.has_canonical_format:
@@ -221,7 +234,7 @@ def _pattern_of(K) -> _Pattern | None:
     with _lock:
         for i, entry in enumerate(_cache):
             ip, ind = entry.indptr, entry.indices
-            if (ip is indptr and ind is indices) or (
+            if (_same_array(ip, indptr) and _same_array(ind, indices)) or (
                     len(ip) == len(indptr) and len(ind) == len(indices)
                     and np.array_equal(ip, indptr) and np.array_equal(ind, indices)):
                 _cache.insert(0, _cache.pop(i))

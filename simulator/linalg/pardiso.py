@@ -136,13 +136,15 @@ class PardisoLDLT:
         self._lock = threading.Lock()
         self._owner = None                # the PardisoFactor whose matrix is factorised now
         self._f = f
+        self._fixed = _fixed_arguments(self.pt, self.iparm, n, self.ia, self.ja)
         # PARDISO's memory is freed with this object (and if the analysis fails)
         weakref.finalize(self, _release, f, self.pt, self.iparm, n, self.ia, self.ja)
         self._call(11, np.zeros(len(upper)))              # ordering + symbolic factorisation
 
     def _call(self, phase: int, data: np.ndarray, b: np.ndarray | None = None,
               x: np.ndarray | None = None) -> None:
-        error = _invoke(self._f, self.pt, self.iparm, phase, self.n, data, self.ia, self.ja, b, x)
+        error = _invoke(self._f, self.pt, self.iparm, phase, self.n, data, self.ia, self.ja, b, x,
+                        self._fixed)
         if error != 0:
             raise PardisoError(f"PARDISO phase {phase} returned error {error}")
 
@@ -218,19 +220,30 @@ class PardisoFactor:
             return h._solve_locked(self.data, b)
 
 
-def _invoke(f, pt, iparm, phase, n, data, ia, ja, b=None, x=None) -> int:
+def _fixed_arguments(pt, iparm, n, ia, ja) -> tuple:
+    """The arguments of ``pardiso`` that stay the same for a handle, as ctypes objects (they
+    keep the arrays alive): pointers to ``pt``, ``ia``, ``ja``, ``iparm`` and references to
+    maxfct = mnum = 1, mtype, n and msglvl = 0. Made once per handle: numpy's ``data_as``
+    costs about 2 us a call."""
+    i32, p, ref = ctypes.c_int32, ctypes.POINTER, ctypes.byref
+    return (pt.ctypes.data_as(p(ctypes.c_int64)), ref(i32(1)), ref(i32(1)),
+            ref(i32(_REAL_SYMMETRIC_INDEFINITE)), ref(i32(n)), ia.ctypes.data_as(p(i32)),
+            ja.ctypes.data_as(p(i32)), iparm.ctypes.data_as(p(i32)), ref(i32(0)))
+
+
+def _invoke(f, pt, iparm, phase, n, data, ia, ja, b=None, x=None, fixed=None) -> int:
     """One call of ``pardiso`` (one factor in the handle, real symmetric indefinite, no
-    messages); its error code."""
-    i32, p = ctypes.c_int32, ctypes.POINTER
+    messages); its error code. ``fixed``: the handle's :func:`_fixed_arguments` (made here if
+    not given)."""
+    i32, ref = ctypes.c_int32, ctypes.byref
+    pt, maxfct, mnum, mtype, n, ia, ja, iparm, msglvl = \
+        _fixed_arguments(pt, iparm, n, ia, ja) if fixed is None else fixed
     nrhs = 1 if b is None or b.ndim == 1 else b.shape[1]
     dummy = np.zeros(1)
     error = i32(0)
-    f(pt.ctypes.data_as(p(ctypes.c_int64)), ctypes.byref(i32(1)), ctypes.byref(i32(1)),
-      ctypes.byref(i32(_REAL_SYMMETRIC_INDEFINITE)), ctypes.byref(i32(phase)),
-      ctypes.byref(i32(n)), data.ctypes.data, ia.ctypes.data_as(p(i32)),
-      ja.ctypes.data_as(p(i32)), None, ctypes.byref(i32(nrhs)), iparm.ctypes.data_as(p(i32)),
-      ctypes.byref(i32(0)), (dummy if b is None else b).ctypes.data,
-      (dummy if x is None else x).ctypes.data, ctypes.byref(error))
+    f(pt, maxfct, mnum, mtype, ref(i32(phase)), n, data.ctypes.data, ia, ja, None,
+      ref(i32(nrhs)), iparm, msglvl, (dummy if b is None else b).ctypes.data,
+      (dummy if x is None else x).ctypes.data, ref(error))
     return error.value
 
 

@@ -51,8 +51,8 @@ def aot_env(built, monkeypatch):
     return built
 
 
-def _recorder(monkeypatch, module, jit):
-    """Replace ``module._compiled`` by a wrapper of numba's kernel ``jit`` that keeps a copy of
+def _recorder(monkeypatch, module, jit, name="_compiled"):
+    """Replace ``module.<name>`` by a wrapper of numba's kernel ``jit`` that keeps a copy of
     the arguments of every call and its return value; returns the list of (args, result)."""
     calls = []
 
@@ -62,7 +62,7 @@ def _recorder(monkeypatch, module, jit):
         calls.append((copied, result))
         return result
 
-    monkeypatch.setattr(module, "_compiled", record)
+    monkeypatch.setattr(module, name, record)
     return calls
 
 
@@ -84,6 +84,7 @@ def test_aot_kernels_give_the_jit_floats(aot_env, monkeypatch):
     elastic supports."""
     from simulator.cases import get_case
     from simulator.linalg import _cholesky_jit
+    from simulator.mechanics import _angles_jit
     from tests.unit.test_fused_kernel import _gripper_with_contacts, _miura
 
     module = _aot._load()
@@ -92,20 +93,26 @@ def test_aot_kernels_give_the_jit_floats(aot_env, monkeypatch):
     assert _thermal_jit.use_compiled()
     jit_thermal = _thermal_jit._compiled
     jit_cholesky = _cholesky_jit.cholesky_solve()
-    for jit in (jit_fused, jit_thermal, jit_cholesky):
+    jit_angles, jit_quiet = _angles_jit.fold_angles_kernel(), _angles_jit.quiet_kernel()
+    for jit in (jit_fused, jit_thermal, jit_cholesky, jit_angles, jit_quiet):
         assert hasattr(jit, "py_func")                              # numba's
     fused_calls = _recorder(monkeypatch, _fused_jit, jit_fused)
     thermal_calls = _recorder(monkeypatch, _thermal_jit, jit_thermal)
     cholesky_calls = _recorder(monkeypatch, _cholesky_jit, jit_cholesky)
+    angles_calls = _recorder(monkeypatch, _angles_jit, jit_angles)
+    quiet_calls = _recorder(monkeypatch, _angles_jit, jit_quiet, "_compiled_quiet")
     get_case("single-fold", residual_fold_deg=-10, gravity=True, thermal_steps=40).run()
     for system, u, rest in (_gripper_with_contacts(), _miura()):    # the gripper: Cholesky
         system.evaluate(u, rest)
         system.evaluate(u, rest, hessian=False)
     assert len(fused_calls) > 100 and len(thermal_calls) > 10 and len(cholesky_calls) > 10
+    assert len(angles_calls) > 10 and len(quiet_calls) > 10
     assert max(result for _, result in fused_calls) >= 6            # active contact pairs
     _same_results(jit_fused, module.fused, fused_calls)
     _same_results(jit_thermal, module.thermal, thermal_calls)
     _same_results(jit_cholesky, module.cholesky, cholesky_calls)
+    _same_results(jit_angles, module.fold_angles, angles_calls)
+    _same_results(jit_quiet, module.quiet, quiet_calls)
 
 
 def test_enabled_kernels_are_the_aot_ones(aot_env, monkeypatch):
@@ -119,6 +126,9 @@ def test_enabled_kernels_are_the_aot_ones(aot_env, monkeypatch):
         assert _thermal_jit.use_compiled() and _thermal_jit._compiled is None
         from simulator.linalg import _cholesky_jit
         assert _cholesky_jit.cholesky_solve() is _aot.kernel("cholesky")
+        from simulator.mechanics import _angles_jit
+        assert _angles_jit.fold_angles_kernel() is _aot.kernel("fold_angles") is not None
+        assert _angles_jit.quiet_kernel() is _aot.kernel("quiet") is not None
     assert hasattr(_fused_jit.fused_kernel(), "py_func")  # numba's again
 
 

@@ -104,6 +104,28 @@ def test_ordering_is_computed_once_per_pattern(monkeypatch):
     assert len(calls) == 1
 
 
+def test_matrices_of_one_assembly_pattern_are_matched_without_comparing(monkeypatch):
+    """scipy's CSR keeps a new view ``indices[:nnz]`` of the assembler's array at every
+    construction: whole views of one array match the cached pattern by identity (no
+    element-wise comparison); a partial or reversed view is compared."""
+    model, u, rest = _sheet(5)
+    system = equilibrium_system(model)
+    monkeypatch.setattr(linsolve, "_cache", [])
+    K1, K2 = system.evaluate(u, rest).K, system.evaluate(u, rest).K
+    assert K1.indices is not K2.indices and K1.indices.base is K2.indices.base
+    entry = linsolve._pattern_of(K1)
+    compared = []
+    real = np.array_equal
+    monkeypatch.setattr(linsolve.np, "array_equal",
+                        lambda a, b: compared.append(1) or real(a, b))
+    assert linsolve._pattern_of(K2) is entry and compared == []
+    ind = K1.indices.base
+    assert linsolve._same_array(ind[:len(ind)], ind) and linsolve._same_array(ind[:], ind[:])
+    assert not linsolve._same_array(ind[:-1], ind[:-1].copy())
+    assert not linsolve._same_array(ind[::-1], ind)
+    assert not linsolve._same_array(ind[1:], ind[1:][:])
+
+
 def test_small_systems_keep_the_minimum_degree_path(monkeypatch):
     def fail(K):
         raise AssertionError("no nested dissection below ND_LIMIT")

@@ -138,6 +138,34 @@ def test_an_increment_that_turns_sharply_is_measured_against_the_path_direction(
     assert not _turns(tilt, u0, slope, 0.1)
 
 
+def test_the_turn_test_decides_as_with_numpys_norms():
+    """_turns takes sqrt(v . v) for np.linalg.norm(v) (what norm computes): the same floats, so
+    the same decision, at random and on the tolerance's boundary (found by bisection)."""
+    from simulator.solvers.newton import TURN_TOLERANCE, _turns
+
+    def by_norms(u_new, u_old, slope, dt):
+        du, pred = u_new - u_old, slope * dt
+        scale = max(float(np.linalg.norm(du)), float(np.linalg.norm(pred)))
+        return scale > 0 and float(np.linalg.norm(du - pred)) > TURN_TOLERANCE * scale
+
+    rng = np.random.default_rng(8)
+    cases = [(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((4, 3)), 0.3)]    # scale 0
+    for _ in range(300):
+        u_old, slope = rng.normal(size=(2, 7, 3)) * 1e-5
+        u_new = u_old + 0.2 * slope + rng.normal(size=(7, 3)) * 1e-6 * rng.uniform(0, 3)
+        cases.append((u_new, u_old, slope, 0.2))
+    u_old, slope, side = rng.normal(size=(3, 7, 3))
+    lo, hi = 0.0, 1.0                   # u_new = u_old + slope dt + s side: the turn's edge
+    for _ in range(80):
+        s = 0.5 * (lo + hi)
+        lo, hi = (lo, s) if by_norms(u_old + 0.5 * slope + s * side, u_old, slope, 0.5) else \
+            (s, hi)
+    cases += [(u_old + 0.5 * slope + s * side, u_old, slope, 0.5) for s in (lo, hi)]
+    decisions = [by_norms(*c) for c in cases]
+    assert [_turns(*c) for c in cases] == decisions and True in decisions and \
+        False in decisions
+
+
 def _ends(lam):
     f = np.zeros(6)
     f[3] = lam
