@@ -162,7 +162,9 @@ def plot(df: pd.DataFrame) -> dict:
 
     creases = df[df["table"] == "crease"]
     bars = _bars(creases, variants, "(9 and 11 halved in the second run)")
-    note = environment_note("air", 0.026, 0, 0, extra=["no substrate"])
+    note = environment_note("air", 0.026, 0, 0, extra=[
+        "no substrate", "heat loss: the chains, beta = 20 deg, t_env = 1 mm (the reference's; "
+        "crane_heat_models shows the calibration-free integral loss beside them)"])
     for f in (fig, bars):
         note_assumptions(f, note)
     figs = {NAME: fig, f"{NAME}_creases": bars}
