@@ -40,8 +40,8 @@ import numpy as np
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
 from .displacement_control import displacement_control  # noqa: F401  (re-exported)
-from .load_path import (LoadPath, PathPoint, _begin, _Constraint, _correct, _flat, model_size,
-                        _tangent)
+from .load_path import (LoadPath, PathConstraint, PathPoint, begin_point, correct_point,
+                        free_added, model_size, path_tangent)
 from .newton import NewtonOptions
 from .path_trace import ContinuationResult, CriticalPoint, PathTrace, _lost_peak
 from .stability import tangent_stability
@@ -217,7 +217,7 @@ class _ArcLengthRun:
         self.trace = PathTrace(path, self.c_t if monitor is None else
                                np.asarray(monitor, float).ravel(), stability, self.u, self.lam,
                                prior)
-        self.pt = _begin(path, self.u, self.lam)
+        self.pt = begin_point(path, self.u, self.lam)
         self.sig = 1.0 if target_load_factor is None or target_load_factor >= self.lam else -1.0
         self.ds, self.uhat_prev, self.norm1 = arc_length, None, None
         self.sig0, self.peak, self.turned = self.sig, self.lam, False
@@ -247,13 +247,13 @@ class _ArcLengthRun:
     def increment(self) -> ContinuationResult | None:
         """Predict and correct one increment; accept it, or halve the arc length for a retry.
         The result if the path ends here, else None."""
-        uhat, msg = _tangent(self.pt, self.lam, self.options.linear_solver)
+        uhat, msg = path_tangent(self.pt, self.lam, self.options.linear_solver)
         if uhat is None:
             return self.result(False, "failed", msg)
         s, dlam = self.load_step(uhat)
         end, dl, con = _predict(self.u, self.lam, dlam, uhat, self.free, self.lam_t, self.c_t,
                                 self.v_t)
-        ok, u1, lam1, pt1, its, res, msg = _correct(self.path, _flat(self.u, self.free,
+        ok, u1, lam1, pt1, its, res, msg = correct_point(self.path, free_added(self.u, self.free,
                                                                      dl * uhat),
                                                     self.lam + dl, con, self.options, self.size)
         self.trace.iterations += its
@@ -334,7 +334,7 @@ class _ArcLengthRun:
                 max(self.ds / 2, self.min_ds) if its >= self.slow else self.ds)
         if self.fine and abs(lam1 - self.lam_fine) <= self.resolution:
             self.ds = min(self.ds, self.resolved(taken, lam1 - back[1]))
-        self.pt = _begin(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
+        self.pt = begin_point(self.path, u1, lam1) if hasattr(self.path, "begin_increment") else pt1
         return None
 
     def refine(self, s, sig_before, end) -> bool:
@@ -399,7 +399,7 @@ class _ArcLengthRun:
         self.trace.jumps.append((len(self.trace.history) - 3, len(self.trace.history) - 1,
                                  "bifurcation"))
         self.u, self.uhat_prev, self.direction, self.sig = landed, None, None, self.sig0
-        self.pt = _begin(self.path, landed, self.lam)
+        self.pt = begin_point(self.path, landed, self.lam)
         if self.until_stable and (not self.trace.stab or self.trace.stab[-1].stable):
             return self.result(True, "converged", "stable on another branch past the "
                                f"bifurcation at load factor {self.lam:.6g}")
@@ -438,13 +438,13 @@ class _ArcLengthRun:
 def _predict(u, lam, dlam, uhat, free, lam_t, c_t, v_t):
     """Predictor of one increment: (what it ends at or "", its load step, its constraint)."""
     if lam_t is not None and dlam * (lam_t - lam) > 0 and abs(dlam) >= abs(lam_t - lam):
-        return f"load factor {lam_t:.6g}", lam_t - lam, _Constraint(None, lam_t)
+        return f"load factor {lam_t:.6g}", lam_t - lam, PathConstraint(None, lam_t)
     if c_t is not None:
         m0, rate = float(c_t @ u.ravel()), float(c_t[free] @ uhat)
         if rate != 0 and (m0 - v_t) * (m0 + dlam * rate - v_t) <= 0:
-            return f"displacement {v_t:.6g} m", (v_t - m0) / rate, _Constraint(c_t[free], v_t)
+            return f"displacement {v_t:.6g} m", (v_t - m0) / rate, PathConstraint(c_t[free], v_t)
     v = u.ravel()[free]
-    return "", dlam, _Constraint(uhat, float(uhat @ v) + dlam * float(uhat @ uhat))
+    return "", dlam, PathConstraint(uhat, float(uhat @ v) + dlam * float(uhat @ uhat))
 
 
 def _passed(u, lam, u1, lam1, lam_t, c_t, v_t) -> bool:

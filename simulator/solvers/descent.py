@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from ..linalg.ladder import factorize
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT
 from ..linalg.small_solve import as_dense
-from .load_path import _Constraint, _correct, model_size
+from .load_path import PathConstraint, correct_point, model_size
 
 __all__ = ["DESCENT_DOF_LIMIT", "BRANCHES", "BranchChoice", "descend", "switch_branch",
            "choose_branch"]
@@ -138,7 +138,7 @@ def descend(path, u, lam, options, max_iter=300, start=None, rounds=ROUNDS):
         v = out[0]
         if moved <= 1e-9 * size:
             break
-    ok, u1, _, _, _, _, _ = _correct(path, v.reshape(-1, 3), lam, _Constraint(None, lam),
+    ok, u1, _, _, _, _, _ = correct_point(path, v.reshape(-1, 3), lam, PathConstraint(None, lam),
                                      options, size)
     logger.debug("descent at load factor %.6g: polish %s", lam, "converged" if ok else "failed")
     return u1 if ok else None

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import finite, integer
 from ..errors import ParameterError
-from .load_path import _Constraint, _correct, _flat, model_size, _tangent
+from .load_path import PathConstraint, correct_point, free_added, model_size, path_tangent
 from .newton import NewtonOptions
 from .nonlinear import march
 from .path_trace import ContinuationResult, PathTrace
@@ -56,7 +56,7 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
     cf = c[free]
     u, lam = np.array(u0, float).reshape(-1, 3), float(lam0)
     pt = path.at(u, lam)
-    uhat, msg = _tangent(pt, lam, options.linear_solver)
+    uhat, msg = path_tangent(pt, lam, options.linear_solver)
     if uhat is not None and abs(cf @ uhat) <= 1e-12 * np.linalg.norm(cf) * np.linalg.norm(uhat):
         raise ParameterError("displacement_control: the reference load does not move the "
                              "controlled displacement (c . K^-1 P = 0); it cannot be controlled "
@@ -67,13 +67,14 @@ def displacement_control(path, u0, lam0: float, c, target: float, *, increments:
 
     def attempt(t_try):
         u, lam, pt = state
-        uhat, msg = _tangent(pt, lam, options.linear_solver)
+        uhat, msg = path_tangent(pt, lam, options.linear_solver)
         if uhat is None or cf @ uhat == 0:
             return False, msg
         value = start + t_try * (target - start)
         dl = (value - float(c @ u.ravel())) / float(cf @ uhat)
-        ok, u1, lam1, pt1, its, res, msg = _correct(
-            path, _flat(u, free, dl * uhat), lam + dl, _Constraint(cf, value), options, size)
+        ok, u1, lam1, pt1, its, res, msg = correct_point(
+            path, free_added(u, free, dl * uhat), lam + dl, PathConstraint(cf, value), options,
+            size)
         trace.iterations += its
         return ok, (u1, lam1, pt1, its, res) if ok else msg
 

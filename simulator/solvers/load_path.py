@@ -5,8 +5,8 @@ A *path* gives, at a point ``(u, lambda)`` (:class:`PathPoint`), the residual ``
 f_ext - f_int`` on the free DOFs, the tangent ``K = -dr/du`` and the load derivative ``q =
 dr/dlambda``. :class:`LoadPath` is affine in the load factor (dead loads ``f0 + lambda P``,
 spring rest angles ``rest0 + lambda R``); heating paths (:mod:`simulator.steps.limit`) add
-temperatures. The corrector (:func:`_correct`) is Newton on ``(u, lambda)`` with one extra
-equation (:class:`_Constraint`): ``c . u = value`` or ``lambda = value``.
+temperatures. The corrector (:func:`correct_point`) is Newton on ``(u, lambda)`` with one extra
+equation (:class:`PathConstraint`): ``c . u = value`` or ``lambda = value``.
 """
 
 from __future__ import annotations
@@ -21,6 +21,9 @@ from .nonlinear import iterate, residual_at_round_off
 from ..linalg.ladder import solve
 
 __all__ = ["LoadPath", "PathPoint", "model_size"]
+# PathConstraint, correct_point, solve_path_system, path_tangent, begin_point and free_added
+# are the corrector's pieces shared by the path-following solvers of this package and
+# simulator.steps.limit: public to them, not exported.
 
 #: Largest rest-angle change [rad] of the difference that gives ``q`` (:meth:`LoadPath.at`):
 #: small against the half turn between a spring's rest angle and its kink, large enough that
@@ -93,7 +96,7 @@ class LoadPath:
                          ev)
 
 
-def _solve(K, B, backend: str = "auto"):
+def solve_path_system(K, B, backend: str = "auto"):
     """Solve K X = B (B (n,) or (n, k)) by the factorisation ladder, the same backend as
     Newton's (:func:`~simulator.linalg.ladder.solve`); None if K is exactly singular or X
     is not finite.
@@ -105,7 +108,7 @@ def _solve(K, B, backend: str = "auto"):
 
 
 @dataclass
-class _Constraint:
+class PathConstraint:
     """The extra equation of the bordered system: ``c . u_free = value`` or (c None)
     ``lambda = value``."""
 
@@ -125,7 +128,7 @@ def model_size(system) -> float:
     return float(np.max(np.ptp(nodes, axis=0)))
 
 
-def _correct(path, u, lam, constraint, options, size):
+def correct_point(path, u, lam, constraint, options, size):
     """Newton on (u, lambda) from a predicted point that satisfies ``constraint``
     (:func:`~simulator.solvers.nonlinear.iterate` on the bordered system).
 
@@ -158,7 +161,7 @@ class _Bordered:
         return pt.r, pt
 
     def correct(self, pt, r):
-        X = _solve(pt.K, np.column_stack([pt.q, r]), self.backend)
+        X = solve_path_system(pt.K, np.column_stack([pt.q, r]), self.backend)
         if X is None:
             return "tangent stiffness is exactly singular"
         free = self.path.free
@@ -173,23 +176,23 @@ class _Bordered:
         self.lam += self.dlam * scale if scale != 1.0 else self.dlam
 
 
-def _flat(u, free, dv):
+def free_added(u, free, dv):
     """Displacements ``u`` (n_nodes, 3) plus ``dv`` on the free DOFs, as a new array."""
     out = np.array(u, float).ravel()
     out[free] += dv
     return out.reshape(-1, 3)
 
 
-def _begin(path, u, lam):
+def begin_point(path, u, lam):
     """Let a path update per-increment data (staggered heating), then evaluate it."""
     if hasattr(path, "begin_increment"):
         path.begin_increment(u)
     return path.at(u, lam)
 
 
-def _tangent(pt, lam, backend: str = "auto"):
+def path_tangent(pt, lam, backend: str = "auto"):
     """K^-1 q at a converged point, or a message if K is exactly singular."""
-    uhat = _solve(pt.K, pt.q, backend)
+    uhat = solve_path_system(pt.K, pt.q, backend)
     if uhat is None:
         return None, f"tangent stiffness is exactly singular at load factor {lam:.6g}"
     return uhat, ""

@@ -44,7 +44,8 @@ import numpy as np
 from ..model.bimorph import crease_temperature_weights
 from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
-from ..solvers.load_path import LoadPath, _Constraint, _correct, _solve, model_size
+from ..solvers.load_path import (LoadPath, PathConstraint, correct_point, model_size,
+                                 solve_path_system)
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
@@ -245,7 +246,7 @@ class HeatPath(LoadPath):
             rest0, R = self._spring_rest(c0, dc)
             forces.append(self.system.evaluate(u, rest0 + lam * R, hessian=False)
                           .f_int[self.free])
-        du = _solve(K, forces[0] - forces[1], linear_solver)
+        du = solve_path_system(K, forces[0] - forces[1], linear_solver)
         return float("nan") if du is None else float(mode @ du) / e
 
     def at(self, u, lam):
@@ -526,8 +527,8 @@ def _on_path(context, path, u, lam, direction):
     if not np.any(c):
         return u, lam, False
     c = c / np.linalg.norm(c)
-    held = _Constraint(c, float(c @ np.asarray(u, float).ravel()[path.free]))
-    ok, u1, lam1, _, its, _, _ = _correct(path, u, lam, held, context.options,
+    held = PathConstraint(c, float(c @ np.asarray(u, float).ravel()[path.free]))
+    ok, u1, lam1, _, its, _, _ = correct_point(path, u, lam, held, context.options,
                                           model_size(path.system))
     return (u1, float(lam1), True) if ok and its > 0 else (u, lam, False)
 
