@@ -43,7 +43,7 @@ from .displacement_control import displacement_control  # noqa: F401  (re-export
 from .load_path import (LoadPath, PathConstraint, PathPoint, begin_point, correct_point,
                         free_added, model_size, path_tangent)
 from .newton import NewtonOptions
-from .path_trace import ContinuationResult, CriticalPoint, PathTrace, _lost_peak
+from .path_trace import ContinuationResult, CriticalPoint, PathTrace, lost_peak
 from .stability import tangent_stability
 
 __all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
@@ -406,11 +406,11 @@ class _ArcLengthRun:
         return None
 
     def jump_lost_fold(self, failed: ContinuationResult, msg: str) -> ContinuationResult:
-        """After a failure past a load-factor maximum above the start (:func:`_lost_peak`):
+        """After a failure past a load-factor maximum above the start (:func:`lost_peak`):
         the result at the equilibrium ``lost_fold_jump`` above the highest point that energy
         descent lands on (the highest point itself if it does not), with success; else
         ``failed``."""
-        k = _lost_peak(failed, self.lam_start)
+        k = lost_peak(failed, self.lam_start)
         if k is None:
             return failed
         from .descent import descend

@@ -220,7 +220,7 @@ class PathTrace:
                                   tuple(self.jumps))
 
 
-def _lost_peak(res, lam0):
+def lost_peak(res, lam0):
     """Index of the highest accepted point of a failed arc-length run that passed a
     load-factor maximum above ``lam0``, or None."""
     if res.status != "failed" or not any(p.kind == "limit_point" and p.maximum

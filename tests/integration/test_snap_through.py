@@ -172,17 +172,17 @@ def test_lost_peak_is_the_highest_point_of_a_failed_run_past_a_maximum():
     from types import SimpleNamespace as NS
 
     from simulator.solvers.path_trace import CriticalPoint
-    from simulator.solvers.continuation import _lost_peak
+    from simulator.solvers.path_trace import lost_peak
 
     u = np.zeros((1, 3))
     history = [(lam, u, 3) for lam in (0.90, 0.91, 0.918, 0.915, 0.912)]
     top = CriticalPoint("limit_point", 0.9182, 3, None, maximum=True)
     failed = NS(status="failed", history=history, critical_points=[top])
-    assert _lost_peak(failed, 0.89) == 2
-    assert _lost_peak(failed, 0.92) is None                  # no progress past the start
-    assert _lost_peak(NS(status="converged", history=history, critical_points=[top]),
+    assert lost_peak(failed, 0.89) == 2
+    assert lost_peak(failed, 0.92) is None                  # no progress past the start
+    assert lost_peak(NS(status="converged", history=history, critical_points=[top]),
                       0.89) is None
-    assert _lost_peak(NS(status="failed", history=history, critical_points=[
+    assert lost_peak(NS(status="failed", history=history, critical_points=[
         CriticalPoint("limit_point", 0.9, 1, None, maximum=False)]), 0.89) is None
 
 
