@@ -6,7 +6,7 @@ its update; the stopping tests (residual or correction criterion, the round-off 
 :data:`ROUND_OFF`), the step limit (``max_step``: no node moves farther in one correction,
 so contact cannot be jumped through) and the bookkeeping live here once. Load control
 (:func:`~simulator.solvers.newton.newton`), the arc-length and displacement-control corrector
-(:func:`~simulator.solvers.load_path._correct`) and the implicit dynamic step
+(:func:`~simulator.solvers.load_path.correct_point`) and the implicit dynamic step
 (:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`) use it.
 
 :func:`march` drives a path parameter ``t`` from 0 to 1 in equal increments, halving an
