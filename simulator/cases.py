@@ -7,6 +7,7 @@ Node and crease ids below are 0-based (reference id - 1).
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
 from dataclasses import dataclass, field
@@ -292,18 +293,22 @@ def single_fold_step_response(power_mW: float = 3.0, t_on: float = 1.0, t_off: f
 
 # ------------------------------------------------------------------------------ double fold
 @_case(residual_fold_deg="deg", thermal_steps="-", power_mW="mW per crease",
-       env_conductivity="W/(m K)", gravity_scale="-")
+       env_conductivity="W/(m K)", gravity_scale="-", loss_model="")
 def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_scale: float = 0.9,
                 thermal_steps: int = 250, power_mW: float = 10.0,
-                env_conductivity: float = 0.026, coupling: str = "staggered") -> Case:
+                env_conductivity: float = 0.026, coupling: str = "staggered",
+                loss_model: str = "chain") -> Case:
     """Anchor and two folding panels over a substrate, both creases heated (Example02, 8.2).
 
     Fold 2 (crease 5, farther from the substrate) gets hotter and folds more than fold 1.
+    ``loss_model``: the heat loss, ``"chain"`` (the reference's chains, t_env = 600 um) or
+    ``"integral"`` (nothing to fit; the substrate is the boundary panel's plane).
     """
     params = {k: v for k, v in locals().items()}
     pattern = double_fold_pattern()
     thermal = ThermalParameters(
-        loss=ChainLoss(thickness=600e-6, dissipation_angle=REFERENCE_BETA),
+        loss=_case_loss("double_fold", loss_model,
+                        ChainLoss(thickness=600e-6, dissipation_angle=REFERENCE_BETA)),
         medium=AIR.with_properties(thermal_conductivity=env_conductivity),
         boundary_panels=(3,), room_temperature_nodes=(0, 3))
     actuators = Actuators(Bimorph(E1=0.7 * 79e9, t1=0.2e-6, E2=2e9, t2=0.9e-6),
@@ -322,6 +327,16 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
                                                                          thermal_steps),
                       coupling=coupling))
     return Case("double_fold", model, tuple(steps), params, double_fold.__doc__)
+
+
+
+def _case_loss(case: str, loss_model: str, chain: ChainLoss):
+    """A case's heat loss by name: ``"chain"`` (the reference's ``chain``) or ``"integral"``
+    (:class:`~simulator.thermal.loss.IntegralLoss` at its defaults)."""
+    if loss_model not in ("chain", "integral"):
+        raise ParameterError(f"{case}: loss_model = {loss_model!r}; use 'chain' (the "
+                             "reference's) or 'integral' (calibration-free).")
+    return chain if loss_model == "chain" else IntegralLoss()
 
 
 # ------------------------------------------------------------------------------ Miura lifter
@@ -397,11 +412,12 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
 
 
 @_case(a="m", b="m", gamma_deg="deg", crease_width="m", power_mW="mW per crease",
-       thermal_steps="-", undercut="m")
+       thermal_steps="-", undercut="m", loss_model="")
 def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float = 1e-3,
                  gamma_deg: float = 60.0, crease_width: float = 200e-6, power_mW: float = 9.0,
                  thermal_steps: int = 250, substrate: bool = False, undercut: float = 100e-6,
-                 coupling: str = "staggered", on_limit_point: str = "stop") -> Case:
+                 coupling: str = "staggered", on_limit_point: str = "stop",
+                 loss_model: str = "chain") -> Case:
     """Miura-ori lifter (paper 6.2): left end clamped (first column of panels), right end lifts
     when all creases are heated; optionally over a substrate that cools the creases near it.
 
@@ -409,6 +425,9 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     on SU-8 0.8 um, |delta_alpha| = 50e-6 /K with the Miura fold directions
     (:func:`miura_sheet_model`).
     ``on_limit_point="continue"`` follows a snap of the sheet by arc length in the power.
+    ``loss_model``: the heat loss, ``"chain"`` (the reference's chains, t_env = the mean panel
+    edge) or ``"integral"`` (nothing to fit; over the substrate panel's plane when there is
+    one).
     """
     params = {k: v for k, v in locals().items()}
     _check(a=a, b=b, gamma_deg=gamma_deg, crease_width=crease_width, undercut=undercut)
@@ -416,6 +435,9 @@ def miura_lifter(cells_x: int = 2, cells_y: int = 2, a: float = 1e-3, b: float =
     gamma = math.radians(gamma_deg)
     model = miura_sheet_model(a, b, gamma, m, n, crease_width, substrate=substrate,
                               undercut=undercut)
+    loss = _case_loss("miura_lifter", loss_model, model.thermal.loss)
+    if loss is not model.thermal.loss:
+        model = dataclasses.replace(model, thermal=dataclasses.replace(model.thermal, loss=loss))
     steps = (Heat({tuple(miura_fold_signs(a, b, gamma, m, n)): _power(power_mW)},
                   increments=_steps_int("thermal_steps", thermal_steps), coupling=coupling,
                   on_limit_point=on_limit_point),)
@@ -450,9 +472,8 @@ def crane(deactivated: bool = False, power_mW: float | None = None, thermal_step
     folds as far: at 4 mW it folds flat early and passes through itself).
     """
     params = {k: v for k, v in locals().items()}
-    if loss_model not in CRANE_POWER_MW:
-        raise ParameterError(f"crane: loss_model = {loss_model!r}; use one of "
-                             f"{', '.join(map(repr, CRANE_POWER_MW))}.")
+    loss = _case_loss("crane", loss_model, ChainLoss(thickness=1e-3,
+                                                     dissipation_angle=REFERENCE_BETA))
     if power_mW is None:
         power_mW = params["power_mW"] = CRANE_POWER_MW[loss_model]
     q = _power(power_mW)
@@ -463,9 +484,7 @@ def crane(deactivated: bool = False, power_mW: float | None = None, thermal_step
         del heat[8], heat[17]
         heat[9] = heat[11] = q / 2
     pattern = crane_pattern()
-    thermal = ThermalParameters(
-        loss=ChainLoss(thickness=1e-3, dissipation_angle=REFERENCE_BETA)
-        if loss_model == "chain" else IntegralLoss(), medium=AIR)
+    thermal = ThermalParameters(loss=loss, medium=AIR)
     actuators = Actuators(Bimorph(E1=50e9, t1=0.2e-6, E2=2e9, t2=0.8e-6),
                           {c - 1: 200e-6 * s for c, s in _CRANE_SIGN.items()})
     model = make_model(pattern, Supports({12: "xyz", 13: "yz", 15: "z", 17: "z"}),

@@ -95,7 +95,13 @@ def _note(fig, df, kind, what):
 
     note_assumptions(fig, what, _levels_note(df, kind) + "; same shape, same nodal heat and "
                      "same sheet conduction for every model: only the loss to the medium "
-                     "differs; errors of the rise above RT")
+                     "differs; errors of the rise above RT", HEAT_LOSSES)
+
+
+#: The footer line naming the heat-loss models compared (theory 4.3, 4.7; the FE: 4.8).
+HEAT_LOSSES = ("heat loss: chain model (the paper's: beta = 20 deg, N = 10, t_env as each "
+               "panel says) against the integral model (calibration-free, m as labelled) and "
+               "the 3-D FE reference")
 
 
 def folded_figure(df):

@@ -276,8 +276,16 @@ def plot(df: pd.DataFrame):
     note_assumptions(fig, environment_note("air", 0.026, 0, 1.0, extra=[
         "single crease 150 um over a substrate (contact), chip a heat sink at room "
         "temperature", "gripper: lumped self-weight, residual fold 0", "air damping "
-        "2 N s/m^3"]))
+        "2 N s/m^3"]), *heat_loss_lines())
     return fig
+
+
+def heat_loss_lines() -> list:
+    """The footer lines naming each device's heat-loss model (the models this study runs)."""
+    from studies.plotting import heat_loss_note
+
+    return [f"single crease: {heat_loss_note(get_case(CASE).model)}",
+            f"gripper: {heat_loss_note(gripper_model(GripperDesign())[0])}"]
 
 
 def main(argv=None):

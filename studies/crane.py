@@ -129,8 +129,8 @@ def plot(df: pd.DataFrame) -> dict:
     from matplotlib.lines import Line2D
     from matplotlib.ticker import MaxNLocator
 
-    from studies.plotting import environment_note, label_points, mark_temperature_limit, \
-        nodal_range, note_assumptions, plot_shape, share_3d_scale
+    from studies.plotting import environment_note, heat_loss_note, label_points, \
+        mark_temperature_limit, nodal_range, note_assumptions, plot_shape, share_3d_scale
 
     variants = list(VARIANTS)
     all_creases = df[df["table"] == "crease"]
@@ -163,8 +163,8 @@ def plot(df: pd.DataFrame) -> dict:
     creases = df[df["table"] == "crease"]
     bars = _bars(creases, variants, "(9 and 11 halved in the second run)")
     note = environment_note("air", 0.026, 0, 0, extra=[
-        "no substrate", "heat loss: the chains, beta = 20 deg, t_env = 1 mm (the reference's; "
-        "crane_heat_models shows the calibration-free integral loss beside them)"])
+        heat_loss_note(get_case(NAME).model) + " (the reference's; crane_heat_models shows "
+        "the calibration-free integral loss beside them)"])
     for f in (fig, bars):
         note_assumptions(f, note)
     figs = {NAME: fig, f"{NAME}_creases": bars}
@@ -174,10 +174,11 @@ def plot(df: pd.DataFrame) -> dict:
                         INTEGRAL: "integral heat loss"})
         models.suptitle("Crane, all creases heated: the integral heat loss folds it as far on "
                         "average at 0.7 mW as the case's chains at 4 mW", fontsize="medium")
-        note_assumptions(models, environment_note("air", 0.026, 0, 0, extra=[
-            "no substrate", "chain: beta = 20 deg, t_env = 1 mm (the reference's); integral: "
-            "nothing fitted (theory 4.7), within 0.2 % of the 3-D FE in crease temperature on "
-            "the flat crane (heat_transfer_models)"]))
+        note_assumptions(models, environment_note("air", 0.026, 0, 0), "chain: "
+                         + heat_loss_note(get_case(NAME).model) + " (the reference's)",
+                         "integral: " + heat_loss_note(get_case(NAME, loss_model="integral").model)
+                         + "; nothing fitted (theory 4.7), within 0.2 % of the 3-D FE in crease "
+                         "temperature on the flat crane (heat_transfer_models)")
         figs[f"{NAME}_heat_models"] = models
 
     nodes = df[df["table"] == "nodes"]

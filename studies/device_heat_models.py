@@ -488,9 +488,10 @@ def plot(df: pd.DataFrame):
                  "against the 3-D FE", fontsize="large")
     levels = sorted(parts["fe"]["fe_level"].dropna().astype(int).unique())
     note_assumptions(fig, environment_note("air", 0.026, 0, extra=[
-        f"integral model: integral_refinement m = {DEFAULT_M} (extrapolated), image of the "
-        "substrate plane (the "
-        "boundary panel's)", f"3-D FE level {', '.join(map(str, levels))}",
+        "heat loss: the chains (the paper's: t_env = 1.5 x the mean arm length on the "
+        "gripper, beta = 20 deg) beside the integral model (calibration-free: m = "
+        f"{DEFAULT_M}, extrapolated, image of the substrate plane, the boundary panel's); "
+        "sheet conduction T3 for both", f"3-D FE level {', '.join(map(str, levels))}",
         "FE-implied power: the model's actuation temperatures reached with the FE's heat "
         "loss (linear heat at the stopping shape; mean over both models' shapes)",
         "measured: the paper's devices near cycles 4 and 9"]))

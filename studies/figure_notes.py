@@ -15,7 +15,8 @@ from cycler import cycler
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 __all__ = ["PALETTE", "LINESTYLES", "figure_style", "environment_note", "note_assumptions",
-           "stamp_quick", "stamp_full", "QUICK_STAMP", "FULL_STAMP"]
+           "heat_loss_note", "check_footer", "stamp_quick", "stamp_full", "QUICK_STAMP",
+           "FULL_STAMP", "NO_HEAT"]
 
 #: Colour-blind-safe colours (Okabe & Ito 2008), the default colour cycle of every study
 #: figure (:func:`figure_style`); ``C0``... name them in this order.
@@ -53,6 +54,19 @@ def environment_note(medium: str, k_env: float | None = None, residual_fold=None
     return "; ".join(parts + list(extra))
 
 
+#: The footer line of a figure whose runs heat nothing (no heat-loss model in play).
+NO_HEAT = "heat loss: none (nothing is heated)"
+
+
+def heat_loss_note(thermal) -> str:
+    """The footer line naming the heat-loss model, its settings, the medium and the
+    substrate of a run: ``thermal.describe()`` of its
+    :class:`~simulator.ThermalParameters` (or of a model, whose ``thermal`` it reads);
+    :data:`NO_HEAT` for None."""
+    thermal = getattr(thermal, "thermal", thermal)
+    return NO_HEAT if thermal is None else thermal.describe()
+
+
 _NOTE_GID, _STATUS_GID = "assumptions", "run-status"
 
 
@@ -79,6 +93,22 @@ def note_assumptions(fig, *lines: str) -> None:
     fig.text(0.005, 0.005, text, ha="left", va="bottom", fontsize=7, color="0.2",
              gid=_NOTE_GID, linespacing=1.25)
     _reserve_bottom(fig, 0.06 + n * 7 * 1.25 / 72 + 0.04)
+
+
+def check_footer(fig, name: str = "figure") -> None:
+    """Raise ValueError unless ``fig`` has a footer (:func:`note_assumptions`) that names its
+    heat-loss model ("heat loss: ...", e.g. :func:`heat_loss_note`, or :data:`NO_HEAT`) and
+    the medium ("medium" or "environment"; not needed with :data:`NO_HEAT`): every study
+    figure says which physics made it."""
+    text = " ".join(t.get_text() for t in fig.texts if t.get_gid() == _NOTE_GID)
+    flat = " ".join(text.split()).lower()
+    needed = (("the heat-loss model", ("heat loss:",)),) + (
+        () if NO_HEAT in flat else (("the medium", ("medium", "environment")),))
+    missing = [what for what, words in needed if not any(w in flat for w in words)]
+    if missing:
+        raise ValueError(f"{name}: its footer does not name {' and '.join(missing)} "
+                         f"(footer: {text[:80]!r}); add heat_loss_note(model) to its "
+                         "note_assumptions(...) call.")
 
 
 #: Text of the stamp on the figures of a ``--quick`` study run (:func:`stamp_quick`).

@@ -313,9 +313,9 @@ def _plot_cycles(cycles, stop_message=""):
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_xlabel("cycle")
         ax.grid(True, alpha=0.3)
-    from studies.plotting import note_assumptions
+    from studies.plotting import GRIPPER_HEAT_LOSS, note_assumptions
 
-    note_assumptions(fig, _NOTE)
+    note_assumptions(fig, _NOTE, GRIPPER_HEAT_LOSS)
     return fig
 
 
@@ -360,9 +360,9 @@ def _plot_methods(comp, hist):
                    "failed, e.g. time limit)")
     ax_h.legend(fontsize="small", ncol=3, loc="upper right")
     ax_h.grid(True, alpha=0.3)
-    from studies.plotting import note_assumptions
+    from studies.plotting import GRIPPER_HEAT_LOSS, note_assumptions
 
-    note_assumptions(fig, _NOTE)
+    note_assumptions(fig, _NOTE, GRIPPER_HEAT_LOSS)
     return fig
 
 

@@ -230,11 +230,12 @@ def plot(df: pd.DataFrame):
     ax_t.set_title("crease temperature at the stopping power")
     ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16))
     ax_t.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2)
-    from studies.plotting import note_assumptions
+    from studies.plotting import GRIPPER_HEAT_LOSS, note_assumptions
 
     note_assumptions(fig, "environment: air, k_env = 0.026 W/(m K); gravity x 1 (lumped "
                      "self-weight); the residual fold of all four actuated creases swept "
-                     "together; temperature: centre-line mean of the hottest heated crease")
+                     "together; temperature: centre-line mean of the hottest heated crease",
+                     GRIPPER_HEAT_LOSS)
     return fig
 
 

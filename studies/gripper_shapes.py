@@ -204,7 +204,8 @@ def _grid(designs, nodes, rows, stages, title, columns=None, schematic=False):
     for one stage; all at one true scale; a schematic in the first free cell if asked."""
     from matplotlib.figure import Figure
 
-    from studies.plotting import nodal_range, note_assumptions, share_3d_scale
+    from studies.plotting import GRIPPER_HEAT_LOSS, nodal_range, note_assumptions, \
+        share_3d_scale
 
     chosen = designs[designs["design"].isin(rows) & designs["stage"].isin(stages)]
     t_range = nodal_range(nodes[nodes["design"].isin(rows)][TEMP])
@@ -229,7 +230,7 @@ def _grid(designs, nodes, rows, stages, title, columns=None, schematic=False):
                  "scale; substrate, 150 um below, not drawn)", fontsize="medium")
     note_assumptions(fig, "environment: air, k_env = 0.026 W/(m K); residual fold 0 deg; "
                      "gravity x 1 (lumped self-weight); stage powers from the bisect search "
-                     "of gripper_optimization (per heated crease)")
+                     "of gripper_optimization (per heated crease)", GRIPPER_HEAT_LOSS)
     return fig
 
 

@@ -152,7 +152,8 @@ _MARKS = {"works": ("o", "works"), "too hot": ("x", "too hot (T > 1.2 T_g)"),
 def _plot_yield(df):
     from matplotlib.figure import Figure
 
-    from studies.plotting import T_LIMIT, T_MEASURE, environment_note, note_assumptions
+    from studies.plotting import GRIPPER_HEAT_LOSS, T_LIMIT, T_MEASURE, environment_note, \
+        note_assumptions
 
     summary = df[df["table"] == "summary"]
     samples = df[df["table"] == "samples"]
@@ -193,7 +194,8 @@ def _plot_yield(df):
     ax_p.grid(True, alpha=0.3)
     ax_p.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     note_assumptions(fig, environment_note(
-        "air", scenario=SCENARIO_TEXT, extra=["gravity x 1 (lumped self-weight)"]), f"T = {T_MEASURE} (limit {T_LIMIT:.0f} °C); a sample whose simulation "
+        "air", scenario=SCENARIO_TEXT, extra=["gravity x 1 (lumped self-weight)"]),
+        GRIPPER_HEAT_LOSS + " (air's conductivity varied as the scenario says)", f"T = {T_MEASURE} (limit {T_LIMIT:.0f} °C); a sample whose simulation "
         f"failed is retried once with power steps {1e3 * RETRY_STEPS[0]:g}/"
         f"{1e3 * RETRY_STEPS[1]:g} mW; failures left after it are not counted in the yield.")
     return fig
@@ -221,10 +223,11 @@ def _plot_inputs(df):
         ax.set_xlabel(f"Spearman rank correlation with {out} (95 % CI)")
         ax.grid(True, axis="x", alpha=0.3)
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    from studies.plotting import environment_note, note_assumptions
+    from studies.plotting import GRIPPER_HEAT_LOSS, environment_note, note_assumptions
 
     note_assumptions(fig, environment_note("air", scenario=SCENARIO_TEXT,
-                                           extra=["gravity x 1 (lumped self-weight)"]))
+                                           extra=["gravity x 1 (lumped self-weight)"]),
+                     GRIPPER_HEAT_LOSS + " (air's conductivity varied as the scenario says)")
     return fig
 
 

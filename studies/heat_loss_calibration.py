@@ -315,7 +315,7 @@ def _style_legend(fig, has_ref, has_fe):
     if has_ref:
         handles.append(Line2D([], [], color="k", ls="none", marker="x", ms=6,
                               label="reference implementation (MATLAB)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 3),
+    fig.legend(handles=handles, loc="outside right center", ncols=1,
                fontsize="small")
 
 
@@ -350,6 +350,12 @@ def _sweep_figure(df, sweeps):
     fig.suptitle(r"Heat loss of the SU-8 strip (k = 0.3 W/(m K)) to air ($k_{env}$ = 0.026 "
                  r"W/(m K)), RT = 0, Q = 10 W L $t_c$; FE (grey, dotted) needs no $\beta$, "
                  r"$t_{env}$, N", fontsize="medium")
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, "environment: air, k_env = 0.026 W/(m K); no substrate",
+                     "heat loss: chain model (the paper's), its beta, t_env and N swept as the "
+                     "panels say; FE: the 2-D cross-section / 3-D FE reference (nothing fitted); "
+                     "sheet conduction T3")
     return fig
 
 
@@ -389,6 +395,12 @@ def _materials_figure(mat):
     fig.suptitle(rf"Structure materials: chain model at $\beta$ = {r['beta [deg]']:g} deg, "
                  rf"$t_{{env}}$ = {r['t_env [-]']:g} L, N = {r['N [-]']:g} (the paper's "
                  "choice) against FE; Q = 10 W L $t_c$, RT = 0", fontsize="medium")
+    from studies.plotting import note_assumptions
+
+    note_assumptions(fig, "environment: air and water as the panels say; no substrate",
+                     f"heat loss: chain model (the paper's; beta = {r['beta [deg]']:g} deg, "
+                     f"t_env = {r['t_env [-]']:g} L, N = {r['N [-]']:g}) against the FE "
+                     "reference (nothing fitted); sheet conduction T3")
     return fig
 
 

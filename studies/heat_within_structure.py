@@ -318,7 +318,7 @@ def plot(df: pd.DataFrame):
 
     note_assumptions(fig, "(e) = (d), not a bug: the ratios depend on t_c L1 / (t_p L) only, so "
                      "L1/L = 0.5, 1, 2 (at t_c/t_p = 0.1) is t_c/t_p = 0.05, 0.1, 0.2 (at "
-                     "L1/L = 1).", "environment: none (k_env = 0, no heat loss); no mechanics; the "
+                     "L1/L = 1).", "environment: none (k_env = 0); heat loss: none (insulated sheet); no mechanics; the "
                      "paper's FE reference curves (Fig. 5) are not re-computed: the exact 1-D "
                      "solution stands in for them")
     return fig

@@ -225,10 +225,12 @@ def plot(df: pd.DataFrame):
     ax_b.legend(fontsize="small")
     for ax in (ax_p, ax_e, ax_b):
         ax.grid(True, alpha=0.3)
-    from studies.plotting import environment_note, note_assumptions
+    from studies.plotting import environment_note, heat_loss_note, note_assumptions
 
-    note_assumptions(fig, "crane: " + environment_note("air", 0.026, 0, 0) + ". double fold: "
-                     + environment_note("air", 0.026, 0, 0.9), _limit_note(df))
+    note_assumptions(fig, "crane: " + environment_note("air", 0.026, 0, 0) + "; "
+                     + heat_loss_note(get_case("crane").model) + ". double fold: "
+                     + environment_note("air", 0.026, 0, 0.9) + "; "
+                     + heat_loss_note(get_case("double_fold").model), _limit_note(df))
     return fig
 
 

@@ -324,11 +324,13 @@ def _grid_figure(grid):
 
 
 def _note(fig):
-    from studies.plotting import environment_note, note_assumptions
+    from design.devices.miura import miura_model
+    from studies.plotting import environment_note, heat_loss_note, note_assumptions
 
     note_assumptions(fig, environment_note("air", 0.026, 0, 0, extra=[
         "4 x 2 cells over a substrate 100 um below", "first column clamped",
-        "temperature: hottest crease, centre-line mean"]))
+        "temperature: hottest crease, centre-line mean"]),
+        heat_loss_note(miura_model()) + " (t_env of the design's case)")
 
 
 def _optimum_figure(opt, cycles):

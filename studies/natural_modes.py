@@ -38,7 +38,7 @@ import pandas as pd
 
 from simulator import Heat, natural_modes, simulate
 from studies._common import TEMP, progress_bar, study_main
-from studies.actuation_speed import gripper, single_crease
+from studies.actuation_speed import gripper, heat_loss_lines, single_crease
 
 NAME = "natural_modes"
 MODES = 4
@@ -119,7 +119,7 @@ def plot(df: pd.DataFrame):
 
     note_assumptions(fig, environment_note("air", 0.026, "0 and -10", 1.0, extra=[
         "single crease 150 um over a substrate (contact)", "gripper: lumped self-weight, "
-        "residual fold 0"]))
+        "residual fold 0"]), *heat_loss_lines())
     return fig
 
 

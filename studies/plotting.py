@@ -16,9 +16,9 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from studies.figure_notes import (FULL_STAMP, LINESTYLES, PALETTE, QUICK_STAMP,  # noqa: F401
-                                  environment_note, figure_style, note_assumptions,
-                                  stamp_full, stamp_quick)
+from studies.figure_notes import (FULL_STAMP, LINESTYLES, NO_HEAT, PALETTE,  # noqa: F401
+                                  QUICK_STAMP, check_footer, environment_note, figure_style,
+                                  heat_loss_note, note_assumptions, stamp_full, stamp_quick)
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
 from design.devices.limits import SU8_LIMIT
@@ -27,8 +27,14 @@ from simulator import crease_limit_temperatures
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",
            "T_LIMIT", "T_MEASURE", "PALETTE", "LINESTYLES", "figure_style", "note_assumptions",
-           "environment_note", "centre_line_temperatures", "share_3d_scale", "label_points",
+           "environment_note", "heat_loss_note", "NO_HEAT", "GRIPPER_HEAT_LOSS", "centre_line_temperatures", "share_3d_scale", "label_points",
            "panel_centres"]
+
+#: The footer line of the gripper studies' heat loss (``GripperDesign``'s default chain
+#: model, whose t_env follows the design's arms).
+GRIPPER_HEAT_LOSS = ("heat loss: chain model (the paper's; t_env = 1.5 x the mean arm length "
+                     "(L1 + L2) / 2, 10 layers, beta = 20 deg); medium: air; t_env capped at "
+                     "the substrate panel (5); sheet conduction T3")
 
 CMAP = "plasma"
 POWER, FOLD, TEMP, TEMP_MAX = ("power [mW]", "fold_angle [deg]", "temperature [degC]",
@@ -457,6 +463,7 @@ def save_figure(fig, path, dpi=150, quick=False) -> pathlib.Path:
     path = pathlib.Path(path)
     if not path.suffix:
         path = path.with_suffix(".png")
+    check_footer(fig, path.name)
     path.parent.mkdir(parents=True, exist_ok=True)
     if quick:
         stamp_quick(fig)

@@ -170,7 +170,7 @@ def plot(df: pd.DataFrame) -> dict:
     """``{"single_fold": fold vs power, "single_fold_shape": 3-D shape of the -10 deg run}``."""
     from matplotlib.figure import Figure
 
-    from studies.plotting import environment_note, note_assumptions, plot_shape
+    from studies.plotting import environment_note, heat_loss_note, note_assumptions, plot_shape
 
     sweep = df[df["table"] == "sweep"]
     thr = df[df["table"] == "threshold"].set_index("variant")
@@ -207,7 +207,8 @@ def plot(df: pd.DataFrame) -> dict:
         "which stops it; the residual fold sets the rest angle, hence the power to lift off. "
         f"k_env = {K_REFERENCE:g} W/(m K) is the reference script's value, {K_REFERENCE / K_AIR:.0f}"
         " x air's; heat leaves the crease mainly through the environment, so in air the same "
-        "fold needs about 20 x less power.",
+        "fold needs about 20 x less power.", heat_loss_note(get_case(NAME).model)
+        + " (medium as the panels say: the reference script's or air)",
         "The paper's measured threshold points (Fig. 7c) are not available here and not drawn.")
 
     nodes = df[df["table"] == "nodes"]
@@ -218,7 +219,8 @@ def plot(df: pd.DataFrame) -> dict:
                  f"({sweep[sweep['variant'] == nodes['variant'].iloc[0]][POWER].max():.0f} mW)")
     ax.view_init(elev=20, azim=-60)
     note_assumptions(shape, environment_note("water-like (reference script)", K_REFERENCE,
-                                             SHAPE_RESIDUAL, 1.0))
+                                             SHAPE_RESIDUAL, 1.0),
+                     heat_loss_note(get_case(NAME).model))
     return {NAME: fig, f"{NAME}_shape": shape}
 
 

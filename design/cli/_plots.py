@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 __all__ = ["demo_figure", "plot_mode_shape", "plot_modes", "save_mode_plots", "set_3d_limits"]
 
 
-def demo_figure(table, threshold, what):
+def demo_figure(table, threshold, what, physics: str = ""):
     """Fold angle and crease temperature vs power of the demo, the threshold marked.
 
     Parameters
@@ -31,6 +31,9 @@ def demo_figure(table, threshold, what):
         Threshold power [mW].
     what : str
         What the threshold marks (legend text).
+    physics : str
+        The footer: the heat-loss model and medium
+        (:meth:`~simulator.ThermalParameters.describe`).
     """
     from matplotlib.figure import Figure
 
@@ -53,6 +56,12 @@ def demo_figure(table, threshold, what):
     h2, l2 = ax_t.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize="small", loc="upper left")
     ax.set_title("single crease on a substrate: heating until lift-off")
+    if physics:
+        import textwrap
+
+        fig.text(0.005, 0.005, textwrap.fill(physics, 110), ha="left", va="bottom", fontsize=6,
+                 color="0.2")
+        fig.get_layout_engine().set(rect=(0, 0.07, 1, 0.93))
     return fig
 
 

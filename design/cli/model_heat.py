@@ -88,7 +88,7 @@ def model_summary(model, heated) -> str:
         loss = thermal.loss
         what = (f"chains, t_env {loss.thickness * 1e6:.4g} um" if loss.model == "chain" else
                 f"integral, m = {loss.refinement}")
-        name = thermal.medium.name if thermal.medium.name != "custom" else "the medium"
+        name = thermal.medium.name
         k_env = thermal.medium.thermal_conductivity
         line += f"; heat loss: {what}, to {name} at {k_env:.4g} W/(m K)"
     fixed = int(model.fixed_mask.sum()) if hasattr(model, "fixed_mask") else 0

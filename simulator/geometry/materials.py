@@ -133,7 +133,8 @@ class Fluid:
     def with_properties(self, **changes) -> Fluid:
         """This fluid with some of ``density`` [kg/m^3], ``specific_heat`` [J/(kg K)],
         ``thermal_conductivity`` [W/(m K)] changed: itself where none changes, else the known
-        fluid (:data:`AIR`, :data:`WATER`) it then equals, else a fluid named ``"custom"``;
+        fluid (:data:`AIR`, :data:`WATER`) it then equals, else a fluid named after this one
+        and what changed (``"air with k changed"``);
         e.g. ``ThermalParameters(medium=AIR.with_properties(thermal_conductivity=0.6))``."""
         for field, value in changes.items():
             if field not in _UNITS:
@@ -145,7 +146,15 @@ class Fluid:
         values = {k: getattr(self, k) for k in _UNITS} | {k: float(v) for k, v in changes.items()}
         return next((f for f in (AIR, WATER) if all(getattr(f, k) == v
                                                    for k, v in values.items())),
-                    None) or Fluid("custom", **values)
+                    None) or Fluid(self._changed_name(values), **values)
+
+    def _changed_name(self, values: dict) -> str:
+        """``"air with k changed"``: the name of this fluid with other ``values``."""
+        symbols = {"density": "rho", "specific_heat": "c", "thermal_conductivity": "k"}
+        base = self.name.split(" with ")[0]
+        origin = next((f for f in (AIR, WATER) if f.name == base), self)
+        changed = [s for k, s in symbols.items() if float(getattr(origin, k)) != values[k]]
+        return f"{base} with {', '.join(changed)} changed"
 
     def environment(self) -> dict:
         """Deprecated: the old flat keywords of

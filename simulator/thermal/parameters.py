@@ -391,8 +391,15 @@ class ThermalParameters:
 
     def describe(self) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate."""
-        sub = ("no substrate" if self.substrate is None else "substrate: the boundary panels' "
-               "plane" if self.substrate.from_panels else "substrate: a given plane")
+        panels = ", ".join(map(str, self.boundary_panels))
+        if self.substrate is None or (self.substrate.from_panels and not panels):
+            sub = "no substrate"
+        elif self.loss.model == "chain":
+            sub = f"t_env capped at the boundary panels ({panels})"
+        elif self.substrate.from_panels:
+            sub = f"substrate: the plane of the boundary panels ({panels})"
+        else:
+            sub = "substrate: a given plane"
         return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
                 f"{self.medium.thermal_conductivity:g} W/(m K); {sub}")
 

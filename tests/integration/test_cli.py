@@ -31,6 +31,7 @@ def test_demo_runs_and_reports(capsys):
     assert main(["demo"]) == 0
     out = capsys.readouterr().out
     assert "self_fold" in out and "gravity" in out and "converged" in out
+    assert "heat loss: chain model (the paper's" in out and "medium: air with k changed, k = 0.6" in out
 
 
 def test_console_script_installed():

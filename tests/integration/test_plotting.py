@@ -15,8 +15,8 @@ from matplotlib.figure import Figure
 
 from simulator.cases import single_fold_model
 from simulator import SelfFold, simulate
-from studies.plotting import (animate, plot_fold_vs_power, plot_shape, plot_temperature_vs_power,
-                              save_figure)
+from studies.plotting import (animate, heat_loss_note, note_assumptions, plot_fold_vs_power,
+                              plot_shape, plot_temperature_vs_power, save_figure)
 
 
 @pytest.fixture(scope="module")
@@ -148,10 +148,13 @@ def test_curves_reject_bad_input(hot):
 
 
 def test_save_figure_writes_png(hot, tmp_path):
-    out = save_figure(plot_shape(hot), tmp_path / "figs" / "shape")
+    shape, curves = plot_shape(hot), plot_fold_vs_power(hot)
+    for fig in (shape, curves):
+        note_assumptions(fig, heat_loss_note(hot.model))     # save_figure requires the physics
+    out = save_figure(shape, tmp_path / "figs" / "shape")
     assert out == tmp_path / "figs" / "shape.png"
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    out = save_figure(plot_fold_vs_power(hot), tmp_path / "fold.png")
+    out = save_figure(curves, tmp_path / "fold.png")
     assert out.stat().st_size > 0
 
 

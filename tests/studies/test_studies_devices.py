@@ -157,15 +157,44 @@ def test_single_fold_example01_follows_the_reference(quick):
     assert ours["fold_angle [deg]"].iloc[-1] > 50
 
 
-def test_double_fold_far_crease_hotter_and_folds_more(quick):
+@pytest.mark.parametrize("loss_model", ["chain", "integral"])
+def test_double_fold_far_crease_hotter_and_folds_more(quick, loss_model):
     _, _, df = quick("double_fold")
     sweep = _table(df, "sweep")
+    sweep = sweep[sweep["loss_model"] == loss_model]
     last = sweep.sort_values("step").groupby("fold").last()
     assert last.loc[2, "fold_angle [deg]"] > last.loc[1, "fold_angle [deg]"] + 10
     assert last.loc[2, "temperature [degC]"] > last.loc[1, "temperature [degC]"] + 20
     assert last["power [mW]"].tolist() == pytest.approx([10, 10])
     first = sweep.sort_values("step").groupby("fold").first()
     assert first["power [mW]"].tolist() == [0, 0] and first["fold_change [deg]"].tolist() == [0, 0]
+
+
+def test_double_fold_integral_loss_runs_hotter_and_folds_further_than_the_chains(quick):
+    """The calibration-free model, which the 3-D FE supports here, loses less heat than the
+    paper's chains: every fold further and hotter at the same power (side by side, issue 29)."""
+    _, _, df = quick("double_fold")
+    sweep = _table(df, "sweep")
+    last = sweep.sort_values("step").groupby(["loss_model", "fold"]).last()
+    for fold in (1, 2):
+        assert (last.loc[("integral", fold), "fold_angle [deg]"]
+                > last.loc[("chain", fold), "fold_angle [deg]"] + 10)
+        assert (last.loc[("integral", fold), "temperature_centre [degC]"]
+                > 1.05 * last.loc[("chain", fold), "temperature_centre [degC]"])
+    nodes = _table(df, "nodes")
+    assert set(nodes["loss_model"]) == {"chain", "integral"}
+
+
+def test_miura_integral_loss_lifts_more_than_the_chains_on_and_off_the_substrate(quick):
+    """The calibration-free loss, side by side with the paper's chains (issue 29): it loses
+    less heat on this lifter, so each variant lifts more and runs hotter."""
+    _, _, df = quick("miura_lifter")
+    lift = _table(df, "sweep").sort_values("step").groupby("variant")["lift [um]"].last()
+    hot = _table(df, "crease").groupby("variant")["temperature_centre [degC]"].max()
+    for variant in ("free", "on substrate"):
+        assert lift[f"{variant}, integral loss"] > 1.5 * lift[variant]
+        assert hot[f"{variant}, integral loss"] > hot[variant] + 20
+    assert lift["on substrate, integral loss"] < 0.6 * lift["free, integral loss"]
 
 
 def test_miura_substrate_lowers_lift_and_cools_anchored_end(quick):

@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 
 import studies
 from studies import _common, plotting
-from studies.plotting import QUICK_STAMP, save_figure, stamp_quick
+from studies.plotting import NO_HEAT, QUICK_STAMP, note_assumptions, save_figure, stamp_quick
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 #: Every study module: the modules of ``studies`` with a ``main``.
@@ -47,6 +47,7 @@ class Stub:
     def plot(self, df):
         fig = Figure(figsize=(4, 3), layout="constrained")
         fig.add_subplot().plot(df["x [um]"])
+        note_assumptions(fig, "environment: none", NO_HEAT)   # save_figure requires a footer
         self.figures.append(fig)
         return fig
 
@@ -140,6 +141,7 @@ def test_save_figure_stamps_quick_figures_once_below_the_axes(tmp_path):
     fig = Figure(figsize=(4, 3), layout="constrained")
     ax = fig.add_subplot()
     ax.plot([0, 1], [0, 1])
+    note_assumptions(fig, "environment: none", NO_HEAT)
     save_figure(fig, tmp_path / "full.png")
     assert not _stamps(fig)
     save_figure(fig, tmp_path / "quick.png", quick=True)

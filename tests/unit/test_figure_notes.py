@@ -20,11 +20,12 @@ def test_footer_and_full_stamp_sit_below_the_axes(tmp_path):
     fig = Figure(figsize=(5, 3), layout="constrained")
     ax = fig.add_subplot()
     ax.plot([0, 1], [0, 1])
-    note_assumptions(fig, environment_note("air", 0.026, -10, 0.9, extra=["substrate"]))
+    note_assumptions(fig, environment_note("air", 0.026, -10, 0.9, extra=["substrate"]),
+                     plotting.NO_HEAT)
     plotting.save_figure(fig, tmp_path / "f.png")
     (note,) = _texts(fig, "assumptions")
     assert " ".join(note.get_text().split()) == ("environment: air, k_env = 0.026 W/(m K); residual fold -10 deg; "
-                               "gravity x 0.9; substrate")
+                               "gravity x 0.9; substrate " + plotting.NO_HEAT)
     (stamp,) = _texts(fig, "full-stamp")
     fig.canvas.draw()
     bottom = ax.get_tightbbox().transformed(fig.transFigure.inverted()).y0

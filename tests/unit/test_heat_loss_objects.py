@@ -56,7 +56,7 @@ def test_old_spellings_are_read_and_switch_the_loss():
         old = ThermalParameters(env_thickness=2e-3, layers=5, env_conductivity=0.6,
                                 boundary_panels=[1], dissipation_angle=0.1)
         assert old.loss == ChainLoss(thickness=2e-3, layers=5, dissipation_angle=0.1)
-        assert old.medium.name == "custom" and old.env_conductivity == 0.6
+        assert old.medium.name == "air with k changed" and old.env_conductivity == 0.6
         assert ThermalParameters(env_thickness=1e-3, **WATER.environment()).medium == WATER
         # the old switch, with the integral model's old fields, in one replace
         integral = dataclasses.replace(old, loss_model="integral", integral_refinement=4,
@@ -210,7 +210,9 @@ def test_a_medium_with_other_properties_is_named_after_the_fluid_it_equals():
     assert AIR.with_properties(density=998.0, specific_heat=4182.0,
                                thermal_conductivity=0.6) is WATER
     custom = AIR.with_properties(thermal_conductivity=0.6)
-    assert (custom.name, custom.density, custom.thermal_conductivity) == ("custom", 1.293, 0.6)
+    assert (custom.name, custom.density, custom.thermal_conductivity) == ("air with k changed",
+                                                                          1.293, 0.6)
+    assert custom.with_properties(density=1.0).name == "air with rho, k changed"
     with pytest.raises(ParameterError, match="'viscosity' is not a property of a fluid"):
         AIR.with_properties(viscosity=1.0)
     with pytest.deprecated_call(match=r"Fluid.environment\(\) is deprecated"):
