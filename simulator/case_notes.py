@@ -10,7 +10,7 @@ CHOICES = {"coupling": ("staggered", "iterated"), "on_limit_point": ("stop", "co
            "mechanics": ("dynamic", "quasi_static"),
            ("verification_strip", "variant"): ("within", "loss"),
            ("snap_through", "variant"): ("force", "heated"),
-           ("crane", "loss_model"): ("chain", "integral")}
+           "loss_model": ("chain", "integral")}
 #: What the ``power_mW`` of each case is: per which crease or circuit.
 POWER_MEANING = {
     "single_fold": "the one crease's power at the end of the ramp",

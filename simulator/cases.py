@@ -185,12 +185,13 @@ def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None
 def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_mW,
                       env_conductivity, crease_width, env_thickness, coupling, t_gold, t_su8,
                       panel_thickness, L, undercut, E_gold, delta_alpha, self_fold_steps,
-                      room_nodes=(0, 3)):
+                      room_nodes=(0, 3), loss_model="chain"):
     _check(crease_width=crease_width, env_thickness=env_thickness, t_gold=t_gold, t_su8=t_su8)
     if not (isinstance(env_conductivity, (int, float)) and env_conductivity >= 0):
         raise ParameterError(f"env_conductivity = {env_conductivity!r} must be >= 0 W/(m K).")
     thermal = ThermalParameters(
-        loss=ChainLoss(thickness=env_thickness, dissipation_angle=REFERENCE_BETA),
+        loss=_case_loss(name, loss_model, ChainLoss(thickness=env_thickness,
+                                                    dissipation_angle=REFERENCE_BETA)),
         medium=AIR.with_properties(thermal_conductivity=env_conductivity),
         boundary_panels=(2,), room_temperature_nodes=room_nodes)
     actuators = Actuators(Bimorph(E1=E_gold, t1=t_gold, E2=2e9, t2=t_su8), {2: delta_alpha})
@@ -207,16 +208,18 @@ def _single_fold_case(name, *, residual_fold_deg, gravity, thermal_steps, power_
 
 
 @_case(residual_fold_deg="deg", thermal_steps="-", power_mW="mW", env_conductivity="W/(m K)",
-       crease_width="m", env_thickness="m")
+       crease_width="m", env_thickness="m", loss_model="")
 def single_fold(residual_fold_deg: float = 0.0, gravity: bool = False, thermal_steps: int = 500,
                 power_mW: float = 100.0, env_conductivity: float = 0.6,
                 crease_width: float = 200e-6, env_thickness: float = 750e-6,
-                coupling: str = "staggered") -> Case:
+                coupling: str = "staggered", loss_model: str = "chain") -> Case:
     """Single crease over a substrate heated to power_mW (reference Example01, theory 10.1).
 
     Defaults are exactly the reference's: residual fold 0, gravity off, k_env = 0.6 (water-like),
     500 increments to 100 mW. The paper's threshold study uses gravity=True and a negative
-    residual fold.
+    residual fold. ``loss_model``: ``"chain"`` (the reference's chains, t_env =
+    ``env_thickness``) or ``"integral"`` (nothing to fit; ``env_thickness`` unused; the
+    substrate is the boundary panel's plane).
     """
     params = {k: v for k, v in locals().items()}
     case = _single_fold_case(
@@ -224,7 +227,7 @@ def single_fold(residual_fold_deg: float = 0.0, gravity: bool = False, thermal_s
         thermal_steps=thermal_steps, power_mW=power_mW, env_conductivity=env_conductivity,
         crease_width=crease_width, env_thickness=env_thickness, coupling=coupling,
         t_gold=0.1e-6, t_su8=0.4e-6, panel_thickness=21e-6, L=0.5e-3, undercut=150e-6,
-        E_gold=39.5e9, delta_alpha=DELTA_ALPHA_AU_SU8, self_fold_steps=80)
+        E_gold=39.5e9, delta_alpha=DELTA_ALPHA_AU_SU8, self_fold_steps=80, loss_model=loss_model)
     return Case(case.name, case.model, case.steps, params, single_fold.__doc__)
 
 

@@ -88,7 +88,7 @@ def model_summary(model, heated) -> str:
         loss = thermal.loss
         what = (f"chains, t_env {loss.thickness * 1e6:.4g} um" if loss.model == "chain" else
                 f"integral, m = {loss.refinement}")
-        name = thermal.medium.name
+        name = thermal.medium.name if " with " not in thermal.medium.name else "the medium"
         k_env = thermal.medium.thermal_conductivity
         line += f"; heat loss: {what}, to {name} at {k_env:.4g} W/(m K)"
     fixed = int(model.fixed_mask.sum()) if hasattr(model, "fixed_mask") else 0

@@ -116,7 +116,8 @@ def _reference_solver(model: Model, reference, x, substrate):
 
         def solve(x, q):
             res = solve_fe3d(model, heat=q, positions=x,
-                             substrate=(plane[:3], plane[3:]) if plane else None)
+                             substrate=Substrate.plane(plane[:3], plane[3:]) if plane
+                             else None)
             if not res.success:
                 raise ParameterError(f"calibrate_environment: the 3-D FE failed: {res.message}")
             return res.temperature
@@ -148,7 +149,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     t_env_bounds : (float, float), optional
         Range of t_env [m] (default: 0.01 to 100 times the model's t_env; a model without
         chains starts from 1.5 times the root of its mean panel area, the paper's suggestion).
-    substrate : "model", Substrate, None or (point, normal)
+    substrate : "model", Substrate or None
         Isothermal substrate plane of the reference (integral model or FE): the model's own
         (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
         boundary panels at ``x``, none without them), a :class:`~simulator.thermal.loss.

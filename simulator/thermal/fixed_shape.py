@@ -151,7 +151,7 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
     state : SimulationState, optional
         Shape ``mesh.nodes + state.u`` and default power; ``positions`` (n, 3) [m] overrides
         the shape. Default: the mesh's nodes.
-    substrate : "model", Substrate, None or (point, normal)
+    substrate : "model", Substrate or None
         Isothermal substrate plane of the integral model and the FE: the model's own
         (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
         boundary panels, none without them), a :class:`~simulator.thermal.loss.Substrate`,
@@ -185,7 +185,8 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
         integer("fe_level", fe_level, 0, 3)
         plane = resolve_substrate(model, x, substrate)
         return solve_fe3d(model, heat=q, positions=x,
-                          substrate=(plane[:3], plane[3:]) if plane else None, level=fe_level,
+                          substrate=Substrate.plane(plane[:3], plane[3:]) if plane else None,
+                          level=fe_level,
                           room_temperature=room_temperature, accuracy=1.0)
     t0 = time.perf_counter()
     prm = model.thermal.with_loss(loss_model)

@@ -32,6 +32,7 @@ from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
+from .._deprecation import warn_deprecated
 from .._validate import array, one_of
 from ..errors import ParameterError, PatternError
 from ..linalg import thresholds
@@ -96,9 +97,10 @@ def resolve_substrate(substrate, mesh, params, x=None) -> tuple:
     """A substrate as a plane of 6 floats (a point and a normal into the medium [m]), or ()
     for none: ``"model"`` is ``params.substrate`` (None ``params``: none), a
     :class:`~simulator.thermal.loss.Substrate` its plane or that of the thermal-boundary panels
-    of ``params`` on ``mesh`` at positions ``x`` (default: the mesh's), None none, or a pair
-    (point (3,), normal (3,)). The one reading of a substrate: the steady model,
-    ``fixed_shape_temperatures``, ``calibrate_environment`` and ``solve_fe3d``."""
+    of ``params`` on ``mesh`` at positions ``x`` (default: the mesh's), None none; a pair
+    (point (3,), normal (3,)) is a deprecated spelling of ``Substrate.plane(point, normal)``.
+    The one reading of a substrate: the steady model, ``fixed_shape_temperatures``,
+    ``calibrate_environment`` and ``solve_fe3d``."""
     from .loss import Substrate
 
     if isinstance(substrate, str):
@@ -114,9 +116,11 @@ def resolve_substrate(substrate, mesh, params, x=None) -> tuple:
     try:
         point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
     except (TypeError, ValueError):
-        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate, None or "
-                             "a pair (point (3,), normal (3,)) [m].") from None
-    return tuple(float(v) for v in np.concatenate([point, normal]))
+        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate "
+                             "(Substrate.plane(point, normal) [m]) or None.") from None
+    warn_deprecated("substrate=(point, normal) is deprecated; give "
+                    "substrate=Substrate.plane(point, normal).")
+    return Substrate.plane(point, normal).as_tuple()
 
 
 def panels_plane(mesh, panels, x=None) -> tuple:

@@ -157,6 +157,19 @@ def test_single_fold_example01_follows_the_reference(quick):
     assert ours["fold_angle [deg]"].iloc[-1] > 50
 
 
+def test_single_fold_integral_loss_lowers_every_threshold(quick):
+    """Side by side (issue 29): the integral loss's thresholds are below the chains' at both
+    media, and rise with the residual fold as theirs do."""
+    _, _, df = quick("single_fold")
+    thr = _table(df, "threshold").set_index("variant")["threshold_power [mW]"]
+    chains = [v for v in thr.index if "gravity" in v and not v.endswith(", integral loss")]
+    assert len(chains) >= 4
+    for v in chains:
+        assert thr[f"{v}, integral loss"] < 0.9 * thr[v]
+    integral_air = [thr[f"air, gravity, residual {r:g} deg, integral loss"] for r in (0, -10)]
+    assert integral_air[0] < integral_air[1]
+
+
 @pytest.mark.parametrize("loss_model", ["chain", "integral"])
 def test_double_fold_far_crease_hotter_and_folds_more(quick, loss_model):
     _, _, df = quick("double_fold")

@@ -324,3 +324,16 @@ def test_chains_are_calibrated_for_a_model_that_has_none():
     # as good as the fit from the model's own chains (t_env beyond the substrate's cap is
     # free there: 1.15 against 0.60 mm at beta -> 0, the same residual)
     assert fit.rms_error == pytest.approx(chained.rms_error, rel=1e-6)
+
+
+def test_a_point_normal_pair_is_a_deprecated_spelling_of_substrate_plane():
+    from simulator.thermal.steady import resolve_substrate
+
+    model = get_case("double_fold").model
+    plane = Substrate.plane((0.0, 0.0, -1e-4), (0.0, 0.0, 1.0))
+    assert resolve_substrate(plane, model.mesh, model.thermal) == plane.as_tuple()
+    with pytest.deprecated_call(match=r"Substrate.plane\(point, normal\)"):
+        old = resolve_substrate(((0, 0, -1e-4), (0, 0, 1)), model.mesh, model.thermal)
+    assert old == plane.as_tuple()
+    with pytest.raises(ParameterError, match="must be 'model', a Substrate"):
+        resolve_substrate((0, 0, 0), model.mesh, model.thermal)

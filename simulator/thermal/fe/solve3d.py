@@ -319,7 +319,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     state : SimulationState, optional
         Shape (``mesh.nodes + state.u``) and default power; ``positions`` (n, 3) [m] overrides
         the shape. Default: the flat mesh.
-    substrate : "model", Substrate, None or (point, normal)
+    substrate : "model", Substrate or None
         Isothermal plane at room temperature: the model's own substrate (``"model"``,
         ``ThermalParameters.substrate``: by default the plane of its thermal boundary panels,
         none if it has none), a :class:`~simulator.thermal.loss.Substrate`, none, or a given
