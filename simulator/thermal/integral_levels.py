@@ -120,7 +120,7 @@ class CorrectedLoss:
         self.lumped = bool(lumped)
         self.nodes = base.nodes
         self._accurate0 = self._base0 = None
-        self._last = (None, None, None)     # (L_base, L_acc(x0), their lumped sum) of the last call
+        self._last = (None, None, None)     # (L_base, L_acc(x0), their sum) of the last call
         self._near = None       # (node ids, their heights) under the cheap operator's scale
 
     @property
