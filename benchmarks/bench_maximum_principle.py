@@ -8,7 +8,8 @@ Prints the numbers behind theory 4.2's "Monotone conduction":
    heated creases and the monotone conduction's flips and Steiner points.
 2. *The cause*: positive couplings of the assembled T3 conduction by kind of edge, and the
    lowest rise with the positive couplings of the conduction, or of the integral loss operator
-   L, moved onto the diagonal (a diagnosis, not a method).
+   L, moved onto the diagonal (:func:`~simulator.thermal.integral.lump_couplings`; for L the
+   option ``IntegralLoss(lumped=True)``).
 3. *Mesh refinement* (a converged reference for the same model): every mesh triangle split
    uniformly into r^2 (T3 from positions), the crease heat spread evenly over each crease (the
    T3 nodal split is exactly that, at r = 1), the chain loss as the loss density
@@ -17,7 +18,11 @@ Prints the numbers behind theory 4.2's "Monotone conduction":
    triangles (one collocation point each, beside the coarse model at m = r: the same
    sub-triangles, only the temperature's resolution differs). Mean centre-line rise of the
    heated creases and the lowest rise, at r = 1 (the T3 model, but for the even spread of the
-   heat: the gripper's hand-edited crease nodes make its nodal split uneven), 2, 4, 8.
+   heat: the gripper's hand-edited crease nodes make its nodal split uneven), 2, 4, 8; beside
+   it the coarse T3 model with the plain operator at m = r, consistent and lumped.
+4. *Lumped or consistent* (the default integral model, m = 3 extrapolated, monotone
+   conduction): the heated creases' mean centre-line and centre-node rise and the lowest
+   rise.
 
 Run: ``python benchmarks/bench_maximum_principle.py`` (about two minutes; ``--quick`` stops
 the refinement at r = 4).
@@ -33,7 +38,7 @@ import numpy as np
 from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
 from simulator.cases import get_case
 from simulator.thermal._single_layer import subdivision
-from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator
+from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator, lump_couplings
 from simulator.thermal.loss import IntegralLoss
 from simulator.thermal.measures import crease_temperatures
 from simulator.thermal.monotone import t3_matrices
@@ -83,17 +88,9 @@ def flat_table():
                   f"{mc.n_steiner}")
 
 
-def _clip(A):
-    """``A`` with its positive off-diagonal entries moved onto the diagonal (rows keep their
-    sums)."""
-    off = A - np.diag(np.diag(A))
-    pos = np.where(off > 0, off, 0.0)
-    return A - pos + np.diag(pos.sum(axis=1))
-
-
 def _coarse(tm, x, p, clip_k=False, clip_l=False, refinement=None):
-    """Rise [K] of the T3 model solved densely, optionally with clipped couplings or with the
-    plain integral operator at ``refinement``."""
+    """Rise [K] of the T3 model solved densely, optionally with lumped couplings
+    (:func:`lump_couplings`) or with the plain integral operator at ``refinement``."""
     n = tm.mesh.n_nodes
     K = tm.sheet_conduction(x).toarray()
     held = np.zeros(n, bool)
@@ -109,7 +106,7 @@ def _coarse(tm, x, p, clip_k=False, clip_l=False, refinement=None):
             op = IntegralOperator(tm.mesh.triangles[~tm.is_boundary], n,
                                   tm.params.medium.thermal_conductivity, refinement, tm.plane)
             L[np.ix_(op.nodes, op.nodes)] = op.loss_matrix(x)
-    K, L = (_clip(K) if clip_k else K), (_clip(L) if clip_l else L)
+    K, L = (lump_couplings(K) if clip_k else K), (lump_couplings(L) if clip_l else L)
     free = ~held
     rise = np.zeros(n)
     q = tm.heat_vector(p)
@@ -229,13 +226,29 @@ def refinement_table(levels):
                 if loss == "integral":
                     tm = ThermalModel(model.mesh, dataclasses.replace(model.thermal,
                                                                       conduction="t3"))
-                    c = _coarse(tm, model.mesh.nodes, p, refinement=r)
-                    cells[-1] += f" [T3 at m={r}: {centre_line(c, model.mesh, p):7.2f}]"
+                    c, d = (_coarse(tm, model.mesh.nodes, p, clip_l=clip, refinement=r)
+                            for clip in (False, True))
+                    cells[-1] += (f" [T3 at m={r}: {centre_line(c, model.mesh, p):7.2f}, "
+                                  f"lumped {centre_line(d, model.mesh, p):7.2f}]")
             mono = ThermalModel(model.mesh, dataclasses.replace(model.thermal,
                                                                 conduction="monotone"))
             m = mono.solve(model.mesh.nodes, mono.heat_vector(p)) - model.thermal.room_temperature
             print(f"  {name:11s} {loss:8s} " + "; ".join(cells)
                   + f"; monotone: {centre_line(m, model.mesh, p):7.2f}")
+
+
+def lumped_table():
+    print("4. the default integral model, consistent -> lumped: heated creases' mean "
+          "centre-line rise [K], mean centre-node rise [K], lowest rise [K]")
+    for name, (model, p) in devices("integral").items():
+        cells = []
+        for lumped in (False, True):
+            tm = ThermalModel(model.mesh, model.thermal.with_loss(lumped=lumped))
+            rise = tm.solve(model.mesh.nodes, tm.heat_vector(p)) - model.thermal.room_temperature
+            ctr = crease_temperatures(rise, model.mesh, "centre")[p > 0].mean()
+            cells.append((centre_line(rise, model.mesh, p), ctr, rise.min()))
+        print(f"  {name:11s} " + "   ".join(f"{a} {b:7.2f} -> {c:7.2f}" for a, b, c in zip(
+            ("centre line", "centre", "lowest"), *cells)))
 
 
 def main(argv=None):
@@ -245,6 +258,7 @@ def main(argv=None):
     flat_table()
     cause_table()
     refinement_table((1, 2, 4) if args.quick else (1, 2, 4, 8))
+    lumped_table()
 
 
 if __name__ == "__main__":

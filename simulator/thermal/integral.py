@@ -41,7 +41,7 @@ from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import collocation_matrix, subdivision
 
-__all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE"]
+__all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE", "lump_couplings"]
 
 logger = logging.getLogger(__name__)
 
@@ -80,13 +80,20 @@ class IntegralOperator:
         Rebuild the operator when the distance between two sheet nodes has changed by more
         than ``shape_tol`` times the larger of that distance and the mean sub-triangle
         diameter since the last build (0: on every change of position).
+    lumped : bool
+        :meth:`loss_matrix` returns the conductance with its positive couplings lumped onto
+        the diagonal (:func:`lump_couplings`; ``IntegralLoss.lumped``), else the consistent
+        ``M^T S^-1 M``. :meth:`sub_triangle_heat` is the consistent operator's either way
+        (the lumped conductance loses the same total heat, not the same heat per node).
     """
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
-                 plane=None, shape_tol: float = 0.0):
+                 plane=None, shape_tol: float = 0.0, lumped: bool = False):
         self.triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
         self.n_nodes, self.conductivity, self.plane = int(n_nodes), float(conductivity), plane
         self.shape_tol = float(shape_tol)
+        #: whether :meth:`loss_matrix` is lumped (:func:`lump_couplings`)
+        self.lumped = bool(lumped)
         #: number of operator builds so far (a diagnostic)
         self.builds = 0
         bary_vertices, bary_centroids = subdivision(refinement)
@@ -230,6 +237,8 @@ class IntegralOperator:
                 "contact (said once per model).")
         size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
         d = self._distances(x)
+        if self.lumped:
+            L = lump_couplings(L)
         L.setflags(write=False)
         return _Operator(x.copy(), L, heat, d, self._scale(d, size), definite)
 
@@ -274,13 +283,29 @@ class IntegralOperator:
         return np.maximum(distances, floor) * np.where(pair, 1.0, HEIGHT_SCALE)
 
     def loss_matrix(self, x) -> np.ndarray:
-        """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)."""
+        """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)
+        (lumped if :attr:`lumped`)."""
         return self._operator(x).L
 
     def sub_triangle_heat(self, x, rise) -> np.ndarray:
         """Heat [W] leaving each sub-triangle through both faces, (n_sub,), for nodal
         temperature rises ``rise`` (n_nodes,) [K] at positions ``x`` [m]."""
         return self._operator(x).heat(np.asarray(rise, float)[self.nodes])
+
+
+def lump_couplings(L) -> np.ndarray:
+    """The conductance ``L`` (n, n) [W/K] with its positive couplings lumped onto the diagonal
+    (theory 4.9; ``IntegralLoss.lumped``): every positive off-diagonal entry ``L_ij`` is set
+    to 0 and added to ``L_ii``. A symmetric ``L`` stays exactly symmetric (``L_ij`` and
+    ``L_ji`` move onto the diagonals of both rows), its row sums (the heat each node loses at
+    a uniform rise) are kept to round-off and so is the loss ``1^T L T`` of any rise ``T``;
+    the negative couplings are kept. A new array."""
+    L = np.array(L, float)
+    positive = np.maximum(L, 0.0)
+    np.fill_diagonal(positive, 0.0)
+    L -= positive
+    L[np.diag_indices_from(L)] += positive.sum(axis=1)
+    return L
 
 
 def _padded(heat, live, n_sub):

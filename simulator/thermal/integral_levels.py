@@ -25,7 +25,7 @@ import logging
 
 import numpy as np
 
-from .integral import IntegralOperator
+from .integral import IntegralOperator, lump_couplings
 
 __all__ = ["ExtrapolatedLoss", "CorrectedLoss", "coarse_refinement", "integral_operator"]
 
@@ -42,13 +42,18 @@ class ExtrapolatedLoss:
     """Richardson extrapolation ``(m L_m - c L_c) / (m - c)`` of two :class:`IntegralOperator`.
 
     Both are built at the same shapes: the fine one's criterion (``shape_tol``) decides, and a
-    rebuild of the fine operator rebuilds the coarse one at the same positions.
+    rebuild of the fine operator rebuilds the coarse one at the same positions. With
+    ``lumped`` the combination of the two consistent operators is lumped
+    (:func:`~simulator.thermal.integral.lump_couplings`): lumping either before combining
+    would not do, ``- c L_c`` turns its negative couplings positive.
     """
 
-    def __init__(self, fine: IntegralOperator, coarse: IntegralOperator, m: int, c: int):
+    def __init__(self, fine: IntegralOperator, coarse: IntegralOperator, m: int, c: int,
+                 lumped: bool = False):
         if not int(m) > int(c) >= 1:
             raise ValueError(f"ExtrapolatedLoss needs m > c >= 1, got m = {m}, c = {c}")
         self.fine, self.coarse, self.m, self.c = fine, coarse, int(m), int(c)
+        self.lumped = bool(lumped)
         self.nodes = fine.nodes
         self._L, self._built = None, -1
 
@@ -62,12 +67,15 @@ class ExtrapolatedLoss:
 
     def _combine(self, Lf, Lc) -> np.ndarray:
         L = (self.m * Lf - self.c * Lc) / (self.m - self.c)
+        if self.lumped:
+            L = lump_couplings(L)
         L.setflags(write=False)
         self._L, self._built = L, self.fine.builds
         return L
 
     def loss_matrix(self, x) -> np.ndarray:
-        """``(m L_m - c L_c) / (m - c)`` [W/K] on :attr:`nodes` at positions ``x`` (n, 3) [m]."""
+        """``(m L_m - c L_c) / (m - c)`` [W/K] on :attr:`nodes` at positions ``x`` (n, 3) [m]
+        (lumped if :attr:`lumped`)."""
         Lf = self.fine.loss_matrix(x)
         if self.fine.builds != self._built:
             return self._combine(Lf, self.coarse.rebuild(self.fine.last_positions))
@@ -100,12 +108,19 @@ class CorrectedLoss:
         the accurate one is, so that ``L(x0) = L_acc(x0)``.
     tol : float
         Relative change of ``L_base`` that triggers an accurate rebuild, > 0.
+    lumped : bool
+        Lump the corrected conductance (:func:`~simulator.thermal.integral.lump_couplings`);
+        ``accurate`` and ``base`` are the consistent ones. The sum is lumped, not its
+        terms: the difference ``L_base(x) - L_base(x0)`` has couplings of either sign, and
+        lumping the sum keeps ``L(x0)`` the lumped ``L_acc(x0)``.
     """
 
-    def __init__(self, accurate, base: IntegralOperator, tol: float):
+    def __init__(self, accurate, base: IntegralOperator, tol: float, lumped: bool = False):
         self.accurate, self.base, self.tol = accurate, base, float(tol)
+        self.lumped = bool(lumped)
         self.nodes = base.nodes
         self._accurate0 = self._base0 = None
+        self._last = (None, None, None)     # (L_base, L_acc(x0), their sum) of the last call
         self._near = None       # (node ids, their heights) under the cheap operator's scale
 
     @property
@@ -129,7 +144,8 @@ class CorrectedLoss:
             else float(np.abs(L_base).max() > 0)
 
     def loss_matrix(self, x) -> np.ndarray:
-        """``L_acc(x0) + L_base(x) - L_base(x0)`` [W/K] on :attr:`nodes` at positions ``x``."""
+        """``L_acc(x0) + L_base(x) - L_base(x0)`` [W/K] on :attr:`nodes` at positions ``x``
+        (lumped if :attr:`lumped`)."""
         x = np.asarray(x, float)
         Lb = None
         if self._accurate0 is not None:
@@ -138,13 +154,28 @@ class CorrectedLoss:
             # through itself and the model is not reliable there (IntegralOperator warns once)
             if (self.change(Lb) <= self.tol and not self._moved_near_plane(x)) or \
                     not self.base.last_definite:
-                return self._accurate0 + (Lb - self._base0)
+                return self._corrected(Lb)
         self._accurate0 = self.accurate.rebuild(x)
         self._near = self._near_plane(x)
         last = self.base.last_positions
         self._base0 = Lb if Lb is not None and np.array_equal(last, x) else self.base.rebuild(x)
         logger.debug("integral loss: accurate operator rebuilt (%d so far)", self.builds)
-        return self._accurate0
+        return self._corrected(self._base0)
+
+    def _corrected(self, Lb) -> np.ndarray:
+        """``L_acc(x0) + Lb - L_base(x0)``, lumped if :attr:`lumped` (kept while ``Lb`` and
+        ``L_acc(x0)`` are the same arrays)."""
+        if Lb is self._base0 and not self.lumped:
+            return self._accurate0
+        last_base, last_accurate, L = self._last
+        if Lb is last_base and self._accurate0 is last_accurate:
+            return L
+        L = self._accurate0 + (Lb - self._base0)
+        if self.lumped:
+            L = lump_couplings(L)
+        L.setflags(write=False)
+        self._last = (Lb, self._accurate0, L)
+        return L
 
 
     def _near_plane(self, x):
@@ -193,16 +224,18 @@ def integral_operator(triangles, n_nodes, params, plane=None):
     correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
     memo = [None, None]                      # the levels share the sheet's distances
 
-    def level(r):
-        out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol)
+    def level(r, lumped=False):
+        out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol, lumped)
         out.distance_memo = memo
         return out
 
-    fine = level(m)
+    # lumped (IntegralLoss.lumped) is the outermost operator only, whose conductance the
+    # solve uses: the combinations are of the consistent operators
+    fine = level(m, loss.lumped and not (loss.extrapolated or correct))
     accurate = fine
     if loss.extrapolated:
         c = coarse_refinement(m)
-        accurate = ExtrapolatedLoss(fine, level(c), m, c)
+        accurate = ExtrapolatedLoss(fine, level(c), m, c, loss.lumped and not correct)
     if not correct:
         return accurate
-    return CorrectedLoss(accurate, level(1), loss.correction_tol)
+    return CorrectedLoss(accurate, level(1), loss.correction_tol, loss.lumped)

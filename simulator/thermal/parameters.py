@@ -330,8 +330,8 @@ class ThermalParameters:
         """These parameters with another heat loss: ``model`` ``"chain"`` or ``"integral"``
         (default: the current loss's), and ``changes`` to its fields (:class:`ChainLoss`:
         ``thickness``, ``layers``, ``dissipation_angle``; :class:`IntegralLoss`:
-        ``refinement``, ``extrapolation``, ``shape_tol``, ``correction_tol``). The current
-        loss's fields are kept where the model stays, else the new model's defaults, e.g.
+        ``refinement``, ``extrapolation``, ``shape_tol``, ``correction_tol``, ``lumped``). The
+        current loss's fields are kept where the model stays, else the new model's defaults, e.g.
         ``params.with_loss(correction_tol=0.0)``, ``params.with_loss("integral")``."""
         model = self.loss.model if model is None else one_of(
             "ThermalParameters.with_loss: model", model, HEAT_LOSS_MODELS)

@@ -532,7 +532,9 @@ class ThermalModel:
         """The integral model's loss conductance [W/K] on ``integral.nodes`` at positions
         ``x`` (n, 3) [m]: ``L_m``, or extrapolated (``IntegralLoss.extrapolation``) the
         Richardson combination ``(m L_m - c L_c) / (m - c)``, ``c = max(m // 2, 2)``, and with
-        ``IntegralLoss.correction_tol`` that operator corrected between rebuilds (theory 4.7)."""
+        ``IntegralLoss.correction_tol`` that operator corrected between rebuilds (theory 4.7);
+        the result with its positive couplings lumped onto the diagonal with
+        ``IntegralLoss.lumped`` (theory 4.9)."""
         return self.integral.loss_matrix(x)
 
     def _integral_loss(self, x):
@@ -558,9 +560,9 @@ class ThermalModel:
             return self._conductances(x, False)[1] * rise
         out = np.zeros(self.mesh.n_nodes)
         nodes = self.integral.nodes
-        if isinstance(self.integral, IntegralOperator):       # the plain operator alone
+        if isinstance(self.integral, IntegralOperator) and not self.integral.lumped:
             out[nodes] = self.integral.M.T @ self.integral.sub_triangle_heat(x, rise)
-        else:                            # the combined conductance the solve used
+        else:                            # the combined or lumped conductance the solve used
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
         return out
 
