@@ -8,7 +8,7 @@ IntegralLoss.refinement``); the sheet temperature rise on them is the linear
 interpolation of the nodal rises, ``M T`` at the sub-triangle centroids. The heat ``p_i`` [W]
 leaving sub-triangle ``i`` through both faces solves the collocated single-layer equation
 ``S p = M T`` with ``S_ij = V_ij / A_j`` (:func:`~simulator.thermal._single_layer.collocation_matrix`,
-symmetrised), and the nodes lose ``M^T p``: the loss conductance added to the sheet's T3
+symmetrised: :func:`~simulator.thermal._single_layer.single_layer_operator`), and the nodes lose ``M^T p``: the loss conductance added to the sheet's T3
 conduction is the dense ``L = M^T S^-1 M`` [W/K], symmetric positive definite.
 
 Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (memory
@@ -39,7 +39,7 @@ from ..errors import ParameterError
 from ..linalg import _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
-from ._single_layer import collocation_matrix, subdivision
+from ._single_layer import single_layer_operator, subdivision
 
 __all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE"]
 
@@ -213,9 +213,8 @@ class IntegralOperator:
         if flat is not None:             # on the substrate: no potential, no unknown
             sub, M = sub[~flat], M[~flat]
         if len(sub):
-            V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
-            S = V / area[None, :]
-            L, heat, definite = self._factorise(0.5 * (S + S.T), M)
+            S, _ = single_layer_operator(sub, self.conductivity, self.plane)
+            L, heat, definite = self._factorise(S, M)
         else:                            # the whole sheet lies on the substrate
             L, heat, definite = np.zeros((len(self.nodes),) * 2), None, True
         if flat is not None:

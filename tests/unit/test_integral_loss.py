@@ -14,7 +14,8 @@ from simulator import (AIR, ChainLoss, IntegralLoss, ParameterError, Substrate,
 from simulator.cases import verification_strip
 from simulator.linalg import _dense_jit
 from simulator.thermal import _single_layer_jit, integral
-from simulator.thermal._single_layer import collocation_matrix, subdivision, triangle_potential
+from simulator.thermal._single_layer import (collocation_matrix, single_layer_operator,
+                                              subdivision, triangle_potential)
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
 
@@ -109,6 +110,29 @@ def test_compiled_kernel_matches_numpy():
     V0 = collocation_matrix(tri, 0.5, plane, compiled=False)[0]
     V1 = collocation_matrix(tri, 0.5, plane, compiled=True)[0]
     assert np.allclose(V0, V1, rtol=1e-12, atol=0)
+
+
+def test_compiled_operator_matches_numpy_on_a_folded_sheet_over_a_plane():
+    """The fused compiled pass (sheet and image, the solid angle in one atan2, S = V / A
+    symmetrised) against numpy's twin on sub-triangles of a sheet folded over a plane: coplanar
+    pairs (a point in its source's plane), points on edge lines, the image close and far."""
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    nodes = np.array([[0, 0, 2], [1, 0, 2], [0, 1, 2], [1, 1, 2], [2, 0, 40], [2, 1, 40]],
+                     float) * 1e-4
+    nodes[:, :2] += np.random.default_rng(8).normal(0, 3e-6, (6, 2))   # no ties at 1.5, 3 diam.
+    triangles = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3], [4, 5, 3]])
+    sub = IntegralOperator(triangles, len(nodes), 0.026, 4).sub_triangles(nodes)
+    plane = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
+    for pl in (plane, None):
+        S0, d0 = single_layer_operator(sub, 0.026, pl, compiled=False)
+        S1, d1 = single_layer_operator(sub, 0.026, pl, compiled=True)
+        assert np.array_equal(S1, S1.T)
+        np.testing.assert_allclose(S1, S0, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(d1, d0, rtol=1e-15)
+        V0 = collocation_matrix(sub, 0.026, pl, compiled=False)[0]
+        V1 = collocation_matrix(sub, 0.026, pl, compiled=True)[0]
+        np.testing.assert_allclose(V1, V0, rtol=1e-12, atol=0)
 
 
 def test_compiled_cholesky_matches_lapack():
