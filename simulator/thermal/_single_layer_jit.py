@@ -101,17 +101,22 @@ def _potential(px, py, pz, t, f):
     return total
 
 
-def _mid(px, py, pz, t):
-    """The 3-point rule of degree 2 (barycentric (2/3, 1/6, 1/6) and permutations) of
-    ``int_t 1 / |p - y| dS_y / A_t``."""
+def _mid(px, py, pz, q):
+    """The 3-point rule of degree 2 of ``int_t 1 / |p - y| dS_y / A_t`` at the triangle's
+    points ``q`` (3, 3) (barycentric (2/3, 1/6, 1/6) and permutations, :func:`_rule_points`)."""
     acc = 0.0
     for a in range(3):
-        b, c = (a + 1) % 3, (a + 2) % 3
-        qx = (4.0 * t[a, 0] + t[b, 0] + t[c, 0]) / 6.0 - px
-        qy = (4.0 * t[a, 1] + t[b, 1] + t[c, 1]) / 6.0 - py
-        qz = (4.0 * t[a, 2] + t[b, 2] + t[c, 2]) / 6.0 - pz
+        qx, qy, qz = q[a, 0] - px, q[a, 1] - py, q[a, 2] - pz
         acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
     return acc / 3.0
+
+
+def _rule_points(t, q):
+    """The points of :func:`_mid`'s rule of the triangle ``t`` (3, 3), into ``q`` (3, 3)."""
+    for a in range(3):
+        b, c = (a + 1) % 3, (a + 2) % 3
+        for k in range(3):
+            q[a, k] = (4.0 * t[a, k] + t[b, k] + t[c, k]) / 6.0
 
 
 def _collocation(tri, origin, normal, image, operator, near, scale, V, area, centroid, diam):
@@ -124,10 +129,11 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
     vectorises), then the 3-point rule and the closed form for the closer ones."""
     n = tri.shape[0]
     mid = _MID_FACTOR * near
-    frames = np.empty((n, 4, 7))
+    frames, rule = np.empty((n, 4, 7)), np.empty((n, 3, 3))
     for j in range(n):
         t = tri[j]
         _frame(t, frames[j])
+        _rule_points(t, rule[j])
         e1x, e1y, e1z = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
         e2x, e2y, e2z = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
         cx, cy, cz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
@@ -143,12 +149,13 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
     reach = np.empty(n)
     for j in range(n):
         reach[j] = mid * diam[j]
+    cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
     dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
     for i in range(n):
-        px, py, pz = centroid[i, 0], centroid[i, 1], centroid[i, 2]
+        px, py, pz = cx[i], cy[i], cz[i]
         # the far field (centroid rule) of all pairs, without branches (vectorised)
         for j in range(n):
-            dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
+            dx, dy, dz = px - cx[j], py - cy[j], pz - cz[j]
             dr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
         for j in range(n):
             dv[j] = area[j] / dr[j]
@@ -157,13 +164,13 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
                 if dr[j] < near * diam[j]:
                     dv[j] = _potential(px, py, pz, tri[j], frames[j])
                 else:
-                    dv[j] = area[j] * _mid(px, py, pz, tri[j])
+                    dv[j] = area[j] * _mid(px, py, pz, rule[j])
         if image:                                # the mirror image of the point
             h = 2.0 * ((px - origin[0]) * normal[0] + (py - origin[1]) * normal[1]
                        + (pz - origin[2]) * normal[2])
             qx, qy, qz = px - h * normal[0], py - h * normal[1], pz - h * normal[2]
             for j in range(n):
-                dx, dy, dz = qx - centroid[j, 0], qy - centroid[j, 1], qz - centroid[j, 2]
+                dx, dy, dz = qx - cx[j], qy - cy[j], qz - cz[j]
                 qr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
             for j in range(n):
                 iv[j] = area[j] / qr[j]
@@ -172,7 +179,7 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
                     if qr[j] < near * diam[j]:
                         iv[j] = _potential(qx, qy, qz, tri[j], frames[j])
                     else:
-                        iv[j] = area[j] * _mid(qx, qy, qz, tri[j])
+                        iv[j] = area[j] * _mid(qx, qy, qz, rule[j])
         if operator:
             for j in range(n):
                 V[i, j] = scale * (dv[j] - iv[j]) / area[j]
@@ -191,7 +198,7 @@ def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_mid"):
+    for name in ("_potential", "_frame", "_mid", "_rule_points"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
