@@ -22,9 +22,10 @@ from ..mechanics.elements import _springs_jit
 
 __all__ = ["use_compiled", "collocation"]
 
-#: triangles (n, 3, 3), plane origin (3,), unit normal (3,), image?, operator?, near, scale,
-#: outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
-_SIGNATURE = ("void(f8[:, :, ::1], f8[::1], f8[::1], b1, b1, f8, f8, f8[:, ::1], f8[::1], "
+#: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
+#: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
+_SIGNATURE = ("void(f8[:, :, ::1], i8[:, ::1], i8, f8[::1], f8[::1], b1, b1, f8, f8, f8[:, ::1], "
+              "f8[::1], "
               "f8[:, ::1], f8[::1])")
 
 _compiled = None
@@ -57,14 +58,19 @@ def _frame(t, f):
         f[i + 1, 6] = length
 
 
-def _potential(px, py, pz, t, f):
+def _potential(px, py, pz, t, f, edge, logs, stamp, key):
     """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) with its :func:`_frame`
     ``f`` (4, 7) at the point p: Wilton's closed form (numpy's twin
     :func:`simulator.thermal._single_layer.triangle_potential`) with the distances to the
     vertices computed once per triangle (an edge's ``R-`` and ``R+``) and the sum of the edges'
     arc tangents, the solid angle ``Omega`` the triangle subtends at p, in one atan2 (Van
     Oosterom & Strackee, IEEE Trans. Biomed. Eng. 30(2) 125, 1983):
-    ``tan(Omega / 2) = |a . (b x c)| / (a b c + (a . b) c + (a . c) b + (b . c) a)``."""
+    ``tan(Omega / 2) = |a . (b x c)| / (a b c + (a . b) c + (a . c) b + (b . c) a)``.
+
+    An edge's logarithm ``ln((R+ + l+) / (R- + l-))`` depends on the point and the edge only
+    (not on the triangle's plane, nor on the edge's direction): it is kept in ``logs`` under the
+    edge's id ``edge[e]`` (n_edges,), marked in ``stamp`` with the point's ``key``, and reused by
+    the other triangle of the edge."""
     nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
     ax, ay, az = t[0, 0] - px, t[0, 1] - py, t[0, 2] - pz
     bx, by, bz = t[1, 0] - px, t[1, 1] - py, t[1, 2] - pz
@@ -90,9 +96,13 @@ def _potential(px, py, pz, t, f):
         lm = vx * tx + vy * ty + vz * tz
         lp = lm + length
         r0sq = p0 * p0 + ad * ad
-        num = r1 + lp if lp >= 0.0 else r0sq / (r1 - lp)
-        den = rv + lm if lm >= 0.0 else r0sq / (rv - lm)
-        total += p0 * math.log(num / den)
+        k = edge[i]
+        if stamp[k] != key:
+            num = r1 + lp if lp >= 0.0 else r0sq / (r1 - lp)
+            den = rv + lm if lm >= 0.0 else r0sq / (rv - lm)
+            logs[k] = math.log(num / den)
+            stamp[k] = key
+        total += p0 * logs[k]
     if ad > 0.0:
         triple = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
         den = (ra * rb * rc + (ax * bx + ay * by + az * bz) * rc
@@ -119,7 +129,8 @@ def _rule_points(t, q):
             q[a, k] = (4.0 * t[a, k] + t[b, k] + t[c, k]) / 6.0
 
 
-def _collocation(tri, origin, normal, image, operator, near, scale, V, area, centroid, diam):
+def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, scale, V, area,
+                 centroid, diam):
     """Into ``V`` (n, n): ``scale (int_j 1 / |c_i - y| dS_y - int_j 1 / |c_i* - y| dS_y)``
     (the second term with ``image`` only: ``c_i*`` the mirror image of the centroid ``c_i`` in
     the plane ``origin``, unit ``normal``; by the reflection's symmetry the same as numpy's
@@ -151,6 +162,7 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
         reach[j] = mid * diam[j]
     cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
     dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
+    logs, stamp = np.empty(n_edges), np.full(n_edges, -1, np.int64)
     for i in range(n):
         px, py, pz = cx[i], cy[i], cz[i]
         # the far field (centroid rule) of all pairs, without branches (vectorised)
@@ -162,7 +174,8 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
         for j in range(n):                       # closer pairs: 3-point rule, closed form
             if dr[j] < reach[j]:
                 if dr[j] < near * diam[j]:
-                    dv[j] = _potential(px, py, pz, tri[j], frames[j])
+                    dv[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp,
+                                       2 * i)
                 else:
                     dv[j] = area[j] * _mid(px, py, pz, rule[j])
         if image:                                # the mirror image of the point
@@ -177,7 +190,8 @@ def _collocation(tri, origin, normal, image, operator, near, scale, V, area, cen
             for j in range(n):
                 if qr[j] < reach[j]:
                     if qr[j] < near * diam[j]:
-                        iv[j] = _potential(qx, qy, qz, tri[j], frames[j])
+                        iv[j] = _potential(qx, qy, qz, tri[j], frames[j], edges[j], logs, stamp,
+                                           2 * i + 1)
                     else:
                         iv[j] = area[j] * _mid(qx, qy, qz, rule[j])
         if operator:
@@ -218,18 +232,23 @@ def use_compiled() -> bool:
     return _compiled is not None
 
 
-def collocation(tri, plane, near, scale, operator=False):
+def collocation(tri, plane, near, scale, operator=False, edges=None):
     """``(V, area, centroid, diam)`` of the triangles ``tri`` (n, 3, 3) [m] by the compiled
     kernel: ``V = scale (V_sheet - V_image)`` (n, n) (no image without a ``plane`` ``(origin,
     unit normal)``), divided by the source areas and symmetrised with ``operator``; the areas
-    [m^2], centroids [m] and diameters [m] of the triangles (see :func:`_collocation`)."""
+    [m^2], centroids [m] and diameters [m] of the triangles (see :func:`_collocation`).
+    ``edges`` (n, 3) int: an id per edge (edge e from corner e to e + 1), shared by the two
+    triangles of an edge (their closed forms share its logarithm); None: none shared."""
     tri = np.ascontiguousarray(tri, np.float64)
     n = len(tri)
+    if edges is None:
+        edges = np.arange(3 * n, dtype=np.int64).reshape(n, 3)
+    edges = np.ascontiguousarray(edges, np.int64)
     V, area, centroid, diam = np.empty((n, n)), np.empty(n), np.empty((n, 3)), np.empty(n)
     if plane is None:
         origin, normal = np.zeros(3), np.array([0.0, 0.0, 1.0])
     else:
         origin, normal = (np.ascontiguousarray(v, np.float64) for v in plane)
-    _compiled(tri, origin, normal, plane is not None, bool(operator), float(near), float(scale),
-              V, area, centroid, diam)
+    _compiled(tri, edges, int(edges.max(initial=-1)) + 1, origin, normal, plane is not None,
+              bool(operator), float(near), float(scale), V, area, centroid, diam)
     return V, area, centroid, diam
