@@ -19,6 +19,11 @@ at 3.4-10.2 times the chain model's: its crane folds flat by a quarter of the ra
 passes through itself (the case has no contact), a path of a different kind;
 ``--overdriven`` times that too (about 50 s more), for the record.
 
+Each integral row also prints the operator builds of one run by level (the accurate m and its
+Richardson partner, the cheap m = 1 of the correction between rebuilds), and ``--accurate``
+adds a row with the accurate operator rebuilt at every shape (``correction_tol=0,
+shape_tol=0``): the answers the default must reproduce (theory 4.7).
+
 Run: ``python benchmarks/bench_loss_models.py`` (about a minute; ``--only gripper|crane``
 runs one of the two rows, and ``--overdriven`` adds its row unless ``--only gripper``): the
 integral model at its defaults (m = 3, Richardson-extrapolated, corrected between rebuilds);
@@ -29,6 +34,8 @@ integral model at its defaults (m = 3, Richardson-extrapolated, corrected betwee
 from __future__ import annotations
 
 import argparse
+import collections
+import contextlib
 import dataclasses
 import statistics
 import time
@@ -36,6 +43,7 @@ import time
 from design.devices import gripper
 from simulator import simulate
 from simulator.cases import CRANE_POWER_MW, get_case
+from simulator.thermal.integral import IntegralOperator
 
 
 def _settings(args) -> dict:
@@ -62,6 +70,28 @@ def _timed(fn, repeat):
         walls.append(time.perf_counter() - t0)
         cpus.append(time.process_time() - c0)
     return statistics.median(walls), statistics.median(cpus), out
+
+
+@contextlib.contextmanager
+def counted_builds():
+    """Count the integral operator's builds by refinement m while the block runs: yields a
+    ``Counter`` {m: builds}."""
+    counts = collections.Counter()
+    rebuild = IntegralOperator.rebuild
+
+    def counting(self, x):
+        counts[round(len(self._bary) ** 0.5)] += 1
+        return rebuild(self, x)
+    IntegralOperator.rebuild = counting
+    try:
+        yield counts
+    finally:
+        IntegralOperator.rebuild = rebuild
+
+
+def _builds(counts) -> str:
+    return "builds " + ", ".join(f"m = {m}: {n}" for m, n in sorted(counts.items(),
+                                                                     reverse=True))
 
 
 def gripper_run(loss_model: str, settings: dict):
@@ -116,6 +146,9 @@ def main(argv=None):
                          "extrapolation, no correction: the integral model before 6 Dec 2026)")
     ap.add_argument("--correction-tol", type=float, default=None,
                     help="the integral loss's correction_tol (default: the model's, 0.1)")
+    ap.add_argument("--accurate", action="store_true",
+                    help="also the integral model with the accurate operator rebuilt at every "
+                         "shape (correction_tol=0, shape_tol=0): the answers to reproduce")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     ap.add_argument("--overdriven", action="store_true",
@@ -133,6 +166,16 @@ def main(argv=None):
             walls[loss], cpus[loss], out = _timed(make(loss, _settings(args)), args.repeat)
             print(f"{name:<28} {loss:<9}: {walls[loss]:7.3f} s (CPU {cpus[loss]:7.3f} s)   "
                   f"{_summary(out)}")
+        with counted_builds() as counts:
+            make("integral", _settings(args))()
+        print(f"{name:<28} integral operator per run: {_builds(counts)}")
+        if args.accurate:
+            run = make("integral", {**_settings(args), "correction_tol": 0.0, "shape_tol": 0.0})
+            wall, cpu, out = _timed(run, 1)
+            with counted_builds() as counts:
+                run()
+            print(f"{name:<28} {'accurate':<9}: {wall:7.3f} s (CPU {cpu:7.3f} s)   "
+                  f"{_summary(out)}; at every shape: {_builds(counts)}")
         ratio = walls["integral"] / walls["chain"]
         verdict = ("no acceptance" if limit is None else
                    f"acceptance <= {limit:g}: {'met' if ratio <= limit else 'NOT met'}")

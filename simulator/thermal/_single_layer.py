@@ -14,6 +14,7 @@ at the triangle centroids.
 * :func:`collocation_matrix`: ``V_ij = int_j G(c_i, y) dS_y`` [K m^2/W], the closed form for
   pairs closer than :data:`NEAR_FACTOR` source diameters, a 3-point rule of degree 2 up to
   ``MID_FACTOR x NEAR_FACTOR`` and the centroid rule ``A_j G(c_i, c_j)`` beyond;
+* :func:`single_layer_operator`: ``S = V / A`` symmetrised, the operator the loss factorises;
 * :func:`subdivision`: barycentric coordinates of the uniform refinement of a triangle into
   ``m^2`` sub-triangles.
 """
@@ -26,7 +27,8 @@ import numpy as np
 
 from . import _single_layer_jit
 
-__all__ = ["triangle_potential", "collocation_matrix", "subdivision", "NEAR_FACTOR"]
+__all__ = ["triangle_potential", "collocation_matrix", "single_layer_operator", "subdivision",
+           "subdivision_edges", "NEAR_FACTOR"]
 
 #: Pairs whose centroid distance is below this many source diameters use the closed form.
 NEAR_FACTOR = 1.5
@@ -103,6 +105,31 @@ def subdivision(level: int):
     return vertices, vertices.mean(axis=1)
 
 
+def subdivision_edges(triangles, level: int) -> np.ndarray:
+    """Ids of the edges of the sub-triangles of :func:`subdivision` of the mesh ``triangles``
+    (n_tri, 3) (node ids), (n_tri level^2, 3): edge e of a sub-triangle runs from its corner e
+    to corner e + 1; an edge that two sub-triangles share (inside a triangle, or along a mesh
+    edge between two triangles) has one id."""
+    m = int(level)
+    weights = np.rint(subdivision(m)[0] * m).astype(np.int64)     # (s, 3 corners, 3 parents)
+    tri = np.asarray(triangles, np.int64).reshape(-1, 3)
+    nodes = np.broadcast_to(tri[:, None, None, :], (len(tri),) + weights.shape)
+    w = np.broadcast_to(weights, nodes.shape)
+    # a corner is its parents' (node, weight) pairs with weight > 0, sorted by node
+    key_nodes = np.where(w > 0, nodes, -1).reshape(-1, 3)
+    order = np.argsort(key_nodes, axis=1)
+    key = np.zeros(len(key_nodes), np.int64)      # one integer per corner: nodes, then weights
+    base = int(tri.max(initial=0)) + 2
+    for column in np.take_along_axis(key_nodes, order, axis=1).T + 1:
+        key = key * base + column
+    for column in np.take_along_axis(w.reshape(-1, 3), order, axis=1).T:
+        key = key * (m + 1) + column
+    corner = np.unique(key, return_inverse=True)[1].reshape(-1, 3).astype(np.int64)
+    ends = np.sort(np.stack([corner, np.roll(corner, -1, axis=1)], axis=2), axis=2)
+    edge = ends[..., 0] * (int(corner.max(initial=0)) + 1) + ends[..., 1]   # corners e, e + 1
+    return np.unique(edge, return_inverse=True)[1].reshape(-1, 3).astype(np.int64)
+
+
 def _mirror(points, plane):
     """Mirror images of ``points`` (..., 3) in the plane ``(origin, unit normal)``."""
     origin, normal = plane
@@ -136,23 +163,51 @@ def collocation_matrix(tri, conductivity: float, plane=None, near: float = NEAR_
     centroid : (n, 3) array [m]
     """
     tri = np.asarray(tri, float)
-    c = tri.mean(axis=1)
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    diam = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-    V = _kernel_matrix(c, tri, c, area, diam, near, compiled)
-    if plane is not None:
-        plane = (np.asarray(plane[0], float), np.asarray(plane[1], float))
-        V -= _kernel_matrix(c, _mirror(tri, plane), _mirror(c, plane), area, diam, near, compiled)
-    return V / (4 * math.pi * conductivity), area, c
-
-
-def _kernel_matrix(points, tri, centroid, area, diam, near, compiled=None):
-    """``int_j 1 / |p_i - y| dS_y`` for all points and triangles: centroid rule, closed form near
-    (by :mod:`simulator.thermal._single_layer_jit` when ``compiled``, default: when selected)."""
     if compiled is None:
         compiled = _single_layer_jit.use_compiled()
     if compiled:
-        return _single_layer_jit.kernel_matrix(points, tri, centroid, area, diam, near)
+        V, area, c, _ = _single_layer_jit.collocation(
+            tri, _plane(plane), near, 1 / (4 * math.pi * conductivity))
+        return V, area, c
+    c = tri.mean(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    diam = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    V = _kernel_matrix(c, tri, c, area, diam, near)
+    if plane is not None:
+        plane = _plane(plane)
+        V -= _kernel_matrix(c, _mirror(tri, plane), _mirror(c, plane), area, diam, near)
+    return V / (4 * math.pi * conductivity), area, c
+
+
+def single_layer_operator(tri, conductivity: float, plane=None, near: float = NEAR_FACTOR,
+                          compiled=None, edges=None):
+    """The symmetrised collocation operator ``S = (V / A + (V / A)^T) / 2`` [K/W] of flat
+    triangles (``S_ij = V_ij / A_j``, :func:`collocation_matrix`), and the triangles' diameters
+    [m] (longest edge), (n,): what :class:`~simulator.thermal.integral.IntegralOperator`
+    factorises. Same parameters as :func:`collocation_matrix`; compiled in one pass, in which
+    the triangles sharing an edge (``edges``: :func:`subdivision_edges`) share the closed
+    form's logarithm of that edge (the same value)."""
+    tri = np.asarray(tri, float)
+    if compiled is None:
+        compiled = _single_layer_jit.use_compiled()
+    if compiled:
+        S, _, _, diam = _single_layer_jit.collocation(
+            tri, _plane(plane), near, 1 / (4 * math.pi * conductivity), operator=True,
+            edges=edges)
+        return S, diam
+    V, area, _ = collocation_matrix(tri, conductivity, plane, near, compiled=False)
+    S = V / area[None, :]
+    return 0.5 * (S + S.T), np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+
+
+def _plane(plane):
+    """``(origin, unit normal)`` as float arrays, or None."""
+    return None if plane is None else (np.asarray(plane[0], float), np.asarray(plane[1], float))
+
+
+def _kernel_matrix(points, tri, centroid, area, diam, near):
+    """``int_j 1 / |p_i - y| dS_y`` for all points and triangles: centroid rule, 3-point rule,
+    closed form near (the numpy reference of :mod:`simulator.thermal._single_layer_jit`)."""
     diff = points[:, None, :] - centroid[None, :, :]
     dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
     close = dist < near * diam[None, :]

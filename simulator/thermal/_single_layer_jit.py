@@ -1,10 +1,14 @@
-"""Compiled (numba) twin of :func:`simulator.thermal._single_layer._kernel_matrix`.
+"""Compiled (numba) twin of :func:`simulator.thermal._single_layer.collocation_matrix` and
+:func:`~simulator.thermal._single_layer.single_layer_operator`.
 
 The same formulas pair by pair: the closed form of ``int_T 1 / |p - y| dS_y`` (Wilton et al.)
-for pairs closer than ``near`` source diameters, the centroid rule otherwise. The numpy path is
-the checked reference (tests compare the two). It follows the spring kernel's backend
-(:func:`simulator.mechanics.elements.springs.spring_kernel_backend`, environment variable
-``ETORIGAMI_JIT``): compiled on first use, cached by numba, numpy if numba is missing or fails.
+for pairs closer than ``near`` source diameters, the 3-point rule up to ``2 near``, the
+centroid rule beyond, for the sheet and (with a substrate plane) its mirror image, in one pass
+over the pairs. The numpy path is the checked reference (tests compare the two; the closed
+form's arc tangents are summed in one atan2 here, see :func:`_potential`). It follows the
+spring kernel's backend (:func:`simulator.mechanics.elements.springs.spring_kernel_backend`,
+environment variable ``ETORIGAMI_JIT``): compiled on first use, cached by numba, numpy if
+numba is missing or fails.
 """
 
 from __future__ import annotations
@@ -16,11 +20,13 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix"]
+__all__ = ["use_compiled", "collocation"]
 
-#: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
-#: output (n, m)
-_SIGNATURE = "void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, f8[:, ::1])"
+#: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
+#: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
+_SIGNATURE = ("void(f8[:, :, ::1], i8[:, ::1], i8, f8[::1], f8[::1], b1, b1, f8, f8, f8[:, ::1], "
+              "f8[::1], "
+              "f8[:, ::1], f8[::1])")
 
 _compiled = None
 _broken = False
@@ -52,74 +58,166 @@ def _frame(t, f):
         f[i + 1, 6] = length
 
 
-def _potential(px, py, pz, t, f):
+def _potential(px, py, pz, t, f, edge, logs, stamp, key):
     """``int_t 1 / |p - y| dS_y`` [m] of the triangle ``t`` (3, 3) with its :func:`_frame`
-    ``f`` (4, 7) at the point p."""
+    ``f`` (4, 7) at the point p: Wilton's closed form (numpy's twin
+    :func:`simulator.thermal._single_layer.triangle_potential`) with the distances to the
+    vertices computed once per triangle (an edge's ``R-`` and ``R+``) and the sum of the edges'
+    arc tangents, the solid angle ``Omega`` the triangle subtends at p, in one atan2 (Van
+    Oosterom & Strackee, IEEE Trans. Biomed. Eng. 30(2) 125, 1983):
+    ``tan(Omega / 2) = |a . (b x c)| / (a b c + (a . b) c + (a . c) b + (b . c) a)``.
+
+    An edge's logarithm ``ln((R+ + l+) / (R- + l-))`` depends on the point and the edge only
+    (not on the triangle's plane, nor on the edge's direction): it is kept in ``logs`` under the
+    edge's id ``edge[e]`` (n_edges,), marked in ``stamp`` with the point's ``key``, and reused by
+    the other triangle of the edge."""
     nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
-    d = (px - t[0, 0]) * nx + (py - t[0, 1]) * ny + (pz - t[0, 2]) * nz
-    rx, ry, rz = px - d * nx, py - d * ny, pz - d * nz
+    ax, ay, az = t[0, 0] - px, t[0, 1] - py, t[0, 2] - pz
+    bx, by, bz = t[1, 0] - px, t[1, 1] - py, t[1, 2] - pz
+    cx, cy, cz = t[2, 0] - px, t[2, 1] - py, t[2, 2] - pz
+    ra = math.sqrt(ax * ax + ay * ay + az * az)
+    rb = math.sqrt(bx * bx + by * by + bz * bz)
+    rc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    d = ax * nx + ay * ny + az * nz                  # height of the triangle's plane over p
     ad = abs(d)
     total = 0.0
     for i in range(3):
-        j = (i + 1) % 3
+        if i == 0:
+            vx, vy, vz, rv, r1 = ax, ay, az, ra, rb
+        elif i == 1:
+            vx, vy, vz, rv, r1 = bx, by, bz, rb, rc
+        else:
+            vx, vy, vz, rv, r1 = cx, cy, cz, rc, ra
         tx, ty, tz = f[i + 1, 0], f[i + 1, 1], f[i + 1, 2]
         ux, uy, uz, length = f[i + 1, 3], f[i + 1, 4], f[i + 1, 5], f[i + 1, 6]
-        ax, ay, az = t[i, 0] - rx, t[i, 1] - ry, t[i, 2] - rz
-        bx, by, bz = t[j, 0] - rx, t[j, 1] - ry, t[j, 2] - rz
-        p0 = ax * ux + ay * uy + az * uz
+        p0 = vx * ux + vy * uy + vz * uz
         if abs(p0) <= 1e-12 * length:
             continue
-        lm = ax * tx + ay * ty + az * tz
-        lp = bx * tx + by * ty + bz * tz
+        lm = vx * tx + vy * ty + vz * tz
+        lp = lm + length
         r0sq = p0 * p0 + ad * ad
-        rm = math.sqrt(lm * lm + r0sq)
-        rp = math.sqrt(lp * lp + r0sq)
-        # r + l without cancellation where l < 0 (r + l = r0^2 / (r - l))
-        num = rp + lp if lp >= 0.0 else r0sq / (rp - lp)
-        den = rm + lm if lm >= 0.0 else r0sq / (rm - lm)
-        total += p0 * math.log(num / den)
-        if ad > 0.0:
-            # atan2(y1, x1) - atan2(y2, x2) in one atan2: both x > 0, so both angles lie in
-            # (-pi/2, pi/2) and their difference in (-pi, pi), atan2's own range
-            y1, x1 = p0 * lp, r0sq + ad * rp
-            y2, x2 = p0 * lm, r0sq + ad * rm
-            total -= ad * math.atan2(y1 * x2 - y2 * x1, x1 * x2 + y1 * y2)
+        k = edge[i]
+        if stamp[k] != key:
+            num = r1 + lp if lp >= 0.0 else r0sq / (r1 - lp)
+            den = rv + lm if lm >= 0.0 else r0sq / (rv - lm)
+            logs[k] = math.log(num / den)
+            stamp[k] = key
+        total += p0 * logs[k]
+    if ad > 0.0:
+        triple = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        den = (ra * rb * rc + (ax * bx + ay * by + az * bz) * rc
+               + (ax * cx + ay * cy + az * cz) * rb + (bx * cx + by * cy + bz * cz) * ra)
+        total -= 2.0 * ad * math.atan2(abs(triple), den)
     return total
 
 
-def _kernel(points, tri, centroid, area, diam, near, out):
+def _mid(px, py, pz, q):
+    """The 3-point rule of degree 2 of ``int_t 1 / |p - y| dS_y / A_t`` at the triangle's
+    points ``q`` (3, 3) (barycentric (2/3, 1/6, 1/6) and permutations, :func:`_rule_points`)."""
+    acc = 0.0
+    for a in range(3):
+        qx, qy, qz = q[a, 0] - px, q[a, 1] - py, q[a, 2] - pz
+        acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
+    return acc / 3.0
+
+
+def _rule_points(t, q):
+    """The points of :func:`_mid`'s rule of the triangle ``t`` (3, 3), into ``q`` (3, 3)."""
+    for a in range(3):
+        b, c = (a + 1) % 3, (a + 2) % 3
+        for k in range(3):
+            q[a, k] = (4.0 * t[a, k] + t[b, k] + t[c, k]) / 6.0
+
+
+def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, scale, V, area,
+                 centroid, diam):
+    """Into ``V`` (n, n): ``scale (int_j 1 / |c_i - y| dS_y - int_j 1 / |c_i* - y| dS_y)``
+    (the second term with ``image`` only: ``c_i*`` the mirror image of the centroid ``c_i`` in
+    the plane ``origin``, unit ``normal``; by the reflection's symmetry the same as numpy's
+    integral over the mirrored triangle at ``c_i``), divided by ``A_j`` and symmetrised with
+    ``operator``; into ``area``, ``centroid`` and ``diam`` the triangles' areas, centroids and
+    diameters (longest edge). Per row the centroid rule first for all pairs (no branches: it
+    vectorises), then the 3-point rule and the closed form for the closer ones."""
+    n = tri.shape[0]
     mid = _MID_FACTOR * near
-    frames = np.empty((tri.shape[0], 4, 7))             # point-independent, once per triangle
-    for j in range(tri.shape[0]):
-        _frame(tri[j], frames[j])
-    for i in range(points.shape[0]):
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        for j in range(tri.shape[0]):
-            dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
-            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if dist < near * diam[j]:
-                out[i, j] = _potential(px, py, pz, tri[j], frames[j])
-            elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
-                acc = 0.0
-                for a in range(3):
-                    b, c = (a + 1) % 3, (a + 2) % 3
-                    qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
-                    qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
-                    qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
-                    acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
-                out[i, j] = area[j] * acc / 3.0
-            else:
-                out[i, j] = area[j] / dist
+    frames, rule = np.empty((n, 4, 7)), np.empty((n, 3, 3))
+    for j in range(n):
+        t = tri[j]
+        _frame(t, frames[j])
+        _rule_points(t, rule[j])
+        e1x, e1y, e1z = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+        e2x, e2y, e2z = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+        cx, cy, cz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+        area[j] = 0.5 * math.sqrt(cx * cx + cy * cy + cz * cz)
+        dm = 0.0
+        for a in range(3):
+            b = (a + 2) % 3
+            ex, ey, ez = t[a, 0] - t[b, 0], t[a, 1] - t[b, 1], t[a, 2] - t[b, 2]
+            dm = max(dm, math.sqrt(ex * ex + ey * ey + ez * ez))
+        diam[j] = dm
+        for k in range(3):
+            centroid[j, k] = (t[0, k] + t[1, k] + t[2, k]) / 3.0
+    reach = np.empty(n)
+    for j in range(n):
+        reach[j] = mid * diam[j]
+    cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
+    dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
+    logs, stamp = np.empty(n_edges), np.full(n_edges, -1, np.int64)
+    for i in range(n):
+        px, py, pz = cx[i], cy[i], cz[i]
+        # the far field (centroid rule) of all pairs, without branches (vectorised)
+        for j in range(n):
+            dx, dy, dz = px - cx[j], py - cy[j], pz - cz[j]
+            dr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
+        for j in range(n):
+            dv[j] = area[j] / dr[j]
+        for j in range(n):                       # closer pairs: 3-point rule, closed form
+            if dr[j] < reach[j]:
+                if dr[j] < near * diam[j]:
+                    dv[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp,
+                                       2 * i)
+                else:
+                    dv[j] = area[j] * _mid(px, py, pz, rule[j])
+        if image:                                # the mirror image of the point
+            h = 2.0 * ((px - origin[0]) * normal[0] + (py - origin[1]) * normal[1]
+                       + (pz - origin[2]) * normal[2])
+            qx, qy, qz = px - h * normal[0], py - h * normal[1], pz - h * normal[2]
+            for j in range(n):
+                dx, dy, dz = qx - cx[j], qy - cy[j], qz - cz[j]
+                qr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
+            for j in range(n):
+                iv[j] = area[j] / qr[j]
+            for j in range(n):
+                if qr[j] < reach[j]:
+                    if qr[j] < near * diam[j]:
+                        iv[j] = _potential(qx, qy, qz, tri[j], frames[j], edges[j], logs, stamp,
+                                           2 * i + 1)
+                    else:
+                        iv[j] = area[j] * _mid(qx, qy, qz, rule[j])
+        if operator:
+            for j in range(n):
+                V[i, j] = scale * (dv[j] - iv[j]) / area[j]
+        else:
+            for j in range(n):
+                V[i, j] = scale * (dv[j] - iv[j])
+    if operator:                                 # symmetrised
+        for i in range(n):
+            for j in range(i):
+                s = 0.5 * (V[i, j] + V[j, i])
+                V[i, j] = s
+                V[j, i] = s
 
 
 def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame"):
+    for name in ("_potential", "_frame", "_mid", "_rule_points"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
-    return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
+    # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
+    # triangle to its own centroid (an inf, overwritten by the closed form)
+    return njit(_SIGNATURE, cache=True, fastmath=False, error_model="numpy")(_collocation)
 
 
 def use_compiled() -> bool:
@@ -134,10 +232,23 @@ def use_compiled() -> bool:
     return _compiled is not None
 
 
-def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:
-    """``int_j 1 / |p_i - y| dS_y`` [m], (n, m), by the compiled kernel (see module notes)."""
-    out = np.empty((len(points), len(tri)))
-    c = np.ascontiguousarray
-    _compiled(c(points, np.float64), c(tri, np.float64), c(centroid, np.float64),
-              c(area, np.float64), c(diam, np.float64), float(near), out)
-    return out
+def collocation(tri, plane, near, scale, operator=False, edges=None):
+    """``(V, area, centroid, diam)`` of the triangles ``tri`` (n, 3, 3) [m] by the compiled
+    kernel: ``V = scale (V_sheet - V_image)`` (n, n) (no image without a ``plane`` ``(origin,
+    unit normal)``), divided by the source areas and symmetrised with ``operator``; the areas
+    [m^2], centroids [m] and diameters [m] of the triangles (see :func:`_collocation`).
+    ``edges`` (n, 3) int: an id per edge (edge e from corner e to e + 1), shared by the two
+    triangles of an edge (their closed forms share its logarithm); None: none shared."""
+    tri = np.ascontiguousarray(tri, np.float64)
+    n = len(tri)
+    if edges is None:
+        edges = np.arange(3 * n, dtype=np.int64).reshape(n, 3)
+    edges = np.ascontiguousarray(edges, np.int64)
+    V, area, centroid, diam = np.empty((n, n)), np.empty(n), np.empty((n, 3)), np.empty(n)
+    if plane is None:
+        origin, normal = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    else:
+        origin, normal = (np.ascontiguousarray(v, np.float64) for v in plane)
+    _compiled(tri, edges, int(edges.max(initial=-1)) + 1, origin, normal, plane is not None,
+              bool(operator), float(near), float(scale), V, area, centroid, diam)
+    return V, area, centroid, diam

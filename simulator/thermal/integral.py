@@ -8,8 +8,9 @@ IntegralLoss.refinement``); the sheet temperature rise on them is the linear
 interpolation of the nodal rises, ``M T`` at the sub-triangle centroids. The heat ``p_i`` [W]
 leaving sub-triangle ``i`` through both faces solves the collocated single-layer equation
 ``S p = M T`` with ``S_ij = V_ij / A_j`` (:func:`~simulator.thermal._single_layer.collocation_matrix`,
-symmetrised), and the nodes lose ``M^T p``: the loss conductance added to the sheet's T3
-conduction is the dense ``L = M^T S^-1 M`` [W/K], symmetric positive definite.
+symmetrised: :func:`~simulator.thermal._single_layer.single_layer_operator`), and the nodes
+lose ``M^T p``: the loss conductance added to the sheet's T3 conduction is the dense
+``L = M^T S^-1 M`` [W/K], symmetric positive definite.
 
 Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (memory
 ``~3 x 8 n_s^2`` bytes during assembly), Cholesky ``n_s^3 / 3`` flops, once per shape. Models
@@ -39,7 +40,7 @@ from ..errors import ParameterError
 from ..linalg import _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
-from ._single_layer import collocation_matrix, subdivision
+from ._single_layer import single_layer_operator, subdivision, subdivision_edges
 
 __all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE", "lump_couplings"]
 
@@ -107,6 +108,8 @@ class IntegralOperator:
                 "(loss=ChainLoss(thickness=...), calibrated by simulator.calibrate_environment) "
                 "or the 3-D FE reference (simulator.thermal.fe).")
         self._bary = bary_vertices                                  # (s, 3, 3)
+        #: (n_sub, 3) ids of the sub-triangles' edges (shared edges share an id)
+        self._edges = subdivision_edges(self.triangles, refinement)
         s = len(bary_centroids)
         #: (n_sub, n_nodes) interpolation of nodal values at the sub-triangle centroids
         M = np.zeros((self.n_sub, self.n_nodes))
@@ -216,13 +219,13 @@ class IntegralOperator:
         from nodal rises to sub-triangle heats."""
         full = self.sub_triangles(x)
         xp, flat = self._pressed(x)
-        sub, M = (full if xp is x else self.sub_triangles(xp)), self.M
+        sub, M, edges = (full if xp is x else self.sub_triangles(xp)), self.M, self._edges
         if flat is not None:             # on the substrate: no potential, no unknown
-            sub, M = sub[~flat], M[~flat]
+            sub, M, edges = sub[~flat], M[~flat], edges[~flat]
+        diam = None
         if len(sub):
-            V, area, _ = collocation_matrix(sub, self.conductivity, self.plane)
-            S = V / area[None, :]
-            L, heat, definite = self._factorise(0.5 * (S + S.T), M)
+            S, diam = single_layer_operator(sub, self.conductivity, self.plane, edges=edges)
+            L, heat, definite = self._factorise(S, M)
         else:                            # the whole sheet lies on the substrate
             L, heat, definite = np.zeros((len(self.nodes),) * 2), None, True
         if flat is not None:
@@ -235,7 +238,9 @@ class IntegralOperator:
                 "sub-triangle diameter or pass through each other (a model without contact?); "
                 "the temperatures there are not reliable. Raise IntegralLoss.refinement or add "
                 "contact (said once per model).")
-        size = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1).mean()
+        if sub is not full:              # the diameters of all sub-triangles, unpressed
+            diam = np.linalg.norm(full - np.roll(full, 1, axis=1), axis=2).max(axis=1)
+        size = diam.mean()
         d = self._distances(x)
         if self.lumped:
             L = lump_couplings(L)

@@ -95,6 +95,35 @@ def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between
     np.testing.assert_allclose(L1, expected, rtol=1e-10, atol=1e-12 * np.abs(L1).max())
 
 
+def test_secant_correction_reproduces_both_accurate_builds_and_interpolates_between():
+    """After two accurate builds (x0, then x1) the correction moves along the secant of the
+    cheap operator between them: exact at x1 (s = 0) and back at x0 (s = -1), and in between
+    closer to the accurate operator than the additive correction alone (measured halfway: 2 %
+    of its error, which is 3.2 % of the operator)."""
+    model, folded = _folded_double_fold()
+    x0 = model.mesh.nodes
+    x1 = x0 + 0.1 * (folded - x0)
+    prm = dataclasses.replace(model.thermal.with_loss("integral", shape_tol=0.0), substrate=None)
+    op = ThermalModel(model.mesh, prm).integral
+    accurate = ThermalModel(model.mesh, prm.with_loss(correction_tol=0.0)).integral
+    op.loss_matrix(x0)
+    op.tol = 0.0                                                   # rebuild at x1
+    op.loss_matrix(x1)
+    op.tol = np.inf                                                # keep from here on
+    assert op.builds == 2 and op._secant is not None
+    for x, s in ((x1, 0.0), (x0, -1.0)):
+        assert op.secant_step(op.base.loss_matrix(x) - op._base0) == pytest.approx(s, abs=1e-12)
+        expected = accurate.loss_matrix(x)
+        np.testing.assert_allclose(op.loss_matrix(x), expected, rtol=1e-9,
+                                   atol=1e-11 * np.abs(expected).max())
+    xm = x0 + 0.05 * (folded - x0)
+    exact = accurate.loss_matrix(xm)
+    additive = op._accurate0 + op.base.loss_matrix(xm) - op._base0
+    norm = lambda A: np.abs(A).sum(axis=1).max()                   # noqa: E731
+    assert norm(op.loss_matrix(xm) - exact) < 0.5 * norm(additive - exact)
+    assert op.builds == 2
+
+
 def _double_fold_drift(substrate):
     """The double fold heated to 10 mW per crease in 12 increments with the integral loss at
     its defaults over ``substrate``: the largest difference, over the shapes of the path, of

@@ -14,7 +14,9 @@ from simulator import (AIR, ChainLoss, IntegralLoss, ParameterError, Substrate,
 from simulator.cases import verification_strip
 from simulator.linalg import _dense_jit
 from simulator.thermal import _single_layer_jit, integral
-from simulator.thermal._single_layer import collocation_matrix, subdivision, triangle_potential
+from simulator.thermal._single_layer import (collocation_matrix, single_layer_operator,
+                                              subdivision, subdivision_edges,
+                                              triangle_potential)
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
 
@@ -100,6 +102,23 @@ def test_subdivision_covers_the_triangle():
         assert np.allclose(areas, 0.4 / (m * m))      # same orientation, equal areas
 
 
+def test_subdivision_edges_name_each_geometric_edge_once():
+    """Sub-triangle edges of three triangles in a fan: one id per segment, shared by the two
+    sub-triangles on either side (inside a triangle and across the two shared mesh edges)."""
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2], [2, 1, 0.1]], float)
+    triangles = np.array([[0, 1, 2], [1, 3, 2], [3, 4, 2]])
+    for m in (1, 2, 3, 5):
+        edges = subdivision_edges(triangles, m)
+        corners = IntegralOperator(triangles, len(nodes), 0.026, m).sub_triangles(nodes)
+        segment = {}
+        for tri, ids in zip(corners, edges):
+            for e in range(3):
+                ends = tuple(sorted(map(tuple, np.round([tri[e], tri[(e + 1) % 3]], 12))))
+                assert segment.setdefault(ids[e], ends) == ends
+        assert len(segment) == edges.max() + 1 == 3 * 3 * m * (m + 1) // 2 - 2 * m
+        assert np.bincount(edges.ravel()).max() == 2
+
+
 def test_compiled_kernel_matches_numpy():
     if not _single_layer_jit.use_compiled():
         pytest.skip("numba backend not selected")
@@ -109,6 +128,33 @@ def test_compiled_kernel_matches_numpy():
     V0 = collocation_matrix(tri, 0.5, plane, compiled=False)[0]
     V1 = collocation_matrix(tri, 0.5, plane, compiled=True)[0]
     assert np.allclose(V0, V1, rtol=1e-12, atol=0)
+
+
+def test_compiled_operator_matches_numpy_on_a_folded_sheet_over_a_plane():
+    """The fused compiled pass (sheet and image, the solid angle in one atan2, S = V / A
+    symmetrised, edges' logarithms shared) against numpy's twin on sub-triangles of a sheet
+    folded over a plane: coplanar pairs (a point in its source's plane), the image close and
+    far."""
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    nodes = np.array([[0, 0, 2], [1, 0, 2], [0, 1, 2], [1, 1, 2], [2, 0, 40], [2, 1, 40]],
+                     float) * 1e-4
+    nodes[:, :2] += np.random.default_rng(8).normal(0, 3e-6, (6, 2))   # no ties at 1.5, 3 diam.
+    triangles = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3], [4, 5, 3]])
+    sub = IntegralOperator(triangles, len(nodes), 0.026, 4).sub_triangles(nodes)
+    plane = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
+    edges = subdivision_edges(triangles, 4)
+    for pl in (plane, None):
+        S0, d0 = single_layer_operator(sub, 0.026, pl, compiled=False)
+        S1, d1 = single_layer_operator(sub, 0.026, pl, compiled=True)
+        assert np.array_equal(S1, S1.T)
+        np.testing.assert_allclose(S1, S0, rtol=1e-12, atol=0)
+        S2, _ = single_layer_operator(sub, 0.026, pl, compiled=True, edges=edges)
+        np.testing.assert_allclose(S2, S0, rtol=1e-12, atol=0)    # logarithms shared
+        np.testing.assert_allclose(d1, d0, rtol=1e-15)
+        V0 = collocation_matrix(sub, 0.026, pl, compiled=False)[0]
+        V1 = collocation_matrix(sub, 0.026, pl, compiled=True)[0]
+        np.testing.assert_allclose(V1, V0, rtol=1e-12, atol=0)
 
 
 def test_compiled_cholesky_matches_lapack():
