@@ -16,7 +16,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "kernel_matrix"]
+__all__ = ["use_compiled", "kernel_matrix", "pair_values"]
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
 #: output (n, m)
@@ -24,6 +24,7 @@ _SIGNATURE = "void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, 
 
 _compiled = None
 _broken = False
+_compiled_pairs = None
 #: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
 #: :data:`simulator.thermal._single_layer.MID_FACTOR`).
 _MID_FACTOR = 2.0
@@ -87,6 +88,25 @@ def _potential(px, py, pz, t, f):
     return total
 
 
+def _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frame):
+    """``int_j 1 / |p - y| dS_y`` [m] of triangle ``j`` at the point p by the rule of its
+    distance: closed form, 3-point rule or centroid rule."""
+    dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if dist < near * diam[j]:
+        return _potential(px, py, pz, tri[j], frame)
+    if dist < mid * diam[j]:                                 # 3-point rule (degree 2)
+        acc = 0.0
+        for a in range(3):
+            b, c = (a + 1) % 3, (a + 2) % 3
+            qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
+            qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
+            qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
+            acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
+        return area[j] * acc / 3.0
+    return area[j] / dist
+
+
 def _kernel(points, tri, centroid, area, diam, near, out):
     mid = _MID_FACTOR * near
     frames = np.empty((tri.shape[0], 4, 7))             # point-independent, once per triangle
@@ -95,31 +115,40 @@ def _kernel(points, tri, centroid, area, diam, near, out):
     for i in range(points.shape[0]):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         for j in range(tri.shape[0]):
-            dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
-            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if dist < near * diam[j]:
-                out[i, j] = _potential(px, py, pz, tri[j], frames[j])
-            elif dist < mid * diam[j]:                       # 3-point rule (degree 2)
-                acc = 0.0
-                for a in range(3):
-                    b, c = (a + 1) % 3, (a + 2) % 3
-                    qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
-                    qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
-                    qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
-                    acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
-                out[i, j] = area[j] * acc / 3.0
-            else:
-                out[i, j] = area[j] / dist
+            out[i, j] = _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frames[j])
+
+
+def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
+    mid = _MID_FACTOR * near
+    frame = np.empty((4, 7))
+    for k in range(rows.shape[0]):
+        i, j = rows[k], cols[k]
+        _frame(tri[j], frame)
+        out[k] = _value(points[i, 0], points[i, 1], points[i, 2], j, tri, centroid, area, diam,
+                        near, mid, frame)
 
 
 def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame"):
+    for name in ("_potential", "_frame", "_value"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
+
+
+def _build_pairs():
+    from numba import njit
+
+    _build()                                           # the helpers, compiled
+    return njit(_PAIR_SIGNATURE, cache=True, fastmath=False)(_pair_kernel)
+
+
+#: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
+#: rows (p,), columns (p,), output (p,)
+_PAIR_SIGNATURE = ("void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, i8[::1], "
+                   "i8[::1], f8[::1])")
 
 
 def use_compiled() -> bool:
@@ -140,4 +169,22 @@ def kernel_matrix(points, tri, centroid, area, diam, near) -> np.ndarray:
     c = np.ascontiguousarray
     _compiled(c(points, np.float64), c(tri, np.float64), c(centroid, np.float64),
               c(area, np.float64), c(diam, np.float64), float(near), out)
+    return out
+
+
+def pair_values(points, tri, centroid, area, diam, near, rows, cols) -> np.ndarray:
+    """``int_j 1 / |p_i - y| dS_y`` [m] of the pairs ``(rows[k], cols[k])``, (p,), by the
+    compiled kernel (the entries of :func:`kernel_matrix` at those pairs); ``None`` if it
+    cannot be compiled."""
+    global _compiled_pairs
+    if _compiled_pairs is None:
+        _compiled_pairs = compile_kernel("single-layer pair kernel", _build_pairs,
+                                         "using numpy") or False
+    if _compiled_pairs is False:
+        return None
+    out = np.empty(len(rows))
+    c = np.ascontiguousarray
+    _compiled_pairs(c(points, np.float64), c(tri, np.float64), c(centroid, np.float64),
+                    c(area, np.float64), c(diam, np.float64), float(near),
+                    c(rows, np.int64), c(cols, np.int64), out)
     return out

@@ -24,13 +24,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import in_range, integer, non_negative, positive
+from .._validate import in_range, integer, non_negative, one_of, positive
 from ..errors import ParameterError
 
 __all__ = ["HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate", "heat_loss_from_dict"]
 
 #: The names of the heat-loss models (``loss.model``).
 HEAT_LOSS_MODELS = ("chain", "integral")
+#: How the integral loss's operator is solved (``IntegralLoss.operator``).
+INTEGRAL_OPERATORS = ("auto", "dense", "fast")
 
 
 @dataclass(frozen=True)
@@ -93,12 +95,22 @@ class IntegralLoss:
         The accurate operator is rebuilt only when the cheap m = 1 one changed by more than
         this fraction; in between it follows the shape through the m = 1 operator's change,
         >= 0 (0: rebuilt at ``shape_tol``).
+    operator : {"auto", "dense", "fast"}
+        How the single-layer operator is solved (theory 4.7). "dense" forms and factorises
+        it (:mod:`simulator.thermal.integral`, up to ``MAX_SUB_TRIANGLES`` sub-triangles per
+        level); "fast" never forms it: the far field by a direct compiled sum or the fast
+        multipole method, the near field sparse, the coupled system by preconditioned MINRES
+        (:mod:`simulator.thermal.integral_fast`: the same discrete model, rebuilt at every
+        shape, so ``shape_tol`` and ``correction_tol`` do not apply). "auto" (default): "fast"
+        above the dense limit (more than ``MAX_SUB_TRIANGLES`` sub-triangles at
+        ``refinement``), else "dense".
     """
 
     refinement: int = 3
     extrapolation: bool | None = None
     shape_tol: float = 0.02
     correction_tol: float = 0.1
+    operator: str = "auto"
 
     model = "integral"
 
@@ -106,6 +118,7 @@ class IntegralLoss:
         integer("IntegralLoss.refinement", self.refinement, 1, 16)
         non_negative("IntegralLoss.shape_tol", self.shape_tol)
         non_negative("IntegralLoss.correction_tol", self.correction_tol)
+        one_of("IntegralLoss.operator", self.operator, INTEGRAL_OPERATORS)
         if self.extrapolation is not None and not isinstance(self.extrapolation,
                                                              (bool, np.bool_)):
             raise ParameterError(f"IntegralLoss.extrapolation = {self.extrapolation!r} must be "
@@ -123,15 +136,20 @@ class IntegralLoss:
         return self.refinement >= 3 if self.extrapolation is None else self.extrapolation
 
     def to_dict(self) -> dict:
-        """``{"model": "integral", ...}`` (FOLD model files, metadata)."""
-        return {"model": "integral", "refinement": int(self.refinement),
-                "extrapolation": self.extrapolation, "shape_tol": float(self.shape_tol),
-                "correction_tol": float(self.correction_tol)}
+        """``{"model": "integral", ...}`` (FOLD model files, metadata; ``operator`` only when
+        not the default "auto", so that files of the default read as before)."""
+        out = {"model": "integral", "refinement": int(self.refinement),
+               "extrapolation": self.extrapolation, "shape_tol": float(self.shape_tol),
+               "correction_tol": float(self.correction_tol)}
+        if self.operator != "auto":
+            out["operator"] = self.operator
+        return out
 
     def describe(self) -> str:
         """``integral model (calibration-free; m = 3, extrapolated)``."""
         return (f"integral model (calibration-free; m = {self.refinement}"
-                f"{', extrapolated' if self.extrapolated else ''})")
+                f"{', extrapolated' if self.extrapolated else ''}"
+                f"{'' if self.operator == 'auto' else f', {self.operator} operator'})")
 
 
 def heat_loss_from_dict(value) -> ChainLoss | IntegralLoss:
