@@ -16,12 +16,13 @@ same discrete model is solved without forming either (above the dense limit
   Beyond that radius the dense matrix *is* the centroid rule, so the two operators differ by
   the FMM's tolerance only.
 * :func:`coupled_solver` solves ``(K + sum_l w_l M_l^T S_l^-1 M_l) T = q`` (one term per level
-  of the operator: the plain operator, or the Richardson pair ``3 L_3 - 2 L_2``) as the
-  symmetric saddle system ``[[K, w M^T], [w M, -w S]] [T; p] = [q; 0]`` by preconditioned
-  MINRES. The preconditioner is block diagonal: the sparse ``K + M^T diag(S)^-1 M`` (positive
-  definite also for a free sheet without a held node, where ``K`` alone is singular) and,
-  per level, ``|w| S`` restricted to the pairs closer than :data:`PRECONDITIONER_RADIUS`
-  diameters, both factorised sparsely.
+  of the operator: the plain operator, or the Richardson pair ``3 L_3 - 2 L_2``) level by
+  level, each as the symmetric saddle system ``[[K, M^T], [M, -S]] [T; p] = [q; 0]`` by MINRES
+  with a two-level preconditioner (:mod:`simulator.thermal.integral_schwarz`: zero-sum patch
+  blocks of ``S`` and the patches' constants as a coarse space, and the Schur complement of
+  that approximation by the Woodbury identity): some 50 iterations per level whatever the
+  size. The Richardson pair's rises are extrapolated from the levels' solutions and corrected
+  once towards the operators' extrapolation.
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ FMM_EPS = 1e-5
 #: compiled sum beats the FMM up to about 16,000 points, measured on the shared 2-core machine).
 DIRECT_MAX = 15000
 #: Above this many sub-triangles (all levels) the fast path warns of its cost: about 1 s per
-#: far-field evaluation, and some hundreds of MINRES iterations per solve (theory 4.7).
+#: far-field evaluation (FMM) and some 50 MINRES iterations per level and solve, some 150
+#: evaluations per solve of the default Richardson pair (theory 4.7).
 SLOW_SUB_TRIANGLES = 30000
 #: Relative residual of the MINRES solve (in the preconditioned norm).
 SOLVE_RTOL = 1e-10
@@ -220,6 +222,18 @@ class FastSingleLayer:
         """``S p`` [K] for heats ``p`` (n,) [W]."""
         return self.far(p) + self.near @ np.asarray(p, float)
 
+    def block(self, rows, cols=None) -> np.ndarray:
+        """``S`` [K/W] on the sub-triangles ``rows`` x ``cols`` (default ``rows``), dense."""
+        rows = np.asarray(rows, np.int64)
+        cols = rows if cols is None else np.asarray(cols, np.int64)
+        c = self.centroids
+        d = np.linalg.norm(c[rows][:, None] - c[cols][None], axis=2)
+        with np.errstate(divide="ignore"):
+            out = np.where(rows[:, None] == cols[None], 0.0, 1.0 / d)
+        if self.plane is not None:
+            out -= 1.0 / np.linalg.norm(c[rows][:, None] - self.images[cols][None], axis=2)
+        return self.scale * out + self.near[rows][:, cols].toarray()
+
     def dense(self) -> np.ndarray:
         """``S`` as a dense array (columns by :meth:`matvec`; for checks on small sets)."""
         return np.column_stack([self.matvec(e) for e in np.eye(self.n)])
@@ -263,8 +277,18 @@ def _add_pairs(rows, cols, values, ar, ac, av, n):
     return out
 
 
-def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 5000):
-    """Solver of ``(K + sum_l w_l M_l^T S_l^-1 M_l) T = q`` without forming the loss.
+def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000):
+    """Solver of ``(K + L) T = q``, ``L = sum_l w_l M_l^T S_l^-1 M_l``, without forming ``L``.
+
+    One level (``w = 1``): the symmetric saddle system ``[[K, M^T], [M, -S]] [T; p] = [q; 0]``
+    by MINRES with the two-level preconditioner
+    (:class:`~simulator.thermal.integral_schwarz.TwoLevelPreconditioner`). Several levels
+    (the Richardson pair, ``sum_l w_l = 1``): each level's system solved so, the rises
+    extrapolated, ``T_se = sum_l w_l T_l`` (the solutions' extrapolation: within 0.19-0.50 %
+    of the largest rise of the operators' on 5 x 5-cell Miura sheets, free and over a
+    plane), and corrected once towards the operators' extrapolation (:func:`corrected`
+    inside: two more single-layer solves by CG and one saddle solve); a saddle system of
+    both levels, of opposite weights, needs some 200-240 iterations even with these blocks.
 
     Parameters
     ----------
@@ -274,79 +298,91 @@ def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 5000):
         Weight ``w`` (float), interpolation ``M`` (n_l, n) sparse [-] of the live
         sub-triangles at the unknown nodes, and ``S`` (:class:`FastSingleLayer`, n_l).
     rtol : float
-        Relative residual of MINRES.
+        Relative residual of MINRES (preconditioned norm).
 
     Returns
     -------
     solver : callable
-        ``q (n,) -> (T (n,), [p_l (n_l,)])``: the rises [K] and each level's heats [W]
-        (``S_l p_l = M_l T``).
+        ``q (n,), start -> (T (n,), [(T_l, p_l)], [h_l])``: the rises [K], each level's own
+        rises and heats [W] (``S_l p_l = M_l T_l``; ``start``, optional: guesses of them) and
+        each level's heats at the rises ``T`` (``S_l h_l = M_l T``).
     """
+    from .integral_schwarz import TwoLevelPreconditioner
+
     rtol = SOLVE_RTOL if rtol is None else float(rtol)
+    K = K.tocsr()
     n = K.shape[0]
-    sizes = [M.shape[0] for _, M, _ in terms]
-    offsets = np.cumsum([n] + sizes)
-    total = int(offsets[-1])
-    positive = sum(w for w, _, _ in terms if w > 0)
-    net = sum(w for w, _, _ in terms)
-    P_T = K.tocsr().astype(float)
-    for w, M, S in terms:
-        if w > 0:
-            P_T = P_T + (w * net / positive) * (M.T @ sp.diags(1.0 / S.diagonal) @ M)
-    solve_T = factorize(P_T.tocsr(), kind="spd", dense_limit=400).solve
-    solve_p = [factorize((abs(w) * S.near_block).tocsr(), kind="spd",
-                         dense_limit=400).solve for w, _, S in terms]
-    # diagonal scaling of the blocks: rises ~ 1 / diag(P_T), heats ~ 1 / diag(S)
-    d = np.concatenate([np.sqrt(P_T.diagonal())] + [np.sqrt(abs(w) * S.diagonal)
-                                                   for w, _, S in terms])
-    d = 1.0 / d
+    levels = [(w, M, S, TwoLevelPreconditioner(S, K, M)) for w, M, S in terms]
 
-    def matvec(y):
-        v = y * d
-        T = v[:n]
-        out = np.empty(total)
-        out[:n] = K @ T
-        for (w, M, S), a, b in zip(terms, offsets[:-1], offsets[1:]):
-            p = v[a:b]
-            out[:n] += w * (M.T @ p)
-            out[a:b] = w * (M @ T - S.matvec(p))
-        return out * d
+    def level_solve(M, S, pre, q, start):
+        total = n + S.n
 
-    def precondition(y):
-        v = y / d
-        out = np.empty(total)
-        out[:n] = solve_T(v[:n])
-        for f, a, b in zip(solve_p, offsets[:-1], offsets[1:]):
-            out[a:b] = f(v[a:b])
-        return out / d
+        def matvec(y):
+            T, p = y[:n], y[n:]
+            return np.concatenate([K @ T + M.T @ p, M @ T - S.matvec(p)])
 
-    A = spla.LinearOperator((total, total), matvec=matvec, dtype=float)
-    P = spla.LinearOperator((total, total), matvec=precondition, dtype=float)
+        def precondition(y):
+            return np.concatenate([pre.rise(y[:n]), pre.heat(y[n:])])
 
-    def solver(q, start=None):
-        q = np.asarray(q, float)
-        rhs = np.zeros(total)
-        rhs[:n] = q * d[:n]
-        if not np.any(rhs):
-            return np.zeros(n), [np.zeros(s) for s in sizes]
-        y0 = None
-        if start is not None:            # a guess (rises, [heats]): kept if it cuts the residual
-            y0 = np.concatenate([np.asarray(start[0], float)]
-                                + [np.asarray(p, float) for p in start[1]]) / d
-            if np.linalg.norm(rhs - matvec(y0)) >= np.linalg.norm(rhs):
+        A = spla.LinearOperator((total, total), matvec=matvec, dtype=float)
+        P = spla.LinearOperator((total, total), matvec=precondition, dtype=float)
+        rhs = np.concatenate([q, np.zeros(S.n)])
+        y0 = None if start is None else np.concatenate(start)
+        if y0 is not None:               # kept only if it cuts the residual (MINRES's norm)
+            r = rhs - matvec(y0)
+            if r @ precondition(r) >= rhs @ precondition(rhs):
                 y0 = None
         count = [0]
 
         def cb(_):
             count[0] += 1
         y, info = spla.minres(A, rhs, x0=y0, M=P, rtol=rtol, maxiter=maxiter, callback=cb)
-        v = y * d
         if info != 0:
             logger.warning("integral loss (fast): MINRES stopped after %d iterations without "
                            "reaching rtol %.1e", count[0], rtol)
         logger.debug("integral loss (fast): %d unknowns, %d MINRES iterations%s", total,
                      count[0], "" if y0 is None else " (from the last solution)")
-        return v[:n], [v[a:b] for a, b in zip(offsets[:-1], offsets[1:])]
+        return y[:n], y[n:]
+
+    def heat_solve(S, pre, u, rtol=1e-8):
+        """``S^-1 u`` [W] of potentials ``u`` [K] by conjugate gradients (``P_S``)."""
+        A = spla.LinearOperator((S.n, S.n), matvec=S.matvec, dtype=float)
+        P = spla.LinearOperator((S.n, S.n), matvec=pre.heat, dtype=float)
+        p, info = spla.cg(A, u, M=P, rtol=rtol, maxiter=maxiter)
+        if info != 0:
+            logger.warning("integral loss (fast): CG on the single layer did not converge")
+        return p
+
+    def corrected(q, out):
+        """The operators' extrapolation from the solutions' (two levels, ``d = T_1 - T_2``):
+        the residual of ``T_se = w_1 T_1 + w_2 T_2`` is ``r = w_1 w_2 (L_1 - L_2) d``; one
+        correction ``(K + L_1)^-1 r`` leaves a second-order error. The levels' heats at the
+        corrected rises, ``S_l^-1 M_l T``, follow from ``h_l = S_l^-1 M_l d`` and the
+        correction's."""
+        (w1, M1, S1, pre1), (w2, M2, S2, pre2) = levels
+        (T1, p1), (T2, p2) = out
+        d = T1 - T2
+        h1, h2 = heat_solve(S1, pre1, M1 @ d), heat_solve(S2, pre2, M2 @ d)
+        r = w1 * w2 * (M1.T @ h1 - M2.T @ h2)
+        delta, g1 = level_solve(M1, S1, pre1, r, None)
+        g2 = heat_solve(S2, pre2, M2 @ delta)
+        T = w1 * T1 + w2 * T2 + delta
+        return T, [p1 - w2 * h1 + g1, p2 + w1 * h2 + g2]
+
+    def solver(q, start=None):
+        q = np.asarray(q, float)
+        if not np.any(q):
+            zero = [(np.zeros(n), np.zeros(S.n)) for _, _, S, _ in levels]
+            return np.zeros(n), zero, [p for _, p in zero]
+        out = [level_solve(M, S, pre, q, None if start is None else start[k])
+               for k, (_, M, S, pre) in enumerate(levels)]
+        if len(levels) == 1:
+            return out[0][0], out, [out[0][1]]
+        if len(levels) == 2:
+            T, heats = corrected(q, out)
+            return T, out, heats
+        T = sum(w * T_l for (w, _, _, _), (T_l, _) in zip(levels, out))
+        return T, out, [p for _, p in out]
     return solver
 
 
@@ -416,11 +452,11 @@ class FastIntegralOperator:
         level = logging.WARNING if self.n_sub > SLOW_SUB_TRIANGLES else logging.INFO
         logger.log(level, "the integral heat loss on %d triangles: %d sub-triangles, above the "
                    "dense limit: the fast path (theory 4.7), one far-field evaluation per MINRES "
-                   "iteration and some 100-400 iterations per solve%s", n_tri, self.n_sub,
+                   "iteration, some 50 iterations per level and solve%s", n_tri, self.n_sub,
                    "; slow at this size (minutes per solve): a lower IntegralLoss.refinement "
                    "or the chain model is much faster" if level == logging.WARNING else "")
         self._built = None                  # (positions, [(w, M_live, S)])
-        self._last = None                   # (unknown nodes, rise, [p_l], q) of the last solve
+        self._last = None   # (unknown nodes, rise, [(T_l, p_l)], q, [h_l]) of the last solve
 
     def _heights(self, x):
         """Heights over the substrate plane [m] and the touch tolerance [m]."""
@@ -484,16 +520,18 @@ class FastIntegralOperator:
                 return np.column_stack([solver(c) for c in q.T])
             scale, last = _multiple(q, shape[0]), self._last
             if scale is not None:            # the system is linear: a multiple of the last q
-                rise, ps = scale * shape[0][1], [scale * p for p in shape[0][2]]
+                rise = scale * shape[0][1]
+                ps = [(scale * T, scale * p) for T, p in shape[0][2]]
+                heats = [scale * h for h in shape[0][3]]
             else:
                 start = None
                 if last is not None and np.array_equal(last[0], unknown) \
-                        and [len(p) for p in last[2]] == sizes and last[3] is not None:
+                        and [len(p) for _, p in last[2]] == sizes and last[3] is not None:
                     a = _multiple(q, (last[3],), tol=np.inf)
-                    start = (a * last[1], [a * p for p in last[2]]) if a else None
-                rise, ps = solve(q, start)
-            shape[0] = (q.copy(), rise, ps)
-            self._last = (unknown, rise.copy(), ps, q.copy())
+                    start = [(a * T, a * p) for T, p in last[2]] if a else None
+                rise, ps, heats = solve(q, start)
+            shape[0] = (q.copy(), rise, ps, heats)
+            self._last = (unknown, rise.copy(), ps, q.copy(), heats)
             return rise
         return solver
 
@@ -507,8 +545,8 @@ class FastIntegralOperator:
         out = np.zeros(self.n_nodes)
         if last is not None and np.array_equal(rise[last[0]], last[1]) \
                 and len(last[2]) == len(terms) and not np.any(np.delete(rise, last[0])):
-            for (w, M, _), p in zip(terms, last[2]):
-                out += w * (M.T @ p)
+            for (w, M, _), h in zip(terms, last[4]):
+                out += w * (M.T @ h)
             return out
         for w, M, S in terms:
             pre = factorize(S.near_block.tocsr(), kind="spd", dense_limit=400).solve
