@@ -224,15 +224,11 @@ class FastSingleLayer:
 
     def block(self, rows, cols=None) -> np.ndarray:
         """``S`` [K/W] on the sub-triangles ``rows`` x ``cols`` (default ``rows``), dense."""
+        from .integral_schwarz import _point_part
+
         rows = np.asarray(rows, np.int64)
         cols = rows if cols is None else np.asarray(cols, np.int64)
-        c = self.centroids
-        d = np.linalg.norm(c[rows][:, None] - c[cols][None], axis=2)
-        with np.errstate(divide="ignore"):
-            out = np.where(rows[:, None] == cols[None], 0.0, 1.0 / d)
-        if self.plane is not None:
-            out -= 1.0 / np.linalg.norm(c[rows][:, None] - self.images[cols][None], axis=2)
-        return self.scale * out + self.near[rows][:, cols].toarray()
+        return _point_part(self, rows, cols) + self.near[rows][:, cols].toarray()
 
     def dense(self) -> np.ndarray:
         """``S`` as a dense array (columns by :meth:`matvec`; for checks on small sets)."""

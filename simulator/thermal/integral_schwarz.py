@@ -97,8 +97,8 @@ class TwoLevelPreconditioner:
         groups = np.split(np.argsort(labels, kind="stable"),
                           np.cumsum(np.bincount(labels, minlength=n0))[:-1])
         R0 = sp.csr_matrix((np.ones(ns), (labels, np.arange(ns))), shape=(n0, ns))
-        self.B = _zero_sum_blocks(S, groups)
-        self.S0 = coarse_matrix(S, groups)
+        self.B = _zero_sum_blocks(S, groups, labels)
+        self.S0 = coarse_matrix(S, groups, labels)
         self._S0 = sla.cho_factor(self.S0)
         self.R0 = R0
         U = (M.T @ R0.T).tocsc()
@@ -120,12 +120,29 @@ class TwoLevelPreconditioner:
         return y - self._AU @ (self._core @ (self._U.T @ y))
 
 
-def _zero_sum_blocks(S, groups) -> sp.csr_matrix:
+def _point_part(S, rows, cols) -> np.ndarray:
+    """The centroid rule of ``S`` [K/W] on ``rows`` x ``cols`` (images included, no self
+    term): ``S`` without its sparse near-field part."""
+    c = S.centroids
+    d = np.linalg.norm(c[rows][:, None] - c[cols][None], axis=2)
+    with np.errstate(divide="ignore"):
+        out = np.where(rows[:, None] == cols[None], 0.0, 1.0 / d)
+    if S.plane is not None:
+        out -= 1.0 / np.linalg.norm(c[rows][:, None] - S.images[cols][None], axis=2)
+    return S.scale * out
+
+
+def _zero_sum_blocks(S, groups, labels) -> sp.csr_matrix:
     """Block-diagonal ``B`` (n_s, n_s): per patch the inverse of ``S`` on it restricted to heats
     of zero sum."""
+    near = S.near.tocoo()
+    inside = labels[near.row] == labels[near.col]
+    near = sp.csr_matrix((near.data[inside], (near.row[inside], near.col[inside])),
+                         shape=near.shape)
     rows, cols, vals = [], [], []
     for g in groups:
-        inv = np.linalg.inv(S.block(g))
+        block = _point_part(S, g, g) + near[g][:, g].toarray()
+        inv = np.linalg.inv(block)
         u = inv.sum(axis=1)
         vals.append((inv - np.outer(u, u) / u.sum()).ravel())
         rows.append(np.repeat(g, len(g)))
@@ -134,11 +151,16 @@ def _zero_sum_blocks(S, groups) -> sp.csr_matrix:
                          shape=(S.n, S.n))
 
 
-def coarse_matrix(S, groups) -> np.ndarray:
+def coarse_matrix(S, groups, labels=None) -> np.ndarray:
     """``R0 S R0^T`` (n0, n0) [K/W]: the sum over patch I's centroids of the potential of one
-    watt on each of patch J's sub-triangles; monopoles between far patch pairs, exact sums
-    between near ones (see the module notes)."""
+    watt on each of patch J's sub-triangles; the near-field part exact (sparse), the centroid
+    rule's by monopoles between far patch pairs and exact sums between near ones (see the
+    module notes)."""
     n0 = len(groups)
+    if labels is None:
+        labels = np.empty(S.n, np.int64)
+        for k, g in enumerate(groups):
+            labels[g] = k
     c = S.centroids
     count = np.array([len(g) for g in groups], float)
     centre = np.array([c[g].mean(axis=0) for g in groups])
@@ -152,8 +174,9 @@ def coarse_matrix(S, groups) -> np.ndarray:
             centre[:, None] - img[None], axis=2)
     near = d < COARSE_NEAR * (radius[:, None] + radius[None])
     for i, j in zip(*np.nonzero(np.triu(near))):
-        value = S.block(groups[i], groups[j]).sum()
-        out[i, j] = out[j, i] = value
+        out[i, j] = out[j, i] = _point_part(S, groups[i], groups[j]).sum()
+    R0 = sp.csr_matrix((np.ones(S.n), (labels, np.arange(S.n))), shape=(n0, S.n))
+    out += (R0 @ S.near @ R0.T).toarray()
     return 0.5 * (out + out.T)
 
 
