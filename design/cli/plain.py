@@ -27,7 +27,8 @@ DEFAULT_STACK = "su8-au"
 
 def add_plain_options(parser, heating: bool = True) -> None:
     """``--stack``, ``--frame``, ``--lay-flat``, ``--keep-collinear`` and, for ``run``,
-    ``--heat``, ``--power``, ``--fix-panel``, ``--contact`` / ``--no-contact``."""
+    ``--heat``, ``--power``, ``--fix-panel``, ``--loss-model``, ``--contact`` /
+    ``--no-contact``."""
     parser.add_argument("--stack", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
                              "(default su8-au, the paper's SU-8/Au bimorph; see "
@@ -49,6 +50,11 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
+        parser.add_argument("--loss-model", choices=("chain", "integral"), default="chain",
+                            help="heat loss of a heated plain pattern to the air: the paper's "
+                                 "chains (default) or the boundary-integral model (theory "
+                                 "4.7: nothing to fit; above its dense limit the fast path, "
+                                 "slow on large sheets)")
         parser.add_argument("--contact", action=argparse.BooleanOptionalAction, default=True,
                             help="panel contact of a heated plain pattern (default on: panels "
                                  "never pass through each other; --no-contact: off, a run "
@@ -172,10 +178,16 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     watts = power_mw("--power", heating.power)
     contact = getattr(heating, "contact", True)
     model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact)
+    loss = getattr(heating, "loss_model", "chain")
+    if loss != "chain":
+        from dataclasses import replace
+
+        model = replace(model, thermal=model.thermal.with_loss(loss))
+        print(f"  heat loss: {model.thermal.loss.describe()}")
     print(f"  {contact_line(model, contact)}")
     steps = (Heat({c: watts for c in heated}, increments=200),)
     params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,
-              "heated_creases": heated, "contact": contact}
+              "heated_creases": heated, "contact": contact, "loss_model": loss}
     return model, steps, params, geo
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from . import _single_layer_jit
 
 __all__ = ["triangle_potential", "collocation_matrix", "single_layer_operator", "subdivision",
-           "subdivision_edges", "NEAR_FACTOR"]
+           "subdivision_edges", "pair_values", "NEAR_FACTOR"]
 
 #: Pairs whose centroid distance is below this many source diameters use the closed form.
 NEAR_FACTOR = 1.5
@@ -219,4 +219,33 @@ def _kernel_matrix(points, tri, centroid, area, diam, near):
     out[i, j] = area[j] * (1 / np.linalg.norm(q - points[i][:, None, :], axis=2)).mean(axis=1)
     i, j = np.nonzero(close)
     out[i, j] = triangle_potential(points[i], tri[j])
+    return out
+
+
+def pair_values(points, tri, centroid, area, diam, rows, cols, near: float = NEAR_FACTOR,
+                compiled=None) -> np.ndarray:
+    """``int_j 1 / |p_i - y| dS_y`` [m] of the pairs ``(rows[k], cols[k])``, (p,): the entries
+    of :func:`_kernel_matrix` at those pairs only, by the same rule (closed form within
+    ``near`` source diameters, the 3-point rule up to ``MID_FACTOR`` times that, the centroid
+    rule beyond), for the near field of the fast operator
+    (:mod:`simulator.thermal.integral_fast`). Compiled when ``compiled`` (default: when
+    selected), numpy otherwise (the checked reference)."""
+    rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
+    if compiled is None:
+        compiled = _single_layer_jit.use_compiled()
+    if compiled:
+        out = _single_layer_jit.pair_values(points, tri, centroid, area, diam, near, rows, cols)
+        if out is not None:
+            return out
+    out = np.empty(len(rows))
+    dist = np.linalg.norm(points[rows] - centroid[cols], axis=1)
+    close = dist < near * diam[cols]
+    mid = ~close & (dist < MID_FACTOR * near * diam[cols])
+    far = ~close & ~mid
+    out[far] = area[cols[far]] / dist[far]
+    i, j = rows[mid], cols[mid]
+    q = (3 * tri[j][:, :, None, :] * np.eye(3)[None, :, :, None]
+         + tri[j][:, None, :, :]).sum(axis=2) / 6
+    out[mid] = area[j] * (1 / np.linalg.norm(q - points[i][:, None, :], axis=2)).mean(axis=1)
+    out[close] = triangle_potential(points[rows[close]], tri[cols[close]])
     return out

@@ -20,7 +20,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "collocation"]
+__all__ = ["use_compiled", "collocation", "pair_values"]
 
 #: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
 #: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
@@ -30,6 +30,7 @@ _SIGNATURE = ("void(f8[:, :, ::1], i8[:, ::1], i8, f8[::1], f8[::1], b1, b1, f8,
 
 _compiled = None
 _broken = False
+_compiled_pairs = None
 #: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
 #: :data:`simulator.thermal._single_layer.MID_FACTOR`).
 _MID_FACTOR = 2.0
@@ -208,16 +209,61 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
                 V[j, i] = s
 
 
+def _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frame, edge, logs, stamp, key):
+    """``int_j 1 / |p - y| dS_y`` [m] of triangle ``j`` at the point p by the rule of its
+    distance: closed form, 3-point rule or centroid rule (the entry :func:`_collocation` gives
+    the pair)."""
+    dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if dist < near * diam[j]:
+        return _potential(px, py, pz, tri[j], frame, edge, logs, stamp, key)
+    if dist < mid * diam[j]:                                 # 3-point rule (degree 2)
+        acc = 0.0
+        for a in range(3):
+            b, c = (a + 1) % 3, (a + 2) % 3
+            qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
+            qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
+            qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
+            acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
+        return area[j] * acc / 3.0
+    return area[j] / dist
+
+
+def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
+    mid = _MID_FACTOR * near
+    frame = np.empty((4, 7))
+    edge = np.arange(3)
+    logs, stamp = np.empty(3), np.full(3, -1, np.int64)
+    for k in range(rows.shape[0]):
+        i, j = rows[k], cols[k]
+        _frame(tri[j], frame)
+        out[k] = _value(points[i, 0], points[i, 1], points[i, 2], j, tri, centroid, area, diam,
+                        near, mid, frame, edge, logs, stamp, k)
+
+
 def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_mid", "_rule_points"):
+    for name in ("_potential", "_frame", "_mid", "_rule_points", "_value"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
     # triangle to its own centroid (an inf, overwritten by the closed form)
     return njit(_SIGNATURE, cache=True, fastmath=False, error_model="numpy")(_collocation)
+
+
+def _build_pairs():
+    from numba import njit
+
+    _build()                                           # the helpers, compiled
+    return njit(_PAIR_SIGNATURE, cache=True, fastmath=False)(_pair_kernel)
+
+
+#: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
+#: rows (p,), columns (p,), output (p,)
+_PAIR_SIGNATURE = ("void(f8[:, ::1], f8[:, :, ::1], f8[:, ::1], f8[::1], f8[::1], f8, i8[::1], "
+                   "i8[::1], f8[::1])")
 
 
 def use_compiled() -> bool:
@@ -252,3 +298,21 @@ def collocation(tri, plane, near, scale, operator=False, edges=None):
     _compiled(tri, edges, int(edges.max(initial=-1)) + 1, origin, normal, plane is not None,
               bool(operator), float(near), float(scale), V, area, centroid, diam)
     return V, area, centroid, diam
+
+
+def pair_values(points, tri, centroid, area, diam, near, rows, cols) -> np.ndarray:
+    """``int_j 1 / |p_i - y| dS_y`` [m] of the pairs ``(rows[k], cols[k])``, (p,), by the
+    compiled kernel (the entries of :func:`kernel_matrix` at those pairs); ``None`` if it
+    cannot be compiled."""
+    global _compiled_pairs
+    if _compiled_pairs is None:
+        _compiled_pairs = compile_kernel("single-layer pair kernel", _build_pairs,
+                                         "using numpy") or False
+    if _compiled_pairs is False:
+        return None
+    out = np.empty(len(rows))
+    c = np.ascontiguousarray
+    _compiled_pairs(c(points, np.float64), c(tri, np.float64), c(centroid, np.float64),
+                    c(area, np.float64), c(diam, np.float64), float(near),
+                    c(rows, np.int64), c(cols, np.int64), out)
+    return out

@@ -104,7 +104,9 @@ class IntegralOperator:
                 f"the integral heat loss: {len(self.triangles)} triangles x "
                 f"{len(bary_centroids)} sub-triangles (IntegralLoss.refinement = {refinement}) = "
                 f"{self.n_sub} sub-triangles exceeds the dense-operator limit MAX_SUB_TRIANGLES = "
-                f"{MAX_SUB_TRIANGLES}; lower the refinement, or use the chain model "
+                f"{MAX_SUB_TRIANGLES}; use IntegralLoss(operator='fast') or 'auto' (the "
+                "default: the fast path above the limit), lower the refinement, or the chain "
+                "model "
                 "(loss=ChainLoss(thickness=...), calibrated by simulator.calibrate_environment) "
                 "or the 3-D FE reference (simulator.thermal.fe).")
         self._bary = bary_vertices                                  # (s, 3, 3)
@@ -127,11 +129,7 @@ class IntegralOperator:
     def _heights(self, x):
         """Height of every node over the substrate plane [m], (n_nodes,), and the touch
         tolerance [m] (``None, 0`` without a plane)."""
-        if self.plane is None:
-            return None, 0.0
-        origin, normal = (np.asarray(v, float) for v in self.plane)
-        h = (x - origin) @ normal
-        return h, TOUCH_TOLERANCE * float(np.ptp(x[self.nodes], axis=0).max())
+        return plane_heights(x, self.plane, self.nodes)
 
     def touching(self, x) -> np.ndarray:
         """Nodes on (or below) the substrate plane at positions ``x`` (n, 3) [m], (n_nodes,)
@@ -311,6 +309,17 @@ def lump_couplings(L) -> np.ndarray:
     L -= positive
     L[np.diag_indices_from(L)] += positive.sum(axis=1)
     return L
+
+
+def plane_heights(x, plane, nodes):
+    """Height of every node of ``x`` (n, 3) [m] over the substrate ``plane`` [m], (n,), and the
+    touch tolerance [m]: :data:`TOUCH_TOLERANCE` times the extent of the sheet ``nodes``
+    (``None, 0`` without a plane)."""
+    if plane is None:
+        return None, 0.0
+    origin, normal = (np.asarray(v, float) for v in plane)
+    h = (x - origin) @ normal
+    return h, TOUCH_TOLERANCE * float(np.ptp(x[nodes], axis=0).max())
 
 
 def _padded(heat, live, n_sub):

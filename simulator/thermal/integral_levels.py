@@ -26,9 +26,12 @@ import logging
 
 import numpy as np
 
+from ..errors import ParameterError
+
 from .integral import IntegralOperator, lump_couplings
 
-__all__ = ["ExtrapolatedLoss", "CorrectedLoss", "coarse_refinement", "integral_operator"]
+__all__ = ["ExtrapolatedLoss", "CorrectedLoss", "coarse_refinement", "integral_operator",
+           "uses_fast"]
 
 logger = logging.getLogger(__name__)
 
@@ -245,14 +248,42 @@ class CorrectedLoss:
 NEAR_PLANE_RTOL = 1.0
 
 
+def uses_fast(n_triangles: int, loss) -> bool:
+    """Whether the :class:`~simulator.thermal.loss.IntegralLoss` ``loss`` on ``n_triangles``
+    sheet triangles takes the fast path (:mod:`simulator.thermal.integral_fast`): its
+    ``operator`` "fast", or "auto" above the dense limit (more than ``MAX_SUB_TRIANGLES``
+    sub-triangles at its ``refinement``)."""
+    from .integral import MAX_SUB_TRIANGLES
+
+    if loss.operator != "auto":
+        return loss.operator == "fast"
+    return n_triangles * loss.refinement ** 2 > MAX_SUB_TRIANGLES
+
+
 def integral_operator(triangles, n_nodes, params, plane=None):
     """The integral loss operator of :class:`~simulator.thermal.parameters.ThermalParameters`
     ``params`` on the sheet ``triangles`` over the substrate ``plane`` ((point, unit normal) or
     None), whose ``loss`` is an :class:`~simulator.thermal.loss.IntegralLoss`: an
     :class:`IntegralOperator` at its ``refinement`` built at its ``shape_tol``, an
-    :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`."""
+    :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`; on the fast path
+    (:func:`uses_fast`) a :class:`~simulator.thermal.integral_fast.FastIntegralOperator` of
+    the same levels (plain or extrapolated, rebuilt at every shape)."""
     loss = params.loss
     m, k = loss.refinement, params.medium.thermal_conductivity
+    if uses_fast(len(np.asarray(triangles).reshape(-1, 3)), loss):
+        from .integral_fast import FastIntegralOperator
+
+        if loss.lumped:
+            raise ParameterError(
+                f"IntegralLoss(lumped=True) needs the dense operator, but this sheet's "
+                f"{len(np.asarray(triangles).reshape(-1, 3))} triangles at refinement {m} take "
+                "the fast path, which never forms the conductance it would lump; use "
+                "lumped=False.")
+        levels = [(1.0, m)]
+        if loss.extrapolated:
+            c = coarse_refinement(m)
+            levels = [(m / (m - c), m), (-c / (m - c), c)]
+        return FastIntegralOperator(triangles, n_nodes, k, levels, plane)
     correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
     memo = [None, None]                      # the levels share the sheet's distances
 

@@ -24,13 +24,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import in_range, integer, non_negative, positive
+from .._validate import in_range, integer, non_negative, one_of, positive
 from ..errors import ParameterError
 
 __all__ = ["HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate", "heat_loss_from_dict"]
 
 #: The names of the heat-loss models (``loss.model``).
 HEAT_LOSS_MODELS = ("chain", "integral")
+#: How the integral loss's operator is solved (``IntegralLoss.operator``).
+INTEGRAL_OPERATORS = ("auto", "dense", "fast")
 
 
 @dataclass(frozen=True)
@@ -105,6 +107,15 @@ class IntegralLoss:
         node -7.6 K at 15 mW) but agrees with the 3-D FE reference on the same P1 sheet; the
         lumped one lowers the crease T_max by up to 9 % on the strips and folded devices and
         14 % on the crane against it (theory 4.9).
+    operator : {"auto", "dense", "fast"}
+        How the single-layer operator is solved (theory 4.7). "dense" forms and factorises
+        it (:mod:`simulator.thermal.integral`, up to ``MAX_SUB_TRIANGLES`` sub-triangles per
+        level); "fast" never forms it: the far field by a direct compiled sum or the fast
+        multipole method, the near field sparse, the coupled system by preconditioned MINRES
+        (:mod:`simulator.thermal.integral_fast`: the same discrete model, rebuilt at every
+        shape, so ``shape_tol`` and ``correction_tol`` do not apply). "auto" (default): "fast"
+        above the dense limit (more than ``MAX_SUB_TRIANGLES`` sub-triangles at
+        ``refinement``), else "dense".
     """
 
     refinement: int = 3
@@ -112,6 +123,7 @@ class IntegralLoss:
     shape_tol: float = 0.02
     correction_tol: float = 0.1
     lumped: bool = False
+    operator: str = "auto"
 
     model = "integral"
 
@@ -119,6 +131,7 @@ class IntegralLoss:
         integer("IntegralLoss.refinement", self.refinement, 1, 16)
         non_negative("IntegralLoss.shape_tol", self.shape_tol)
         non_negative("IntegralLoss.correction_tol", self.correction_tol)
+        one_of("IntegralLoss.operator", self.operator, INTEGRAL_OPERATORS)
         if self.extrapolation is not None and not isinstance(self.extrapolation,
                                                              (bool, np.bool_)):
             raise ParameterError(f"IntegralLoss.extrapolation = {self.extrapolation!r} must be "
@@ -130,6 +143,10 @@ class IntegralLoss:
                                  "positive couplings lumped onto the diagonal) or False (the "
                                  "consistent conductance).")
         object.__setattr__(self, "lumped", bool(self.lumped))
+        if self.lumped and self.operator == "fast":
+            raise ParameterError("IntegralLoss(lumped=True, operator='fast'): the fast path never "
+                                 "forms the conductance it would lump; use operator='dense' or "
+                                 "'auto', or lumped=False.")
         if self.extrapolation and self.refinement < 3:
             raise ParameterError(f"IntegralLoss.extrapolation = True needs refinement >= 3, got "
                                  f"{self.refinement}: the coarse level max(m // 2, 2) must be "
@@ -142,13 +159,15 @@ class IntegralLoss:
 
     def to_dict(self) -> dict:
         """``{"model": "integral", ...}`` (FOLD model files, metadata); ``lumped`` only when
-        True, so that the dicts of the consistent loss, and those written before the field
-        existed, are as they were (read back: consistent)."""
+        True and ``operator`` only when not the default "auto", so that the dicts of the
+        default, and those written before the fields existed, are as they were."""
         out = {"model": "integral", "refinement": int(self.refinement),
                "extrapolation": self.extrapolation, "shape_tol": float(self.shape_tol),
                "correction_tol": float(self.correction_tol)}
         if self.lumped:
             out["lumped"] = True
+        if self.operator != "auto":
+            out["operator"] = self.operator
         return out
 
     def describe(self) -> str:
@@ -156,7 +175,8 @@ class IntegralLoss:
         :attr:`lumped`)."""
         return (f"integral model (calibration-free; m = {self.refinement}"
                 f"{', extrapolated' if self.extrapolated else ''}"
-                f"{', lumped' if self.lumped else ''})")
+                f"{', lumped' if self.lumped else ''}"
+                f"{'' if self.operator == 'auto' else f', {self.operator} operator'})")
 
 
 def heat_loss_from_dict(value) -> ChainLoss | IntegralLoss:

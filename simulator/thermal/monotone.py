@@ -218,6 +218,19 @@ class _Triangulation:
             return 0.0 if w[0] == a else 1.0
         return w[2] if w[0] == a else 1.0 - w[2]
 
+    def still_sides(self, edge, sides) -> bool:
+        """Whether every ``(triangle, corner)`` of ``sides`` still has ``edge`` opposite that
+        corner: then they are the edge's sides in :meth:`edges` (a split rewrites the
+        triangles it touches, so entries made before it are checked, and :meth:`edges` is
+        rebuilt only when one is stale, not for every edge: the rebuild for every edge made
+        the build quadratic in the mesh size)."""
+        for t, c in sides:
+            corners = self.tri[t]
+            i, j = corners[(c + 1) % 3], corners[(c + 2) % 3]
+            if (min(i, j), max(i, j)) != edge:
+                return False
+        return True
+
     def bad_edges(self) -> list:
         """Edges whose coupling is positive, with their sides."""
         return [(e, s) for e, s in self.edges().items() if self.weight(s) < -self.tol]
@@ -242,8 +255,12 @@ def monotone_conduction(x, tri, region, kt) -> "MonotoneConduction":
         bad = tr.bad_edges()
         if not bad:
             break
+        edges = tr.edges()
         for e, _sides in bad:
-            sides = tr.edges().get(e)
+            sides = edges.get(e)
+            if sides is not None and not tr.still_sides(e, sides):   # a split changed them
+                edges = tr.edges()
+                sides = edges.get(e)
             if sides is not None and tr.constrained(sides) and tr.weight(sides) < -tr.tol:
                 tr.split(e, sides)
         tr.make_delaunay()

@@ -479,6 +479,8 @@ class ThermalModel:
         K = self._element_values(x, K)
         if self.integral is None:
             solver = self._factorize(K, g_eff[self.free_nodes])
+        elif getattr(self.integral, "fast", False):      # the loss never formed
+            solver = self._fast_solver(x, K)
         else:                            # nodes touching the substrate are held there
             solver = self._factorize(K, np.zeros(len(self.free_nodes)), self._integral_loss(x),
                                      self.integral.touching(x)[self.free_nodes])
@@ -528,13 +530,31 @@ class ThermalModel:
             return self.fixed_nodes
         return np.union1d(self.fixed_nodes, np.flatnonzero(self.integral.touching(x)))
 
+    def _fast_solver(self, x, K):
+        """Solver ``q_free -> rise_free`` of the integral model's fast path
+        (:class:`~simulator.thermal.integral_fast.FastIntegralOperator`): the sparse conduction
+        of the free nodes not touching the substrate, coupled to the loss by MINRES."""
+        if self._warn_plane:
+            self._warn_plane = False
+            _warn_no_plane(self.params)
+        n_free = len(self.free_nodes)
+        A = self._free_pattern.matrix([*K, np.zeros(n_free)])
+        keep = ~self.integral.touching(x)[self.free_nodes]
+        return _scattered(self.integral.solver(x, A[keep][:, keep], self.free_nodes[keep])
+                          if keep.any() else None, keep)
+
     def integral_loss_matrix(self, x) -> np.ndarray:
         """The integral model's loss conductance [W/K] on ``integral.nodes`` at positions
         ``x`` (n, 3) [m]: ``L_m``, or extrapolated (``IntegralLoss.extrapolation``) the
         Richardson combination ``(m L_m - c L_c) / (m - c)``, ``c = max(m // 2, 2)``, and with
         ``IntegralLoss.correction_tol`` that operator corrected between rebuilds (theory 4.7);
         the result with its positive couplings lumped onto the diagonal with
-        ``IntegralLoss.lumped`` (theory 4.9)."""
+        ``IntegralLoss.lumped`` (theory 4.9).
+        Not on the fast path (``IntegralLoss.operator`` "fast"), which never forms it."""
+        if getattr(self.integral, "fast", False):
+            raise ParameterError("the integral model's fast path (IntegralLoss(operator='fast'), "
+                                 "or 'auto' on a large sheet) never forms the loss conductance; "
+                                 "use environment_loss, or IntegralLoss(operator='dense').")
         return self.integral.loss_matrix(x)
 
     def _integral_loss(self, x):
@@ -558,6 +578,8 @@ class ThermalModel:
         rise = np.asarray(temperature, float) - rt
         if self.integral is None:
             return self._conductances(x, False)[1] * rise
+        if getattr(self.integral, "fast", False):
+            return self.integral.loss(x, rise)
         out = np.zeros(self.mesh.n_nodes)
         nodes = self.integral.nodes
         if isinstance(self.integral, IntegralOperator) and not self.integral.lumped:
@@ -602,6 +624,12 @@ def _held_solver(A, keep):
     eliminated (their rise 0: held at room temperature; their heat goes to the holder)."""
     solve = factorize(A[np.ix_(keep, keep)], kind="spd", dense_limit=int(keep.sum())).solve \
         if keep.any() else None
+    return _scattered(solve, keep)
+
+
+def _scattered(solve, keep):
+    """Solver ``q -> rise`` of all free nodes from ``solve`` (None: nothing to solve) of those
+    in ``keep``; the others' rise is 0."""
 
     def solver(q):
         q = np.asarray(q, float)

@@ -168,3 +168,20 @@ def test_a_flat_start_at_a_bifurcation_at_the_cli_in_cli_words(tmp_path, capsys)
     assert ": unstable (" in status and "--stability check" in status
     assert "event: stability lost in step heat" in out and "--stability switch leaves it" in out
     assert "NewtonOptions" not in out
+
+
+def test_loss_model_integral_heats_a_plain_pattern_hotter_than_the_chains(tmp_path, capsys):
+    """--loss-model integral: the boundary-integral heat loss (theory 4.7) on a drawn Miura;
+    in still air it loses less than the paper's chains, so the same power heats it more."""
+    runs = {}
+    for loss in ("chain", "integral"):
+        out_dir = tmp_path / loss
+        assert main(["run", MIURA, "--heat", "all", "--power", "1", "--set", "thermal_steps=2",
+                     "--loss-model", loss, "--out", str(out_dir), "-q"]) == 0
+        meta = json.loads((out_dir / "meta.json").read_text())
+        assert meta["overrides"]["loss_model"] == loss
+        runs[loss] = pd.read_csv(out_dir / "creases.csv")
+    assert "heat loss: integral model" in capsys.readouterr().out
+    hottest = {k: v[v["step"] == v["step"].max()].filter(like="temperature").max().max()
+               for k, v in runs.items()}
+    assert hottest["integral"] > hottest["chain"]

@@ -250,10 +250,12 @@ def test_boundary_panels_are_held_at_room_temperature():
 
 
 def test_dense_limit_is_refused_naming_the_limit_and_the_alternatives(monkeypatch):
+    """The dense operator asked for above its limit is refused; "auto" (the default) takes the
+    fast path there instead (tests/unit/test_integral_fast.py)."""
     monkeypatch.setattr(integral, "MAX_SUB_TRIANGLES", 100)
     with pytest.raises(ParameterError, match=r"(?s)224 sub-triangles exceeds the dense-operator "
-                       r"limit MAX_SUB_TRIANGLES = 100.*loss=ChainLoss.*3-D FE"):
-        _strip(refinement=4)
+                       r"limit MAX_SUB_TRIANGLES = 100.*operator='fast'.*loss=ChainLoss.*3-D FE"):
+        _strip(refinement=4, operator="dense")
 
 
 def test_the_default_limit_refuses_a_fine_refinement():
