@@ -42,7 +42,7 @@ def test_pair_values_are_the_dense_entries(compiled):
     c = sub.mean(axis=1)
     area = 0.5 * np.linalg.norm(np.cross(sub[:, 1] - sub[:, 0], sub[:, 2] - sub[:, 0]), axis=1)
     diam = np.linalg.norm(sub - np.roll(sub, 1, axis=1), axis=2).max(axis=1)
-    full = _kernel_matrix(c, sub, c, area, diam, 1.5, compiled=False)
+    full = _kernel_matrix(c, sub, c, area, diam, 1.5)
     rng = np.random.default_rng(0)
     rows, cols = rng.integers(0, len(sub), 400), rng.integers(0, len(sub), 400)
     rows[:50] = cols[:50]                                    # self terms too
