@@ -302,7 +302,8 @@ def collocation(tri, plane, near, scale, operator=False, edges=None):
 
 def pair_values(points, tri, centroid, area, diam, near, rows, cols) -> np.ndarray:
     """``int_j 1 / |p_i - y| dS_y`` [m] of the pairs ``(rows[k], cols[k])``, (p,), by the
-    compiled kernel (the entries of :func:`kernel_matrix` at those pairs); ``None`` if it
+    compiled kernel (the entries of :func:`collocation`'s ``V`` at those pairs, before the
+    scale); ``None`` if it
     cannot be compiled."""
     global _compiled_pairs
     if _compiled_pairs is None:

@@ -282,8 +282,8 @@ def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000):
     (the Richardson pair, ``sum_l w_l = 1``): each level's system solved so, the rises
     extrapolated, ``T_se = sum_l w_l T_l`` (the solutions' extrapolation: within 0.19-0.50 %
     of the largest rise of the operators' on 5 x 5-cell Miura sheets, free and over a
-    plane), and corrected once towards the operators' extrapolation (:func:`corrected`
-    inside: two more single-layer solves by CG and one saddle solve); a saddle system of
+    plane), and corrected once towards the operators' extrapolation (its inner
+    ``corrected``: two more single-layer solves by CG and one saddle solve); a saddle system of
     both levels, of opposite weights, needs some 200-240 iterations even with these blocks.
 
     Parameters
