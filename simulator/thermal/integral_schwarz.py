@@ -33,7 +33,6 @@ import logging
 import math
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..linalg.ladder import factorize
@@ -99,20 +98,20 @@ class TwoLevelPreconditioner:
         R0 = sp.csr_matrix((np.ones(ns), (labels, np.arange(ns))), shape=(n0, ns))
         self.B = _zero_sum_blocks(S, groups, labels)
         self.S0 = coarse_matrix(S, groups, labels)
-        self._S0 = sla.cho_factor(self.S0)
+        self._S0 = factorize(self.S0, kind="spd", backend="dense").solve
         self.R0 = R0
         U = (M.T @ R0.T).tocsc()
         W = _SHIFT / np.diag(self.S0)
         A = (K + M.T @ self.B @ M + U @ sp.diags(W) @ U.T).tocsr()
         self._A = factorize(A, kind="spd", dense_limit=400).solve
         self._AU = self._A(U.toarray())
-        X = np.linalg.inv(sla.cho_solve(self._S0, np.eye(n0)) - np.diag(W))
+        X = np.linalg.inv(self._S0(np.eye(n0)) - np.diag(W))
         self._core = np.linalg.inv(X + U.T @ self._AU)
         self._U = U
 
     def heat(self, r) -> np.ndarray:
         """``P_S^-1 r`` [W] of potentials ``r`` (n_s,) [K]."""
-        return self.B @ r + self.R0.T @ sla.cho_solve(self._S0, self.R0 @ r)
+        return self.B @ r + self.R0.T @ self._S0(self.R0 @ r)
 
     def rise(self, r) -> np.ndarray:
         """``P_T^-1 r`` [K] of heats ``r`` (n,) [W] (Woodbury)."""

@@ -50,7 +50,9 @@ def test_run_and_gripper_evaluate_judge_the_same_measure(tmp_path, capsys, judge
     # (the integral loss with its monotone sheet conduction, theory 4.9)
     assert ("temperature limit met: crease 2: centre-line mean 202.08 degC <= 1.2 T_g = 252 "
             "degC (the stages' heated creases at their stopping powers)") in lines
-    assert ("hottest node 262.99 degC (crease 2, information: the limit is judged on the crease "
+    # the accurate operator rebuilt at every shape gives 262.99 degC; the default corrects it
+    # between 20 rebuilds (theory 4.7), 0.03 K (0.01 % of the rise) lower
+    assert ("hottest node 262.96 degC (crease 2, information: the limit is judged on the crease "
             "centre-line mean)") in lines
     assert not [line for line in lines if "max crease temperature" in line]
 
