@@ -35,6 +35,11 @@ NEAR_FACTOR = 1.5
 #: Pairs between NEAR_FACTOR and MID_FACTOR x NEAR_FACTOR source diameters use the 3-point rule
 #: of degree 2 (barycentric (2/3, 1/6, 1/6) and permutations), farther ones the centroid rule.
 MID_FACTOR = 2.0
+#: The rule thresholds are raised by this relative amount, so that a distance exactly at one
+#: (common on structured meshes: a centroid offset of (1.5, 1.5) times a right triangle's legs
+#: is 1.5 of its diameters) takes the closer pair's rule whatever the round-off of a rotated or
+#: mirrored sheet: without it a rigid rotation moved temperatures by up to 2e-5 K.
+TIE = 1e-9
 
 
 def triangle_potential(p, tri) -> np.ndarray:
@@ -208,6 +213,7 @@ def _plane(plane):
 def _kernel_matrix(points, tri, centroid, area, diam, near):
     """``int_j 1 / |p_i - y| dS_y`` for all points and triangles: centroid rule, 3-point rule,
     closed form near (the numpy reference of :mod:`simulator.thermal._single_layer_jit`)."""
+    near = near * (1 + TIE)
     diff = points[:, None, :] - centroid[None, :, :]
     dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
     close = dist < near * diam[None, :]
@@ -238,6 +244,7 @@ def pair_values(points, tri, centroid, area, diam, rows, cols, near: float = NEA
         if out is not None:
             return out
     out = np.empty(len(rows))
+    near = near * (1 + TIE)
     dist = np.linalg.norm(points[rows] - centroid[cols], axis=1)
     close = dist < near * diam[cols]
     mid = ~close & (dist < MID_FACTOR * near * diam[cols])

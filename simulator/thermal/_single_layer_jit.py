@@ -34,6 +34,8 @@ _compiled_pairs = None
 #: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
 #: :data:`simulator.thermal._single_layer.MID_FACTOR`).
 _MID_FACTOR = 2.0
+#: Relative bias of the rule thresholds (numpy's twin :data:`simulator.thermal._single_layer.TIE`).
+_TIE = 1e-9
 
 
 def _frame(t, f):
@@ -140,6 +142,7 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
     diameters (longest edge). Per row the centroid rule first for all pairs (no branches: it
     vectorises), then the 3-point rule and the closed form for the closer ones."""
     n = tri.shape[0]
+    near = near * (1.0 + _TIE)
     mid = _MID_FACTOR * near
     frames, rule = np.empty((n, 4, 7)), np.empty((n, 3, 3))
     for j in range(n):
@@ -230,6 +233,7 @@ def _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frame, edge, log
 
 
 def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
+    near = near * (1.0 + _TIE)
     mid = _MID_FACTOR * near
     frame = np.empty((4, 7))
     edge = np.arange(3)
