@@ -6,7 +6,7 @@ from __future__ import annotations
 __all__ = ["parameter_note", "CHOICES", "POWER_MEANING"]
 
 #: Allowed values of the cases' text parameters: by parameter name, or by (case, parameter).
-CHOICES = {"coupling": ("staggered", "iterated"), "on_limit_point": ("stop", "continue"),
+CHOICES = {"coupling": ("staggered", "iterated", "settled"), "on_limit_point": ("stop", "continue"),
            "mechanics": ("dynamic", "quasi_static"),
            ("verification_strip", "variant"): ("within", "loss"),
            ("snap_through", "variant"): ("force", "heated"),

@@ -144,7 +144,8 @@ def verification_strip(variant: str = "loss", W: float = 0.4, L: float = 1.0, L1
                                     medium=AIR, room_temperature=0.0,
                                     room_temperature_nodes=(0, 3, 5, 6))
     model = make_model(pattern, Supports.nodes([0, 1, 2, 3, 8, 9, 10, 11]), thermal=thermal)
-    return Case("verification_strip", model, (Heat({2: 10 * W * L * tc}, increments=1),),
+    return Case("verification_strip", model, (Heat({2: 10 * W * L * tc}, increments=1,
+                                                    coupling="staggered"),),
                 dict(variant=variant, W=W, L=L, L1=L1, L2=L2, tc=tc, tp=tp, beta_deg=beta_deg,
                      t_env=t_env, layers=layers), verification_strip.__doc__)
 

@@ -336,7 +336,7 @@ def _run_gripper(quick, level, progress):
         if all(r.success for r in results.values()):
             more, checks = _gripper_fe(cycle, geometry, results, level)
             fe_rows += more
-        room = gripper_model(GripperDesign(**geometry))[0].thermal.room_temperature
+        room = gripper_model(GripperDesign(**geometry, loss_model="chain"))[0].thermal.room_temperature
         comparison += _gripper_comparison(cycle, rows, checks, room)
     return pd.DataFrame(rows), pd.DataFrame(fe_rows), pd.DataFrame(comparison)
 

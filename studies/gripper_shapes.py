@@ -78,7 +78,9 @@ PARTS = {"central panel": 1, "base": 0, "arm": 3}
 
 
 def _design(row) -> GripperDesign:
-    return GripperDesign(**{v: float(row[f"{v} [um]"]) * 1e-6 for v in UM})
+    """The design of a row of the optimisation's table, with its heat loss (the paper's
+    chains, the setting the powers were found with)."""
+    return GripperDesign(**{v: float(row[f"{v} [um]"]) * 1e-6 for v in UM}, loss_model="chain")
 
 
 def gripper_states(design: GripperDesign, assembly_power: float, grip_power: float,

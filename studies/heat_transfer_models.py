@@ -207,7 +207,7 @@ def _gripper(quick):
     from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign
     from studies.gripper_shapes import gripper_states
 
-    model, res = gripper_states(GripperDesign(), GRIPPER_ASSEMBLY, GRIPPER_GRIP,
+    model, res = gripper_states(GripperDesign(loss_model="chain"), GRIPPER_ASSEMBLY, GRIPPER_GRIP,
                                 GRIPPER_INCREMENTS_QUICK if quick else GRIPPER_INCREMENTS)
     mesh = model.mesh
     out = {}

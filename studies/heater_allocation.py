@@ -130,7 +130,7 @@ def _flat_lp(case, targets, reference, increments):
     heaters = {f"crease {c}": (c,) for c in targets}
     p = linear_allocation(case.model, targets, heaters=heaters)
     power = dict(zip(targets, map(float, p)))
-    res = simulate(case.model, [Heat(power, increments=increments)])
+    res = simulate(case.model, [Heat(power, increments=increments, coupling="staggered")])
     mesh = case.model.mesh
     fold = res.fold_angle[-1]
     achieved = {c: float(fold[mesh.crease_row_of(c)]) for c in targets}
@@ -147,7 +147,8 @@ def crane_rows(quick: bool, bar) -> list:
     circuits = {name: tuple(r - 1 for r in refs) for name, refs in PAPER_CIRCUITS.items()}
     for variant, heaters in (("per-crease heaters", None), ("paper circuits", circuits)):
         t0 = time.perf_counter()
-        res = allocate_heaters(case.model, targets, heaters=heaters, increments=inc)
+        res = allocate_heaters(case.model, targets, heaters=heaters, increments=inc,
+                               coupling="staggered")              # the paper setting
         rows += _rows("crane", variant, 0, res, reference, targets, time.perf_counter() - t0)
         bar.update()
     rows += _flat_lp(case, targets, reference, inc)
@@ -162,7 +163,7 @@ def double_fold_rows(quick: bool, bar) -> list:
     for band in (BANDS_DEG_QUICK if quick else BANDS_DEG):
         t0 = time.perf_counter()
         res = allocate_heaters(case.model, targets, state=start, band=math.radians(band),
-                               increments=30)
+                               increments=30, coupling="staggered")
         rows += _rows("double_fold", "per-crease heaters", band, res, reference, targets,
                       time.perf_counter() - t0)
         bar.update()

@@ -62,13 +62,14 @@ def heated_model(fold: dict):
                      crease_thickness=stack.crease_thickness,
                      panel_thickness=stack.panel_thickness)
     heated = geo.pattern.creases.tolist()
-    return stack_model(geo.pattern, stack, heated), heated
+    return stack_model(geo.pattern, stack, heated, loss_model="chain"), heated
 
 
 def heat(model, heated, power_mw: float, steps: int, stability: str = "switch"):
     """(SimulationResult, wall time [s]) of every crease heated to ``power_mw`` per crease."""
     t0 = time.perf_counter()
-    res = simulate(model, [Heat({c: 1e-3 * power_mw for c in heated}, increments=steps)],
+    res = simulate(model, [Heat({c: 1e-3 * power_mw for c in heated}, increments=steps,
+                                coupling="staggered")],
                    options=NewtonOptions(stability=stability))
     return res, time.perf_counter() - t0
 

@@ -208,8 +208,8 @@ class _Rounds:
     """One LP about the current state, then one heating simulation with its powers."""
 
     def __init__(self, model, state, table, rows, limit, max_power, increments, options,
-                 out, band):
-        self.band = band
+                 out, band, coupling="settled"):
+        self.band, self.coupling = band, coupling
         self.model, self.state, self.table, self.rows = model, state, table, rows
         self.limit, self.max_power, self.increments, self.options = (limit, max_power,
                                                                      increments, options)
@@ -249,7 +249,7 @@ class _Rounds:
             return False, excess
         planned = self.folds + A @ (p - self.p_cur)      # what the linear model expects
         res = simulate(self.model, [Heat({c: pj for pj, c in zip(p, self.table.values())},
-                                         increments=self.increments)],
+                                         increments=self.increments, coupling=self.coupling)],
                        state=self.state, options=self.options)
         if not res.success:                            # too far: shrink the region, retry
             self.radius = self.radius / 4
@@ -293,8 +293,8 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
                      temperature_limit: float = 1.2 * SU8_TG, max_power: float | None = None,
                      fold_tol: float = math.radians(0.5), max_rounds: int = 20, stages: int = 3,
                      band: float = 0.0, temperature_measure: str = "centre_line",
-                     increments: int = 50, options: NewtonOptions = NewtonOptions()
-                     ) -> HeaterAllocation:
+                     increments: int = 50, options: NewtonOptions = NewtonOptions(),
+                     coupling: str = "settled") -> HeaterAllocation:
     """Least total power that folds every target crease to its target angle.
 
     Parameters
@@ -332,6 +332,8 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     increments : int
         Heating increments of each simulation.
     options : NewtonOptions
+    coupling : {"settled", "staggered", "iterated"}
+        ``Heat.coupling`` of each simulation ("staggered": the reference's lagged loop).
 
     Returns
     -------
@@ -358,7 +360,7 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
                              "cannot do that.")
     out = _Allocation(table, dict(targets), float(temperature_limit), temperature_measure)
     run = _Rounds(model, state, table, rows, temperature_limit, max_power, increments,
-                  options, out, band)
+                  options, out, band, coupling)
     return _run_stages(run, fold0, target, stages, max_rounds, fold_tol).result()
 
 

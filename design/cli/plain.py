@@ -50,11 +50,13 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
-        parser.add_argument("--loss-model", choices=("chain", "integral"), default="chain",
-                            help="heat loss of a heated plain pattern to the air: the paper's "
-                                 "chains (default) or the boundary-integral model (theory "
-                                 "4.7: nothing to fit; above its dense limit the fast path, "
-                                 "slow on large sheets)")
+        parser.add_argument("--loss-model", choices=("integral", "chain"), default="integral",
+                            help="heat loss of a heated plain pattern to the air: the "
+                                 "boundary-integral model (default; theory 4.7: nothing "
+                                 "fitted, within 1 %% of the 3-D FE; above its dense limit "
+                                 "the fast path, minutes per solve on sheets of thousands of "
+                                 "triangles) or the paper's chains (seconds, 20-40 %% too "
+                                 "cool)")
         parser.add_argument("--contact", action=argparse.BooleanOptionalAction, default=True,
                             help="panel contact of a heated plain pattern (default on: panels "
                                  "never pass through each other; --no-contact: off, a run "
@@ -149,6 +151,23 @@ def print_notes(geo, stack=None) -> None:
               f"{', '.join(instead)}")
 
 
+def heat_loss_line(model) -> str:
+    """The heat loss of a plain pattern's model, in CLI units: the integral model (with the
+    cost of its fast path on a large sheet) or the paper's chains, and the air."""
+    thermal = model.thermal
+    loss, k_env = thermal.loss, thermal.medium.thermal_conductivity
+    if loss.model == "chain":
+        return (f"the paper's chains, t_env {loss.thickness * 1e6:.4g} um, to air at "
+                f"{k_env:.4g} W/(m K)")
+    line = f"{loss.describe()}, to air at {k_env:.4g} W/(m K)"
+    n = len(model.mesh.triangles)
+    if loss.takes_fast_path(n):
+        line += (f"; {n} triangles take its fast path (theory 4.7): minutes per thermal solve "
+                 "at this size; --loss-model chain runs the paper's chains in seconds, 20-40 % "
+                 "too cool")
+    return line
+
+
 def stack_reader_options(stack, options: dict) -> dict:
     """Reader keywords: the stack's crease / panel values unless the flags give them."""
     out = {"crease_width": stack.crease_width, "crease_thickness": stack.crease_thickness,
@@ -177,13 +196,10 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     heated = select_creases(heating.heat, geo)
     watts = power_mw("--power", heating.power)
     contact = getattr(heating, "contact", True)
-    model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact)
-    loss = getattr(heating, "loss_model", "chain")
-    if loss != "chain":
-        from dataclasses import replace
-
-        model = replace(model, thermal=model.thermal.with_loss(loss))
-        print(f"  heat loss: {model.thermal.loss.describe()}")
+    loss = getattr(heating, "loss_model", "integral")
+    model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact,
+                        loss_model=loss)
+    print(f"  heat loss: {heat_loss_line(model)}")
     print(f"  {contact_line(model, contact)}")
     steps = (Heat({c: watts for c in heated}, increments=200),)
     params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,

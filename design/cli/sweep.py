@@ -58,10 +58,11 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
 
 
 def _sweep(args) -> int:
+    from ..devices.gripper import GripperDesign
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.robustness import residual_fold_grid, sweep_residual_fold
 
-    problem = GripperProblem(mode=args.mode)
+    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     values = floats("--values", args.values)
     for v in values:
@@ -97,13 +98,14 @@ def _reasons(frame, cols) -> list:
 def _uncertainty(args) -> int:
     import json
 
+    from ..devices.gripper import GripperDesign
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.uncertainty import SCENARIOS
     from ..analysis.uncertainty_sweep import summarize_yield, sweep_uncertainty
 
     if args.samples < 1:
         raise CLIError(f"--samples = {args.samples} must be at least 1")
-    problem = GripperProblem(mode=args.mode)
+    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
     scenario = SCENARIOS[args.scenario]
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     samples = scenario.sample(args.samples, args.seed, args.method)
@@ -129,10 +131,15 @@ def _interrupted(args) -> str:
 
 
 def _add_common_options(parser, func) -> None:
-    """``--design``, ``--mode``, ``--out``, ``-q``, ``--parallel``/``--dask`` of every sweep."""
+    """``--design``, ``--mode``, ``--loss-model``, ``--out``, ``-q``, ``--parallel``/``--dask``
+    of every sweep."""
     parser.add_argument("--design", action="append", metavar="start|W=..,La=..,L1=..,L2=..",
                         help="design in um (repeatable; default the start design)")
     parser.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
+    parser.add_argument("--loss-model", choices=("integral", "chain"), default="integral",
+                        help="heat loss: the boundary-integral model over the substrate "
+                             "(default; theory 4.7) or the paper's fitted chains (its "
+                             "optimisation's setting)")
     parser.add_argument("--out", required=True, metavar="DIR")
     add_parallel_options(parser)
     parser.set_defaults(func=func, interrupted=_interrupted)

@@ -16,11 +16,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .._validate import capped
+from .._validate import capped, one_of
 from ..errors import ParameterError
 from ..geometry.pattern import Pattern
 from ..geometry.materials import AIR
-from ..thermal.loss import ChainLoss
+from ..thermal.loss import ChainLoss, IntegralLoss
 from ..thermal.steady import REFERENCE_BETA, ThermalParameters
 from .bimorph import Actuators, Bimorph
 from .mesh import build_mesh
@@ -53,7 +53,8 @@ class LayerStack:
     panel_thickness : float
         Panel thickness [m].
     env_thickness, env_conductivity : float
-        Air layer thickness [m] and conductivity [W/(m K)] of the heat loss.
+        Air conductivity [W/(m K)] of the heat loss, and the air layer thickness t_env [m]
+        of the paper's chains (used only with ``stack_model(..., loss_model="chain")``).
     """
 
     name: str
@@ -88,7 +89,8 @@ class LayerStack:
                 f"active layer {self.t_active * 1e6:g} um at {self.E_active / 1e9:g} GPa, "
                 f"passive layer {self.t_passive * 1e6:g} um at {self.E_passive / 1e9:g} GPa, "
                 f"delta_alpha {self.delta_alpha:g} /K, panels {self.panel_thickness * 1e6:g} um, "
-                f"air {self.env_thickness * 1e6:g} um at {self.env_conductivity:g} W/(m K)")
+                f"air at {self.env_conductivity:g} W/(m K) (the chains' t_env "
+                f"{self.env_thickness * 1e6:g} um)")
 
 
 #: The paper's SU-8 / gold bimorph (Zhu & Filipov; the Miura lifter, Example03: gold 0.2 um at
@@ -204,7 +206,7 @@ def _plain_contact(mesh, params: BarHingeParameters,
 def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                 fixed_panel: int | None = None,
                 contact: bool | ContactParameters | None = True,
-                scatter: float = 0.0, seed: int = 0) -> Model:
+                scatter: float = 0.0, seed: int = 0, loss_model: str = "integral") -> Model:
     """A heatable model of a pattern with a layer stack.
 
     Parameters
@@ -226,7 +228,15 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
         a fabricated sheet's imperfection; with it the branch a symmetric pattern takes can
         change with the seed and with the step count (theory 6.12), without it the critical
         mode's sign picks it, the same at any step count.
+    loss_model : {"integral", "chain"}
+        Heat loss to the stack's air (theory 4.3, 4.7): ``"integral"`` (default,
+        :class:`~simulator.thermal.loss.IntegralLoss`: the sheet's single-layer potential in
+        the medium, nothing fitted, within 1 % of the 3-D FE; above its dense limit the fast
+        path of theory 4.7, minutes per solve on sheets of thousands of triangles) or
+        ``"chain"`` (the paper's chains, t_env the stack's ``env_thickness``: seconds, but
+        20-40 % too cool at the heated crease and blind to heat passed between creases).
     """
+    one_of("loss_model", loss_model, ("integral", "chain"))
     if not isinstance(stack, LayerStack):
         raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
     heated = [pattern.check_crease(c, "heated crease") for c in heated]
@@ -241,9 +251,10 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                                   t2=stack.t_passive),
                           {c: stack.delta_alpha * float(sign[c]) for c in heated},
                           scatter=scatter, seed=seed)
+    loss = ChainLoss(thickness=stack.env_thickness, dissipation_angle=REFERENCE_BETA) \
+        if loss_model == "chain" else IntegralLoss()
     thermal = ThermalParameters(
-        loss=ChainLoss(thickness=stack.env_thickness, dissipation_angle=REFERENCE_BETA),
-        medium=AIR.with_properties(thermal_conductivity=stack.env_conductivity))
+        loss=loss, medium=AIR.with_properties(thermal_conductivity=stack.env_conductivity))
     supports = Supports({int(i): "xyz" for i in mesh.panel_nodes(fixed_panel)})
     params = BarHingeParameters()
     if contact is True:

@@ -152,6 +152,14 @@ class IntegralLoss:
                                  f"{self.refinement}: the coarse level max(m // 2, 2) must be "
                                  "below m; use refinement=3 (or extrapolation=False).")
 
+    def takes_fast_path(self, n_triangles: int) -> bool:
+        """Whether a sheet of ``n_triangles`` triangles is solved on the fast path (theory 4.7):
+        ``operator`` "fast", or "auto" above the dense limit (more than
+        ``MAX_SUB_TRIANGLES`` sub-triangles at ``refinement``)."""
+        from .integral_levels import uses_fast
+
+        return uses_fast(int(n_triangles), self)
+
     @property
     def extrapolated(self) -> bool:
         """Whether the operator is extrapolated (``extrapolation``; None: from m = 3 on)."""

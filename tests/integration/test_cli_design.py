@@ -9,8 +9,9 @@ from design.cli import main
 
 
 def test_gripper_evaluate_json_matches_reference_g2(capsys):
+    """The reference's G2 in the paper setting (--loss-model chain)."""
     code = main(["gripper", "evaluate", "--W", "300", "--La", "1500", "--L1", "500", "--L2",
-                 "500", "--mode", "staircase", "--json"])
+                 "500", "--mode", "staircase", "--loss-model", "chain", "--json"])
     assert code == 0
     out = json.loads(capsys.readouterr().out)
     for key in ("assembly_power [mW]", "grip_power [mW]", "total_power [mW]",
@@ -98,3 +99,22 @@ def test_infeasible_design_reports_not_met_not_zero(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["success"] is False and out["total_power [mW]"] is None
     assert out["assembly_power [mW]"] is None and "power cap" in out["message"]
+
+
+def test_the_design_commands_take_the_loss_model_and_the_miura_refuses_the_integral_one(
+        tmp_path, capsys):
+    """The gripper's design commands default to the integral loss and take --loss-model; the
+    Miura lifter's problem has the chains only, and says so in one line before any work."""
+    from design.cli import _parser
+
+    parser = _parser()
+    for argv in (["sweep", "residual-fold", "--values=0", "--out", "x"],
+                 ["optimize", "gripper", "--out", "x"]):
+        args = parser.parse_args(argv)
+        assert args.loss_model in (None, "integral")
+        assert parser.parse_args([*argv, "--loss-model", "chain"]).loss_model == "chain"
+    assert main(["optimize", "miura", "--loss-model", "integral", "--out",
+                 str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--loss-model integral" in err[0] and "chains only" in err[0]
+    assert not (tmp_path / "m").exists()

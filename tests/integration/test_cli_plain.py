@@ -158,7 +158,7 @@ def test_a_flat_start_at_a_bifurcation_at_the_cli_in_cli_words(tmp_path, capsys)
     path = tmp_path / "waterbomb.fold"
     path.write_text(json.dumps(_waterbomb()))
     common = ["run", str(path), "--heat", "all", "--power", "20", "--set", "thermal_steps=50",
-              "-q"]
+              "--loss-model", "chain", "-q"]           # the heat loss the power was chosen for
     assert main(common + ["--out", str(tmp_path / "a")]) == 0
     out = capsys.readouterr().out
     assert "waterbomb: converged" in out and "stability lost" not in out
@@ -185,3 +185,28 @@ def test_loss_model_integral_heats_a_plain_pattern_hotter_than_the_chains(tmp_pa
     hottest = {k: v[v["step"] == v["step"].max()].filter(like="temperature").max().max()
                for k, v in runs.items()}
     assert hottest["integral"] > hottest["chain"]
+
+
+def test_a_plain_pattern_heats_with_the_integral_loss_by_default(tmp_path, capsys):
+    """Issue 29: new models use the calibration-free integral loss unless told otherwise; the
+    run says which loss and medium it heats with."""
+    out_dir = tmp_path / "default"
+    assert main(["run", MIURA, "--heat", "all", "--power", "1", "--set", "thermal_steps=2",
+                 "--out", str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    assert "heat loss: integral model (calibration-free; m = 3, extrapolated), to air at " \
+           "0.026 W/(m K)" in out
+    assert json.loads((out_dir / "meta.json").read_text())["overrides"]["loss_model"] == \
+        "integral"
+    from simulator import ParameterError, get_stack, parse_fold, stack_model
+
+    stack = get_stack("su8-au")
+    geo = parse_fold(json.loads(pathlib.Path(MIURA).read_text()),
+                     crease_width=stack.crease_width, crease_thickness=stack.crease_thickness,
+                     panel_thickness=stack.panel_thickness)
+    creases = geo.pattern.creases.tolist()
+    assert stack_model(geo.pattern, stack, creases).thermal.loss.model == "integral"
+    paper = stack_model(geo.pattern, stack, creases, loss_model="chain").thermal.loss
+    assert (paper.model, paper.thickness) == ("chain", stack.env_thickness)
+    with pytest.raises(ParameterError, match="loss_model = 'fe'"):
+        stack_model(geo.pattern, stack, creases, loss_model="fe")

@@ -80,7 +80,7 @@ def test_heat_takes_its_coupling_settings_as_fields():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"coupling": object()}, r"Heat.coupling = .* must be one of 'staggered', 'iterated'; "
+    ({"coupling": object()}, r"Heat.coupling = .* must be one of 'staggered', 'iterated', 'settled'; "
                              r"the tolerance .* coupling_tol and max_coupling_iterations"),
     ({"coupling_tol": 0.0}, r"Heat.coupling_tol = 0.0 must be a finite number > 0 \[K\]"),
     ({"max_coupling_iterations": 0}, r"Heat.max_coupling_iterations = 0 must be a positive"),

@@ -43,7 +43,9 @@ def strip() -> Pattern:
 
 
 def heated(pattern, power, increments, contact, status="converged"):
-    model = stack_model(pattern, STACK, pattern.creases.tolist(), contact=contact)
+    """Heated with the paper's chains, the loss the powers were chosen for."""
+    model = stack_model(pattern, STACK, pattern.creases.tolist(), contact=contact,
+                        loss_model="chain")
     result = simulate(model, [Heat({int(c): power for c in pattern.creases},
                                    increments=increments)])
     assert result.status == status, result.message

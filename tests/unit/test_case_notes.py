@@ -33,5 +33,5 @@ def test_cases_prints_the_notes(capsys):
     assert main(["cases"]) == 0
     out = capsys.readouterr().out
     assert "variant = 'loss'  (one of 'within', 'loss')" in out
-    assert "coupling = 'staggered'  (one of 'staggered', 'iterated')" in out
+    assert "coupling = 'staggered'  (one of 'staggered', 'iterated', 'settled')" in out
     assert "cools the creases" in out and "issue 9" not in out

@@ -121,7 +121,7 @@ def _device_meshes():
     from simulator.cases import get_case
 
     crane = get_case("crane").model
-    gripper, _ = gripper_model(GripperDesign())
+    gripper, _ = gripper_model(GripperDesign(loss_model="chain"))     # the chains: T3
     double = get_case("double_fold").model
     return {"crane": crane, "gripper": gripper, "double_fold": double}
 

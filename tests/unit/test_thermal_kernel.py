@@ -36,7 +36,7 @@ def _gripper_state():
     from design.devices.gripper import GripperDesign, gripper_model
     from simulator.simulation import simulate
     from simulator.state import thermal_model
-    model, pre = gripper_model(GripperDesign())
+    model, pre = gripper_model(GripperDesign(loss_model="chain"))   # the chains with T3
     state = simulate(model, pre).state
     return thermal_model(model), model.mesh.nodes + state.u, model.mesh.n_creases
 
