@@ -12,6 +12,7 @@ makes the chosen creases actuators folding in their assigned directions, clamps 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 
 from ._common import CLIError, distinct, length_um, power_mw
@@ -50,13 +51,14 @@ def add_plain_options(parser, heating: bool = True) -> None:
                             help="power per heated crease [mW]")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
-        parser.add_argument("--loss-model", choices=("integral", "chain"), default="integral",
+        parser.add_argument("--loss-model", choices=("integral", "chain"), default=None,
                             help="heat loss of a heated plain pattern to the air: the "
                                  "boundary-integral model (default; theory 4.7: nothing "
-                                 "fitted, within 1 %% of the 3-D FE; above its dense limit "
-                                 "the fast path, minutes per solve on sheets of thousands of "
-                                 "triangles) or the paper's chains (seconds, 20-40 %% too "
-                                 "cool)")
+                                 "fitted, within 1 %% of the 3-D FE) or the paper's chains "
+                                 "(seconds, 20-40 %% too cool). Above the integral model's "
+                                 "dense limit (about 440 triangles) it takes a fast path of "
+                                 "minutes per thermal solve: there the default is the chains, "
+                                 "with a warning; --loss-model integral uses it anyway")
         parser.add_argument("--contact", action=argparse.BooleanOptionalAction, default=True,
                             help="panel contact of a heated plain pattern (default on: panels "
                                  "never pass through each other; --no-contact: off, a run "
@@ -196,9 +198,20 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     heated = select_creases(heating.heat, geo)
     watts = power_mw("--power", heating.power)
     contact = getattr(heating, "contact", True)
-    loss = getattr(heating, "loss_model", "integral")
+    loss = getattr(heating, "loss_model", None)
     model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact,
-                        loss_model=loss)
+                        loss_model=loss or "integral")
+    n = len(model.mesh.triangles)
+    if loss is None and model.thermal.loss.takes_fast_path(n):
+        loss = "chain"
+        model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact,
+                            loss_model=loss)
+        logging.getLogger("design.cli").warning(
+            "%d triangles: the integral heat loss would take its fast path here (minutes per "
+            "thermal solve, theory 4.7), so this run heats with the paper's chains, 20-40 %% "
+            "too cool at a heated crease; --loss-model integral uses the integral loss anyway",
+            n)
+    loss = loss or "integral"
     print(f"  heat loss: {heat_loss_line(model)}")
     print(f"  {contact_line(model, contact)}")
     steps = (Heat({c: watts for c in heated}, increments=200),)

@@ -210,3 +210,23 @@ def test_a_plain_pattern_heats_with_the_integral_loss_by_default(tmp_path, capsy
     assert (paper.model, paper.thickness) == ("chain", stack.env_thickness)
     with pytest.raises(ParameterError, match="loss_model = 'fe'"):
         stack_model(geo.pattern, stack, creases, loss_model="fe")
+
+
+def test_a_large_plain_pattern_falls_back_to_the_chains_with_a_warning(tmp_path, caplog):
+    """Above the integral model's dense limit (a 6 x 6-cell Miura: 504 triangles) its fast path
+    takes minutes per thermal solve: unless --loss-model integral is given, the run heats with
+    the chains and warns (the result is affected)."""
+    import logging
+
+    from simulator import write_fold
+    from simulator.geometry.example_patterns import miura_sheet_pattern
+
+    path = write_fold(miura_sheet_pattern(m=6, n=6), tmp_path / "miura6.fold")
+    out_dir = tmp_path / "run"
+    with caplog.at_level(logging.WARNING):
+        assert main(["run", str(path), "--heat", "all", "--power", "0.1", "--set",
+                     "thermal_steps=2", "--out", str(out_dir), "-q"]) == 0
+    warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert any("504 triangles: the integral heat loss would take its fast path" in m and
+               "--loss-model integral" in m for m in warned), warned
+    assert json.loads((out_dir / "meta.json").read_text())["overrides"]["loss_model"] == "chain"
