@@ -40,11 +40,13 @@ def available() -> bool:
 def cholesky_loss(S, M):
     """``(C, W, L)`` for the symmetric ``S`` (n, n) and ``M`` (n, k): the lower Cholesky
     factor ``C`` of ``S``, ``W = C^-1 M`` and ``L = W^T W`` (k, k), exactly symmetric; None if
-    ``S`` is not positive definite (or threads cannot be limited: :func:`available`)."""
+    ``S`` is not positive definite (or threads cannot be limited: :func:`available`). The
+    strict upper triangle of ``C`` is left as LAPACK leaves it (not zeroed: only the lower
+    triangle is read, by ``dtrtrs`` here and in :func:`back_substitute`)."""
     if not available():
         return None
     with _lock, _controller.limit(limits=1, user_api="blas"):
-        C, info = lapack.dpotrf(np.asarray(S, np.float64), lower=1, clean=1)
+        C, info = lapack.dpotrf(np.asarray(S, np.float64), lower=1, clean=0)
         if info != 0:
             return None
         W, info = lapack.dtrtrs(C, np.asarray(M, np.float64), lower=1)
