@@ -112,18 +112,45 @@ def _potential(px, py, pz, t, f, edge, logs, stamp, key):
     return total
 
 
-def _mid(px, py, pz, q):
-    """The 3-point rule of degree 2 of ``int_t 1 / |p - y| dS_y / A_t`` at the triangle's
-    points ``q`` (3, 3) (barycentric (2/3, 1/6, 1/6) and permutations, :func:`_rule_points`)."""
-    acc = 0.0
-    for a in range(3):
-        qx, qy, qz = q[a, 0] - px, q[a, 1] - py, q[a, 2] - pz
-        acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
-    return acc / 3.0
+def _near_row(px, py, pz, key, dist, out, reach, near_dist, area, tri, frames, edges, rule,
+              logs, stamp, picked, points, sums):
+    """Overwrite ``out[j]`` (the centroid rule ``A_j / |p - c_j|``, ``dist`` (n,) the distances
+    ``|p - c_j|``) for the triangles j closer to the point p than ``reach[j]``: the closed form
+    (:func:`_potential`, closer than ``near_dist[j]``) in increasing j, else ``A_j`` times the
+    3-point rule of degree 2 at the triangle's points ``rule[j]`` (3, 3) (barycentric (2/3,
+    1/6, 1/6) and permutations, :func:`_rule_points`). The rule's triangles are listed in
+    ``picked`` (n,) and their points copied into ``points`` (9, n), so that the rule's loop over
+    them is contiguous and vectorises (its square roots and divisions are correctly rounded
+    either way: the same values as one triangle at a time); ``sums`` (n,) is work space."""
+    n = dist.shape[0]
+    count = 0
+    for j in range(n):
+        if dist[j] < reach[j]:
+            if dist[j] < near_dist[j]:
+                out[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp, key)
+            else:
+                picked[count] = j
+                count += 1
+    for k in range(count):
+        j = picked[k]
+        for c in range(9):
+            points[c, k] = rule[j, c // 3, c % 3]
+    for k in range(count):
+        ax, ay, az = points[0, k] - px, points[1, k] - py, points[2, k] - pz
+        bx, by, bz = points[3, k] - px, points[4, k] - py, points[5, k] - pz
+        cx, cy, cz = points[6, k] - px, points[7, k] - py, points[8, k] - pz
+        acc = 1.0 / math.sqrt(ax * ax + ay * ay + az * az)
+        acc += 1.0 / math.sqrt(bx * bx + by * by + bz * bz)
+        acc += 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
+        sums[k] = acc
+    for k in range(count):
+        j = picked[k]
+        out[j] = area[j] * (sums[k] / 3.0)
 
 
 def _rule_points(t, q):
-    """The points of :func:`_mid`'s rule of the triangle ``t`` (3, 3), into ``q`` (3, 3)."""
+    """The points of :func:`_near_row`'s 3-point rule of the triangle ``t`` (3, 3), into ``q``
+    (3, 3)."""
     for a in range(3):
         b, c = (a + 1) % 3, (a + 2) % 3
         for k in range(3):
@@ -138,7 +165,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
     integral over the mirrored triangle at ``c_i``), divided by ``A_j`` and symmetrised with
     ``operator``; into ``area``, ``centroid`` and ``diam`` the triangles' areas, centroids and
     diameters (longest edge). Per row the centroid rule first for all pairs (no branches: it
-    vectorises), then the 3-point rule and the closed form for the closer ones."""
+    vectorises), then the closed form and the 3-point rule for the closer ones
+    (:func:`_near_row`)."""
     n = tri.shape[0]
     mid = _MID_FACTOR * near
     frames, rule = np.empty((n, 4, 7)), np.empty((n, 3, 3))
@@ -158,11 +186,13 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
         diam[j] = dm
         for k in range(3):
             centroid[j, k] = (t[0, k] + t[1, k] + t[2, k]) / 3.0
-    reach = np.empty(n)
+    reach, near_dist = np.empty(n), np.empty(n)
     for j in range(n):
         reach[j] = mid * diam[j]
+        near_dist[j] = near * diam[j]
     cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
     dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
+    picked, points, sums = np.empty(n, np.int64), np.empty((9, n)), np.empty(n)
     logs, stamp = np.empty(n_edges), np.full(n_edges, -1, np.int64)
     for i in range(n):
         px, py, pz = cx[i], cy[i], cz[i]
@@ -172,13 +202,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
             dr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
         for j in range(n):
             dv[j] = area[j] / dr[j]
-        for j in range(n):                       # closer pairs: 3-point rule, closed form
-            if dr[j] < reach[j]:
-                if dr[j] < near * diam[j]:
-                    dv[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp,
-                                       2 * i)
-                else:
-                    dv[j] = area[j] * _mid(px, py, pz, rule[j])
+        _near_row(px, py, pz, 2 * i, dr, dv, reach, near_dist, area, tri, frames, edges, rule,
+                  logs, stamp, picked, points, sums)    # closer pairs: closed form, 3-point rule
         if image:                                # the mirror image of the point
             h = 2.0 * ((px - origin[0]) * normal[0] + (py - origin[1]) * normal[1]
                        + (pz - origin[2]) * normal[2])
@@ -188,13 +213,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
                 qr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
             for j in range(n):
                 iv[j] = area[j] / qr[j]
-            for j in range(n):
-                if qr[j] < reach[j]:
-                    if qr[j] < near * diam[j]:
-                        iv[j] = _potential(qx, qy, qz, tri[j], frames[j], edges[j], logs, stamp,
-                                           2 * i + 1)
-                    else:
-                        iv[j] = area[j] * _mid(qx, qy, qz, rule[j])
+            _near_row(qx, qy, qz, 2 * i + 1, qr, iv, reach, near_dist, area, tri, frames, edges,
+                      rule, logs, stamp, picked, points, sums)
         if operator:
             for j in range(n):
                 V[i, j] = scale * (dv[j] - iv[j]) / area[j]
@@ -245,7 +265,7 @@ def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_mid", "_rule_points", "_value"):
+    for name in ("_potential", "_frame", "_near_row", "_rule_points", "_value"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
