@@ -20,7 +20,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "collocation", "pair_values"]
+__all__ = ["use_compiled", "collocation", "pair_values", "corners"]
 
 #: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
 #: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
@@ -31,6 +31,7 @@ _SIGNATURE = ("void(f8[:, :, ::1], i8[:, ::1], i8, f8[::1], f8[::1], b1, b1, f8,
 _compiled = None
 _broken = False
 _compiled_pairs = None
+_compiled_corners = None
 #: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
 #: :data:`simulator.thermal._single_layer.MID_FACTOR`).
 _MID_FACTOR = 2.0
@@ -261,6 +262,20 @@ def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
                         near, mid, frame, edge, logs, stamp, k)
 
 
+def _corners_kernel(x, triangles, bary, out):
+    """Into ``out`` (n_tri s, 3, 3): corner a of sub-triangle q of triangle t is
+    ``sum_b bary[q, a, b] x[triangles[t, b]]``, summed in the order b = 0, 1, 2 (numpy's twin,
+    ``einsum``, sums in that order: the same values)."""
+    s = bary.shape[0]
+    for t in range(triangles.shape[0]):
+        v0, v1, v2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        for q in range(s):
+            for a in range(3):
+                w0, w1, w2 = bary[q, a, 0], bary[q, a, 1], bary[q, a, 2]
+                for k in range(3):
+                    out[t * s + q, a, k] = w0 * x[v0, k] + w1 * x[v1, k] + w2 * x[v2, k]
+
+
 def _build():
     from numba import njit
 
@@ -278,6 +293,17 @@ def _build_pairs():
 
     _build()                                           # the helpers, compiled
     return njit(_PAIR_SIGNATURE, cache=True, fastmath=False)(_pair_kernel)
+
+
+def _build_corners():
+    from numba import njit
+
+    return njit(_CORNERS_SIGNATURE, cache=True, fastmath=False)(_corners_kernel)
+
+
+#: node positions (n, 3), triangles (n_tri, 3), barycentric corners (s, 3, 3), output
+#: (n_tri s, 3, 3)
+_CORNERS_SIGNATURE = "void(f8[:, ::1], i8[:, ::1], f8[:, :, ::1], f8[:, :, ::1])"
 
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
@@ -337,3 +363,28 @@ def pair_values(points, tri, centroid, area, diam, near, rows, cols) -> np.ndarr
                     c(area, np.float64), c(diam, np.float64), float(near),
                     c(rows, np.int64), c(cols, np.int64), out)
     return out
+
+
+def corners(x, triangles, bary):
+    """Corners [m] of the sub-triangles (n_tri s, 3, 3) of the ``triangles`` (n_tri, 3) (node
+    ids) at node positions ``x`` (n, 3) [m] by the barycentric corners ``bary`` (s, 3, 3)
+    (:func:`simulator.thermal._single_layer.subdivision`), compiled: numpy's twin is
+    :func:`simulator.thermal._single_layer.sub_triangle_corners` (the same values); ``None`` if
+    it cannot be compiled."""
+    global _compiled_corners
+    if _compiled_corners is None:
+        _compiled_corners = compile_kernel("sub-triangle corner kernel", _build_corners,
+                                           "using numpy") or False
+    if _compiled_corners is False:
+        return None
+    out = np.empty((len(triangles) * len(bary), 3, 3))
+    _compiled_corners(_writable(x, np.float64), _writable(triangles, np.int64),
+                      _writable(bary, np.float64), out)
+    return out
+
+
+def _writable(a, dtype):
+    """``a`` as a C-contiguous array of ``dtype`` that the compiled signatures accept (numba
+    types a read-only array apart: a copy then)."""
+    a = np.ascontiguousarray(a, dtype)
+    return a if a.flags.writeable else a.copy()

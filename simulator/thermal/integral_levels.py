@@ -285,11 +285,11 @@ def integral_operator(triangles, n_nodes, params, plane=None):
             levels = [(m / (m - c), m), (-c / (m - c), c)]
         return FastIntegralOperator(triangles, n_nodes, k, levels, plane)
     correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
-    memo = [None, None]                      # the levels share the sheet's distances
+    memo, heights = [None, None], [None, None, None]   # the levels share the sheet's distances
 
     def level(r, lumped=False):
         out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol, lumped)
-        out.distance_memo = memo
+        out.distance_memo, out.height_memo = memo, heights    # and heights
         return out
 
     # lumped (IntegralLoss.lumped) is the outermost operator only, whose conductance the
