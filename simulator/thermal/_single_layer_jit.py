@@ -20,7 +20,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "collocation", "pair_values", "corners"]
+__all__ = ["use_compiled", "collocation", "pair_values", "corners", "pair_distances"]
 
 #: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
 #: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
@@ -276,6 +276,18 @@ def _corners_kernel(x, triangles, bary, out):
                     out[t * s + q, a, k] = w0 * x[v0, k] + w1 * x[v1, k] + w2 * x[v2, k]
 
 
+def _pair_distances_kernel(p, out):
+    """Into ``out`` (n (n - 1) / 2,): ``|p_i - p_j|`` for i < j in the order of
+    ``scipy.spatial.distance.pdist`` (numpy's twin; the same sums: the same values)."""
+    n = p.shape[0]
+    k = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx, dy, dz = p[i, 0] - p[j, 0], p[i, 1] - p[j, 1], p[i, 2] - p[j, 2]
+            out[k] = math.sqrt(dx * dx + dy * dy + dz * dz)
+            k += 1
+
+
 def _build():
     from numba import njit
 
@@ -298,7 +310,9 @@ def _build_pairs():
 def _build_corners():
     from numba import njit
 
-    return njit(_CORNERS_SIGNATURE, cache=True, fastmath=False)(_corners_kernel)
+    return (njit(_CORNERS_SIGNATURE, cache=True, fastmath=False)(_corners_kernel),
+            njit("void(f8[:, ::1], f8[::1])", cache=True, fastmath=False)(
+                _pair_distances_kernel))
 
 
 #: node positions (n, 3), triangles (n_tri, 3), barycentric corners (s, 3, 3), output
@@ -371,16 +385,35 @@ def corners(x, triangles, bary):
     (:func:`simulator.thermal._single_layer.subdivision`), compiled: numpy's twin is
     :func:`simulator.thermal._single_layer.sub_triangle_corners` (the same values); ``None`` if
     it cannot be compiled."""
-    global _compiled_corners
-    if _compiled_corners is None:
-        _compiled_corners = compile_kernel("sub-triangle corner kernel", _build_corners,
-                                           "using numpy") or False
-    if _compiled_corners is False:
+    kernels = _geometry_kernels()
+    if kernels is None:
         return None
     out = np.empty((len(triangles) * len(bary), 3, 3))
-    _compiled_corners(_writable(x, np.float64), _writable(triangles, np.int64),
-                      _writable(bary, np.float64), out)
+    kernels[0](_writable(x, np.float64), _writable(triangles, np.int64),
+               _writable(bary, np.float64), out)
     return out
+
+
+def pair_distances(p):
+    """``|p_i - p_j|`` [m] for i < j of the points ``p`` (n, 3) [m], (n (n - 1) / 2,), in the
+    order of ``scipy.spatial.distance.pdist`` (numpy's twin, the same values), compiled;
+    ``None`` if it cannot be compiled."""
+    kernels = _geometry_kernels()
+    if kernels is None:
+        return None
+    out = np.empty(len(p) * (len(p) - 1) // 2)
+    kernels[1](_writable(p, np.float64), out)
+    return out
+
+
+def _geometry_kernels():
+    """The compiled sub-triangle corner and pair distance kernels (compiled or loaded on the
+    first call), None if they cannot be compiled."""
+    global _compiled_corners
+    if _compiled_corners is None:
+        _compiled_corners = compile_kernel("sub-triangle geometry kernels", _build_corners,
+                                           "using numpy") or False
+    return _compiled_corners or None
 
 
 def _writable(a, dtype):

@@ -221,7 +221,9 @@ class IntegralOperator:
         if memo[0] is not None and memo[0].shape == x.shape and np.array_equal(memo[0], x):
             return memo[1]
         p = x[self.nodes]
-        d = pdist(p)
+        d = _single_layer_jit.pair_distances(p) if _single_layer_jit.use_compiled() else None
+        if d is None:                               # numpy's twin
+            d = pdist(p)
         if self.plane is not None:
             origin, normal = self.plane
             d = np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
@@ -269,7 +271,7 @@ class IntegralOperator:
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
         if len(S) >= thresholds.LOSS_DENSE_LAPACK_MIN:     # blocked LAPACK, single-threaded
-            out = dense_lapack.cholesky_loss(S, M)
+            out = dense_lapack.cholesky_loss(S, M, overwrite=True)   # S is ours
             if out is not None:              # positive definite
                 C, W, L = out
                 return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True

@@ -173,6 +173,19 @@ def test_compiled_sub_triangle_corners_are_numpys():
         assert np.array_equal(a, b)
 
 
+def test_compiled_pair_distances_are_pdists():
+    """The compiled distances between sheet nodes (the operator's rebuild criterion) are
+    scipy's pdist, in its order, to the last bit."""
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    from scipy.spatial.distance import pdist
+
+    rng = np.random.default_rng(6)
+    for n in (2, 5, 37):
+        p = rng.normal(0, 1e-3, (n, 3)) + 0.01
+        assert np.array_equal(_single_layer_jit.pair_distances(p), pdist(p))
+
+
 def test_compiled_cholesky_matches_lapack():
     if not _single_layer_jit.use_compiled():
         pytest.skip("numba backend not selected")
