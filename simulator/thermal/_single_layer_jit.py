@@ -114,24 +114,29 @@ def _potential(px, py, pz, t, f, edge, logs, stamp, key):
 
 
 def _near_row(px, py, pz, key, dist, out, reach, near_dist, area, tri, frames, edges, rule,
-              logs, stamp, picked, points, sums):
+              slot_of, stamp, picked, points, sums, close, work, slots, logs):
     """Overwrite ``out[j]`` (the centroid rule ``A_j / |p - c_j|``, ``dist`` (n,) the distances
     ``|p - c_j|``) for the triangles j closer to the point p than ``reach[j]``: the closed form
-    (:func:`_potential`, closer than ``near_dist[j]``) in increasing j, else ``A_j`` times the
-    3-point rule of degree 2 at the triangle's points ``rule[j]`` (3, 3) (barycentric (2/3,
-    1/6, 1/6) and permutations, :func:`_rule_points`). The rule's triangles are listed in
-    ``picked`` (n,) and their points copied into ``points`` (9, n), so that the rule's loop over
-    them is contiguous and vectorises (its square roots and divisions are correctly rounded
-    either way: the same values as one triangle at a time); ``sums`` (n,) is work space."""
+    (:func:`_closed_forms`, closer than ``near_dist[j]``), else ``A_j`` times the 3-point rule
+    of degree 2 at the triangle's points ``rule[j]`` (3, 3) (barycentric (2/3, 1/6, 1/6) and
+    permutations, :func:`_rule_points`). The rule's triangles are listed in ``picked`` (n,) and
+    their points copied into ``points`` (9, n), so that the rule's loop over them is contiguous
+    and vectorises (its square roots and divisions are correctly rounded either way: the same
+    values as one triangle at a time); ``sums`` (n,) is work space, and ``close``, ``work``,
+    ``slots``, ``logs``, ``slot_of``, ``stamp`` that of :func:`_closed_forms`."""
     n = dist.shape[0]
     count = 0
+    n_close = 0
     for j in range(n):
         if dist[j] < reach[j]:
             if dist[j] < near_dist[j]:
-                out[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp, key)
+                close[n_close] = j
+                n_close += 1
             else:
                 picked[count] = j
                 count += 1
+    _closed_forms(px, py, pz, key, close, n_close, out, tri, frames, edges, slot_of, stamp,
+                  work, slots, logs)
     for k in range(count):
         j = picked[k]
         for c in range(9):
@@ -147,6 +152,79 @@ def _near_row(px, py, pz, key, dist, out, reach, near_dist, area, tri, frames, e
     for k in range(count):
         j = picked[k]
         out[j] = area[j] * (sums[k] / 3.0)
+
+
+def _closed_forms(px, py, pz, key, close, n_close, out, tri, frames, edges, slot_of, stamp,
+                  work, slots, logs):
+    """``out[j] = int_j 1 / |p - y| dS_y`` for the triangles ``close[:n_close]``: the formulas
+    of :func:`_potential` (the same values, summed in the same order), in three passes so that
+    the logarithms and arc tangents are evaluated back to back, not each at the end of its
+    pair's chain of dependent operations: the geometry of every pair (per edge ``P0`` into
+    ``work[0:3]`` and the slot of its logarithm's argument into ``slots`` (-1: the edge's line
+    passes through the projection of p, no term), the solid angle's atan2 arguments and
+    ``|d|`` into ``work[3:6]``), then the logarithms (``logs``: arguments, then values, one
+    per edge: the edge's slot ``slot_of[edge]`` is this point's where ``stamp[edge] == key``,
+    shared by the edge's two triangles), the arc tangents (``work[6]``), then the sums."""
+    n_logs = 0
+    for k in range(n_close):
+        j = close[k]
+        t, f, edge = tri[j], frames[j], edges[j]
+        nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
+        ax, ay, az = t[0, 0] - px, t[0, 1] - py, t[0, 2] - pz
+        bx, by, bz = t[1, 0] - px, t[1, 1] - py, t[1, 2] - pz
+        cx, cy, cz = t[2, 0] - px, t[2, 1] - py, t[2, 2] - pz
+        ra = math.sqrt(ax * ax + ay * ay + az * az)
+        rb = math.sqrt(bx * bx + by * by + bz * bz)
+        rc = math.sqrt(cx * cx + cy * cy + cz * cz)
+        d = ax * nx + ay * ny + az * nz
+        ad = abs(d)
+        for i in range(3):
+            if i == 0:
+                vx, vy, vz, rv, r1 = ax, ay, az, ra, rb
+            elif i == 1:
+                vx, vy, vz, rv, r1 = bx, by, bz, rb, rc
+            else:
+                vx, vy, vz, rv, r1 = cx, cy, cz, rc, ra
+            tx, ty, tz = f[i + 1, 0], f[i + 1, 1], f[i + 1, 2]
+            ux, uy, uz, length = f[i + 1, 3], f[i + 1, 4], f[i + 1, 5], f[i + 1, 6]
+            p0 = vx * ux + vy * uy + vz * uz
+            if abs(p0) <= 1e-12 * length:
+                slots[k, i] = -1
+                continue
+            work[i, k] = p0
+            e = edge[i]
+            if stamp[e] != key:
+                lm = vx * tx + vy * ty + vz * tz
+                lp = lm + length
+                r0sq = p0 * p0 + ad * ad
+                num = r1 + lp if lp >= 0.0 else r0sq / (r1 - lp)
+                den = rv + lm if lm >= 0.0 else r0sq / (rv - lm)
+                logs[0, n_logs] = num / den
+                slot_of[e] = n_logs
+                stamp[e] = key
+                n_logs += 1
+            slots[k, i] = slot_of[e]
+        work[5, k] = ad
+        if ad > 0.0:
+            triple = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+            work[3, k] = abs(triple)
+            work[4, k] = (ra * rb * rc + (ax * bx + ay * by + az * bz) * rc
+                          + (ax * cx + ay * cy + az * cz) * rb + (bx * cx + by * cy + bz * cz) * ra)
+    for s in range(n_logs):
+        logs[1, s] = math.log(logs[0, s])
+    for k in range(n_close):
+        if work[5, k] > 0.0:
+            work[6, k] = math.atan2(work[3, k], work[4, k])
+    for k in range(n_close):
+        total = 0.0
+        for i in range(3):
+            s = slots[k, i]
+            if s >= 0:
+                total += work[i, k] * logs[1, s]
+        ad = work[5, k]
+        if ad > 0.0:
+            total -= 2.0 * ad * work[6, k]
+        out[close[k]] = total
 
 
 def _rule_points(t, q):
@@ -194,7 +272,9 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
     cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
     dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
     picked, points, sums = np.empty(n, np.int64), np.empty((9, n)), np.empty(n)
-    logs, stamp = np.empty(n_edges), np.full(n_edges, -1, np.int64)
+    close, work = np.empty(n, np.int64), np.empty((7, n))
+    slots, logs = np.empty((n, 3), np.int64), np.empty((2, 3 * n))
+    slot_of, stamp = np.empty(n_edges, np.int64), np.full(n_edges, -1, np.int64)
     for i in range(n):
         px, py, pz = cx[i], cy[i], cz[i]
         # the far field (centroid rule) of all pairs, without branches (vectorised)
@@ -204,7 +284,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
         for j in range(n):
             dv[j] = area[j] / dr[j]
         _near_row(px, py, pz, 2 * i, dr, dv, reach, near_dist, area, tri, frames, edges, rule,
-                  logs, stamp, picked, points, sums)    # closer pairs: closed form, 3-point rule
+                  slot_of, stamp, picked, points, sums, close, work, slots,
+                  logs)                                 # closer pairs: closed form, 3-point rule
         if image:                                # the mirror image of the point
             h = 2.0 * ((px - origin[0]) * normal[0] + (py - origin[1]) * normal[1]
                        + (pz - origin[2]) * normal[2])
@@ -215,7 +296,7 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
             for j in range(n):
                 iv[j] = area[j] / qr[j]
             _near_row(qx, qy, qz, 2 * i + 1, qr, iv, reach, near_dist, area, tri, frames, edges,
-                      rule, logs, stamp, picked, points, sums)
+                      rule, slot_of, stamp, picked, points, sums, close, work, slots, logs)
         if operator:
             for j in range(n):
                 V[i, j] = scale * (dv[j] - iv[j]) / area[j]
@@ -292,7 +373,8 @@ def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_near_row", "_rule_points", "_value"):
+    for name in ("_potential", "_frame", "_near_row", "_closed_forms", "_rule_points",
+                 "_value"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
