@@ -37,15 +37,31 @@ def available() -> bool:
     return bool(_controller)
 
 
-def cholesky_loss(S, M):
+def cholesky_loss(S, M, overwrite=False):
     """``(C, W, L)`` for the symmetric ``S`` (n, n) and ``M`` (n, k): the lower Cholesky
     factor ``C`` of ``S``, ``W = C^-1 M`` and ``L = W^T W`` (k, k), exactly symmetric; None if
-    ``S`` is not positive definite (or threads cannot be limited: :func:`available`)."""
+    ``S`` is not positive definite (or threads cannot be limited: :func:`available`). The
+    strict upper triangle of ``C`` is left as LAPACK leaves it (not zeroed: only the lower
+    triangle is read, by ``dtrtrs`` here and in :func:`back_substitute`).
+
+    ``overwrite``: ``S`` (exactly symmetric, C- or Fortran-ordered float64) may be factorised
+    in place, ``C`` is then a view of its memory (no copy of the n x n matrix); if it is not
+    positive definite, ``S`` is restored (from the triangle LAPACK does not touch) before None
+    is returned."""
     if not available():
         return None
+    S = np.asarray(S, np.float64)
+    # S^T == S: the transposed view of a C-ordered S is the Fortran-ordered matrix LAPACK reads
+    A = S.T if S.flags.c_contiguous else S
+    in_place = overwrite and A.flags.f_contiguous and A.flags.writeable
+    if in_place:
+        diagonal = np.diag(A).copy()
     with _lock, _controller.limit(limits=1, user_api="blas"):
-        C, info = lapack.dpotrf(np.asarray(S, np.float64), lower=1, clean=1)
+        C, info = lapack.dpotrf(A, lower=1, clean=0, overwrite_a=int(in_place))
         if info != 0:
+            if in_place:                   # the strict upper triangle is untouched
+                A[...] = np.triu(A, 1) + np.triu(A, 1).T
+                A[np.diag_indices_from(A)] = diagonal
             return None
         W, info = lapack.dtrtrs(C, np.asarray(M, np.float64), lower=1)
         if info != 0:

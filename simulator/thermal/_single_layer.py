@@ -28,7 +28,7 @@ import numpy as np
 from . import _single_layer_jit
 
 __all__ = ["triangle_potential", "collocation_matrix", "single_layer_operator", "subdivision",
-           "subdivision_edges", "pair_values", "NEAR_FACTOR"]
+           "subdivision_edges", "sub_triangle_corners", "pair_values", "NEAR_FACTOR"]
 
 #: Pairs whose centroid distance is below this many source diameters use the closed form.
 NEAR_FACTOR = 1.5
@@ -108,6 +108,21 @@ def subdivision(level: int):
     ij = np.array(corners, float) / m                           # (m^2, 3, 2): weights of v1, v2
     vertices = np.concatenate([1 - ij.sum(axis=-1, keepdims=True), ij], axis=-1)
     return vertices, vertices.mean(axis=1)
+
+
+def sub_triangle_corners(x, triangles, bary, compiled=None) -> np.ndarray:
+    """Corners [m] of the sub-triangles of the mesh ``triangles`` (n_tri, 3) (node ids) at node
+    positions ``x`` (n, 3) [m], (n_tri s, 3, 3): corner a of sub-triangle q of triangle t is
+    ``sum_b bary[q, a, b] x[triangles[t, b]]`` (``bary`` (s, 3, 3): :func:`subdivision`'s
+    vertices). Compiled when ``compiled`` (default: when selected), numpy otherwise (the
+    checked reference; both sum over b in the same order: the same values)."""
+    if compiled is None:
+        compiled = _single_layer_jit.use_compiled()
+    if compiled:
+        out = _single_layer_jit.corners(x, triangles, bary)
+        if out is not None:
+            return out
+    return np.einsum("sab,tbk->tsak", bary, np.asarray(x, float)[triangles]).reshape(-1, 3, 3)
 
 
 def subdivision_edges(triangles, level: int) -> np.ndarray:

@@ -20,7 +20,7 @@ import numpy as np
 from .._jit import compile_kernel
 from ..mechanics.elements import _springs_jit
 
-__all__ = ["use_compiled", "collocation", "pair_values"]
+__all__ = ["use_compiled", "collocation", "pair_values", "corners", "pair_distances"]
 
 #: triangles (n, 3, 3), their edges' ids (n, 3) and number, plane origin (3,), unit normal (3,),
 #: image?, operator?, near, scale, outputs V (n, n), area (n,), centroid (n, 3), diameter (n,)
@@ -31,6 +31,7 @@ _SIGNATURE = ("void(f8[:, :, ::1], i8[:, ::1], i8, f8[::1], f8[::1], b1, b1, f8,
 _compiled = None
 _broken = False
 _compiled_pairs = None
+_compiled_corners = None
 #: The 3-point rule is used up to this many times ``near`` source diameters (numpy's twin:
 #: :data:`simulator.thermal._single_layer.MID_FACTOR`).
 _MID_FACTOR = 2.0
@@ -114,18 +115,123 @@ def _potential(px, py, pz, t, f, edge, logs, stamp, key):
     return total
 
 
-def _mid(px, py, pz, q):
-    """The 3-point rule of degree 2 of ``int_t 1 / |p - y| dS_y / A_t`` at the triangle's
-    points ``q`` (3, 3) (barycentric (2/3, 1/6, 1/6) and permutations, :func:`_rule_points`)."""
-    acc = 0.0
-    for a in range(3):
-        qx, qy, qz = q[a, 0] - px, q[a, 1] - py, q[a, 2] - pz
-        acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
-    return acc / 3.0
+def _near_row(px, py, pz, key, dist, out, reach, near_dist, area, tri, frames, edges, rule,
+              slot_of, stamp, picked, points, sums, close, work, slots, logs):
+    """Overwrite ``out[j]`` (the centroid rule ``A_j / |p - c_j|``, ``dist`` (n,) the distances
+    ``|p - c_j|``) for the triangles j closer to the point p than ``reach[j]``: the closed form
+    (:func:`_closed_forms`, closer than ``near_dist[j]``), else ``A_j`` times the 3-point rule
+    of degree 2 at the triangle's points ``rule[j]`` (3, 3) (barycentric (2/3, 1/6, 1/6) and
+    permutations, :func:`_rule_points`). The rule's triangles are listed in ``picked`` (n,) and
+    their points copied into ``points`` (9, n), so that the rule's loop over them is contiguous
+    and vectorises (its square roots and divisions are correctly rounded either way: the same
+    values as one triangle at a time); ``sums`` (n,) is work space, and ``close``, ``work``,
+    ``slots``, ``logs``, ``slot_of``, ``stamp`` that of :func:`_closed_forms`."""
+    n = dist.shape[0]
+    count = 0
+    n_close = 0
+    for j in range(n):
+        if dist[j] < reach[j]:
+            if dist[j] < near_dist[j]:
+                close[n_close] = j
+                n_close += 1
+            else:
+                picked[count] = j
+                count += 1
+    _closed_forms(px, py, pz, key, close, n_close, out, tri, frames, edges, slot_of, stamp,
+                  work, slots, logs)
+    for k in range(count):
+        j = picked[k]
+        for c in range(9):
+            points[c, k] = rule[j, c // 3, c % 3]
+    for k in range(count):
+        ax, ay, az = points[0, k] - px, points[1, k] - py, points[2, k] - pz
+        bx, by, bz = points[3, k] - px, points[4, k] - py, points[5, k] - pz
+        cx, cy, cz = points[6, k] - px, points[7, k] - py, points[8, k] - pz
+        acc = 1.0 / math.sqrt(ax * ax + ay * ay + az * az)
+        acc += 1.0 / math.sqrt(bx * bx + by * by + bz * bz)
+        acc += 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
+        sums[k] = acc
+    for k in range(count):
+        j = picked[k]
+        out[j] = area[j] * (sums[k] / 3.0)
+
+
+def _closed_forms(px, py, pz, key, close, n_close, out, tri, frames, edges, slot_of, stamp,
+                  work, slots, logs):
+    """``out[j] = int_j 1 / |p - y| dS_y`` for the triangles ``close[:n_close]``: the formulas
+    of :func:`_potential` (the same values, summed in the same order), in three passes so that
+    the logarithms and arc tangents are evaluated back to back, not each at the end of its
+    pair's chain of dependent operations: the geometry of every pair (per edge ``P0`` into
+    ``work[0:3]`` and the slot of its logarithm's argument into ``slots`` (-1: the edge's line
+    passes through the projection of p, no term), the solid angle's atan2 arguments and
+    ``|d|`` into ``work[3:6]``), then the logarithms (``logs``: arguments, then values, one
+    per edge: the edge's slot ``slot_of[edge]`` is this point's where ``stamp[edge] == key``,
+    shared by the edge's two triangles), the arc tangents (``work[6]``), then the sums."""
+    n_logs = 0
+    for k in range(n_close):
+        j = close[k]
+        t, f, edge = tri[j], frames[j], edges[j]
+        nx, ny, nz = f[0, 0], f[0, 1], f[0, 2]
+        ax, ay, az = t[0, 0] - px, t[0, 1] - py, t[0, 2] - pz
+        bx, by, bz = t[1, 0] - px, t[1, 1] - py, t[1, 2] - pz
+        cx, cy, cz = t[2, 0] - px, t[2, 1] - py, t[2, 2] - pz
+        ra = math.sqrt(ax * ax + ay * ay + az * az)
+        rb = math.sqrt(bx * bx + by * by + bz * bz)
+        rc = math.sqrt(cx * cx + cy * cy + cz * cz)
+        d = ax * nx + ay * ny + az * nz
+        ad = abs(d)
+        for i in range(3):
+            if i == 0:
+                vx, vy, vz, rv, r1 = ax, ay, az, ra, rb
+            elif i == 1:
+                vx, vy, vz, rv, r1 = bx, by, bz, rb, rc
+            else:
+                vx, vy, vz, rv, r1 = cx, cy, cz, rc, ra
+            tx, ty, tz = f[i + 1, 0], f[i + 1, 1], f[i + 1, 2]
+            ux, uy, uz, length = f[i + 1, 3], f[i + 1, 4], f[i + 1, 5], f[i + 1, 6]
+            p0 = vx * ux + vy * uy + vz * uz
+            if abs(p0) <= 1e-12 * length:
+                slots[k, i] = -1
+                continue
+            work[i, k] = p0
+            e = edge[i]
+            if stamp[e] != key:
+                lm = vx * tx + vy * ty + vz * tz
+                lp = lm + length
+                r0sq = p0 * p0 + ad * ad
+                num = r1 + lp if lp >= 0.0 else r0sq / (r1 - lp)
+                den = rv + lm if lm >= 0.0 else r0sq / (rv - lm)
+                logs[0, n_logs] = num / den
+                slot_of[e] = n_logs
+                stamp[e] = key
+                n_logs += 1
+            slots[k, i] = slot_of[e]
+        work[5, k] = ad
+        if ad > 0.0:
+            triple = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+            work[3, k] = abs(triple)
+            work[4, k] = (ra * rb * rc + (ax * bx + ay * by + az * bz) * rc
+                          + (ax * cx + ay * cy + az * cz) * rb + (bx * cx + by * cy + bz * cz) * ra)
+    for s in range(n_logs):
+        logs[1, s] = math.log(logs[0, s])
+    for k in range(n_close):
+        if work[5, k] > 0.0:
+            work[6, k] = math.atan2(work[3, k], work[4, k])
+    for k in range(n_close):
+        total = 0.0
+        for i in range(3):
+            s = slots[k, i]
+            if s >= 0:
+                total += work[i, k] * logs[1, s]
+        ad = work[5, k]
+        if ad > 0.0:
+            total -= 2.0 * ad * work[6, k]
+        out[close[k]] = total
 
 
 def _rule_points(t, q):
-    """The points of :func:`_mid`'s rule of the triangle ``t`` (3, 3), into ``q`` (3, 3)."""
+    """The points of :func:`_near_row`'s 3-point rule of the triangle ``t`` (3, 3), into ``q``
+    (3, 3)."""
     for a in range(3):
         b, c = (a + 1) % 3, (a + 2) % 3
         for k in range(3):
@@ -140,7 +246,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
     integral over the mirrored triangle at ``c_i``), divided by ``A_j`` and symmetrised with
     ``operator``; into ``area``, ``centroid`` and ``diam`` the triangles' areas, centroids and
     diameters (longest edge). Per row the centroid rule first for all pairs (no branches: it
-    vectorises), then the 3-point rule and the closed form for the closer ones."""
+    vectorises), then the closed form and the 3-point rule for the closer ones
+    (:func:`_near_row`)."""
     n = tri.shape[0]
     near = near * (1.0 + _TIE)
     mid = _MID_FACTOR * near
@@ -161,12 +268,16 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
         diam[j] = dm
         for k in range(3):
             centroid[j, k] = (t[0, k] + t[1, k] + t[2, k]) / 3.0
-    reach = np.empty(n)
+    reach, near_dist = np.empty(n), np.empty(n)
     for j in range(n):
         reach[j] = mid * diam[j]
+        near_dist[j] = near * diam[j]
     cx, cy, cz = centroid[:, 0].copy(), centroid[:, 1].copy(), centroid[:, 2].copy()
     dr, dv, qr, iv = np.empty(n), np.empty(n), np.zeros(n), np.zeros(n)
-    logs, stamp = np.empty(n_edges), np.full(n_edges, -1, np.int64)
+    picked, points, sums = np.empty(n, np.int64), np.empty((9, n)), np.empty(n)
+    close, work = np.empty(n, np.int64), np.empty((7, n))
+    slots, logs = np.empty((n, 3), np.int64), np.empty((2, 3 * n))
+    slot_of, stamp = np.empty(n_edges, np.int64), np.full(n_edges, -1, np.int64)
     for i in range(n):
         px, py, pz = cx[i], cy[i], cz[i]
         # the far field (centroid rule) of all pairs, without branches (vectorised)
@@ -175,13 +286,9 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
             dr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
         for j in range(n):
             dv[j] = area[j] / dr[j]
-        for j in range(n):                       # closer pairs: 3-point rule, closed form
-            if dr[j] < reach[j]:
-                if dr[j] < near * diam[j]:
-                    dv[j] = _potential(px, py, pz, tri[j], frames[j], edges[j], logs, stamp,
-                                       2 * i)
-                else:
-                    dv[j] = area[j] * _mid(px, py, pz, rule[j])
+        _near_row(px, py, pz, 2 * i, dr, dv, reach, near_dist, area, tri, frames, edges, rule,
+                  slot_of, stamp, picked, points, sums, close, work, slots,
+                  logs)                                 # closer pairs: closed form, 3-point rule
         if image:                                # the mirror image of the point
             h = 2.0 * ((px - origin[0]) * normal[0] + (py - origin[1]) * normal[1]
                        + (pz - origin[2]) * normal[2])
@@ -191,13 +298,8 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
                 qr[j] = math.sqrt(dx * dx + dy * dy + dz * dz)
             for j in range(n):
                 iv[j] = area[j] / qr[j]
-            for j in range(n):
-                if qr[j] < reach[j]:
-                    if qr[j] < near * diam[j]:
-                        iv[j] = _potential(qx, qy, qz, tri[j], frames[j], edges[j], logs, stamp,
-                                           2 * i + 1)
-                    else:
-                        iv[j] = area[j] * _mid(qx, qy, qz, rule[j])
+            _near_row(qx, qy, qz, 2 * i + 1, qr, iv, reach, near_dist, area, tri, frames, edges,
+                      rule, slot_of, stamp, picked, points, sums, close, work, slots, logs)
         if operator:
             for j in range(n):
                 V[i, j] = scale * (dv[j] - iv[j]) / area[j]
@@ -245,11 +347,38 @@ def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
                         near, mid, frame, edge, logs, stamp, k)
 
 
+def _corners_kernel(x, triangles, bary, out):
+    """Into ``out`` (n_tri s, 3, 3): corner a of sub-triangle q of triangle t is
+    ``sum_b bary[q, a, b] x[triangles[t, b]]``, summed in the order b = 0, 1, 2 (numpy's twin,
+    ``einsum``, sums in that order: the same values)."""
+    s = bary.shape[0]
+    for t in range(triangles.shape[0]):
+        v0, v1, v2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        for q in range(s):
+            for a in range(3):
+                w0, w1, w2 = bary[q, a, 0], bary[q, a, 1], bary[q, a, 2]
+                for k in range(3):
+                    out[t * s + q, a, k] = w0 * x[v0, k] + w1 * x[v1, k] + w2 * x[v2, k]
+
+
+def _pair_distances_kernel(p, out):
+    """Into ``out`` (n (n - 1) / 2,): ``|p_i - p_j|`` for i < j in the order of
+    ``scipy.spatial.distance.pdist`` (numpy's twin; the same sums: the same values)."""
+    n = p.shape[0]
+    k = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx, dy, dz = p[i, 0] - p[j, 0], p[i, 1] - p[j, 1], p[i, 2] - p[j, 2]
+            out[k] = math.sqrt(dx * dx + dy * dy + dz * dz)
+            k += 1
+
+
 def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_potential", "_frame", "_mid", "_rule_points", "_value"):
+    for name in ("_potential", "_frame", "_near_row", "_closed_forms", "_rule_points",
+                 "_value"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     # error_model="numpy": the branch-free centroid rule divides by the zero distance of a
@@ -262,6 +391,19 @@ def _build_pairs():
 
     _build()                                           # the helpers, compiled
     return njit(_PAIR_SIGNATURE, cache=True, fastmath=False)(_pair_kernel)
+
+
+def _build_corners():
+    from numba import njit
+
+    return (njit(_CORNERS_SIGNATURE, cache=True, fastmath=False)(_corners_kernel),
+            njit("void(f8[:, ::1], f8[::1])", cache=True, fastmath=False)(
+                _pair_distances_kernel))
+
+
+#: node positions (n, 3), triangles (n_tri, 3), barycentric corners (s, 3, 3), output
+#: (n_tri s, 3, 3)
+_CORNERS_SIGNATURE = "void(f8[:, ::1], i8[:, ::1], f8[:, :, ::1], f8[:, :, ::1])"
 
 
 #: points (n, 3), triangles (m, 3, 3), centroids (m, 3), areas (m,), diameters (m,), near,
@@ -321,3 +463,47 @@ def pair_values(points, tri, centroid, area, diam, near, rows, cols) -> np.ndarr
                     c(area, np.float64), c(diam, np.float64), float(near),
                     c(rows, np.int64), c(cols, np.int64), out)
     return out
+
+
+def corners(x, triangles, bary):
+    """Corners [m] of the sub-triangles (n_tri s, 3, 3) of the ``triangles`` (n_tri, 3) (node
+    ids) at node positions ``x`` (n, 3) [m] by the barycentric corners ``bary`` (s, 3, 3)
+    (:func:`simulator.thermal._single_layer.subdivision`), compiled: numpy's twin is
+    :func:`simulator.thermal._single_layer.sub_triangle_corners` (the same values); ``None`` if
+    it cannot be compiled."""
+    kernels = _geometry_kernels()
+    if kernels is None:
+        return None
+    out = np.empty((len(triangles) * len(bary), 3, 3))
+    kernels[0](_writable(x, np.float64), _writable(triangles, np.int64),
+               _writable(bary, np.float64), out)
+    return out
+
+
+def pair_distances(p):
+    """``|p_i - p_j|`` [m] for i < j of the points ``p`` (n, 3) [m], (n (n - 1) / 2,), in the
+    order of ``scipy.spatial.distance.pdist`` (numpy's twin, the same values), compiled;
+    ``None`` if it cannot be compiled."""
+    kernels = _geometry_kernels()
+    if kernels is None:
+        return None
+    out = np.empty(len(p) * (len(p) - 1) // 2)
+    kernels[1](_writable(p, np.float64), out)
+    return out
+
+
+def _geometry_kernels():
+    """The compiled sub-triangle corner and pair distance kernels (compiled or loaded on the
+    first call), None if they cannot be compiled."""
+    global _compiled_corners
+    if _compiled_corners is None:
+        _compiled_corners = compile_kernel("sub-triangle geometry kernels", _build_corners,
+                                           "using numpy") or False
+    return _compiled_corners or None
+
+
+def _writable(a, dtype):
+    """``a`` as a C-contiguous array of ``dtype`` that the compiled signatures accept (numba
+    types a read-only array apart: a copy then)."""
+    a = np.ascontiguousarray(a, dtype)
+    return a if a.flags.writeable else a.copy()

@@ -40,7 +40,8 @@ from ..errors import ParameterError
 from ..linalg import _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
-from ._single_layer import single_layer_operator, subdivision, subdivision_edges
+from ._single_layer import (single_layer_operator, sub_triangle_corners, subdivision,
+                             subdivision_edges)
 
 __all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE", "lump_couplings"]
 
@@ -125,11 +126,25 @@ class IntegralOperator:
         #: ``[positions, distances]`` of the last :meth:`_distances` call; operators of the
         #: same sheet and plane at other refinements may share the list (they need the same)
         self.distance_memo = [None, None]
+        #: ``[positions, heights, tolerance]`` of the last :meth:`_heights` call (shared as
+        #: :attr:`distance_memo` is)
+        self.height_memo = [None, None, None]
+        self._factors = None               # the per-distance factors of :meth:`_scale`
 
     def _heights(self, x):
-        """Height of every node over the substrate plane [m], (n_nodes,), and the touch
-        tolerance [m] (``None, 0`` without a plane)."""
-        return plane_heights(x, self.plane, self.nodes)
+        """Height of every node over the substrate plane [m], (n_nodes,), read-only, and the
+        touch tolerance [m] (``None, 0`` without a plane): :func:`plane_heights`, kept for the
+        last positions (a loss evaluation asks for them at the same positions several
+        times)."""
+        if self.plane is None:
+            return None, 0.0
+        memo = self.height_memo
+        if memo[0] is not None and memo[0].shape == x.shape and np.array_equal(memo[0], x):
+            return memo[1], memo[2]
+        h, tol = plane_heights(x, self.plane, self.nodes)
+        h.setflags(write=False)
+        memo[:] = [np.array(x, float), h, tol]
+        return h, tol
 
     def touching(self, x) -> np.ndarray:
         """Nodes on (or below) the substrate plane at positions ``x`` (n, 3) [m], (n_nodes,)
@@ -148,14 +163,15 @@ class IntegralOperator:
                            "for the heat loss", int(below.sum()), float(-h.min()))
             x = x - np.minimum(h, 0.0)[:, None] * np.asarray(self.plane[1], float)
             h = np.maximum(h, 0.0)
+        if not np.any(h[self.nodes] <= tol):     # only nodes off the sheet touch (its
+            return x, None                       # boundary panels): no sub-triangle in the plane
         corner = np.einsum("sab,tb->tsa", self._bary, h[self.triangles]).reshape(-1, 3)
         flat = np.all(corner <= tol, axis=1)
         return x, (flat if flat.any() else None)
 
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
-        corners = np.asarray(x, float)[self.triangles]                # (n_tri, 3, 3)
-        return np.einsum("sab,tbk->tsak", self._bary, corners).reshape(-1, 3, 3)
+        return sub_triangle_corners(x, self.triangles, self._bary)
 
     def _operator(self, x) -> "_Operator":
         """The operator at positions ``x`` (n, 3) [m]: the last build while the shape stays
@@ -205,7 +221,9 @@ class IntegralOperator:
         if memo[0] is not None and memo[0].shape == x.shape and np.array_equal(memo[0], x):
             return memo[1]
         p = x[self.nodes]
-        d = pdist(p)
+        d = _single_layer_jit.pair_distances(p) if _single_layer_jit.use_compiled() else None
+        if d is None:                               # numpy's twin
+            d = pdist(p)
         if self.plane is not None:
             origin, normal = self.plane
             d = np.concatenate([d, 2 * np.abs((p - origin) @ normal)])
@@ -253,7 +271,7 @@ class IntegralOperator:
         W^T diag(sign) W`` with ``W = C^-1 M``; LU if a pivot vanishes. Else by the ladder
         (dense Cholesky, a sparse LU if not definite)."""
         if len(S) >= thresholds.LOSS_DENSE_LAPACK_MIN:     # blocked LAPACK, single-threaded
-            out = dense_lapack.cholesky_loss(S, M)
+            out = dense_lapack.cholesky_loss(S, M, overwrite=True)   # S is ours
             if out is not None:              # positive definite
                 C, W, L = out
                 return L, lambda rise: dense_lapack.back_substitute(C, W @ rise), True
@@ -280,10 +298,12 @@ class IntegralOperator:
         distance, at least the mean sub-triangle diameter ``size``; a height over the plane
         at least 1 % of it, times :data:`HEIGHT_SCALE` (the image's share of the loss changes
         with the height itself)."""
-        n = len(self.nodes) * (len(self.nodes) - 1) // 2
-        pair = np.arange(len(distances)) < n
-        floor = np.where(pair, size, 0.01 * size)
-        return np.maximum(distances, floor) * np.where(pair, 1.0, HEIGHT_SCALE)
+        if self._factors is None or len(self._factors[0]) != len(distances):
+            n = len(self.nodes) * (len(self.nodes) - 1) // 2
+            pair = np.arange(len(distances)) < n
+            self._factors = np.where(pair, 1.0, 0.01), np.where(pair, 1.0, HEIGHT_SCALE)
+        floor, scale = self._factors
+        return np.maximum(distances, size * floor) * scale
 
     def loss_matrix(self, x) -> np.ndarray:
         """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)

@@ -130,7 +130,7 @@ class CorrectedLoss:
         self.accurate, self.base, self.tol = accurate, base, float(tol)
         self.lumped = bool(lumped)
         self.nodes = base.nodes
-        self._accurate0 = self._base0 = None
+        self._accurate0 = self._base0 = self._base0_norm = None
         self._last = (None, None, None)     # (L_base, L_acc(x0), their sum) of the last call
         self._near = None       # (node ids, their heights) under the cheap operator's scale
         #: (dL_base, dC, ||dL_base||^2) between the last two accurate builds (None before two)
@@ -152,7 +152,7 @@ class CorrectedLoss:
     def change(self, L_base) -> float:
         """Relative change of the cheap operator ``L_base`` since the last accurate build
         (largest absolute row sum of the difference over that of ``L_base(x0)``)."""
-        norm = np.abs(self._base0).sum(axis=1).max()
+        norm = self._base0_norm
         return float(np.abs(L_base - self._base0).sum(axis=1).max() / norm) if norm > 0 \
             else float(np.abs(L_base).max() > 0)
 
@@ -177,6 +177,7 @@ class CorrectedLoss:
             self._secant = (d_base, (accurate - base) - (self._accurate0 - self._base0),
                             norm) if norm > 0 else None
         self._accurate0, self._base0 = accurate, base
+        self._base0_norm = np.abs(base).sum(axis=1).max()       # of change()
         self._near = self._near_plane(x)
         logger.debug("integral loss: accurate operator rebuilt (%d so far)", self.builds)
         return self._corrected(self._base0)
@@ -285,11 +286,11 @@ def integral_operator(triangles, n_nodes, params, plane=None):
             levels = [(m / (m - c), m), (-c / (m - c), c)]
         return FastIntegralOperator(triangles, n_nodes, k, levels, plane)
     correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
-    memo = [None, None]                      # the levels share the sheet's distances
+    memo, heights = [None, None], [None, None, None]   # the levels share the sheet's distances
 
     def level(r, lumped=False):
         out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol, lumped)
-        out.distance_memo = memo
+        out.distance_memo, out.height_memo = memo, heights    # and heights
         return out
 
     # lumped (IntegralLoss.lumped) is the outermost operator only, whose conductance the

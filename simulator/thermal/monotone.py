@@ -312,8 +312,8 @@ class MonotoneConduction:
         self.kt = np.array(tr.kt)
         where = tr.where[n:]
         self.steiner = np.array(where, float).reshape(-1, 3)
-        self._ends = self.steiner[:, :2].astype(np.int64).T
-        self._fraction = self.steiner[:, 2:3].copy()
+        self._ends = np.ascontiguousarray(self.steiner[:, :2].astype(np.int64).T)
+        self._fraction = np.ascontiguousarray(self.steiner[:, 2:3])
         self.flips = tr.flips
         plain = np.all(self.corners < n, axis=1)
         self._plain = np.flatnonzero(plain)
@@ -333,10 +333,21 @@ class MonotoneConduction:
         xa = x[self._ends[0]]
         return np.concatenate([x, xa + self._fraction * (x[self._ends[1]] - xa)])
 
-    def triangle_matrices(self, x) -> np.ndarray:
+    def triangle_matrices(self, x, compiled=None) -> np.ndarray:
         """T3 matrices [W/K] of every triangle of the triangulation at node positions ``x``
-        (n, 3) [m], (m', 3, 3)."""
-        return t3_matrices(self.positions(x)[self.corners], self.kt)
+        (n, 3) [m], (m', 3, 3): by a compiled kernel when ``compiled`` (default: when the
+        numba backend is selected), else by numpy (:func:`t3_matrices` of :meth:`positions`,
+        the checked twin: the same formulas, its sums in another order)."""
+        if compiled is None:
+            compiled = _compiled_backend()
+        kernel = _t3_kernel_compiled() if compiled else None
+        if kernel is None:
+            return t3_matrices(self.positions(x)[self.corners], self.kt)
+        x = np.require(x, np.float64, ("C", "W"))
+        out = np.empty((len(self.corners), 3, 3))
+        kernel(x, self._ends[0], self._ends[1], self._fraction[:, 0], self.corners, self.kt,
+               np.empty((len(x) + self.n_steiner, 3)), out)
+        return out
 
     def element_values(self, x) -> list:
         """The element matrices [W/K] of :attr:`families` at node positions ``x`` (n, 3) [m]:
@@ -350,6 +361,61 @@ class MonotoneConduction:
             F[g.pad] = 1.0
             out.append(schur_complements(F.reshape(len(g.nodes), k, k), g.k_o))
         return out
+
+
+def _t3_kernel(x, ends_a, ends_b, fraction, corners, kt, points, out):
+    """Compiled :meth:`MonotoneConduction.triangle_matrices`: the points (mesh nodes ``x``,
+    then the Steiner points at ``x_a + s (x_b - x_a)``) into ``points``, and into ``out`` the
+    T3 matrix ``k t (e_i . e_j) / (4 A)`` of every triangle ``corners`` (:func:`t3_matrices`,
+    the same formulas)."""
+    n = x.shape[0]
+    for i in range(n):
+        for k in range(3):
+            points[i, k] = x[i, k]
+    for p in range(ends_a.shape[0]):
+        for k in range(3):
+            xa = x[ends_a[p], k]
+            points[n + p, k] = xa + fraction[p] * (x[ends_b[p], k] - xa)
+    e = np.empty((3, 3))
+    for t in range(corners.shape[0]):
+        c0, c1, c2 = corners[t, 0], corners[t, 1], corners[t, 2]
+        for k in range(3):
+            e[0, k] = points[c2, k] - points[c1, k]
+            e[1, k] = points[c0, k] - points[c2, k]
+            e[2, k] = points[c1, k] - points[c0, k]
+        ux, uy, uz = e[2, 0], e[2, 1], e[2, 2]                 # P1 - P0
+        vx, vy, vz = -e[1, 0], -e[1, 1], -e[1, 2]              # P2 - P0
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        scale = kt[t] / (2 * math.sqrt(cx * cx + cy * cy + cz * cz))
+        for i in range(3):
+            for j in range(3):
+                out[t, i, j] = scale * (e[i, 0] * e[j, 0] + e[i, 1] * e[j, 1]
+                                        + e[i, 2] * e[j, 2])
+
+
+_t3_compiled = None
+
+
+def _compiled_backend() -> bool:
+    from ..mechanics.elements import _springs_jit
+
+    return _springs_jit.compiled_backend()
+
+
+def _t3_kernel_compiled():
+    """The compiled :func:`_t3_kernel` (compiled or loaded on the first call), None if numba
+    cannot compile it (numpy's path then)."""
+    global _t3_compiled
+    if _t3_compiled is None:
+        from .._jit import compile_kernel
+
+        def build():
+            from numba import njit
+            return njit("void(f8[:, ::1], i8[::1], i8[::1], f8[::1], i8[:, ::1], f8[::1], "
+                        "f8[:, ::1], f8[:, :, ::1])", cache=True, fastmath=False)(_t3_kernel)
+        _t3_compiled = compile_kernel("monotone conduction kernel", build, "using numpy") \
+            or False
+    return _t3_compiled or None
 
 
 def _groups(corners, n, triangles) -> list:

@@ -562,13 +562,20 @@ class ThermalModel:
         if self._warn_plane:
             self._warn_plane = False
             _warn_no_plane(self.params)
+        rows, kept = self._integral_scatter
+        L = np.zeros((len(self.free_nodes),) * 2)
+        L[rows] = self.integral_loss_matrix(x)[kept]
+        return L
+
+    @cached_property
+    def _integral_scatter(self):
+        """Index pairs of :meth:`_integral_loss`: the free-node rows and columns of the integral
+        model's sheet nodes, and the same entries of its loss conductance (``np.ix_``)."""
         idx = np.full(self.mesh.n_nodes, -1)
         idx[self.free_nodes] = np.arange(len(self.free_nodes))
         sheet = idx[self.integral.nodes]
         keep = sheet >= 0
-        L = np.zeros((len(self.free_nodes),) * 2)
-        L[np.ix_(sheet[keep], sheet[keep])] = self.integral_loss_matrix(x)[np.ix_(keep, keep)]
-        return L
+        return np.ix_(sheet[keep], sheet[keep]), np.ix_(keep, keep)
 
     def environment_loss(self, x, temperature, room_temperature=None) -> np.ndarray:
         """Heat [W] each node loses to the medium at temperatures ``temperature`` (n,) [deg C]

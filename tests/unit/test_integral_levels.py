@@ -236,3 +236,22 @@ def test_lapack_lu_handles_an_operator_that_is_not_positive_definite():
     b = rng.random(7)
     np.testing.assert_allclose(solve(M @ b), P @ b, rtol=1e-8)
     assert dense_lapack.lu_loss(np.zeros((300, 300)), M) is None       # singular
+
+
+def test_lapack_cholesky_in_place_restores_an_indefinite_operator():
+    """``cholesky_loss(..., overwrite=True)`` (the operator's own S, factorised in place)
+    gives the out-of-place result on a positive definite S, and leaves an indefinite S as it
+    was (the LU fallback then factorises it), C- or Fortran-ordered."""
+    rng = np.random.default_rng(4)
+    A = rng.random((300, 300))
+    M = rng.random((300, 7))
+    for order in ("C", "F"):
+        S = np.array(A + A.T - 150 * np.eye(300), order=order)
+        before = S.copy()
+        assert dense_lapack.cholesky_loss(S, M, overwrite=True) is None
+        assert np.array_equal(S, before)
+        P = np.array(A @ A.T + 300 * np.eye(300), order=order)
+        C0, W0, L0 = dense_lapack.cholesky_loss(P.copy(order="A"), M)
+        C1, W1, L1 = dense_lapack.cholesky_loss(P, M, overwrite=True)
+        assert np.array_equal(np.tril(C0), np.tril(C1)) and np.shares_memory(C1, P)
+        assert np.array_equal(W0, W1) and np.array_equal(L0, L1)

@@ -15,8 +15,8 @@ from simulator.cases import verification_strip
 from simulator.linalg import _dense_jit
 from simulator.thermal import _single_layer_jit, integral
 from simulator.thermal._single_layer import (collocation_matrix, single_layer_operator,
-                                              subdivision, subdivision_edges,
-                                              triangle_potential)
+                                              sub_triangle_corners, subdivision,
+                                              subdivision_edges, triangle_potential)
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel
 
@@ -155,6 +155,35 @@ def test_compiled_operator_matches_numpy_on_a_folded_sheet_over_a_plane():
         V0 = collocation_matrix(sub, 0.026, pl, compiled=False)[0]
         V1 = collocation_matrix(sub, 0.026, pl, compiled=True)[0]
         np.testing.assert_allclose(V1, V0, rtol=1e-12, atol=0)
+
+
+def test_compiled_sub_triangle_corners_are_numpys():
+    """The compiled sub-triangle corners (the operator's per-build interpolation) are those of
+    numpy's einsum, to the last bit, at several refinements."""
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    rng = np.random.default_rng(5)
+    x = rng.normal(0, 1e-3, (7, 3))
+    triangles = np.array([[0, 1, 2], [1, 3, 2], [3, 4, 2], [4, 5, 6], [6, 5, 0]])
+    for m in (1, 2, 3, 4):
+        bary = subdivision(m)[0]
+        a = sub_triangle_corners(x, triangles, bary, compiled=False)
+        b = sub_triangle_corners(x, triangles, bary, compiled=True)
+        assert a.shape == b.shape == (len(triangles) * m * m, 3, 3)
+        assert np.array_equal(a, b)
+
+
+def test_compiled_pair_distances_are_pdists():
+    """The compiled distances between sheet nodes (the operator's rebuild criterion) are
+    scipy's pdist, in its order, to the last bit."""
+    if not _single_layer_jit.use_compiled():
+        pytest.skip("numba backend not selected")
+    from scipy.spatial.distance import pdist
+
+    rng = np.random.default_rng(6)
+    for n in (2, 5, 37):
+        p = rng.normal(0, 1e-3, (n, 3)) + 0.01
+        assert np.array_equal(_single_layer_jit.pair_distances(p), pdist(p))
 
 
 def test_compiled_cholesky_matches_lapack():

@@ -165,6 +165,24 @@ def test_monotone_conduction_follows_the_shape(devices):
     np.testing.assert_allclose(b, a, atol=1e-12 * np.abs(a).max())
 
 
+@pytest.mark.parametrize("name", ["crane", "gripper", "double_fold"])
+def test_compiled_triangle_matrices_are_numpys(devices, name):
+    """The compiled T3 matrices of the monotone triangulation (Steiner points included) are
+    numpy's (:func:`t3_matrices`) to round-off, at a shape other than the mesh's."""
+    from simulator.mechanics.elements import _springs_jit
+
+    if not _springs_jit.compiled_backend():
+        pytest.skip("numba backend not selected")
+    mesh = devices[name].mesh
+    mc = monotone_conduction(mesh.nodes, mesh.triangles, _region(mesh),
+                             ThermalModel(mesh, _CHAIN_MONOTONE)._kt)
+    x = mesh.nodes + np.random.default_rng(2).normal(0, 1e-5, mesh.nodes.shape)
+    a = mc.triangle_matrices(x, compiled=False)
+    b = mc.triangle_matrices(x, compiled=True)
+    assert mc.n_steiner > 0 and a.shape == b.shape
+    np.testing.assert_allclose(b, a, rtol=0, atol=1e-14 * np.abs(a).max())
+
+
 # ---------------------------------------------------------------- linear precision
 def _uniform_strip():
     """The verification strip (crease triangles of 136 deg at the crease centre against square
