@@ -12,8 +12,8 @@ growth exponent of the time with the sub-triangle count, fitted over all sizes a
 
 The sheet's conduction is the T3 elements' (``--conduction t3``, the default here) so that
 the loss's cost is measured: the integral loss's own default, the monotone conduction
-(theory 4.9), builds its triangulation in pure Python, 80 s for the 16 x 16-cell sheet
-alone (``--conduction monotone`` to include it).
+(theory 4.9), builds its triangulation once per model (0.6 s for the 16 x 16-cell sheet, 4.0 s
+for 36 x 36; ``--conduction monotone`` to include it).
 
 Run: ``python benchmarks/bench_integral_scaling.py [--cells 4 6 8 12] [--operator fast]
 [--refinement 1] [--plain]``
