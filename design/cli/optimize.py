@@ -12,7 +12,7 @@ import sys
 
 from simulator import EtorigamiError
 
-from ._common import (RESIDUAL_LIMIT_DEG, BestSoFar, CLIError, add_parallel_options, executor,
+from ._common import (RESIDUAL_LIMIT_DEG, BestSoFar, add_parallel_options, executor,
                       floats, fold_deg, progress_bar, resume_message, resuming_line)
 
 __all__ = ["add_optimize_command"]
@@ -59,15 +59,12 @@ def _problem(args):
     from ..devices.gripper_problem import GripperProblem
 
     if args.target == "miura":
-        from ..devices.miura import MiuraProblem
-        if args.loss_model == "integral":
-            raise CLIError("--loss-model integral: the Miura lifter's design problem has the "
-                           "paper's chains only; drop the option or give --loss-model chain")
-        return MiuraProblem()
+        from ..devices.miura import MiuraDesign, MiuraProblem
+        return MiuraProblem(base=MiuraDesign(loss_model=args.loss_model))
     from ..devices.gripper import GripperDesign
 
     base = GripperProblem(mode=args.mode,
-                          base=GripperDesign(loss_model=args.loss_model or "integral"),
+                          base=GripperDesign(loss_model=args.loss_model),
                           residual_fold=fold_deg("--residual-fold", args.residual_fold))
     if args.robust:
         from ..analysis.robustness import RobustGripperProblem
@@ -127,10 +124,10 @@ def add_optimize_command(sub) -> None:
                                                   "and results")
     opt.add_argument("--max-evaluations", type=int, default=None, metavar="N")
     opt.add_argument("--mode", choices=("bisect", "staircase"), default="bisect")
-    opt.add_argument("--loss-model", choices=("integral", "chain"), default=None,
-                     help="heat loss of the gripper: the boundary-integral model over the "
-                          "substrate (default; theory 4.7) or the paper's fitted chains (its "
-                          "optimisation's setting); the Miura lifter has the chains only")
+    opt.add_argument("--loss-model", choices=("integral", "chain"), default="integral",
+                     help="heat loss: the boundary-integral model over the substrate "
+                          "(default; theory 4.7) or the paper's fitted chains (its "
+                          "optimisation's setting)")
     opt.add_argument("--residual-fold", type=float, default=0.0, metavar="DEG",
                      help="residual fold of the actuated creases in degrees, in (-180, 180]")
     opt.add_argument("--robust", metavar="DEG,DEG,...",

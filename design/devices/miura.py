@@ -14,9 +14,9 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator import (TG_FACTOR, Model, ParameterError, PatternError, TemperatureLimit,
-                       TemperatureVerdict, build_mesh, example_patterns, miura_fold_signs,
-                       miura_sheet_model, simulate)
+from simulator import (TG_FACTOR, IntegralLoss, Model, ParameterError, PatternError,
+                       TemperatureLimit, TemperatureVerdict, build_mesh, example_patterns,
+                       miura_fold_signs, miura_sheet_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import in_range, integer, one_of, positive
 
@@ -49,6 +49,9 @@ class MiuraDesign:
     substrate : bool
         Sheet over a substrate (a thermal boundary and a contact surface), True.
     undercut : gap between the sheet and the substrate [m], 100 um
+    loss_model : heat loss to the air, ``"integral"`` (default since 7 Dec 2026, theory 4.7:
+        nothing fitted, over the substrate's plane) or ``"chain"`` (the ``miura_lifter``
+        case's chains, the paper setting)
     """
 
     a: float = 1e-3
@@ -62,6 +65,7 @@ class MiuraDesign:
     panel_thickness: float = 10e-6
     substrate: bool = True
     undercut: float = 100e-6
+    loss_model: str = "integral"
 
     def __post_init__(self):
         for name in ("a", "b", "W", "t_gold", "t_su8", "panel_thickness", "undercut"):
@@ -70,6 +74,7 @@ class MiuraDesign:
                  "0 to 90 deg; convert degrees with math.radians", open_low=True, open_high=True)
         integer("MiuraDesign.cells_x", self.cells_x, 2)
         integer("MiuraDesign.cells_y", self.cells_y, 1)
+        one_of("MiuraDesign.loss_model", self.loss_model, ("integral", "chain"))
         if not isinstance(self.substrate, (bool, np.bool_)):
             raise ParameterError(f"MiuraDesign.substrate = {self.substrate!r} must be a bool.")
         if not _meshable(self, self.W):
@@ -83,7 +88,12 @@ class MiuraDesign:
                 f"deg; allowed: W < {lo * 1e6:.4g} um.")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The fields; ``loss_model`` only when not "chain" (the heat loss before the field
+        existed), so that the logs of chain designs keep their hashes."""
+        out = asdict(self)
+        if out["loss_model"] == "chain":
+            del out["loss_model"]
+        return out
 
 
 def _meshable(d: MiuraDesign, W: float) -> bool:
@@ -111,11 +121,15 @@ def design_columns(values) -> dict:
 
 def miura_model(design: MiuraDesign = MiuraDesign()) -> Model:
     """The ``miura_lifter`` case's model for ``design`` (one builder for both:
-    :func:`simulator.cases.miura_sheet_model`)."""
+    :func:`simulator.cases.miura_sheet_model`), with the design's heat loss (the integral one
+    over the substrate's plane, or the case's chains)."""
     d = design
-    return miura_sheet_model(d.a, d.b, d.gamma, d.cells_x, d.cells_y, d.W, t_gold=d.t_gold,
-                             t_su8=d.t_su8, panel_thickness=d.panel_thickness,
-                             substrate=d.substrate, undercut=d.undercut)
+    model = miura_sheet_model(d.a, d.b, d.gamma, d.cells_x, d.cells_y, d.W, t_gold=d.t_gold,
+                              t_su8=d.t_su8, panel_thickness=d.panel_thickness,
+                              substrate=d.substrate, undercut=d.undercut)
+    if d.loss_model == "chain":
+        return model
+    return replace(model, thermal=replace(model.thermal, loss=IntegralLoss()))
 
 
 def _lift_nodes(model: Model, design: MiuraDesign) -> np.ndarray:

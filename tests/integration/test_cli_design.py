@@ -101,20 +101,18 @@ def test_infeasible_design_reports_not_met_not_zero(capsys):
     assert out["assembly_power [mW]"] is None and "power cap" in out["message"]
 
 
-def test_the_design_commands_take_the_loss_model_and_the_miura_refuses_the_integral_one(
-        tmp_path, capsys):
-    """The gripper's design commands default to the integral loss and take --loss-model; the
-    Miura lifter's problem has the chains only, and says so in one line before any work."""
+def test_the_design_commands_take_the_loss_model(tmp_path):
+    """The design commands default to the integral loss (issue 29) and take --loss-model for
+    the gripper and the Miura lifter alike."""
     from design.cli import _parser
+    from design.cli.optimize import _problem
 
     parser = _parser()
     for argv in (["sweep", "residual-fold", "--values=0", "--out", "x"],
-                 ["optimize", "gripper", "--out", "x"]):
-        args = parser.parse_args(argv)
-        assert args.loss_model in (None, "integral")
+                 ["optimize", "gripper", "--out", "x"], ["optimize", "miura", "--out", "x"]):
+        assert parser.parse_args(argv).loss_model == "integral"
         assert parser.parse_args([*argv, "--loss-model", "chain"]).loss_model == "chain"
-    assert main(["optimize", "miura", "--loss-model", "integral", "--out",
-                 str(tmp_path / "m")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "--loss-model integral" in err[0] and "chains only" in err[0]
-    assert not (tmp_path / "m").exists()
+    for target in ("gripper", "miura"):
+        for loss in ("integral", "chain"):
+            args = parser.parse_args(["optimize", target, "--loss-model", loss, "--out", "x"])
+            assert _problem(args).base.loss_model == loss

@@ -23,10 +23,13 @@ from simulator.errors import ParameterError
 TARGET = 100e-6          # default design over the substrate: ~7.7 mW per crease (~0.2-0.7 s)
 STEP = 0.1e-3
 
+#: The case's chains (the paper setting): the targets and powers here were chosen for them.
+PAPER = MiuraDesign(loss_model="chain")
+
 
 @pytest.fixture(scope="module")
 def searches():
-    return {mode: lift_power(MiuraDesign(), TARGET, mode=mode, step=STEP)
+    return {mode: lift_power(PAPER, TARGET, mode=mode, step=STEP)
             for mode in ("staircase", "bisect")}
 
 
@@ -35,7 +38,7 @@ def test_model_is_the_miura_lifter_case(substrate):
     """For the case's parameters miura_model builds the case's model: same mesh, same lift."""
     case = get_case("miura_lifter", cells_x=4, cells_y=2, thermal_steps=20, power_mW=9.0,
                     substrate=substrate)
-    design = MiuraDesign(substrate=substrate)
+    design = MiuraDesign(loss_model="chain", substrate=substrate)
     model = miura_model(design)
     np.testing.assert_array_equal(model.mesh.nodes, case.model.mesh.nodes)
     assert model.thermal == case.model.thermal and model.actuators == case.model.actuators
@@ -64,7 +67,7 @@ def test_default_design_reaches_target_in_both_modes(searches):
 
 @pytest.mark.parametrize("mode", ["bisect", "staircase"])
 def test_unreachable_target_is_not_met_with_reason(mode):
-    res = lift_power(MiuraDesign(), 5e-3, mode=mode, power_cap=3e-3)
+    res = lift_power(PAPER, 5e-3, mode=mode, power_cap=3e-3)
     assert not res.success and res.status == "not_met"
     assert res.power_per_crease is None and res.total_power is None   # never 0 or inf
     assert res.to_dict()["total_power [mW]"] is None
@@ -74,14 +77,14 @@ def test_unreachable_target_is_not_met_with_reason(mode):
 
 def test_substrate_needs_more_power_for_the_same_lift(searches):
     """Paper 6.2: the substrate cools the creases near it, so the same lift costs more power."""
-    free = lift_power(MiuraDesign(substrate=False), TARGET)
+    free = lift_power(MiuraDesign(loss_model="chain", substrate=False), TARGET)
     assert free.success
     assert searches["bisect"].power_per_crease > 1.5 * free.power_per_crease   # 7.8 vs 3.4 mW
 
 
 def test_lift_per_power_table_trends():
-    designs = {"substrate": MiuraDesign(), "free": MiuraDesign(substrate=False),
-               "thick_su8": MiuraDesign(t_su8=1.6e-6)}
+    designs = {"substrate": PAPER, "free": MiuraDesign(loss_model="chain", substrate=False),
+               "thick_su8": MiuraDesign(loss_model="chain", t_su8=1.6e-6)}
     table = lift_per_power_table(designs, [9.0, 3.0], increments=10)
     assert len(table) == 6 and table["success"].all()
     assert {"lift [um]", "max_crease_temperature [degC]", "power [mW]", "total_power [mW]",
@@ -96,7 +99,7 @@ def test_lift_per_power_table_trends():
 
 
 def test_problem_evaluates_default_design():
-    problem = MiuraProblem(target_lift=TARGET)
+    problem = MiuraProblem(target_lift=TARGET, base=PAPER)
     assert pickle.loads(pickle.dumps(problem)) == problem
     ev = problem.evaluate(problem.space.start)
     assert ev.feasible, ev.message
@@ -109,7 +112,7 @@ def test_problem_evaluates_default_design():
 
 
 def test_problem_reports_hot_and_unmeshable_designs():
-    problem = MiuraProblem(target_lift=TARGET)
+    problem = MiuraProblem(target_lift=TARGET, base=PAPER)
     hot = problem.evaluate({"a": 0.5e-3, "b": 0.5e-3, "gamma": math.radians(75), "W": 100e-6})
     assert hot.success and not hot.feasible and hot.constraints["temperature"] > 0
     assert hot.status == "infeasible"
@@ -146,3 +149,15 @@ def test_invalid_search_settings_raise():
         lift_power(MiuraDesign(), -1e-6)
     with pytest.raises(ParameterError, match="mode"):
         MiuraProblem(mode="grid")
+
+
+def test_the_default_design_uses_the_integral_loss_and_a_chain_design_keeps_its_dict():
+    """Issue 29: MiuraDesign's heat loss defaults to the integral model over the substrate's
+    plane; a chain design's dict is the one it had before the field (its logs still match)."""
+    model = miura_model(MiuraDesign())
+    assert model.thermal.loss.model == "integral"
+    assert miura_model(PAPER).thermal.loss.model == "chain"
+    assert "loss_model" not in PAPER.to_dict()
+    assert MiuraDesign().to_dict()["loss_model"] == "integral"
+    with pytest.raises(ParameterError, match="MiuraDesign.loss_model = 'fe'"):
+        MiuraDesign(loss_model="fe")
