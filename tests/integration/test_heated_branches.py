@@ -170,3 +170,28 @@ def test_the_square_twist_folds_the_same_at_any_step_count(mw):
         ends.append(np.degrees(res.fold_angle[-1]))
     assert np.ptp(np.array(ends), axis=0).max() < 1.0, np.array(ends)
     assert np.abs(ends[0]).max() > mw                 # folded: 11, 22, 46 deg at 5, 10, 20 mW
+
+
+def test_a_settled_end_that_does_not_settle_warns(caplog):
+    """The "settled" coupling iterates the last increment until the temperatures agree within
+    ``coupling_tol``; allowed one round only it cannot, and says so (WARNING: the end state
+    lags)."""
+    import logging
+
+    stack = S.get_stack("su8-au")
+    geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
+                       crease_thickness=stack.crease_thickness,
+                       panel_thickness=stack.panel_thickness)
+    heated = geo.pattern.creases.tolist()
+    model = S.stack_model(geo.pattern, stack, heated)
+    with caplog.at_level(logging.WARNING, logger="simulator.steps.heating"):
+        res = S.simulate(model, [S.Heat({c: 20e-3 for c in heated}, increments=5,
+                                        max_coupling_iterations=1)])
+    assert res.success
+    warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert any("increment 5/5: heat and shape still differ after 1 coupling iterations" in m
+               and "raise max_coupling_iterations" in m for m in warned), warned
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="simulator.steps.heating"):
+        S.simulate(model, [S.Heat({c: 20e-3 for c in heated}, increments=5)])
+    assert not [r for r in caplog.records if "still differ" in r.getMessage()]
