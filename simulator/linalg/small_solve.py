@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
+from .dense_lapack import one_blas_thread
 from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
 __all__ = ["as_dense", "solve_dense", "positive_definite", "schur_complements", "DenseFactor",
@@ -86,7 +87,13 @@ def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):
 
 def _factor(K: np.ndarray, cholesky_first: bool, condition: bool, lu_fallback: bool) -> tuple:
     """``(method, info, factors, pivots, rcond)`` of a dense square K (see
-    :class:`DenseFactor`): pivots None for Cholesky, rcond None without ``condition``."""
+    :class:`DenseFactor`): pivots None for Cholesky, rcond None without ``condition``; BLAS on
+    one thread (:func:`~simulator.linalg.dense_lapack.one_blas_thread`)."""
+    with one_blas_thread():
+        return _factor_here(K, cholesky_first, condition, lu_fallback)
+
+
+def _factor_here(K, cholesky_first, condition, lu_fallback) -> tuple:
     anorm = _dlange("1", K) if condition else None
     if cholesky_first:
         c, info = _dpotrf(K, lower=0, clean=0)

@@ -26,6 +26,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._result import ResultFiles
+from ..linalg.dense_lapack import one_blas_thread
 from ..linalg.ladder import factorize, positive_definite
 from ..linalg.small_solve import as_dense
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
@@ -145,7 +146,8 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     tol = rtol * negative_tolerance(K)
     if n <= DENSE_LIMIT:
         A = as_dense(K)
-        w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
+        with one_blas_thread():
+            w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
         return Stability(int(np.sum(w < -tol)), float(w[0]), _critical_mode(w, V), True)
     import scipy.sparse.linalg as spla
 
