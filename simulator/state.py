@@ -116,5 +116,6 @@ def thermal_model(model: Model) -> ThermalModel:
                              "ThermalParameters(...) to make_model to use heating steps.")
     tm = _THERMAL.get(model)
     if tm is None:
-        tm = _THERMAL[model] = ThermalModel(model.mesh, model.thermal)
+        tm = _THERMAL[model] = ThermalModel(model.mesh, model.thermal,
+                                            actuators=model.actuators)
     return tm

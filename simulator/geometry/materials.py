@@ -12,7 +12,8 @@ from .._deprecation import warn_deprecated
 from .._validate import finite, in_range, non_negative, positive
 from ..errors import ParameterError
 
-__all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "SILICON", "AIR", "WATER"]
+__all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "GOLD_FILM_CONDUCTIVITY",
+           "SILICON", "AIR", "WATER"]
 
 
 #: Units of the non-negative material and fluid properties.
@@ -98,6 +99,17 @@ SUBSTRATE = Material("substrate", youngs_modulus=2e9, poisson_ratio=0.3, density
 #: Fundamentals of Heat and Mass Transfer, 6th ed., Table A.1; nu: CRC Handbook).
 GOLD = Material("gold", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0,
                 thermal_conductivity=317.0, specific_heat=129.0)
+
+#: In-plane thermal conductivity of a thin (0.1-0.5 um) evaporated or sputtered gold film
+#: [W/(m K)], about half the bulk 317: grain-boundary and surface scattering of the electrons
+#: lower it. Thermal-lensing measurements find it falling from about 300 W/(m K) at 2 um to about
+#: 100 W/(m K) at 100 nm (the abstract of "Thermal conduction in thin films measured by optical
+#: surface thermal lensing"); scanning-thermal-microscopy and Wiedemann-Franz measurements of
+#: 240 nm and 47 nm Au films agree with a kinetic thin-film model within 6.4 % (Zhang, Zhu and
+#: Borca-Tasciuc, Nanoscale Adv. 2021, doi:10.1039/D0NA00657B). 150 W/(m K) is the value for
+#: the paper's 0.1-0.2 um heater layers (theory 4.10), the default of
+#: :attr:`simulator.model.bimorph.Bimorph.k1`; its plausible range is 100-300 W/(m K).
+GOLD_FILM_CONDUCTIVITY = 150.0
 
 #: Single-crystal silicon. E = 150 GPa and rho = 2300 kg/m^3 as in the reference micro-mirror
 #: (02/Example04, theory 10.9); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),

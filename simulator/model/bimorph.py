@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import finite, positive
+from .._validate import finite, non_negative, positive
 from ..errors import ParameterError
+from ..geometry.materials import GOLD_FILM_CONDUCTIVITY, SU8
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
 
@@ -44,23 +45,43 @@ class Bimorph:
         Modulus [Pa] and thickness [m] of layer 1 (gold in the paper's devices).
     E2, t2 : float
         Modulus [Pa] and thickness [m] of layer 2 (SU-8).
+    k1, k2 : float
+        In-plane thermal conductivity [W/(m K)] of layer 1 and layer 2, >= 0: the crease's
+        sheet conductance ``k1 t1 + k2 t2`` [W/K] where the thermal parameters ask for
+        ``crease_conduction="layers"`` (theory 4.10; unused with the default ``"paper"``).
+        Defaults: a thin gold film,
+        :data:`~simulator.geometry.materials.GOLD_FILM_CONDUCTIVITY` = 150 (bulk gold: 317),
+        and SU-8, 0.3. The layer data live here, beside the layers' moduli and thicknesses,
+        because the crease's conduction and its bending come from the same two layers.
     """
 
     E1: float
     t1: float
     E2: float
     t2: float
+    k1: float = GOLD_FILM_CONDUCTIVITY
+    k2: float = SU8.thermal_conductivity
 
     def __post_init__(self):
         for name in ("E1", "t1", "E2", "t2"):
             positive(f"Bimorph.{name}", getattr(self, name), "Pa" if name[0] == "E" else "m")
+        for name, what in (("k1", "150 for a thin gold film"), ("k2", "0.3 for SU-8")):
+            non_negative(f"Bimorph.{name}", getattr(self, name), "W/(m K)",
+                         hint=f"give the layer's in-plane thermal conductivity, e.g. {what}")
+
+    @property
+    def sheet_conductance(self) -> float:
+        """In-plane sheet conductance ``k1 t1 + k2 t2`` of the two layers [W/K] (theory
+        4.10)."""
+        return float(self.k1) * float(self.t1) + float(self.k2) * float(self.t2)
 
     def curvature(self, delta_alpha, dT):
         """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""
         return timoshenko_curvature(delta_alpha, dT, self.E1, self.t1, self.E2, self.t2)
 
     def to_dict(self) -> dict:
-        return {"E1 [Pa]": self.E1, "t1 [m]": self.t1, "E2 [Pa]": self.E2, "t2 [m]": self.t2}
+        return {"E1 [Pa]": self.E1, "t1 [m]": self.t1, "E2 [Pa]": self.E2, "t2 [m]": self.t2,
+                "k1 [W/(m K)]": self.k1, "k2 [W/(m K)]": self.k2}
 
 
 @dataclass(frozen=True)

@@ -98,7 +98,8 @@ def _reference_solver(model: Model, reference, x, substrate):
         prm = dataclasses.replace(model.thermal.with_loss("integral"),
                                   substrate=Substrate.plane(plane[:3], plane[3:]) if plane
                                   else None)
-        return (ThermalModel(model.mesh, prm, warn_no_plane=substrate is not None).solve,
+        return (ThermalModel(model.mesh, prm, warn_no_plane=substrate is not None,
+                             actuators=model.actuators).solve,
                 "integral")
     if reference == "fe":
         try:
@@ -181,7 +182,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
         raise ParameterError(f"beta_bounds = {beta_bounds!r}, t_env_bounds = {t_env_bounds!r}: "
                              "each must be (low, high) with low < high.")
     solve, name = _reference_solver(model, reference, x, substrate)
-    chain = ThermalModel(mesh, prm)
+    chain = ThermalModel(mesh, prm, actuators=model.actuators)
     q = chain.heat_vector(power)
     if not q.sum() > 0:
         raise ParameterError("calibrate_environment: power must heat at least one crease (> 0).")
@@ -195,7 +196,8 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
 
     def rel_error(v):
         beta, t_env = v[0], math.exp(v[1])
-        tm = ThermalModel(mesh, prm.with_loss(dissipation_angle=beta, thickness=t_env))
+        tm = ThermalModel(mesh, prm.with_loss(dissipation_angle=beta, thickness=t_env),
+                          actuators=model.actuators)
         return (tm.solve(x, q)[nodes] - rt - target) / np.maximum(np.abs(target), 1e-300)
 
     beta0, t_env0 = prm.loss.dissipation_angle, prm.loss.thickness

@@ -177,7 +177,7 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
         raise ParameterError("fixed_shape_temperatures needs a Model with thermal parameters "
                              f"(got {type(model).__name__}).")
     own = ThermalModel(model.mesh, model.thermal,       # its heat input (any loss model)
-                       warn_no_plane=False)
+                       warn_no_plane=False, actuators=model.actuators)
     x, q = _shape_and_heat(model, own, state, positions, crease_power, heat)
     if loss_model == "fe":
         from .fe import solve_fe3d
@@ -198,7 +198,7 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
             prm.with_loss(**changes),
             substrate=Substrate.plane(plane[:3], plane[3:]) if plane else None)
     tm = own if prm == model.thermal and loss_model == "chain" else ThermalModel(
-        model.mesh, prm, warn_no_plane=substrate is not None)
+        model.mesh, prm, warn_no_plane=substrate is not None, actuators=model.actuators)
     rt = prm.room_temperature if room_temperature is None else float(room_temperature)
     T = tm.solve(x, q, rt)
     return _result(model, T, q, tm, rt, time.perf_counter() - t0)

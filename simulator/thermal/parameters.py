@@ -20,7 +20,7 @@ from ..geometry.materials import AIR, Fluid
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 from .monotone import CONDUCTIONS
 
-__all__ = ["ThermalParameters", "REFERENCE_BETA"]
+__all__ = ["ThermalParameters", "REFERENCE_BETA", "CREASE_CONDUCTIONS"]
 
 logger = logging.getLogger(__name__)
 
@@ -28,6 +28,9 @@ logger = logging.getLogger(__name__)
 #: (0.348888... rad instead of 0.349066 rad; tan differs by 0.06 %). Use it to reproduce
 #: the reference's numbers; ``math.radians(20)`` is the physical value.
 REFERENCE_BETA = 20 / 180 * 3.14
+
+#: How a crease conducts heat in-plane (:attr:`ThermalParameters.crease_conduction`).
+CREASE_CONDUCTIONS = ("paper", "layers")
 
 #: ``substrate`` not given: the plane of the model's thermal-boundary panels, if any.
 _PANELS = object()
@@ -188,7 +191,8 @@ class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
-    boundary_panels=(), room_temperature_nodes=(), conduction=None)``; give them by keyword.
+    boundary_panels=(), room_temperature_nodes=(), conduction=None, crease_conduction="paper")``;
+    give them by keyword.
 
     Parameters
     ----------
@@ -224,6 +228,13 @@ class ThermalParameters:
         :mod:`~simulator.thermal.monotone`). None (default): ``"t3"`` with the chains (the
         paper's model, on which they were fitted), ``"monotone"`` with the integral loss;
         :attr:`conduction_method` says which.
+    crease_conduction : {"paper", "layers"}
+        The in-plane conduction of a crease (theory 4.10): ``"paper"`` (default) one layer of the
+        crease material's conductivity over the crease thickness, as the reference;
+        ``"layers"`` the actuated creases conduct as their two bimorph layers, sheet
+        conductance ``k1 t1 + k2 t2`` (:class:`~simulator.model.bimorph.Bimorph`, taken from
+        the model's actuators; about 100x the paper's on the paper's gold-on-SU-8 creases);
+        passive creases stay as in ``"paper"``.
 
     Notes
     -----
@@ -249,6 +260,7 @@ class ThermalParameters:
     boundary_panels: tuple
     room_temperature_nodes: tuple
     conduction: str | None
+    crease_conduction: str
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
@@ -256,7 +268,7 @@ class ThermalParameters:
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
                  integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
-                 conduction=None):
+                 conduction=None, crease_conduction="paper"):
         old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
                "layers": layers, "dissipation_angle": dissipation_angle,
                "env_density": env_density, "env_specific_heat": env_specific_heat,
@@ -268,11 +280,11 @@ class ThermalParameters:
             warn_deprecated(f"ThermalParameters({name}=...) is deprecated; use "
                             f"{_OLD_KEYWORDS[name]}.")
         self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
-                  room_temperature_nodes, conduction)
+                  room_temperature_nodes, conduction, crease_conduction)
 
     def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
              room_temperature=21.0, boundary_panels=(), room_temperature_nodes=(),
-             conduction=None):
+             conduction=None, crease_conduction="paper"):
         """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
         old = {k: old.get(k) for k in _OLD_KEYWORDS}
         loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
@@ -290,6 +302,10 @@ class ThermalParameters:
         set_(self, "conduction", None if conduction is None else one_of(
             "ThermalParameters.conduction", conduction, CONDUCTIONS,
             hint="or None: 't3' with the chains, 'monotone' with the integral loss"))
+        set_(self, "crease_conduction", one_of(
+            "ThermalParameters.crease_conduction", crease_conduction, CREASE_CONDUCTIONS,
+            hint="'paper' for the reference's single crease layer, 'layers' for the sum of "
+                 "k t over the actuators' bimorph layers"))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
@@ -380,17 +396,19 @@ class ThermalParameters:
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
-        the held panels and nodes and the ``conduction`` (None: the loss model's).
+        the held panels and nodes, the ``conduction`` (None: the loss model's) and the
+        ``crease_conduction``.
         :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
                 "room_temperature": float(self.room_temperature),
                 "boundary_panels": list(self.boundary_panels),
                 "room_temperature_nodes": list(self.room_temperature_nodes),
-                "conduction": self.conduction}
+                "conduction": self.conduction, "crease_conduction": self.crease_conduction}
 
     def describe(self) -> str:
-        """One line for figure footers and summaries: the loss, the medium, the substrate."""
+        """One line for figure footers and summaries: the loss, the medium, the substrate (and
+        the crease conduction where it is not the paper's)."""
         panels = ", ".join(map(str, self.boundary_panels))
         if self.substrate is None or (self.substrate.from_panels and not panels):
             sub = "no substrate"
@@ -400,8 +418,10 @@ class ThermalParameters:
             sub = f"substrate: the plane of the boundary panels ({panels})"
         else:
             sub = "substrate: a given plane"
+        layers = ("; creases conduct as their bimorph layers (sum of k t)"
+                  if self.crease_conduction == "layers" else "")
         return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
-                f"{self.medium.thermal_conductivity:g} W/(m K); {sub}")
+                f"{self.medium.thermal_conductivity:g} W/(m K); {sub}{layers}")
 
 
 def _plane(substrate: Substrate | None):

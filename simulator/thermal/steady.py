@@ -160,10 +160,14 @@ class ThermalModel:
         With the integral loss, boundary panels and ``substrate=None``, warn (once per
         process) at the first steady solve that the medium is unbounded below the sheet;
         False where the caller chose no plane.
+    actuators : Actuators or None
+        The model's :class:`~simulator.model.bimorph.Actuators`: with
+        ``params.crease_conduction == "layers"`` their bimorph's layers give the actuated
+        creases' sheet conductance ``k1 t1 + k2 t2`` (theory 4.10); unused with ``"paper"``.
     """
 
     def __init__(self, mesh: BarHingeMesh, params: ThermalParameters,
-                 warn_no_plane: bool = True):
+                 warn_no_plane: bool = True, actuators=None):
         if not isinstance(params, ThermalParameters):
             raise ParameterError(f"params must be ThermalParameters, got {type(params).__name__}.")
         self.mesh, self.params = mesh, params
@@ -186,6 +190,10 @@ class ThermalModel:
                                   pat.crease_thickness[np.append(mesh.crease_ids, 0)[crease]])
         self.conductivity = np.where(is_panel, k_panel[panel],
                                      pat.crease_material.thermal_conductivity)
+        #: (n_tri,) k t of every triangle [W/K]
+        self._kt = self.conductivity * self.thickness
+        if params.crease_conduction == "layers":
+            self._layer_conduction(actuators)
         self.is_boundary = is_panel & np.isin(panel, params.boundary_panels)
         self._cap_nodes = np.unique(tri[~self.is_boundary])
         fixed = np.zeros(n, bool)
@@ -214,8 +222,6 @@ class ThermalModel:
         self.free_nodes = np.flatnonzero(~fixed)
         self._check_solvable()
         self._factor_cache = None       # (compiled kernel?, positions, solver) of the last shape
-        #: k t of every triangle [W/K]
-        self._kt = self.conductivity * self.thickness
         # the model's arguments of the compiled kernel (simulator.thermal._thermal_jit), in its
         # order (the integral loss: conduction only, no chains)
         chain = self.integral is None
@@ -226,6 +232,31 @@ class ThermalModel:
             math.tan(self.chains.dissipation_angle),
             float(params.medium.thermal_conductivity) if chain else 0.0, int(self.chains.layers),
             _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
+
+    def _layer_conduction(self, actuators) -> None:
+        """Give the actuated creases' triangles the sheet conductance ``k1 t1 + k2 t2`` of the
+        bimorph of ``actuators`` (``crease_conduction="layers"``, theory 4.10); their
+        :attr:`conductivity` becomes the effective ``(k1 t1 + k2 t2) / t`` over the crease
+        thickness ``t`` (which the heat capacity keeps using)."""
+        from ..model.bimorph import Actuators
+
+        if not isinstance(actuators, Actuators):
+            raise ParameterError(
+                f"ThermalParameters.crease_conduction = 'layers' needs the model's actuators "
+                f"(their bimorph layers conduct), got actuators = {actuators!r}; give "
+                "make_model(..., actuators=Actuators(Bimorph(...), ...)), or "
+                "crease_conduction='paper'.")
+        mesh = self.mesh
+        actuated = np.isin(mesh.crease_ids, [int(c) for c in dict(actuators.delta_alpha)])
+        crease = mesh.triangle_crease
+        layered = (crease >= 0) & np.append(actuated, False)[crease]
+        self._kt = np.where(layered, actuators.bimorph.sheet_conductance, self._kt)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.conductivity = np.where(layered & (self.thickness > 0),
+                                         self._kt / self.thickness, self.conductivity)
+        logger.debug("crease conduction 'layers': %d of %d crease triangles at k t = %g W/K",
+                     int(layered.sum()), int((crease >= 0).sum()),
+                     actuators.bimorph.sheet_conductance)
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
@@ -245,7 +276,7 @@ class ThermalModel:
         if self.params.medium.thermal_conductivity > 0:
             return
         n, tri = self.mesh.n_nodes, self.mesh.triangles
-        live = tri[self.conductivity * self.thickness > 0]
+        live = tri[self._kt > 0]
         adj = sp.coo_matrix((np.ones(3 * len(live)), (live.ravel(), np.roll(live, 1, 1).ravel())),
                             shape=(n, n))
         from scipy.sparse.csgraph import connected_components

@@ -252,7 +252,8 @@ def _model_inputs(model, positions, state, crease_power, heat):
     # the chains, whose t_env plays no part here, keep the integral operator unbuilt), the
     # model's own sheet conduction (T3 or monotone)
     tm = ThermalModel(mesh, dataclasses.replace(params, loss=ChainLoss(thickness=1.0),
-                                                conduction=params.conduction_method))
+                                                conduction=params.conduction_method),
+                      actuators=model.actuators)
     if heat is not None:
         if crease_power is not None:
             raise ParameterError("give crease_power or heat, not both.")
