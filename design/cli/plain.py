@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+from dataclasses import replace
 
 from ._common import CLIError, distinct, length_um, power_mw
 
@@ -204,8 +205,7 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     n = len(model.mesh.triangles)
     if loss is None and model.thermal.loss.takes_fast_path(n):
         loss = "chain"
-        model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact,
-                            loss_model=loss)
+        model = replace(model, thermal=replace(model.thermal, loss=stack.heat_loss(loss)))
         logging.getLogger("design.cli").warning(
             "%d triangles: the integral heat loss would take its fast path here (minutes per "
             "thermal solve, theory 4.7), so this run heats with the paper's chains, 20-40 %% "

@@ -19,6 +19,8 @@ import threading
 import numpy as np
 from scipy.linalg import lapack
 
+from .thresholds import DENSE_ONE_THREAD_MIN
+
 __all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss", "one_blas_thread"]
 
 _controller = None
@@ -40,14 +42,16 @@ def available() -> bool:
 
 
 @contextlib.contextmanager
-def one_blas_thread():
-    """BLAS limited to one thread while the block runs (a no-op without ``threadpoolctl``):
+def one_blas_thread(rows: int | None = None):
+    """BLAS limited to one thread while the block runs (a no-op without ``threadpoolctl``, and
+    for a matrix of fewer ``rows`` than :data:`~.thresholds.DENSE_ONE_THREAD_MIN`, where the
+    limit would cost more than threads can):
     for the dense factorisations and eigen-decompositions of a few hundred rows, where two
     threads gain little on an idle machine and lose much on a loaded one or beside a process
     pool's workers (measured, n = 400 at load 3.4: dpotrf 25 ms with OpenBLAS's threads, 4.0
     ms with one; idle, 2.0 against 2.3 ms at n = 300; the crane with the integral loss 179 s
     against 7 s at load 3-4). Entering and leaving costs about 12 us."""
-    if not available():
+    if (rows is not None and rows < DENSE_ONE_THREAD_MIN) or not available():
         yield
         return
     with _lock, _controller.limit(limits=1, user_api="blas"):

@@ -88,8 +88,9 @@ def solve_dense(K: np.ndarray, r: np.ndarray, cholesky_first: bool = True):
 def _factor(K: np.ndarray, cholesky_first: bool, condition: bool, lu_fallback: bool) -> tuple:
     """``(method, info, factors, pivots, rcond)`` of a dense square K (see
     :class:`DenseFactor`): pivots None for Cholesky, rcond None without ``condition``; BLAS on
-    one thread (:func:`~simulator.linalg.dense_lapack.one_blas_thread`)."""
-    with one_blas_thread():
+    one thread from :data:`~simulator.linalg.thresholds.DENSE_ONE_THREAD_MIN` rows on
+    (:func:`~simulator.linalg.dense_lapack.one_blas_thread`)."""
+    with one_blas_thread(K.shape[0]):
         return _factor_here(K, cholesky_first, condition, lu_fallback)
 
 

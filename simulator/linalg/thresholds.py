@@ -8,7 +8,8 @@ Different consumers need different dense limits for measured reasons; they are a
 from __future__ import annotations
 
 __all__ = ["DENSE_LIMIT", "SPARSE_MIN", "PARDISO_LIMIT", "ND_LIMIT", "CONDUCTION_DENSE_LIMIT",
-           "TRANSIENT_DENSE_LIMIT", "EIGEN_DENSE_LIMIT", "LOSS_DENSE_LAPACK_MIN"]
+           "TRANSIENT_DENSE_LIMIT", "EIGEN_DENSE_LIMIT", "LOSS_DENSE_LAPACK_MIN",
+           "DENSE_ONE_THREAD_MIN"]
 
 #: Up to this many free DOFs mechanical tangents are dense: evaluated by the fused kernel
 #: (compiled backend) and solved densely by LAPACK or the compiled sparse Cholesky (faster
@@ -53,3 +54,10 @@ EIGEN_DENSE_LIMIT = 600
 #: 1.1 against 3.1 ms (earlier, 256 here: n = 176 0.35 against 0.29 ms, the call overhead of
 #: threadpoolctl's limit since cut to 0.01 ms).
 LOSS_DENSE_LAPACK_MIN = 64
+
+#: Dense factorisations and eigen-decompositions of the small-model rung limit BLAS to one
+#: thread (:func:`~simulator.linalg.dense_lapack.one_blas_thread`) from this many rows on;
+#: below, the limit's 12-30 us would cost more than threads can (measured 7 Dec 2026, idle:
+#: dpotrf with rcond n = 24 11 against 42 us with the limit, n = 60 29 against 43 us, n = 120
+#: 94 against 93 us; at load 3.4, n = 400 25 ms with OpenBLAS's threads against 4.0 ms).
+DENSE_ONE_THREAD_MIN = 100

@@ -83,6 +83,14 @@ class LayerStack:
     def to_dict(self) -> dict:
         return asdict(self)
 
+    def heat_loss(self, loss_model: str = "integral") -> ChainLoss | IntegralLoss:
+        """The stack's heat loss to its air: ``"integral"`` (:class:`IntegralLoss`, nothing
+        fitted) or ``"chain"`` (the paper's chains, t_env :attr:`env_thickness`)."""
+        one_of("loss_model", loss_model, ("integral", "chain"))
+        if loss_model == "chain":
+            return ChainLoss(thickness=self.env_thickness, dissipation_angle=REFERENCE_BETA)
+        return IntegralLoss()
+
     def summary(self) -> str:
         """One line in CLI units (um, GPa, 1/K, W/(m K))."""
         return (f"{self.name}: {self.description}; crease width {self.crease_width * 1e6:g} um, "
@@ -236,9 +244,9 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
         ``"chain"`` (the paper's chains, t_env the stack's ``env_thickness``: seconds, but
         20-40 % too cool at the heated crease and blind to heat passed between creases).
     """
-    one_of("loss_model", loss_model, ("integral", "chain"))
     if not isinstance(stack, LayerStack):
         raise ParameterError(f"stack must be a LayerStack, got {type(stack).__name__}.")
+    loss = stack.heat_loss(loss_model)
     heated = [pattern.check_crease(c, "heated crease") for c in heated]
     if not heated:
         raise ParameterError("no crease to heat: give at least one crease id.")
@@ -251,8 +259,6 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
                                   t2=stack.t_passive),
                           {c: stack.delta_alpha * float(sign[c]) for c in heated},
                           scatter=scatter, seed=seed)
-    loss = ChainLoss(thickness=stack.env_thickness, dissipation_angle=REFERENCE_BETA) \
-        if loss_model == "chain" else IntegralLoss()
     thermal = ThermalParameters(
         loss=loss, medium=AIR.with_properties(thermal_conductivity=stack.env_conductivity))
     supports = Supports({int(i): "xyz" for i in mesh.panel_nodes(fixed_panel)})

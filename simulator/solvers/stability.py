@@ -146,7 +146,7 @@ def tangent_stability(K, k: int = 6, linear_solver: str = "auto",
     tol = rtol * negative_tolerance(K)
     if n <= DENSE_LIMIT:
         A = as_dense(K)
-        with one_blas_thread():
+        with one_blas_thread(n):
             w, V = scipy.linalg.eigh(0.5 * (A + A.T), check_finite=False)
         return Stability(int(np.sum(w < -tol)), float(w[0]), _critical_mode(w, V), True)
     import scipy.sparse.linalg as spla

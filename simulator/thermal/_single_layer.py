@@ -28,7 +28,8 @@ import numpy as np
 from . import _single_layer_jit
 
 __all__ = ["triangle_potential", "collocation_matrix", "single_layer_operator", "subdivision",
-           "subdivision_edges", "sub_triangle_corners", "pair_values", "NEAR_FACTOR"]
+           "subdivision_edges", "sub_triangle_corners", "pair_values", "mirror",
+           "NEAR_FACTOR"]
 
 #: Pairs whose centroid distance is below this many source diameters use the closed form.
 NEAR_FACTOR = 1.5
@@ -150,7 +151,7 @@ def subdivision_edges(triangles, level: int) -> np.ndarray:
     return np.unique(edge, return_inverse=True)[1].reshape(-1, 3).astype(np.int64)
 
 
-def _mirror(points, plane):
+def mirror(points, plane):
     """Mirror images of ``points`` (..., 3) in the plane ``(origin, unit normal)``."""
     origin, normal = plane
     h = (points - origin) @ normal
@@ -195,7 +196,7 @@ def collocation_matrix(tri, conductivity: float, plane=None, near: float = NEAR_
     V = _kernel_matrix(c, tri, c, area, diam, near)
     if plane is not None:
         plane = _plane(plane)
-        V -= _kernel_matrix(c, _mirror(tri, plane), _mirror(c, plane), area, diam, near)
+        V -= _kernel_matrix(c, mirror(tri, plane), mirror(c, plane), area, diam, near)
     return V / (4 * math.pi * conductivity), area, c
 
 

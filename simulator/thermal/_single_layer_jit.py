@@ -314,21 +314,20 @@ def _collocation(tri, edges, n_edges, origin, normal, image, operator, near, sca
                 V[j, i] = s
 
 
-def _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frame, edge, logs, stamp, key):
+def _value(px, py, pz, j, tri, centroid, area, diam, near, mid, frame, edge, logs, stamp, key,
+           rule):
     """``int_j 1 / |p - y| dS_y`` [m] of triangle ``j`` at the point p by the rule of its
-    distance: closed form, 3-point rule or centroid rule (the entry :func:`_collocation` gives
-    the pair)."""
+    distance: closed form, 3-point rule (its points into the scratch ``rule`` (3, 3),
+    :func:`_rule_points`) or centroid rule (the entry :func:`_collocation` gives the pair)."""
     dx, dy, dz = px - centroid[j, 0], py - centroid[j, 1], pz - centroid[j, 2]
     dist = math.sqrt(dx * dx + dy * dy + dz * dz)
     if dist < near * diam[j]:
         return _potential(px, py, pz, tri[j], frame, edge, logs, stamp, key)
     if dist < mid * diam[j]:                                 # 3-point rule (degree 2)
+        _rule_points(tri[j], rule)
         acc = 0.0
         for a in range(3):
-            b, c = (a + 1) % 3, (a + 2) % 3
-            qx = (4.0 * tri[j, a, 0] + tri[j, b, 0] + tri[j, c, 0]) / 6.0 - px
-            qy = (4.0 * tri[j, a, 1] + tri[j, b, 1] + tri[j, c, 1]) / 6.0 - py
-            qz = (4.0 * tri[j, a, 2] + tri[j, b, 2] + tri[j, c, 2]) / 6.0 - pz
+            qx, qy, qz = rule[a, 0] - px, rule[a, 1] - py, rule[a, 2] - pz
             acc += 1.0 / math.sqrt(qx * qx + qy * qy + qz * qz)
         return area[j] * acc / 3.0
     return area[j] / dist
@@ -340,11 +339,12 @@ def _pair_kernel(points, tri, centroid, area, diam, near, rows, cols, out):
     frame = np.empty((4, 7))
     edge = np.arange(3)
     logs, stamp = np.empty(3), np.full(3, -1, np.int64)
+    rule = np.empty((3, 3))
     for k in range(rows.shape[0]):
         i, j = rows[k], cols[k]
         _frame(tri[j], frame)
         out[k] = _value(points[i, 0], points[i, 1], points[i, 2], j, tri, centroid, area, diam,
-                        near, mid, frame, edge, logs, stamp, k)
+                        near, mid, frame, edge, logs, stamp, k, rule)
 
 
 def _corners_kernel(x, triangles, bary, out):

@@ -35,7 +35,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..linalg.ladder import factorize
-from ._single_layer import _mirror, pair_values
+from ._single_layer import mirror, pair_values
 
 __all__ = ["FastSingleLayer", "FastIntegralOperator", "coupled_solver", "NEAR_RADIUS",
            "PRECONDITIONER_RADIUS", "FMM_EPS", "DIRECT_MAX", "SOLVE_RTOL"]
@@ -189,7 +189,7 @@ class FastSingleLayer:
         pre = np.where(rows == cols, 0.0, 1.0 / np.where(rows == cols, 1.0, d)) + corr
         keep = d < PRECONDITIONER_RADIUS * np.maximum(diam[rows], diam[cols])
         if self.plane is not None:
-            cm, subm = _mirror(c, self.plane), _mirror(sub, self.plane)
+            cm, subm = mirror(c, self.plane), mirror(sub, self.plane)
             self.images = cm
             ir, ic = _pairs_to(tree, cm, c, diam, NEAR_RADIUS)
             di = np.linalg.norm(c[ir] - cm[ic], axis=1)
@@ -224,11 +224,20 @@ class FastSingleLayer:
 
     def block(self, rows, cols=None) -> np.ndarray:
         """``S`` [K/W] on the sub-triangles ``rows`` x ``cols`` (default ``rows``), dense."""
-        from .integral_schwarz import _point_part
-
         rows = np.asarray(rows, np.int64)
         cols = rows if cols is None else np.asarray(cols, np.int64)
-        return _point_part(self, rows, cols) + self.near[rows][:, cols].toarray()
+        return self.point_block(rows, cols) + self.near[rows][:, cols].toarray()
+
+    def point_block(self, rows, cols) -> np.ndarray:
+        """The centroid rule of ``S`` [K/W] on ``rows`` x ``cols`` (images included, no self
+        term): ``S`` without its sparse near-field part, dense."""
+        c = self.centroids
+        d = np.linalg.norm(c[rows][:, None] - c[cols][None], axis=2)
+        with np.errstate(divide="ignore"):
+            out = np.where(rows[:, None] == cols[None], 0.0, 1.0 / d)
+        if self.plane is not None:
+            out -= 1.0 / np.linalg.norm(c[rows][:, None] - self.images[cols][None], axis=2)
+        return self.scale * out
 
     def dense(self) -> np.ndarray:
         """``S`` as a dense array (columns by :meth:`matvec`; for checks on small sets)."""

@@ -271,13 +271,14 @@ def integral_operator(triangles, n_nodes, params, plane=None):
     the same levels (plain or extrapolated, rebuilt at every shape)."""
     loss = params.loss
     m, k = loss.refinement, params.medium.thermal_conductivity
-    if uses_fast(len(np.asarray(triangles).reshape(-1, 3)), loss):
+    n_triangles = len(np.asarray(triangles).reshape(-1, 3))
+    if uses_fast(n_triangles, loss):
         from .integral_fast import FastIntegralOperator
 
         if loss.lumped:
             raise ParameterError(
                 f"IntegralLoss(lumped=True) needs the dense operator, but this sheet's "
-                f"{len(np.asarray(triangles).reshape(-1, 3))} triangles at refinement {m} take "
+                f"{n_triangles} triangles at refinement {m} take "
                 "the fast path, which never forms the conductance it would lump; use "
                 "lumped=False.")
         levels = [(1.0, m)]

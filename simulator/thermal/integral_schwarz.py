@@ -36,6 +36,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..linalg.ladder import factorize
+from ._single_layer import mirror
 
 __all__ = ["TwoLevelPreconditioner", "patches", "PATCH_SIZE", "MAX_PATCHES", "COARSE_NEAR"]
 
@@ -119,18 +120,6 @@ class TwoLevelPreconditioner:
         return y - self._AU @ (self._core @ (self._U.T @ y))
 
 
-def _point_part(S, rows, cols) -> np.ndarray:
-    """The centroid rule of ``S`` [K/W] on ``rows`` x ``cols`` (images included, no self
-    term): ``S`` without its sparse near-field part."""
-    c = S.centroids
-    d = np.linalg.norm(c[rows][:, None] - c[cols][None], axis=2)
-    with np.errstate(divide="ignore"):
-        out = np.where(rows[:, None] == cols[None], 0.0, 1.0 / d)
-    if S.plane is not None:
-        out -= 1.0 / np.linalg.norm(c[rows][:, None] - S.images[cols][None], axis=2)
-    return S.scale * out
-
-
 def _zero_sum_blocks(S, groups, labels) -> sp.csr_matrix:
     """Block-diagonal ``B`` (n_s, n_s): per patch the inverse of ``S`` on it restricted to heats
     of zero sum."""
@@ -140,7 +129,7 @@ def _zero_sum_blocks(S, groups, labels) -> sp.csr_matrix:
                          shape=near.shape)
     rows, cols, vals = [], [], []
     for g in groups:
-        block = _point_part(S, g, g) + near[g][:, g].toarray()
+        block = S.point_block(g, g) + near[g][:, g].toarray()
         inv = np.linalg.inv(block)
         u = inv.sum(axis=1)
         vals.append((inv - np.outer(u, u) / u.sum()).ravel())
@@ -168,18 +157,13 @@ def coarse_matrix(S, groups, labels=None) -> np.ndarray:
     with np.errstate(divide="ignore"):
         out = S.scale * np.outer(count, count) / d
     if S.plane is not None:
-        img = _mirror_points(centre, S.plane)
+        img = mirror(centre, S.plane)
         out -= S.scale * np.outer(count, count) / np.linalg.norm(
             centre[:, None] - img[None], axis=2)
     near = d < COARSE_NEAR * (radius[:, None] + radius[None])
     for i, j in zip(*np.nonzero(np.triu(near))):
-        out[i, j] = out[j, i] = _point_part(S, groups[i], groups[j]).sum()
+        out[i, j] = out[j, i] = S.point_block(groups[i], groups[j]).sum()
     R0 = sp.csr_matrix((np.ones(S.n), (labels, np.arange(S.n))), shape=(n0, S.n))
     out += (R0 @ S.near @ R0.T).toarray()
     return 0.5 * (out + out.T)
 
-
-def _mirror_points(points, plane):
-    origin, normal = plane
-    h = (points - origin) @ normal
-    return points - 2 * h[:, None] * normal

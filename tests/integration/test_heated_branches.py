@@ -25,16 +25,31 @@ def _waterbomb():
             "edges_assignment": ["M" if i % 2 == 0 else "V" for i in range(8)] + ["B"] * 8}
 
 
-@pytest.fixture(scope="module")
-def waterbomb():
+def _waterbomb_model(loss_model=None):
+    """(model, heated creases) of the waterbomb base with the paper's stack, every crease
+    heated, with the heat loss ``loss_model`` (None: ``stack_model``'s default)."""
     stack = S.get_stack("su8-au")
     geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
                        crease_thickness=stack.crease_thickness,
                        panel_thickness=stack.panel_thickness)
     heated = geo.pattern.creases.tolist()
+    chosen = {} if loss_model is None else {"loss_model": loss_model}
+    return S.stack_model(geo.pattern, stack, heated, **chosen), heated
+
+
+@pytest.fixture(scope="module")
+def waterbomb():
     # the paper's chains, the heat loss the powers were chosen for (the default integral loss
     # heats the sheet more: test_the_fold_with_the_default_loss_does_not_depend_on_the_step_count)
-    return S.stack_model(geo.pattern, stack, heated, loss_model="chain"), heated
+    return _waterbomb_model("chain")
+
+
+@pytest.fixture(scope="module")
+def default_waterbomb():
+    """The waterbomb with the default heat loss (the integral model)."""
+    model, heated = _waterbomb_model()
+    assert model.thermal.loss.model == "integral"
+    return model, heated
 
 
 def _heat(model, heated, mw, n, **options):
@@ -58,18 +73,12 @@ def test_the_fold_does_not_depend_on_the_step_count(waterbomb, mw):
 
 
 @pytest.mark.parametrize("mw", [5.0, 20.0])
-def test_the_fold_with_the_default_loss_does_not_depend_on_the_step_count(mw):
+def test_the_fold_with_the_default_loss_does_not_depend_on_the_step_count(default_waterbomb, mw):
     """With the default integral loss folding changes the heat loss much more than with the
     chains: the staggered end lagged by one increment moved the midlines from 60.5 to 62.4
     deg between 25 and 400 increments at 20 mW; ``Heat``'s default ``"settled"`` coupling ends
     on a coupled equilibrium (measured spread 0.04 deg at 20 mW, 1e-4 deg at 5 mW)."""
-    stack = S.get_stack("su8-au")
-    geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
-                       crease_thickness=stack.crease_thickness,
-                       panel_thickness=stack.panel_thickness)
-    heated = geo.pattern.creases.tolist()
-    model = S.stack_model(geo.pattern, stack, heated)
-    assert model.thermal.loss.model == "integral"
+    model, heated = default_waterbomb
     folds = []
     for n in (25, 100, 400):
         res = _heat(model, heated, mw, n)
@@ -172,18 +181,13 @@ def test_the_square_twist_folds_the_same_at_any_step_count(mw):
     assert np.abs(ends[0]).max() > mw                 # folded: 11, 22, 46 deg at 5, 10, 20 mW
 
 
-def test_a_settled_end_that_does_not_settle_warns(caplog):
+def test_a_settled_end_that_does_not_settle_warns(default_waterbomb, caplog):
     """The "settled" coupling iterates the last increment until the temperatures agree within
     ``coupling_tol``; allowed one round only it cannot, and says so (WARNING: the end state
     lags)."""
     import logging
 
-    stack = S.get_stack("su8-au")
-    geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
-                       crease_thickness=stack.crease_thickness,
-                       panel_thickness=stack.panel_thickness)
-    heated = geo.pattern.creases.tolist()
-    model = S.stack_model(geo.pattern, stack, heated)
+    model, heated = default_waterbomb
     with caplog.at_level(logging.WARNING, logger="simulator.steps.heating"):
         res = S.simulate(model, [S.Heat({c: 20e-3 for c in heated}, increments=5,
                                         max_coupling_iterations=1)])
