@@ -118,6 +118,9 @@ FOLDS = {1: 2, 2: 5}                      # double fold: fold number -> crease i
 #: uses too, so that the models differ in the heat loss only (not the integral loss's default
 #: monotone conduction, theory 4.9).
 CONDUCTION = "t3"
+#: The sheet on the mesh triangles for every model (theory 4.11): the FE meshes the medium
+#: around the same P1 sheet, so the models differ in the heat loss only.
+SHEET = 1
 GRIP_STATE_INCREMENTS = 10
 POWER, TEMP, TEMP_CL = "power [mW]", "temperature [degC]", "temperature_centre [degC]"
 
@@ -130,7 +133,8 @@ def integral_model(model, refinement: int = DEFAULT_M):
     too; not the integral loss's default monotone one, theory 4.9)."""
     thermal = dataclasses.replace(model.thermal, loss=IntegralLoss(refinement=refinement),
                                   substrate=Substrate(),
-                                  conduction=model.thermal.conduction_method)
+                                  conduction=model.thermal.conduction_method,
+                                  sheet_refinement=SHEET)
     return dataclasses.replace(model, thermal=thermal)
 
 
@@ -194,7 +198,7 @@ def _evaluate(cycle, powers, geometry, model, m):
     power [mW]). Returns (GripperResult, ``gripper`` row)."""
     t0 = time.perf_counter()
     res = evaluate_gripper(GripperDesign(**geometry, loss_model=model, integral_refinement=m,
-                                         conduction=CONDUCTION))
+                                         conduction=CONDUCTION, sheet_refinement=SHEET))
     d = res.to_dict()
     full = (2e3 * (res.assembly.power_per_crease + res.grip.power_per_crease)
             if res.success else None)
@@ -217,14 +221,15 @@ def _gripper_fe(cycle, geometry, results, level):
     Returns the ``fe`` rows and, per shape (model), {quantity: (that model's value on its
     re-simulated stopping state, the FE's value or FE-implied power there)}, powers in mW.
     """
-    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m,
-                                             conduction=CONDUCTION))[0] for m in MODELS}
+    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m, conduction=CONDUCTION,
+                                             sheet_refinement=SHEET))[0] for m in MODELS}
     case, rows, checks = f"gripper cycle {cycle}", [], {}
     room = models["chain"].thermal.room_temperature
     for shape, res in results.items():
         pa, pg = res.assembly.power_per_crease, res.grip.power_per_crease
         model, states = gripper_states(GripperDesign(**geometry, loss_model=shape,
-                                                     conduction=CONDUCTION), pa, pg,
+                                                     conduction=CONDUCTION,
+                                                     sheet_refinement=SHEET), pa, pg,
                                        GRIP_STATE_INCREMENTS)
         mesh = model.mesh
         tm = ThermalModel(mesh, model.thermal)

@@ -63,8 +63,11 @@ def heat_loss_note(thermal) -> str:
     substrate of a run: ``thermal.describe()`` of its
     :class:`~simulator.ThermalParameters` (or of a model, whose ``thermal`` it reads);
     :data:`NO_HEAT` for None."""
+    mesh = getattr(thermal, "mesh", None)
     thermal = getattr(thermal, "thermal", thermal)
-    return NO_HEAT if thermal is None else thermal.describe()
+    if thermal is None:
+        return NO_HEAT
+    return thermal.describe(None if mesh is None else len(mesh.triangles))
 
 
 _NOTE_GID, _STATUS_GID = "assumptions", "run-status"

@@ -164,6 +164,8 @@ def heat_loss_line(model) -> str:
                 f"{k_env:.4g} W/(m K)")
     line = f"{loss.describe()}, to air at {k_env:.4g} W/(m K)"
     n = len(model.mesh.triangles)
+    if (r := thermal.sheet_refinement_for(n)) > 1:
+        line += f", sheet refined r = {r}"
     if loss.takes_fast_path(n):
         line += (f"; {n} triangles take its fast path (theory 4.7): minutes per thermal solve "
                  "at this size; --loss-model chain runs the paper's chains in seconds, 20-40 % "

@@ -86,7 +86,7 @@ def _print_demo(case, result, table, threshold, what, wall):
     print(f"etorigami {__version__} demo: one electro-thermal crease (gold on SU-8), residual "
           f"fold {rf:g} deg, {'on the substrate under gravity' if grav else 'no gravity'}, "
           f"heated to {DEMO_POWER_MW:g} mW")
-    print(f"  {case.model.thermal.describe()}")
+    print(f"  {case.model.thermal.describe(len(case.model.mesh.triangles))}")
     print("  steps: " + ", ".join(f"{s.name} {s.status} ({s.increments} increments)"
                                   for s in result.steps))
     every = max(1, round((len(table) - 1) / DEMO_ROWS))
@@ -120,7 +120,7 @@ def _demo(args) -> int:
 
         out = result.save(args.out, {"case": case.name, "parameters": case.parameters,
                                      "threshold_power [mW]": threshold})
-        demo_figure(table, threshold, what, case.model.thermal.describe()).savefig(
+        demo_figure(table, threshold, what, case.model.thermal.describe(len(case.model.mesh.triangles))).savefig(
             out / "demo.png", dpi=120)
         print(f"  results in {out}: creases.csv, nodes.npz, meta.json, demo.png")
     return 0 if result.success else 1

@@ -107,6 +107,10 @@ class GripperDesign:
     conduction : the sheet's conduction, ``"t3"``, ``"monotone"`` or None (default: the loss
         model's, T3 with the chains and monotone with the integral loss;
         :class:`~simulator.ThermalParameters` ``conduction``, theory 4.9)
+    sheet_refinement : the sheet split into ``r^2`` per mesh triangle for the heat balance
+        (:class:`~simulator.ThermalParameters` ``sheet_refinement``, theory 4.11; the integral
+        model only), or None (default: the loss model's, 1 with the chains and 2 with the
+        integral loss at ``integral_refinement`` up to 5)
     """
 
     W: float = 200e-6
@@ -127,6 +131,7 @@ class GripperDesign:
     loss_model: str = "integral"
     integral_refinement: int = 3
     conduction: str | None = None
+    sheet_refinement: int | None = None
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -139,9 +144,15 @@ class GripperDesign:
         integer("GripperDesign.integral_refinement", self.integral_refinement, 1, 16)
         if self.conduction is not None:
             one_of("GripperDesign.conduction", self.conduction, CONDUCTIONS)
+        if self.sheet_refinement is not None:
+            integer("GripperDesign.sheet_refinement", self.sheet_refinement, 1, 16)
+            if self.sheet_refinement > 1 and self.loss_model != "integral":
+                raise ParameterError(f"GripperDesign.sheet_refinement = {self.sheet_refinement} "
+                                     "needs loss_model='integral' (the chains were fitted on "
+                                     "the mesh triangles); use sheet_refinement=None or 1.")
         for name, value in asdict(self).items():
             if name in ("residual_fold_creases", "loss_model", "integral_refinement",
-                        "conduction"):
+                        "conduction", "sheet_refinement"):
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -157,9 +168,9 @@ class GripperDesign:
         ``env_conductivity``, ``loss_model``, ``integral_refinement``, ``conduction``) only
         when they differ from the values they had before they existed (``loss_model`` only
         when not "chain", the default until 7 Dec 2026), so that problem settings, and the
-        hashes of evaluation logs written before, are kept; ``integral_refinement`` and the
-        conduction in force always with the integral model (their defaults changed, so an
-        older log of the integral model never matches)."""
+        hashes of evaluation logs written before, are kept; ``integral_refinement``, the
+        conduction and the sheet refinement in force always with the integral model (their
+        defaults changed, so an older log of the integral model never matches)."""
         out = asdict(self)
         for name in _OPTIONAL:
             if out[name] == _OPTIONAL[name]:
@@ -167,7 +178,16 @@ class GripperDesign:
         if self.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
             out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
             out["conduction"] = self.conduction or "monotone"       # and its conduction, 7 Dec
+            out["sheet_refinement"] = self.sheet_refinement_in_force  # and the sheet's, 8 Dec
         return out
+
+    @property
+    def sheet_refinement_in_force(self) -> int:
+        """The sheet refinement of the heat balance (:attr:`sheet_refinement`, or the loss
+        model's for the gripper mesh's :data:`GRIPPER_TRIANGLES` triangles)."""
+        if self.sheet_refinement is not None:
+            return self.sheet_refinement
+        return ThermalParameters(**_loss_model(self)).sheet_refinement_for(GRIPPER_TRIANGLES)
 
     def crease_residual_folds(self) -> dict:
         """Residual fold [rad] of each actuated crease id."""
@@ -330,11 +350,14 @@ class GripperResult(ResultFiles):
 
 
 _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
-          "integral_refinement": "-", "conduction": "-"}
+          "integral_refinement": "-", "conduction": "-", "sheet_refinement": "-"}
 #: The optional fields' values before they existed (left out of ``GripperDesign.to_dict``);
 #: ``loss_model`` "chain" was the default until 7 Dec 2026.
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
-             "loss_model": "chain", "integral_refinement": 3, "conduction": None}
+             "loss_model": "chain", "integral_refinement": 3, "conduction": None,
+             "sheet_refinement": None}
+#: Triangles of the gripper's mesh (every design: the dimensions move its nodes only).
+GRIPPER_TRIANGLES = 48
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
@@ -387,7 +410,7 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     thermal = ThermalParameters(
         medium=AIR.with_properties(thermal_conductivity=design.env_conductivity),
         boundary_panels=(5,), room_temperature_nodes=(37,), conduction=design.conduction,
-        **_loss_model(design))
+        sheet_refinement=design.sheet_refinement, **_loss_model(design))
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),

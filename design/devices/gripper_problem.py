@@ -108,7 +108,7 @@ class GripperProblem(TemperatureLimited, DesignProblem):
         metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]")
                    and not k.startswith(("residual_fold", "loss_model", "integral_refinement",
-                                         "conduction"))
+                                         "conduction", "sheet_refinement"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = verdict.temperature
         return (res.total_power, constraints, metrics, None if res.success else res.status,

@@ -291,7 +291,7 @@ class _HeatPart:
         self.age += 1
         if self.stepper is None or self.stepper.dt != h:
             self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
-        self._q = free_heat_input(self.tm, self.system.free, power)
+        self._q = free_heat_input(self.tm, self.system.free, power, self.system.load)
         self._electric = float(np.sum(power))      # W (the rest of _q heats fixed nodes)
         self._T = self.stepper.step(self.T, self._q, self._q)
         self._h = h

@@ -20,7 +20,7 @@ from ..geometry.materials import AIR, Fluid
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 from .monotone import CONDUCTIONS
 
-__all__ = ["ThermalParameters", "REFERENCE_BETA", "CREASE_CONDUCTIONS"]
+__all__ = ["ThermalParameters", "REFERENCE_BETA", "CREASE_CONDUCTIONS", "AUTO_SHEET_REFINEMENT"]
 
 logger = logging.getLogger(__name__)
 
@@ -31,6 +31,9 @@ REFERENCE_BETA = 20 / 180 * 3.14
 
 #: How a crease conducts heat in-plane (:attr:`ThermalParameters.crease_conduction`).
 CREASE_CONDUCTIONS = ("paper", "layers")
+#: The integral loss's sheet refinement where its dense operator allows
+#: (:meth:`ThermalParameters.sheet_refinement_for`; theory 4.11).
+AUTO_SHEET_REFINEMENT = 2
 
 #: ``substrate`` not given: the plane of the model's thermal-boundary panels, if any.
 _PANELS = object()
@@ -191,7 +194,8 @@ class ThermalParameters:
     """Heat-transfer parameters (theory 4; SI units, temperatures in deg C).
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
-    boundary_panels=(), room_temperature_nodes=(), conduction=None, crease_conduction="paper")``;
+    boundary_panels=(), room_temperature_nodes=(), conduction=None, crease_conduction="paper",
+    sheet_refinement=None)``;
     give them by keyword.
 
     Parameters
@@ -235,6 +239,14 @@ class ThermalParameters:
         conductance ``k1 t1 + k2 t2`` (:class:`~simulator.model.bimorph.Bimorph`, taken from
         the model's actuators; about 100x the paper's on the paper's gold-on-SU-8 creases);
         passive creases stay as in ``"paper"``.
+    sheet_refinement : int or None
+        The sheet's temperature resolved within the mesh triangles (theory 4.11,
+        :mod:`~simulator.thermal.refined`): every mesh triangle split uniformly into ``r^2``
+        for the heat balance, the temperatures the mechanics reads taken at the mesh nodes;
+        the integral loss only (the chains were fitted on the mesh triangles, and their loss
+        area sums triangle perimeters, theory 4.3). None (default): the loss model's: 1 with
+        the chains, :data:`AUTO_SHEET_REFINEMENT` with the integral loss where its dense
+        operator allows (:meth:`sheet_refinement_for` says which).
 
     Notes
     -----
@@ -261,6 +273,7 @@ class ThermalParameters:
     room_temperature_nodes: tuple
     conduction: str | None
     crease_conduction: str
+    sheet_refinement: int | None
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
@@ -268,7 +281,7 @@ class ThermalParameters:
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
                  integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
-                 conduction=None, crease_conduction="paper"):
+                 conduction=None, crease_conduction="paper", sheet_refinement=None):
         old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
                "layers": layers, "dissipation_angle": dissipation_angle,
                "env_density": env_density, "env_specific_heat": env_specific_heat,
@@ -280,11 +293,11 @@ class ThermalParameters:
             warn_deprecated(f"ThermalParameters({name}=...) is deprecated; use "
                             f"{_OLD_KEYWORDS[name]}.")
         self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
-                  room_temperature_nodes, conduction, crease_conduction)
+                  room_temperature_nodes, conduction, crease_conduction, sheet_refinement)
 
     def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
              room_temperature=21.0, boundary_panels=(), room_temperature_nodes=(),
-             conduction=None, crease_conduction="paper"):
+             conduction=None, crease_conduction="paper", sheet_refinement=None):
         """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
         old = {k: old.get(k) for k in _OLD_KEYWORDS}
         loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
@@ -306,6 +319,7 @@ class ThermalParameters:
             "ThermalParameters.crease_conduction", crease_conduction, CREASE_CONDUCTIONS,
             hint="'paper' for the reference's single crease layer, 'layers' for the sum of "
                  "k t over the actuators' bimorph layers"))
+        set_(self, "sheet_refinement", _sheet_refinement(sheet_refinement, loss))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
@@ -318,6 +332,31 @@ class ThermalParameters:
         if self.conduction is not None:
             return self.conduction
         return "t3" if self.loss.model == "chain" else "monotone"
+
+    def sheet_refinement_for(self, n_triangles: int) -> int:
+        """The sheet refinement in force on a mesh of ``n_triangles`` triangles:
+        :attr:`sheet_refinement`, or if None 1 with the chains and, with the integral loss,
+        :data:`AUTO_SHEET_REFINEMENT` where the refined sheet's dense operator stays within
+        ``MAX_SUB_TRIANGLES`` (its ``r^2 m^2`` sub-triangles per mesh triangle), else 1
+        (theory 4.11)."""
+        if self.sheet_refinement is not None:
+            return self.sheet_refinement
+        if self.loss.model != "integral" or self.loss.operator == "fast":
+            return 1
+        from .integral import MAX_SUB_TRIANGLES
+
+        r, m = AUTO_SHEET_REFINEMENT, self.loss.refinement
+        return r if int(n_triangles) * (r * m) ** 2 <= MAX_SUB_TRIANGLES else 1
+
+    def _describe_refinement(self, n_triangles) -> str:
+        """The sheet refinement's part of :meth:`describe`."""
+        if n_triangles is not None:
+            r = self.sheet_refinement_for(n_triangles)
+            return f"; sheet refined r = {r}" if r > 1 else ""
+        if self.sheet_refinement is None:
+            return (f"; sheet refined r = {AUTO_SHEET_REFINEMENT} where the dense operator "
+                    "allows" if self.loss.model == "integral" else "")
+        return f"; sheet refined r = {self.sheet_refinement}" if self.sheet_refinement > 1 else ""
 
     @classmethod
     def from_dict(cls, d: Mapping) -> ThermalParameters:
@@ -361,7 +400,9 @@ class ThermalParameters:
             return dataclasses.replace(self, loss=dataclasses.replace(self.loss, **changes))
         if model == "chain" and "thickness" not in changes:
             _no_thickness()
-        return dataclasses.replace(self, loss=cls(**changes))
+        fine = {} if model == "integral" or (self.sheet_refinement or 1) == 1 else {
+            "sheet_refinement": None}        # the chains on the mesh triangles (theory 4.11)
+        return dataclasses.replace(self, loss=cls(**changes), **fine)
 
     # ------------------------------------------------------------------ old flat spellings
     def _chain(self) -> ChainLoss:
@@ -396,19 +437,22 @@ class ThermalParameters:
     def to_dict(self) -> dict:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
-        the held panels and nodes, the ``conduction`` (None: the loss model's) and the
-        ``crease_conduction``.
+        the held panels and nodes, the ``conduction`` (None: the loss model's), the
+        ``crease_conduction`` and, where given, the ``sheet_refinement``.
         :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
                 "room_temperature": float(self.room_temperature),
                 "boundary_panels": list(self.boundary_panels),
                 "room_temperature_nodes": list(self.room_temperature_nodes),
-                "conduction": self.conduction, "crease_conduction": self.crease_conduction}
+                "conduction": self.conduction, "crease_conduction": self.crease_conduction,
+                **({} if self.sheet_refinement is None
+                   else {"sheet_refinement": self.sheet_refinement})}
 
-    def describe(self) -> str:
+    def describe(self, n_triangles: int | None = None) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate (and
-        the crease conduction where it is not the paper's)."""
+        the crease conduction where it is not the paper's, and the sheet refinement where it
+        is above 1: the one in force on a mesh of ``n_triangles`` triangles where given)."""
         panels = ", ".join(map(str, self.boundary_panels))
         if self.substrate is None or (self.substrate.from_panels and not panels):
             sub = "no substrate"
@@ -420,8 +464,28 @@ class ThermalParameters:
             sub = "substrate: a given plane"
         layers = ("; creases conduct as their bimorph layers (sum of k t)"
                   if self.crease_conduction == "layers" else "")
+        fine = self._describe_refinement(n_triangles)
         return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
-                f"{self.medium.thermal_conductivity:g} W/(m K); {sub}{layers}")
+                f"{self.medium.thermal_conductivity:g} W/(m K); {sub}{layers}{fine}")
+
+
+def _sheet_refinement(value, loss) -> int | None:
+    """The checked :attr:`ThermalParameters.sheet_refinement` (None: the loss model's)."""
+    if value is None:
+        return None
+    from .refined import MAX_SHEET_REFINEMENT
+
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+            or not 1 <= value <= MAX_SHEET_REFINEMENT:
+        raise ParameterError(f"ThermalParameters.sheet_refinement = {value!r} must be None or an "
+                             f"integer from 1 (the mesh triangles) to {MAX_SHEET_REFINEMENT}.")
+    if value > 1 and loss.model != "integral":
+        raise ParameterError(f"ThermalParameters.sheet_refinement = {value} needs the integral "
+                             "loss (loss=IntegralLoss()): the chains were fitted on the mesh "
+                             "triangles and their loss area sums triangle perimeters (theory "
+                             "4.3), so refining would change them; use sheet_refinement=1 or "
+                             "None with ChainLoss.")
+    return int(value)
 
 
 def _plane(substrate: Substrate | None):

@@ -21,6 +21,7 @@ reference); t_air is floored at 1e-9 t_env where the reference would divide by z
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from functools import cached_property
@@ -42,6 +43,7 @@ from .integral import IntegralOperator
 from .integral_levels import integral_operator
 from .loss import ChainLoss
 from .monotone import MonotoneConduction, monotone_conduction
+from .refined import RefinedSheet
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
 __all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
@@ -232,6 +234,28 @@ class ThermalModel:
             math.tan(self.chains.dissipation_angle),
             float(params.medium.thermal_conductivity) if chain else 0.0, int(self.chains.layers),
             _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
+        #: the refined sheet (:class:`~simulator.thermal.refined.RefinedSheet`) where
+        #: ``params.sheet_refinement_for`` the mesh is above 1, else None
+        self.sheet = None
+        #: the thermal model of the refined sheet (None without refinement)
+        self.fine_model = None
+        self._last_fine = None           # (x, q, fine temperatures) of the last solve
+        r = params.sheet_refinement_for(len(tri))
+        if r > 1:
+            self._refine(r, warn_no_plane, actuators)
+
+    def _refine(self, r: int, warn_no_plane: bool, actuators) -> None:
+        """Solve on the mesh triangles split into ``r^2`` each (theory 4.11): the fine sheet's
+        own model, whose integral operator, substrate plane and held nodes this one shows."""
+        self.sheet = RefinedSheet(self.mesh, r)
+        self.fine_model = ThermalModel(self.sheet.mesh,
+                                       dataclasses.replace(self.params, sheet_refinement=1),
+                                       warn_no_plane, actuators)
+        fine = self.fine_model
+        self.integral, self.plane, self._warn_plane = fine.integral, fine.plane, False
+        n = self.mesh.n_nodes
+        self.fixed_nodes = fine.fixed_nodes[fine.fixed_nodes < n]
+        self.free_nodes = np.setdiff1d(np.arange(n), self.fixed_nodes)
 
     def _layer_conduction(self, actuators) -> None:
         """Give the actuated creases' triangles the sheet conductance ``k1 t1 + k2 t2`` of the
@@ -490,6 +514,10 @@ class ThermalModel:
                 or not math.isfinite(rt):
             raise ParameterError(f"q must be a finite array of shape ({n},) or ({n}, k) [W] and "
                                  "the room temperature finite.")
+        if self.sheet is not None:
+            fine = self.fine_model.solve(self.sheet.positions(x), self.sheet.heat(q), rt)
+            self._last_fine = (np.array(x, float), q.copy(), rt, fine)
+            return fine[:n]
         rise = np.zeros(q.shape)
         if len(self.free_nodes):
             rise[self.free_nodes] = self.factorized(x)(q[self.free_nodes])
@@ -502,6 +530,8 @@ class ThermalModel:
         (a fixed-shape coupling, several heat inputs) reuses it.
         """
         x = np.asarray(x, float)
+        if self.sheet is not None:
+            return self._refined_solver(x)
         compiled, last = _thermal_jit.use_compiled(), self._factor_cache
         if last is not None and last[0] == compiled and last[1].shape == x.shape \
                 and np.array_equal(last[1], x):
@@ -516,6 +546,22 @@ class ThermalModel:
             solver = self._factorize(K, np.zeros(len(self.free_nodes)), self._integral_loss(x),
                                      self.integral.touching(x)[self.free_nodes])
         self._factor_cache = (compiled, x.copy(), solver)
+        return solver
+
+    def _refined_solver(self, x):
+        """:meth:`factorized` on the refined sheet: the mesh nodes' heat spread onto the fine
+        nodes, the fine rise taken at the mesh nodes."""
+        fine, sheet, free = self.fine_model, self.sheet, self.free_nodes
+        solve = fine.factorized(sheet.positions(x))
+        ffree = fine.free_nodes
+
+        def solver(q_free):
+            q_free = np.asarray(q_free, float)
+            q = np.zeros((self.mesh.n_nodes,) + q_free.shape[1:])
+            q[free] = q_free
+            rise = np.zeros((sheet.n_fine,) + q_free.shape[1:])
+            rise[ffree] = solve(sheet.heat(q)[ffree])
+            return rise[free]
         return solver
 
     def structure_conductances(self, x):
@@ -557,6 +603,9 @@ class ThermalModel:
         """Nodes the steady model holds at room temperature at positions ``x`` (n, 3) [m]:
         :attr:`fixed_nodes` and, in the integral model, the nodes touching the substrate plane
         (:meth:`~simulator.thermal.integral.IntegralOperator.touching`)."""
+        if self.sheet is not None:
+            held = self.fine_model.held_nodes(self.sheet.positions(x))
+            return held[held < self.mesh.n_nodes]
         if self.integral is None:
             return self.fixed_nodes
         return np.union1d(self.fixed_nodes, np.flatnonzero(self.integral.touching(x)))
@@ -581,7 +630,13 @@ class ThermalModel:
         ``IntegralLoss.correction_tol`` that operator corrected between rebuilds (theory 4.7);
         the result with its positive couplings lumped onto the diagonal with
         ``IntegralLoss.lumped`` (theory 4.9).
-        Not on the fast path (``IntegralLoss.operator`` "fast"), which never forms it."""
+        Not on the fast path (``IntegralLoss.operator`` "fast"), which never forms it, nor on
+        a refined sheet (``sheet_refinement`` > 1), whose loss couples the fine nodes."""
+        if self.sheet is not None:
+            raise ParameterError(
+                f"the loss conductance of a refined sheet (sheet_refinement = {self.sheet.r}) "
+                "lives on its fine nodes: use tm.fine_model.integral_loss_matrix("
+                "tm.sheet.positions(x)), or tm.condensed_system(x) on the mesh nodes.")
         if getattr(self.integral, "fast", False):
             raise ParameterError("the integral model's fast path (IntegralLoss(operator='fast'), "
                                  "or 'auto' on a large sheet) never forms the loss conductance; "
@@ -613,6 +668,8 @@ class ThermalModel:
         and positions ``x`` (n, 3) [m], (n,), by the parameters' loss model (the rest of the
         heat input leaves through the room-temperature nodes)."""
         rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
+        if self.sheet is not None:
+            return self._refined_loss(x, temperature, rt)
         rise = np.asarray(temperature, float) - rt
         if self.integral is None:
             return self._conductances(x, False)[1] * rise
@@ -625,6 +682,50 @@ class ThermalModel:
         else:                            # the combined or lumped conductance the solve used
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
         return out
+
+    def _refined_loss(self, x, temperature, rt) -> np.ndarray:
+        """:meth:`environment_loss` on a refined sheet: the fine field of the last solve (the
+        only one whose mesh-node temperatures determine it), its loss gathered onto the mesh
+        nodes (:meth:`~simulator.thermal.refined.RefinedSheet.restrict`: the total kept)."""
+        last, T = self._last_fine, np.asarray(temperature, float)
+        if last is None or not (np.array_equal(last[0], np.asarray(x, float)) and last[2] == rt
+                                and last[3].ndim == 1 and np.array_equal(last[3][:len(T)], T)):
+            raise ParameterError(
+                f"environment_loss on a refined sheet (sheet_refinement = {self.sheet.r}) "
+                "needs the temperatures and positions of the last solve: the mesh nodes' "
+                "temperatures do not determine the fine field; call solve(x, q) first.")
+        fine = self.fine_model.environment_loss(self.sheet.positions(x), last[3], rt)
+        return self.sheet.restrict(fine)
+
+    def condensed_system(self, x):
+        """The refined sheet's steady system condensed onto the mesh nodes it does not hold,
+        at positions ``x`` (n, 3) [m] (theory 4.11): ``(A, G)`` with the dense conductance
+        ``A`` (n_free, n_free) [W/K] and the load map ``G`` (n_free, n) such that the rise of
+        :attr:`free_nodes` solves ``A dT = G q`` for the mesh nodal heat ``q`` [W]: the fine
+        nodes that are not mesh nodes eliminated exactly (a Schur complement), the heat put
+        on them passed on through ``G``. Refined sheets with the dense loss only."""
+        if self.sheet is None:
+            raise ParameterError("condensed_system is the refined sheet's (sheet_refinement > "
+                                 "1); without refinement the system is on the mesh nodes.")
+        fine, sheet = self.fine_model, self.sheet
+        X = sheet.positions(x)
+        n = self.mesh.n_nodes
+        K = fine.sheet_conduction(X).toarray()
+        if getattr(fine.integral, "fast", False):
+            raise ParameterError("condensed_system: the refined sheet's loss is on the fast path "
+                                 "(too many sub-triangles for the dense operator); lower "
+                                 "sheet_refinement or IntegralLoss.refinement.")
+        K[np.ix_(fine.integral.nodes, fine.integral.nodes)] += fine.integral_loss_matrix(X)
+        free = np.setdiff1d(np.arange(sheet.n_fine), fine.held_nodes(X))
+        c, f = free[free < n], free[free >= n]
+        Q = sheet.load
+        if len(f) == 0:
+            return K[np.ix_(c, c)], Q[c]
+        solve = factorize(K[np.ix_(f, f)], kind="spd", dense_limit=len(f)).solve
+        W = solve(np.hstack([K[np.ix_(f, c)], Q[f]]))
+        A = K[np.ix_(c, c)] - K[np.ix_(c, f)] @ W[:, :len(c)]
+        G = Q[c] - K[np.ix_(c, f)] @ W[:, len(c):]
+        return 0.5 * (A + A.T), G
 
     def _factorize(self, K, g_free, loss=None, held=None):
         """Factorise the free-node system (conduction plus condensed chains, or plus the

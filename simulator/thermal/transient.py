@@ -128,12 +128,17 @@ class HeatSystem:
     free : (m,) indices of the free unknowns in the full ((N + 1) n) numbering
     outflow : (m,) heat flow into the Dirichlet nodes per kelvin of rise of each free unknown
         [W/K]; ``outflow @ dT`` is the heat leaving the free unknowns.
+    load : (m, n) array or None
+        The heat of the free unknowns from the mesh nodal heat (a refined sheet's condensed
+        system, theory 4.11: part of a node's heat leaves through the eliminated fine nodes);
+        None: the free unknowns' own entries.
     """
 
     K: sp.csc_matrix
     C: np.ndarray
     free: np.ndarray
     outflow: np.ndarray
+    load: np.ndarray | None = None
 
 
 def _dirichlet_mask(tm: ThermalModel) -> np.ndarray:
@@ -178,19 +183,23 @@ def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
     x = np.asarray(x, float)
     area = tm.triangle_areas(x)
     tri = mesh.triangles
-    K = tm.sheet_conduction(x).toarray()
-    sheet = tm.integral.nodes
-    K[np.ix_(sheet, sheet)] += tm.integral_loss_matrix(x)
     free = np.setdiff1d(np.arange(n), tm.held_nodes(x))
+    load = None
+    if tm.sheet is not None:           # the fine nodes eliminated: they hold no heat
+        Kff, load = tm.condensed_system(x)
+    else:
+        K = tm.sheet_conduction(x).toarray()
+        sheet = tm.integral.nodes
+        K[np.ix_(sheet, sheet)] += tm.integral_loss_matrix(x)
+        Kff = K[np.ix_(free, free)]
     solid = _volumetric_capacity(tm) * tm.thickness * area / 3
     C = np.bincount(tri.ravel(), np.repeat(solid, 3), minlength=n)[free]
     if np.any(C <= 0):
         raise ParameterError(f"node {int(free[np.argmin(C)])} has no heat capacity: every "
                              "node needs a triangle with thickness, density and specific heat.")
-    Kff = K[np.ix_(free, free)]
     # heat leaving the free nodes per kelvin of each one's rise: into the held nodes and the
     # medium (the column sums: the rows of the conduction alone sum to zero)
-    return HeatSystem(sp.csc_matrix(Kff), C, free, Kff.sum(axis=0))
+    return HeatSystem(sp.csc_matrix(Kff), C, free, Kff.sum(axis=0), load)
 
 
 def medium_diffusion_time(tm: ThermalModel, x) -> float:
@@ -222,8 +231,11 @@ def check_quasi_static_medium(tm: ThermalModel, x, dt: float, owner: str) -> Non
             1e3 * tau)
 
 
-def free_heat_input(tm: ThermalModel, free: np.ndarray, power) -> np.ndarray:
-    """Heat input [W] of the free unknowns ``free`` for the (C,) crease powers [W]."""
+def free_heat_input(tm: ThermalModel, free: np.ndarray, power, load=None) -> np.ndarray:
+    """Heat input [W] of the free unknowns ``free`` for the (C,) crease powers [W] (``load``:
+    a :class:`HeatSystem`'s map from the mesh nodal heat, where it has one)."""
+    if load is not None:
+        return load @ tm.heat_vector(power)
     q = np.zeros(tm.n_dof)
     q[:tm.mesh.n_nodes] = tm.heat_vector(power)
     return q[free]
@@ -484,7 +496,7 @@ class _HeatRun:
 
     def heat(self, p) -> np.ndarray:
         """Heat input [W] of the free unknowns for the (C,) crease powers ``p`` [W]."""
-        return free_heat_input(self.tm, self.free, p)
+        return free_heat_input(self.tm, self.free, p, self.system.load)
 
     def temperature(self) -> np.ndarray:
         """Structure node temperatures [deg C], (n,)."""

@@ -250,9 +250,11 @@ def _model_inputs(model, positions, state, crease_power, heat):
     params = model.thermal or ThermalParameters()
     # the nodal heat and the sheet's conduction only: no loss model (the FE is the loss;
     # the chains, whose t_env plays no part here, keep the integral operator unbuilt), the
-    # model's own sheet conduction (T3 or monotone)
+    # model's own sheet conduction (T3 or monotone), on the mesh triangles (the FE's sheet is
+    # the mesh's P1 sheet, whatever the model's sheet_refinement: theory 4.11)
     tm = ThermalModel(mesh, dataclasses.replace(params, loss=ChainLoss(thickness=1.0),
-                                                conduction=params.conduction_method),
+                                                conduction=params.conduction_method,
+                                                sheet_refinement=1),
                       actuators=model.actuators)
     if heat is not None:
         if crease_power is not None:
