@@ -80,8 +80,9 @@ ANIMATION_FRAMES = 50                    # node records kept of the -10 deg run 
 EXAMPLE01, EXAMPLE01_REF = "Example01 (ours)", "Example01 reference"
 #: What the 3-D FE says of the two heat-loss models (this device is not in the FE studies).
 FE_VERDICT = ("not checked against the 3-D FE on this device; on the strip, the double fold, "
-              "the gripper and the Miura lifter the FE supports the integral model "
-              "(heat_transfer_models, device_heat_models)")
+              "the gripper and the Miura lifter the FE supports the integral loss on the mesh's "
+              "sheet (heat_transfer_models, device_heat_models); here on the sheet refined r = 2 "
+              "(theory 4.11)")
 
 POWER, FOLD = "power [mW]", "fold_angle [deg]"
 

@@ -120,8 +120,8 @@ def _demo(args) -> int:
 
         out = result.save(args.out, {"case": case.name, "parameters": case.parameters,
                                      "threshold_power [mW]": threshold})
-        demo_figure(table, threshold, what, case.model.thermal.describe(len(case.model.mesh.triangles))).savefig(
-            out / "demo.png", dpi=120)
+        footer = case.model.thermal.describe(len(case.model.mesh.triangles))
+        demo_figure(table, threshold, what, footer).savefig(out / "demo.png", dpi=120)
         print(f"  results in {out}: creases.csv, nodes.npz, meta.json, demo.png")
     return 0 if result.success else 1
 

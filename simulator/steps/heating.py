@@ -113,6 +113,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     settled = coupling.mode == "settled" and not coupling.fixed_shape
+    exact = False           # the integral loss's operator rebuilt at the end shape (theory 6.6)
     for s, (power, room) in enumerate(zip(powers, ambient), start=1):
         q = tm.heat_vector(power)
         temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
@@ -136,6 +137,12 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             new_temp = tm.solve(mesh.nodes + path.u, q, room)
             change = float(np.max(np.abs(new_temp - temp)))
             temp = new_temp
+            if change <= coupling.tol and s == n_inc and not exact \
+                    and tm.exact_loss_at(mesh.nodes + path.u):
+                exact = True             # the end on the accurate loss at the end shape
+                new_temp = tm.solve(mesh.nodes + path.u, q, room)
+                change = max(change, float(np.max(np.abs(new_temp - temp))))
+                temp = new_temp
             if change <= coupling.tol:
                 break
         if iterate and change > coupling.tol:

@@ -188,6 +188,16 @@ class IntegralOperator:
         self.builds += 1
         return self._cache.L
 
+    def exact_at(self, x) -> bool:
+        """Rebuild at positions ``x`` (n, 3) [m] unless the last build was there (the end of a
+        settled coupling, theory 6.6: the answer then does not depend on where the operator
+        was last rebuilt); whether it rebuilt."""
+        x = np.asarray(x, float)
+        if self._cache is not None and np.array_equal(self._cache.x, x):
+            return False
+        self.rebuild(x)
+        return True
+
     @property
     def last_definite(self) -> bool:
         """Whether the operator of the last build was positive definite (False where parts of

@@ -90,6 +90,21 @@ class ExtrapolatedLoss:
         the extrapolated loss conductance."""
         return self._combine(self.fine.rebuild(x), self.coarse.rebuild(x))
 
+    @property
+    def last_positions(self):
+        """Positions (n, 3) [m] of the last build (None before the first)."""
+        return self.fine.last_positions
+
+    def exact_at(self, x) -> bool:
+        """Rebuild both at positions ``x`` unless the last build was there; whether it
+        rebuilt (:meth:`IntegralOperator.exact_at`)."""
+        x = np.asarray(x, float)
+        last = self.fine.last_positions
+        if last is not None and np.array_equal(last, x) and self.fine.builds == self._built:
+            return False
+        self.rebuild(x)
+        return True
+
 
 class CorrectedLoss:
     """An accurate operator rebuilt only where the shape has changed enough, following the
@@ -168,6 +183,22 @@ class CorrectedLoss:
             if (self.change(Lb) <= self.tol and not self._moved_near_plane(x)) or \
                     not self.base.last_definite:
                 return self._corrected(Lb)
+        return self._rebuild(x, Lb)
+
+    def exact_at(self, x) -> bool:
+        """Rebuild the accurate operator at positions ``x`` unless its last build was there,
+        so that the conductance there is the accurate one, whatever the path of shapes before
+        (the end of a settled coupling, theory 6.6); whether it rebuilt."""
+        x = np.asarray(x, float)
+        last = self.accurate.last_positions
+        if self._accurate0 is not None and last is not None and np.array_equal(last, x):
+            return False
+        self._rebuild(x, None)
+        return True
+
+    def _rebuild(self, x, Lb) -> np.ndarray:
+        """The accurate operator rebuilt at ``x`` (``Lb``: the cheap one there, if known),
+        the secant updated; returns the conductance there."""
         accurate = self.accurate.rebuild(x)
         last = self.base.last_positions
         base = Lb if Lb is not None and np.array_equal(last, x) else self.base.rebuild(x)

@@ -10,7 +10,7 @@ sheet_refinement=r)`` solves the heat balance on every mesh triangle split unifo
 
 * the mesh nodes kept as the first fine nodes (the temperatures the mechanics reads are the
   fine field's at the mesh nodes, injected);
-* fine positions interpolated linearly from the mesh nodes' (:attr:`RefinedSheet.P`): a fine
+* fine positions interpolated linearly from the mesh nodes' (``RefinedSheet.P``): a fine
   node stays on its (flat) mesh triangle at any shape;
 * the heat input (:meth:`RefinedSheet.heat`): a crease's power, which the mesh nodes receive
   by the paper's nodal split (theory 4.6), heats the crease's fine triangles uniformly (the

@@ -88,7 +88,7 @@ def test_fmm_far_field_matches_the_direct_sum_on_a_larger_set(monkeypatch):
 
 def _temperatures(model, x, operator, substrate=None, **kw):
     prm = dataclasses.replace(model.thermal, loss=IntegralLoss(operator=operator, **kw),
-                              substrate=substrate)
+                              substrate=substrate, sheet_refinement=1)
     tm = ThermalModel(model.mesh, prm, warn_no_plane=False)
     q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
     T = tm.solve(x, q)

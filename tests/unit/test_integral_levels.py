@@ -21,8 +21,10 @@ from unit.test_integral_loss import disk_mesh
 
 
 def _strip_params(**kw):
+    """The strip with the integral loss on the mesh triangles (the operator under test)."""
     model = verification_strip().model
-    return model, model.thermal.with_loss("integral", **kw)
+    return model, dataclasses.replace(model.thermal.with_loss("integral", **kw),
+                                      sheet_refinement=1)
 
 
 def test_coarse_refinement_is_half_at_least_two():
@@ -74,7 +76,7 @@ def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between
     model, folded = _folded_double_fold()
     x0 = model.mesh.nodes
     prm = dataclasses.replace(model.thermal.with_loss("integral", shape_tol=0.0),
-                              substrate=None)             # an unbounded medium
+                              substrate=None, sheet_refinement=1)   # an unbounded medium
     assert (prm.loss.refinement, prm.loss.extrapolated, prm.loss.correction_tol) == (3, True,
                                                                                      0.1)
     tm = ThermalModel(model.mesh, prm)
@@ -103,7 +105,8 @@ def test_secant_correction_reproduces_both_accurate_builds_and_interpolates_betw
     model, folded = _folded_double_fold()
     x0 = model.mesh.nodes
     x1 = x0 + 0.1 * (folded - x0)
-    prm = dataclasses.replace(model.thermal.with_loss("integral", shape_tol=0.0), substrate=None)
+    prm = dataclasses.replace(model.thermal.with_loss("integral", shape_tol=0.0), substrate=None,
+                              sheet_refinement=1)
     op = ThermalModel(model.mesh, prm).integral
     accurate = ThermalModel(model.mesh, prm.with_loss(correction_tol=0.0)).integral
     op.loss_matrix(x0)
@@ -131,7 +134,8 @@ def _double_fold_drift(substrate):
     to the largest rise; the number of accurate builds and of shapes; the corrected loss."""
     case = get_case("double_fold", thermal_steps=12)
     model = case.model
-    prm = dataclasses.replace(model.thermal, loss=IntegralLoss(), substrate=substrate)
+    prm = dataclasses.replace(model.thermal, loss=IntegralLoss(), substrate=substrate,
+                              sheet_refinement=1)
     model = dataclasses.replace(model, thermal=prm)
     res = simulate(model, case.steps)
     assert res.success

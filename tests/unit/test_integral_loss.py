@@ -227,7 +227,7 @@ def _strip(refinement=2, room=(0, 3, 5, 6), substrate=None, **kw):
     model = verification_strip().model
     kw = {"correction_tol": 0.0, **kw}
     params = dataclasses.replace(model.thermal.with_loss("integral", refinement=refinement, **kw),
-                                 room_temperature_nodes=room,
+                                 room_temperature_nodes=room, sheet_refinement=1,
                                  **({"substrate": substrate} if substrate else {}))
     tm = ThermalModel(model.mesh, params)
     q = tm.heat_vector(np.array([4e-3]))
@@ -330,6 +330,15 @@ def test_transient_heat_uses_the_integral_loss():
     assert system.K.shape[0] < chain.K.shape[0] and system.free.max() < model.mesh.n_nodes
     q = tm.heat_vector(np.full(model.mesh.n_creases, 2e-3))
     steady = tm.solve(x, q) - tm.params.room_temperature
+    # the sheet refined (r = 2, theory 4.11): the fine nodes condensed, their heat through
+    # the system's load map
+    assert tm.sheet is not None and system.load is not None
+    np.testing.assert_allclose(system.K @ steady[system.free], system.load @ q,
+                               atol=1e-12 * np.abs(q).max())
+    mesh = ThermalModel(model.mesh, dataclasses.replace(tm.params, sheet_refinement=1))
+    system = heat_system(mesh, x)
+    steady = mesh.solve(x, q) - tm.params.room_temperature
+    assert system.load is None
     np.testing.assert_allclose(system.K @ steady[system.free], q[system.free],
                                atol=1e-12 * np.abs(q).max())
 

@@ -22,7 +22,7 @@ OPERATORS = {"plain": ({"refinement": 2, "correction_tol": 0.0}, IntegralOperato
 
 def _gripper(lumped, **fields):
     """The flat default gripper's model with the integral loss, and its thermal model."""
-    model, _ = gripper_model(GripperDesign(loss_model="integral"))
+    model, _ = gripper_model(GripperDesign(loss_model="integral", sheet_refinement=1))
     thermal = model.thermal.with_loss(lumped=lumped, **fields)
     return model, ThermalModel(model.mesh, thermal)
 

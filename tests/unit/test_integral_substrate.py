@@ -27,7 +27,7 @@ def _strip_model(**kw):
     model = verification_strip().model
     loss = IntegralLoss(**{"refinement": 2, "correction_tol": 0.0, **kw})
     return model, ThermalModel(model.mesh, dataclasses.replace(
-        model.thermal, loss=loss, room_temperature_nodes=(),
+        model.thermal, loss=loss, room_temperature_nodes=(), sheet_refinement=1,
         substrate=Substrate.plane((0, 0, 0), (0, 0, 1))))
 
 
