@@ -77,6 +77,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".thermal.monotone": ("CONDUCTIONS",),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
     ".thermal.measures": ("CREASE_MEASURES", "crease_temperatures"),
+    ".thermal.circuits": ("Circuit", "Drive", "Heater"),
     ".thermal.limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
                        "crease_limit_temperatures"),
     ".thermal.fixed_shape": ("FixedShapeTemperatures", "fixed_shape_temperatures",
@@ -143,6 +144,8 @@ __all__ = [
     "crossing_event", "crease_crossings", "node_crossings",
     # coupled electro-thermal dynamics
     "ElectroThermal",
+    # electrical drive: heaters with a temperature coefficient in circuits (theory 8.8)
+    "Heater", "Circuit", "Drive",
     # results and cases
     "SimulationResult", "StepResult", "Case", "get_case", "describe_cases", "parameter_note",
     # result viewer (self-contained HTML)

@@ -45,6 +45,12 @@ class SimulationState:
         Node velocities [m/s] left by a dynamic step; None means at rest (quasi-static steps).
     time : float
         Time reached by dynamic steps [s] (quasi-static steps do not advance it).
+    circuits : tuple of (Circuit, Drive) pairs
+        Heater circuits driving creases at the end of the step, their drives held constant
+        (:mod:`simulator.thermal.circuits`); a later heating step keeps driving them. Empty:
+        none (the powers are fixed).
+    circuit_power : (C,) array or None
+        The circuits' part of ``crease_power`` [W] (None: no circuit).
     """
 
     u: np.ndarray
@@ -56,6 +62,8 @@ class SimulationState:
     room_temperature: float = ROOM_TEMPERATURE
     velocity: np.ndarray | None = None
     time: float = 0.0
+    circuits: tuple = ()
+    circuit_power: np.ndarray | None = None
 
     @property
     def node_velocity(self) -> np.ndarray:

@@ -40,7 +40,7 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
     from simulator import load_fold_json, parse_fold, read_model
 
     from .model_heat import model_file_heat_case, refuse_unheatable
-    from .plain import heater_names, is_plain, plain_case
+    from .plain import heater_names, is_plain, plain_case, refuse_electrical_without_heat
     from .sharp import is_sharp_request, sharp_case
 
     options = dict(options or {})
@@ -50,6 +50,8 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
     geo = None
     drive = heating is not None and (heating.heat is not None or getattr(heating, "fold", None)
                                      or is_plain(data))
+    if heating is not None and not drive:
+        refuse_electrical_without_heat(heating, f"{path} runs its own steps")
     if drive and (is_sharp_request(options) or getattr(heating, "fold", None)):
         model, steps, params, geo = sharp_case(path, data, options, sharp, heating)
     elif drive and is_plain(data):

@@ -1,4 +1,5 @@
-"""A FOLD model file heated from the flags: ``run MODEL.fold --heat WHICH --power MW``.
+"""A FOLD model file heated from the flags: ``run MODEL.fold --heat WHICH --power MW`` (or
+``--voltage V``, ``--current MA``).
 
 A model file (``etorigami:`` steps, written by ``etorigami export`` or
 :func:`simulator.write_model`) carries its own layers, bimorph, heat loss and supports; the
@@ -11,7 +12,7 @@ pattern what it lacks, are refused: the file has its own.
 
 from __future__ import annotations
 
-from ._common import CLIError, distinct, power_mw
+from ._common import CLIError, distinct
 
 __all__ = ["model_file_heat_case", "refuse_unheatable", "model_summary"]
 
@@ -39,29 +40,34 @@ def model_file_heat_case(path, data, options: dict, sharp: dict, heating) -> tup
 
     from simulator import Heat, parse_fold, read_model
 
-    from .plain import print_notes, refuse_creaseless, select_creases
+    from .plain import (drive_parameters, driven, heat_drive, heat_fields, print_notes,
+                        refuse_creaseless, select_creases)
 
     for flag, value in (("--stack", heating.stack), ("--fix-panel", heating.fix_panel)):
         if value is not None:
             raise CLIError(f"{flag} applies to plain crease patterns; {path} is a model file "
                            f"with its own layers and supports (etorigami: fields): drop {flag}")
-    if heating.power is None:
-        raise CLIError(f"--heat {heating.heat} needs --power MW (the power per heated crease)")
+    if not driven(heating):
+        raise CLIError(f"--heat {heating.heat} needs --power MW (the power per heated crease), "
+                       "--voltage V or --current MA")
+    drive = heat_drive(heating)
     model, steps = read_model(path, **options, **sharp)
     geo = parse_fold(data, **options)
     print_notes(geo)
     refuse_creaseless(path, geo.pattern, "heat")
     heated = select_creases(heating.heat, geo)
-    watts = power_mw("--power", heating.power)
     first = next((k for k, s in enumerate(steps) if isinstance(s, Heat)), len(steps))
-    power = {c: watts for c in heated}
-    heat = replace(steps[first], power=power) if first < len(steps) else \
-        Heat(power, increments=200)
+    fields = heat_fields(heated, drive)
+    if "circuits" in fields:                 # circuits are not followed past a limit point
+        fields["on_limit_point"] = "stop"
+    heat = replace(steps[first], **{"power": {}, **fields}) if first < len(steps) else \
+        Heat(**fields, increments=200)
     steps = (*steps[:first], heat)
     refuse_unheatable(model, steps, path)
     print(model_summary(model, heated))
-    params = {"model_file_parameters": True, "heat": heating.heat, "power_mW": heating.power,
-              "heated_creases": heated, "steps": [s.name for s in steps]}
+    params = {"model_file_parameters": True, "heat": heating.heat,
+              **drive_parameters(heating), "heated_creases": heated,
+              "steps": [s.name for s in steps]}
     return model, steps, params, geo
 
 

@@ -20,7 +20,8 @@ from ._common import CLIError, distinct, length_um, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
            "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK",
-           "heat_failure_hint"]
+           "heat_failure_hint", "driven", "heat_drive", "heat_fields", "drive_parameters",
+           "refuse_electrical_without_heat"]
 
 _NS = "etorigami:"
 #: The layer stack of a plain pattern when ``--stack`` is not given.
@@ -50,6 +51,13 @@ def add_plain_options(parser, heating: bool = True) -> None:
                                  "'3,5' or heater names from the file")
         parser.add_argument("--power", type=float, metavar="MW",
                             help="power per heated crease [mW]")
+        parser.add_argument("--voltage", type=float, metavar="V",
+                            help="instead of --power: voltage [V] across each heated crease's "
+                                 "heater (a gold film over the crease, its resistance rising "
+                                 "0.34 %% per K: self-limiting; theory 8.8)")
+        parser.add_argument("--current", type=float, metavar="MA",
+                            help="instead of --power: current [mA] through each heated "
+                                 "crease's heater (may run away: theory 8.8)")
         parser.add_argument("--fix-panel", type=int, metavar="ID",
                             help="clamped panel (default: the panel nearest the centre)")
         parser.add_argument("--loss-model", choices=("integral", "chain"), default=None,
@@ -193,13 +201,13 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
         raise CLIError(f"{path} has sharp creases (width 0 in edges_etorigami:width): heating "
                        "needs creases with a width; fold it with --fold WHICH=DEG instead")
     refuse_creaseless(path, geo.pattern, "heat")
-    if heating.heat is None or heating.power is None:
+    if heating.heat is None or not driven(heating):
         missing = [f for f, v in (("--heat all|M|V|IDS", heating.heat),
-                                  ("--power MW", heating.power)) if v is None]
+                                  ("--power MW", driven(heating))) if not v]
         raise CLIError(f"{path} is a plain crease pattern (no etorigami: steps); heating it "
                        f"needs {' and '.join(missing)}")
     heated = select_creases(heating.heat, geo)
-    watts = power_mw("--power", heating.power)
+    drive = heat_drive(heating)
     contact = getattr(heating, "contact", True)
     loss = getattr(heating, "loss_model", None)
     model = stack_model(geo.pattern, stack, heated, heating.fix_panel, contact=contact,
@@ -216,10 +224,68 @@ def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     loss = loss or "integral"
     print(f"  heat loss: {heat_loss_line(model)}")
     print(f"  {contact_line(model, contact)}")
-    steps = (Heat({c: watts for c in heated}, increments=200),)
-    params = {"stack": stack.name, "heat": heating.heat, "power_mW": heating.power,
+    steps = (Heat(**heat_fields(heated, drive), increments=200),)
+    params = {"stack": stack.name, "heat": heating.heat, **drive_parameters(heating),
               "heated_creases": heated, "contact": contact, "loss_model": loss}
     return model, steps, params, geo
+
+
+#: Largest voltage [V] and current [mA] the CLI accepts per heated crease: a gold heater over a
+#: crease has about 0.1-10 Ohm, so 100 V or 10 A would vaporise it; a larger value is a typo.
+MAX_VOLTAGE_V, MAX_CURRENT_MA = 100.0, 1e4
+#: The drives of a heating run: flag, CLI unit, SI factor, largest value, Drive keyword.
+_DRIVES = (("--power", "mW", 1e-3, None, "power"),
+           ("--voltage", "V", 1.0, MAX_VOLTAGE_V, "voltage"),
+           ("--current", "mA", 1e-3, MAX_CURRENT_MA, "current"))
+
+
+def driven(heating) -> list:
+    """The drive flags given (``--power``, ``--voltage``, ``--current``)."""
+    return [flag for flag, *_ in _DRIVES if getattr(heating, flag[2:], None) is not None]
+
+
+def heat_drive(heating) -> tuple:
+    """``(kind, value [W, V or A])`` of the one drive flag given, checked in CLI units;
+    refused in one line if none or several are given or a value is out of range."""
+    given = driven(heating)
+    if len(given) != 1:
+        raise CLIError(f"give one of --power MW, --voltage V or --current MA per heated crease "
+                       f"(got {', '.join(given) or 'none'})")
+    flag, unit, si, top, kind = next(d for d in _DRIVES if d[0] == given[0])
+    value = getattr(heating, flag[2:])
+    if kind == "power":
+        return kind, power_mw(flag, value)
+    if not (math.isfinite(value) and 0.0 <= value <= top):
+        raise CLIError(f"{flag} = {value:g} {unit} is outside the plausible range 0 to {top:g} "
+                       f"{unit} per heated crease (a gold heater over a crease has 0.1-10 Ohm)")
+    return kind, value * si
+
+
+def refuse_electrical_without_heat(args, what: str) -> None:
+    """Refuse, in one line, ``--voltage`` / ``--current`` without ``--heat`` (``what``: why
+    they would be ignored)."""
+    given = [f for f in driven(args) if f != "--power"]
+    if given:
+        raise CLIError(f"{' and '.join(given)} drive the creases of --heat WHICH; {what}: add "
+                       "--heat all|M|V|IDS or drop them")
+
+
+def heat_fields(heated, drive) -> dict:
+    """``Heat`` keywords of the heated creases at ``drive`` (:func:`heat_drive`): a power per
+    crease, or per crease one circuit (named by its crease id) of a gold-film heater over it
+    (:class:`simulator.Heater` defaults, squares from the crease's length over its width)."""
+    from simulator import Circuit, Drive
+
+    kind, value = drive
+    if kind == "power":
+        return {"power": {c: value for c in heated}}
+    return {"circuits": {Circuit((c,), name=str(c)): Drive(**{kind: value}) for c in heated}}
+
+
+def drive_parameters(heating) -> dict:
+    """The drive flag as typed, for ``meta.json`` (``power_mW``, ``voltage_V``, ``current_mA``)."""
+    return {f"{flag[2:]}_{unit}": getattr(heating, flag[2:])
+            for flag, unit, *_ in _DRIVES if getattr(heating, flag[2:], None) is not None}
 
 
 #: The crease width a plain pattern is retried with after load control gave up heating it, as a
@@ -310,6 +376,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
           f"(checked with crease width {widths.min() * 1e6:g} um)")
     print(f"  physical parameters from layer stack {stack.summary()}")
-    print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]))
+    print("  a run needs: " + "; ".join(needs + ["--heat all|M|V|IDS", "--power MW"]) +
+          " (or --voltage V, --current MA)")
     print(f"  e.g. etorigami run {args.file} --heat all --power 2 --out DIR")
     return 0

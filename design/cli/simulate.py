@@ -16,7 +16,7 @@ from ._common import fold_deg, progress_bar
 from ._terms import cli_terms
 
 __all__ = ["add_simulate_commands", "demo_run", "heating_table",
-           "threshold_power"]
+           "threshold_power", "circuit_table"]
 
 #: The demo's heating ramp: power at its end [mW] and thermal increments (2.5 mW each).
 DEMO_POWER_MW = 100.0
@@ -159,6 +159,10 @@ def _run(args) -> int:
         name, model, steps, params = fold_case(args.case, args.set, reader_options(args))
         meta = {"model_file": str(args.case), "overrides": params}
     else:
+        from .plain import refuse_electrical_without_heat
+
+        refuse_electrical_without_heat(args, f"{args.case} is a built-in case with its own "
+                                       "heating")
         case = get_case(args.case, **case_overrides(args.set, args.case))
         name, model, steps = case.name, case.model, case.steps
         meta = {"case": case.name, "parameters": case.parameters}
@@ -184,6 +188,9 @@ def _run(args) -> int:
           f"{time.perf_counter() - t0:.1f} s; "
           f"results in {out}" + (f"; {hint}" if hint else ""))
     print(_last_record_table(result, model))
+    circuits = circuit_table(result)
+    if circuits:
+        print(circuits)
     for line in summary_lines(result):
         print(line)
     return 0 if result.success else 1
@@ -206,6 +213,31 @@ def _last_record_table(result, model) -> str:
     table["temperature_centre [degC]"] = result.crease_temperature_centre_line[-1]
     table["temperature_max [degC]"] = columns["temperature_max [degC]"][last]
     return format_table(table)
+
+
+def circuit_table(result) -> str:
+    """The heater circuits at the last record that has them, in CLI units: ``circuit``,
+    ``voltage [V]``, ``current [mA]``, ``power [mW]`` (delivered), ``lead_loss [mW]``; ""
+    without circuits."""
+    import numpy as np
+
+    from ._text_table import format_table
+
+    cols = result.history["columns"]
+    labels = [n[len("circuit_"):-len("_voltage [V]")] for n in cols
+              if n.startswith("circuit_") and n.endswith("_voltage [V]")]
+    if not labels:
+        return ""
+    rows = []
+    for lb in labels:
+        values = [cols[f"circuit_{lb}_{q}"] for q in ("voltage [V]", "current [A]", "power [W]",
+                                                      "lead_loss [W]")]
+        last = max(i for i, v in enumerate(values[0]) if v is not None)
+        rows.append([v[last] for v in values])
+    v, i, p, lead = np.array(rows, float).T
+    return format_table({"circuit": np.array(labels, dtype=object), "voltage [V]": v,
+                         "current [mA]": 1e3 * i, "power [mW]": 1e3 * p,
+                         "lead_loss [mW]": 1e3 * lead})
 
 
 def _save_interrupted(result, out_dir, meta, where) -> int:

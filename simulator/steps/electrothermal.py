@@ -62,7 +62,8 @@ from ..events import CrossingWatch, stops
 from ..solvers.generalized_alpha import TimeIntegrator
 from ..solvers.newton import follow_path
 from ..schedules import next_switch
-from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
+from ..thermal.circuits import check_circuits, describe_circuits
+from ..thermal.schedules import check_power_mapping, describe_power_mapping
 from ..thermal.transient import (DEFAULT_THETA, ThetaStepper, check_quasi_static_medium,
                                  check_theta, check_time_step, free_heat_input, heat_system,
                                  initial_rise)
@@ -70,6 +71,7 @@ from .base import Step, StepContext, StepOutcome, StepRecorder
 from ..model.properties import spring_rest_angles
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
 from .heating import thermal_actuation
+from .transient import circuit_end, step_powers
 
 __all__ = ["ElectroThermal", "MECHANICS", "EASY_ITERATIONS", "REFRESH_STEPS"]
 
@@ -126,6 +128,13 @@ class ElectroThermal(Step):
     folds : mapping {crease id: fold angle [rad] or schedule}, optional
         Rest fold angles of creases driven mechanically; they replace the thermally actuated
         rest angles of those creases.
+    circuits : mapping {Circuit: Drive}
+        Heater circuits (theory 8.8) driven by a voltage, current or power, constant or a
+        schedule of the step time (steps end on its switching times); the circuits the state
+        drives keep their drives. Their powers follow from the temperatures at the start of
+        each time step (semi-implicit); a heater past
+        :data:`~simulator.thermal.circuits.RUNAWAY_TEMPERATURE` ends the step with status
+        "thermal_runaway".
     """
 
     power: Mapping = field(default_factory=dict)
@@ -142,6 +151,7 @@ class ElectroThermal(Step):
     forces: object = None
     folds: Mapping = field(default_factory=dict)
     name: str = "electro_thermal"
+    circuits: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         owner = type(self).__name__
@@ -167,6 +177,7 @@ class ElectroThermal(Step):
         integer(f"{owner}.record_every", self.record_every)
         check_force_drive(owner, self.forces)
         check_fold_drive(owner, self.folds)
+        check_circuits(owner, self.circuits)
 
     @property
     def bounds(self) -> tuple[float, float]:
@@ -179,13 +190,15 @@ class ElectroThermal(Step):
         heat = _HeatPart(context, state, self)
         mech = _MechanicsPart(context, state, self, drive.load0)
         actuate = _driven(thermal_actuation(context.model, state), drive)
-        powers = CreasePowers(context.model.mesh, self.power, base=state.crease_power)
+        powers = step_powers(context.model.mesh, state, self.power, self.circuits,
+                             "ElectroThermal")
+        circuit_columns = getattr(powers, "columns", lambda temp, t: {})
         switches = powers.schedules + drive.schedules
         rec = StepRecorder(state)
         watch = CrossingWatch(context.model.mesh, state.u)
         rec.record_start(power=powers(0.0), velocity=mech.velocity,
                          **{"time [s]": state.time, "dt [s]": None, **mech.energies(),
-                            **heat.energies()})
+                            **heat.energies(), **circuit_columns(state.temperature, 0.0)})
         dt_min, dt_max = self.bounds
         t, h, k, temp = 0.0, float(self.dt), 0, state.temperature
         target, rest = state.crease_rest, state.spring_rest
@@ -212,18 +225,24 @@ class ElectroThermal(Step):
             t, k, temp, target, rest = t + h_try, k + 1, new_temp, new_target, new_rest
             rec.iterations += report.iterations
             rec.cuts += report.cuts
+            runaway = _runaway(powers, temp, state.time + t)
             crossing = watch.check(mech.u, len(rec), t / self.duration, powers(t), temp)
-            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12) or crossing:
+            if k % self.record_every == 0 or t >= self.duration * (1 - 1e-12) or crossing \
+                    or runaway:
                 rec.record(t / self.duration, mech.u, temp, powers(t), report.iterations,
                            np.concatenate(report.residual_norms) if report.residual_norms
                            else (), velocity=mech.velocity,
                            **{"time [s]": state.time + t, "dt [s]": h_try,
-                                       **mech.energies(), **heat.energies()})
+                              **mech.energies(), **heat.energies(),
+                              **circuit_columns(temp, t)})
             if crossing is not None:                  # (recorded above)
                 rec.events.append(crossing)
             if stops(crossing):                       # panels through each other: stop
                 status, message = "panel_crossing", f"at t = {state.time + t:.6g} s: " + \
                     crossing.message
+                break
+            if runaway:
+                status, message = "thermal_runaway", runaway
                 break
             context.report(k, k + math.ceil((self.duration - t) / h_try - 1e-9))
             if change > self.temperature_step:
@@ -237,7 +256,8 @@ class ElectroThermal(Step):
         logger.info("ElectroThermal: %s", message)
         end = replace(state, u=mech.u, velocity=mech.velocity, temperature=temp,
                       crease_rest=target, spring_rest=rest, crease_power=powers(t),
-                      time=state.time + t, applied_load=mech.f.reshape(state.u.shape))
+                      time=state.time + t, applied_load=mech.f.reshape(state.u.shape),
+                      **circuit_end(powers, temp, t))
         return rec.finish(status == "converged", status, message, end, mech.f, mech.evaluation)
 
     def describe(self) -> dict:
@@ -247,7 +267,19 @@ class ElectroThermal(Step):
                 "dt_max [s]": dt_max, "mechanics": self.mechanics, "theta": self.theta,
                 "temperature_step [K]": self.temperature_step, "shape_tol [m]": self.shape_tol,
                 "record_every": self.record_every, **describe_drive(self.forces, self.folds),
-                **self.options.to_dict()}
+                **self.options.to_dict(),
+                **({"circuits": describe_circuits(self.circuits)} if self.circuits else {})}
+
+
+def _runaway(powers, temp, time: float) -> str:
+    """Give heater circuits the accepted temperatures (n,) [deg C]; the message of a run-away
+    at ``time`` [s] if they are no operating point, else ""."""
+    why = powers.observe(temp) if hasattr(powers, "observe") else ""
+    if not why:
+        return ""
+    message = f"at t = {time:.6g} s: {powers.runaway_message(why)}"
+    logger.warning("ElectroThermal: %s", message)
+    return message
 
 
 def _driven(actuate, drive):

@@ -32,6 +32,9 @@ from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
 from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
+from ..thermal.circuits import check_circuits, describe_circuits
+from ..thermal.electrical import (CircuitIncrements, HeatingPoint, held_network,
+                                  ramped_values)
 from .limit import HeatPath, check_on_limit_point, continue_past_limit
 
 logger = logging.getLogger(__name__)
@@ -90,7 +93,8 @@ class _Coupling:
 
 
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
-                       coupling: _Coupling = _Coupling(), lam=None) -> StepOutcome:
+                       coupling: _Coupling = _Coupling(), lam=None,
+                       heating=None) -> StepOutcome:
     """The paper's three-step loop over increments s = 1..S (theory 6.6).
 
     Per increment: node temperatures for crease powers ``powers[s]`` (S, C) [W] and room
@@ -100,7 +104,9 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     first increment whose equilibrium fails (status "failed") or in which a crease folds past
     +-180 deg (status "panel_crossing", with its event). ``lam`` (S + 1,): the step's load
     factor at the start and after every increment (default ``s / S``), for the records and
-    events of a step that resumes part-way.
+    events of a step that resumes part-way. ``heating`` (:class:`CircuitIncrements`): crease
+    powers that depend on the temperatures (heater circuits); its operating point replaces
+    ``powers[s]``, and a drive that runs away ends the step (status "thermal_runaway").
     """
     model, tm = context.model, context.thermal
     mesh = model.mesh
@@ -114,9 +120,13 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     settled = coupling.mode == "settled" and not coupling.fixed_shape
     exact = False           # the integral loss's operator rebuilt at the end shape (theory 6.6)
-    for s, (power, room) in enumerate(zip(powers, ambient), start=1):
-        q = tm.heat_vector(power)
-        temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
+    solve = _fixed_powers(tm) if heating is None else heating
+    columns = {}
+    for s, (base, room) in enumerate(zip(powers, ambient), start=1):
+        point = solve(s, x_start if coupling.fixed_shape else mesh.nodes + u, base, room)
+        if point.status != "converged":
+            return _stopped(rec, state, point, u, spring, f, evaluation, s, n_inc)
+        temp, power, columns = point.temperature, point.power, point.columns
         iterate = iterated or (settled and s == n_inc)
         change = 0.0
         for _ in range(coupling.max_iterations if iterate else 1):
@@ -134,15 +144,19 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                                   f, evaluation)
             if not iterate:
                 break
-            new_temp = tm.solve(mesh.nodes + path.u, q, room)
-            change = float(np.max(np.abs(new_temp - temp)))
-            temp = new_temp
+            point = solve(s, mesh.nodes + path.u, base, room)
+            if point.status != "converged":
+                return _stopped(rec, state, point, u, spring, f, evaluation, s, n_inc)
+            change = float(np.max(np.abs(point.temperature - temp)))
+            temp, power, columns = point.temperature, point.power, point.columns
             if change <= coupling.tol and s == n_inc and not exact \
                     and tm.exact_loss_at(mesh.nodes + path.u):
                 exact = True             # the end on the accurate loss at the end shape
-                new_temp = tm.solve(mesh.nodes + path.u, q, room)
-                change = max(change, float(np.max(np.abs(new_temp - temp))))
-                temp = new_temp
+                point = solve(s, mesh.nodes + path.u, base, room)
+                if point.status != "converged":
+                    return _stopped(rec, state, point, u, spring, f, evaluation, s, n_inc)
+                change = max(change, float(np.max(np.abs(point.temperature - temp))))
+                temp, power, columns = point.temperature, point.power, point.columns
             if change <= coupling.tol:
                 break
         if iterate and change > coupling.tol:
@@ -158,7 +172,8 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         rec.note_stability(path, temp, power,
                            lambda t, a=lam0, b=lam1: a + t * (b - a), one_record=True)
         rec.record(lam1, u, temp, np.asarray(power, float), path.iterations,
-                   np.concatenate(path.residual_norms) if path.residual_norms else ())
+                   np.concatenate(path.residual_norms) if path.residual_norms else (),
+                   **columns)
         crossing = watch.check(u, len(rec) - 1, lam1, power, temp)
         if crossing is not None:
             rec.events.append(crossing)
@@ -169,8 +184,25 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                                       room_temperature=float(room)), f, evaluation)
         context.report(s, n_inc)
     end = at_rest(state, u=u, spring_rest=spring, temperature=temp, crease_rest=target,
-                  crease_power=np.asarray(powers[-1], float), room_temperature=float(ambient[-1]))
+                  crease_power=np.asarray(power if heating else powers[-1], float),
+                  room_temperature=float(ambient[-1]),
+                  **({} if heating is None else heating.end_state()))
     return rec.finish(True, "converged", "converged", end, f, evaluation)
+
+
+def _fixed_powers(tm):
+    """The heat solve of fixed crease powers: ``(s, x, power, room) -> HeatingPoint``."""
+    def solve(s, x, power, room):
+        return HeatingPoint(tm.solve(x, tm.heat_vector(power), room), power)
+    return solve
+
+
+def _stopped(rec, state, point, u, spring, f, evaluation, s, n_inc) -> StepOutcome:
+    """The outcome of increment ``s`` of ``n_inc`` whose electrical drive has no operating
+    point."""
+    last = rec._rows["temperature"][-1] if len(rec) else state.temperature
+    return rec.finish(False, point.status, f"increment {s}/{n_inc}: {point.message}",
+                      at_rest(state, u=u, spring_rest=spring, temperature=last), f, evaluation)
 
 
 #: The coupling modes of :class:`Heat` (``Heat.coupling``).
@@ -217,6 +249,13 @@ class Heat(Step):
         "limit_point" (default), or continue by arc length in the power (temperatures on the
         current shape, :class:`~simulator.steps.limit.HeatPath`) through the unstable branch
         to the step's final power.
+    circuits : mapping {Circuit: Drive}
+        Heater circuits (theory 8.8) driven by a constant voltage, current or power at the end
+        of the step, ramped linearly from their value at the state (0 if the state does not
+        drive them); the circuits the state drives keep their drives. Their powers follow from
+        the temperatures (each increment's steady operating point; a drive with none ends the
+        step with status "thermal_runaway"), on top of ``power``. With circuits a failed
+        increment ends the step "failed" (no limit point is located).
     """
 
     power: Mapping = field(default_factory=dict)
@@ -226,6 +265,7 @@ class Heat(Step):
     max_coupling_iterations: int = 20
     name: str = "heat"
     on_limit_point: str = "stop"
+    circuits: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         check_increments(self)
@@ -233,6 +273,15 @@ class Heat(Step):
         _coupling(self)
         for key, v in dict(self.power).items():
             finite(f"Heat: power of crease {key}", v, "W")
+        for circuit, drive in check_circuits("Heat", self.circuits).items():
+            if drive.schedules:
+                raise ParameterError(
+                    f"Heat.circuits: circuit {circuit.name or circuit.creases} has the drive "
+                    f"{drive.value!r}; Heat ramps to a constant: give a number, or use "
+                    "TransientHeat / ElectroThermal for a schedule of the time.")
+        if self.circuits and self.on_limit_point == "continue":
+            raise ParameterError("Heat: on_limit_point = 'continue' follows the powers by arc "
+                                 "length, which circuits do not give; use 'stop' with circuits.")
 
     def power_array(self, mesh) -> np.ndarray:
         """(C,) power added per crease row [W]."""
@@ -244,6 +293,9 @@ class Heat(Step):
 
     def run(self, context: StepContext, state) -> StepOutcome:
         mesh = context.model.mesh
+        network, base = held_network(mesh, state, self.circuits, "Heat")
+        if network is not None:
+            return self._run_circuits(context, state, network, base)
         dP = self.power_array(mesh)
         end = state.crease_power + dP
         if np.any(end < 0):
@@ -273,11 +325,30 @@ class Heat(Step):
         return continue_past_limit(context, state, outcome, path, self.increments,
                                    self.on_limit_point, path.state_at, resume, path.powers)
 
+    def _run_circuits(self, context, state, network, base) -> StepOutcome:
+        """:meth:`run` with heater circuits: the other powers ramp on top of ``base`` (the
+        state's powers without its circuits' part), the circuits' drives as
+        :func:`~simulator.thermal.electrical.ramped_values` says."""
+        dP = self.power_array(context.model.mesh)
+        if np.any(base + dP < 0):
+            raise ParameterError("Heat: the powers would end below zero; a step may lower "
+                                 "the power but not below zero.")
+        s = np.arange(1, self.increments + 1)[:, None] / self.increments
+        values = ramped_values(context.model.mesh, state, network,
+                               check_circuits("Heat", self.circuits), self.increments)
+        heating = CircuitIncrements(context.thermal, network, values)
+        return coupled_increments(context, state, base + s * dP,
+                                  np.full(self.increments, state.room_temperature),
+                                  _coupling(self), heating=heating)
+
     def describe(self) -> dict:
-        return {"power_added [mW]": {str(k): 1e3 * float(v) for k, v in
-                                     dict(self.power).items()},
-                "increments": self.increments, "coupling": self.coupling,
-                "on_limit_point": self.on_limit_point}
+        out = {"power_added [mW]": {str(k): 1e3 * float(v) for k, v in
+                                    dict(self.power).items()},
+               "increments": self.increments, "coupling": self.coupling,
+               "on_limit_point": self.on_limit_point}
+        if self.circuits:
+            out["circuits"] = describe_circuits(self.circuits)
+        return out
 
 
 @dataclass(frozen=True)
@@ -297,6 +368,10 @@ class AmbientTemperature(Step):
         finite("AmbientTemperature.target", self.target, "deg C", hint="a temperature")
 
     def run(self, context: StepContext, state) -> StepOutcome:
+        if state.circuits:
+            logger.warning("AmbientTemperature holds the crease powers; the heater circuits' "
+                           "powers stay at their values at the start of the step (their "
+                           "resistances are not updated)")
         s = np.arange(1, self.increments + 1) / self.increments
         ambient = state.room_temperature + s * (self.target - state.room_temperature)
         powers = np.repeat(state.crease_power[None], self.increments, axis=0)

@@ -18,11 +18,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from .._validate import integer, positive
+from ..thermal.circuits import check_circuits, describe_circuits
+from ..thermal.electrical import CircuitPowers, held_network
 from ..thermal.schedules import CreasePowers, check_power_mapping, describe_power_mapping
 from ..thermal.transient import DEFAULT_THETA, check_theta, check_time_step, integrate_heat
 from .base import Step, StepContext, StepOutcome, StepRecorder
 
-__all__ = ["TransientHeat"]
+__all__ = ["TransientHeat", "step_powers", "circuit_end"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,12 @@ class TransientHeat(Step):
         below room temperature; ``REFERENCE_THETA`` = 2/3 is the reference's).
     record_every : int
         Record every k-th time step (the last one is always recorded).
+    circuits : mapping {Circuit: Drive}
+        Heater circuits (theory 8.8) driven by a voltage, current or power, constant or a
+        schedule of the step time; the circuits the state drives keep their drives. Their
+        powers follow from the temperatures at the start of each time step (semi-implicit);
+        a heater past :data:`~simulator.thermal.circuits.RUNAWAY_TEMPERATURE` ends the step
+        with status "thermal_runaway".
 
     Notes
     -----
@@ -58,9 +66,11 @@ class TransientHeat(Step):
     theta: float = DEFAULT_THETA
     record_every: int = 1
     name: str = "transient_heat"
+    circuits: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         check_power_mapping("TransientHeat", self.power)
+        check_circuits("TransientHeat", self.circuits)
         positive("TransientHeat.duration", self.duration, "s")
         check_time_step(self.dt, "TransientHeat.dt")
         check_theta(self.theta)
@@ -68,7 +78,7 @@ class TransientHeat(Step):
 
     def run(self, context: StepContext, state) -> StepOutcome:
         mesh, tm = context.model.mesh, context.thermal
-        powers = CreasePowers(mesh, self.power, base=state.crease_power)
+        powers = step_powers(mesh, state, self.power, self.circuits, "TransientHeat")
         result = integrate_heat(
             tm, mesh.nodes + state.u, powers, self.duration, self.dt, self.theta,
             state.room_temperature, state.temperature, self.record_every,
@@ -79,17 +89,42 @@ class TransientHeat(Step):
                        "mean_power [mW]": None if k == 0 else 1e3 * result.mean_power[k],
                        "heat_in [J]": result.heat_in[k], "heat_out [J]": result.heat_out[k],
                        "heat_stored [J]": result.heat_stored[k] - result.heat_stored[0]}
+            if hasattr(powers, "columns"):
+                columns.update(powers.columns(result.temperature[k], result.time[k]))
             if k == 0:
                 rec.record_start(result.temperature[0], result.power[0], **columns)
             else:
                 rec.record(result.time[k] / self.duration, state.u, result.temperature[k],
                            result.power[k], 0, (), **columns)
         end = replace(state, temperature=result.temperature[-1], crease_power=result.power[-1],
-                      time=state.time + float(result.time[-1]))
+                      time=state.time + float(result.time[-1]),
+                      **circuit_end(powers, result.temperature[-1], float(result.time[-1])))
         return rec.finish(result.success, result.status, result.message, end,
                           state.applied_load.ravel())
 
     def describe(self) -> dict:
         return {"power_added": describe_power_mapping(self.power),
                 "duration [s]": self.duration, "dt [s]": self.dt, "theta": self.theta,
-                "record_every": self.record_every}
+                "record_every": self.record_every,
+                **({"circuits": describe_circuits(self.circuits)} if self.circuits else {})}
+
+
+def step_powers(mesh, state, power, circuits, owner: str):
+    """Crease powers of a time-domain step as a function of the step time: the step's
+    ``power`` mapping on top of the state's powers (a
+    :class:`~simulator.thermal.schedules.CreasePowers`), or with heater circuits (the step's
+    and the state's, :func:`~simulator.thermal.electrical.held_network`) a
+    :class:`~simulator.thermal.electrical.CircuitPowers`."""
+    network, base = held_network(mesh, state, circuits, owner)
+    if network is None:
+        return CreasePowers(mesh, power, base=state.crease_power)
+    return CircuitPowers(CreasePowers(mesh, power, base=base), network, state.temperature)
+
+
+def circuit_end(powers, temperature, t: float) -> dict:
+    """The end state's circuit fields after a time-domain step ending at step time t [s] with
+    node temperatures (n,) [deg C] (none without circuits)."""
+    if not isinstance(powers, CircuitPowers):
+        return {}
+    powers.observe(temperature)
+    return {"circuits": powers.held(t), "circuit_power": powers.circuit_power(t)}

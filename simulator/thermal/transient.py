@@ -331,7 +331,8 @@ class TransientHeatResult(ResultFiles):
     ----------
     success : bool
     status : str
-        "converged" (reached ``t_end``), "stopped" (callback) or "failed" (non-finite values).
+        "converged" (reached ``t_end``), "stopped" (callback), "failed" (non-finite values) or
+        "thermal_runaway" (heater circuits without an operating point).
     message : str
     time : (m,) [s]
     temperature : (m, n) structure node temperatures [deg C]
@@ -419,7 +420,11 @@ def integrate_heat(tm: ThermalModel, x, powers, t_end, dt, theta=DEFAULT_THETA, 
         :mod:`simulator.thermal.schedules`), or ``powers(t)`` giving the (C,) crease powers [W].
         If ``powers`` has a ``mean(t0, t1)`` method (schedules given as a mapping do), each
         step uses the exact mean power over the step (so pulses shorter than dt keep their
-        energy); otherwise the theta-weighted powers at the two ends of the step.
+        energy); otherwise the theta-weighted powers at the two ends of the step. If it has an
+        ``observe(temperature)`` method (heater circuits,
+        :class:`~simulator.thermal.electrical.CircuitPowers`), it is given the structure
+        temperatures (n,) [deg C] at the start and after every step, and a non-empty answer
+        (no operating point) ends the run with status "thermal_runaway".
     t_end, dt : float
         End time and (largest) time step [s], > 0.
     theta : float
@@ -486,6 +491,8 @@ class _HeatRun:
         self.T = self.rise[self.system.free]
         self.free = self.system.free                          # the free set never changes
         self.averaged = hasattr(powers, "mean")
+        self.observing = hasattr(powers, "observe")   # powers that depend on the temperature
+        self.why = self._observe()
         p_new = np.asarray(powers(0.0), float)
         self.q_new = self.heat(p_new)
         self.p_new = self.p_mean = p_new
@@ -502,6 +509,11 @@ class _HeatRun:
         """Structure node temperatures [deg C], (n,)."""
         return self.room + self.rise[:self.tm.mesh.n_nodes]
 
+    def _observe(self) -> str:
+        """Give temperature-dependent powers (heater circuits) the current temperatures; ""
+        or why they are no operating point (a run-away)."""
+        return self.powers.observe(self.temperature()) if self.observing else ""
+
     def steps(self, t_end, n_steps, record_every, callback) -> tuple[str, str, int]:
         """Take the ``n_steps`` steps up to ``t_end`` [s] unless the temperature becomes
         non-finite or the callback stops; (status, message, steps taken)."""
@@ -511,6 +523,10 @@ class _HeatRun:
             t1, p_new = self.advance(k, record)
             if not np.all(np.isfinite(self.T)):
                 status, message = "failed", f"non-finite temperature at t = {t1:g} s (step {k})"
+            elif self.why:
+                status = "thermal_runaway"
+                message = f"at t = {t1:g} s (step {k}): {self.powers.runaway_message(self.why)}"
+                logger.warning("integrate_heat: %s", message)
             elif callback is not None and callback(k, n_steps, t1, self.temperature()):
                 status, message = "stopped", f"stopped by the callback at t = {t1:g} s (step {k})"
             if record or status != "converged":
@@ -533,7 +549,7 @@ class _HeatRun:
         h, theta, powers = self.h, self.theta, self.powers
         t0, t1 = (k - 1) * h, k * h
         self.reassemble(k, t0)
-        p_new = np.asarray(powers(t1), float) if record or not self.averaged else None
+        p_new = None if self.averaged else np.asarray(powers(t1), float)
         if self.averaged:                     # exact heat input per step (PWM, steps, ramps)
             self.p_mean = np.asarray(powers.mean(t0, t1), float)
             q_old = q_new = self.heat(self.p_mean)
@@ -548,6 +564,9 @@ class _HeatRun:
         self.e_out += h * self.system.outflow @ (theta * T_new + (1 - theta) * T)
         self.T = T_new
         self.rise[self.free] = T_new
+        self.why = self._observe()
+        if record and p_new is None:          # the powers at t1 (at the new temperatures)
+            p_new = np.asarray(powers(t1), float)
         return t1, p_new
 
     def record(self, t1: float, p_new) -> None:

@@ -127,6 +127,12 @@ def _encode_step(step, index: int, circuits: dict) -> dict:
         if not f.init:
             continue
         value = getattr(step, f.name)
+        if f.name == "circuits":                  # heater circuits (theory 8.8)
+            if value:
+                raise ParameterError(f"steps[{index}].circuits: heater circuits have no FOLD "
+                                     "form yet; write the steps without them (powers per "
+                                     "crease) and give the circuits in Python.")
+            continue
         if _EDGE_KEYED.get(out["type"]) == f.name:
             value = {names.get(_key_tuple(k), k): v for k, v in dict(value).items()}
         out[f.name] = _encode(value, f"steps[{index}].{f.name}")
