@@ -38,7 +38,8 @@ from ..linalg.ladder import factorize
 from ._single_layer import mirror, pair_values
 
 __all__ = ["FastSingleLayer", "FastIntegralOperator", "coupled_solver", "NEAR_RADIUS",
-           "PRECONDITIONER_RADIUS", "FMM_EPS", "DIRECT_MAX", "SOLVE_RTOL"]
+           "PRECONDITIONER_RADIUS", "FMM_EPS", "DIRECT_MAX", "SOLVE_RTOL", "GRID_MIN",
+           "FAR_FIELDS"]
 
 logger = logging.getLogger(__name__)
 
@@ -54,6 +55,12 @@ FMM_EPS = 1e-5
 #: Up to this many sub-triangles (with their images) the far field is summed directly (the
 #: compiled sum beats the FMM up to about 16,000 points, measured on the shared 2-core machine).
 DIRECT_MAX = 15000
+#: Above this many sub-triangles the far field is summed on a grid (``far_field="auto"``;
+#: :mod:`simulator.thermal.integral_grid`): below, the compiled direct sum is exact and about
+#: as fast.
+GRID_MIN = 6000
+#: The far-field methods of :class:`FastSingleLayer` (``far_field``).
+FAR_FIELDS = ("auto", "direct", "grid", "fmm")
 #: Above this many sub-triangles (all levels) the fast path warns of its cost: about 1 s per
 #: far-field evaluation (FMM) and some 50 MINRES iterations per level and solve, some 150
 #: evaluations per solve of the default Richardson pair (theory 4.7).
@@ -121,12 +128,31 @@ def direct_potential(points, charges, compiled=None, n_targets=None) -> np.ndarr
     return out
 
 
-def _fmm_potential(points, charges, eps, n_targets=None):
+def _far_method(far_field: str, c, area, plane) -> str:
+    """The far-field method "direct", "grid" or "fmm" of :class:`FastSingleLayer`'s
+    ``far_field`` option for the centroids ``c`` (n, 3) of sub-triangles of areas ``area``."""
+    if far_field not in FAR_FIELDS:
+        raise ValueError(f"far_field = {far_field!r}: use one of {', '.join(FAR_FIELDS)}")
+    if far_field != "auto":
+        return far_field
+    if len(c) <= GRID_MIN:
+        return "fmm"
+    from .integral_grid import MAX_GRID, SPLIT, grid_size
+
+    nodes = grid_size(c, SPLIT * math.sqrt(area.mean()), plane)
+    if nodes <= MAX_GRID:
+        return "grid"
+    logger.info("integral loss (fast): the far field's grid would have %d nodes (more than "
+                "MAX_GRID = %d: a folded sheet's bounding box); the FMM sums it", nodes, MAX_GRID)
+    return "fmm"
+
+
+def _fmm_potential(points, charges, eps, n_targets=None, direct=False):
     """``sum_{j != i} charges_j / |points_i - points_j|`` at the first ``n_targets`` points
-    (default all), (n_targets,): directly up to :data:`DIRECT_MAX` points, else by the FMM
-    (``fmm3dpy``) at tolerance ``eps``."""
+    (default all), (n_targets,): directly with ``direct`` or up to :data:`DIRECT_MAX` points,
+    else by the FMM (``fmm3dpy``) at tolerance ``eps``."""
     global _no_fmm_warned
-    if len(points) <= DIRECT_MAX:
+    if direct or len(points) <= DIRECT_MAX:
         return direct_potential(points, charges, n_targets=n_targets)
     try:
         import fmm3dpy
@@ -163,9 +189,17 @@ class FastSingleLayer:
         Isothermal substrate plane (image method).
     eps : float
         Relative tolerance of the far field (FMM).
+    far_field : {"auto", "direct", "grid", "fmm"}
+        How the centroid rule's far field is summed: directly (compiled), on a grid
+        (:class:`~simulator.thermal.integral_grid.GridFarField`, about 1e-4 of the potential)
+        or by the FMM (``fmm3dpy`` at ``eps``; directly up to :data:`DIRECT_MAX` points).
+        "auto": "fmm" up to :data:`GRID_MIN` sub-triangles (that is, directly), "grid" above
+        ("fmm" where the grid would exceed :data:`~simulator.thermal.integral_grid.MAX_GRID`
+        nodes).
     """
 
-    def __init__(self, sub, conductivity: float, plane=None, eps: float = FMM_EPS):
+    def __init__(self, sub, conductivity: float, plane=None, eps: float = FMM_EPS,
+                 far_field: str = "auto"):
         from scipy.spatial import cKDTree
 
         sub = np.ascontiguousarray(sub, float)
@@ -208,15 +242,26 @@ class FastSingleLayer:
         self.near_block = (0.5 * (P + P.T)).tocsr() * self.scale
         #: the diagonal of ``S`` [K/W]
         self.diagonal = self.near_block.diagonal()
+        #: how the far field is summed ("direct", "grid" or "fmm"; :meth:`far`)
+        self.far_field = _far_method(far_field, c, area, self.plane)
+        self._grid = None
+        if self.far_field == "grid":
+            from .integral_grid import SPLIT, GridFarField
+
+            self._grid = GridFarField(c, SPLIT * math.sqrt(area.mean()), self.plane)
 
     def far(self, p) -> np.ndarray:
         """The centroid-rule part ``sum_{j != i} p_j G(c_i, c_j)`` [K] (images included) of
         heats ``p`` (n,) [W]."""
         p = np.asarray(p, float)
+        if self._grid is not None:
+            return self.scale * self._grid.potential(p)
+        direct = self.far_field == "direct"
         if self.plane is None:
-            return self.scale * _fmm_potential(self.centroids, p, self.eps)
+            return self.scale * _fmm_potential(self.centroids, p, self.eps, direct=direct)
         both = np.concatenate([self.centroids, self.images])
-        return self.scale * _fmm_potential(both, np.concatenate([p, -p]), self.eps, self.n)
+        return self.scale * _fmm_potential(both, np.concatenate([p, -p]), self.eps, self.n,
+                                           direct=direct)
 
     def matvec(self, p) -> np.ndarray:
         """``S p`` [K] for heats ``p`` (n,) [W]."""
