@@ -285,7 +285,8 @@ def integral_operator(triangles, n_nodes, params, plane=None):
         if loss.extrapolated:
             c = coarse_refinement(m)
             levels = [(m / (m - c), m), (-c / (m - c), c)]
-        return FastIntegralOperator(triangles, n_nodes, k, levels, plane)
+        return FastIntegralOperator(triangles, n_nodes, k, levels, plane,
+                                    shape_tol=loss.shape_tol)
     correct = loss.correction_tol > 0 and (m > 1 or loss.extrapolated)
     memo, heights = [None, None], [None, None, None]   # the levels share the sheet's distances
 
