@@ -61,10 +61,10 @@ DIRECT_MAX = 15000
 GRID_MIN = 6000
 #: The far-field methods of :class:`FastSingleLayer` (``far_field``).
 FAR_FIELDS = ("auto", "direct", "grid", "fmm")
-#: Above this many sub-triangles (all levels) the fast path warns of its cost: about 1 s per
-#: far-field evaluation (FMM) and some 50 MINRES iterations per level and solve, some 150
-#: evaluations per solve of the default Richardson pair (theory 4.7).
-SLOW_SUB_TRIANGLES = 30000
+#: Above this many sub-triangles (all levels) the fast path warns of its cost (minutes per
+#: solve: the near field, the grid's pairs and the preconditioners grow with the
+#: sub-triangles; the 36 x 36-cell Miura sheet has 101,520 at its large-sheet levels).
+SLOW_SUB_TRIANGLES = 150000
 #: :meth:`FastIntegralOperator.unchanged` checks every node pair closer than this many
 #: sub-triangle diameters ...
 CHECK_RADIUS = 4.0
@@ -470,9 +470,8 @@ class FastIntegralOperator:
 
     The levels are those of the dense model (:func:`~simulator.thermal.integral_levels.
     integral_operator`): ``[(1, m)]`` for the plain operator, ``[(m / (m - c), m),
-    (-c / (m - c), c)]`` for the Richardson extrapolation. The operator is rebuilt at every
-    new shape (its near field and preconditioner cost a fraction of one solve); the
-    substrate rule (touching nodes held, sub-triangles in the plane left out) is that of
+    (-c / (m - c), c)]`` for the Richardson extrapolation. The operator is kept at a new
+    shape within ``shape_tol`` (:meth:`unchanged`) and rebuilt otherwise; the substrate rule (touching nodes held, sub-triangles in the plane left out) is that of
     :class:`~simulator.thermal.integral.IntegralOperator`.
 
     Parameters
@@ -518,10 +517,12 @@ class FastIntegralOperator:
             self._bary.append(bary)
             self._M.append(sp.csr_matrix((vals, (rows, cols)), shape=(n_tri * s, self.n_nodes)))
         self.n_sub = sum(M.shape[0] for M in self._M)
+        from .integral_levels import describe_levels
+
         level = logging.WARNING if self.n_sub > SLOW_SUB_TRIANGLES else logging.INFO
-        logger.log(level, "the integral heat loss on %d triangles: %d sub-triangles, above the "
-                   "dense limit: the fast path (theory 4.7), one far-field evaluation per MINRES "
-                   "iteration, some 50 iterations per level and solve%s", n_tri, self.n_sub,
+        logger.log(level, "the integral heat loss on %d triangles: %s, %d sub-triangles, above "
+                   "the dense limit: the fast path (theory 4.7)%s", n_tri,
+                   describe_levels(self.levels), self.n_sub,
                    "; slow at this size (minutes per solve): a lower IntegralLoss.refinement "
                    "or the chain model is much faster" if level == logging.WARNING else "")
         self._built = None                  # (positions, [(w, M_live, S)])
