@@ -158,7 +158,7 @@ def large_sheet_loss():
     """The integral loss of a plain pattern whose default loss would take the fast path (above
     the dense limit): plain m = 2, one level (the default, m = 3 extrapolated from 2, has 13
     sub-triangles per triangle: 264,000 on the 36 x 36-cell Miura sheet)."""
-    from simulator.thermal.loss import IntegralLoss
+    from simulator import IntegralLoss
 
     return IntegralLoss(refinement=2, extrapolation=False)
 
@@ -173,12 +173,13 @@ def heat_loss_line(model) -> str:
                 f"{k_env:.4g} W/(m K)")
     line = f"{loss.describe()}, to air at {k_env:.4g} W/(m K)"
     n = len(model.mesh.triangles)
+    if loss == large_sheet_loss():
+        line += ("; m = 2 without extrapolation: the default, m = 3 extrapolated, is above its "
+                 "dense limit here and takes too long (m = 2 is 2-4 % hotter on bent Miura "
+                 "sheets)")
     if loss.takes_fast_path(n):
         line += (f"; {n} triangles take its fast path (theory 4.7): about a minute per "
                  "thermal solve at 20,000 triangles")
-        if loss == large_sheet_loss():
-            line += (" at m = 2 without extrapolation (2-4 % above the default m = 3 "
-                     "extrapolated on bent Miura sheets, which takes too long here)")
     return line
 
 
