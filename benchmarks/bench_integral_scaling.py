@@ -15,8 +15,14 @@ the loss's cost is measured: the integral loss's own default, the monotone condu
 (theory 4.9), builds its triangulation once per model (0.6 s for the 16 x 16-cell sheet, 4.0 s
 for 36 x 36; ``--conduction monotone`` to include it).
 
+With ``--cli CELLS`` it also times the whole CLI process heating a flat Miura sheet of
+``CELLS x CELLS`` cells drawn as a plain FOLD file (``etorigami run FILE --heat all --power 1
+--set thermal_steps=2``), once with the chains (``--loss-model chain``) and once with the
+default (the integral loss; above the dense limit at m = 2 on its fast path), and prints both
+times and their ratio (issue 29: at most 5x the chains').
+
 Run: ``python benchmarks/bench_integral_scaling.py [--cells 4 6 8 12] [--operator fast]
-[--refinement 1] [--plain]``
+[--refinement 1] [--plain] [--cli 36]``
 """
 
 from __future__ import annotations
@@ -88,8 +94,12 @@ def main(argv=None):
     ap.add_argument("--plain", action="store_true", help="no Richardson extrapolation")
     ap.add_argument("--conduction", choices=("t3", "monotone"), default="t3",
                     help="the sheet's conduction (default t3: the loss's cost alone)")
+    ap.add_argument("--cli", type=int, metavar="CELLS",
+                    help="also time the CLI heating a CELLS x CELLS plain FOLD Miura sheet")
     args = ap.parse_args(argv)
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    if args.cli:
+        cli_times(args.cli, env)
     rows = []
     print(f"load: {os.getloadavg()[0]:.2f} (1-min average; 2 cores)")
     print(f"{'cells':>5} {'triangles':>9} {'sub-tri':>8} {'time [s]':>9} {'evals':>6} path  "
@@ -110,6 +120,33 @@ def main(argv=None):
               f"{np.polyfit(n, t, 1)[0]:.2f} over all sizes; pairwise "
               + ", ".join(f"{(t[i + 1] - t[i]) / (n[i + 1] - n[i]):.2f}"
                           for i in range(len(rows) - 1)))
+
+
+def cli_times(cells: int, env) -> None:
+    """Whole-process wall time of ``etorigami run`` heating a plain FOLD Miura sheet, chains
+    against the default (integral) loss."""
+    import tempfile
+    import time
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"miura{cells}.fold"
+        code = ("import json, sys; from simulator.geometry.example_patterns import "
+                "miura_sheet_pattern as m; from simulator.io.fold.writer import pattern_to_fold "
+                "as f; d = f(m(m={0}, n={0})); json.dump({{k: v for k, v in d.items() if "
+                "'etorigami' not in k}}, open(sys.argv[1], 'w'))").format(cells)
+        subprocess.run([sys.executable, "-c", code, str(path)], env=env, check=True)
+        times = {}
+        for loss in ("chain", "integral"):
+            argv = [sys.executable, "-m", "design.cli", "run", str(path), "--heat", "all",
+                    "--power", "1", "--set", "thermal_steps=2", "-q", "--out",
+                    str(Path(tmp) / loss)] + (["--loss-model", "chain"] if loss == "chain"
+                                              else [])
+            t0 = time.perf_counter()
+            subprocess.run(argv, env=env, check=True, capture_output=True)
+            times[loss] = time.perf_counter() - t0
+            print(f"CLI, {cells} x {cells} cells, {loss}: {times[loss]:.1f} s (whole process)",
+                  flush=True)
+        print(f"integral / chains: {times['integral'] / times['chain']:.2f}x (issue 29: <= 5x)")
 
 
 if __name__ == "__main__":

@@ -38,7 +38,8 @@ from ..linalg.ladder import factorize
 from ._single_layer import mirror, pair_values
 
 __all__ = ["FastSingleLayer", "FastIntegralOperator", "coupled_solver", "NEAR_RADIUS",
-           "PRECONDITIONER_RADIUS", "FMM_EPS", "DIRECT_MAX", "SOLVE_RTOL"]
+           "PRECONDITIONER_RADIUS", "FMM_EPS", "DIRECT_MAX", "SOLVE_RTOL", "GRID_MIN",
+           "FAR_FIELDS"]
 
 logger = logging.getLogger(__name__)
 
@@ -54,10 +55,21 @@ FMM_EPS = 1e-5
 #: Up to this many sub-triangles (with their images) the far field is summed directly (the
 #: compiled sum beats the FMM up to about 16,000 points, measured on the shared 2-core machine).
 DIRECT_MAX = 15000
-#: Above this many sub-triangles (all levels) the fast path warns of its cost: about 1 s per
-#: far-field evaluation (FMM) and some 50 MINRES iterations per level and solve, some 150
-#: evaluations per solve of the default Richardson pair (theory 4.7).
-SLOW_SUB_TRIANGLES = 30000
+#: Above this many sub-triangles the far field is summed on a grid (``far_field="auto"``;
+#: :mod:`simulator.thermal.integral_grid`): below, the compiled direct sum is exact and about
+#: as fast.
+GRID_MIN = 6000
+#: The far-field methods of :class:`FastSingleLayer` (``far_field``).
+FAR_FIELDS = ("auto", "direct", "grid", "fmm")
+#: Above this many sub-triangles (all levels) the fast path warns of its cost (minutes per
+#: solve: the near field, the grid's pairs and the preconditioners grow with the
+#: sub-triangles; the 36 x 36-cell Miura sheet has 101,520 at its large-sheet levels).
+SLOW_SUB_TRIANGLES = 150000
+#: :meth:`FastIntegralOperator.unchanged` checks every node pair closer than this many
+#: sub-triangle diameters ...
+CHECK_RADIUS = 4.0
+#: ... and every pair of a subset of about this many nodes spread over the sheet.
+CHECK_NODES = 1500
 #: Relative residual of the MINRES solve (in the preconditioned norm).
 SOLVE_RTOL = 1e-10
 
@@ -121,12 +133,31 @@ def direct_potential(points, charges, compiled=None, n_targets=None) -> np.ndarr
     return out
 
 
-def _fmm_potential(points, charges, eps, n_targets=None):
+def _far_method(far_field: str, c, area, plane) -> str:
+    """The far-field method "direct", "grid" or "fmm" of :class:`FastSingleLayer`'s
+    ``far_field`` option for the centroids ``c`` (n, 3) of sub-triangles of areas ``area``."""
+    if far_field not in FAR_FIELDS:
+        raise ValueError(f"far_field = {far_field!r}: use one of {', '.join(FAR_FIELDS)}")
+    if far_field != "auto":
+        return far_field
+    if len(c) <= GRID_MIN:
+        return "fmm"
+    from .integral_grid import MAX_GRID, SPLIT, grid_size
+
+    nodes = grid_size(c, SPLIT * math.sqrt(area.mean()), plane)
+    if nodes <= MAX_GRID:
+        return "grid"
+    logger.info("integral loss (fast): the far field's grid would have %d nodes (more than "
+                "MAX_GRID = %d: a folded sheet's bounding box); the FMM sums it", nodes, MAX_GRID)
+    return "fmm"
+
+
+def _fmm_potential(points, charges, eps, n_targets=None, direct=False):
     """``sum_{j != i} charges_j / |points_i - points_j|`` at the first ``n_targets`` points
-    (default all), (n_targets,): directly up to :data:`DIRECT_MAX` points, else by the FMM
-    (``fmm3dpy``) at tolerance ``eps``."""
+    (default all), (n_targets,): directly with ``direct`` or up to :data:`DIRECT_MAX` points,
+    else by the FMM (``fmm3dpy``) at tolerance ``eps``."""
     global _no_fmm_warned
-    if len(points) <= DIRECT_MAX:
+    if direct or len(points) <= DIRECT_MAX:
         return direct_potential(points, charges, n_targets=n_targets)
     try:
         import fmm3dpy
@@ -163,9 +194,17 @@ class FastSingleLayer:
         Isothermal substrate plane (image method).
     eps : float
         Relative tolerance of the far field (FMM).
+    far_field : {"auto", "direct", "grid", "fmm"}
+        How the centroid rule's far field is summed: directly (compiled), on a grid
+        (:class:`~simulator.thermal.integral_grid.GridFarField`, about 1e-4 of the potential)
+        or by the FMM (``fmm3dpy`` at ``eps``; directly up to :data:`DIRECT_MAX` points).
+        "auto": "fmm" up to :data:`GRID_MIN` sub-triangles (that is, directly), "grid" above
+        ("fmm" where the grid would exceed :data:`~simulator.thermal.integral_grid.MAX_GRID`
+        nodes).
     """
 
-    def __init__(self, sub, conductivity: float, plane=None, eps: float = FMM_EPS):
+    def __init__(self, sub, conductivity: float, plane=None, eps: float = FMM_EPS,
+                 far_field: str = "auto"):
         from scipy.spatial import cKDTree
 
         sub = np.ascontiguousarray(sub, float)
@@ -208,15 +247,26 @@ class FastSingleLayer:
         self.near_block = (0.5 * (P + P.T)).tocsr() * self.scale
         #: the diagonal of ``S`` [K/W]
         self.diagonal = self.near_block.diagonal()
+        #: how the far field is summed ("direct", "grid" or "fmm"; :meth:`far`)
+        self.far_field = _far_method(far_field, c, area, self.plane)
+        self._grid = None
+        if self.far_field == "grid":
+            from .integral_grid import SPLIT, GridFarField
+
+            self._grid = GridFarField(c, SPLIT * math.sqrt(area.mean()), self.plane)
 
     def far(self, p) -> np.ndarray:
         """The centroid-rule part ``sum_{j != i} p_j G(c_i, c_j)`` [K] (images included) of
         heats ``p`` (n,) [W]."""
         p = np.asarray(p, float)
+        if self._grid is not None:
+            return self.scale * self._grid.potential(p)
+        direct = self.far_field == "direct"
         if self.plane is None:
-            return self.scale * _fmm_potential(self.centroids, p, self.eps)
+            return self.scale * _fmm_potential(self.centroids, p, self.eps, direct=direct)
         both = np.concatenate([self.centroids, self.images])
-        return self.scale * _fmm_potential(both, np.concatenate([p, -p]), self.eps, self.n)
+        return self.scale * _fmm_potential(both, np.concatenate([p, -p]), self.eps, self.n,
+                                           direct=direct)
 
     def matvec(self, p) -> np.ndarray:
         """``S p`` [K] for heats ``p`` (n,) [W]."""
@@ -282,7 +332,8 @@ def _add_pairs(rows, cols, values, ar, ac, av, n):
     return out
 
 
-def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000):
+def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000,
+                   preconditioners=None):
     """Solver of ``(K + L) T = q``, ``L = sum_l w_l M_l^T S_l^-1 M_l``, without forming ``L``.
 
     One level (``w = 1``): the symmetric saddle system ``[[K, M^T], [M, -S]] [T; p] = [q; 0]``
@@ -304,20 +355,26 @@ def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000):
         sub-triangles at the unknown nodes, and ``S`` (:class:`FastSingleLayer`, n_l).
     rtol : float
         Relative residual of MINRES (preconditioned norm).
+    preconditioners : list of TwoLevelPreconditioner, optional
+        One per level, built before (with a nearby ``K``: a kept operator at a new shape);
+        default: built here.
 
     Returns
     -------
     solver : callable
         ``q (n,), start -> (T (n,), [(T_l, p_l)], [h_l])``: the rises [K], each level's own
         rises and heats [W] (``S_l p_l = M_l T_l``; ``start``, optional: guesses of them) and
-        each level's heats at the rises ``T`` (``S_l h_l = M_l T``).
+        each level's heats at the rises ``T`` (``S_l h_l = M_l T``); its attribute
+        ``preconditioners`` the levels' preconditioners.
     """
     from .integral_schwarz import TwoLevelPreconditioner
 
     rtol = SOLVE_RTOL if rtol is None else float(rtol)
     K = K.tocsr()
     n = K.shape[0]
-    levels = [(w, M, S, TwoLevelPreconditioner(S, K, M)) for w, M, S in terms]
+    if preconditioners is None:
+        preconditioners = [TwoLevelPreconditioner(S, K, M) for _, M, S in terms]
+    levels = [(w, M, S, pre) for (w, M, S), pre in zip(terms, preconditioners)]
 
     def level_solve(M, S, pre, q, start):
         total = n + S.n
@@ -388,6 +445,7 @@ def coupled_solver(K, terms, rtol: float | None = None, maxiter: int = 2000):
             return T, out, heats
         T = sum(w * T_l for (w, _, _, _), (T_l, _) in zip(levels, out))
         return T, out, [p for _, p in out]
+    solver.preconditioners = preconditioners
     return solver
 
 
@@ -412,9 +470,8 @@ class FastIntegralOperator:
 
     The levels are those of the dense model (:func:`~simulator.thermal.integral_levels.
     integral_operator`): ``[(1, m)]`` for the plain operator, ``[(m / (m - c), m),
-    (-c / (m - c), c)]`` for the Richardson extrapolation. The operator is rebuilt at every
-    new shape (its near field and preconditioner cost a fraction of one solve); the
-    substrate rule (touching nodes held, sub-triangles in the plane left out) is that of
+    (-c / (m - c), c)]`` for the Richardson extrapolation. The operator is kept at a new
+    shape within ``shape_tol`` (:meth:`unchanged`) and rebuilt otherwise; the substrate rule (touching nodes held, sub-triangles in the plane left out) is that of
     :class:`~simulator.thermal.integral.IntegralOperator`.
 
     Parameters
@@ -427,18 +484,24 @@ class FastIntegralOperator:
     plane : (origin (3,), unit normal (3,)), optional
     eps : float
         FMM tolerance.
+    shape_tol : float
+        The operator (near field, far field, preconditioners) is kept at a new shape while no
+        distance between sheet nodes has changed by more than this fraction of itself (at
+        least of the mean sub-triangle diameter) and no height over the plane by more than a
+        quarter of it (:meth:`unchanged`, the rule of
+        :class:`~simulator.thermal.integral.IntegralOperator`); 0: rebuilt at every shape.
     """
 
     #: marks the fast path for :class:`~simulator.thermal.steady.ThermalModel`
     fast = True
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, levels, plane=None,
-                 eps: float = FMM_EPS):
+                 eps: float = FMM_EPS, shape_tol: float = 0.0):
         from ._single_layer import subdivision
 
         self.triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
         self.n_nodes, self.conductivity, self.plane = int(n_nodes), float(conductivity), plane
-        self.eps = float(eps)
+        self.eps, self.shape_tol = float(eps), float(shape_tol)
         self.levels = [(float(w), int(m)) for w, m in levels]
         self.nodes = np.unique(self.triangles)
         #: number of operator builds so far (a diagnostic)
@@ -454,14 +517,17 @@ class FastIntegralOperator:
             self._bary.append(bary)
             self._M.append(sp.csr_matrix((vals, (rows, cols)), shape=(n_tri * s, self.n_nodes)))
         self.n_sub = sum(M.shape[0] for M in self._M)
+        from .integral_levels import describe_levels
+
         level = logging.WARNING if self.n_sub > SLOW_SUB_TRIANGLES else logging.INFO
-        logger.log(level, "the integral heat loss on %d triangles: %d sub-triangles, above the "
-                   "dense limit: the fast path (theory 4.7), one far-field evaluation per MINRES "
-                   "iteration, some 50 iterations per level and solve%s", n_tri, self.n_sub,
+        logger.log(level, "the integral heat loss on %d triangles: %s, %d sub-triangles, above "
+                   "the dense limit: the fast path (theory 4.7)%s", n_tri,
+                   describe_levels(self.levels), self.n_sub,
                    "; slow at this size (minutes per solve): a lower IntegralLoss.refinement "
                    "or the chain model is much faster" if level == logging.WARNING else "")
         self._built = None                  # (positions, [(w, M_live, S)])
         self._last = None   # (unknown nodes, rise, [(T_l, p_l)], q, [h_l]) of the last solve
+        self._pre = None    # (terms, unknown nodes, preconditioners) of the last solver
 
     def _heights(self, x):
         """Heights over the substrate plane [m] and the touch tolerance [m]."""
@@ -476,7 +542,8 @@ class FastIntegralOperator:
         return np.zeros(self.n_nodes, bool) if h is None else h <= tol
 
     def _build(self, x):
-        """``[(w, M_live (n_live, n_nodes), S)]`` at positions ``x``."""
+        """``[(w, M_live (n_live, n_nodes), S)]`` at positions ``x`` (and the mean
+        sub-triangle diameter of the finest level, for :meth:`unchanged`)."""
         h, tol = self._heights(x)
         xp = x
         if h is not None and np.any(h < -tol):
@@ -495,15 +562,50 @@ class FastIntegralOperator:
             if live.any():
                 terms.append((w, M[live], FastSingleLayer(sub[live], self.conductivity,
                                                           self.plane, self.eps)))
+        self._size = float(min((S.diameter.mean() for _, _, S in terms), default=0.0))
         self.builds += 1
+        logger.debug("integral loss (fast): operator built (%d so far)", self.builds)
         return terms
 
     def terms(self, x):
-        """The levels at positions ``x`` (n, 3) [m], built once per shape."""
+        """The levels at positions ``x`` (n, 3) [m], built once per shape (kept within
+        ``shape_tol``, :meth:`unchanged`)."""
         x = np.asarray(x, float)
-        if self._built is None or not np.array_equal(self._built[0], x):
+        if self._built is None or not self.unchanged(x):
             self._built = (x.copy(), self._build(x))
         return self._built[1]
+
+    def unchanged(self, x) -> bool:
+        """Whether the operator built at the last positions ``x0`` is kept at ``x`` (n, 3)
+        [m]: the same positions, or, with ``shape_tol`` > 0, the distances between sheet
+        nodes changed by at most ``shape_tol`` times the larger of the distance and the mean
+        sub-triangle diameter, and twice the heights over the plane by at most a quarter of
+        that (``HEIGHT_SCALE``; at least 1 % of the diameter). The pairs checked: all pairs
+        closer than :data:`CHECK_RADIUS` diameters, and all pairs of a subset of
+        :data:`CHECK_NODES` nodes spread over the sheet (a far distance changes smoothly
+        with the shape; every pair of 14,000 nodes would be 100 million)."""
+        x0 = self._built[0]
+        if np.array_equal(x0, x):
+            return True
+        if self.shape_tol == 0:
+            return False
+        from scipy.spatial import cKDTree
+        from .integral import HEIGHT_SCALE
+
+        tol, size = self.shape_tol, self._size
+        p0, p = x0[self.nodes], x[self.nodes]
+        if self.plane is not None:
+            o, nrm = (np.asarray(v, float) for v in self.plane)
+            h0, h = 2 * np.abs((p0 - o) @ nrm), 2 * np.abs((p - o) @ nrm)
+            if np.any(np.abs(h - h0) > tol * HEIGHT_SCALE * np.maximum(h0, 0.01 * size)):
+                return False
+        i, j = cKDTree(p0).query_pairs(CHECK_RADIUS * size, output_type="ndarray").T
+        step = max(1, len(p0) // CHECK_NODES)
+        a, b = np.triu_indices(len(p0[::step]), 1)
+        i, j = np.concatenate([i, a * step]), np.concatenate([j, b * step])
+        d0 = np.linalg.norm(p0[i] - p0[j], axis=1)
+        d = np.linalg.norm(p[i] - p[j], axis=1)
+        return bool(np.all(np.abs(d - d0) <= tol * np.maximum(d0, size)))
 
     def solver(self, x, K, unknown):
         """Solver ``q (n_unknown,) -> rise (n_unknown,)`` [W -> K] of ``(K + L) T = q`` on the
@@ -515,7 +617,12 @@ class FastIntegralOperator:
             from ..linalg.ladder import factorize as _factorize
 
             return _factorize(K.tocsr(), kind="spd", dense_limit=400).solve
-        solve = coupled_solver(K, terms)
+        pre = None
+        if self._pre is not None and self._pre[0] is self._built[1] \
+                and np.array_equal(self._pre[1], unknown):
+            pre = self._pre[2]           # a kept operator: its preconditioners, K nearby
+        solve = coupled_solver(K, terms, preconditioners=pre)
+        self._pre = (self._built[1], unknown, solve.preconditioners)
         sizes = [M.shape[0] for _, M, _ in terms]
         shape = [None]                       # (q, rise, [p_l]) of the last solve at this shape
 

@@ -112,8 +112,8 @@ class IntegralLoss:
         it (:mod:`simulator.thermal.integral`, up to ``MAX_SUB_TRIANGLES`` sub-triangles per
         level); "fast" never forms it: the far field by a direct compiled sum or the fast
         multipole method, the near field sparse, the coupled system by preconditioned MINRES
-        (:mod:`simulator.thermal.integral_fast`: the same discrete model, rebuilt at every
-        shape, so ``shape_tol`` and ``correction_tol`` do not apply). "auto" (default): "fast"
+        (:mod:`simulator.thermal.integral_fast`: the same discrete model, kept within
+        ``shape_tol``; ``correction_tol`` does not apply). "auto" (default): "fast"
         above the dense limit (more than ``MAX_SUB_TRIANGLES`` sub-triangles at
         ``refinement``), else "dense".
     """

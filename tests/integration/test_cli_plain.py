@@ -212,10 +212,10 @@ def test_a_plain_pattern_heats_with_the_integral_loss_by_default(tmp_path, capsy
         stack_model(geo.pattern, stack, creases, loss_model="fe")
 
 
-def test_a_large_plain_pattern_falls_back_to_the_chains_with_a_warning(tmp_path, caplog):
-    """Above the integral model's dense limit (a 6 x 6-cell Miura: 504 triangles) its fast path
-    takes minutes per thermal solve: unless --loss-model integral is given, the run heats with
-    the chains and warns (the result is affected)."""
+def test_a_large_plain_pattern_heats_with_the_integral_loss_at_m_2(tmp_path, caplog, capsys):
+    """Above the default integral model's dense limit (a 6 x 6-cell Miura: 504 triangles) a
+    plain pattern heats with the integral loss at m = 2 without extrapolation (no fallback to
+    the chains; 2016 sub-triangles, dense here), and the heat-loss line says so."""
     import logging
 
     from simulator import write_fold
@@ -227,6 +227,9 @@ def test_a_large_plain_pattern_falls_back_to_the_chains_with_a_warning(tmp_path,
         assert main(["run", str(path), "--heat", "all", "--power", "0.1", "--set",
                      "thermal_steps=2", "--out", str(out_dir), "-q"]) == 0
     warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
-    assert any("504 triangles: the integral heat loss would take its fast path" in m and
-               "--loss-model integral" in m for m in warned), warned
-    assert json.loads((out_dir / "meta.json").read_text())["overrides"]["loss_model"] == "chain"
+    assert not any("chains" in m for m in warned), warned
+    out = capsys.readouterr().out
+    assert "integral model (calibration-free; m = 2)" in out
+    assert "m = 2 without extrapolation" in out
+    assert json.loads((out_dir / "meta.json").read_text())["overrides"]["loss_model"] == \
+        "integral"

@@ -184,13 +184,15 @@ def test_a_multiple_of_the_last_heat_input_is_not_solved_again_and_a_new_shape_s
         caplog):
     """A heating run solves the same shape at a fraction of the power (a multiple of the last
     q: the scaled solution, no MINRES) and the next shape from the last solution (fewer
-    iterations, the same answer to the solver's tolerance)."""
+    iterations, the same answer to the solver's tolerance; shape_tol = 0: the operator rebuilt
+    at the new shape, see the next test for the operator kept)."""
     import logging
 
     caplog.set_level(logging.DEBUG, logger="simulator.thermal.integral_fast")
     model = _miura_model(3)
     x = model.mesh.nodes.copy()
-    prm = dataclasses.replace(model.thermal, loss=IntegralLoss(operator="fast", refinement=2),
+    prm = dataclasses.replace(model.thermal, loss=IntegralLoss(operator="fast", refinement=2,
+                                                               shape_tol=0.0),
                               substrate=None)
     tm = ThermalModel(model.mesh, prm, warn_no_plane=False)
     q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
@@ -208,6 +210,33 @@ def test_a_multiple_of_the_last_heat_input_is_not_solved_again_and_a_new_shape_s
     counts = _minres_counts(caplog)
     assert len(counts) == 3 and counts[1] < counts[2], counts
     assert np.abs(warm - cold).max() <= 1e-6 * cold.max()
+
+
+@pytest.mark.parametrize("plane", [None, Substrate.plane((0.0, 0.0, -2e-4), (0.0, 0.0, 1.0))])
+def test_the_fast_operator_is_kept_within_shape_tol_as_the_dense_one(plane):
+    """A bend of 20 um keeps the operator (near field, far field and preconditioners) at the
+    default shape_tol (not 500 um over a plane, where it changes heights by 4 %), and the
+    temperatures are those of the dense operator kept the same way; a bend of 1.5 mm
+    rebuilds both, and the same holds."""
+    model = _miura_model(3)
+    x = model.mesh.nodes.copy()
+    out = {}
+    for op in ("dense", "fast"):
+        prm = dataclasses.replace(model.thermal, substrate=plane, loss=IntegralLoss(
+            operator=op, refinement=2, correction_tol=0.0))      # dense: one plain operator
+        tm = ThermalModel(model.mesh, prm, warn_no_plane=False)
+        q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
+        rises, builds = [], []
+        for amp in (0.0, 2e-5, 1.5e-3):
+            y = x.copy()
+            y[:, 2] += amp * np.sin(y[:, 0] / 1.5e-3) ** 2 + 3e-4
+            rises.append(tm.solve(y, q) - prm.room_temperature)
+            builds.append(tm.integral.builds)
+        out[op] = rises, builds
+    assert out["fast"][1] == out["dense"][1]
+    assert out["fast"][1] == ([1, 1, 2] if plane is None else [1, 2, 3])  # heights: 1/4 tol
+    for fast, dense in zip(out["fast"][0], out["dense"][0]):
+        assert np.abs(fast - dense).max() <= 1e-6 * dense.max()
 
 
 def test_patches_split_the_points_into_groups_of_at_most_the_size():
