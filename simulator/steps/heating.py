@@ -26,7 +26,7 @@ import numpy as np
 
 from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from ..events import CrossingWatch, stops
 from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
@@ -89,6 +89,15 @@ class _Coupling:
     fixed_shape: bool = False
 
 
+def steady_temperatures(tm, x, q, room):
+    """``tm.solve(x, q, room)``, or the message where its nonlinear heat balance (theory 4.12)
+    did not converge: a failure as data, for the step to report."""
+    try:
+        return tm.solve(x, q, room)
+    except ConvergenceError as error:
+        return str(error)
+
+
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
                        coupling: _Coupling = _Coupling(), lam=None) -> StepOutcome:
     """The paper's three-step loop over increments s = 1..S (theory 6.6).
@@ -113,9 +122,20 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     settled = coupling.mode == "settled" and not coupling.fixed_shape
+    def failed(s, power, why):
+        last = rec._rows["temperature"][-1] if len(rec) else state.temperature
+        message = (f"increment {s}/{n_inc} (crease power up to "
+                   f"{1e3 * np.max(power, initial=0):.4g} mW): {why}")
+        return rec.finish(False, "failed", message,
+                          at_rest(state, u=u, spring_rest=spring, temperature=last), f,
+                          evaluation)
+
     for s, (power, room) in enumerate(zip(powers, ambient), start=1):
         q = tm.heat_vector(power)
-        temp = tm.solve(x_start if coupling.fixed_shape else mesh.nodes + u, q, room)
+        temp = steady_temperatures(tm, x_start if coupling.fixed_shape else mesh.nodes + u, q,
+                                   room)
+        if isinstance(temp, str):
+            return failed(s, power, temp)
         iterate = iterated or (settled and s == n_inc)
         change = 0.0
         for _ in range(coupling.max_iterations if iterate else 1):
@@ -125,15 +145,12 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             rec.iterations += path.iterations
             rec.cuts += path.cuts
             if not path.success:
-                last = rec._rows["temperature"][-1] if len(rec) else state.temperature
-                message = (f"increment {s}/{n_inc} (crease power up to "
-                           f"{1e3 * np.max(power, initial=0):.4g} mW): {path.message}")
-                return rec.finish(False, "failed", message,
-                                  at_rest(state, u=u, spring_rest=spring, temperature=last),
-                                  f, evaluation)
+                return failed(s, power, path.message)
             if not iterate:
                 break
-            new_temp = tm.solve(mesh.nodes + path.u, q, room)
+            new_temp = steady_temperatures(tm, mesh.nodes + path.u, q, room)
+            if isinstance(new_temp, str):
+                return failed(s, power, new_temp)
             change = float(np.max(np.abs(new_temp - temp)))
             temp = new_temp
             if change <= coupling.tol:

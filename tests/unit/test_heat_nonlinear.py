@@ -333,3 +333,17 @@ def single_fold(loss, medium=AIR_T, eps=0.9, sheet_refinement=None):
     power = np.zeros(model.mesh.n_creases)
     power[model.mesh.crease_row[2]] = 20e-3
     return tm, x, tm.heat_vector(power)
+
+
+def test_a_heat_step_reports_a_heat_balance_that_did_not_converge(monkeypatch):
+    from simulator import simulate
+    from simulator.cases import get_case
+
+    case = get_case("single_fold", thermal_steps=2)
+
+    def no_balance(self, x, q, room_temperature=None):
+        raise ConvergenceError("the nonlinear heat balance did not converge: (a test)")
+    monkeypatch.setattr(ThermalModel, "solve", no_balance)
+    result = simulate(case.model, case.steps)
+    assert not result.success
+    assert "increment 1/2" in result.message and "did not converge: (a test)" in result.message
