@@ -20,7 +20,7 @@ power per heated crease (two heated creases per stage). Each variant's evaluatio
 (wall and CPU time after a warm-up; the median of ``--repeat`` runs for the paper setting and
 for all the physics, whose ratio is the acceptance: at most 1.5). The device keeps its own
 materials; a variant swaps the model's medium and materials in ``gripper_model`` while the
-evaluation runs (as ``bench_loss_models`` swaps its loss).
+evaluation runs (``bench_loss_models.gripper_evaluation``, as that benchmark swaps its loss).
 
 Run: ``python benchmarks/bench_nonlinear_heat.py`` (about a minute; ``--repeat 1`` quicker).
 """
@@ -29,9 +29,8 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import statistics
-import time
 
+from bench_loss_models import _timed as timed, gripper_evaluation
 from design.devices import gripper
 from simulator import AIR
 from simulator.geometry.materials import GOLD_FILM_EMISSIVITY
@@ -63,35 +62,6 @@ def with_physics(model, hot_air: bool, eps: float):
     return dataclasses.replace(model, mesh=mesh, thermal=thermal)
 
 
-def evaluation(design, hot_air: bool, eps: float):
-    """A function evaluating ``design`` (bisect) with the variant's physics."""
-    original = gripper.gripper_model
-
-    def model_with(design, *args, **kw):
-        model, pre = original(design, *args, **kw)
-        return with_physics(model, hot_air, eps), pre
-
-    def run():
-        gripper.gripper_model = model_with
-        try:
-            return gripper.evaluate_gripper(design, mode="bisect")
-        finally:
-            gripper.gripper_model = original
-    return run
-
-
-def timed(fn, repeat: int):
-    """Median wall and CPU time [s] of ``repeat`` runs after a warm-up, and the last output."""
-    fn()
-    walls, cpus = [], []
-    for _ in range(repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = fn()
-        walls.append(time.perf_counter() - t0)
-        cpus.append(time.process_time() - c0)
-    return statistics.median(walls), statistics.median(cpus), out
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3,
@@ -103,7 +73,8 @@ def main(argv=None):
         base = times = None
         for variant, hot_air, eps in VARIANTS:
             repeat = args.repeat if variant in ("constant", "k(T) + eps 0.9") else 1
-            wall, cpu, out = timed(evaluation(design, hot_air, eps), repeat)
+            run = gripper_evaluation(design, lambda m, h=hot_air, e=eps: with_physics(m, h, e))
+            wall, cpu, out = timed(run, repeat)
             full = None if out.total_power is None else 2e3 * out.total_power
             base = full if base is None else base
             times = (wall, cpu) if times is None else times
