@@ -105,11 +105,18 @@ def gripper_run(loss_model: str, settings: dict):
     extra = {k: v for k, v in settings.items() if k != "refinement"}
     if loss_model == "chain" or not extra:
         return lambda: gripper.evaluate_gripper(design, mode="bisect")
+    return gripper_evaluation(design, lambda model: dataclasses.replace(
+        model, thermal=model.thermal.with_loss(**extra)))
+
+
+def gripper_evaluation(design, transform):
+    """A function evaluating ``design`` (bisect) with the model of ``gripper.gripper_model``
+    passed through ``transform(model) -> model`` while it runs."""
     original = gripper.gripper_model
 
     def model_with(design, *args, **kw):
         model, pre = original(design, *args, **kw)
-        return dataclasses.replace(model, thermal=model.thermal.with_loss(**extra)), pre
+        return transform(model), pre
 
     def run():
         gripper.gripper_model = model_with

@@ -64,9 +64,9 @@ from ..solvers.newton import follow_path
 from ..schedules import next_switch
 from ..thermal.circuits import check_circuits, describe_circuits
 from ..thermal.schedules import check_power_mapping, describe_power_mapping
-from ..thermal.transient import (DEFAULT_THETA, ThetaStepper, check_quasi_static_medium,
-                                 check_theta, check_time_step, free_heat_input, heat_system,
-                                 initial_rise)
+from ..thermal.transient import (DEFAULT_THETA, check_quasi_static_medium, check_theta,
+                                 check_time_step, free_heat_input, heat_out_rate, heat_system,
+                                 initial_rise, stepper_for)
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from ..model.properties import spring_rest_angles
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
@@ -322,10 +322,11 @@ class _HeatPart:
             self.assemblies += 1
         self.age += 1
         if self.stepper is None or self.stepper.dt != h:
-            self.stepper = ThetaStepper(self.system.K, self.system.C, h, self.theta)
+            self.stepper = stepper_for(self.system, h, self.theta, self.room)
         self._q = free_heat_input(self.tm, self.system.free, power, self.system.load)
         self._electric = float(np.sum(power))      # W (the rest of _q heats fixed nodes)
         self._T = self.stepper.step(self.T, self._q, self._q)
+        self._out = heat_out_rate(self.system, self.stepper, self.T, self._T)
         self._h = h
         rise = self.rise.copy()
         rise[self.system.free] = self._T
@@ -333,10 +334,9 @@ class _HeatPart:
         return self.room + rise[:self.n]
 
     def accept(self) -> None:
-        th, h = self.theta, self._h
+        h = self._h
         self.heat_in += h * self._electric
-        self.heat_out += h * (self._electric - float(np.sum(self._q)) + float(
-            self.system.outflow @ (th * self._T + (1 - th) * self.T)))
+        self.heat_out += h * (self._electric - float(np.sum(self._q)) + float(self._out))
         self.T, self.rise = self._T, self._rise
 
     def energies(self) -> dict:

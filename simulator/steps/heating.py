@@ -26,7 +26,7 @@ import numpy as np
 
 from ..model.bimorph import crease_temperature_weights
 from .._validate import finite, integer, one_of, positive
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
 from ..events import CrossingWatch, stops
 from ..solvers.newton import LOCATE_TOL, follow_path
 from ..model.properties import spring_rest_angles
@@ -90,6 +90,15 @@ class _Coupling:
     tol: float = 1e-6
     max_iterations: int = 20
     fixed_shape: bool = False
+
+
+def steady_temperatures(tm, x, q, room):
+    """``tm.solve(x, q, room)``, or the message where its nonlinear heat balance (theory 4.12)
+    did not converge: a failure as data, for the step to report."""
+    try:
+        return tm.solve(x, q, room)
+    except ConvergenceError as error:
+        return str(error)
 
 
 def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient: np.ndarray,
@@ -191,9 +200,15 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
 
 
 def _fixed_powers(tm):
-    """The heat solve of fixed crease powers: ``(s, x, power, room) -> HeatingPoint``."""
+    """The heat solve of fixed crease powers: ``(s, x, power, room) -> HeatingPoint`` (status
+    "failed" where the nonlinear heat balance of theory 4.12 did not converge)."""
     def solve(s, x, power, room):
-        return HeatingPoint(tm.solve(x, tm.heat_vector(power), room), power)
+        temp = steady_temperatures(tm, x, tm.heat_vector(power), room)
+        if isinstance(temp, str):
+            return HeatingPoint(None, power, status="failed",
+                                message=f"crease power up to "
+                                        f"{1e3 * np.max(power, initial=0):.4g} mW: {temp}")
+        return HeatingPoint(temp, power)
     return solve
 
 

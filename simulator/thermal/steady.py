@@ -35,7 +35,7 @@ from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
 from .._deprecation import warn_deprecated
 from .._validate import array, one_of
-from ..errors import ParameterError, PatternError
+from ..errors import ConvergenceError, ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
@@ -43,6 +43,7 @@ from .integral import IntegralOperator
 from .integral_levels import integral_operator
 from .loss import ChainLoss
 from .monotone import MonotoneConduction, monotone_conduction
+from .nonlinear import NonlinearLoss, radiation, solve_heat_balance
 from .refined import RefinedSheet
 from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
@@ -455,9 +456,22 @@ class ThermalModel:
         Index ``q * n + node`` is layer ``q`` (0 = structure) of a node; no boundary conditions.
         """
         K, area = self._conduction(x)
+        return self._full_pattern.matrix([*self._element_values(x, K),
+                                          self._chain_pairs(x, area)])
+
+    def chain_matrix(self, x) -> sp.csr_matrix:
+        """The environment chains' part of :meth:`conductivity_matrix` [W/K] (the layer
+        conductances alone, no sheet conduction), ((N + 1) n)^2, at positions ``x`` (n, 3)
+        [m]."""
+        K, area = self._conduction(x)
+        return self._full_pattern.matrix([*(np.zeros_like(v) for v in
+                                            self._element_values(x, K)),
+                                          self._chain_pairs(x, area)])
+
+    def _chain_pairs(self, x, area) -> np.ndarray:
+        """The 2 x 2 matrices [W/K] of every node's chain layers, node-major, (n N, 2, 2)."""
         g = self.layer_conductance(x, area).ravel()                         # node-major (n, N)
-        pair = g[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
-        return self._full_pattern.matrix([*self._element_values(x, K), pair])
+        return g[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
 
     def sheet_conduction(self, x) -> sp.csr_matrix:
         """The sheet's conduction matrix [W/K], (n, n), at node positions ``x`` (n, 3) [m]:
@@ -518,10 +532,97 @@ class ThermalModel:
             fine = self.fine_model.solve(self.sheet.positions(x), self.sheet.heat(q), rt)
             self._last_fine = (np.array(x, float), q.copy(), rt, fine)
             return fine[:n]
+        if self.nonlinear:
+            return rt + self._nonlinear_rise(x, q, rt)
         rise = np.zeros(q.shape)
         if len(self.free_nodes):
             rise[self.free_nodes] = self.factorized(x)(q[self.free_nodes])
         return rt + rise
+
+    @cached_property
+    def _emissivity(self) -> np.ndarray:
+        """Emissivity [-] of every triangle, (n_tri,): its panel's material's, or the crease
+        material's; 0 on the boundary panels (they are the substrate)."""
+        mesh, pat = self.mesh, self.mesh.pattern
+        panel = mesh.triangle_panel
+        eps_panel = np.array([getattr(m, "emissivity", 0.0) for m in pat.panel_material])
+        eps = np.where(panel >= 0, eps_panel[np.maximum(panel, 0)],
+                       getattr(pat.crease_material, "emissivity", 0.0))
+        return np.where(self.is_boundary, 0.0, eps)
+
+    @property
+    def nonlinear(self) -> bool:
+        """Whether the heat balance is nonlinear (theory 4.12): a medium conductivity law
+        (``Fluid.conductivity_table``) or a material with an emissivity > 0."""
+        return self.params.medium.temperature_dependent or bool(self._emissivity.any())
+
+    def emissive_area(self, x) -> np.ndarray:
+        """Emissivity times radiating area of every node, both faces [m^2], (n,), at positions
+        ``x`` (n, 3) [m]: a third of ``2 eps A_t`` of each triangle at it (theory 4.12)."""
+        area = self._conduction(x)[1]
+        tri = self.mesh.triangles
+        return np.bincount(tri.ravel(), np.repeat(2 * self._emissivity * area / 3, 3),
+                           minlength=self.mesh.n_nodes)
+
+    def radiation_loss(self, x, temperature, room_temperature=None) -> np.ndarray:
+        """Heat [W] each node radiates to surroundings at room temperature, (n,), at
+        temperatures ``temperature`` (n,) [deg C] and positions ``x`` (n, 3) [m] (theory
+        4.12; on a refined sheet that of the last solve's fine field, gathered)."""
+        rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
+        if self.sheet is not None:
+            return self._refined_loss(x, temperature, rt, "radiation_loss")
+        return radiation(self.emissive_area(x), np.asarray(temperature, float) - rt, rt)
+
+    def nonlinear_system(self, x, room_temperature=None):
+        """The steady heat balance on its unknown nodes at positions ``x`` (n, 3) [m] (theory
+        4.12): ``(A, loss, nodes)`` with the sheet's conduction ``A`` [W/K] (dense, or sparse
+        for a large chain model), the :class:`~simulator.thermal.nonlinear.NonlinearLoss`
+        (the chains condensed, or the integral model's loss conductance; radiation) and the
+        mesh nodes solved for (the free nodes, without those touching the substrate): their
+        rise solves ``A u + loss.flux(u) = q[nodes]``. Not on the fast path nor on a refined
+        sheet (its fine model's system is the one solved)."""
+        rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
+        if self.sheet is not None or getattr(self.integral, "fast", False):
+            raise ParameterError(
+                "the nonlinear heat balance (a medium conductivity law or radiation) is solved "
+                "on the dense integral operator or the chains: "
+                + ("a refined sheet's is its fine model's (tm.fine_model.nonlinear_system)."
+                   if self.sheet is not None else
+                   "the fast path of large sheets (IntegralLoss operator 'fast', or 'auto' "
+                   "above the dense limit) does not take it; use IntegralLoss(operator="
+                   "'dense') with a lower refinement, or the chains, or a constant "
+                   "conductivity and emissivity 0."))
+        K, g_eff = self._conductances(x, _thermal_jit.use_compiled())
+        K = self._element_values(x, K)
+        free = self.free_nodes
+        e = self.emissive_area(x)[free]
+        zero = np.zeros(len(free))
+        medium = self.params.medium
+        if self.integral is None:
+            A = (self._dense_free(K, zero) if len(free) <= thresholds.CONDUCTION_DENSE_LIMIT
+                 else self._free_pattern.matrix([*K, zero]))
+            return A, NonlinearLoss(medium, rt, g=g_eff[free], emissive=e), free
+        keep = ~self.integral.touching(x)[free]
+        A, L = self._dense_free(K, zero), self._integral_loss(x)
+        return (A[np.ix_(keep, keep)],
+                NonlinearLoss(medium, rt, B=L[np.ix_(keep, keep)], emissive=e[keep]), free[keep])
+
+    def _nonlinear_rise(self, x, q, rt) -> np.ndarray:
+        """The steady rise [K], (n,), of the nonlinear heat balance for the nodal heat ``q``
+        (n,) [W] by Newton's method (:func:`~simulator.thermal.nonlinear.solve_heat_balance`);
+        :class:`ConvergenceError` carrying its result where it does not converge."""
+        if q.ndim != 1:
+            raise ParameterError(
+                f"q of shape {q.shape}: the heat balance is nonlinear (a medium conductivity "
+                "law or radiation, theory 4.12), so heat inputs do not superpose; solve one "
+                "heat input (n,) at a time.")
+        A, loss, nodes = self.nonlinear_system(x, rt)
+        out = solve_heat_balance(A, loss, q[nodes])
+        if not out.success:
+            raise ConvergenceError(out.message, out)
+        rise = np.zeros(self.mesh.n_nodes)
+        rise[nodes] = out.rise
+        return rise
 
     def factorized(self, x):
         """Solver ``q_free -> rise_free`` of the free-node system at positions ``x`` [m].
@@ -530,6 +631,10 @@ class ThermalModel:
         (a fixed-shape coupling, several heat inputs) reuses it.
         """
         x = np.asarray(x, float)
+        if self.nonlinear:
+            raise ParameterError("factorized: the heat balance is nonlinear (a medium "
+                                 "conductivity law or radiation, theory 4.12) and has no "
+                                 "linear solver; use solve(x, q).")
         if self.sheet is not None:
             return self._refined_solver(x)
         compiled, last = _thermal_jit.use_compiled(), self._factor_cache
@@ -683,8 +788,8 @@ class ThermalModel:
         heat input leaves through the room-temperature nodes)."""
         rt = self.params.room_temperature if room_temperature is None else float(room_temperature)
         if self.sheet is not None:
-            return self._refined_loss(x, temperature, rt)
-        rise = np.asarray(temperature, float) - rt
+            return self._refined_loss(x, temperature, rt, "environment_loss")
+        rise = self.params.medium.kirchhoff(np.asarray(temperature, float) - rt, rt)[0]
         if self.integral is None:
             return self._conductances(x, False)[1] * rise
         if getattr(self.integral, "fast", False):
@@ -697,18 +802,19 @@ class ThermalModel:
             out[nodes] = self.integral_loss_matrix(x) @ rise[nodes]
         return out
 
-    def _refined_loss(self, x, temperature, rt) -> np.ndarray:
-        """:meth:`environment_loss` on a refined sheet: the fine field of the last solve (the
-        only one whose mesh-node temperatures determine it), its loss gathered onto the mesh
-        nodes (:meth:`~simulator.thermal.refined.RefinedSheet.restrict`: the total kept)."""
+    def _refined_loss(self, x, temperature, rt, which: str) -> np.ndarray:
+        """:meth:`environment_loss` or :meth:`radiation_loss` (``which``) on a refined sheet:
+        the fine field of the last solve (the only one whose mesh-node temperatures determine
+        it), its loss gathered onto the mesh nodes
+        (:meth:`~simulator.thermal.refined.RefinedSheet.restrict`: the total kept)."""
         last, T = self._last_fine, np.asarray(temperature, float)
         if last is None or not (np.array_equal(last[0], np.asarray(x, float)) and last[2] == rt
                                 and last[3].ndim == 1 and np.array_equal(last[3][:len(T)], T)):
             raise ParameterError(
-                f"environment_loss on a refined sheet (sheet_refinement = {self.sheet.r}) "
+                f"{which} on a refined sheet (sheet_refinement = {self.sheet.r}) "
                 "needs the temperatures and positions of the last solve: the mesh nodes' "
                 "temperatures do not determine the fine field; call solve(x, q) first.")
-        fine = self.fine_model.environment_loss(self.sheet.positions(x), last[3], rt)
+        fine = getattr(self.fine_model, which)(self.sheet.positions(x), last[3], rt)
         return self.sheet.restrict(fine)
 
     def condensed_system(self, x):
@@ -757,19 +863,23 @@ class ThermalModel:
         n_free = len(g_free)
         limit = thresholds.CONDUCTION_DENSE_LIMIT
         if loss is not None:             # the integral model: dense anyway
-            pos, keep = self._dense_position
-            flat = np.concatenate([*(v.ravel() for v in K), g_free])[keep]
-            A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free) + loss
+            A = self._dense_free(K, g_free) + loss
             if held is None or not held.any():
                 return factorize(A, kind="spd", dense_limit=n_free).solve
             return _held_solver(A, ~held)
         if n_free <= limit:
-            pos, keep = self._dense_position
-            flat = np.concatenate([*(v.ravel() for v in K), g_free])[keep]
-            A = np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
+            A = self._dense_free(K, g_free)
         else:
             A = self._free_pattern.matrix([*K, g_free])
         return factorize(A, kind="spd", dense_limit=limit).solve
+
+    def _dense_free(self, K, diagonal) -> np.ndarray:
+        """The dense free-node matrix [W/K], (n_free, n_free), scattered from the element
+        matrices ``K`` (of :attr:`_families`) and the ``diagonal`` (n_free,) terms."""
+        n_free = len(diagonal)
+        pos, keep = self._dense_position
+        flat = np.concatenate([*(v.ravel() for v in K), diagonal])[keep]
+        return np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
 
 
 def _held_solver(A, keep):

@@ -31,6 +31,7 @@ in equals the integral of the power even for pulses shorter than dt.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Mapping
@@ -45,12 +46,13 @@ from ..errors import ParameterError
 from ..linalg import thresholds
 from ..linalg.ladder import check_backend, factorize
 from ..model.model import Model
+from .nonlinear import NonlinearLoss
 from .schedules import crease_power_function
 from ..state import thermal_model
 from .steady import ThermalModel
 
 __all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
-           "theta_step", "TransientHeatResult", "integrate_heat", "environment_profile",
+           "theta_step", "stepper_for", "heat_out_rate", "TransientHeatResult", "integrate_heat", "environment_profile",
            "free_heat_input", "initial_rise", "check_time_step", "check_theta",
            "medium_diffusion_time", "check_quasi_static_medium"]
 
@@ -132,6 +134,12 @@ class HeatSystem:
         The heat of the free unknowns from the mesh nodal heat (a refined sheet's condensed
         system, theory 4.11: part of a node's heat leaves through the eliminated fine nodes);
         None: the free unknowns' own entries.
+    nonlinear : NonlinearLoss or None
+        The nonlinear losses (a medium conductivity law, radiation; theory 4.12): ``K`` is
+        then the linear part only (the sheet's conduction), the medium's conductance and the
+        radiation are here, and ``outflow`` is that of ``K`` plus the medium at its reference
+        conductivity (the steppers book the exact heat out: :func:`heat_out_rate`). None: a
+        linear system.
     """
 
     K: sp.csc_matrix
@@ -139,6 +147,7 @@ class HeatSystem:
     free: np.ndarray
     outflow: np.ndarray
     load: np.ndarray | None = None
+    nonlinear: NonlinearLoss | None = None
 
 
 def _dirichlet_mask(tm: ThermalModel) -> np.ndarray:
@@ -170,7 +179,22 @@ def heat_system(tm: ThermalModel, x) -> HeatSystem:
         raise ParameterError(f"unknown {int(free[np.argmin(C)])} has no heat capacity: every "
                              "node needs a triangle with thickness, density and specific heat.")
     outflow = -np.asarray(K[np.flatnonzero(fixed)][:, free].sum(axis=0)).ravel()
+    if tm.nonlinear:                   # the chains' layers apart: they conduct by the law
+        B = tm.chain_matrix(x).tocsc()[free][:, free]
+        return HeatSystem((K[free][:, free] - B).tocsc(), C, free, outflow, None,
+                          _nonlinear_loss(tm, x, free, B))
     return HeatSystem(K[free][:, free].tocsc(), C, free, outflow)
+
+
+def _nonlinear_loss(tm: ThermalModel, x, free, B) -> NonlinearLoss:
+    """The :class:`~simulator.thermal.nonlinear.NonlinearLoss` of the free unknowns ``free``
+    (structure nodes first in the full numbering, ``q * n + node``) with the medium's
+    conductance ``B`` among them: radiation from the structure nodes."""
+    n = tm.mesh.n_nodes
+    e = np.zeros(len(free))
+    sheet = free < n
+    e[sheet] = tm.emissive_area(x)[free[sheet]]
+    return NonlinearLoss(tm.params.medium, tm.params.room_temperature, B=B, emissive=e)
 
 
 def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
@@ -184,14 +208,25 @@ def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
     area = tm.triangle_areas(x)
     tri = mesh.triangles
     free = np.setdiff1d(np.arange(n), tm.held_nodes(x))
-    load = None
+    load = nonlinear = None
     if tm.sheet is not None:           # the fine nodes eliminated: they hold no heat
+        if tm.nonlinear:
+            raise ParameterError(
+                f"the time domain on a refined sheet (sheet_refinement = {tm.sheet.r}) with a "
+                "medium conductivity law or radiation (theory 4.12): the fine nodes are "
+                "eliminated linearly; use ThermalParameters(sheet_refinement=1) for the "
+                "transient, or a constant conductivity and emissivity 0.")
         Kff, load = tm.condensed_system(x)
     else:
         K = tm.sheet_conduction(x).toarray()
         sheet = tm.integral.nodes
-        K[np.ix_(sheet, sheet)] += tm.integral_loss_matrix(x)
+        loss = tm.integral_loss_matrix(x)
+        K[np.ix_(sheet, sheet)] += loss
         Kff = K[np.ix_(free, free)]
+        if tm.nonlinear:
+            B = np.zeros((n, n))
+            B[np.ix_(sheet, sheet)] = loss
+            nonlinear = _nonlinear_loss(tm, x, free, B[np.ix_(free, free)])
     solid = _volumetric_capacity(tm) * tm.thickness * area / 3
     C = np.bincount(tri.ravel(), np.repeat(solid, 3), minlength=n)[free]
     if np.any(C <= 0):
@@ -199,6 +234,9 @@ def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
                              "node needs a triangle with thickness, density and specific heat.")
     # heat leaving the free nodes per kelvin of each one's rise: into the held nodes and the
     # medium (the column sums: the rows of the conduction alone sum to zero)
+    if nonlinear is not None:
+        return HeatSystem(sp.csc_matrix(Kff - nonlinear.B), C, free, Kff.sum(axis=0), load,
+                          nonlinear)
     return HeatSystem(sp.csc_matrix(Kff), C, free, Kff.sum(axis=0), load)
 
 
@@ -281,13 +319,20 @@ class ThetaStepper:
         Backend of the factorisation (:func:`~simulator.linalg.ladder.factorize`).
     """
 
-    def __init__(self, K, C, dt, theta=DEFAULT_THETA, linear_solver="auto"):
+    def __init__(self, K, C, dt, theta=DEFAULT_THETA, linear_solver="auto", nonlinear=None):
         self.dt, self.theta = check_time_step(dt), check_theta(theta)
         C = np.asarray(C, float)
         if C.ndim != 1 or K.shape != (len(C), len(C)) or not np.all(C > 0):
             raise ParameterError(f"ThetaStepper: need K of shape (m, m) and C of shape (m,) with "
                                  f"C > 0 J/K; got K {K.shape}, C {C.shape}.")
         self.K, self.C = sp.csc_matrix(K), C
+        #: the nonlinear losses (:class:`~simulator.thermal.nonlinear.NonlinearLoss`) or None
+        self.nonlinear = nonlinear
+        #: the mean heat flow [W] out of the unknowns over the last step (nonlinear steps)
+        self.out_rate = None
+        if nonlinear is not None:      # linearised at the start of every step: no factors kept
+            self._lu = None
+            return
         mass = sp.diags(C / self.dt)
         A = (mass + self.theta * self.K).tocsc()
         # the ladder, never dense (kept for many steps); PARDISO if installed, else SuperLU
@@ -299,10 +344,61 @@ class ThetaStepper:
     def step(self, T, q_old, q_new) -> np.ndarray:
         """Rise at the new time level [K], (m,), from the rise ``T`` and heat inputs [W] at the
         old and new time levels, (m,) each."""
+        if self.nonlinear is not None:
+            return self._linearised_step(np.asarray(T, float), q_old, q_new)
         if self._lu is None:
             return np.asarray(T, float)
         b = self._rhs @ T + self.theta * np.asarray(q_new) + (1 - self.theta) * np.asarray(q_old)
         return self._lu.solve(b)
+
+    def _linearised_step(self, T, q_old, q_new) -> np.ndarray:
+        """One step of the theta method linearised at its start (theory 4.12): with the heat
+        flow ``F(T) = K T + loss(T)`` and its Jacobian ``J`` at ``T``, ``(C / dt + theta J)
+        dT = theta q_new + (1 - theta) q_old - F(T)``; the same as the linear step where
+        ``F`` is linear, and its fixed point is the steady ``F(T) = q``. Sets
+        :attr:`out_rate`, the step's exact mean heat flow out, ``1^T (F(T) + theta J dT)``."""
+        if not len(T):
+            self.out_rate = 0.0
+            return T
+        loss, th = self.nonlinear, self.theta
+        full, d = loss.jacobian(T)
+        d = d + self.C / self.dt
+        if full is None or sp.issparse(full):
+            J = self.K + (0 if full is None else full)
+            A = (sp.diags(d) + th * J).tocsc()
+            kind = "spd" if full is None else "general"
+        else:
+            J = self.K.toarray() + full
+            A = th * J
+            A[np.diag_indices_from(A)] += d
+            kind = "general"
+        A_diag = d - self.C / self.dt            # the Jacobian's own diagonal terms
+        F = self.K @ T + loss.flux(T)
+        dT = factorize(A, kind=kind, dense_limit=thresholds.TRANSIENT_DENSE_LIMIT).solve(
+            th * np.asarray(q_new) + (1 - th) * np.asarray(q_old) - F)
+        self.out_rate = float(np.sum(F + th * (J @ dT + A_diag * dT)))
+        return T + dT
+
+
+def heat_out_rate(system: HeatSystem, stepper: ThetaStepper, T, T_new) -> float:
+    """The mean heat flow [W] out of the free unknowns over the step from rises ``T`` to
+    ``T_new`` [K] that ``stepper`` took on ``system``: ``outflow @ (theta T_new + (1 - theta)
+    T)``, or the nonlinear step's own (:attr:`ThetaStepper.out_rate`)."""
+    if system.nonlinear is not None:
+        return stepper.out_rate
+    th = stepper.theta
+    return system.outflow @ (th * T_new + (1 - th) * T)
+
+
+def stepper_for(system: HeatSystem, dt: float, theta: float = DEFAULT_THETA,
+                room: float | None = None) -> ThetaStepper:
+    """The :class:`ThetaStepper` of ``system`` (its nonlinear losses included, at room
+    temperature ``room`` [deg C] where given) with time step ``dt`` [s] and weight
+    ``theta``."""
+    loss = system.nonlinear
+    if loss is not None and room is not None:
+        loss = dataclasses.replace(loss, room=float(room))
+    return ThetaStepper(system.K, system.C, dt, theta, nonlinear=loss)
 
 
 _LAST: dict = {}
@@ -486,7 +582,7 @@ class _HeatRun:
                                                                            theta, room)
         self.x = np.asarray(shape(0.0), float)
         self.system = heat_system(tm, self.x)
-        self.stepper, self.assemblies = ThetaStepper(self.system.K, self.system.C, h, theta), 1
+        self.stepper, self.assemblies = stepper_for(self.system, h, theta, room), 1
         self.rise = initial_rise(tm, self.x, T0, room)
         self.T = self.rise[self.system.free]
         self.free = self.system.free                          # the free set never changes
@@ -540,7 +636,7 @@ class _HeatRun:
         x_new = np.asarray(self.shape(t0), float)
         if k > 1 and not np.array_equal(x_new, self.x):
             self.x, self.system = x_new, heat_system(self.tm, x_new)
-            self.stepper = ThetaStepper(self.system.K, self.system.C, self.h, self.theta)
+            self.stepper = stepper_for(self.system, self.h, self.theta, self.room)
             self.assemblies += 1
 
     def advance(self, k: int, record: bool):
@@ -561,7 +657,7 @@ class _HeatRun:
         T = self.T
         T_new = self.stepper.step(T, q_old, q_new)
         self.e_in += h * np.sum(theta * q_new + (1 - theta) * q_old)
-        self.e_out += h * self.system.outflow @ (theta * T_new + (1 - theta) * T)
+        self.e_out += h * heat_out_rate(self.system, self.stepper, T, T_new)
         self.T = T_new
         self.rise[self.free] = T_new
         self.why = self._observe()
