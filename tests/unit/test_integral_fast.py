@@ -222,8 +222,9 @@ def test_the_fast_operator_is_kept_within_shape_tol_as_the_dense_one(plane):
     x = model.mesh.nodes.copy()
     out = {}
     for op in ("dense", "fast"):
-        prm = dataclasses.replace(model.thermal, substrate=plane, loss=IntegralLoss(
-            operator=op, refinement=2, correction_tol=0.0))      # dense: one plain operator
+        prm = dataclasses.replace(model.thermal, substrate=plane, sheet_refinement=1,
+                                  loss=IntegralLoss(operator=op, refinement=2,
+                                                    correction_tol=0.0))  # dense: one plain
         tm = ThermalModel(model.mesh, prm, warn_no_plane=False)
         q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
         rises, builds = [], []

@@ -90,8 +90,8 @@ def test_fast_path_on_the_grid_agrees_with_dense(plane, monkeypatch):
     x[:, 2] += 3e-4 * np.sin(x[:, 0] / 1.5e-3) ** 2
     out = {}
     for op in ("dense", "fast"):
-        prm = dataclasses.replace(model.thermal, substrate=plane, loss=IntegralLoss(
-            operator=op, refinement=2))
+        prm = dataclasses.replace(model.thermal, substrate=plane, sheet_refinement=1,
+                                  loss=IntegralLoss(operator=op, refinement=2))
         tm = ThermalModel(model.mesh, prm, warn_no_plane=False)
         out[op] = tm.solve(x, tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))) \
             - prm.room_temperature
