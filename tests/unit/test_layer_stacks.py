@@ -215,3 +215,19 @@ def test_fold_model_file_keeps_the_sheet_layers(tmp_path):
     back, _ = read_model(write_model(model, (), tmp_path / "strip.fold"))
     assert back.thermal.sheet_layers == model.thermal.sheet_layers
     assert back.to_dict() == model.to_dict()
+
+
+def test_integral_loss_on_the_refined_sheet_conducts_as_one_layer_of_sum_k_t():
+    """The default integral path (monotone conduction on the refined sheet, r = 2): the
+    layered strip gives the temperatures of the same strip of one material with k t = S."""
+    model = _strip(n=6, loss=IntegralLoss(refinement=1), refinement=2)
+    tm = _thermal_model(model)
+    one = dataclasses.replace(SU8, thermal_conductivity=S / 1e-6)
+    pattern = dataclasses.replace(model.mesh.pattern, panel_material=one, crease_material=one)
+    paper = dataclasses.replace(model.thermal, crease_conduction="paper", sheet_layers=None)
+    single = ThermalModel(dataclasses.replace(model.mesh, pattern=pattern), paper)
+    x = model.mesh.nodes
+    q = tm.heat_vector(np.full(model.mesh.n_creases, 1e-3))
+    layered = tm.solve(x, q)
+    assert layered.max() > 1.0
+    np.testing.assert_allclose(layered, single.solve(x, q), rtol=1e-10)
