@@ -41,8 +41,8 @@ __getattr__, __dir__ = _attach(__name__, {
               "read_fold", "read_model", "result_to_fold_frames", "write_fold",
               "write_fold_frames", "write_model"),
     ".solvers.generalized_alpha": ("MotionState", "TimeIntegrator"),
-    ".geometry.materials": ("AIR", "GOLD", "SILICON", "SPR", "SU8", "SUBSTRATE", "WATER", "Fluid",
-                   "Material"),
+    ".geometry.materials": ("AIR", "GOLD", "GOLD_FILM", "SILICON", "SPR", "SU8", "SUBSTRATE",
+                            "WATER", "Fluid", "Material"),
     ".model.mass": ("lumped_masses",),
     ".model.stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
                      "unsupported_panels", "check_supported", "plain_contact"),
@@ -73,6 +73,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".solvers.stability": ("Stability", "tangent_stability", "state_stability"),
     ".solvers.equilibrium_check": ("EQUILIBRIUM_RTOL", "EquilibriumCheck", "check_equilibrium"),
     ".thermal.parameters": ("REFERENCE_BETA", "ThermalParameters"),
+    ".thermal.layers": ("Layer", "SheetLayers"),
     ".thermal.loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
     ".thermal.monotone": ("CONDUCTIONS",),
     ".thermal.calibration": ("CalibrationResult", "calibrate_environment"),
@@ -97,7 +98,9 @@ __all__ = [
     "sharp_model", "SharpHingeParameters", "SharpHingeMesh", "build_sharp_mesh",
     "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph", "Supports",
     "ContactParameters", "Model", "make_model", "STANDARD_GRAVITY", "ROOM_TEMPERATURE",
-    "Fluid", "GOLD", "SILICON", "AIR", "WATER",
+    "Fluid", "GOLD", "GOLD_FILM", "SILICON", "AIR", "WATER",
+    # the sheet's layer stacks for the heat balance (crease_conduction="layers", theory 4.10)
+    "Layer", "SheetLayers",
     # heat loss to the medium: the paper's chains or the calibration-free integral, a substrate
     "ChainLoss", "IntegralLoss", "Substrate", "HEAT_LOSS_MODELS",
     # the sheet's conduction: the reference's T3 or the monotone one (theory 4.9)

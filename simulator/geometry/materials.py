@@ -14,7 +14,7 @@ from .._deprecation import warn_deprecated
 from .._validate import finite, in_range, non_negative, positive
 from ..errors import ParameterError
 
-__all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "GOLD_FILM_CONDUCTIVITY",
+__all__ = ["Material", "Fluid", "SU8", "SPR", "SUBSTRATE", "GOLD", "GOLD_FILM_CONDUCTIVITY", "GOLD_FILM",
            "SILICON", "AIR", "WATER", "AIR_CONDUCTIVITY_TABLE", "WATER_CONDUCTIVITY_TABLE",
            "POLYMER_EMISSIVITY", "GOLD_FILM_EMISSIVITY", "KELVIN"]
 
@@ -143,6 +143,13 @@ GOLD = Material("gold", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0
 #: the paper's 0.1-0.2 um heater layers (theory 4.10), the default of
 #: :attr:`simulator.model.bimorph.Bimorph.k1`; its plausible range is 100-300 W/(m K).
 GOLD_FILM_CONDUCTIVITY = 150.0
+
+#: A thin evaporated gold film (heater or metal layer, 0.1-0.5 um): :data:`GOLD` with the
+#: film's in-plane conductivity :data:`GOLD_FILM_CONDUCTIVITY`; density and specific heat are
+#: the bulk's (19300 kg/m^3, 129 J/(kg K), Incropera Table A.1: the heat capacity of a film this
+#: thick is the bulk's). For layer stacks (``Layer.of(GOLD_FILM, 0.1e-6)``, theory 4.10).
+GOLD_FILM = Material("gold film", youngs_modulus=79e9, poisson_ratio=0.44, density=19300.0,
+                     thermal_conductivity=GOLD_FILM_CONDUCTIVITY, specific_heat=129.0)
 
 #: Single-crystal silicon. E = 150 GPa and rho = 2300 kg/m^3 as in the reference micro-mirror
 #: (02/Example04, theory 10.9); nu = 0.22 (polysilicon, Sharpe et al. 1997); c = 712 J/(kg K),

@@ -19,7 +19,7 @@ import numpy as np
 
 from .._validate import finite, non_negative, positive
 from ..errors import ParameterError
-from ..geometry.materials import GOLD_FILM_CONDUCTIVITY, SU8
+from ..geometry.materials import GOLD, GOLD_FILM_CONDUCTIVITY, SU8
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
 
@@ -53,6 +53,14 @@ class Bimorph:
         :data:`~simulator.geometry.materials.GOLD_FILM_CONDUCTIVITY` = 150 (bulk gold: 317),
         and SU-8, 0.3. The layer data live here, beside the layers' moduli and thicknesses,
         because the crease's conduction and its bending come from the same two layers.
+    rho_c1, rho_c2 : float
+        Volumetric heat capacity rho c [J/(m^3 K)] of layer 1 and layer 2, >= 0: the crease's
+        areal heat capacity ``rho_c1 t1 + rho_c2 t2`` [J/(m^2 K)] in the transient model with
+        ``crease_conduction="layers"`` (theory 7.2). Defaults: gold, 19300 kg/m^3 x 129
+        J/(kg K) = 2.49e6 (Incropera et al., 6th ed., Table A.1; a film's specific heat is
+        the bulk's), and the toolkit's SU-8, 1200 kg/m^3 x 1666.7 J/(kg K) = 2.0e6 (the
+        reference's value, :data:`~simulator.geometry.materials.SU8`; "Determination of
+        thermal and mechanical properties of SU-8" measured 1.6 J/(g K): theory 4.10).
     """
 
     E1: float
@@ -61,6 +69,8 @@ class Bimorph:
     t2: float
     k1: float = GOLD_FILM_CONDUCTIVITY
     k2: float = SU8.thermal_conductivity
+    rho_c1: float = GOLD.density * GOLD.specific_heat
+    rho_c2: float = SU8.density * SU8.specific_heat
 
     def __post_init__(self):
         for name in ("E1", "t1", "E2", "t2"):
@@ -68,6 +78,9 @@ class Bimorph:
         for name, what in (("k1", "150 for a thin gold film"), ("k2", "0.3 for SU-8")):
             non_negative(f"Bimorph.{name}", getattr(self, name), "W/(m K)",
                          hint=f"give the layer's in-plane thermal conductivity, e.g. {what}")
+        for name, what in (("rho_c1", "2.49e6 for gold"), ("rho_c2", "2.0e6 for SU-8")):
+            non_negative(f"Bimorph.{name}", getattr(self, name), "J/(m^3 K)",
+                         hint=f"give the layer's density times specific heat, e.g. {what}")
 
     @property
     def sheet_conductance(self) -> float:
@@ -75,13 +88,31 @@ class Bimorph:
         4.10)."""
         return float(self.k1) * float(self.t1) + float(self.k2) * float(self.t2)
 
+    @property
+    def layers(self) -> tuple:
+        """The two layers as :class:`~simulator.thermal.layers.Layer` (conductivities ``k1``,
+        ``k2``, heat capacities ``rho_c1``, ``rho_c2``): the stack of an actuated crease, and
+        of a passive crease carrying the same heater film (``SheetLayers(creases={c:
+        bimorph.layers})``; theory 4.10)."""
+        from ..thermal.layers import Layer
+
+        return (Layer(self.t1, self.k1, self.rho_c1, "bimorph layer 1"),
+                Layer(self.t2, self.k2, self.rho_c2, "bimorph layer 2"))
+
+    @property
+    def areal_capacity(self) -> float:
+        """Areal heat capacity ``rho_c1 t1 + rho_c2 t2`` of the two layers [J/(m^2 K)]
+        (theory 7.2)."""
+        return float(self.rho_c1) * float(self.t1) + float(self.rho_c2) * float(self.t2)
+
     def curvature(self, delta_alpha, dT):
         """Curvature [1/m] for expansion mismatch [1/K] and temperature rise [K]."""
         return timoshenko_curvature(delta_alpha, dT, self.E1, self.t1, self.E2, self.t2)
 
     def to_dict(self) -> dict:
         return {"E1 [Pa]": self.E1, "t1 [m]": self.t1, "E2 [Pa]": self.E2, "t2 [m]": self.t2,
-                "k1 [W/(m K)]": self.k1, "k2 [W/(m K)]": self.k2}
+                "k1 [W/(m K)]": self.k1, "k2 [W/(m K)]": self.k2,
+                "rho_c1 [J/(m^3 K)]": self.rho_c1, "rho_c2 [J/(m^3 K)]": self.rho_c2}
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from .._deprecation import warn_deprecated
 from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
 from ..geometry.materials import AIR, Fluid
+from .layers import SheetLayers
 from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 from .monotone import CONDUCTIONS
 
@@ -195,7 +196,7 @@ class ThermalParameters:
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
     boundary_panels=(), room_temperature_nodes=(), conduction=None, crease_conduction="paper",
-    sheet_refinement=None)``;
+    sheet_layers=None, sheet_refinement=None)``;
     give them by keyword.
 
     Parameters
@@ -237,8 +238,15 @@ class ThermalParameters:
         crease material's conductivity over the crease thickness, as the reference;
         ``"layers"`` the actuated creases conduct as their two bimorph layers, sheet
         conductance ``k1 t1 + k2 t2`` (:class:`~simulator.model.bimorph.Bimorph`, taken from
-        the model's actuators; about 100x the paper's on the paper's gold-on-SU-8 creases);
-        passive creases stay as in ``"paper"``.
+        the model's actuators; about 100x the paper's on the paper's gold-on-SU-8 creases),
+        and the panels and passive creases listed in ``sheet_layers`` as their stacks; the
+        transient model's heat capacity of those is ``sum rho c t`` over the same layers
+        (theory 7.2). Everything else stays as in ``"paper"``.
+    sheet_layers : SheetLayers or None
+        Layer stacks of panels and passive creases (:class:`~simulator.thermal.layers.
+        SheetLayers`: a metal film on a panel, a heater film on a crease that does not
+        actuate), used with ``crease_conduction="layers"`` (with ``"paper"`` an error: they
+        would be ignored). None (default): none.
     sheet_refinement : int or None
         The sheet's temperature resolved within the mesh triangles (theory 4.11,
         :mod:`~simulator.thermal.refined`): every mesh triangle split uniformly into ``r^2``
@@ -273,6 +281,7 @@ class ThermalParameters:
     room_temperature_nodes: tuple
     conduction: str | None
     crease_conduction: str
+    sheet_layers: SheetLayers | None
     sheet_refinement: int | None
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
@@ -281,7 +290,8 @@ class ThermalParameters:
                  loss_model=None, integral_refinement=None, substrate_plane=None,
                  integral_shape_tol=None, integral_extrapolation=None,
                  integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
-                 conduction=None, crease_conduction="paper", sheet_refinement=None):
+                 conduction=None, crease_conduction="paper", sheet_layers=None,
+                 sheet_refinement=None):
         old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
                "layers": layers, "dissipation_angle": dissipation_angle,
                "env_density": env_density, "env_specific_heat": env_specific_heat,
@@ -293,11 +303,13 @@ class ThermalParameters:
             warn_deprecated(f"ThermalParameters({name}=...) is deprecated; use "
                             f"{_OLD_KEYWORDS[name]}.")
         self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
-                  room_temperature_nodes, conduction, crease_conduction, sheet_refinement)
+                  room_temperature_nodes, conduction, crease_conduction, sheet_refinement,
+                  sheet_layers)
 
     def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
              room_temperature=21.0, boundary_panels=(), room_temperature_nodes=(),
-             conduction=None, crease_conduction="paper", sheet_refinement=None):
+             conduction=None, crease_conduction="paper", sheet_refinement=None,
+             sheet_layers=None):
         """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
         old = {k: old.get(k) for k in _OLD_KEYWORDS}
         loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
@@ -319,6 +331,7 @@ class ThermalParameters:
             "ThermalParameters.crease_conduction", crease_conduction, CREASE_CONDUCTIONS,
             hint="'paper' for the reference's single crease layer, 'layers' for the sum of "
                  "k t over the actuators' bimorph layers"))
+        set_(self, "sheet_layers", _sheet_layers(sheet_layers, self.crease_conduction))
         set_(self, "sheet_refinement", _sheet_refinement(sheet_refinement, loss))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
@@ -438,7 +451,8 @@ class ThermalParameters:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
         the held panels and nodes, the ``conduction`` (None: the loss model's), the
-        ``crease_conduction`` and, where given, the ``sheet_refinement``.
+        ``crease_conduction`` and, where given, the ``sheet_layers`` and the
+        ``sheet_refinement``.
         :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
@@ -446,6 +460,8 @@ class ThermalParameters:
                 "boundary_panels": list(self.boundary_panels),
                 "room_temperature_nodes": list(self.room_temperature_nodes),
                 "conduction": self.conduction, "crease_conduction": self.crease_conduction,
+                **({} if self.sheet_layers is None
+                   else {"sheet_layers": self.sheet_layers.to_dict()}),
                 **({} if self.sheet_refinement is None
                    else {"sheet_refinement": self.sheet_refinement})}
 
@@ -464,9 +480,28 @@ class ThermalParameters:
             sub = "substrate: a given plane"
         layers = ("; creases conduct as their bimorph layers (sum of k t)"
                   if self.crease_conduction == "layers" else "")
+        if self.sheet_layers is not None:
+            layers += (f", {len(self.sheet_layers.panels)} panel(s) and "
+                       f"{len(self.sheet_layers.creases)} passive crease(s) as their stacks")
         fine = self._describe_refinement(n_triangles)
         return (f"heat loss: {self.loss.describe()}; medium: {self.medium.name}, k = "
                 f"{self.medium.thermal_conductivity:g} W/(m K); {sub}{layers}{fine}")
+
+
+def _sheet_layers(value, crease_conduction: str) -> SheetLayers | None:
+    """The checked :attr:`ThermalParameters.sheet_layers` (None: none; an empty one is None)."""
+    if value is None:
+        return None
+    layers = SheetLayers.from_dict(value)
+    if not layers:
+        return None
+    if crease_conduction != "layers":
+        raise ParameterError(
+            f"ThermalParameters.sheet_layers: {len(layers.panels)} panel and "
+            f"{len(layers.creases)} crease stack(s) given with crease_conduction = "
+            f"{crease_conduction!r}, which ignores them; give crease_conduction='layers' (or "
+            "sheet_layers=None for the paper's single layers).")
+    return layers
 
 
 def _sheet_refinement(value, loss) -> int | None:

@@ -34,7 +34,7 @@ from . import _thermal_jit
 from ..mechanics.assembly import StiffnessPattern
 from ..mechanics.elements.contact import point_triangle_distance
 from .._deprecation import warn_deprecated
-from .._validate import array, one_of
+from .._validate import array, capped, one_of
 from ..errors import ConvergenceError, ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
@@ -167,6 +167,15 @@ class ThermalModel:
         The model's :class:`~simulator.model.bimorph.Actuators`: with
         ``params.crease_conduction == "layers"`` their bimorph's layers give the actuated
         creases' sheet conductance ``k1 t1 + k2 t2`` (theory 4.10); unused with ``"paper"``.
+
+    Attributes
+    ----------
+    layered : (n_tri,) bool
+        Triangles that conduct and store heat as a layer stack (``crease_conduction="layers"``:
+        the actuated creases' and the ``params.sheet_layers``' panels and creases).
+    layer_capacity : (n_tri,) float
+        Areal heat capacity ``sum rho c t`` [J/(m^2 K)] of the layered triangles' stacks (0
+        elsewhere; the transient model takes the others' from their material, theory 7.2).
     """
 
     def __init__(self, mesh: BarHingeMesh, params: ThermalParameters,
@@ -195,6 +204,8 @@ class ThermalModel:
                                      pat.crease_material.thermal_conductivity)
         #: (n_tri,) k t of every triangle [W/K]
         self._kt = self.conductivity * self.thickness
+        self.layered = np.zeros(len(tri), bool)
+        self.layer_capacity = np.zeros(len(tri))
         if params.crease_conduction == "layers":
             self._layer_conduction(actuators)
         self.is_boundary = is_panel & np.isin(panel, params.boundary_panels)
@@ -259,10 +270,33 @@ class ThermalModel:
         self.free_nodes = np.setdiff1d(np.arange(n), self.fixed_nodes)
 
     def _layer_conduction(self, actuators) -> None:
-        """Give the actuated creases' triangles the sheet conductance ``k1 t1 + k2 t2`` of the
-        bimorph of ``actuators`` (``crease_conduction="layers"``, theory 4.10); their
-        :attr:`conductivity` becomes the effective ``(k1 t1 + k2 t2) / t`` over the crease
-        thickness ``t`` (which the heat capacity keeps using)."""
+        """Give the layered triangles (``crease_conduction="layers"``, theory 4.10) their
+        stack's sheet conductance and areal heat capacity: the actuated creases their bimorph's
+        ``k1 t1 + k2 t2`` and ``rho_c1 t1 + rho_c2 t2``, the panels and passive creases of
+        ``params.sheet_layers`` their stack's sums. Their :attr:`conductivity` becomes the
+        effective ``sum k t / t`` over the pattern's thickness ``t``."""
+        stacks = self.params.sheet_layers
+        kt, cap = self._kt.copy(), self.layer_capacity.copy()
+        if stacks is not None:
+            listed, skt, scap = stacks.per_triangle(self.mesh, self.mesh.pattern)
+            kt, cap, self.layered = np.where(listed, skt, kt), scap, listed
+        if actuators is not None or stacks is None:
+            actuated = self._actuated_triangles(actuators, stacks)
+            b = actuators.bimorph
+            kt = np.where(actuated, b.sheet_conductance, kt)
+            cap = np.where(actuated, b.areal_capacity, cap)
+            self.layered = self.layered | actuated
+        self._kt, self.layer_capacity = kt, cap
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.conductivity = np.where(self.layered & (self.thickness > 0),
+                                         self._kt / self.thickness, self.conductivity)
+        logger.debug("conduction 'layers': %d of %d triangles as layer stacks",
+                     int(self.layered.sum()), len(self.layered))
+
+    def _actuated_triangles(self, actuators, stacks) -> np.ndarray:
+        """(n_tri,) bool: the triangles of the creases ``actuators`` actuate; an error without
+        actuators, or where ``stacks`` (:class:`~simulator.thermal.layers.SheetLayers`) lists
+        an actuated crease (its layers are its bimorph's)."""
         from ..model.bimorph import Actuators
 
         if not isinstance(actuators, Actuators):
@@ -270,18 +304,18 @@ class ThermalModel:
                 f"ThermalParameters.crease_conduction = 'layers' needs the model's actuators "
                 f"(their bimorph layers conduct), got actuators = {actuators!r}; give "
                 "make_model(..., actuators=Actuators(Bimorph(...), ...)), or "
-                "crease_conduction='paper'.")
-        mesh = self.mesh
-        actuated = np.isin(mesh.crease_ids, [int(c) for c in dict(actuators.delta_alpha)])
-        crease = mesh.triangle_crease
-        layered = (crease >= 0) & np.append(actuated, False)[crease]
-        self._kt = np.where(layered, actuators.bimorph.sheet_conductance, self._kt)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.conductivity = np.where(layered & (self.thickness > 0),
-                                         self._kt / self.thickness, self.conductivity)
-        logger.debug("crease conduction 'layers': %d of %d crease triangles at k t = %g W/K",
-                     int(layered.sum()), int((crease >= 0).sum()),
-                     actuators.bimorph.sheet_conductance)
+                "ThermalParameters(sheet_layers=SheetLayers(...)) for the stacks of panels and "
+                "passive creases, or crease_conduction='paper'.")
+        ids = [int(c) for c in dict(actuators.delta_alpha)]
+        both = sorted(set(ids) & set(stacks.creases)) if stacks is not None else []
+        if both:
+            raise ParameterError(
+                f"SheetLayers.creases lists the actuated crease(s) {capped(both)}: an actuated "
+                "crease conducts as its bimorph's layers (Actuators.bimorph); list only passive "
+                "creases (a heater film without actuation), or change the Bimorph.")
+        actuated = np.isin(self.mesh.crease_ids, ids)
+        crease = np.asarray(self.mesh.triangle_crease)
+        return (crease >= 0) & np.append(actuated, False)[crease]
 
     def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""

@@ -6,7 +6,8 @@ diagonal (lumped, theory 7.2) and uses the same volumes as the conductivity:
 
 * solid: ``rho c t A_t / 3`` to each vertex of a triangle (material of its panel, or the crease
   material; unlike the reference, panels use their specific heat, not their conductivity,
-  theory 7.2);
+  theory 7.2); a triangle that conducts as a layer stack (``crease_conduction="layers"``,
+  theory 4.10) holds ``sum rho c t`` over the same layers instead;
 * environment: layer segment ``q`` of a vertex holds ``rho_env c_env A_q t_air / N``, half on
   each of its two end copies (``A_q``, ``t_air`` as in the conductance, theory 4.3-4.4).
 
@@ -51,7 +52,7 @@ from .schedules import crease_power_function
 from ..state import thermal_model
 from .steady import ThermalModel
 
-__all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "HeatSystem", "heat_system", "ThetaStepper",
+__all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "areal_capacity", "HeatSystem", "heat_system", "ThetaStepper",
            "theta_step", "stepper_for", "heat_out_rate", "TransientHeatResult", "integrate_heat", "environment_profile",
            "free_heat_input", "initial_rise", "check_time_step", "check_theta",
            "medium_diffusion_time", "check_quasi_static_medium"]
@@ -79,12 +80,13 @@ def check_theta(theta) -> float:
 
 # ------------------------------------------------------------------ capacity
 def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
-    """rho c [J/(m^3 K)] of every triangle, (n_tri,); error for missing density / heat."""
+    """rho c [J/(m^3 K)] of every triangle's material, (n_tri,); error for missing density /
+    heat where a triangle that is not a layer stack (:attr:`ThermalModel.layered`) needs it."""
     mesh, pat = tm.mesh, tm.mesh.pattern
     panel = mesh.triangle_panel
     mats = list(pat.panel_material) + [pat.crease_material]
     which = np.where(panel >= 0, panel, len(mats) - 1)
-    for k in np.unique(which[tm.thickness > 0]):
+    for k in np.unique(which[(tm.thickness > 0) & ~tm.layered]):
         m = mats[k]
         where = f"panel {k}" if k < len(mats) - 1 else "the creases"
         for field, unit in (("density", "kg/m^3"), ("specific_heat", "J/(kg K)")):
@@ -97,6 +99,14 @@ def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
     return rho_c[which]
 
 
+def areal_capacity(tm: ThermalModel) -> np.ndarray:
+    """Areal heat capacity [J/(m^2 K)] of every triangle, (n_tri,) (theory 7.2): ``rho c t``
+    of its material and thickness, or ``sum rho c t`` over its layers where it conducts as a
+    layer stack (:attr:`ThermalModel.layered`, theory 4.10): the same layers in the steady
+    conduction and in the capacity."""
+    return np.where(tm.layered, tm.layer_capacity, _volumetric_capacity(tm) * tm.thickness)
+
+
 def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     """Lumped heat capacity [J/K] of every unknown, ((N + 1) n,), at positions ``x`` (n, 3) [m].
 
@@ -106,7 +116,7 @@ def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     medium, mesh = tm.params.medium, tm.mesh
     n, N = mesh.n_nodes, tm.chains.layers
     area = tm.triangle_areas(x)
-    solid = _volumetric_capacity(tm) * tm.thickness * area / 3
+    solid = areal_capacity(tm) * area / 3
     C = np.zeros((N + 1, n))
     C[0] = np.bincount(mesh.triangles.ravel(), np.repeat(solid, 3), minlength=n)
     if medium.thermal_conductivity > 0:            # k_env = 0: no environment in contact
@@ -227,7 +237,7 @@ def _integral_heat_system(tm: ThermalModel, x) -> HeatSystem:
             B = np.zeros((n, n))
             B[np.ix_(sheet, sheet)] = loss
             nonlinear = _nonlinear_loss(tm, x, free, B[np.ix_(free, free)])
-    solid = _volumetric_capacity(tm) * tm.thickness * area / 3
+    solid = areal_capacity(tm) * area / 3
     C = np.bincount(tri.ravel(), np.repeat(solid, 3), minlength=n)[free]
     if np.any(C <= 0):
         raise ParameterError(f"node {int(free[np.argmin(C)])} has no heat capacity: every "
