@@ -186,7 +186,7 @@ def test_double_fold_far_crease_hotter_and_folds_more(quick, loss_model):
 def test_double_fold_integral_loss_runs_hotter_and_folds_further_than_the_chains(quick):
     """The calibration-free model, which the 3-D FE supports here, loses less heat than the
     paper's chains: every fold further and hotter at the same power (side by side, issue 29;
-    the crease centres 3.8-4 % hotter on the sheet refined r = 2, theory 4.11, 12-27 % on the
+    the crease centres 3.8-4 % hotter on the sheet refined r = 2, theory 4.11; 12-27 % on the
     mesh triangles, which run hot)."""
     _, _, df = quick("double_fold")
     sweep = _table(df, "sweep")
