@@ -24,6 +24,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".devices.gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
                  "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
                  "gripper_model"),
+    ".devices.gripper_drive": ("GripperDrive", "gripper_circuits", "gripper_drive"),
     ".devices.miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
                "heated_creases", "lift_per_power_table", "lift_power", "miura_model"),
     ".core.evaluation_log": ("EvaluationLog", "LoggedProblem"),
@@ -50,6 +51,7 @@ __all__ = [
     # gripper
     "GripperDesign", "StageResult", "GripperResult", "STAGE_STATUSES", "gripper_model",
     "evaluate_gripper", "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON",
+    "GripperDrive", "gripper_drive", "gripper_circuits",
     # Miura lifter
     "MiuraDesign", "MiuraProblem", "MIURA_SPACE", "LiftPowerResult", "miura_model",
     "heated_creases", "lift_power", "lift_per_power_table",

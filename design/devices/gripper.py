@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -36,9 +36,9 @@ from simulator import (AIR, CONDUCTIONS, REFERENCE_BETA, REFERENCE_GRAVITY, SPR,
                        BarHingeParameters, Bimorph, ChainLoss, ContactParameters, IntegralLoss,
                        Load, NewtonOptions, ParameterError, SelfFold, Substrate, Supports,
                        TemperatureLimit, TemperatureVerdict, ThermalParameters, build_mesh,
-                       example_patterns, make_model, simulate)
+                       crease_temperatures, example_patterns, make_model, simulate)
 from simulator._result import ResultFiles
-from simulator._validate import integer, one_of, positive
+from simulator._validate import finite, in_range, integer, non_negative, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .limits import SU8_LIMIT
@@ -51,6 +51,8 @@ logger = logging.getLogger(__name__)
 
 #: Heat-loss models of :attr:`GripperDesign.loss_model` (theory 4.3 and 4.7).
 LOSS_MODELS = ("chain", "integral")
+#: How a crease conducts in-plane (:class:`~simulator.ThermalParameters` ``crease_conduction``).
+_CREASE_CONDUCTIONS = ("paper", "layers")
 #: Heater circuits (0-based crease ids): base hinges (reference 3, 6), arm hinges (4, 10).
 BASE_CREASES = (2, 5)
 ARM_CREASES = (3, 9)
@@ -111,6 +113,27 @@ class GripperDesign:
         (:class:`~simulator.ThermalParameters` ``sheet_refinement``, theory 4.11; the integral
         model only), or None (default: the loss model's, 1 with the chains and 2 with the
         integral loss at ``integral_refinement`` up to 5)
+    crease_conduction : how an actuated crease conducts in-plane
+        (:class:`~simulator.ThermalParameters` ``crease_conduction``, theory 4.10): ``"paper"``
+        (default: one polymer layer over the crease thickness, the reference's) or
+        ``"layers"`` (the gold and SU-8 layers in parallel, ``k_gold t_gold + k2 t_su8``)
+    k_gold : in-plane thermal conductivity of the crease's gold film [W/(m K)] with
+        ``crease_conduction="layers"``, or None (default: :class:`~simulator.Bimorph`'s
+        thin-film value, 150; plausible 100-300, bulk 317; theory 4.10)
+    temperature_dependent_air : the air's conductivity follows Incropera's Table A.4 (theory
+        4.12, ``AIR.with_temperature_dependence()``) instead of the constant
+        ``env_conductivity`` (default False, the paper setting)
+    emissivity_polymer, emissivity_gold : total hemispherical emissivities [-] of the
+        polymer (the SPR panels, the creases' SU-8 face) and of the creases' gold face (theory
+        4.12); a crease radiates with the mean of its two faces'. Default 0 (no radiation,
+        the paper setting); plausible 0.5-0.9 for the thin polymer films, 0.02-0.05 for
+        evaporated gold
+    lead_fraction : resistance of each heater circuit's leads and traces as a fraction of its
+        heaters' resistance at room temperature [-] (default 0); the electrical drive only
+        (:func:`~design.devices.gripper_drive.gripper_drive`, theory 8.8), not the heat balance
+    heater_tcr : temperature coefficient of resistance of the gold heaters [1/K], or None
+        (default: :class:`~simulator.Heater`'s, 0.0034, the upper end for a thin film); the
+        electrical drive only, like ``lead_fraction``
     """
 
     W: float = 200e-6
@@ -132,6 +155,13 @@ class GripperDesign:
     integral_refinement: int = 3
     conduction: str | None = None
     sheet_refinement: int | None = None
+    crease_conduction: str = "paper"
+    k_gold: float | None = None
+    temperature_dependent_air: bool = False
+    emissivity_polymer: float = 0.0
+    emissivity_gold: float = 0.0
+    lead_fraction: float = 0.0
+    heater_tcr: float | None = None
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -150,9 +180,10 @@ class GripperDesign:
                 raise ParameterError(f"GripperDesign.sheet_refinement = {self.sheet_refinement} "
                                      "needs loss_model='integral' (the chains were fitted on "
                                      "the mesh triangles); use sheet_refinement=None or 1.")
+        self._check_physics()
         for name, value in asdict(self).items():
             if name in ("residual_fold_creases", "loss_model", "integral_refinement",
-                        "conduction", "sheet_refinement"):
+                        "conduction", "sheet_refinement") or name in _PHYSICS:
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -163,12 +194,45 @@ class GripperDesign:
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
 
+    def _check_physics(self):
+        """Check the heat-transfer and electrical switches (:data:`_PHYSICS`)."""
+        one_of("GripperDesign.crease_conduction", self.crease_conduction,
+               _CREASE_CONDUCTIONS)
+        positive("GripperDesign.k_gold", self.k_gold, "W/(m K)",
+                 "100-300 for a thin gold film (bulk 317), or None for the default 150",
+                 allow_none=True)
+        if self.k_gold is not None and self.crease_conduction != "layers":
+            raise ParameterError(f"GripperDesign.k_gold = {self.k_gold!r} W/(m K) acts only "
+                                 "with crease_conduction='layers' (the paper setting conducts "
+                                 "a crease as one polymer layer); set crease_conduction="
+                                 "'layers' or leave k_gold None.")
+        if not isinstance(self.temperature_dependent_air, (bool, np.bool_)):
+            raise ParameterError(f"GripperDesign.temperature_dependent_air = "
+                                 f"{self.temperature_dependent_air!r} must be True or False.")
+        if self.temperature_dependent_air and self.env_conductivity != _OPTIONAL[
+                "env_conductivity"]:
+            raise ParameterError(
+                f"GripperDesign.env_conductivity = {self.env_conductivity!r} W/(m K) with "
+                "temperature_dependent_air=True: the air then follows Incropera's table "
+                "whatever the constant is (theory 4.12); leave env_conductivity at 0.026 or "
+                "set temperature_dependent_air=False.")
+        for name in ("emissivity_polymer", "emissivity_gold"):
+            in_range(f"GripperDesign.{name}", getattr(self, name), 0.0, 1.0, "",
+                     "0 without radiation (the paper setting), 0.5-0.9 a thin polymer film, "
+                     "0.02-0.05 evaporated gold")
+        non_negative("GripperDesign.lead_fraction", self.lead_fraction, "",
+                     "0 without leads, e.g. 0.1 for leads of a tenth of the heaters' resistance")
+        finite("GripperDesign.heater_tcr", self.heater_tcr, "1/K",
+               "0.0011-0.0034 for a thin gold film, or None for 0.0034", allow_none=True)
+
     def to_dict(self) -> dict:
         """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
         ``env_conductivity``, ``loss_model``, ``integral_refinement``, ``conduction``) only
         when they differ from the values they had before they existed (``loss_model`` only
         when not "chain", the default until 7 Dec 2026), so that problem settings, and the
-        hashes of evaluation logs written before, are kept; ``integral_refinement``, the
+        hashes of evaluation logs written before, are kept (so are the physics switches
+        ``crease_conduction`` to ``heater_tcr``, named only away from their defaults);
+        ``integral_refinement``, the
         conduction and the sheet refinement in force always with the integral model (their
         defaults changed, so an older log of the integral model never matches)."""
         out = asdict(self)
@@ -236,6 +300,10 @@ class StageResult(ResultFiles):
         power of a met stage (the ``" after a snap (...)"`` of the message); empty if none.
     temperature_crease, hottest_node_crease : int or None
         Crease ids of ``temperature`` and of ``max_crease_temperature``.
+    crease_temperatures : tuple of float
+        Actuation temperature of every crease [deg C] (the 7-node measure that drives the
+        bimorph and sets a heater's resistance, theory 5.1 and 8.8), in crease-row order, at
+        the stage's last state (its stopping power if met); empty if not computed.
     """
 
     success: bool
@@ -250,6 +318,7 @@ class StageResult(ResultFiles):
     snaps: tuple = ()
     temperature_crease: int | None = None
     hottest_node_crease: int | None = None
+    crease_temperatures: tuple = ()
 
     def __post_init__(self):
         check_outcome(self, ("met",), STAGE_STATUSES[1:])
@@ -350,12 +419,20 @@ class GripperResult(ResultFiles):
 
 
 _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
-          "integral_refinement": "-", "conduction": "-", "sheet_refinement": "-"}
+          "integral_refinement": "-", "conduction": "-", "sheet_refinement": "-",
+          "crease_conduction": "-", "k_gold": "W/(m K)", "temperature_dependent_air": "-",
+          "emissivity_polymer": "-", "emissivity_gold": "-", "lead_fraction": "-",
+          "heater_tcr": "1/K"}
+#: The heat-transfer and electrical switches of issue 30 and their defaults (the paper
+#: setting), left out of ``GripperDesign.to_dict`` at these values.
+_PHYSICS = {"crease_conduction": "paper", "k_gold": None, "temperature_dependent_air": False,
+            "emissivity_polymer": 0.0, "emissivity_gold": 0.0, "lead_fraction": 0.0,
+            "heater_tcr": None}
 #: The optional fields' values before they existed (left out of ``GripperDesign.to_dict``);
 #: ``loss_model`` "chain" was the default until 7 Dec 2026.
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
              "loss_model": "chain", "integral_refinement": 3, "conduction": None,
-             "sheet_refinement": None}
+             "sheet_refinement": None, **_PHYSICS}
 #: Triangles of the gripper's mesh (every design: the dimensions move its nodes only).
 GRIPPER_TRIANGLES = 48
 
@@ -398,20 +475,43 @@ def _loss_model(design: GripperDesign) -> dict:
             "substrate": Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))}
 
 
-def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
-    """The gripper model and the loading steps before heating (residual fold, gravity)."""
+def _gripper_pattern(design: GripperDesign):
+    """The design's pattern (before the node edits): SPR panels, the creases of the panel
+    material, both radiating at the design's emissivities (a crease the mean of its polymer
+    and gold faces', theory 4.12; no radiation at the defaults)."""
+    panel = SPR
+    if design.emissivity_polymer:
+        panel = replace(SPR, emissivity=design.emissivity_polymer)
     pattern = example_patterns.gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
                               crease_thickness=design.t_gold + design.t_su8,
                               grip_range=design.grip_range, undercut=design.undercut,
-                              panel_thickness=design.panel_thickness, panel_material=SPR)
-    mesh = build_mesh(pattern)
+                              panel_thickness=design.panel_thickness, panel_material=panel)
+    crease = (design.emissivity_polymer + design.emissivity_gold) / 2
+    if crease != pattern.crease_material.emissivity:
+        pattern = replace(pattern, crease_material=replace(pattern.crease_material,
+                                                           emissivity=crease))
+    return pattern
+
+
+def _medium(design: GripperDesign):
+    """The air: Incropera's k(T) (theory 4.12) or the constant ``env_conductivity``."""
+    if design.temperature_dependent_air:
+        return AIR.with_temperature_dependence()
+    return AIR.with_properties(thermal_conductivity=design.env_conductivity)
+
+
+def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
+    """The gripper model and the loading steps before heating (residual fold, gravity)."""
+    mesh = build_mesh(_gripper_pattern(design))
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(
-        medium=AIR.with_properties(thermal_conductivity=design.env_conductivity),
-        boundary_panels=(5,), room_temperature_nodes=(37,), conduction=design.conduction,
+        medium=_medium(design), boundary_panels=(5,), room_temperature_nodes=(37,),
+        conduction=design.conduction, crease_conduction=design.crease_conduction,
         sheet_refinement=design.sheet_refinement, **_loss_model(design))
-    actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8),
+    gold = {} if design.k_gold is None else {"k1": design.k_gold}
+    actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8,
+                                  **gold),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
     model = make_model(mesh, supports, BarHingeParameters(diagonal_rate=100),
                        contact=ContactParameters(1e-4, 40e-6, 40e-6), thermal=thermal,
@@ -488,7 +588,9 @@ class _Stage(HeatingStage):
         return StageResult(met, status, message, power if met else None, value,
                            heated.temperature, gripper.hottest_node, self.simulations,
                            self.increments, self.snap_events(state) if met else (),
-                           heated.crease, gripper.hottest_node_crease)
+                           heated.crease, gripper.hottest_node_crease,
+                           tuple(float(t) for t in crease_temperatures(state.temperature,
+                                                                       self.model.mesh)))
 
 
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",

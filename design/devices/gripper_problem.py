@@ -108,7 +108,9 @@ class GripperProblem(TemperatureLimited, DesignProblem):
         metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]")
                    and not k.startswith(("residual_fold", "loss_model", "integral_refinement",
-                                         "conduction", "sheet_refinement"))
+                                         "conduction", "sheet_refinement", "crease_conduction",
+                                         "k_gold", "temperature_dependent_air", "emissivity",
+                                         "lead_fraction", "heater_tcr"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = verdict.temperature
         return (res.total_power, constraints, metrics, None if res.success else res.status,
