@@ -215,8 +215,13 @@ class HeatPath(LoadPath):
     def _on_shape(self, u):
         """(T0, dT, crease rest at 0, per unit lambda) with the temperatures on ``u``."""
         room = self.start.room_temperature
-        T = self.tm.solve(self.mesh.nodes + u, self.q, room)
-        T0, dT = T[:, 0], T[:, 1] - room
+        x = self.mesh.nodes + u
+        if not self.tm.nonlinear:
+            T = self.tm.solve(x, self.q, room)
+            T0, dT = T[:, 0], T[:, 1] - room
+        else:       # heat inputs do not superpose (theory 4.12): the secant from 0 to 1
+            T0 = self.tm.solve(x, self.q[:, 0], room)
+            dT = self.tm.solve(x, self.q[:, 0] + self.q[:, 1], room) - T0
         cn = self.mesh.crease_nodes
         c0 = self.start.crease_rest + self.rot * ((T0 - self.start.temperature)[cn] @ self.w)
         return T0, dT, c0, self.rot * (dT[cn] @ self.w)
