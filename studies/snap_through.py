@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from simulator import DisplacementControl, Load, get_case, simulate
+from simulator import DisplacementControl, Load, simulate
 from studies._common import run_case, study_main
 
 NAME = "snap_through"

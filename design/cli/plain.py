@@ -12,11 +12,10 @@ makes the chosen creases actuators folding in their assigned directions, clamps 
 from __future__ import annotations
 
 import argparse
-import logging
 import math
 from dataclasses import replace
 
-from ._common import CLIError, distinct, length_um, power_mw
+from ._common import CLIError, distinct, power_mw
 
 __all__ = ["add_plain_options", "is_plain", "plain_case", "check_plain", "select_creases",
            "heater_names", "refuse_creaseless", "chosen_stack", "print_notes", "DEFAULT_STACK",

@@ -180,7 +180,7 @@ class NestedDissection:
 class PermutedLU:
     """SuperLU factors ``lu`` of ``K[perm][:, perm]``, solving with ``K`` itself."""
 
-    lu: "scipy.sparse.linalg.SuperLU"
+    lu: object          # scipy.sparse.linalg.SuperLU (scipy imported lazily)
     perm: np.ndarray
 
     def solve(self, r: np.ndarray) -> np.ndarray:

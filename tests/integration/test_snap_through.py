@@ -424,7 +424,6 @@ def test_descent_from_a_limit_point_lands_on_the_far_stable_branch(roof):
     from simulator.solvers.stability import tangent_stability
     from simulator.steps.base import StepContext
     from simulator.solvers.descent import descend
-    from simulator.state import equilibrium_system
 
     case, res = roof
     step = res.steps[0]

@@ -133,7 +133,7 @@ def test_energy_balance_and_full_system(rt):
     K, T, qf, fixed = _full_solve(tm, x, q, rt)
     np.testing.assert_allclose(tm.solve(x, q, rt), T[:tm.mesh.n_nodes], rtol=1e-12, atol=1e-14)
     outflow = -(K @ T - qf)[fixed]              # heat leaving into the far layer and fixed nodes
-    n, N = tm.mesh.n_nodes, tm.params.loss.layers
+    n = tm.mesh.n_nodes
     far, nodes = outflow[-n:].sum(), outflow[:-n].sum()
     assert far > 0 and nodes > 0
     assert far + nodes == pytest.approx(q.sum(), rel=1e-9)

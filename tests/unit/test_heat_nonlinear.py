@@ -3,7 +3,6 @@
 from both faces; the Newton solve, its Jacobian, the time domain and the bad inputs."""
 
 import dataclasses
-import math
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -18,8 +17,7 @@ from simulator.cases import single_fold_model
 from simulator.geometry.materials import (AIR_CONDUCTIVITY_TABLE, KELVIN, Fluid,
                                           WATER_CONDUCTIVITY_TABLE)
 from simulator.state import thermal_model
-from simulator.thermal.nonlinear import (STEFAN_BOLTZMANN, NonlinearLoss, radiation,
-                                         solve_heat_balance)
+from simulator.thermal.nonlinear import (STEFAN_BOLTZMANN, NonlinearLoss, solve_heat_balance)
 from simulator.thermal.refined import FineMesh
 from simulator.thermal.steady import ThermalModel
 from simulator.thermal.transient import integrate_heat

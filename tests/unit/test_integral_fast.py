@@ -18,7 +18,6 @@ from simulator.thermal._single_layer import collocation_matrix, pair_values, _ke
 from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator
 from simulator.thermal.integral_levels import uses_fast
 from simulator.thermal.loss import IntegralLoss, Substrate, heat_loss_from_dict
-from simulator.thermal.parameters import ThermalParameters
 from simulator.thermal.steady import ThermalModel
 
 PLANE = (np.array([0.0, 0.0, -1e-4]), np.array([0.0, 0.0, 1.0]))

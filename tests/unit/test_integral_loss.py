@@ -2,7 +2,6 @@
 symmetry, energy balance, refinement convergence, the dense limit and the parameters."""
 
 import dataclasses
-import logging
 import math
 
 import numpy as np

@@ -2,7 +2,6 @@
 kernels for short commands (design.cli._common.kernel_backend): compiled when the cache is
 warm, numpy plus a background compilation when it is cold."""
 
-import contextlib
 import importlib.util
 import os
 

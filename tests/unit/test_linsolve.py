@@ -10,7 +10,6 @@ import scipy.sparse.linalg as spla
 from simulator import initial_state
 from simulator.linalg import linsolve, pardiso, thresholds
 from simulator.linalg import factorize, solve as _solve_linear
-from simulator.thermal import steady as thermal
 from simulator.cases import miura_sheet_model
 from simulator.state import thermal_model
 from simulator.geometry.example_patterns import miura_sheet_pattern

@@ -9,7 +9,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from types import SimpleNamespace as NS
 
 from simulator import initial_state
 from simulator.cases import single_fold_model

@@ -138,9 +138,6 @@ CLASSES = {
         "thickness": P, "dissipation_angle": P, "layers": I}),
     "IntegralLoss": (_with(simulator.IntegralLoss), {
         "refinement": I, "shape_tol": P, "correction_tol": P}),
-    "Fluid": (_with(simulator.Fluid, name="f", density=1.0, specific_heat=1.0,
-                    thermal_conductivity=1.0), {
-        "density": P, "specific_heat": P, "thermal_conductivity": P}),
     "SharpHingeParameters": (_with(simulator.SharpHingeParameters), {
         "fold_stiffness": P, "panel_bending_width": P}),
     "StepSignal": (_with(simulator.StepSignal, value=0.1), {"value": F, "t_on": F,

@@ -422,7 +422,7 @@ def _assignments(data, edges, sides) -> list:
             _fail(f"edges_assignment[{i}]", f"'B' but edge {a}-{b} borders two faces "
                   f"{sides[(min(a, b), max(a, b))]}; use M, V, U or F.")
         if n_faces == 2 and x == "C":
-            _fail(f"edges_assignment[{i}]", f"cut 'C' between two faces is not supported; give "
+            _fail(f"edges_assignment[{i}]", "cut 'C' between two faces is not supported; give "
                   "the two faces separate vertices along the cut.")
         out.append(x)
     return out
