@@ -45,7 +45,8 @@ from .limits import SU8_LIMIT
 from .power_search import HeatingStage, bisect_search, staircase_search
 
 __all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
-           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES", "LOSS_MODELS"]
+           "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES", "LOSS_MODELS",
+           "gripper_design_pattern"]
 
 logger = logging.getLogger(__name__)
 
@@ -475,7 +476,7 @@ def _loss_model(design: GripperDesign) -> dict:
             "substrate": Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))}
 
 
-def _gripper_pattern(design: GripperDesign):
+def gripper_design_pattern(design: GripperDesign):
     """The design's pattern (before the node edits): SPR panels, the creases of the panel
     material, both radiating at the design's emissivities (a crease the mean of its polymer
     and gold faces', theory 4.12; no radiation at the defaults)."""
@@ -502,7 +503,7 @@ def _medium(design: GripperDesign):
 
 def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
     """The gripper model and the loading steps before heating (residual fold, gravity)."""
-    mesh = build_mesh(_gripper_pattern(design))
+    mesh = build_mesh(gripper_design_pattern(design))
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(

@@ -32,7 +32,7 @@ import numpy as np
 
 from simulator import Circuit, Heater
 
-from .gripper import ARM_CREASES, BASE_CREASES, GripperResult, _gripper_pattern
+from .gripper import ARM_CREASES, BASE_CREASES, GripperResult, gripper_design_pattern
 
 __all__ = ["GripperDrive", "gripper_drive", "gripper_circuits", "DRIVE_STATUSES"]
 
@@ -44,7 +44,7 @@ def gripper_circuits(design) -> tuple:
     """The gripper's two series circuits ``(base, arm)`` (:class:`~simulator.Circuit`) of the
     design's gold heaters (``heater_tcr``) with leads of ``lead_fraction`` x their R0."""
     tcr = {} if design.heater_tcr is None else {"tcr": design.heater_tcr}
-    pattern = _gripper_pattern(design)
+    pattern = gripper_design_pattern(design)
     out = []
     for name, creases in (("base", BASE_CREASES), ("arm", ARM_CREASES)):
         heaters = tuple(Heater(c, **tcr) for c in creases)
@@ -99,7 +99,7 @@ def gripper_drive(result: GripperResult) -> GripperDrive:
     if not result.success:
         return GripperDrive(False, "not_met", f"no full function to drive: {result.message}")
     design, grip = result.design, result.grip
-    pattern = _gripper_pattern(design)
+    pattern = gripper_design_pattern(design)
     rows = {int(c): k for k, c in enumerate(pattern.creases)}     # crease rows of the mesh
     temps = np.asarray(grip.crease_temperatures, float)
     power = {"base": result.assembly.power_per_crease, "arm": grip.power_per_crease}

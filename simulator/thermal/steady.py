@@ -687,6 +687,13 @@ class ThermalModel:
         self._factor_cache = (compiled, x.copy(), solver)
         return solver
 
+    @property
+    def fine_temperatures(self):
+        """Temperatures [deg C] of the refined sheet's fine nodes at the last solve, (n_fine,)
+        or (n_fine, k) (theory 4.11; the mesh nodes first); None without refinement or before
+        the first solve."""
+        return None if self._last_fine is None else self._last_fine[3]
+
     def exact_loss_at(self, x) -> bool:
         """Rebuild the integral loss's accurate operator at positions ``x`` (n, 3) [m] unless
         its last build was there (``Heat``'s settled end, theory 6.6: the end state then does

@@ -75,7 +75,7 @@ def test_heated_gripper_with_the_default_integral_loss_has_no_node_below_room_te
     tm = ThermalModel(model.mesh, model.thermal)
     assert tm.sheet is not None and tm.sheet.r == 2
     rise = tm.solve(model.mesh.nodes, tm.heat_vector(power)) - model.thermal.room_temperature
-    assert tm._last_fine[3].min() >= model.thermal.room_temperature - _TOL
+    assert tm.fine_temperatures.min() >= model.thermal.room_temperature - _TOL
     assert rise.max() > 100
     mesh_model, _ = _gripper("integral", None, creases)
     assert _rise(mesh_model, power).min() < -1.0
@@ -87,20 +87,35 @@ def test_folding_with_the_default_integral_loss_keeps_every_node_above_room_temp
     temperature, and on the folded gripper at 15 mW every fine node (the mesh model: -2.0 K,
     lumped: 0)."""
     model, pre = gripper_model(GripperDesign(loss_model="integral"))
-    start = simulate(model, pre)
-    res = simulate(model, [Heat({BASE_CREASES: 26e-3}, increments=5)], state=start.state)
     case = get_case("double_fold", thermal_steps=20)
     double = dataclasses.replace(case.model, thermal=case.model.thermal.with_loss("integral"))
-    folded = simulate(double, case.steps)
-    for m, r in ((model, res), (double, folded)):
+    res, _ = _fold_both_above_room_temperature(model, pre, double, case.steps)
+    p = _base_power(model)
+    tm = ThermalModel(model.mesh, model.thermal)
+    tm.solve(model.mesh.nodes + res.state.u, tm.heat_vector(p))
+    assert tm.sheet.r == 2 and tm.fine_temperatures.min() >= model.thermal.room_temperature - _TOL
+
+
+def _base_power(model, power=15e-3):
+    """(C,) crease powers [W]: ``power`` on the gripper's base creases."""
+    p = np.zeros(model.mesh.n_creases)
+    p[[model.mesh.crease_row_of(c) for c in BASE_CREASES]] = power
+    return p
+
+
+def _fold_both_above_room_temperature(gripper, pre, double, double_steps, **heat):
+    """The gripper's base creases heated to 26 mW in 5 increments after its steps ``pre``
+    (``heat``: more ``Heat`` fields) and the double fold along ``double_steps``: both succeed,
+    hot, with every recorded temperature at least room temperature. Returns their results."""
+    start = simulate(gripper, pre)
+    res = simulate(gripper, [Heat({BASE_CREASES: 26e-3}, increments=5, **heat)],
+                   state=start.state)
+    folded = simulate(double, double_steps)
+    for m, r in ((gripper, res), (double, folded)):
         assert r.success
         T = r.history["temperature"]
         assert T.min() >= m.thermal.room_temperature - _TOL and T.max() > 300
-    p = np.zeros(model.mesh.n_creases)
-    p[[model.mesh.crease_row_of(c) for c in BASE_CREASES]] = 15e-3
-    tm = ThermalModel(model.mesh, model.thermal)
-    tm.solve(model.mesh.nodes + res.state.u, tm.heat_vector(p))
-    assert tm.sheet.r == 2 and tm._last_fine[3].min() >= model.thermal.room_temperature - _TOL
+    return res, folded
 
 
 def _lumped(model, lumped=True):
@@ -132,17 +147,10 @@ def test_folding_with_the_lumped_integral_loss_keeps_every_node_above_room_tempe
     fold at 10 mW per crease in 20."""
     model, pre = gripper_model(GripperDesign(loss_model="integral", sheet_refinement=1))
     model = _lumped(model)
-    start = simulate(model, pre)
-    res = simulate(model, [Heat({BASE_CREASES: 26e-3}, increments=5, coupling="iterated")],
-                   state=start.state)
     double, steps, p_double = _double_fold()
-    folded = simulate(double, steps)
-    for m, r in ((model, res), (double, folded)):
-        assert r.success
-        T = r.history["temperature"]
-        assert T.min() >= m.thermal.room_temperature - _TOL and T.max() > 300
-    p = np.zeros(model.mesh.n_creases)
-    p[[model.mesh.crease_row_of(c) for c in BASE_CREASES]] = 15e-3
+    res, folded = _fold_both_above_room_temperature(model, pre, double, steps,
+                                                    coupling="iterated")
+    p = _base_power(model)
     x = model.mesh.nodes + res.state.u
     assert _rise(model, p, x).min() >= -_TOL
     assert _rise(_lumped(model, False), p, x).min() < -1.0

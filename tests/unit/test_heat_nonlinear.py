@@ -253,7 +253,7 @@ def test_refined_sheet_solves_the_nonlinear_balance_on_its_fine_nodes():
     fine = tm.fine_model
     assert fine.nonlinear
     X = tm.sheet.positions(x)
-    TF = tm._last_fine[3]
+    TF = tm.fine_temperatures
     lost = (fine.environment_loss(X, TF).sum() + fine.radiation_loss(X, TF).sum())
     held = fine.held_nodes(X)
     assert lost < q.sum() and T.max() > ROOM

@@ -171,5 +171,5 @@ def test_the_refined_gripper_heated_alone_has_no_node_below_room_temperature():
     p[[model.mesh.crease_row_of(c) for c in BASE_CREASES]] = 15e-3
     tm = ThermalModel(model.mesh, model.thermal)
     T = tm.solve(model.mesh.nodes, tm.heat_vector(p))
-    fine = tm._last_fine[3]
+    fine = tm.fine_temperatures
     assert fine.min() >= 21.0 - 1e-9 and T.max() > 150
