@@ -20,7 +20,9 @@ passes through itself (the case has no contact), a path of a different kind;
 ``--overdriven`` times that too (about 50 s more), for the record.
 
 Each integral row also prints the operator builds of one run by level (the accurate m and its
-Richardson partner, the cheap m = 1 of the correction between rebuilds), and ``--accurate``
+Richardson partner, the cheap m = 1 of the correction between rebuilds; per edge of the
+triangles the operator is built on: on the gripper's sheet, refined r = 2, its fine triangles,
+where the default levels are 2 and 1, the partner being the cheap level, theory 4.11), and ``--accurate``
 adds a row with the accurate operator rebuilt at every shape (``correction_tol=0,
 shape_tol=0``): the answers the default must reproduce (theory 4.7).
 

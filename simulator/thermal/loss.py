@@ -83,18 +83,23 @@ class IntegralLoss:
     Parameters
     ----------
     refinement : int
-        Sub-triangles per mesh-triangle edge m (m^2 per triangle), 1..16.
+        Sub-triangles per mesh-triangle edge m (m^2 per triangle), 1..16. On a refined sheet
+        (``ThermalParameters.sheet_refinement`` r > 1) at least m, nested in the fine
+        triangles: ``ceil(m / r)`` per fine triangle edge, at least 2 where extrapolated
+        (theory 4.11, ``integral_levels.sheet_levels``).
     extrapolation : bool or None
         Richardson extrapolation from the refinements ``max(m // 2, 2)`` and ``m`` (removes
         the first-order error of the flux's edge singularity); needs m >= 3. None: True from
-        m = 3 on.
+        m = 3 on. On a refined sheet the partner is half the fine level, at least 1 per fine
+        edge (2 per mesh edge at r = 2).
     shape_tol : float
         The operator is rebuilt when a node-to-node distance (or a height over the substrate)
         changed by more than this fraction since the last build, >= 0.
     correction_tol : float
-        The accurate operator is rebuilt only when the cheap m = 1 one changed by more than
-        this fraction; in between it follows the shape through the m = 1 operator's change,
-        >= 0 (0: rebuilt at ``shape_tol``).
+        The accurate operator is rebuilt only when the cheap one (m = 1; on a refined sheet
+        one per fine triangle, the Richardson partner) changed by more than this fraction; in
+        between it follows the shape through the cheap operator's change, >= 0 (0: rebuilt at
+        ``shape_tol``).
     lumped : bool
         Lump the positive couplings of the loss conductance onto its diagonal (theory 4.9,
         the analogue of mass lumping): every positive off-diagonal entry of the final

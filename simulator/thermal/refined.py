@@ -53,6 +53,9 @@ class FineMesh:
     bar_length: np.ndarray
     crease_ids: np.ndarray
     pattern: object
+    #: the refinement r of the mesh triangles (the integral loss's levels count per fine
+    #: triangle edge, :func:`~simulator.thermal.integral_levels.sheet_levels`)
+    r: int = 1
 
     @property
     def n_nodes(self) -> int:
@@ -111,7 +114,7 @@ class RefinedSheet:
             triangle_panel=np.asarray(mesh.triangle_panel)[self.parent],
             triangle_crease=np.asarray(mesh.triangle_crease)[self.parent],
             bars=edges, bar_length=np.linalg.norm(x0[edges[:, 1]] - x0[edges[:, 0]], axis=1),
-            crease_ids=np.asarray(mesh.crease_ids), pattern=mesh.pattern)
+            crease_ids=np.asarray(mesh.crease_ids), pattern=mesh.pattern, r=self.r)
         logger.debug("sheet refined r = %d: %d nodes, %d triangles (mesh: %d, %d)", self.r,
                      len(x0), len(ftri), self.n, len(tri))
 

@@ -226,7 +226,7 @@ class ThermalModel:
         if params.loss.model == "integral":          # boundary panels lie on the substrate
             fixed[tri[self.is_boundary].ravel()] = True
             self.plane = substrate_plane(mesh, params)
-            self.integral = integral_operator(tri[~self.is_boundary], n, params, self.plane)
+            self.integral = self._integral_operator(params)
         #: warn at the first steady solve with the integral loss that boundary panels have no
         #: substrate plane (``substrate=None``; ``warn_no_plane=False``: the caller chose none)
         self._warn_plane = (warn_no_plane and self.integral is not None
@@ -255,6 +255,13 @@ class ThermalModel:
         r = params.sheet_refinement_for(len(tri))
         if r > 1:
             self._refine(r, warn_no_plane, actuators)
+
+    def _integral_operator(self, params):
+        """The integral loss's operator on the sheet (the conducting triangles), at the levels
+        of a refined sheet's fine triangles on a :class:`~simulator.thermal.refined.FineMesh`
+        (theory 4.11)."""
+        return integral_operator(self.mesh.triangles[~self.is_boundary], self.mesh.n_nodes,
+                                 params, self.plane, getattr(self.mesh, "r", 1))
 
     def _refine(self, r: int, warn_no_plane: bool, actuators) -> None:
         """Solve on the mesh triangles split into ``r^2`` each (theory 4.11): the fine sheet's
