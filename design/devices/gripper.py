@@ -39,6 +39,7 @@ from simulator import (AIR, CONDUCTIONS, REFERENCE_BETA, REFERENCE_GRAVITY, SPR,
                        crease_temperatures, example_patterns, make_model, simulate)
 from simulator._result import ResultFiles
 from simulator._validate import finite, in_range, integer, non_negative, one_of, positive
+from simulator.thermal.integral_levels import sheet_levels
 
 from ..core._contract import check_outcome, power_if
 from .limits import SU8_LIMIT
@@ -234,8 +235,9 @@ class GripperDesign:
         hashes of evaluation logs written before, are kept (so are the physics switches
         ``crease_conduction`` to ``heater_tcr``, named only away from their defaults);
         ``integral_refinement``, the
-        conduction and the sheet refinement in force always with the integral model (their
-        defaults changed, so an older log of the integral model never matches)."""
+        conduction, the sheet refinement and the loss levels in force
+        (:attr:`integral_levels_in_force`) always with the integral model (their defaults
+        changed, so an older log of the integral model never matches)."""
         out = asdict(self)
         for name in _OPTIONAL:
             if out[name] == _OPTIONAL[name]:
@@ -244,7 +246,17 @@ class GripperDesign:
             out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
             out["conduction"] = self.conduction or "monotone"       # and its conduction, 7 Dec
             out["sheet_refinement"] = self.sheet_refinement_in_force  # and the sheet's, 8 Dec
+            out["integral_levels"] = self.integral_levels_in_force    # and its levels, 8 Dec
         return out
+
+    @property
+    def integral_levels_in_force(self) -> str:
+        """The integral loss's levels per mesh triangle edge in force on the gripper's sheet,
+        ``"m/partner"`` (``"m"`` without extrapolation; theory 4.11: ``"4/2"`` at the default
+        m = 3 on the sheet refined r = 2, ``"3/2"`` on the mesh triangles)."""
+        r = self.sheet_refinement_in_force
+        m, c = sheet_levels(ThermalParameters(**_loss_model(self)).loss, r)
+        return f"{r * m}" + (f"/{r * c}" if c is not None else "")
 
     @property
     def sheet_refinement_in_force(self) -> int:
@@ -421,6 +433,7 @@ class GripperResult(ResultFiles):
 
 _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-",
           "integral_refinement": "-", "conduction": "-", "sheet_refinement": "-",
+          "integral_levels": "-",
           "crease_conduction": "-", "k_gold": "W/(m K)", "temperature_dependent_air": "-",
           "emissivity_polymer": "-", "emissivity_gold": "-", "lead_fraction": "-",
           "heater_tcr": "1/K"}

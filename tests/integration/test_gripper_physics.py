@@ -23,7 +23,8 @@ def test_the_switches_keep_the_old_dict_at_their_defaults():
            "panel_thickness", "residual_fold", "residual_fold_base", "residual_fold_arm"}
     assert set(GripperDesign(loss_model="chain").to_dict()) == old
     assert set(GripperDesign().to_dict()) == old | {"loss_model", "integral_refinement",
-                                                    "conduction", "sheet_refinement"}
+                                                    "conduction", "sheet_refinement",
+                                                    "integral_levels"}
     d = GripperDesign(**SWITCHES).to_dict()
     assert {k: d[k] for k in SWITCHES} == SWITCHES
     assert GripperDesign(crease_conduction="layers").to_dict()["crease_conduction"] == "layers"

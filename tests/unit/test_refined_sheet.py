@@ -129,6 +129,10 @@ def test_the_loss_levels_of_a_refined_sheet_nest_in_its_fine_triangles():
     op = ThermalModel(grip.mesh, grip.thermal).integral
     assert isinstance(op, CorrectedLoss) and op.base is op.accurate.coarse
     assert (op.accurate.m, op.accurate.c) == (2, 1)
+    # the design's settings name the levels per mesh edge (evaluation logs of older levels
+    # never match)
+    assert GripperDesign().to_dict()["integral_levels"] == "4/2"
+    assert GripperDesign(sheet_refinement=1).to_dict()["integral_levels"] == "3/2"
 
 
 def test_no_heat_is_lost_and_the_loss_matches_the_input_without_held_nodes():
