@@ -1,6 +1,6 @@
-"""Issue 19 acceptance on folded shapes (slow: about a minute each; run with -m slow): the
-integral model within 5 % of the 3-D FE in crease temperatures, on the double fold at 10 mW per
-crease after heating and the gripper (default design) at assembly with 3 mW per base crease.
+"""Issue 19 acceptance on folded shapes (slow: 10-25 s each; CI runs them as -m fe_accuracy):
+the integral model within 5 % of the 3-D FE in crease temperatures, on the double fold at 10 mW
+per crease after heating and the gripper (default design) at assembly with 3 mW per base crease.
 
 All models solve the same fixed shape and heat (``fixed_shape_temperatures``); the FE reference
 is the Richardson extrapolation ``2 T_1 - T_0`` of levels 0 and 1 (first order in the mesh
@@ -26,7 +26,7 @@ pytest.importorskip("gmsh")
 
 from simulator import fixed_shape_temperatures  # noqa: E402
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.fe_accuracy]    # in CI: .ci/run
 
 
 def _rises(model, power, x):
