@@ -17,11 +17,9 @@ A class with more than a table (arrays, a model) overrides ``save`` and calls
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import json
 import os
 import pathlib
-import platform
 import subprocess
 
 import numpy as np
@@ -111,6 +109,9 @@ def provenance() -> dict:
     commit of the checkout the package is imported from, None when unknown: an installed copy,
     no git), ``date`` (now, UTC, ISO 8601) and ``machine`` (operating system, architecture,
     CPU model where the system names it, logical CPUs, Python version; no host name)."""
+    import datetime                       # here: the CLI's start-up imports this module
+    import platform
+
     return {"etorigami_version": __version__, "git": _git_hash(),
             "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "machine": {"system": f"{platform.system()} {platform.release()}",
@@ -120,6 +121,8 @@ def provenance() -> dict:
 
 def _cpu_model() -> str | None:
     """The CPU's model name (Linux: /proc/cpuinfo), else ``platform.processor()`` or None."""
+    import platform
+
     try:
         with open("/proc/cpuinfo") as f:
             for line in f:
