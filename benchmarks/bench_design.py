@@ -1,4 +1,4 @@
-"""Design-layer benchmarks (issue: design layer; figures go into the README).
+"""Design-layer benchmarks (issue: design layer; figures go into docs/performance.md).
 
 1. One gripper evaluation (start design) in ``bisect`` and ``staircase`` modes
    (target: bisect <= 2 s; the paper: about 20 s per simulation).

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import pathlib
 import subprocess
 
@@ -25,7 +26,7 @@ import numpy as np
 
 from ._version import __version__
 
-__all__ = ["ResultFiles", "write_meta"]
+__all__ = ["ResultFiles", "write_meta", "provenance"]
 
 
 class ResultFiles:
@@ -101,6 +102,35 @@ def _jsonable(obj):
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
     return str(obj)
+
+
+def provenance() -> dict:
+    """What produced a result, for its ``meta.json``: ``etorigami_version``, ``git`` (the
+    commit of the checkout the package is imported from, None when unknown: an installed copy,
+    no git), ``date`` (now, UTC, ISO 8601) and ``machine`` (operating system, architecture,
+    CPU model where the system names it, logical CPUs, Python version; no host name)."""
+    import datetime                       # here: the CLI's start-up imports this module
+    import platform
+
+    return {"etorigami_version": __version__, "git": _git_hash(),
+            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "machine": {"system": f"{platform.system()} {platform.release()}",
+                        "architecture": platform.machine(), "cpu": _cpu_model(),
+                        "cpus": os.cpu_count(), "python": platform.python_version()}}
+
+
+def _cpu_model() -> str | None:
+    """The CPU's model name (Linux: /proc/cpuinfo), else ``platform.processor()`` or None."""
+    import platform
+
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.partition(":")[2].strip() or None
+    except OSError:
+        pass
+    return platform.processor() or None
 
 
 def _git_hash() -> str | None:

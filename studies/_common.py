@@ -21,7 +21,7 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
-from simulator import __version__
+from simulator._result import provenance
 from simulator.cases import get_case
 
 __all__ = ["RESULTS", "QUICK_RESULTS", "default_out", "refusal", "run_was_quick", "study_main", "replot", "progress_bar", "write_outputs", "node_frame",
@@ -104,7 +104,9 @@ def write_outputs(out: pathlib.Path, name: str, frame, figures: dict, settings: 
     """Write ``<name>.csv``, one PNG per figure and ``meta.json`` into ``out``.
 
     ``settings["quick"]`` true (a ``--quick`` run) stamps every figure as a quick run
-    (:func:`studies.plotting.save_figure`); ``meta.json`` records the settings.
+    (:func:`studies.plotting.save_figure`); ``meta.json`` records the study, the version,
+    the commit (when known), the date and the machine (``simulator._result.provenance``), the
+    settings, the row count and the wall time [s].
     """
     from studies.plotting import save_figure
 
@@ -113,7 +115,7 @@ def write_outputs(out: pathlib.Path, name: str, frame, figures: dict, settings: 
     frame.to_csv(out / f"{name}.csv", index=False)
     for fig_name, fig in figures.items():
         save_figure(fig, out / f"{fig_name}.png", quick=quick)
-    meta = {"study": name, "etorigami_version": __version__, "settings": settings,
+    meta = {"study": name, **provenance(), "settings": settings,
             "rows": len(frame), "wall_time [s]": round(wall_time, 3)}
     (out / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
 

@@ -1,6 +1,6 @@
-"""Issue 19 acceptance on folded shapes (slow: about a minute each; run with -m slow): the
-integral model within 5 % of the 3-D FE in crease temperatures, on the double fold at 10 mW per
-crease after heating and the gripper (default design) at assembly with 3 mW per base crease.
+"""Issue 19 acceptance on folded shapes (slow: 10-25 s each; CI runs them as -m fe_accuracy):
+the integral model within 5 % of the 3-D FE in crease temperatures, on the double fold at 10 mW
+per crease after heating and the gripper (default design) at assembly with 3 mW per base crease.
 
 All models solve the same fixed shape and heat (``fixed_shape_temperatures``); the FE reference
 is the Richardson extrapolation ``2 T_1 - T_0`` of levels 0 and 1 (first order in the mesh
@@ -10,7 +10,13 @@ Measured (6 Dec 2026), the integral model at its defaults (m = 3, Richardson-ext
 (fold 2); gripper base creases +1.0 / +0.9 % and +1.0 / +1.1 % (the chain model: -38 / -36 %,
 -20 / -6 %; -42 / -32 %, -42 / -32 %; the plain m = 2, the default before: +6.2 / +7.1 %,
 +3.9 / +4.8 %; +6.7 / +7.0 %, +6.7 / +7.2 %; m = 4 extrapolated: within 1.0 %).
+Since the integral loss refines the sheet by default (theory 4.11) the comparison sets
+``sheet_refinement=1``, the FE's sheet: measured 7 Dec 2026, double fold +0.4 / -0.1 % (fold 1),
++1.3 / +0.3 % (fold 2); gripper base creases +1.2 / +1.2 % and +1.3 / +1.3 % (at the refined
+default fold 1 was -11 / -15 %, the comparison of two different sheets).
 """
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -20,14 +26,19 @@ pytest.importorskip("gmsh")
 
 from simulator import fixed_shape_temperatures  # noqa: E402
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.fe_accuracy]    # in CI: .ci/run
 
 
 def _rises(model, power, x):
-    """Crease rises [K] (7-node, centre line) of the FE reference and the integral model."""
+    """Crease rises [K] (7-node, centre line) of the FE reference and the integral model, both
+    on the mesh triangles: the FE meshes the air around that sheet, so the integral loss is
+    compared on it (``sheet_refinement=1``; the default refines the sheet, theory 4.11, whose
+    heated creases run 10-15 % cooler than on the mesh triangles: another sheet)."""
     fe = [fixed_shape_temperatures(model, "fe", power, positions=x, fe_level=lv) for lv in (0, 1)]
     assert all(r.success for r in fe)
-    integral = fixed_shape_temperatures(model, "integral", power, positions=x)   # defaults
+    thermal = dataclasses.replace(model.thermal.with_loss("integral"), sheet_refinement=1)
+    integral = fixed_shape_temperatures(dataclasses.replace(model, thermal=thermal), "integral",
+                                        power, positions=x)        # the loss at its defaults
     rt = integral.room_temperature
 
     def pair(r):

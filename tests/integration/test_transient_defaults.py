@@ -1,6 +1,6 @@
 """Time-domain defaults that cannot go below ambient (issue 21, item 7): the default scheme is
-backward Euler (L-stable), theta = 2/3 stays available for reference comparisons; the README's
-time-domain example never reports a temperature below room temperature; ``power [mW]`` is the
+backward Euler (L-stable), theta = 2/3 stays available for reference comparisons; the docs'
+time-domain example (docs/time-domain.md) never reports a temperature below room temperature; ``power [mW]`` is the
 value at the record and ``mean_power [mW]`` the mean over the step; time 0 on the first
 record."""
 
@@ -13,20 +13,20 @@ import pytest
 from simulator import (DEFAULT_THETA, REFERENCE_THETA, ElectroThermal, SquareWave,
                        TransientHeat, get_case, integrate_heat, simulate)
 
-README = pathlib.Path(__file__).resolve().parents[2] / "README.md"
+PAGE = pathlib.Path(__file__).resolve().parents[2] / "docs" / "time-domain.md"
 
 
-def _readme_time_domain_example() -> str:
-    text = README.read_text(encoding="utf-8")
+def _docs_time_domain_example() -> str:
+    text = PAGE.read_text(encoding="utf-8")
     section = text[text.index("## Time domain"):]
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-def test_readme_time_domain_example_never_goes_below_21_degc(capsys):
-    code = _readme_time_domain_example()
+def test_docs_time_domain_example_never_goes_below_21_degc(capsys):
+    code = _docs_time_domain_example()
     assert "TransientHeat" in code and "SquareWave" in code
     namespace = {}
-    exec(compile(code, "README.md (time domain)", "exec"), namespace)      # the example itself
+    exec(compile(code, "time-domain.md (time domain)", "exec"), namespace)      # the example itself
     res = namespace["res"]
     frame = res.to_frame()
     assert frame["temperature [degC]"].min() >= 21.0

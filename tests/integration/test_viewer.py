@@ -1,8 +1,8 @@
 """The HTML result viewer: data files, page size, and behaviour in a real headless Chromium.
 
 Browser tests use playwright with the system Chromium (``ETORIGAMI_CHROMIUM`` or ``chromium``
-on PATH, Debian's package); they are skipped when neither is there, except under CI (``CI`` set),
-where a missing browser is a failure.
+on PATH, Debian's package); they are skipped when either is missing, except under CI (``CI`` set
+to a true value; .ci/run sets it), where a missing browser is a failure.
 """
 
 import io
@@ -138,11 +138,41 @@ def _chromium():
     except ImportError:
         path = None
     if path is None:
-        if os.environ.get("CI"):
+        if _under_ci():
             pytest.fail("CI needs playwright and Debian's chromium for the viewer tests "
                         "(.ci/run installs them)")
         pytest.skip("playwright or chromium not installed")
     return path
+
+
+def _under_ci() -> bool:
+    """Whether ``CI`` is set to a true value (GitHub, GitLab and .ci/run set ``CI=true``)."""
+    return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
+
+
+@pytest.mark.parametrize("ci, outcome", [("true", pytest.fail.Exception),
+                                         ("1", pytest.fail.Exception),
+                                         (None, pytest.skip.Exception),
+                                         ("false", pytest.skip.Exception)])
+@pytest.mark.parametrize("missing", ["chromium", "playwright"])
+def test_missing_browser_fails_under_ci_and_skips_elsewhere(ci, outcome, missing, monkeypatch):
+    """The skip decision of the browser tests: without Chromium (nothing on PATH, no
+    ``ETORIGAMI_CHROMIUM``) or without playwright they fail under CI and skip elsewhere."""
+    import sys
+
+    monkeypatch.delenv("ETORIGAMI_CHROMIUM", raising=False)
+    if ci is None:
+        monkeypatch.delenv("CI", raising=False)
+    else:
+        monkeypatch.setenv("CI", ci)
+    if missing == "chromium":
+        monkeypatch.setenv("PATH", "")
+        assert shutil.which("chromium") is None and shutil.which("chromium-browser") is None
+    else:
+        monkeypatch.setenv("ETORIGAMI_CHROMIUM", "/usr/bin/chromium")
+        monkeypatch.setitem(sys.modules, "playwright.sync_api", None)     # import fails
+    with pytest.raises(outcome):
+        _chromium()
 
 
 @pytest.fixture(scope="module")

@@ -1,17 +1,28 @@
-"""Documentation that runs: every ``python`` code block of README.md and docs/*.md executes,
-and every public name is exported.
+"""Documentation that runs: every code block of README.md and docs/*.md executes and writes
+nothing into the repository, and every public name is exported.
 
-The blocks of one file run in order in one namespace (later blocks may use earlier names),
-inside a temporary working directory so that files they write land there. A block fenced
-as ```python no-test is shown to readers but not run (used only for commands that need a
-cluster or take minutes; each one says so in the text around it).
+Code blocks (docs/development.md, "Code blocks in the README and the docs"): the blocks of one
+file run in order inside a temporary working folder that holds copies of ``docs/examples/``;
+``python`` blocks in one namespace (later blocks may use earlier names), ``bash`` blocks whose
+lines are all ``etorigami ...`` commands through the CLI's ``main()`` (``~`` is a temporary
+home folder). ``text`` blocks are output, ``json`` blocks are parsed; a fence without a
+language is an error. A block is left out by a comment on the line before its fence:
+``<!-- no-run: why -->`` (it cannot run here: an installation, a cluster) or
+``<!-- slow: why -->`` (it runs only with ``-m slow``). Afterwards ``git status --porcelain``
+of the repository must show nothing new.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import pathlib
 import re
+import shlex
+import shutil
+import subprocess
 import sys
+import tempfile
 import types
 
 import pytest
@@ -21,32 +32,176 @@ import simulator
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-_BLOCK = re.compile(r"^```python[ \t]*(?P<info>[^\n]*)\n(?P<code>.*?)^```", re.M | re.S)
+#: The most blocks all pages may mark ``no-run``: installations, builds, a cluster.
+MAX_NO_RUN = 6
+_FENCE = re.compile(r"^```(?P<info>[^\n`]*)\n(?P<code>.*?)^```[ \t]*$", re.M | re.S)
+_MARK = re.compile(r"<!--\s*(?P<kind>no-run|slow)\s*:\s*(?P<why>[^>]*?)\s*-->\s*\Z")
+_SHELL = ("bash", "sh", "shell", "console")
+_KINDS = ("python", "json", "text", *_SHELL)
+
+
+@dataclasses.dataclass(frozen=True)
+class Block:
+    """One fenced block of a Markdown file: its language, its code, the line of its fence and
+    its mark (``""``, ``"no-run"`` or ``"slow"``) with the reason given."""
+
+    path: pathlib.Path
+    line: int
+    language: str
+    info: str
+    code: str
+    mark: str = ""
+    why: str = ""
+
+    @property
+    def where(self) -> str:
+        return f"{self.path.name}:{self.line}"
+
+
+def blocks(path: pathlib.Path) -> list[Block]:
+    """Every fenced block of a Markdown file, in order."""
+    text = path.read_text()
+    found = []
+    for m in _FENCE.finditer(text):
+        info = m.group("info").strip()
+        before = text[:m.start()].rstrip("\n").rsplit("\n", 1)[-1]
+        mark = _MARK.search(before)
+        found.append(Block(path, text.count("\n", 0, m.start()) + 1, info.split(" ")[0], info,
+                           m.group("code"), mark.group("kind") if mark else "",
+                           mark.group("why") if mark else ""))
+    return found
 
 
 def python_blocks(path: pathlib.Path) -> list[tuple[int, str]]:
-    """(line number, code) of every runnable ``python`` block of a Markdown file."""
-    text = path.read_text()
-    return [(text.count("\n", 0, m.start()) + 1, m.group("code"))
-            for m in _BLOCK.finditer(text) if "no-test" not in m.group("info")]
+    """(line number, code) of every ``python`` block of a Markdown file that runs."""
+    return [(b.line, b.code) for b in blocks(path) if b.language == "python" and not b.mark]
+
+
+def etorigami_commands(code: str) -> list[list[str]]:
+    """The commands of a shell block as argument lists (continued lines joined, comments
+    dropped); every command must be ``etorigami ...``."""
+    commands = []
+    for line in code.replace("\\\n", " ").splitlines():
+        words = shlex.split(line, comments=True)
+        if words:
+            if words[0] != "etorigami":
+                raise ValueError(f"{line.strip()!r} is not an etorigami command")
+            commands.append(words[1:])
+    return commands
+
+
+def _git_status() -> str | None:
+    git = shutil.which("git")
+    if git is None:
+        return None
+    out = subprocess.run([git, "status", "--porcelain", "--untracked-files=all"], cwd=ROOT,
+                         capture_output=True, text=True)
+    return out.stdout if out.returncode == 0 else None
+
+
+def _run_shell(block: Block, home: pathlib.Path) -> None:
+    from design.cli import main
+
+    for args in etorigami_commands(block.code):
+        args = [str(home / a[2:]) if a.startswith("~/") else a for a in args]
+        try:
+            code = main(args)
+        except SystemExit as exc:                       # argparse's errors and --help
+            code = exc.code
+        assert code in (0, None), f"{block.where}: etorigami {shlex.join(args)} exited {code}"
+
+
+def _run_blocks(path: pathlib.Path, tmp_path, monkeypatch, slow: bool) -> int:
+    """Run the blocks of ``path`` (the slow ones too when ``slow``) in a temporary working
+    folder; check that the repository shows nothing new. Returns how many blocks ran."""
+    work, home = tmp_path / "work", tmp_path / "home"
+    shutil.copytree(ROOT / "docs" / "examples", work)
+    home.mkdir()
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.chdir(work)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))   # tempfile.mkdtemp()
+    module = types.ModuleType("_docs_namespace")       # dataclasses need a real module
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    namespace = module.__dict__
+    before = _git_status()
+    ran = 0
+    for block in blocks(path):
+        if block.mark == "no-run" or (block.mark == "slow" and not slow):
+            continue
+        try:
+            if block.language == "python":
+                exec(compile(block.code, block.where, "exec"), namespace)
+            elif block.language in _SHELL:
+                _run_shell(block, home)
+            else:
+                continue
+        except Exception as exc:  # pragma: no cover - the message is the point
+            raise AssertionError(f"{block.where}: code block failed: {type(exc).__name__}: "
+                                 f"{exc}") from exc
+        ran += 1
+    after = _git_status()
+    new = sorted(set((after or "").splitlines()) - set((before or "").splitlines()))
+    assert new == [], f"the code blocks of {path.name} wrote into the repository: {new}"
+    return ran
 
 
 @pytest.mark.parametrize("path", DOCS, ids=lambda p: p.name)
 def test_code_blocks_run(path, tmp_path, monkeypatch):
-    blocks = python_blocks(path)
+    ran = _run_blocks(path, tmp_path, monkeypatch, slow=False)
     if path.name == "README.md":
-        assert len(blocks) >= 3, "the README lost its examples"
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    module = types.ModuleType("_docs_namespace")       # dataclasses need a real module
-    monkeypatch.setitem(sys.modules, module.__name__, module)
-    namespace = module.__dict__
-    for line, code in blocks:
-        try:
-            exec(compile(code, f"{path.name}:{line}", "exec"), namespace)
-        except Exception as exc:  # pragma: no cover - the message is the point
-            raise AssertionError(f"{path.name}, code block at line {line} failed: "
-                                 f"{type(exc).__name__}: {exc}") from exc
+        assert ran >= 3, "the README lost its examples"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", [p for p in DOCS if any(b.mark == "slow" for b in blocks(p))],
+                         ids=lambda p: p.name)
+def test_slow_code_blocks_run(path, tmp_path, monkeypatch):
+    """The files with blocks marked slow, every block in order (the slow ones included)."""
+    _run_blocks(path, tmp_path, monkeypatch, slow=True)
+
+
+def test_every_block_says_what_it_is():
+    """Every fence names its language, shell blocks are etorigami commands or marked, json
+    blocks parse, and the blocks left out are marked with a reason and few."""
+    every = [b for path in DOCS for b in blocks(path)]
+    assert len(every) > 40
+    wrong = [f"{b.where}: ```{b.info}" for b in every
+             if b.language not in _KINDS or b.info != b.language]
+    assert wrong == [], "name the block's language (python, bash, json or text): " + str(wrong)
+    for b in every:
+        if b.language in _SHELL and not b.mark:
+            etorigami_commands(b.code)                  # raises on another command
+        if b.language == "json":
+            json.loads(b.code)
+        if b.mark:
+            assert b.language in ("python", *_SHELL) and len(b.why) > 10, b.where
+    no_run = [b.where for b in every if b.mark == "no-run"]
+    assert len(no_run) <= MAX_NO_RUN, f"{len(no_run)} blocks not run: {no_run}"
+
+
+def test_a_mark_stands_right_before_its_fence():
+    for path in DOCS:
+        text = path.read_text()
+        marked = {b.line for b in blocks(path) if b.mark}
+        for i, line in enumerate(text.splitlines(), 1):
+            if _MARK.search(line):
+                assert i + 1 in marked, f"{path.name}:{i}: a mark must be on the line before a fence"
+
+
+def test_block_parser(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("text\n\n```python\nx = 1\n```\n\n<!-- no-run: needs a cluster here -->\n"
+                    "```bash\npip install x\n```\n\n<!-- slow: about a minute -->\n```python\n"
+                    "y = 2\n```\n\n```\nplain\n```\n")
+    found = blocks(page)
+    assert [(b.line, b.language, b.mark) for b in found] == [
+        (3, "python", ""), (8, "bash", "no-run"), (13, "python", "slow"), (17, "", "")]
+    assert found[1].why == "needs a cluster here" and python_blocks(page) == [(3, "x = 1\n")]
+    assert etorigami_commands("etorigami run a \\\n  --out b   # c\n\n") == [["run", "a", "--out",
+                                                                             "b"]]
+    with pytest.raises(ValueError, match="not an etorigami command"):
+        etorigami_commands("pip install x\n")
 
 
 def test_readme_imports_only_from_the_two_packages():

@@ -343,7 +343,7 @@ def test_transient_heat_uses_the_integral_loss():
 
 
 # ------------------------------------------------------------------ against the 3-D FE reference
-@pytest.mark.slow
+@pytest.mark.slow                     # 35 s: not in CI's fe_accuracy set (.ci/run-slow runs it)
 @pytest.mark.parametrize("h_over_a", [0.1, 0.5, 2.0])
 def test_disk_over_a_plane_agrees_with_converged_fe(h_over_a):
     """Measured (this branch, 2 Dec 2026): integral / FE - 1 = -0.37 %, -0.23 %, -0.21 %."""
@@ -358,9 +358,12 @@ def test_disk_over_a_plane_agrees_with_converged_fe(h_over_a):
 
 
 @pytest.mark.slow
+@pytest.mark.fe_accuracy
 @pytest.mark.parametrize("W", [0.4, 1.0])
 def test_strip_in_air_agrees_with_fe(W):
-    """SU-8 strip in air, the integral loss at refinement 8 against the 3-D FE at level 2. Measured (2 Dec
+    """SU-8 strip in air, the integral loss at refinement 8 against the 3-D FE at level 2, both on
+    the mesh triangles (the FE meshes the air around that sheet; the default refined sheet,
+    theory 4.11, is 10-12 % cooler here and would compare two sheets). Measured (2 Dec
     2026), T_max / T_ave errors: W/L 0.1 +3.1 / +3.2 %, 0.4 +1.4 / +2.9 %, 1.0 +0.2 / +2.6 %
     (the chain model: -12 / -4 %, -15 / +7 %, -26 / -7 %); FE level 1 -> 2 moves by ~1 %."""
     pytest.importorskip("skfem")
@@ -369,7 +372,9 @@ def test_strip_in_air_agrees_with_fe(W):
     from studies.heat_loss_calibration import strip_case
     model = strip_case(W, k=0.3, k_env=0.026, t_env=1.5).model
     power = 10 * W * 1e-3
-    tm = ThermalModel(model.mesh, model.thermal.with_loss("integral", refinement=8))
+    # on the FE's sheet, the mesh triangles (sheet_refinement=1; theory 4.11)
+    tm = ThermalModel(model.mesh, dataclasses.replace(
+        model.thermal.with_loss("integral", refinement=8), sheet_refinement=1))
     T = tm.solve(model.mesh.nodes, tm.heat_vector([power]))
     fe = solve_fe3d(model, [power], level=2, box_factor=4.0, accuracy=1.0)
     assert fe.success
