@@ -69,7 +69,7 @@ def folding_sheet(cells: int, ext: float = 0.9, fold_deg: float = 1.0):
 
     import numpy as np
 
-    from simulator import initial_state
+    from simulator.steps import initial_state
     from simulator.cases import miura_fold_signs
     from simulator.geometry.example_patterns import miura_vertices
     from simulator.geometry.materials import SU8

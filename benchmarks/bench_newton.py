@@ -65,7 +65,7 @@ def _miura(cells):
     rng = np.random.default_rng(0)
     u = rng.normal(size=(model.mesh.n_nodes, 3)) * 1e-9
     u[panel0] = 0
-    from simulator import initial_state
+    from simulator.steps import initial_state
     return model, u, initial_state(model).spring_rest
 
 

@@ -14,7 +14,9 @@ import time
 
 import numpy as np
 
-from simulator import SquareWave, get_case, integrate_heat, theta_step
+from simulator import get_case
+from simulator.schedules import SquareWave
+from simulator.thermal import integrate_heat, theta_step
 from simulator.state import thermal_model
 from simulator.thermal.transient import heat_system
 

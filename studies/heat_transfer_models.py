@@ -123,7 +123,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from simulator import IntegralLoss, Substrate, crease_temperatures
+from simulator import IntegralLoss, Substrate
+from simulator.thermal import crease_temperatures
 from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 
