@@ -19,11 +19,8 @@ import time
 
 import numpy as np
 
-from design.core.executors import make_executor
-from design.devices.gripper import GripperDesign, evaluate_gripper
-from design.core.optimize import optimize
-from design import GripperProblem
-from design.analysis.robustness import residual_fold_grid, sweep_residual_fold
+from design import (GripperDesign, GripperProblem, evaluate_gripper, make_executor, optimize,
+                    residual_fold_grid, sweep_residual_fold)
 
 
 def _timed(fn, repeat=1):

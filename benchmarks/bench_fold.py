@@ -69,13 +69,11 @@ def folding_sheet(cells: int, ext: float = 0.9, fold_deg: float = 1.0):
 
     import numpy as np
 
-    from simulator import initial_state
+    from simulator.steps import initial_state
     from simulator.cases import miura_fold_signs
     from simulator.geometry.example_patterns import miura_vertices
-    from simulator.geometry.materials import SU8
-    from simulator.model.model import Supports, make_model
-    from simulator.geometry.pattern import Pattern
-    from simulator.model.properties import BarHingeParameters
+    from simulator import BarHingeParameters, Pattern, Supports, make_model
+    from simulator.materials import SU8
 
     a = b = 1e-3
     gamma = math.radians(60)

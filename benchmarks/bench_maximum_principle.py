@@ -35,14 +35,14 @@ import dataclasses
 
 import numpy as np
 
-from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design import GripperDesign, gripper_model
+from design.devices import BASE_CREASES
+from simulator import IntegralLoss
+from simulator.thermal import ThermalModel, crease_temperatures
 from simulator.cases import get_case
 from simulator.thermal._single_layer import subdivision
 from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator, lump_couplings
-from simulator.thermal.loss import IntegralLoss
-from simulator.thermal.measures import crease_temperatures
 from simulator.thermal.monotone import t3_matrices
-from simulator.thermal.steady import ThermalModel
 
 
 def _with(model, **fields):

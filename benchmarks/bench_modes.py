@@ -13,9 +13,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.model.model import Supports, make_model
-from simulator.solvers.modes import natural_modes
+from simulator import Supports, make_model, natural_modes
+from simulator.example_patterns import miura_sheet_pattern
 
 
 def miura_model(cells: int):

@@ -16,11 +16,10 @@ import time
 import numpy as np
 
 from simulator.cases import single_fold_model
-from simulator import SelfFold, simulate
-from simulator.state import equilibrium_system
-from simulator.model.model import ContactParameters, Supports, make_model
-from simulator.geometry.example_patterns import gripper_pattern, miura_sheet_pattern
-from simulator.model.properties import BarHingeParameters
+from simulator import (BarHingeParameters, ContactParameters, SelfFold, Supports, make_model,
+                       simulate)
+from simulator.example_patterns import gripper_pattern, miura_sheet_pattern
+from simulator.mechanics import equilibrium_system
 from simulator.linalg import solve as _solve_linear
 
 
@@ -65,7 +64,7 @@ def _miura(cells):
     rng = np.random.default_rng(0)
     u = rng.normal(size=(model.mesh.n_nodes, 3)) * 1e-9
     u[panel0] = 0
-    from simulator import initial_state
+    from simulator.steps import initial_state
     return model, u, initial_state(model).spring_rest
 
 

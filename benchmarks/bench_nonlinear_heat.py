@@ -33,7 +33,7 @@ import dataclasses
 from bench_loss_models import _timed as timed, gripper_evaluation
 from design.devices import gripper
 from simulator import AIR
-from simulator.geometry.materials import GOLD_FILM_EMISSIVITY
+from simulator.materials import GOLD_FILM_EMISSIVITY
 
 #: The two measured grippers: (name, design, measured full-function power [mW]).
 DESIGNS = (

@@ -14,8 +14,9 @@ import time
 
 import numpy as np
 
-from simulator import SquareWave, get_case, integrate_heat, theta_step
-from simulator.state import thermal_model
+from simulator import get_case
+from simulator.schedules import SquareWave
+from simulator.thermal import integrate_heat, thermal_model, theta_step
 from simulator.thermal.transient import heat_system
 
 

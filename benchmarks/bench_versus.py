@@ -131,8 +131,7 @@ from simulator.newton import _solve_linear
 """
 
 _NEWTON_NEW = """
-from simulator import initial_state
-from simulator.state import equilibrium_system
+from simulator.state import equilibrium_system, initial_state
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.linalg import solve as _solve_linear
 """

@@ -1,5 +1,6 @@
 """Deprecated spellings: one warning, attributed to the user's line (not to the toolkit's own
-frames, nor to ``dataclasses.replace``, which calls ``__init__``)."""
+frames, nor to ``dataclasses.replace``, which calls ``__init__``, nor to the import system, which
+looks a name up once more in ``from package import name``)."""
 
 from __future__ import annotations
 
@@ -14,10 +15,11 @@ __all__ = ["warn_deprecated"]
 
 def warn_deprecated(message: str) -> None:
     """Warn with an :class:`~simulator.errors.EtorigamiDeprecationWarning` ``message`` at the
-    first frame outside the calling module and :mod:`dataclasses` (Python shows it once per
-    such line)."""
+    first frame outside the calling module, :mod:`dataclasses` and the import system (Python
+    shows it once per such line)."""
     frame, level = sys._getframe(1), 2
     skip = {frame.f_code.co_filename, dataclasses.__file__}
-    while frame.f_back is not None and frame.f_code.co_filename in skip:
+    while frame.f_back is not None and (frame.f_code.co_filename in skip or
+                                        frame.f_code.co_filename.startswith("<frozen importlib")):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, EtorigamiDeprecationWarning, stacklevel=level)

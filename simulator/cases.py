@@ -3,6 +3,11 @@
 Every case is a function returning a :class:`Case` (model + loading steps) and accepts
 keyword overrides; units are in the parameter names or listed in ``CASES[name].units``.
 Node and crease ids below are 0-based (reference id - 1).
+
+:func:`get_case` and :class:`Case` are at ``simulator``'s door; this namespace
+(``simulator.cases``) also has the list of cases with their parameters (:func:`describe_cases`,
+:func:`parameter_note`) and the model builders the cases share (:func:`miura_sheet_model`,
+:func:`single_fold_model`).
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+from .case_notes import parameter_note
 from .model.bimorph import Actuators, Bimorph
 from ._validate import integer, non_negative, positive
 from .errors import ParameterError
@@ -33,7 +39,7 @@ from .solvers.newton import NewtonOptions
 from .thermal.loss import ChainLoss, IntegralLoss
 from .thermal.steady import REFERENCE_BETA, ThermalParameters
 
-__all__ = ["Case", "CASES", "get_case", "describe_cases", "miura_sheet_model",
+__all__ = ["Case", "get_case", "describe_cases", "parameter_note", "CASES", "miura_sheet_model",
            "miura_fold_signs", "single_fold_model", "SINGLE_FOLD_SUPPORTS", "CRANE_POWER_MW"]
 
 #: alpha_SU8 - alpha_Au [1/K] (52e-6 - 14e-6), the actuators of the paper's devices.
@@ -360,7 +366,8 @@ def miura_fold_signs(a, b, gamma, m, n) -> dict:
     -------
     dict
         Crease (edge) id of :func:`simulator.example_patterns.miura_sheet_pattern` -> +1
-        (folds towards +z) or -1 (towards -z), in the sign convention of :func:`fold_angles`.
+        (folds towards +z) or -1 (towards -z), in the sign convention of
+        :func:`~simulator.mechanics.fold_angles`.
     """
     v, p = miura_vertices(a, b, gamma, m, n, ext=0.8)
     return fold_directions(v, p)

@@ -265,7 +265,7 @@ def crossing_event(mesh, u_prev, u, *, increment: int, load_factor: float, power
     message = (f"panels passed through each other in increment {increment + 1} (load factor "
                f"{load_factor:.6g}): {'; '.join(parts)}. Panel contact keeps them apart: "
                "leave out --no-contact (etorigami run), or give the model contact "
-               "(stack_model(..., contact=True), simulator.plain_contact(pattern))")
+               "(stack_model(..., contact=True), simulator.model.plain_contact(pattern))")
     panels = np.unique(np.r_[mesh.node_panel[pairs[:, 0]], pairs[:, 1]]) if len(pairs) else ()
     return Event("panel_crossing", float(load_factor), increment, power_per_crease=power,
                  temperature_max=None if temperature is None else float(np.max(temperature)),
@@ -373,7 +373,7 @@ def _past_flat(mesh, rows, a, *, increment, load_factor, power, temperature) -> 
                "no panel passed through another (the crease's width holds its panels apart): "
                "the step goes on. Fold angles are reported in (-180, 180] deg: "
                f"{angles} here (360 deg more). Panel contact from the crease's gap "
-               "(simulator.plain_contact) stops creases short of 180 deg")
+               "(simulator.model.plain_contact) stops creases short of 180 deg")
     return Event("fold_past_flat", float(load_factor), increment, power_per_crease=power,
                  temperature_max=None if temperature is None else float(np.max(temperature)),
                  message=message, creases=ids)

@@ -53,7 +53,7 @@ class StepResult(ResultFiles):
     energies : dict of energy components at the end [J]
     wall_time : float [s]
     settings : dict
-        The step's parameters (:meth:`Step.describe`).
+        The step's parameters (:meth:`~simulator.steps.Step.describe`).
     columns : dict of (m,) arrays
         Step-specific per-increment quantities (e.g. ``stable``, ``time [s]``).
     velocity_history : (m, n_nodes, 3) node velocities [m/s], or None (quasi-static step)

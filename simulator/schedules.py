@@ -5,17 +5,21 @@ vectorised over ``t`` (a float gives a float, an array an array of the same shap
 exact mean over an interval and a JSON-able description. Two families share its shapes (step,
 ramp, square wave, sine, piecewise linear; the formulas are the functions below):
 
-* the **power schedules** of :mod:`simulator.thermal.schedules` (``StepPower``, ``Ramp``,
-  ``SquareWave``, ``Sine``, ``PiecewiseLinear``): non-negative powers [W] of heaters;
-* the **signals** here (:class:`StepSignal`, :class:`RampSignal`, :class:`SquareWaveSignal`,
+* the **power schedules** (:class:`StepPower`, :class:`Ramp`, :class:`SquareWave`,
+  :class:`Sine`, :class:`PiecewiseLinear`, defined in :mod:`simulator.thermal.schedules`):
+  non-negative powers [W] of heaters, the field ``power``;
+* the **signals** (:class:`StepSignal`, :class:`RampSignal`, :class:`SquareWaveSignal`,
   :class:`SineSignal`, :class:`PiecewiseLinearSignal`): signed values of any unit, for the
   mechanical drives of :class:`~simulator.steps.Dynamics` and
   :class:`~simulator.steps.ElectroThermal` (a crease's rest fold angle [rad], or the
   dimensionless factor of a force vector).
 
-Every schedule may be used where a signal is expected (a power schedule is a non-negative
-signal). ``switch_times(t)`` lists the times at which a schedule jumps (steps, square waves) or
-kinks (tables), so that adaptive time steppers end their steps there; ramps and sines list none.
+The two families are not aliases of each other: a power schedule refuses a negative power and
+its sine's offset defaults to ``|amplitude|`` (a heater cannot cool), while a signal is signed
+about ``offset`` (default 0). The heating steps take power schedules (or constant watts); every
+schedule may be used where a signal is expected (a power schedule is a non-negative signal).
+``switch_times(t)`` lists the times at which a schedule jumps (steps, square waves) or kinks
+(tables), so that adaptive time steppers end their steps there; ramps and sines list none.
 """
 
 from __future__ import annotations
@@ -26,11 +30,21 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ._lazy import attach as _attach
 from ._validate import finite, number, positive
 from .errors import ParameterError
 
-__all__ = ["Schedule", "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal",
-           "PiecewiseLinearSignal", "next_switch"]
+# the power schedules live beside the heat they drive and import the shapes from here
+__getattr__, __dir__ = _attach(__name__, {
+    ".thermal.schedules": ("PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine",
+                           "PiecewiseLinear"),
+})
+
+__all__ = ["Schedule",  # noqa: F822 - the power schedules come from __getattr__
+           # power schedules [W] >= 0: Heat, TransientHeat, ElectroThermal heaters
+           "PowerSchedule", "StepPower", "Ramp", "SquareWave", "Sine", "PiecewiseLinear",
+           # signed signals: the mechanical drives of Dynamics and ElectroThermal
+           "StepSignal", "RampSignal", "SquareWaveSignal", "SineSignal", "PiecewiseLinearSignal"]
 
 
 class Schedule(ABC):

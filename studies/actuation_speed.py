@@ -58,8 +58,9 @@ import pandas as pd
 
 from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
                             _tip_distance, gripper_model)
-from simulator import Heat, SquareWave, StepPower, get_case, natural_modes, simulate
-from simulator.mechanics.kinematics import fold_angles
+from simulator import Heat, get_case, natural_modes, simulate
+from simulator.schedules import SquareWave, StepPower
+from simulator.mechanics import fold_angles
 from studies._common import TEMP, progress_bar, study_main
 
 NAME = "actuation_speed"

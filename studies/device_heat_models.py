@@ -87,12 +87,12 @@ import time
 import numpy as np
 import pandas as pd
 
-from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, evaluate_gripper,
-                                    gripper_model)
-from simulator import (IntegralLoss, Substrate, crease_limit_temperatures, crease_temperatures,
-                       simulate, solve_fe3d)
+from design import GripperDesign, evaluate_gripper, gripper_model
+from design.devices import ARM_CREASES, BASE_CREASES
+from simulator import IntegralLoss, Substrate, simulate
+from simulator.fe import solve_fe3d
+from simulator.thermal import ThermalModel, crease_limit_temperatures, crease_temperatures
 from simulator.cases import get_case
-from simulator.thermal.steady import ThermalModel
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import PAPER_DEVICES
 from studies.gripper_shapes import _cd_csv, _cd_cycles, gripper_states
@@ -145,7 +145,7 @@ def _actuation(mesh, T) -> np.ndarray:
 
 def _centre(mesh, T) -> np.ndarray:
     """(C,) centre-line means (A, B, Ctr) [degC] of nodal temperatures ``T``: the measure of
-    the 1.2 T_g limit (:func:`simulator.crease_limit_temperatures`)."""
+    the 1.2 T_g limit (:func:`simulator.thermal.crease_limit_temperatures`)."""
     return crease_limit_temperatures(T, mesh)
 
 

@@ -75,10 +75,9 @@ import time
 
 import pandas as pd
 
-from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
-from design.devices.gripper_drive import gripper_drive
+from design import GripperDesign, evaluate_gripper, gripper_drive, gripper_model
+from simulator.materials import GOLD_FILM_EMISSIVITY
 from simulator import EtorigamiError
-from simulator.geometry.materials import GOLD_FILM_EMISSIVITY
 from simulator.thermal.circuits import GOLD_TCR
 from studies._common import progress_bar, study_main
 

@@ -78,9 +78,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design.core.executors import make_executor
-from design.core.optimize import optimize
-from design import GripperDesign, GripperProblem
+from design import GripperDesign, GripperProblem, make_executor, optimize
 from studies._common import (EvaluationTimeout, TimeLimited, progress_bar, study_main,
                              time_limit)
 

@@ -73,13 +73,8 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design.core.executors import make_executor
-from design.core.optimize import optimize
-from design.analysis.robustness import (
-    RobustGripperProblem,
-    residual_fold_grid,
-    sweep_residual_fold,
-)
+from design import (RobustGripperProblem, make_executor, optimize, residual_fold_grid,
+                    sweep_residual_fold)
 from studies._common import RESULTS, progress_bar, study_main
 from studies.gripper_optimization import (
     CD_OPTIONS,

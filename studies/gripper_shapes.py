@@ -53,8 +53,9 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gripper_model
-from simulator.simulation import simulate
+from design import GripperDesign, gripper_model
+from design.devices import ARM_CREASES, BASE_CREASES
+from simulator import simulate
 from simulator.steps import Heat
 from studies._common import (RESULTS, TEMP, XYZ, default_out, progress_bar, shape_from_frame,
                              study_main)
@@ -241,7 +242,7 @@ def draw_schematic(ax, design: GripperDesign = GripperDesign()):
     Fig. 11a): panels grey, creases orange, the anchored base hatched; lengths in mm."""
     from matplotlib.patches import Polygon
 
-    from simulator.geometry.example_patterns import gripper_pattern
+    from simulator.example_patterns import gripper_pattern
 
     pat = gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2)
     v = np.asarray(pat.vertices)[:, :2] * 1e3

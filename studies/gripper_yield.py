@@ -64,10 +64,8 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from design.core.executors import make_executor
-from design import GripperProblem
-from design.analysis.uncertainty import SCENARIOS
-from design.analysis.uncertainty_sweep import RobustYieldProblem, summarize_yield, sweep_uncertainty
+from design.analysis import SCENARIOS, summarize_yield
+from design import GripperProblem, RobustYieldProblem, make_executor, sweep_uncertainty
 from studies._common import RESULTS, progress_bar, study_main
 from studies.gripper_optimization import PAPER_BASE
 from studies.gripper_robustness import FALLBACK_CD_BUDGET_QUICK, _design_row, _optimize, \

@@ -109,9 +109,8 @@ import numpy as np
 import pandas as pd
 
 from simulator.cases import verification_strip
-from simulator.geometry.materials import Material
-from simulator.model.model import make_model
-from simulator.geometry.example_patterns import strip_pattern
+from simulator import Material, make_model
+from simulator.example_patterns import strip_pattern
 from studies._common import progress_bar, study_main
 
 NAME = "heat_loss_calibration"
@@ -175,7 +174,7 @@ def fe_temperatures(W, k, k_env, level=FE_LEVEL) -> tuple:
     unit depth Q / L on the crease), ends held at RT, box radius 4 x half length.
     """
     try:
-        from simulator.thermal.fe import solve_fe2d, solve_fe3d
+        from simulator.fe import solve_fe2d, solve_fe3d
         import gmsh  # noqa: F401
         import skfem  # noqa: F401
     except ImportError:

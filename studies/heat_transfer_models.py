@@ -123,8 +123,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from simulator import IntegralLoss, Substrate, crease_temperatures
-from simulator.thermal.steady import ThermalModel
+from simulator import IntegralLoss, Substrate
+from simulator.thermal import ThermalModel, crease_temperatures
 from studies._common import progress_bar, study_main
 
 __all__ = ["NAME", "ERROR_CSV", "run", "plot", "main", "error_table", "crease_measures",
@@ -204,7 +204,8 @@ def _double_fold(quick):
 
 
 def _gripper(quick):
-    from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign
+    from design import GripperDesign
+    from design.devices import ARM_CREASES, BASE_CREASES
     from studies.gripper_shapes import gripper_states
 
     model, res = gripper_states(GripperDesign(loss_model="chain"), GRIPPER_ASSEMBLY, GRIPPER_GRIP,
@@ -269,7 +270,7 @@ def _steady(model, x, q, **changes):
 
 def _fe(model, x, q, levels):
     """[(level, node temperatures or None, wall time [s], success, message)] of the 3-D FE."""
-    from simulator.thermal.fe import solve_fe3d
+    from simulator.fe import solve_fe3d
 
     out = []
     for level in levels:

@@ -63,7 +63,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from design.analysis.heaters import HeaterAllocation, allocate_heaters, linear_allocation
+from design import HeaterAllocation, allocate_heaters
+from design.analysis import linear_allocation
 from simulator.cases import get_case
 from simulator import Heat, simulate
 from studies._common import progress_bar, study_main

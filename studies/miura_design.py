@@ -84,7 +84,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design.core.executors import make_executor
+from design import make_executor
+from simulator import ParameterError
 from design.devices.miura import (
     MIURA_SPACE,
     MiuraDesign,
@@ -93,7 +94,6 @@ from design.devices.miura import (
     lift_per_power_table,
     lift_power,
 )
-from simulator.errors import ParameterError
 from studies._common import progress_bar, study_main
 from studies._common import EvaluationTimeout, TimeLimited, time_limit
 
@@ -266,7 +266,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
 
 def optimize_miura(problem, executor, budget, callback=None):
     """The coordinate descent on ``problem`` from the space's start."""
-    from design.core.optimize import optimize
+    from design import optimize
 
     return optimize(problem, "cd", executor=executor, max_evaluations=budget,
                     callback=callback, **CD_OPTIONS)
@@ -328,7 +328,7 @@ def _grid_figure(grid):
 
 
 def _note(fig):
-    from design.devices.miura import miura_model
+    from design import miura_model
     from studies.plotting import environment_note, heat_loss_note, note_assumptions
 
     note_assumptions(fig, environment_note("air", 0.026, 0, 0, extra=[

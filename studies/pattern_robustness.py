@@ -43,7 +43,9 @@ import time
 import numpy as np
 import pandas as pd
 
-from simulator import Heat, NewtonOptions, get_stack, parse_fold, simulate, stack_model
+from simulator import Heat, NewtonOptions, simulate
+from simulator.fold import parse_fold
+from simulator.model import get_stack, stack_model
 from studies._classic_patterns import PATTERNS, POWERS_MW
 from studies._common import progress_bar, study_main
 

@@ -22,7 +22,7 @@ from studies.figure_notes import (FULL_STAMP, LINESTYLES, NO_HEAT, PALETTE,  # n
 
 from design.cli._plots import set_3d_limits      # shared with the CLI's mode-shape figures
 from design.devices.limits import SU8_LIMIT
-from simulator import crease_limit_temperatures
+from simulator.thermal import crease_limit_temperatures
 
 __all__ = ["plot_shape", "plot_fold_vs_power", "plot_temperature_vs_power", "animate",
            "save_figure", "stamp_quick", "QUICK_STAMP", "mark_temperature_limit", "nodal_range",

@@ -10,16 +10,16 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from simulator import (LIMIT_MEASURES, ConvergenceError, Model, ParameterError, SimulationState,
-                       SolverError, crease_limit_temperatures, crease_temperatures,
-                       fold_angles, initial_state)
-# Behind the doors on purpose: the LP linearises the solver itself (the steady thermal
-# operator and the crease temperature weights for the influence matrices; a Newton re-solve
-# of the equilibrium system with moved crease rest angles for the fold sensitivities). These
-# are solver internals, not a user's API (tests/unit/test_architecture.py lists them).
-from simulator.model.properties import spring_rest_angles
-from simulator.solvers.newton import newton
-from simulator.state import equilibrium_system, thermal_model
+# The LP linearises the solver itself: the steady thermal operator and the crease temperature
+# measures for the influence matrices, a Newton re-solve of the equilibrium system with moved
+# crease rest angles for the fold sensitivities (all public in simulator's namespaces).
+from simulator import ConvergenceError, Model, ParameterError, SolverError
+from simulator.mechanics import equilibrium_system, fold_angles
+from simulator.model import spring_rest_angles
+from simulator.solvers import solve_equilibrium
+from simulator.steps import SimulationState, initial_state
+from simulator.thermal import (LIMIT_MEASURES, crease_limit_temperatures, crease_temperatures,
+                               thermal_model)
 
 from ..devices.limits import SU8_TG
 
@@ -29,7 +29,7 @@ __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation", "TEMPE
 #: What the temperature limit bounds: ``"centre_line"``, the mean of each crease's three
 #: centre-line nodes (A, B, Ctr; the documented measure of the 1.2 T_g limit, theory 5.4, as
 #: in every design problem and figure), or ``"crease_max"``, every crease node (stricter);
-#: :data:`simulator.LIMIT_MEASURES`.
+#: :data:`simulator.thermal.LIMIT_MEASURES`.
 TEMPERATURE_MEASURES = tuple(LIMIT_MEASURES)
 
 
@@ -85,7 +85,7 @@ def limit_temperatures(model: Model, node_values: np.ndarray,
 
     ``node_values`` (n,) or (n, k) (temperatures [deg C], or rises per heater watt [K/W]);
     returns (C,) or (C, k) for ``"centre_line"`` (the mean of each crease's centre-line nodes
-    A, B, Ctr, :func:`simulator.crease_limit_temperatures`: a linear functional, so the LP
+    A, B, Ctr, :func:`simulator.thermal.crease_limit_temperatures`: a linear functional, so the LP
     stays linear) or (C * 7,) or (C * 7, k) for ``"crease_max"`` (every crease node, rows of
     ``mesh.crease_nodes``: their maximum is bounded by bounding each).
     """
@@ -155,7 +155,7 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     f = state.applied_load.ravel()
 
     def folds(rest):
-        res = newton(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
+        res = solve_equilibrium(system, state.u, f, spring_rest_angles(mesh, rest, model.params))
         if not res.success:
             raise ConvergenceError(f"fold_sensitivity: equilibrium not found ({res.message})",
                                        res)

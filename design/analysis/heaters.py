@@ -47,9 +47,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simulator import (ConvergenceError, Heat, Model, NewtonOptions, ParameterError,
-                       SimulationState, TemperatureLimit, TemperatureVerdict, fold_angles,
-                       initial_state, simulate)
+from simulator import ConvergenceError, Heat, Model, NewtonOptions, ParameterError, simulate
+from simulator.mechanics import fold_angles
+from simulator.steps import SimulationState, initial_state
+from simulator.thermal import TemperatureLimit, TemperatureVerdict
 from simulator._result import ResultFiles
 from simulator._validate import integer, non_negative, positive
 
@@ -301,7 +302,7 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     ----------
     model : Model with thermal parameters and actuators
     targets : {crease id: fold angle [rad]}
-        Fold angle from flat (sign as :func:`simulator.fold_angles`) each crease must
+        Fold angle from flat (sign as :func:`simulator.mechanics.fold_angles`) each crease must
         reach within ``fold_tol``; a target that needs the crease to fold against its actuation direction is a
         ParameterError.
     heaters : {name: crease id or tuple of crease ids}, optional

@@ -22,7 +22,7 @@ expected, a folder that cannot be made or written). A usage error ends with one 
 Short commands (demo, run, gripper evaluate) use the compiled kernels when numba's cache holds
 them, else the numpy ones while a background process compiles them for the next run (see
 :func:`design.cli._common.kernel_backend`); long ones always the compiled ones (see
-:func:`simulator.spring_kernel_backend`).
+:func:`simulator.kernels.spring_kernel_backend`).
 """
 
 from __future__ import annotations

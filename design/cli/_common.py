@@ -180,14 +180,16 @@ def kernel_backend(short: bool):
     """Context for a command: short ones (one case, one gripper evaluation: a few thousand
     kernel calls) use the ahead-of-time compiled kernels when they are built
     (:mod:`simulator._aot`: no numba imported), else numba's kernels only when numba's cache
-    holds them (loading costs about half a second, :func:`simulator.kernel_cache_warm`); with
-    a cold cache they run on the numpy kernels, since compiling costs more than it saves
-    there. Without the ahead-of-time kernels they start compiling in a background process for
-    the next run (:func:`simulator.warm_kernel_cache`). Long ones (optimize, sweep) keep the
+    holds them (loading costs about half a second,
+    :func:`simulator.kernels.kernel_cache_warm`); with a cold cache they run on the numpy
+    kernels, since compiling costs more than it saves there. Without the ahead-of-time kernels
+    they start compiling in a background process for the next run
+    (:func:`simulator.kernels.warm_kernel_cache`). Long ones (optimize, sweep) keep the
     default. ``ETORIGAMI_JIT`` overrides both."""
     if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
         return contextlib.nullcontext()
-    from simulator import _aot, kernel_cache_warm, warm_kernel_cache
+    from simulator import _aot
+    from simulator.kernels import kernel_cache_warm, warm_kernel_cache
 
     if _aot.available(log=True):            # files only: a usage error stays quick
         return _aot.enabled()               # no numba imported (falls back to it if needed)
@@ -195,7 +197,7 @@ def kernel_backend(short: bool):
     warm_kernel_cache()                     # numba's cache if cold, then the AOT module
     if warm:
         return contextlib.nullcontext()
-    from simulator import spring_kernel_backend
+    from simulator.kernels import spring_kernel_backend
 
     return spring_kernel_backend("numpy")
 

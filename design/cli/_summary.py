@@ -1,10 +1,10 @@
 """What a finished simulation printed by the CLI says besides its status: the events of its steps
-(snaps, limit points: typed records, :class:`simulator.Event`) and the verdict on the design
+(snaps, limit points: typed records, :class:`simulator.steps.Event`) and the verdict on the design
 limit 1.2 T_g of the crease material.
 
 Creases are named by their crease id (the pattern's edge id), as in ``creases.csv``, the FOLD
 files and the viewer. The limit is judged, as everywhere, on the crease centre-line mean (the
-mean of its nodes A, B, Ctr; theory 5.4, :class:`simulator.TemperatureLimit`), the hottest
+mean of its nodes A, B, Ctr; theory 5.4, :class:`simulator.thermal.TemperatureLimit`), the hottest
 crease over all records counting; the hottest of its nodes (``temperature_max [degC]`` of
 ``creases.csv``) follows as information.
 """
@@ -54,7 +54,7 @@ def _temperature_lines(result) -> list:
     5.4), then the hottest node as information; none if the crease material has no T_g."""
     import numpy as np
 
-    from simulator import TemperatureLimit
+    from simulator.thermal import TemperatureLimit
 
     mesh, h = result.model.mesh, result.history
     limit = TemperatureLimit.of_material(mesh.pattern.crease_material)

@@ -1,7 +1,7 @@
 """Case parameters at the command line: one unit table from the library's SI units to the CLI's.
 
-The library's cases take SI values (:func:`simulator.describe_cases` lists each parameter with
-its SI unit); the CLI speaks um, mW, degrees and seconds. :data:`CLI_UNITS` maps every SI unit
+The library's cases take SI values (:func:`simulator.cases.describe_cases` lists each parameter
+with its SI unit); the CLI speaks um, mW, degrees and seconds. :data:`CLI_UNITS` maps every SI unit
 of a case parameter to its CLI unit, the conversion to SI and the range allowed at the CLI, so
 ``--set crease_width=200`` means 200 um, ``etorigami cases`` prints ``crease_width = 200
 [um]``, and ``--set crease_width=-5`` answers in um, before anything is built. Names that carry
@@ -40,7 +40,8 @@ class CLIUnit:
     check: str = ""
 
 
-#: SI unit of a case parameter (as :func:`simulator.describe_cases` gives it) -> its CLI unit.
+#: SI unit of a case parameter (as :func:`simulator.cases.describe_cases` gives it) -> its CLI
+#: unit.
 CLI_UNITS = {
     "m": CLIUnit("um", 1e6, "length"),
     "mW": CLIUnit("mW", 1.0, "power"),                 # names ending in _mW: already mW
@@ -74,7 +75,7 @@ def to_cli(value, si_unit: str):
 
 def case_parameters() -> dict:
     """{case name: {parameter: (default in CLI units, SI unit)}} of every built-in case."""
-    from simulator import describe_cases
+    from simulator.cases import describe_cases
 
     return {name: {p: (to_cli(default, unit), unit) for p, default, unit in params}
             for name, _, params in describe_cases()}

@@ -37,7 +37,7 @@ def fold_case(path: str, overrides: list | None, options: dict | None = None):
     step on that crease (or on the heater circuit that contains it), ``thermal_steps=N`` the
     increments of its heating steps.
     """
-    from simulator import load_fold_json, parse_fold, read_model
+    from simulator.fold import load_fold_json, parse_fold, read_model
 
     from .model_heat import model_file_heat_case, refuse_unheatable
     from .plain import heater_names, is_plain, plain_case, refuse_electrical_without_heat
@@ -105,7 +105,7 @@ def _apply_overrides(path, steps, overrides, names, params) -> list:
 
 
 def reader_options(args) -> dict:
-    """Keyword arguments of :func:`simulator.read_model` from ``--unit-scale``, the
+    """Keyword arguments of :func:`simulator.fold.read_model` from ``--unit-scale``, the
     ``--crease-width`` / ``--crease-thickness`` / ``--panel-thickness`` defaults [um],
     ``--frame``, ``--lay-flat`` / ``--no-lay-flat``, ``--keep-collinear`` and
     ``--crease-model`` (and, under ``_heating``, the flags that drive a plain pattern; under
@@ -168,7 +168,8 @@ def _set_power(power, creases: tuple, watts: float) -> dict:
 
 # ------------------------------------------------------------------------------ commands
 def _export(args) -> int:
-    from simulator import get_case, write_model
+    from simulator import get_case
+    from simulator.fold import write_model
 
     from .case_params import case_overrides
 
@@ -187,7 +188,8 @@ def _export(args) -> int:
 def _check(args) -> int:
     import numpy as np
 
-    from simulator import Heat, load_fold_json, read_model
+    from simulator import Heat
+    from simulator.fold import load_fold_json, read_model
 
     from .plain import check_plain, is_plain
 
@@ -222,7 +224,7 @@ def _check(args) -> int:
 
 
 def _view(args) -> int:
-    from simulator import write_viewer
+    from simulator.viewer import write_viewer
 
     path = write_viewer(args.result_dir, args.out)
     print(f"viewer written to {path} ({path.stat().st_size / 1e6:.2f} MB); open it in a browser")

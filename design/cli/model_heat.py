@@ -2,7 +2,7 @@
 ``--voltage V``, ``--current MA``).
 
 A model file (``etorigami:`` steps, written by ``etorigami export`` or
-:func:`simulator.write_model`) carries its own layers, bimorph, heat loss and supports; the
+:func:`simulator.fold.write_model`) carries its own layers, bimorph, heat loss and supports; the
 flags choose only what to heat and how hard. The file's steps up to its first heating step
 (self-fold, gravity) are kept, and its heating is replaced by one ``Heat`` of the chosen
 creases at ``--power`` (with the increments and coupling of the file's first heating step).
@@ -38,7 +38,8 @@ def model_file_heat_case(path, data, options: dict, sharp: dict, heating) -> tup
     ``Heat`` of the flags."""
     from dataclasses import replace
 
-    from simulator import Heat, parse_fold, read_model
+    from simulator import Heat
+    from simulator.fold import parse_fold, read_model
 
     from .plain import (drive_parameters, driven, heat_drive, heat_fields, print_notes,
                         refuse_creaseless, select_creases)

@@ -1,12 +1,13 @@
 """Plain crease patterns at the command line: ``check`` and ``run`` of a FOLD file drawn in an
 editor, with no ``etorigami:`` fields.
 
-A named layer stack (:data:`simulator.STACKS`, default ``su8-au``, the paper's SU-8/Au bimorph)
-supplies the physical parameters the file lacks; ``--crease-width`` / ``--crease-thickness`` /
-``--panel-thickness`` [um] override it. ``run FILE.fold --heat all|M|V|IDS|NAMES --power MW``
-makes the chosen creases actuators folding in their assigned directions, clamps one panel
-(``--fix-panel``, default the central one), switches panel contact on (``--no-contact``: off;
-:func:`simulator.plain_contact`) and heats them in ``--thermal-steps`` increments.
+A named layer stack (:data:`simulator.model.STACKS`, default ``su8-au``, the paper's SU-8/Au
+bimorph) supplies the physical parameters the file lacks; ``--crease-width`` /
+``--crease-thickness`` / ``--panel-thickness`` [um] override it. ``run FILE.fold --heat
+all|M|V|IDS|NAMES --power MW`` makes the chosen creases actuators folding in their assigned
+directions, clamps one panel (``--fix-panel``, default the central one), switches panel
+contact on (``--no-contact``: off; :func:`simulator.model.plain_contact`) and heats them in
+``--thermal-steps`` increments.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ def add_plain_options(parser, heating: bool = True) -> None:
     parser.add_argument("--stack", metavar="NAME",
                         help="layer stack giving a plain pattern's physical parameters "
                              "(default su8-au, the paper's SU-8/Au bimorph; see "
-                             "simulator.STACKS)")
+                             "simulator.model.STACKS)")
     parser.add_argument("--frame", metavar="INDEX|CLASS",
                         help="FOLD frame to read: an index (0 = key frame) or creasePattern / "
                              "foldedForm")
@@ -75,7 +76,7 @@ def add_plain_options(parser, heating: bool = True) -> None:
 
 def chosen_stack(name):
     """The layer stack of ``--stack`` (default :data:`DEFAULT_STACK`)."""
-    from simulator import get_stack
+    from simulator.model import get_stack
 
     return get_stack(DEFAULT_STACK if name is None else name)
 
@@ -202,7 +203,9 @@ def stack_reader_options(stack, options: dict) -> dict:
 
 def plain_case(path: str, data: dict, options: dict, heating) -> tuple:
     """``(model, steps, parameters)`` of a plain pattern heated from the flags."""
-    from simulator import Heat, parse_fold, stack_model
+    from simulator import Heat
+    from simulator.fold import parse_fold
+    from simulator.model import stack_model
 
     stack = chosen_stack(heating.stack)
     print(f"layer stack {stack.summary()}")
@@ -323,7 +326,8 @@ def heat_failure_hint(params: dict, model, result, unit_scale) -> str:
 
 def contact_line(model, asked: bool) -> str:
     """What the run does about panels passing through each other, in one line."""
-    from simulator import ParameterError, plain_contact
+    from simulator import ParameterError
+    from simulator.model import plain_contact
 
     crossing = "a run stops with an event where panels pass through each other"
     if model.contact is not None:
@@ -343,7 +347,9 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import build_mesh, central_panel, check_supported, parse_fold, start_fold_angles
+    from simulator import build_mesh
+    from simulator.fold import parse_fold
+    from simulator.model import central_panel, check_supported, start_fold_angles
 
     from .sharp import check_sharp
 

@@ -24,7 +24,7 @@ def _steady_temperature(model, steps):
     from simulator import Heat
     # behind the doors, as the heater LP: the steady thermal operator
     # (tests/unit/test_architecture.py)
-    from simulator.state import thermal_model
+    from simulator.thermal import thermal_model
 
     heats = [s for s in steps if isinstance(s, Heat)]
     if not heats or model.thermal is None:
@@ -37,11 +37,11 @@ def _steady_temperature(model, steps):
 
 def estimate_crease_temperature(model, steps):
     """(C,) crease temperatures [degC] on the measure of the design limit, the centre-line
-    mean (:func:`simulator.crease_limit_temperatures`), at the power the ``Heat`` steps of
+    mean (:func:`simulator.thermal.crease_limit_temperatures`), at the power the ``Heat`` steps of
     ``steps`` end at, from one steady solve on the unfolded shape; None if the run heats
     nothing by ``Heat`` steps or the model has no thermal parameters (numpy is imported here,
     so that ``etorigami --version`` stays light)."""
-    from simulator import crease_limit_temperatures
+    from simulator.thermal import crease_limit_temperatures
 
     temperature = _steady_temperature(model, steps)
     return None if temperature is None else crease_limit_temperatures(temperature, model.mesh)
@@ -51,10 +51,10 @@ def check_heating(model, steps, what: str) -> str | None:
     """Refuse (``CLIError``) a run whose estimated hottest crease (centre-line mean, the
     measure of the design limit) exceeds :data:`ABSURD_TEMPERATURE_C`; return a warning line
     naming the crease, its estimate and the limit if it exceeds 1.2 T_g of the crease material
-    (:class:`simulator.TemperatureLimit`), else None."""
+    (:class:`simulator.thermal.TemperatureLimit`), else None."""
     import numpy as np
 
-    from simulator import TemperatureLimit, crease_limit_temperatures
+    from simulator.thermal import TemperatureLimit, crease_limit_temperatures
 
     mesh = model.mesh
     temperature = _steady_temperature(model, steps)

@@ -73,7 +73,8 @@ def is_sharp_request(options: dict, geo=None) -> bool:
 
 def refuse_heated_sharp(model, steps, path) -> None:
     """Refuse, in one line, a run of a sharp model with heating steps."""
-    from simulator import Heat, SharpHingeMesh
+    from simulator import Heat
+    from simulator.model import SharpHingeMesh
 
     heats = [s.name for s in steps if isinstance(s, Heat)]
     if heats and isinstance(model.mesh, SharpHingeMesh):
@@ -104,8 +105,9 @@ def _folds(specs, geo) -> dict:
 def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
     """``(model, steps, parameters, geo)`` of a FOLD file run with sharp creases and a
     ``--fold`` drive (the layer stack gives the crease data the flags and the file lack)."""
-    from simulator import (SelfFold, Supports, central_panel, check_supported, fold_to_model,
-                           parse_fold, sharp_model)
+    from simulator import SelfFold, Supports
+    from simulator.fold import fold_to_model, parse_fold
+    from simulator.model import central_panel, check_supported, sharp_model
 
     from .plain import chosen_stack, print_notes, refuse_creaseless, stack_reader_options
 
@@ -142,7 +144,7 @@ def sharp_case(path, data, options: dict, sharp: dict, args) -> tuple:
 
 def check_sharp(args, geo, sharp: dict, needs: list) -> None:
     """Lines of ``check`` for a sharp read: mesh, stiffness rules, what a run needs."""
-    from simulator import build_sharp_mesh
+    from simulator.model import build_sharp_mesh
 
     pattern = geo.pattern
     mesh = build_sharp_mesh(pattern, sharp.get("panel_mesh", "N5B8"))

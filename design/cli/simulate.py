@@ -51,7 +51,7 @@ def heating_table(result):
 
     # behind the doors on purpose: the contact count of the equilibrium system at a record
     # (the system's element-family interface is not public; tests/unit/test_architecture.py)
-    from simulator.state import equilibrium_system
+    from simulator.mechanics import equilibrium_system
 
     h = result.history
     heat = np.flatnonzero(h["stage_name"] == "heat")
@@ -130,7 +130,7 @@ def _demo(args) -> int:
 def _cases(args) -> int:
     import textwrap
 
-    from simulator import describe_cases, parameter_note
+    from simulator.cases import describe_cases, parameter_note
 
     from .case_params import cli_unit, to_cli
 

@@ -32,11 +32,14 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from simulator import (AIR, CONDUCTIONS, REFERENCE_BETA, REFERENCE_GRAVITY, SPR, Actuators,
-                       BarHingeParameters, Bimorph, ChainLoss, ContactParameters, IntegralLoss,
-                       Load, NewtonOptions, ParameterError, SelfFold, Substrate, Supports,
-                       TemperatureLimit, TemperatureVerdict, ThermalParameters, build_mesh,
-                       crease_temperatures, example_patterns, make_model, simulate)
+from simulator import (AIR, Actuators, BarHingeParameters, Bimorph, ChainLoss, ContactParameters,
+                       IntegralLoss, Load, NewtonOptions, ParameterError, SelfFold, Substrate,
+                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
+                       simulate)
+from simulator.materials import SPR
+from simulator.model import REFERENCE_GRAVITY
+from simulator.thermal import (CONDUCTIONS, REFERENCE_BETA, TemperatureLimit, TemperatureVerdict,
+                               crease_temperatures)
 from simulator._result import ResultFiles
 from simulator._validate import finite, in_range, integer, non_negative, one_of, positive
 from simulator.thermal.integral_levels import sheet_levels
@@ -577,8 +580,8 @@ class _Stage(HeatingStage):
         return state, ok, msg
 
     def temperatures(self, state) -> tuple:
-        """``(heated, gripper)``: :class:`~simulator.TemperatureVerdict` of the stage's heated
-        creases (their centre-line mean: the limit's measure) and of all creases (the
+        """``(heated, gripper)``: :class:`~simulator.thermal.TemperatureVerdict` of the stage's
+        heated creases (their centre-line mean: the limit's measure) and of all creases (the
         gripper's hottest node)."""
         mesh, t = self.model.mesh, state.temperature
         return SU8_LIMIT.judge(t, mesh, self.creases), SU8_LIMIT.judge(t, mesh)

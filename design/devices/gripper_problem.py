@@ -7,7 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from simulator import TG_FACTOR, ParameterError
+from simulator import ParameterError
+from simulator.thermal import TG_FACTOR
 
 from ..core.problem import DesignProblem
 from ..core.space import DesignSpace, Variable

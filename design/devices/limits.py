@@ -1,15 +1,16 @@
 """Material limits the devices' design problems take as defaults, and the crease temperature
 constraint they share (theory 5.4: 1.2 T_g judged on the crease centre-line mean, by
-:class:`simulator.TemperatureLimit`)."""
+:class:`simulator.thermal.TemperatureLimit`)."""
 
 from __future__ import annotations
 
-from simulator import SU8, TG_FACTOR, TemperatureLimit
+from simulator.materials import SU8
+from simulator.thermal import TG_FACTOR, TemperatureLimit
 
 __all__ = ["SU8_TG", "SU8_LIMIT", "TemperatureLimited"]
 
 #: Glass transition temperature [deg C] of SU-8, the crease polymer of the paper's devices, read
-#: from the material (:data:`simulator.SU8`, 210 deg C); problems take it as default.
+#: from the material (:data:`simulator.materials.SU8`, 210 deg C); problems take it as default.
 SU8_TG = SU8.glass_transition
 #: The design limit of the paper's devices: 1.2 T_g of SU-8 (252 deg C) on the crease
 #: centre-line mean.

@@ -14,9 +14,10 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator import (TG_FACTOR, IntegralLoss, Model, ParameterError, PatternError,
-                       TemperatureLimit, TemperatureVerdict, build_mesh, example_patterns,
-                       miura_fold_signs, miura_sheet_model, simulate)
+from simulator import (IntegralLoss, Model, ParameterError, PatternError, build_mesh,
+                       example_patterns, simulate)
+from simulator.cases import miura_fold_signs, miura_sheet_model
+from simulator.thermal import TG_FACTOR, TemperatureLimit, TemperatureVerdict
 from simulator._result import ResultFiles
 from simulator._validate import in_range, integer, one_of, positive
 

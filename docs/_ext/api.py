@@ -1,16 +1,22 @@
 """API reference machinery of the documentation build (mkdocs.yml): the public names of
 ``simulator`` and ``design`` become pages, and docstrings written for numpydoc render here.
 
-Three parts, all driven by the packages' own ``__init__.py`` (read as source, not imported):
+Three parts, all driven by the packages' own sources (read, not imported):
 
-* :func:`public_names` reads ``__all__`` and the lazy-import map that ``simulator._lazy.attach``
-  gets, giving every public name and the module it lives in.
-* The MkDocs hooks ``on_config`` and ``on_files`` generate one page per subpackage
-  (``api/simulator/geometry.md``, ...) with a ``::: simulator.Pattern`` entry for every public
-  name that lives there, and put the pages in the navigation: a new name in ``__all__`` appears
-  without editing anything here; a name in ``__all__`` whose module is unknown stops the build.
+* :func:`public_names` reads a package's or namespace's ``__all__`` and where each name comes
+  from (the lazy-import map that ``simulator._lazy.attach`` gets, an import, or a definition in
+  the module itself); the modules a package's ``__all__`` lists are its namespaces
+  (``simulator.thermal``, ``simulator.fold``, ...).
+* The MkDocs hooks ``on_config`` and ``on_files`` generate one page for each package's door
+  (``api/simulator/index.md``) and one per namespace (``api/simulator/thermal.md``, ...) with a
+  ``::: simulator.thermal.ThermalModel`` entry for every public name (a namespace's name that
+  is also at the door links to the door's entry), and put the pages in the navigation: a new
+  name in an ``__all__`` appears without editing anything here; a name whose module is unknown
+  stops the build. ``on_page_markdown`` fills ``<!-- moved names: simulator -->`` with the
+  table of old spellings (the package's ``_moved.py``) and their new places.
 * :class:`PublicApi`, a griffe extension, makes the lazily exported names visible to griffe
-  (as aliases on the package, so ``simulator.simulate`` resolves statically) and rewrites the
+  (as aliases on the package or namespace, so ``simulator.simulate`` and
+  ``simulator.thermal.ThermalModel`` resolve statically) and rewrites the
   Sphinx roles of the docstrings (``:func:`~simulator.simulate``` and friends) into
   mkdocs-autorefs cross-references, which ``mkdocs build --strict`` checks. A role whose target
   is in our packages but not rendered (a private helper) becomes inline code; a role naming an
@@ -44,92 +50,166 @@ logger = logging.getLogger("mkdocs.hooks.api")
 # ---------------------------------------------------------------- the packages' public names
 @dataclass(frozen=True)
 class PublicName:
-    """One entry of a package's ``__all__``: ``name`` in ``package``, defined in ``module``."""
+    """One entry of a namespace's ``__all__``: ``name`` in ``package`` (``simulator`` or a
+    namespace such as ``simulator.thermal``), defined in ``module`` as ``source``."""
 
     package: str
     name: str
     module: str          # dotted module that defines it (for a public submodule, that module)
     is_module: bool
+    source: str = ""     # its name in ``module`` when published under another one
 
     @property
     def target(self) -> str:
         """Dotted path of the object the public name stands for."""
-        return self.module if self.is_module else f"{self.module}.{self.name}"
+        return self.module if self.is_module else f"{self.module}.{self.source or self.name}"
 
     @property
-    def group(self) -> str:
-        """Subpackage the name lives in ("" for modules at the package's top level)."""
-        parts = self.module.split(".")
-        sub = ROOT.joinpath(*parts[:2])
-        return parts[1] if len(parts) > 2 or sub.is_dir() else ""
+    def ident(self) -> str:
+        """The documented identifier, ``package.name``."""
+        return f"{self.package}.{self.name}"
 
 
-def public_names(package: str) -> list[PublicName]:
-    """Every name of ``package.__all__`` with its defining module, in ``__all__`` order."""
-    tree = ast.parse((ROOT / package / "__init__.py").read_text())
-    lazy, modules, imported, exported = {}, {}, {}, None
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "_attach":
-            for key, names in zip(node.args[1].keys, node.args[1].values):
-                lazy.update({n.value: key.value for n in names.elts})
-            for kw in node.keywords:
+def _module_file(module: str) -> pathlib.Path:
+    path = ROOT.joinpath(*module.split("."))
+    return path / "__init__.py" if path.is_dir() else path.with_suffix(".py")
+
+
+def _absolute(relative: str, anchor: str) -> str:
+    """A relative module name (``"..state"``) seen from the package ``anchor``."""
+    level = len(relative) - len(relative.lstrip("."))
+    if not level:
+        return relative
+    base = anchor.split(".")[:len(anchor.split(".")) - level + 1]
+    return ".".join(base + [p for p in [relative[level:]] if p])
+
+
+def _entry(entry: str) -> tuple[str, str]:
+    """``(source, public)`` of a lazy entry ``"name"`` or ``"source as public"``."""
+    source, _, public = entry.partition(" as ")
+    return source.strip(), (public or source).strip()
+
+
+def public_names(package: str, as_name: str | None = None) -> list[PublicName]:
+    """Every name of ``package.__all__`` (a package or module; published as ``as_name``) with
+    its defining module, in ``__all__`` order: lazily mapped (``_attach(...)``), imported, or
+    defined in the module itself."""
+    path = _module_file(package)
+    anchor = package if path.name == "__init__.py" else package.rpartition(".")[0]
+    found, exported = {}, None
+    for node in ast.parse(path.read_text()).body:
+        value = getattr(node, "value", None)
+        if isinstance(value, ast.Call) and getattr(value.func, "id", "") == "_attach":
+            for key, names in zip(value.args[1].keys, value.args[1].values):
+                for n in names.elts:
+                    source, public = _entry(n.value)
+                    found[public] = (_absolute(key.value, anchor), False, source)
+            for kw in value.keywords:
                 if kw.arg == "modules":
-                    modules = ast.literal_eval(kw.value)
-        elif isinstance(node, ast.ImportFrom) and node.level == 1:
-            imported.update({a.asname or a.name: "." + (node.module or "") for a in node.names})
-        elif isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "__all__":
-            exported = ast.literal_eval(node.value)
+                    found.update({k: (_absolute(v, anchor), True, "")
+                                  for k, v in ast.literal_eval(kw.value).items()})
+        elif isinstance(node, ast.ImportFrom):
+            module = _absolute("." * node.level + (node.module or ""), anchor)
+            found.update({a.asname or a.name: (module, False, a.name) for a in node.names})
+        elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            found[node.name] = (package, False, node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                if getattr(target, "id", "") == "__all__":
+                    exported = ast.literal_eval(node.value)
+                elif isinstance(target, ast.Name):
+                    found[target.id] = (package, False, target.id)
     if exported is None:
-        raise RuntimeError(f"{package}/__init__.py has no literal __all__")
+        raise RuntimeError(f"{path.relative_to(ROOT)} has no literal __all__")
     out = []
     for name in exported:
-        if name in modules:
-            out.append(PublicName(package, name, package + modules[name], True))
-        elif name in lazy or name in imported:
-            out.append(PublicName(package, name, package + (lazy.get(name) or imported[name]),
-                                  False))
-        else:
-            raise RuntimeError(f"{package}.__all__ lists {name!r}, but {package}/__init__.py "
-                               "neither imports it nor maps it in _attach(...): add it there")
+        if name not in found:
+            raise RuntimeError(f"{package}.__all__ lists {name!r}, but {path.name} neither "
+                               "imports it nor maps it in _attach(...): add it there")
+        module, is_module, source = found[name]
+        out.append(PublicName(as_name or package, name, module, is_module,
+                              "" if source == name else source))
     return out
 
 
-def _groups(package: str) -> dict[str, list[PublicName]]:
-    groups: dict[str, list[PublicName]] = {"": []}
-    for item in public_names(package):
-        groups.setdefault(item.group, []).append(item)
-    return groups
+def namespaces(package: str) -> list[PublicName]:
+    """The namespaces of ``package``: the modules its ``__all__`` lists."""
+    return [item for item in public_names(package) if item.is_module]
 
 
-def _page_path(package: str, group: str) -> str:
-    return f"{API_DIR}/{package}/{group or 'index'}.md"
+def namespace_names(item: PublicName) -> list[PublicName]:
+    """The public names of the namespace ``item`` (``simulator.thermal``), as its own."""
+    return public_names(item.module, as_name=item.ident)
 
 
-def _title(package: str, group: str) -> str:
-    return f"{package}.{group}" if group else f"{package} (top level)"
+def _pages(package: str) -> dict[str, tuple[str, list[PublicName], set]]:
+    """Page path -> (documented module, its public names, door targets) of the door and of
+    every namespace of ``package``."""
+    door = public_names(package)
+    at_door = {item.target for item in door if not item.is_module}
+    pages = {_page_path(package, ""): (package, door, set())}
+    for ns in namespaces(package):
+        pages[_page_path(package, ns.name)] = (ns.ident, namespace_names(ns), at_door)
+    return pages
 
 
-def _page(package: str, group: str, items: list[PublicName]) -> str:
-    module = f"{package}.{group}" if group else package
+def _page_path(package: str, namespace: str) -> str:
+    return f"{API_DIR}/{package}/{namespace or 'index'}.md"
+
+
+def _title(module: str, package: str) -> str:
+    return module if module != package else f"{package} (the door)"
+
+
+def _page(module: str, items: list[PublicName], at_door: set) -> str:
+    """One API page: the module's docstring, then every public name (a name also at the
+    package's door is a link to its entry there)."""
+    package = module.split(".")[0]
     lines = [f"# {module}", ""]
-    if group:
-        lines += [f"Public names of `{package}` that live in `{module}`; import them from "
-                  f"`{package}` itself (`from {package} import {items[0].name}`).", ""]
+    if module == package:
+        lines += [f"The names at `{package}`'s door (`from {package} import ...`). Families "
+                  "of further names are in the namespaces, each on its own page: "
+                  + ", ".join(f"[`{ns.ident}`]({ns.name}.md)" for ns in namespaces(package))
+                  + ".", ""]
     lines += [f"::: {module}", "    options:", "      members: false",
               "      show_root_heading: false", ""]
+    door = [i for i in items if i.target in at_door]
+    if door:
+        lines += [f"Also here, documented at the door: "
+                  + ", ".join(f"[`{i.name}`][{package}.{i.name}]" for i in door) + ".", ""]
     for item in items:
-        lines += [f"::: {package}.{item.name}", ""]
+        if not item.is_module and item.target not in at_door:
+            lines += [f"::: {item.ident}", ""]
     return "\n".join(lines)
 
 
+def migration_table(package: str) -> str:
+    """Markdown table old spelling -> new spelling of ``package``'s ``_moved.py``."""
+    tree = ast.parse((ROOT / package / "_moved.py").read_text())
+    table = next(ast.literal_eval(node.value) for node in tree.body
+                 if isinstance(node, ast.Assign) and node.targets[0].id == "MOVED")
+    rows = ["| old spelling | new spelling |", "| --- | --- |"]
+    for namespace, entries in table.items():
+        for entry in entries:
+            old, new = _entry(entry)
+            rows.append(f"| `{package}.{old}` | [`{package}.{namespace}.{new}`]"
+                        f"[{package}.{namespace}.{new}] |")
+    return "\n".join(rows)
+
+
 # ---------------------------------------------------------------- MkDocs hooks
+MIGRATION_MARK = re.compile(r"^<!-- moved names: (\w+) -->$", re.M)
+
+
 def on_config(config, **kwargs):
-    """Fill the navigation's API section with one page per package and subpackage."""
+    """Fill the navigation's API section with the door and the namespaces of each package."""
     nav = config["nav"] or []
     for entry in nav:
         if isinstance(entry, dict) and NAV_TITLE in entry:
             entry[NAV_TITLE] = [
-                {package: [{_title(package, g): _page_path(package, g)} for g in _groups(package)]}
+                {package: [{_title(module, package): path}
+                           for path, (module, _, _) in _pages(package).items()]}
                 for package in PACKAGES]
             return config
     raise RuntimeError(f"mkdocs.yml: the nav needs an entry '{NAV_TITLE}: []' to fill")
@@ -140,10 +220,14 @@ def on_files(files, config, **kwargs):
     from mkdocs.structure.files import File
 
     for package in PACKAGES:
-        for group, items in _groups(package).items():
-            files.append(File.generated(config, _page_path(package, group),
-                                        content=_page(package, group, items)))
+        for path, (module, items, at_door) in _pages(package).items():
+            files.append(File.generated(config, path, content=_page(module, items, at_door)))
     return files
+
+
+def on_page_markdown(markdown, **kwargs):
+    """Replace ``<!-- moved names: simulator -->`` by the package's migration table."""
+    return MIGRATION_MARK.sub(lambda m: migration_table(m.group(1)), markdown)
 
 
 # ---------------------------------------------------------------- griffe extension
@@ -224,24 +308,43 @@ class PublicApi(griffe.Extension if griffe else object):
 
 
 def _add_lazy_aliases(loader) -> None:
+    """Make every public name of the doors and namespaces a griffe member (an alias to the
+    object it stands for), as the lazy imports make it one at run time."""
     for package in PACKAGES:
-        pkg = loader.modules_collection[package]
-        for item in public_names(package):
-            if item.name not in pkg.members or not pkg.members[item.name].is_alias:
-                pkg.set_member(item.name, griffe.Alias(item.name, item.target, parent=pkg))
+        collection = loader.modules_collection
+        owners = [(package, public_names(package))]
+        owners += [(ns.module, namespace_names(ns)) for ns in namespaces(package)]
+        for module, items in owners:
+            owner = collection[package] if module == package else \
+                _member(collection[package], module.split(".", 1)[1])
+            for item in items:
+                if item.target == f"{module}.{item.name}":
+                    continue                        # the module's own object or submodule
+                member = owner.members.get(item.name)
+                if member is not None and member.is_alias:
+                    continue                        # imported: griffe knows it
+                if member is not None and member.kind.value == "module":
+                    logger.warning("%s: the public name %r is also the name of a submodule",
+                                   module, item.name)
+                    continue
+                owner.set_member(item.name, griffe.Alias(item.name, item.target, parent=owner))
 
 
 def _rendered(loader) -> dict[str, str]:
-    """Canonical path -> documented identifier of everything the API pages render."""
+    """Canonical path -> documented identifier of everything the API pages render (the door's
+    entry where a name is also in a namespace)."""
     out = {}
+    collection = loader.modules_collection
     for package in PACKAGES:
-        for item in public_names(package):
-            obj = _final(_member(loader.modules_collection[package], item.name))
-            if obj is None:
-                logger.warning("%s.%s: its target %s does not exist", package, item.name,
-                               item.target)
-                continue
-            _register(obj, f"{package}.{item.name}", out)
+        for _, (module, items, at_door) in _pages(package).items():
+            for item in items:
+                if item.target in at_door or (item.is_module and module == package):
+                    continue
+                obj = _final(_member(collection[package], item.ident.split(".", 1)[1]))
+                if obj is None:
+                    logger.warning("%s: its target %s does not exist", item.ident, item.target)
+                    continue
+                _register(obj, item.ident, out)
     return out
 
 

@@ -234,7 +234,7 @@ class Gravity(Step):
     direction : (3,) sequence of float
         Direction of gravity in the model's axes (any length; default -z): the one quantity of
         a plain pattern that depends on how it lies in space. A flat FOLD sheet drawn in
-        another plane is laid in x-y with its top side up (:func:`~simulator.read_fold`,
+        another plane is laid in x-y with its top side up (:func:`~simulator.fold.read_fold`,
         ``lay_flat``), so -z pulls towards its bottom side; a sheet kept standing needs its
         gravity given here.
     """

@@ -107,9 +107,9 @@ class IntegralOperator:
                 f"{self.n_sub} sub-triangles exceeds the dense-operator limit MAX_SUB_TRIANGLES = "
                 f"{MAX_SUB_TRIANGLES}; use IntegralLoss(operator='fast') or 'auto' (the "
                 "default: the fast path above the limit), lower the refinement, or the chain "
-                "model "
-                "(loss=ChainLoss(thickness=...), calibrated by simulator.calibrate_environment) "
-                "or the 3-D FE reference (simulator.thermal.fe).")
+                "model (loss=ChainLoss(thickness=...), calibrated by "
+                "simulator.thermal.calibrate_environment) or the 3-D FE reference "
+                "(simulator.fe).")
         self._bary = bary_vertices                                  # (s, 3, 3)
         #: (n_sub, 3) ids of the sub-triangles' edges (shared edges share an id)
         self._edges = subdivision_edges(self.triangles, refinement)

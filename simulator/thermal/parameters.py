@@ -68,7 +68,7 @@ _OLD_PROPERTIES = {
     "loss_model": "loss.model",
     "substrate_plane": "substrate.as_tuple() (substrate None: no plane)",
     "plane": "substrate.point and substrate.normal (an explicit Substrate.plane), or "
-             "simulator.boundary_panel_plane(model) (the boundary panels' plane)",
+             "simulator.thermal.boundary_panel_plane(model) (the boundary panels' plane)",
 }
 
 

@@ -167,7 +167,7 @@ def test_first_demo_compiles_nothing(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          cwd=ROOT)
     assert out.returncode == 0 and out.stdout.strip().endswith("False"), out.stderr
-    probe = "from simulator import kernel_cache_warm as w; print(w())"
+    probe = "from simulator.kernels import kernel_cache_warm as w; print(w())"
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline:
         warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,

@@ -198,7 +198,9 @@ def test_a_plain_pattern_heats_with_the_integral_loss_by_default(tmp_path, capsy
            "0.026 W/(m K)" in out
     assert json.loads((out_dir / "meta.json").read_text())["overrides"]["loss_model"] == \
         "integral"
-    from simulator import ParameterError, get_stack, parse_fold, stack_model
+    from simulator import ParameterError
+    from simulator.fold import parse_fold
+    from simulator.model import get_stack, stack_model
 
     stack = get_stack("su8-au")
     geo = parse_fold(json.loads(pathlib.Path(MIURA).read_text()),
@@ -218,7 +220,7 @@ def test_a_large_plain_pattern_heats_with_the_integral_loss_at_m_2(tmp_path, cap
     the chains; 2016 sub-triangles, dense here), and the heat-loss line says so."""
     import logging
 
-    from simulator import write_fold
+    from simulator.fold import write_fold
     from simulator.geometry.example_patterns import miura_sheet_pattern
 
     path = write_fold(miura_sheet_pattern(m=6, n=6), tmp_path / "miura6.fold")

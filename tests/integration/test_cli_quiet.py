@@ -84,7 +84,7 @@ def test_run_summary_names_hottest_crease_and_the_tg_limit(tmp_path, capsys):
 def test_summary_names_each_event_with_power_and_jump():
     import numpy as np
 
-    from simulator import Event
+    from simulator.steps import Event
 
     snap = Event(kind="snap", load_factor=0.5, displacement=1e-4, maximum=True,
                  power_per_crease=(0.0, 9.215e-3), jump=51e-6, temperature_max=458.0, node=7,

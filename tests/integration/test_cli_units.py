@@ -55,7 +55,7 @@ def test_a_number_whose_default_the_case_chooses_is_checked_in_cli_units():
 
 
 def test_every_default_round_trips_through_cli_units_bit_identically():
-    from simulator import describe_cases
+    from simulator.cases import describe_cases
 
     for name, _, params in describe_cases():
         for pname, default, unit in params:

@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simulator import (Dynamics, DynamicsOptions, ElectroThermal, ParameterError, get_case,
-                       simulate, single_fold_model)
+from simulator import Dynamics, DynamicsOptions, ElectroThermal, ParameterError, get_case, simulate
+from simulator.cases import single_fold_model
 from simulator.state import initial_state
 from simulator.schedules import PiecewiseLinearSignal, RampSignal, SineSignal, StepSignal
 

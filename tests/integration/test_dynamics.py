@@ -14,9 +14,10 @@ import pytest
 import scipy.linalg
 
 from simulator import (Dynamics, DynamicsOptions, Load, Material, ParameterError, SelfFold,
-                       TimeIntegrator, integrate, lumped_masses, make_model, natural_modes,
-                       simulate)
-from simulator import single_fold_model
+                       make_model, natural_modes, simulate)
+from simulator.model import lumped_masses
+from simulator.solvers import TimeIntegrator, integrate
+from simulator.cases import single_fold_model
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.mechanics.kinematics import fold_angles
 from simulator.state import equilibrium_system, initial_state

@@ -16,8 +16,9 @@ import logging
 import numpy as np
 import pytest
 
-from simulator import (Circuit, Drive, ElectroThermal, Heat, Heater, ParameterError,
-                       SquareWaveSignal, TransientHeat, get_case, simulate)
+from simulator import (Circuit, Drive, ElectroThermal, Heat, Heater, ParameterError, TransientHeat,
+                       get_case, simulate)
+from simulator.schedules import SquareWaveSignal
 from simulator.thermal.circuits import RUNAWAY_TEMPERATURE
 
 ROOM = 21.0
@@ -245,7 +246,7 @@ def test_no_circuit_leaves_the_state_without_circuits(fold):
 
 
 def test_write_model_refuses_circuits(fold, tmp_path):
-    from simulator import write_model
+    from simulator.fold import write_model
 
     model, c, _ = fold
     step = Heat(circuits={Circuit((c,)): Drive(voltage=0.1)})

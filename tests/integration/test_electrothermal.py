@@ -6,8 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from simulator import (REFERENCE_THETA, ElectroThermal, Heat, ParameterError, SquareWave, StepPower, get_case,
-                       simulate)
+from simulator import ElectroThermal, Heat, ParameterError, get_case, simulate
+from simulator.schedules import SquareWave, StepPower
+from simulator.thermal import REFERENCE_THETA
 
 P = 3e-3                                          # W, the case's default power
 
@@ -161,7 +162,7 @@ def test_default_case_acceptance():
 
 
 def test_case_is_registered_with_units():
-    from simulator import describe_cases
+    from simulator.cases import describe_cases
 
     case = get_case("single-fold-step-response", power_mW=5.0, t_on=0.5, t_off=0.25)
     step = case.steps[-1]

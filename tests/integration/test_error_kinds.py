@@ -8,7 +8,8 @@ import pytest
 
 import simulator
 from simulator import (ChainLoss, ConvergenceError, EtorigamiError, Heat, ParameterError,
-                       SolverError, ThermalParameters, initial_state, simulate)
+                       SolverError, ThermalParameters, simulate)
+from simulator.steps import initial_state
 from simulator.cases import single_fold_model
 from simulator.state import thermal_model
 
@@ -40,7 +41,7 @@ def test_failed_sensitivity_solve_is_a_convergence_error(monkeypatch):
     import design.analysis._heater_lp as lp
 
     failed = types.SimpleNamespace(success=False, message="no convergence in 30 iterations")
-    monkeypatch.setattr(lp, "newton", lambda *args, **kwargs: failed)
+    monkeypatch.setattr(lp, "solve_equilibrium", lambda *args, **kwargs: failed)
     model = single_fold_model(contact=False, substrate=False)
     with pytest.raises(ConvergenceError, match="equilibrium not found") as err:
         lp.fold_sensitivity(model, initial_state(model))

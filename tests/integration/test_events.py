@@ -11,7 +11,8 @@ import pytest
 import design.devices.power_search as ps
 from design.devices.gripper import GripperDesign, GripperResult, StageResult, _Stage, gripper_model
 from design.devices.power_search import HeatingTrial
-from simulator import EVENT_KINDS, Event, Load, NewtonOptions, get_case, simulate
+from simulator import Load, NewtonOptions, get_case, simulate
+from simulator.steps import EVENT_KINDS, Event
 from simulator.errors import ParameterError
 
 #: Newton gives up at the roof's limit point with this iteration cap (as in test_snap_through).

@@ -9,8 +9,8 @@ import re
 import numpy as np
 import pytest
 
-from simulator import (FoldFormatError, ParameterError, Pattern, fold_to_pattern,
-                       pattern_to_fold, read_fold, write_fold)
+from simulator import FoldFormatError, ParameterError, Pattern
+from simulator.fold import fold_to_pattern, pattern_to_fold, read_fold, write_fold
 from simulator.geometry.example_patterns import (crane_pattern, gripper_pattern, miura_sheet_pattern,
                                         single_fold_pattern)
 from simulator.geometry.materials import Material

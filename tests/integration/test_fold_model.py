@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from simulator import (FoldFormatError, Heat, fold_to_model, get_case, initial_state,
-                       read_model, simulate, write_fold_frames, write_model)
+from simulator import FoldFormatError, Heat, get_case, simulate
+from simulator.fold import fold_to_model, read_model, write_fold_frames, write_model
+from simulator.steps import initial_state
 from simulator.state import equilibrium_system
 
 

@@ -17,7 +17,8 @@ import pandas as pd
 import pytest
 
 from design.cli import main
-from simulator import SelfFold, SharpHingeMesh, Supports, simulate, sharp_model
+from simulator import SelfFold, Supports, simulate
+from simulator.model import SharpHingeMesh, sharp_model
 from simulator.errors import ParameterError
 from simulator.io.fold.model_file import fold_to_model
 from simulator.io.fold.reader import load_fold_json, parse_fold
@@ -265,7 +266,7 @@ def test_a_heated_model_file_read_as_sharp_is_refused_in_one_line(tmp_path, caps
 
 @pytest.mark.parametrize("stiffness", [None, 2e-6, "per crease"])
 def test_a_sharp_model_file_runs_back_to_the_same_result(tmp_path, capsys, stiffness):
-    from simulator import read_model, write_model
+    from simulator.fold import read_model, write_model
 
     data = load("miura_3x3_plain.fold")
     if stiffness == "per crease":

@@ -7,7 +7,9 @@ import pathlib
 import pytest
 
 from design.cli import main
-from simulator import ParameterError, check_supported, read_fold, unsupported_panels
+from simulator import ParameterError
+from simulator.fold import read_fold
+from simulator.model import check_supported, unsupported_panels
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 TOUCHING = str(ROOT / "tests" / "data" / "fold" / "sheets_touching_at_a_vertex.fold")

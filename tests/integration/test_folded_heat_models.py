@@ -24,7 +24,7 @@ import pytest
 pytest.importorskip("skfem")
 pytest.importorskip("gmsh")
 
-from simulator import fixed_shape_temperatures  # noqa: E402
+from simulator.thermal import fixed_shape_temperatures  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.fe_accuracy]    # in CI: .ci/run
 

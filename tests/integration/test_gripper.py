@@ -138,7 +138,7 @@ def test_stage_result_contract_is_checked():
 
 def test_gripper_message_names_a_stage_met_after_a_snap():
     from design.devices.gripper import GripperResult
-    from simulator import Event
+    from simulator.steps import Event
 
     plain = StageResult(True, "met", "criterion met", 9e-3, 1.6, 150.0, 160.0, 30, 30)
     event = Event("snap", 0.5, 10, 3e-5, True, power_per_crease=(5e-5,) * 4, jump=2e-7)

@@ -28,13 +28,13 @@ def _waterbomb():
 def _waterbomb_model(loss_model=None):
     """(model, heated creases) of the waterbomb base with the paper's stack, every crease
     heated, with the heat loss ``loss_model`` (None: ``stack_model``'s default)."""
-    stack = S.get_stack("su8-au")
-    geo = S.parse_fold(_waterbomb(), crease_width=stack.crease_width,
+    stack = S.model.get_stack("su8-au")
+    geo = S.fold.parse_fold(_waterbomb(), crease_width=stack.crease_width,
                        crease_thickness=stack.crease_thickness,
                        panel_thickness=stack.panel_thickness)
     heated = geo.pattern.creases.tolist()
     chosen = {} if loss_model is None else {"loss_model": loss_model}
-    return S.stack_model(geo.pattern, stack, heated, **chosen), heated
+    return S.model.stack_model(geo.pattern, stack, heated, **chosen), heated
 
 
 @pytest.fixture(scope="module")
@@ -121,10 +121,10 @@ def test_without_the_switch_the_unstable_end_is_not_called_converged(waterbomb):
 @pytest.fixture(scope="module")
 def small_waterbomb():
     """The waterbomb drawn 2 mm wide: at 20 mW per crease its midlines fold towards 180 deg."""
-    stack = S.get_stack("su8-au")
+    stack = S.model.get_stack("su8-au")
     data = _waterbomb()
     data["vertices_coords"] = [[0.1 * x for x in v] for v in data["vertices_coords"]]
-    geo = S.parse_fold(data, crease_width=stack.crease_width,
+    geo = S.fold.parse_fold(data, crease_width=stack.crease_width,
                        crease_thickness=stack.crease_thickness,
                        panel_thickness=stack.panel_thickness)
     heated = geo.pattern.creases.tolist()
@@ -136,7 +136,7 @@ def test_without_contact_creases_past_180_deg_are_events_and_panels_meeting_stop
     """The midlines pass 180 deg (an event: their 200 um creases hold the panels apart), then
     panels meet: the step stops there, naming the creases past flat and the panels."""
     pattern, stack, heated = small_waterbomb
-    model = S.stack_model(pattern, stack, heated, contact=False, loss_model="chain")
+    model = S.model.stack_model(pattern, stack, heated, contact=False, loss_model="chain")
     res = _heat(model, heated, 20.0, 50)
     assert not res.success and res.status == "panel_crossing"
     (past,) = [x for x in res.events if x.kind == "fold_past_flat"]
@@ -150,7 +150,7 @@ def test_without_contact_creases_past_180_deg_are_events_and_panels_meeting_stop
 
 def test_with_contact_no_crease_passes_180_deg_at_any_step_count(small_waterbomb):
     pattern, stack, heated = small_waterbomb
-    model = S.stack_model(pattern, stack, heated, loss_model="chain")    # contact on by default
+    model = S.model.stack_model(pattern, stack, heated, loss_model="chain")  # contact on by default
     assert model.contact is not None
     ends = []
     for n in (50, 200):

@@ -8,7 +8,8 @@ import pytest
 from design.analysis.heaters import allocate_heaters, influence_matrices, limit_temperatures
 from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
-from simulator import Heat, TemperatureLimit, crease_temperatures, simulate
+from simulator import Heat, simulate
+from simulator.thermal import TemperatureLimit, crease_temperatures
 from simulator.state import thermal_model
 
 P_REF = 6e-3          # W per crease that made the target shape
@@ -117,7 +118,7 @@ def test_fold_sensitivity_of_a_free_hinge_is_one():
     """Nothing resists a free hinge: its fold follows its rest angle one to one."""
     from design.analysis.heaters import fold_sensitivity
     from simulator.cases import single_fold_model
-    from simulator import initial_state
+    from simulator.steps import initial_state
 
     model = single_fold_model(contact=False, substrate=False)
     S = fold_sensitivity(model, initial_state(model))

@@ -163,7 +163,7 @@ def test_the_fe_reference_on_the_same_sheet_also_has_nodes_below_room_temperatur
     discretisation's (theory 4.9)."""
     pytest.importorskip("skfem")
     pytest.importorskip("gmsh")
-    from simulator import fixed_shape_temperatures
+    from simulator.thermal import fixed_shape_temperatures
 
     model, power = _gripper("integral", None, BASE_CREASES)
     fe = fixed_shape_temperatures(model, "fe", power, fe_level=0)

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from simulator import (EQUILIBRIUM_RTOL, Dynamics, DynamicsOptions, Material, NewtonOptions,
-                       ParameterError, Pattern, SelfFold, Supports, check_equilibrium,
-                       natural_modes, simulate, state_stability)
+from simulator import (Dynamics, DynamicsOptions, Material, NewtonOptions, ParameterError, Pattern,
+                       SelfFold, Supports, natural_modes, simulate)
+from simulator.solvers import EQUILIBRIUM_RTOL, check_equilibrium, state_stability
 from simulator.model.mass import lumped_masses
 from simulator.model.sharp import SharpHingeParameters, sharp_model
 from simulator.schedules import SineSignal

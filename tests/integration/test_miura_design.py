@@ -16,7 +16,7 @@ from design.devices.miura import (
     lift_power,
     miura_model,
 )
-from design import SU8_TG
+from design.devices import SU8_TG
 from simulator.cases import get_case
 from simulator.errors import ParameterError
 

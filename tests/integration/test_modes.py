@@ -5,9 +5,10 @@ import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
-from simulator import (Gravity, ParameterError, SelfFold, Supports, initial_state, make_model,
-                       natural_modes, simulate)
-from simulator import single_fold_model
+from simulator import (Gravity, ParameterError, SelfFold, Supports, make_model, natural_modes,
+                       simulate)
+from simulator.steps import initial_state
+from simulator.cases import single_fold_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from design.cli._plots import plot_mode_shape, save_mode_plots
 
@@ -120,7 +121,8 @@ def test_a_moving_state_is_not_an_equilibrium(fold, tmp_path, caplog):
     import json
     import logging
 
-    from simulator import Dynamics, check_equilibrium
+    from simulator import Dynamics
+    from simulator.solvers import check_equilibrium
 
     flat = natural_modes(fold, count=2)
     assert flat.status == "converged" and flat.equilibrium.in_equilibrium

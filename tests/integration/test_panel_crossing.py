@@ -3,8 +3,8 @@ contact, a crease of finite width folds on with its panels apart (a "fold_past_f
 the step goes on) until a panel corner or centre passes through the other panel (a
 "panel_crossing" event, the step stops there); both are checked here against the crossing
 tests applied to every pair of consecutive records. With the panel contact of plain patterns
-(:func:`simulator.plain_contact`, the default of ``stack_model`` and the CLI) no crease passes
-180 deg at all."""
+(:func:`simulator.model.plain_contact`, the default of ``stack_model`` and the CLI) no crease
+passes 180 deg at all."""
 
 import json
 import math
@@ -15,8 +15,10 @@ import pytest
 
 from design.cli import main
 from simulator import (ArcLengthLoad, DisplacementControl, Dynamics, ElectroThermal, Heat,
-                       ParameterError, Pattern, SelfFold, crease_crossings, get_stack, load_fold_json, node_crossings, parse_fold,
-                       plain_contact, simulate, stack_model)
+                       ParameterError, Pattern, SelfFold, simulate)
+from simulator.fold import load_fold_json, parse_fold
+from simulator.mechanics import crease_crossings, node_crossings
+from simulator.model import get_stack, plain_contact, stack_model
 
 STACK = get_stack("su8-au")
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"

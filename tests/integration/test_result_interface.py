@@ -10,7 +10,10 @@ import pytest
 
 import design
 import simulator
-from simulator import SelfFold, Stability, simulate, single_fold_model
+from doors import public_names
+from simulator import SelfFold, simulate
+from simulator.cases import single_fold_model
+from simulator.solvers import Stability
 
 
 @pytest.fixture(scope="module")
@@ -36,16 +39,16 @@ def _results(run):
     stab = Stability(0, 12.5, np.ones(3) / math.sqrt(3))
     yield "SimulationResult", res
     yield "StepResult", res.steps[0]
-    yield "ContinuationResult", simulator.ContinuationResult(
+    yield "ContinuationResult", simulator.solvers.ContinuationResult(
         True, "converged", "target reached", _u(), 1.0, 5, 0,
         history=[(0.5, _u(), 3), (1.0, _u() + 1e-6, 2)], stability=[stab, stab],
         temperatures=[None, np.full(4, 30.0)],
-        critical_points=(simulator.CriticalPoint("limit_point", 0.7, 1),))
-    yield "DynamicsResult", simulator.DynamicsResult(
+        critical_points=(simulator.solvers.CriticalPoint("limit_point", 0.7, 1),))
+    yield "DynamicsResult", simulator.solvers.DynamicsResult(
         True, "converged", "reached the end", np.array([0.0, 1e-3]), np.zeros((2, 4, 3)),
         np.zeros((2, 4, 3)), np.zeros((2, 4, 3)), np.zeros(2), np.zeros(2), np.zeros(2),
         np.zeros(2), np.array([0, 2]), 0, None)
-    yield "TransientHeatResult", simulator.TransientHeatResult(
+    yield "TransientHeatResult", simulator.thermal.TransientHeatResult(
         True, "converged", "reached t_end", np.array([0.0, 0.1]), np.full((2, 4), 21.0),
         np.zeros((2, 1)), np.zeros(2), np.zeros(2), np.zeros(2), np.full(8, 21.0), 0.1, 2 / 3,
         1, 1)
@@ -64,8 +67,8 @@ def _results(run):
         True, "converged", "targets met", {"h1": (2,)}, np.array([1e-3]), 2, {2: 0.3},
         achieved={2: 0.3}, max_temperature=60.0, temperature_limit=200.0,
         history=({"round": 1, "total_power [mW]": 1.0},))
-    yield "TemperatureVerdict", simulator.TemperatureVerdict(
-        simulator.TemperatureLimit(252.0, "1.2 T_g"), 5, 250.06, 266.67, 5)
+    yield "TemperatureVerdict", simulator.thermal.TemperatureVerdict(
+        simulator.thermal.TemperatureLimit(252.0, "1.2 T_g"), 5, 250.06, 266.67, 5)
 
 
 NAMES = ["SimulationResult", "StepResult", "ContinuationResult", "DynamicsResult",
@@ -76,8 +79,8 @@ NAMES = ["SimulationResult", "StepResult", "ContinuationResult", "DynamicsResult
 
 def test_every_public_result_type_is_covered(run):
     assert [name for name, _ in _results(run)] == NAMES
-    for name in NAMES:                           # each is a public name of its package
-        assert name in simulator.__all__ or name in design.__all__, name
+    for name in NAMES:               # each is a public name of its package's door or namespaces
+        assert name in public_names(simulator) or name in public_names(design), name
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -8,7 +8,8 @@ import pytest
 from simulator.cases import single_fold_model
 from simulator.errors import ConvergenceError, ParameterError
 from simulator.mechanics.kinematics import fold_angles
-from simulator import Gravity, Load, SelfFold, initial_state, simulate
+from simulator import Gravity, Load, SelfFold, simulate
+from simulator.steps import initial_state
 from simulator.state import equilibrium_system
 from simulator.model.model import Supports, gravity_loads, make_model
 from simulator.geometry.example_patterns import single_fold_pattern

@@ -1,6 +1,6 @@
 """One temperature verdict (issue 28, item 5): ``run``, ``gripper evaluate``, the design
 problems and the sweeps judge the 1.2 T_g limit on one measure, the crease centre-line mean,
-through one function (:meth:`simulator.TemperatureLimit.judge`); every "exceeded" or "not
+through one function (:meth:`simulator.thermal.TemperatureLimit.judge`); every "exceeded" or "not
 feasible" names the crease, its temperature and the limit, and a hottest node shown beside it
 is labelled as information."""
 
@@ -11,7 +11,7 @@ import pytest
 from design import (GripperDesign, GripperProblem, evaluate_gripper, residual_fold_grid,
                     sweep_residual_fold)
 from design.cli import main
-from simulator import TemperatureLimit, TemperatureVerdict
+from simulator.thermal import TemperatureLimit, TemperatureVerdict
 
 
 @pytest.fixture

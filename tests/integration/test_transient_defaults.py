@@ -10,8 +10,9 @@ import re
 import numpy as np
 import pytest
 
-from simulator import (DEFAULT_THETA, REFERENCE_THETA, ElectroThermal, SquareWave,
-                       TransientHeat, get_case, integrate_heat, simulate)
+from simulator import ElectroThermal, TransientHeat, get_case, simulate
+from simulator.schedules import SquareWave
+from simulator.thermal import DEFAULT_THETA, REFERENCE_THETA, integrate_heat
 
 PAGE = pathlib.Path(__file__).resolve().parents[2] / "docs" / "time-domain.md"
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from simulator import (AIR, WATER, Heat, Material, PiecewiseLinear, Ramp, Sine, SquareWave,
-                       StepPower, ThetaStepper, TransientHeat, capacity_vector, get_case,
-                       integrate_heat, simulate, theta_step)
+from simulator import AIR, WATER, Heat, Material, TransientHeat, get_case, simulate
+from simulator.schedules import PiecewiseLinear, Ramp, Sine, SquareWave, StepPower
+from simulator.thermal import ThetaStepper, capacity_vector, integrate_heat, theta_step
 from simulator.errors import ParameterError, PatternError
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.model.mesh import build_mesh
@@ -232,7 +232,7 @@ def test_powers_per_crease_and_circuit():
 
 
 def test_fluids_and_materials_have_heat_data():
-    from simulator import GOLD, SILICON, SPR, SU8, SUBSTRATE
+    from simulator.materials import GOLD, SILICON, SPR, SU8, SUBSTRATE
     for m in (SU8, SPR, SUBSTRATE, GOLD, SILICON):
         assert m.density > 0 and m.specific_heat > 0
     assert SU8.density * SU8.specific_heat == pytest.approx(2e6)

@@ -18,7 +18,7 @@ def fold():
     the heating, the heating step)."""
     case = S.get_case("single_fold")
     model = case.model
-    plane = S.boundary_panel_plane(model)
+    plane = S.thermal.boundary_panel_plane(model)
     th = dataclasses.replace(model.thermal.with_loss("integral"),
                              substrate=S.Substrate.plane(plane[:3], plane[3:]))
     model = dataclasses.replace(model, thermal=th)

@@ -14,7 +14,8 @@ import shutil
 import numpy as np
 import pytest
 
-from simulator import ParameterError, get_case, load_viewer_data, viewer_html, write_viewer
+from simulator import ParameterError, get_case
+from simulator.viewer import load_viewer_data, viewer_html, write_viewer
 
 BACKGROUND = (0xF4, 0xF5, 0xF7)
 

@@ -13,7 +13,8 @@ import pandas as pd
 import pytest
 from matplotlib.figure import Figure
 
-from simulator import boundary_panel_plane, crease_temperatures, get_case
+from simulator import get_case
+from simulator.thermal import boundary_panel_plane, crease_temperatures
 from studies import heat_transfer_models as htm
 from studies.figure_notes import QUICK_STAMP
 

@@ -108,7 +108,7 @@ def test_compiled_scatter_equals_the_numpy_reference_bit_for_bit(monkeypatch):
 
 def test_scatter_loop_follows_the_kernel_backend():
     """With the numpy backend in force the scatter loop is not used (nor numba compiled)."""
-    from simulator import spring_kernel_backend
+    from simulator.kernels import spring_kernel_backend
     from simulator.mechanics import assembly
     with spring_kernel_backend("numpy"):
         assert assembly._scatter_compiled() is None

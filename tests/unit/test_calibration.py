@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import simulator
-from simulator import ParameterError, calibrate_environment
+from simulator import ParameterError
+from simulator.thermal import calibrate_environment
 from simulator.cases import verification_strip
 from simulator.thermal.steady import ThermalModel
 
@@ -39,7 +40,8 @@ def test_fit_to_the_integral_model_reports_its_residual():
 
 
 def test_exported():
-    assert "calibrate_environment" in simulator.__all__ and "CalibrationResult" in simulator.__all__
+    thermal = simulator.thermal.__all__
+    assert "calibrate_environment" in thermal and "CalibrationResult" in thermal
 
 
 @pytest.mark.parametrize("kw, match", [
@@ -95,7 +97,7 @@ def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypa
     plane by default, as the FE does (without it the medium would be unbounded below the
     sheet); calibrated on it, the chains fit as against a reference given that plane; at
     positions other than the mesh's the plane is taken there."""
-    from simulator import boundary_panel_plane
+    from simulator.thermal import boundary_panel_plane
     from simulator.cases import get_case
     from simulator.thermal import steady
 
@@ -127,7 +129,7 @@ def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(ca
     ``substrate=None``, the steady model warns once per process, at its first solve with the
     integral loss; not for the FE's or a transient run's use of the same parameters, nor
     where the caller of fixed_shape_temperatures chose no plane."""
-    from simulator import boundary_panel_plane, fixed_shape_temperatures
+    from simulator.thermal import boundary_panel_plane, fixed_shape_temperatures
     from simulator.cases import get_case
     from simulator.thermal import steady
 

@@ -1,10 +1,10 @@
 """``etorigami cases``: full summaries, allowed values and what a power is per
-(simulator.describe_cases, simulator.parameter_note)."""
+(simulator.cases.describe_cases, simulator.cases.parameter_note)."""
 
 import inspect
 
 from design.cli import main
-from simulator import describe_cases, parameter_note
+from simulator.cases import describe_cases, parameter_note
 from simulator.cases import CASES
 
 

@@ -33,7 +33,7 @@ def test_time_integration_steps_record_velocities(tmp_path):
     np.testing.assert_array_equal(v[3:], dyn.velocity_history)
     assert np.abs(v[3, 5, 2]) > 0
     # kinetic energy of the records equals 1/2 m v^2 of the recorded velocities
-    from simulator import lumped_masses
+    from simulator.model import lumped_masses
     m = lumped_masses(model.mesh)
     ke = 0.5 * np.einsum("n,kni,kni->k", m, v[3:], v[3:])
     np.testing.assert_allclose(ke, dyn.columns["kinetic_energy [J]"], rtol=1e-9, atol=1e-30)

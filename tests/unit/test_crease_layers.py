@@ -116,7 +116,7 @@ def test_crease_conduction_round_trips_and_old_dicts_read_as_paper():
 
 
 def test_fold_model_file_keeps_the_crease_conduction_and_layer_conductivities(tmp_path):
-    from simulator import read_model, write_model
+    from simulator.fold import read_model, write_model
 
     case = single_fold(thermal_steps=2)
     model = _with(case.model, "layers", dataclasses.replace(

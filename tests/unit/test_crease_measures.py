@@ -1,12 +1,14 @@
-"""Each crease's temperature measures (:func:`simulator.crease_temperatures`, issue 29): the one
-place that knows which crease nodes carry which measure; the results, the fixed-shape and FE
-results, the limit and the studies read them from it."""
+"""Each crease's temperature measures (:func:`simulator.thermal.crease_temperatures`, issue 29):
+the one place that knows which crease nodes carry which measure; the results, the fixed-shape
+and FE results, the limit and the studies read them from it."""
 
 import numpy as np
 import pytest
 
-from simulator import (CREASE_MEASURES, ParameterError, crease_limit_temperatures,
-                       crease_temperatures, fixed_shape_temperatures, get_case, sharp_model)
+from simulator import ParameterError, get_case
+from simulator.model import sharp_model
+from simulator.thermal import (CREASE_MEASURES, crease_limit_temperatures, crease_temperatures,
+                               fixed_shape_temperatures)
 
 #: The seven crease nodes by name (``BarHingeMesh.crease_nodes``).
 N11, N12, N21, N22, A, B, CTR = range(7)

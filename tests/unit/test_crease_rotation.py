@@ -90,7 +90,7 @@ def test_every_case_reports_crease_rotation(name, tmp_path):
 
 
 def _meshes():
-    from simulator import build_sharp_mesh
+    from simulator.model import build_sharp_mesh
     from simulator.geometry.example_patterns import miura_sheet_pattern
 
     cases = [("single_fold", {}), ("double_fold", {}), ("miura_lifter", {}), ("crane", {})]

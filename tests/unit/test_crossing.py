@@ -4,8 +4,10 @@ folded rigidly about its crease through 180 deg."""
 import numpy as np
 import pytest
 
-from simulator import (EVENT_KINDS, Event, Pattern, build_mesh, build_sharp_mesh,
-                       crease_crossings, crossing_event, fold_angles, node_crossings)
+from simulator import Pattern, build_mesh
+from simulator.mechanics import crease_crossings, fold_angles, node_crossings
+from simulator.model import build_sharp_mesh
+from simulator.steps import EVENT_KINDS, Event, crossing_event
 from simulator.errors import ParameterError
 
 

@@ -29,6 +29,7 @@ import pytest
 
 import design
 import simulator
+from doors import moved, namespaces
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -204,12 +205,14 @@ def test_block_parser(tmp_path):
         etorigami_commands("pip install x\n")
 
 
-def test_readme_imports_only_from_the_two_packages():
+def test_readme_imports_only_from_the_doors_and_namespaces():
     imports = []
     for _, code in python_blocks(ROOT / "README.md"):
         imports += re.findall(r"^\s*(?:from|import)\s+([\w.]+)", code, re.M)
     ours = [m for m in imports if m.split(".")[0] in ("simulator", "design", "studies")]
-    assert ours and all(m in ("simulator", "design") for m in ours), ours
+    public = {"simulator", "design"} | {f"{p.__name__}.{n}" for p in (simulator, design)
+                                        for n in namespaces(p)}
+    assert ours and all(m in public for m in ours), ours
 
 
 @pytest.mark.parametrize("package", [simulator, design], ids=lambda p: p.__name__)
@@ -224,8 +227,9 @@ def test_issue_names_are_public():
     for name in ("simulate", "make_model", "Supports", "ContactParameters", "BarHingeParameters",
                  "ThermalParameters", "Actuators", "Bimorph", "Material", "Pattern", "SelfFold",
                  "Gravity", "Heat", "AmbientTemperature", "NewtonOptions", "SimulationResult",
-                 "get_case", "ParameterError", "Step"):
+                 "get_case", "ParameterError"):
         assert name in simulator.__all__, name
+    assert "Step" in simulator.steps.__all__
     for name in ("GripperDesign", "evaluate_gripper", "GripperProblem", "MiuraDesign",
                  "MiuraProblem", "miura_model", "heated_creases", "lift_power", "optimize",
                  "make_executor", "sweep_residual_fold", "allocate_heaters"):
@@ -302,22 +306,43 @@ def _api_module():
 
 @pytest.mark.parametrize("package", [simulator, design], ids=lambda p: p.__name__)
 def test_api_pages_document_every_public_name(package):
-    """The static reading of __init__.py that makes the API pages agrees with the runtime."""
+    """The static reading of the sources that makes the API pages agrees with the runtime:
+    the door and every namespace, each name the object it stands for; every public name has
+    one entry (a namespace's name that is also at the door has the door's)."""
     import importlib
 
     api = _api_module()
     names = api.public_names(package.__name__)
     assert [n.name for n in names] == package.__all__
+    spaces = namespaces(package)
+    assert [n.name for n in api.namespaces(package.__name__)] == list(spaces)
+    for ns in api.namespaces(package.__name__):
+        items = api.namespace_names(ns)
+        assert [n.name for n in items] == spaces[ns.name].__all__, ns.name
+        names += items
     for item in names:
+        owner = importlib.import_module(item.package)
         defined = importlib.import_module(item.module)
-        obj = defined if item.is_module else getattr(defined, item.name)
-        assert obj is getattr(package, item.name), item
-    pages = {group: api._page(package.__name__, group, items)
-             for group, items in api._groups(package.__name__).items()}
-    intros = {f"::: {package.__name__}.{group}" for group in pages}      # subpackage docstrings
-    entries = [line for page in pages.values() for line in page.splitlines()
-               if line.startswith(f"::: {package.__name__}.") and line not in intros]
-    assert sorted(entries) == sorted(f"::: {package.__name__}.{n}" for n in package.__all__)
+        obj = defined if item.is_module else getattr(defined, item.source or item.name)
+        assert obj is getattr(owner, item.name), item
+    pages = api._pages(package.__name__)
+    entries = {line[4:] for module, items, at_door in pages.values()
+               for line in api._page(module, items, at_door).splitlines()
+               if line.startswith("::: ") and line[4:] not in (module, package.__name__)}
+    door = {n for n in package.__all__ if n not in spaces}
+    documented = {f"{package.__name__}.{n}" for n in door}
+    for name, module in spaces.items():
+        documented |= {f"{package.__name__}.{name}.{n}" for n in module.__all__
+                       if not (n in door and getattr(module, n) is getattr(package, n))}
+    assert entries == documented
+
+
+def test_migration_table_lists_every_moved_name():
+    api = _api_module()
+    for package in (simulator, design):
+        rows = api.migration_table(package.__name__).splitlines()[2:]
+        assert len(rows) == len(moved(package)) > 0
+        assert all(f"`{package.__name__}." in row for row in rows)
 
 
 def test_api_theory_anchors_are_mkdocs_slugs():

@@ -7,7 +7,8 @@ import pytest
 from matplotlib.figure import Figure
 
 from design.devices.miura import MiuraProblem
-from simulator import ParameterError, crease_temperatures, get_case
+from simulator import ParameterError, get_case
+from simulator.thermal import crease_temperatures
 from studies import plotting
 from studies.figure_notes import PALETTE, environment_note, figure_style, note_assumptions
 

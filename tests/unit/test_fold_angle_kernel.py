@@ -7,7 +7,9 @@ as the numpy one, NaN included."""
 import numpy as np
 import pytest
 
-from simulator import Pattern, build_mesh, build_sharp_mesh, fold_angles
+from simulator import Pattern, build_mesh
+from simulator.mechanics import fold_angles
+from simulator.model import build_sharp_mesh
 from simulator.cases import get_case
 from simulator.events import LARGE_TURN, NEAR_FLAT, CrossingWatch, _crease_angles, _quiet
 from simulator.mechanics import _angles_jit

@@ -6,7 +6,7 @@ import pytest
 import scipy.linalg
 import scipy.sparse as sp
 
-from simulator import spring_kernel_backend
+from simulator.kernels import spring_kernel_backend
 from simulator.mechanics.assembly import assemble_vector, element_dofs
 from simulator.cases import get_case
 from simulator.mechanics.elements import _springs_jit

@@ -12,9 +12,11 @@ import warnings
 import numpy as np
 import pytest
 
-from simulator import (AIR, WATER, ChainLoss, EtorigamiDeprecationWarning, Fluid, Heat,
-                       IntegralLoss, ParameterError, Substrate, ThermalParameters,
-                       boundary_panel_plane, get_case, read_model, simulate, write_model)
+from simulator import (AIR, WATER, ChainLoss, EtorigamiDeprecationWarning, Heat, IntegralLoss,
+                       ParameterError, Substrate, ThermalParameters, get_case, simulate)
+from simulator.fold import read_model, write_model
+from simulator.materials import Fluid
+from simulator.thermal import boundary_panel_plane
 from simulator.thermal.steady import ThermalModel
 
 
@@ -294,7 +296,8 @@ def test_a_model_file_keeps_its_heat_loss_and_old_files_are_read(tmp_path, caplo
 def test_a_model_without_chain_parameters_runs_the_integral_model_and_the_fe():
     """ThermalParameters() (no t_env): the integral fixed-shape solve and the 3-D FE reference
     run on it; the chain model refuses, naming what it needs."""
-    from simulator import fixed_shape_temperatures, solve_fe3d
+    from simulator.fe import solve_fe3d
+    from simulator.thermal import fixed_shape_temperatures
 
     case = get_case("single_fold")
     thermal = ThermalParameters(boundary_panels=case.model.thermal.boundary_panels,
@@ -314,7 +317,7 @@ def test_a_model_without_chain_parameters_runs_the_integral_model_and_the_fe():
 def test_chains_are_calibrated_for_a_model_that_has_none():
     """calibrate_environment on a model with the integral loss only: the chains start from
     1.5 panel lengths and are fitted to the integral model."""
-    from simulator import calibrate_environment
+    from simulator.thermal import calibrate_environment
 
     case = get_case("double_fold", thermal_steps=2)
     thermal = ThermalParameters(boundary_panels=case.model.thermal.boundary_panels,

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from simulator import (AIR, SU8, WATER, ChainLoss, ConvergenceError, IntegralLoss, Material,
+from simulator import (AIR, WATER, ChainLoss, ConvergenceError, IntegralLoss, Material,
                        ParameterError, ThermalParameters, make_model)
+from simulator.materials import SU8
 from simulator.cases import single_fold_model
 from simulator.geometry.materials import (AIR_CONDUCTIVITY_TABLE, KELVIN, Fluid,
                                           WATER_CONDUCTIVITY_TABLE)

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simulator import get_stack, stack_model
+from simulator.model import get_stack, stack_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.mesh import build_mesh
 from simulator.thermal import integral_fast

@@ -349,7 +349,7 @@ def test_disk_over_a_plane_agrees_with_converged_fe(h_over_a):
     """Measured (this branch, 2 Dec 2026): integral / FE - 1 = -0.37 %, -0.23 %, -0.21 %."""
     pytest.importorskip("skfem")
     pytest.importorskip("gmsh")
-    from simulator import fe_disk
+    from simulator.fe import fe_disk
     k, a = 0.026, 1e-3
     plane = (np.array([0, 0, -h_over_a * a]), np.array([0, 0, 1.0]))
     fe = fe_disk(a, k, h_over_a * a, level=2, extrapolate=True)
@@ -368,7 +368,7 @@ def test_strip_in_air_agrees_with_fe(W):
     (the chain model: -12 / -4 %, -15 / +7 %, -26 / -7 %); FE level 1 -> 2 moves by ~1 %."""
     pytest.importorskip("skfem")
     pytest.importorskip("gmsh")
-    from simulator import solve_fe3d
+    from simulator.fe import solve_fe3d
     from studies.heat_loss_calibration import strip_case
     model = strip_case(W, k=0.3, k_env=0.026, t_env=1.5).model
     power = 10 * W * 1e-3
@@ -391,7 +391,9 @@ def test_a_rigid_rotation_or_mirror_image_of_a_structured_sheet_keeps_the_loss(m
     by 2e-5 K)."""
     import pathlib
 
-    from simulator import build_mesh, load_fold_json, parse_fold, STACKS
+    from simulator import build_mesh
+    from simulator.fold import load_fold_json, parse_fold
+    from simulator.model import STACKS
 
     stack = STACKS["su8-au"]
     path = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold" / "zigzag_folded.fold"

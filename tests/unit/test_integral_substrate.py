@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from simulator import (ChainLoss, FixedShapeTemperatures, IntegralLoss, ParameterError,
-                       Substrate, ThermalParameters, fixed_shape_temperatures)
+from simulator import ChainLoss, IntegralLoss, ParameterError, Substrate, ThermalParameters
+from simulator.thermal import FixedShapeTemperatures, fixed_shape_temperatures
 from simulator.cases import verification_strip
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.steady import ThermalModel

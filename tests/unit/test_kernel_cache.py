@@ -81,9 +81,8 @@ def test_short_commands_use_numba_only_with_a_warm_cache(monkeypatch, warm):
     started = []
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
     monkeypatch.setattr(_aot, "available", lambda log=False: False)
-    monkeypatch.setattr(simulator, "kernel_cache_warm", lambda: warm, raising=False)
-    monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: started.append(1),
-                        raising=False)
+    monkeypatch.setattr(simulator.kernels, "kernel_cache_warm", lambda: warm)
+    monkeypatch.setattr(simulator.kernels, "warm_kernel_cache", lambda: started.append(1))
     with _common.kernel_backend(short=True):
         chosen = _springs_jit.backend
     assert chosen == (None if warm else "numpy")           # None: the default (numba)
@@ -101,8 +100,7 @@ def test_short_commands_use_the_aot_kernels_when_built(monkeypatch):
     monkeypatch.setattr(_aot, "available", lambda log=False: True)
     monkeypatch.setattr(_aot, "_enabled", False)
     monkeypatch.setattr(_aot, "_module", False)            # as if it failed to load
-    monkeypatch.setattr(simulator, "warm_kernel_cache", lambda: pytest.fail("started"),
-                        raising=False)
+    monkeypatch.setattr(simulator.kernels, "warm_kernel_cache", lambda: pytest.fail("started"))
     with _common.kernel_backend(short=True):
         assert _aot._enabled and _springs_jit.backend is None
     assert not _aot._enabled                               # only within the command

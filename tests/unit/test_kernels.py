@@ -109,7 +109,8 @@ def test_compiled_spring_kernel_equals_numpy_kernel():
 
 def test_spring_kernel_backend_selects_the_kernel(monkeypatch):
     """One backend per block or process; both kernels give the same values."""
-    from simulator import ParameterError, spring_kernel_backend
+    from simulator import ParameterError
+    from simulator.kernels import spring_kernel_backend
 
     x, k, t0 = _springs(20)
     calls = []
@@ -153,7 +154,7 @@ def test_compile_kernel_returns_the_kernel_or_none_with_one_warning(caplog):
 
 def test_compiled_bar_kernel_equals_numpy_kernel_bit_for_bit():
     from simulator.mechanics.elements import _bars_jit
-    from simulator import spring_kernel_backend
+    from simulator.kernels import spring_kernel_backend
 
     x, L0, EA = _bars(500)
     dX = RNG.normal(size=(500, 3)) * 1e-3
@@ -168,7 +169,7 @@ def test_compiled_bar_kernel_equals_numpy_kernel_bit_for_bit():
 
 
 def test_large_model_evaluation_takes_the_compiled_bar_kernel_with_numba(monkeypatch):
-    from simulator import spring_kernel_backend
+    from simulator.kernels import spring_kernel_backend
     from simulator.mechanics.elements import _bars_jit
     from simulator.geometry.example_patterns import miura_sheet_pattern
     from simulator.model.model import Supports, make_model

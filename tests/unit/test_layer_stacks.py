@@ -12,9 +12,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simulator import (AIR, GOLD_FILM, SPR, SU8, Actuators, Bimorph, ChainLoss, IntegralLoss,
-                       Layer, ParameterError, Pattern, SheetLayers, ThermalParameters,
-                       build_mesh, make_model)
+from simulator import (AIR, Actuators, Bimorph, ChainLoss, IntegralLoss, ParameterError, Pattern,
+                       ThermalParameters, build_mesh, make_model)
+from simulator.materials import GOLD_FILM, SPR, SU8
+from simulator.thermal import Layer, SheetLayers
 from simulator.thermal.steady import ThermalModel
 from simulator.thermal.transient import (ThetaStepper, areal_capacity, capacity_vector,
                                          heat_system)
@@ -209,7 +210,7 @@ def test_stacks_of_unknown_or_actuated_creases_and_unknown_panels_are_refused():
 
 
 def test_fold_model_file_keeps_the_sheet_layers(tmp_path):
-    from simulator import read_model, write_model
+    from simulator.fold import read_model, write_model
 
     model = _strip(n=3, passive=True)
     back, _ = read_model(write_model(model, (), tmp_path / "strip.fold"))

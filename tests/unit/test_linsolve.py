@@ -7,7 +7,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from simulator import initial_state
+from simulator.steps import initial_state
 from simulator.linalg import linsolve, pardiso, thresholds
 from simulator.linalg import factorize, solve as _solve_linear
 from simulator.cases import miura_sheet_model

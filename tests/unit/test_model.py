@@ -2,9 +2,10 @@
 
 import pytest
 
-from simulator import (REFERENCE_GRAVITY, SPR, SU8, Actuators, Bimorph, ChainLoss,
-                       ContactParameters, Material, ParameterError, Supports, ThermalParameters,
-                       build_mesh, make_model)
+from simulator import (Actuators, Bimorph, ChainLoss, ContactParameters, Material, ParameterError,
+                       Supports, ThermalParameters, build_mesh, make_model)
+from simulator.materials import SPR, SU8
+from simulator.model import REFERENCE_GRAVITY
 from simulator.geometry.example_patterns import single_fold_pattern
 
 

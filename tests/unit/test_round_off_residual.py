@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 
-from simulator import initial_state
+from simulator.steps import initial_state
 from simulator.cases import single_fold_model
 from simulator.model.properties import spring_rest_angles
 from simulator.solvers.newton import NewtonOptions, newton

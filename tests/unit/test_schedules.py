@@ -6,9 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from simulator import (ParameterError, PiecewiseLinear, PiecewiseLinearSignal, PowerSchedule,
-                       Ramp, RampSignal, Schedule, Sine, SineSignal, SquareWave,
-                       SquareWaveSignal, StepPower, StepSignal)
+from simulator import ParameterError
+from simulator.schedules import (PiecewiseLinear, PiecewiseLinearSignal, PowerSchedule, Ramp,
+                                 RampSignal, Schedule, Sine, SineSignal, SquareWave,
+                                 SquareWaveSignal, StepPower, StepSignal)
 from simulator.schedules import next_switch
 
 SIGNALS = [StepSignal(-0.3, t_on=0.2, t_off=0.7, offset=0.1),

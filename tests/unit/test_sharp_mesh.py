@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from simulator import (Material, ParameterError, Pattern, SharpHingeParameters, Supports,
-                       build_sharp_mesh, make_model, sharp_model, simulate)
+from simulator import Material, ParameterError, Pattern, Supports, make_model, simulate
+from simulator.model import SharpHingeParameters, build_sharp_mesh, sharp_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.mechanics.kinematics import crease_rotations, fold_angles
 from simulator.model.mass import lumped_masses

@@ -6,7 +6,8 @@ import pickle
 import numpy as np
 import pytest
 
-from design import GRIPPER_SPACE, DesignProblem, Evaluation, GripperProblem
+from design import DesignProblem, Evaluation, GripperProblem
+from design.devices import GRIPPER_SPACE
 from design.core.space import DesignSpace, Variable
 from simulator.errors import ParameterError
 

@@ -4,9 +4,10 @@ verdict, whose message names the crease, its temperature and the limit."""
 import numpy as np
 import pytest
 
-from simulator import (SU8, LIMIT_MEASURES, ParameterError, PatternError, TemperatureLimit,
-                       TemperatureVerdict, crease_limit_temperatures, crease_temperatures,
-                       get_case)
+from simulator import ParameterError, PatternError, get_case
+from simulator.materials import SU8
+from simulator.thermal import (LIMIT_MEASURES, TemperatureLimit, TemperatureVerdict,
+                               crease_limit_temperatures, crease_temperatures)
 
 LIMIT = TemperatureLimit.of_glass_transition(SU8.glass_transition)
 

@@ -8,6 +8,7 @@ import pytest
 
 import design
 import simulator
+from doors import public_names, public_object
 from simulator import ParameterError
 from simulator import _validate as v
 
@@ -138,15 +139,15 @@ CLASSES = {
         "thickness": P, "dissipation_angle": P, "layers": I}),
     "IntegralLoss": (_with(simulator.IntegralLoss), {
         "refinement": I, "shape_tol": P, "correction_tol": P}),
-    "SharpHingeParameters": (_with(simulator.SharpHingeParameters), {
+    "SharpHingeParameters": (_with(simulator.model.SharpHingeParameters), {
         "fold_stiffness": P, "panel_bending_width": P}),
-    "StepSignal": (_with(simulator.StepSignal, value=0.1), {"value": F, "t_on": F,
+    "StepSignal": (_with(simulator.schedules.StepSignal, value=0.1), {"value": F, "t_on": F,
                                                               "offset": F}),
-    "RampSignal": (_with(simulator.RampSignal, value=0.1, duration=1.0), {
+    "RampSignal": (_with(simulator.schedules.RampSignal, value=0.1, duration=1.0), {
         "value": F, "duration": P, "t_start": F, "offset": F}),
-    "SquareWaveSignal": (_with(simulator.SquareWaveSignal, value=0.1, period=0.1), {
+    "SquareWaveSignal": (_with(simulator.schedules.SquareWaveSignal, value=0.1, period=0.1), {
         "value": F, "period": P, "duty": P, "t_start": F, "offset": F}),
-    "SineSignal": (_with(simulator.SineSignal, amplitude=0.1, frequency=10.0), {
+    "SineSignal": (_with(simulator.schedules.SineSignal, amplitude=0.1, frequency=10.0), {
         "amplitude": F, "frequency": P, "offset": F, "phase": F}),
     "BarHingeParameters": (_with(simulator.BarHingeParameters), {
         "diagonal_rate": P, "panel_bending_width": P, "centre_line_share": P}),
@@ -157,7 +158,7 @@ CLASSES = {
     "Material": (_with(simulator.Material, name="m", youngs_modulus=2e9), {
         "youngs_modulus": P, "poisson_ratio": P, "density": P, "thermal_conductivity": P,
         "specific_heat": P, "glass_transition": F}),
-    "Fluid": (_with(simulator.Fluid, name="f", density=1.0, specific_heat=1e3,
+    "Fluid": (_with(simulator.materials.Fluid, name="f", density=1.0, specific_heat=1e3,
                     thermal_conductivity=0.03), {
         "density": P, "specific_heat": P, "thermal_conductivity": P}),
     "NewtonOptions": (_with(simulator.NewtonOptions), {
@@ -184,12 +185,12 @@ CLASSES = {
         "target_displacement": F}),
     "DisplacementControl": (_with(simulator.DisplacementControl), {
         "target": F, "increments": I}),
-    "StepPower": (_with(simulator.StepPower, power=1e-3), {"power": P, "t_on": F}),
-    "Ramp": (_with(simulator.Ramp, power=1e-3, duration=1.0), {
+    "StepPower": (_with(simulator.schedules.StepPower, power=1e-3), {"power": P, "t_on": F}),
+    "Ramp": (_with(simulator.schedules.Ramp, power=1e-3, duration=1.0), {
         "power": P, "duration": P, "t_start": F}),
-    "SquareWave": (_with(simulator.SquareWave, power=1e-3, period=0.1), {
+    "SquareWave": (_with(simulator.schedules.SquareWave, power=1e-3, period=0.1), {
         "power": P, "period": P, "duty": P, "t_start": F}),
-    "Sine": (_with(simulator.Sine, amplitude=1e-3, frequency=10.0), {
+    "Sine": (_with(simulator.schedules.Sine, amplitude=1e-3, frequency=10.0), {
         "amplitude": F, "frequency": P, "phase": F}),
     "GripperDesign": (_with(design.GripperDesign), {
         "W": P, "L1": P, "L2": P, "La": P, "t_gold": P, "t_su8": P, "grip_range": P,
@@ -207,9 +208,9 @@ CASES = [(cls, fieldname, bad) for cls, (_, fields) in CLASSES.items()
 
 def test_the_list_covers_the_public_parameter_classes():
     for cls in CLASSES:
-        assert cls in simulator.__all__ or cls in design.__all__, cls
-    steps = {n for n in simulator.__all__ if isinstance(getattr(simulator, n), type)
-             and issubclass(getattr(simulator, n), simulator.Step) and n != "Step"}
+        assert cls in public_names(simulator) or cls in public_names(design), cls
+    steps = {n for n in public_names(simulator) if isinstance(public_object(simulator, n), type)
+             and issubclass(public_object(simulator, n), simulator.steps.Step) and n != "Step"}
     assert steps <= set(CLASSES), steps - set(CLASSES)
 
 
