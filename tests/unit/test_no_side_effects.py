@@ -102,3 +102,15 @@ def test_blas_thread_limit_is_scoped_to_the_call():
     solve, _ = dense_lapack.lu_loss(S - 2 * n * np.eye(n), M)
     solve(M[:, 0])
     assert _blas_threads() == before
+
+
+def test_import_and_kernel_choice_raise_no_warning():
+    """numba.pycc warns on import (pending deprecation): neither importing the packages nor
+    choosing a command's kernels imports it, even with warnings as errors."""
+    code = ("import simulator, design\nfrom simulator import _aot, _jit\n"
+            "_jit.command_tier(short=True); _aot.wanted(); _aot.available()\n"
+            "import sys\nprint('numba.pycc' in sys.modules)")
+    out = subprocess.run([sys.executable, "-W", "error", "-c", code], capture_output=True,
+                         text=True, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert out.returncode == 0 and out.stderr == "", out.stderr
+    assert out.stdout.strip() == "False"
