@@ -15,8 +15,8 @@ scatter loop) is an accelerator with a numpy twin. Three tiers run them:
 environment. The environment variables ``ETORIGAMI_*`` are read here only
 (:func:`environment`). The default is ``"numba"`` when numba is installed and
 ``ETORIGAMI_JIT`` is not off, else ``"numpy"``; :func:`use` (or
-:func:`simulator.mechanics.elements.springs.spring_kernel_backend`) changes it within a ``with`` block, and
-:func:`command_tier` is the CLI's choice for a command. No state of the disk (numba's cache
+:func:`simulator.mechanics.elements.springs.spring_kernel_backend`) changes it within a
+``with`` block, and :func:`command_tier` is the CLI's choice for a command. No state of the disk (numba's cache
 warm or cold) changes the tier: the same command gives the same floats on its first and
 later runs.
 

@@ -14,9 +14,9 @@ Two paths compute the same numbers (to rounding):
   not know);
 * an accelerator on small models whose families are exactly those of
   :data:`~simulator.mechanics.families.FUSED_FAMILIES`, when the compiled backend is in force
-  (numba installed, ``ETORIGAMI_JIT`` not off: :func:`simulator._jit.numba_selected`): one call of the fused
-  kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the tangent straight
-  into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
+  (numba installed, ``ETORIGAMI_JIT`` not off: :func:`simulator._jit.numba_selected`): one
+  call of the fused kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the
+  tangent straight into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
   it) and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first
   access, so every consumer of ``K`` sees a CSR matrix whichever path ran.
 
