@@ -8,8 +8,8 @@ kernels, 0.98-1.09 s with numba's cached kernels, whose import and set-up cost a
 the ahead-of-time compiled kernels of ``simulator._aot`` load without numba)?
 
 Method: each command runs ``--repeat`` times in a fresh process (``sys.executable -m
-design.cli``, this tree first on ``PYTHONPATH``), alternately; one run first fills numba's cache,
-the ahead-of-time module (both in the background) and the bytecode caches
+design.cli``, this tree first on ``PYTHONPATH``), alternately; one run first fills numba's cache
+(in the run), the ahead-of-time module (in the background after it) and the bytecode caches
 (``PYTHONDONTWRITEBYTECODE`` is unset for the children, as in a user's
 installation) if needed, so every timed run is a "second run". For each command the
 best wall time and the best CPU time (user + system of the child, from ``getrusage``) are

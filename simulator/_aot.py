@@ -19,12 +19,16 @@ millisecond and imports nothing from numba.
   also holds the SHA-256 of the module file. A module whose manifest does not match (stale, or
   a file damaged or replaced) is ignored, with an INFO line saying why.
 * **Built in the background.** :func:`build` compiles it (about 7 s of CPU); the CLI starts it
-  in a detached process when it is missing (:func:`simulator._jit.warm_kernel_cache`), like the
-  background compilation into numba's cache, so only the next run profits.
-* **Opt-in.** Only code run under :func:`enabled` (the CLI's short commands,
-  :func:`design.cli._common.kernel_backend`) or after :func:`enable` uses it; the kernels ask
-  :func:`kernel` at each call, so leaving the context restores numba's. ``ETORIGAMI_AOT=0``
-  switches it off. Any failure falls back to the JIT kernels (then numpy), as before.
+  in a detached process after a short command when it is missing
+  (:func:`simulator._jit.warm_kernel_cache`), so only the next run profits.
+* **Chosen in one place.** Its kernels run where :mod:`simulator._jit` says the tier is
+  ``"aot"`` (the CLI's short commands, :func:`simulator._jit.command_tier`, or a block of
+  :func:`simulator._jit.use`); the kernels ask :func:`simulator._jit.aot_kernel` at each call,
+  so leaving the block restores numba's. ``ETORIGAMI_AOT=0`` switches it off. Any failure
+  falls back to the JIT kernels (the same floats).
+* **Deprecated upstream.** numba marks ``numba.pycc`` pending deprecation (a warning on its
+  import): it is imported by :func:`build` only, with that warning silenced, never by
+  ``import simulator``. The plan, with the first-run times it buys: ``docs/kernels.md``.
 """
 
 from __future__ import annotations
@@ -41,8 +45,10 @@ import platform
 import sys
 import sysconfig
 
+from . import _jit
+
 __all__ = ["aot_dir", "available", "build", "disable", "enable", "enabled", "kernel", "key",
-           "wanted"]
+           "module_kernel", "wanted"]
 
 logger = logging.getLogger(__name__)
 
@@ -61,9 +67,7 @@ SOURCES = ("mechanics/elements/_fused_jit.py", "mechanics/elements/_springs_jit.
            "thermal/_thermal_jit.py", "linalg/_cholesky_jit.py", "mechanics/_angles_jit.py",
            "_aot.py")
 _PREFIX = "_etorigami_kernels_"
-_OFF = ("0", "off", "no", "false", "never", "numpy", "jit")
 
-_enabled = False
 #: The loaded module; False after a failed attempt in this process (not tried again).
 _module = None
 
@@ -72,8 +76,8 @@ def aot_dir() -> pathlib.Path:
     """Folder of the compiled module: ``ETORIGAMI_AOT_DIR`` if set, else ``etorigami-aot`` in
     ``NUMBA_CACHE_DIR`` if that is set, else ``<XDG_CACHE_HOME or ~/.cache>/etorigami/aot``
     (beside numba's user-wide cache)."""
-    if os.environ.get("ETORIGAMI_AOT_DIR"):
-        return pathlib.Path(os.environ["ETORIGAMI_AOT_DIR"])
+    if _jit.environment().aot_dir:
+        return pathlib.Path(_jit.environment().aot_dir)
     if os.environ.get("NUMBA_CACHE_DIR"):
         return pathlib.Path(os.environ["NUMBA_CACHE_DIR"]) / "etorigami-aot"
     cache_home = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
@@ -140,7 +144,7 @@ def _paths(k: str):
 
 
 def _switched_off() -> bool:
-    return os.environ.get("ETORIGAMI_AOT", "").strip().lower() in _OFF
+    return not _jit.environment().aot
 
 
 def _file_sha256(path) -> str:
@@ -191,39 +195,40 @@ def _load():
 
 
 def enable() -> bool:
-    """Use the ahead-of-time kernels in this process from now on, if they load (see
-    :func:`kernel`); returns whether they did."""
-    global _enabled
-    _enabled = True
-    return kernel(EXPORTS[0][0]) is not None
+    """Use the ahead-of-time kernels in this process from now on, if they load (tier "aot" of
+    :mod:`simulator._jit` wherever numba's kernels would run); returns whether they did."""
+    _jit._aot = True
+    return module_kernel(EXPORTS[0][0]) is not None
 
 
 def disable() -> None:
     """Stop using the ahead-of-time kernels: numba's from the next kernel call on."""
-    global _enabled
-    _enabled = False
+    _jit._aot = False
 
 
 @contextlib.contextmanager
 def enabled():
     """Context in which the kernels are the ahead-of-time ones when they load (:func:`enable`);
     the previous choice is restored on exit."""
-    global _enabled
-    before = _enabled
+    before = _jit._aot
     enable()
     try:
         yield
     finally:
-        _enabled = before
+        _jit._aot = before
 
 
 def kernel(name: str):
-    """The ahead-of-time compiled kernel ``name`` (``"fused"``, ``"thermal"``, ``"cholesky"``,
-    ``"fold_angles"``, ``"quiet"``), or None if this process has not called :func:`enable` or the module does not load
-    (logged once)."""
+    """The ahead-of-time compiled kernel ``name`` where the tier is "aot"
+    (:func:`simulator._jit.aot_kernel`), else None."""
+    return _jit.aot_kernel(name)
+
+
+def module_kernel(name: str):
+    """The kernel ``name`` of the module (``"fused"``, ``"thermal"``, ``"cholesky"``,
+    ``"fold_angles"``, ``"quiet"``), loaded on the first call; None if it does not load
+    (logged once, not tried again in this process)."""
     global _module
-    if not _enabled:
-        return None
     if _module is None:
         _module = _load() or False
     return getattr(_module, name, None) if _module else None
@@ -255,10 +260,17 @@ def available(log: bool = False) -> bool:
 
 
 def wanted() -> bool:
-    """Whether a build would be useful: switched on, numba installed, no module for the
-    current sources yet."""
-    return (not _switched_off() and importlib.util.find_spec("numba") is not None
-            and not available())
+    """Whether a build would be useful and possible: switched on, numba installed with its
+    ``pycc`` (looked for without importing numba: numba marks it pending deprecation), no
+    module for the current sources yet."""
+    return not _switched_off() and _pycc_shipped() and not available()
+
+
+def _pycc_shipped() -> bool:
+    """Whether the installed numba has ``numba.pycc`` (its folder; nothing imported)."""
+    spec = importlib.util.find_spec("numba") if _jit.AVAILABLE else None
+    return bool(spec and spec.origin
+                and (pathlib.Path(spec.origin).parent / "pycc" / "__init__.py").is_file())
 
 
 #: Modules kept in :func:`aot_dir` (other checkouts or versions share it); older ones are

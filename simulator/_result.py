@@ -20,7 +20,6 @@ import dataclasses
 import json
 import os
 import pathlib
-import subprocess
 
 import numpy as np
 
@@ -134,10 +133,34 @@ def _cpu_model() -> str | None:
 
 
 def _git_hash() -> str | None:
+    """The commit of the git checkout this package is imported from, read from its ``.git``
+    files (``HEAD``, the branch's ref file or ``packed-refs``; a worktree's ``.git`` file
+    pointing elsewhere), without running git; None for an installed copy or an unreadable
+    checkout. Called when a result is saved, never on import."""
     try:
-        here = pathlib.Path(__file__).resolve().parent
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
-                             text=True, timeout=5)
-        return out.stdout.strip() or None
-    except (OSError, subprocess.SubprocessError):
-        return None
+        dot_git = pathlib.Path(__file__).resolve().parent.parent / ".git"
+        if dot_git.is_file():                  # a worktree: "gitdir: <path>"
+            text = dot_git.read_text().strip()
+            if not text.startswith("gitdir:"):
+                return None
+            git_dir = (dot_git.parent / text[len("gitdir:"):].strip()).resolve()
+        elif dot_git.is_dir():
+            git_dir = dot_git
+        else:
+            return None
+        head = (git_dir / "HEAD").read_text().strip()
+        if not head.startswith("ref:"):
+            return head or None                # a detached HEAD holds the commit
+        ref = head[len("ref:"):].strip()
+        common = git_dir
+        if (git_dir / "commondir").is_file():  # refs live in the main repository's .git
+            common = (git_dir / (git_dir / "commondir").read_text().strip()).resolve()
+        for folder in dict.fromkeys((git_dir, common)):
+            if (folder / ref).is_file():
+                return (folder / ref).read_text().strip() or None
+        for line in (common / "packed-refs").read_text().splitlines():
+            if line.endswith(" " + ref) and not line.startswith(("#", "^")):
+                return line.split()[0]
+    except OSError:
+        pass
+    return None

@@ -19,10 +19,10 @@ Options are in um, mW, degrees and seconds, ``--set`` of a case included (the un
 refused with a hint. ``--out`` is checked before any work (an existing file where a folder is
 expected, a folder that cannot be made or written). A usage error ends with one line on stderr and exit status
 2; Ctrl-C ends with one line saying what was saved and how to resume, and exit status 130.
-Short commands (demo, run, gripper evaluate) use the compiled kernels when numba's cache holds
-them, else the numpy ones while a background process compiles them for the next run (see
-:func:`design.cli._common.kernel_backend`); long ones always the compiled ones (see
-:func:`simulator.kernels.spring_kernel_backend`).
+Every command runs on one kernel tier whatever the state of numba's cache, so that it gives
+the same floats on its first run and later ones: short commands (demo, run, gripper evaluate)
+on the ahead-of-time compiled kernels when built, else numba's; long ones on numba's (see
+:func:`design.cli._common.kernel_backend` and ``docs/kernels.md``).
 """
 
 from __future__ import annotations

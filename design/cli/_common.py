@@ -176,30 +176,26 @@ def executor(args):
     return executor_from_option(getattr(args, "parallel", None), getattr(args, "dask", None))
 
 
+@contextlib.contextmanager
 def kernel_backend(short: bool):
-    """Context for a command: short ones (one case, one gripper evaluation: a few thousand
-    kernel calls) use the ahead-of-time compiled kernels when they are built
-    (:mod:`simulator._aot`: no numba imported), else numba's kernels only when numba's cache
-    holds them (loading costs about half a second,
-    :func:`simulator.kernels.kernel_cache_warm`); with a cold cache they run on the numpy
-    kernels, since compiling costs more than it saves there. Without the ahead-of-time kernels
-    they start compiling in a background process for the next run
-    (:func:`simulator.kernels.warm_kernel_cache`). Long ones (optimize, sweep) keep the
-    default. ``ETORIGAMI_JIT`` overrides both."""
-    if not short or os.environ.get("ETORIGAMI_JIT", "").strip():
-        return contextlib.nullcontext()
-    from simulator import _aot
-    from simulator.kernels import kernel_cache_warm, warm_kernel_cache
+    """Context for a command: its kernels are those :func:`simulator._jit.command_tier` chooses
+    (short ones, one case or one gripper evaluation: the ahead-of-time compiled kernels when
+    built, else numba's; long ones: numba's), the same on the first run after install and on
+    later ones, so that the same command gives the same floats. Only here does the CLI ask for
+    background work: on a cold numba cache a short command compiles the thermal kernel in a
+    second process beside the fused one (:func:`simulator._jit.compile_thermal_kernel_beside`),
+    and after it the ahead-of-time module is built in a detached process for the next run
+    (:func:`simulator._jit.warm_kernel_cache`). ``ETORIGAMI_JIT`` set: neither."""
+    from simulator import _jit
 
-    if _aot.available(log=True):            # files only: a usage error stays quick
-        return _aot.enabled()               # no numba imported (falls back to it if needed)
-    warm = kernel_cache_warm()
-    warm_kernel_cache()                     # numba's cache if cold, then the AOT module
-    if warm:
-        return contextlib.nullcontext()
-    from simulator.kernels import spring_kernel_backend
-
-    return spring_kernel_backend("numpy")
+    tier = _jit.command_tier(short)
+    asks = short and tier == "numba" and _jit.environment().jit is None
+    if asks:
+        _jit.compile_thermal_kernel_beside()
+    with _jit.use(tier):
+        yield
+    if asks:
+        _jit.warm_kernel_cache()
 
 
 def saved_rows(path) -> int:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 
-from .. import _aot
+from .. import _jit
 from .._jit import HELPER_OPTIONS, compile_kernel
 
 __all__ = ["cholesky_solve", "SIGNATURE", "broken"]
@@ -155,7 +155,7 @@ def cholesky_solve():
     ahead-of-time compiled one when enabled and loaded (:mod:`simulator._aot`, no numba
     imported), else numba's, compiled or loaded from its cache on first use."""
     global _compiled, broken
-    aot = _aot.kernel("cholesky")                      # enabled by short CLI commands only
+    aot = _jit.aot_kernel("cholesky")                  # tier "aot": short CLI commands
     if aot is not None:
         return aot
     if _compiled is None and not broken:

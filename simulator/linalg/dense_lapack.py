@@ -5,7 +5,11 @@ positive definite ``S``: blocked BLAS-3 code, 3-4 times the speed of the compile
 kernel of :mod:`._dense_jit` from a few hundred rows on (measured: n = 584, 2.9 ms against
 9.6 ms). BLAS's threads are limited to one for the call (``threadpoolctl``): at these sizes two
 threads are slower than one (n = 396: 2.4 ms against 1.1 ms) and would compete with a
-process pool's workers. :func:`cholesky_loss` returns None where ``S`` is not positive
+process pool's workers. The limit is scoped: each call enters ``threadpoolctl``'s limit and
+leaves it when the call returns, restoring the number of threads BLAS had (the tests check
+it); while the call runs it holds for the whole process (BLAS has one setting), so calls from
+several threads take turns (:data:`_lock`). Nothing is changed at import or left changed
+after a call. :func:`cholesky_loss` returns None where ``S`` is not positive
 definite; :func:`lu_loss` then factorises it by LU with partial pivoting (``dgetrf``, blocked:
 2-3 times the speed of the compiled kernels' indefinite path at n = 1314), and the compiled
 kernel stays for a singular ``S``.

@@ -33,6 +33,8 @@ import weakref
 import numpy as np
 import scipy.sparse as sp
 
+from .. import _jit
+
 __all__ = ["available", "PardisoLDLT", "PardisoFactor", "PardisoError"]
 
 logger = logging.getLogger(__name__)
@@ -56,7 +58,7 @@ def _pardiso():
 
 
 def _load() -> tuple:
-    if os.environ.get("ETORIGAMI_PARDISO", "1").strip().lower() in ("0", "false", "no", "off"):
+    if not _jit.environment().pardiso:
         logger.info("PARDISO disabled by ETORIGAMI_PARDISO")
         return ()
     lib = None
@@ -84,7 +86,7 @@ def _mkl_candidates() -> list[str]:
     """Paths of MKL's runtime library to try, most likely first: ``ETORIGAMI_MKL_RT``, then
     the ``lib`` (``Library/bin`` on Windows) folders of this Python and of the user site,
     where the ``mkl`` wheel puts it, then the system's library search."""
-    override = os.environ.get("ETORIGAMI_MKL_RT")
+    override = _jit.environment().mkl_rt
     if override:
         return [override]
     names = ("mkl_rt*.dll",) if sys.platform == "win32" else ("libmkl_rt.so*", "libmkl_rt*.dylib")

@@ -7,8 +7,8 @@ Every quasi-static step checks each accepted state for panels passing through ea
 calls, costs more than its arithmetic (18 us per state on the single crease, 24-31 us on the
 gripper and the 3 x 3 Miura lifter); one call here costs a few microseconds. The numpy path
 stays the reference (the tests compare the two) and is used where numba is not selected
-(``ETORIGAMI_JIT=0``, short commands on a cold cache: the switch of
-:func:`simulator.mechanics.elements._springs_jit.numba_selected`) or fails to compile.
+(``ETORIGAMI_JIT=0``: the switch of :func:`simulator._jit.numba_selected`) or fails to
+compile.
 
 The same formulas, with the components taken in the order the numpy path gathers them; the
 angles agree to round-off, a few ulps (the tests check 1e-14 rad), not bit for bit: numpy's
@@ -24,9 +24,7 @@ from __future__ import annotations
 
 import math
 
-from .. import _aot
-from .._jit import compile_kernel
-from .elements._springs_jit import numba_selected
+from .._jit import aot_kernel, compile_kernel, numba_selected
 
 __all__ = ["fold_angles_kernel", "quiet_kernel", "SIGNATURE", "QUIET_SIGNATURE"]
 
@@ -104,7 +102,7 @@ def fold_angles_kernel():
     """The compiled :func:`_kernel`, or None (use numpy): the ahead-of-time compiled one when
     enabled and loaded (:mod:`simulator._aot`, no numba imported), else numba's where numba
     is selected, compiled or loaded from its cache on first use."""
-    aot = _aot.kernel("fold_angles")                   # enabled by short CLI commands only
+    aot = aot_kernel("fold_angles")                    # tier "aot": short CLI commands
     if aot is not None:
         return aot
     if broken or not numba_selected():
@@ -114,7 +112,7 @@ def fold_angles_kernel():
 
 def quiet_kernel():
     """The compiled :func:`_quiet`, or None, as :func:`fold_angles_kernel`."""
-    aot = _aot.kernel("quiet")
+    aot = aot_kernel("quiet")
     if aot is not None:
         return aot
     if broken or not numba_selected():

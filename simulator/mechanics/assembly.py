@@ -15,8 +15,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from .._jit import compile_kernel
-from .elements._springs_jit import numba_selected
+from .._jit import compile_kernel, numba_selected
 
 __all__ = ["element_dofs", "assemble_vector", "StiffnessPattern", "assemble_matrix",
            "FamilyAssembly", "scatter_numpy", "JIT_ENTRIES"]

@@ -14,10 +14,9 @@ Two paths compute the same numbers (to rounding):
   not know);
 * an accelerator on small models whose families are exactly those of
   :data:`~simulator.mechanics.families.FUSED_FAMILIES`, when the compiled backend is in force
-  (numba installed, ``ETORIGAMI_JIT`` not off, see
-  :func:`simulator.mechanics.elements.springs.spring_kernel_backend`): one call of the fused
-  kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the tangent straight
-  into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
+  (numba installed, ``ETORIGAMI_JIT`` not off: :func:`simulator._jit.numba_selected`): one
+  call of the fused kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the
+  tangent straight into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
   it) and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first
   access, so every consumer of ``K`` sees a CSR matrix whichever path ran.
 
@@ -39,7 +38,6 @@ from ..linalg.ladder import solve
 from ..linalg.small_solve import SparseCholesky, pattern_of
 from ..linalg.thresholds import DENSE_LIMIT
 from .contact_search import ContactSearch
-from ..thermal import _thermal_jit
 from .elements import _fused_jit, _springs_jit
 from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, SpringFamily,
                        SupportFamily, check_family, model_families)
@@ -214,8 +212,6 @@ class EquilibriumSystem:
     def _fused_evaluator(self, spring_rest):
         """u -> Evaluation by the fused kernel for fixed rest angles (arguments prepared once);
         the numpy path if compilation failed (logged)."""
-        if _fused_jit.needs_compiling() and self.model.thermal is not None:
-            _thermal_jit.compile_in_background()       # first run: both compile side by side
         kernel = _fused_jit.fused_kernel()
         if kernel is None:
             return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)

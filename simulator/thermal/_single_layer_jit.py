@@ -5,10 +5,9 @@ The same formulas pair by pair: the closed form of ``int_T 1 / |p - y| dS_y`` (W
 for pairs closer than ``near`` source diameters, the 3-point rule up to ``2 near``, the
 centroid rule beyond, for the sheet and (with a substrate plane) its mirror image, in one pass
 over the pairs. The numpy path is the checked reference (tests compare the two; the closed
-form's arc tangents are summed in one atan2 here, see :func:`_potential`). It follows the
-spring kernel's backend (:func:`simulator.mechanics.elements.springs.spring_kernel_backend`,
-environment variable ``ETORIGAMI_JIT``): compiled on first use, cached by numba, numpy if
-numba is missing or fails.
+form's arc tangents are summed in one atan2 here, see :func:`_potential`). It runs where
+:func:`simulator._jit.numba_selected` says compiled kernels do (the one switch of every
+kernel): compiled on first use, cached by numba, numpy if numba is missing or fails.
 """
 
 from __future__ import annotations
@@ -17,8 +16,7 @@ import math
 
 import numpy as np
 
-from .._jit import compile_kernel
-from ..mechanics.elements import _springs_jit
+from .._jit import compile_kernel, numba_selected
 
 __all__ = ["use_compiled", "collocation", "pair_values", "corners", "pair_distances"]
 
@@ -416,7 +414,7 @@ def use_compiled() -> bool:
     """Whether the compiled kernel is used (the spring kernel's backend is "numba"); compiles
     or loads it on the first call."""
     global _compiled, _broken
-    if _broken or not _springs_jit.numba_selected():
+    if _broken or not numba_selected():
         return False
     if _compiled is None:
         _compiled = compile_kernel("single-layer kernel", _build, "using numpy")

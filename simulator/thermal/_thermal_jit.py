@@ -9,10 +9,9 @@ temperature. The numpy path (:meth:`simulator.thermal.steady.ThermalModel.solve`
 ``"numpy"`` backend) is the checked reference: tests compare the two.
 
 A small gripper (42 nodes) takes about 1 ms per solve on numpy (some 60 array calls of a few
-microseconds each, and SuperLU's set-up) and tens of microseconds here. The kernel follows the
-spring kernel's backend (:func:`simulator.mechanics.elements.springs.spring_kernel_backend`, environment
-variable ``ETORIGAMI_JIT``): compiled on first use, cached by numba, numpy if numba is missing
-or fails to compile.
+microseconds each, and SuperLU's set-up) and tens of microseconds here. It runs where
+:mod:`simulator._jit` selects compiled kernels (the ahead-of-time copy in tier "aot"):
+compiled on first use, cached by numba, numpy if numba is missing or fails to compile.
 """
 
 from __future__ import annotations
@@ -26,9 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _aot
-from .._jit import compile_kernel
-from ..mechanics.elements import _springs_jit
+from .._jit import aot_kernel, compile_kernel, numba_selected
 
 __all__ = ["use_compiled", "thermal_element_data", "compile_in_background"]
 
@@ -197,10 +194,11 @@ def compile_in_background() -> bool:
     is neither loaded here nor cached yet; returns whether such a process was started.
 
     The first run after install compiles the fused mechanics kernel (about 4 s of CPU) and
-    this one (about 1 s) one after the other; the model's first evaluation starts this process
-    just before compiling the fused kernel, so that both compile side by side and
-    :func:`use_compiled` later only loads this kernel from the cache (it waits for the process
-    first). Any failure here is ignored: the kernel is then compiled in this process as usual.
+    this one (about 1 s) one after the other; the CLI's short commands on a cold cache call
+    this first (no simulation does: a library call starts no process), so that both compile
+    side by side and :func:`use_compiled` later only loads this kernel from the cache (it
+    waits for the process first). Any failure here is ignored: the kernel is then compiled in
+    this process as usual.
     """
     global _background
     if _compiled is not None or _broken or _background is not None:
@@ -225,12 +223,12 @@ def compile_in_background() -> bool:
 
 
 def use_compiled() -> bool:
-    """Whether the thermal model uses this kernel (the spring kernel's backend is "numba"):
-    the ahead-of-time compiled one if enabled and loaded (:mod:`simulator._aot`), else
+    """Whether the thermal model uses this kernel (:func:`simulator._jit.numba_selected`):
+    the ahead-of-time compiled one in tier "aot" when it loads (:mod:`simulator._aot`), else
     numba's, compiled or loaded on the first call."""
-    if _broken or not _springs_jit.numba_selected():
+    if _broken or not numba_selected():
         return False
-    return (_aot.kernel("thermal") or _compiled or _compile()) is not None
+    return (aot_kernel("thermal") or _compiled or _compile()) is not None
 
 
 def thermal_element_data(args, x):
@@ -238,7 +236,7 @@ def thermal_element_data(args, x):
     [W/K] at positions ``x`` (n, 3) [m], and the number of triangles whose t_air was floored;
     ``args`` are the model's arguments of the kernel (``ThermalModel._kernel_args``). Compiles
     the kernel on first use (see :func:`use_compiled`)."""
-    kernel = _aot.kernel("thermal") or _compiled or _compile()
+    kernel = aot_kernel("thermal") or _compiled or _compile()
     n, m, layers = len(x), len(args[0]), args[8]
     Ke, g_eff = np.empty((m, 3, 3)), np.empty(n)
     floored = kernel(np.require(x, np.float64, ("C", "W")), *args, Ke, g_eff, np.zeros(n),

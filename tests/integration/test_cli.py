@@ -143,36 +143,51 @@ def test_python_entry_points_reject_fold_angles_outside_a_turn():
         GripperProblem(residual_fold_groups=(("arm", -4.0),))
 
 
-def test_short_commands_use_the_numpy_kernel(monkeypatch, tmp_path, capsys):
-    """No numba compilation for one case or one gripper evaluation (it would cost more than
-    the run); ETORIGAMI_JIT overrides."""
-    from simulator.mechanics.elements import _springs_jit
+def test_short_commands_run_on_one_tier(monkeypatch, tmp_path, capsys):
+    """A short command chooses its kernels once, from the environment and the ahead-of-time
+    module (never numpy because numba's cache is cold), and restores the default after."""
+    from simulator import _jit
 
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
-    used = []
-    monkeypatch.setattr(_springs_jit, "spring_kernel_jit", lambda *a: used.append(1))
+    tiers = []
+    monkeypatch.setattr(_jit, "warm_kernel_cache", lambda: tiers.append(_jit.tier()))
     argv = ["run", "single-fold", "--set", "thermal_steps=2", "--out", str(tmp_path), "-q"]
     assert main(argv) == 0
-    assert used == [] and _springs_jit.backend is None
+    assert _jit._backend is None and not _jit._aot
+    if _jit.AVAILABLE and not _jit.command_tier(short=True) == "aot":
+        assert tiers == ["numba"]                  # asked for the AOT module after the run
 
 
-def test_first_demo_compiles_nothing(tmp_path):
-    """A fresh install (empty numba cache): the demo neither compiles nor imports numba in its
-    process; a detached process compiles the kernels meanwhile, so the next run finds numba's
-    cache warm (issue 21, item 8)."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path / "numba"))
-    env.pop("ETORIGAMI_JIT", None)
-    code = ("import sys; from design.cli import main; code = main(['demo']); "
-            "print('numba' in sys.modules); sys.exit(code)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                         cwd=ROOT)
-    assert out.returncode == 0 and out.stdout.strip().endswith("False"), out.stderr
-    probe = "from simulator.kernels import kernel_cache_warm as w; print(w())"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline:
-        warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                              env=env, cwd=ROOT).stdout.strip()
-        if warm == "True":
-            break
-        time.sleep(2.0)
-    assert warm == "True", "the background compilation did not fill numba's cache"
+#: A short command of the paper's single fold (heated until it lifts off the substrate).
+SAME_BITS_RUN = ["run", "single-fold", "--set", "residual_fold_deg=-10", "--set", "gravity=true",
+                 "--set", "thermal_steps=40", "-q"]
+
+
+def test_the_first_and_second_run_give_the_same_bits(tmp_path, monkeypatch):
+    """Issue 31: the first run after install (an empty numba cache, no ahead-of-time module:
+    numba's kernels compiled in the run) and the second (the ahead-of-time module the first
+    asked for, built in the background before it) write the same files, byte for byte. (They
+    differed when a cold cache meant the numpy kernels.)"""
+    from simulator import _jit
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               ETORIGAMI_AOT_DIR=str(tmp_path / "aot"))
+    for name in ("ETORIGAMI_JIT", "ETORIGAMI_AOT"):
+        env.pop(name, None)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", env["NUMBA_CACHE_DIR"])
+    lock = _jit._compile_lock()              # of a background compilation into that cache
+
+    def run(name):
+        out = subprocess.run([sys.executable, "-m", "design.cli", *SAME_BITS_RUN, "--out",
+                              str(tmp_path / name)], capture_output=True, text=True, env=env,
+                             cwd=tmp_path, timeout=600)
+        assert out.returncode == 0, out.stderr
+        deadline = time.monotonic() + 600
+        while lock.exists() and time.monotonic() < deadline:  # what the run asked for
+            time.sleep(1.0)
+        return {f: (tmp_path / name / f).read_bytes() for f in ("creases.csv", "nodes.npz")}
+
+    first = run("first")
+    if _jit.AVAILABLE:
+        assert list((tmp_path / "aot").glob("_etorigami_kernels_*.json")), "no module built"
+    assert run("second") == first

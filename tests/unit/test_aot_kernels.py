@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from simulator import _aot
+from simulator import _aot, _jit
 from simulator.mechanics.elements import _fused_jit, _springs_jit
 from simulator.thermal import _thermal_jit
 
@@ -46,7 +46,7 @@ def aot_env(built, monkeypatch):
     before and after."""
     monkeypatch.setenv("ETORIGAMI_AOT_DIR", str(built))
     monkeypatch.delenv("ETORIGAMI_AOT", raising=False)
-    monkeypatch.setattr(_aot, "_enabled", False)
+    monkeypatch.setattr(_jit, "_aot", False)
     monkeypatch.setattr(_aot, "_module", None)
     return built
 
@@ -214,7 +214,7 @@ def test_an_unloadable_module_is_ignored_with_a_log_line(aot_env, tmp_path, monk
 
 def test_no_module_means_numba_with_a_log_line(tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("ETORIGAMI_AOT_DIR", str(tmp_path / "empty"))
-    monkeypatch.setattr(_aot, "_enabled", False)
+    monkeypatch.setattr(_jit, "_aot", False)
     monkeypatch.setattr(_aot, "_module", None)
     with caplog.at_level(logging.INFO, logger="simulator._aot"):
         assert not _aot.available(log=True) and _aot.wanted()
@@ -247,3 +247,23 @@ def test_only_the_newest_modules_are_kept(tmp_path):
     _aot._prune(tmp_path, keep=2)
     kept = [f"_etorigami_kernels_{i:024d}{s}" for i in (3, 4) for s in (".json", ".so")]
     assert sorted(f.name for f in tmp_path.iterdir()) == sorted(["other.txt"] + kept)
+
+
+def test_no_build_is_wanted_from_a_numba_without_pycc(tmp_path, monkeypatch):
+    """numba marks pycc pending deprecation: once it is gone, short commands keep numba's
+    kernels and start no build (looked for without importing numba)."""
+    import importlib.machinery
+
+    package = tmp_path / "numba"
+    (package / "pycc").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    spec = importlib.machinery.ModuleSpec("numba", None, origin=str(package / "__init__.py"))
+    monkeypatch.setattr(_aot.importlib.util, "find_spec",
+                        lambda name, *a: spec if name == "numba" else None)
+    monkeypatch.setattr(_aot, "available", lambda log=False: False)
+    monkeypatch.delenv("ETORIGAMI_AOT", raising=False)
+    assert not _aot.wanted()                           # pycc/ without its __init__.py
+    (package / "pycc" / "__init__.py").write_text("")
+    assert _aot.wanted()
+    monkeypatch.setenv("ETORIGAMI_AOT", "0")
+    assert not _aot.wanted()

@@ -12,6 +12,7 @@ from simulator.mechanics import fold_angles
 from simulator.model import build_sharp_mesh
 from simulator.cases import get_case
 from simulator.events import LARGE_TURN, NEAR_FLAT, CrossingWatch, _crease_angles, _quiet
+from simulator import _jit
 from simulator.mechanics import _angles_jit
 from simulator.mechanics.elements import _springs_jit
 
@@ -23,7 +24,7 @@ V = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
 @pytest.fixture
 def kernels(monkeypatch):
     """The compiled kernels, with numba selected whatever ETORIGAMI_JIT says."""
-    monkeypatch.setattr(_springs_jit, "backend", "numba")
+    monkeypatch.setattr(_jit, "_backend", "numba")
     angles, quiet = _angles_jit.fold_angles_kernel(), _angles_jit.quiet_kernel()
     assert angles is not None and quiet is not None, "numba could not compile the kernels"
     return angles, quiet
@@ -117,7 +118,7 @@ def test_the_watch_uses_the_compiled_kernels_only_where_numba_is_selected(monkey
     mesh = _strip(False)
     u0 = _turned(mesh, 30) - mesh.nodes
     assert CrossingWatch(mesh, u0)._kernel is kernels[0]
-    monkeypatch.setattr(_springs_jit, "backend", "numpy")
+    monkeypatch.setattr(_jit, "_backend", "numpy")
     watch = CrossingWatch(mesh, u0)
     assert watch._kernel is None and watch._quiet is None
     assert watch.check(_turned(mesh, 40) - mesh.nodes, 1, 0.5) is None

@@ -1,6 +1,7 @@
-"""numba's cache seen from the files (simulator._jit.kernel_cache_warm) and the CLI's choice of
-kernels for short commands (design.cli._common.kernel_backend): compiled when the cache is
-warm, numpy plus a background compilation when it is cold."""
+"""The one place that chooses the kernels (simulator._jit): the environment read there only,
+the tier of a CLI command the same whatever numba's cache holds (design.cli._common.kernel_backend),
+numba's cache seen from the files (kernel_cache_warm) and the background compilation the CLI
+asks for (warm_kernel_cache)."""
 
 import importlib.util
 import os
@@ -8,7 +9,6 @@ import os
 import pytest
 
 from simulator import _jit
-from simulator.mechanics.elements import _springs_jit
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None,
                                 reason="numba not installed")
@@ -73,39 +73,100 @@ def test_the_package_kernels_are_named_by_existing_functions():
 
 
 @pytest.mark.parametrize("warm", [True, False])
-def test_short_commands_use_numba_only_with_a_warm_cache(monkeypatch, warm):
-    import simulator
+def test_short_commands_run_numba_whether_the_cache_is_warm_or_cold(monkeypatch, warm):
+    """One tier whatever numba's cache holds (the same floats on the first and later runs);
+    on a cold cache the CLI asks for the thermal kernel's compilation beside the run, and
+    after the run for the ahead-of-time module."""
     from design.cli import _common
     from simulator import _aot
+    from simulator.thermal import _thermal_jit
 
-    started = []
+    asked = []
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
+    monkeypatch.delenv("ETORIGAMI_AOT", raising=False)
     monkeypatch.setattr(_aot, "available", lambda log=False: False)
-    monkeypatch.setattr(simulator.kernels, "kernel_cache_warm", lambda: warm)
-    monkeypatch.setattr(simulator.kernels, "warm_kernel_cache", lambda: started.append(1))
+    monkeypatch.setattr(_jit, "kernel_cache_warm", lambda *a: warm)
+    monkeypatch.setattr(_jit, "warm_kernel_cache", lambda: asked.append("aot module"))
+    monkeypatch.setattr(_thermal_jit, "compile_in_background", lambda: asked.append("thermal"))
     with _common.kernel_backend(short=True):
-        chosen = _springs_jit.backend
-    assert chosen == (None if warm else "numpy")           # None: the default (numba)
-    assert started == [1]                      # builds the AOT module (and the cache if cold)
+        assert _jit.tier() == "numba" and asked == ([] if warm else ["thermal"])
+    assert asked[-1] == "aot module"                        # asked for after the run
+    assert _jit._backend is None and not _jit._aot          # restored
+    asked.clear()
     with _common.kernel_backend(short=False):
-        assert _springs_jit.backend is None
+        assert _jit.tier() == "numba"
+    assert asked == []                                      # long commands ask for nothing
 
 
 def test_short_commands_use_the_aot_kernels_when_built(monkeypatch):
-    import simulator
     from design.cli import _common
     from simulator import _aot
 
     monkeypatch.delenv("ETORIGAMI_JIT", raising=False)
+    monkeypatch.delenv("ETORIGAMI_AOT", raising=False)
     monkeypatch.setattr(_aot, "available", lambda log=False: True)
-    monkeypatch.setattr(_aot, "_enabled", False)
+    monkeypatch.setattr(_jit, "_aot", False)
     monkeypatch.setattr(_aot, "_module", False)            # as if it failed to load
-    monkeypatch.setattr(simulator.kernels, "warm_kernel_cache", lambda: pytest.fail("started"))
+    monkeypatch.setattr(_jit, "warm_kernel_cache", lambda: pytest.fail("started"))
     with _common.kernel_backend(short=True):
-        assert _aot._enabled and _springs_jit.backend is None
-    assert not _aot._enabled                               # only within the command
+        assert _jit._aot and _jit.numba_selected()
+        assert _jit.tier() == "numba"                      # it did not load: numba's kernels
+    assert not _jit._aot                                   # only within the command
     with _common.kernel_backend(short=False):
-        assert not _aot._enabled
+        assert not _jit._aot
+
+
+@pytest.mark.parametrize("env, short, tier", [
+    ({}, True, "aot"), ({}, False, "numba"), ({"ETORIGAMI_JIT": "0"}, True, "numpy"),
+    ({"ETORIGAMI_JIT": "1"}, True, "numba"), ({"ETORIGAMI_AOT": "0"}, True, "numba"),
+])
+def test_the_command_tier_follows_the_environment_only(monkeypatch, env, short, tier):
+    from simulator import _aot
+
+    for name in _jit.VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    monkeypatch.setattr(_aot, "available", lambda log=False: True)   # the module is built
+    assert _jit.command_tier(short) == (tier if _jit.AVAILABLE else "numpy")
+
+
+def test_the_environment_is_read_in_one_place(monkeypatch):
+    for name in _jit.VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    default = _jit.environment()
+    assert (default.jit, default.aot, default.aot_dir, default.pardiso, default.mkl_rt) == (
+        None, True, None, True, None)
+    assert _jit.environment() is default                              # parsed once
+    monkeypatch.setenv("ETORIGAMI_JIT", "off")
+    monkeypatch.setenv("ETORIGAMI_AOT", "jit")
+    monkeypatch.setenv("ETORIGAMI_PARDISO", "0")
+    monkeypatch.setenv("ETORIGAMI_MKL_RT", "/opt/libmkl_rt.so.2")
+    monkeypatch.setenv("ETORIGAMI_AOT_DIR", "/tmp/aot")
+    env = _jit.environment()
+    assert (env.jit, env.aot, env.aot_dir, env.pardiso, env.mkl_rt) == (
+        False, False, "/tmp/aot", False, "/opt/libmkl_rt.so.2")
+    assert _jit.default_backend() == "numpy" and _jit.tier() == "numpy"
+    with _jit.use("numba" if _jit.AVAILABLE else "numpy"):
+        assert _jit.numba_selected() == _jit.AVAILABLE
+    with pytest.raises(Exception, match="kernel tier 'cuda'; use one of 'aot', 'numba', 'numpy'"):
+        with _jit.use("cuda"):
+            pass
+
+
+def test_no_kernel_module_reads_the_environment():
+    """ETORIGAMI_* appear in code (not docstrings or comments) of simulator/_jit.py only."""
+    import ast
+    import pathlib
+
+    root = pathlib.Path(_jit.__file__).parent
+    readers = set()
+    for path in [*root.rglob("*.py"), *(root.parent / "design").rglob("*.py")]:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) \
+                    and node.value.startswith("ETORIGAMI_") and " " not in node.value:
+                readers.add(path.relative_to(root.parent).as_posix())
+    assert readers == {"simulator/_jit.py"}
 
 
 def test_warm_cache_starts_nothing(monkeypatch):

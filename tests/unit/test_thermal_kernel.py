@@ -169,22 +169,16 @@ def test_background_compilation_fills_the_cache(tmp_path):
     assert again.stdout.strip() == "False", again.stderr
 
 
-@pytest.mark.parametrize("with_thermal", [True, False])
-def test_first_evaluation_starts_the_background_compilation(monkeypatch, with_thermal):
-    """A model with heat transfer starts the thermal kernel's compilation just before the
-    fused kernel compiles; a purely mechanical one does not."""
+def test_first_evaluation_starts_no_background_compilation(monkeypatch):
+    """A library call starts no process (issue 31): the model's first evaluation compiles the
+    thermal kernel in this process; only the CLI asks for the background compilation."""
     from simulator.cases import get_case
     from simulator.mechanics.elements import _fused_jit
     from simulator.state import equilibrium_system, initial_state
-    import dataclasses
     model = get_case("single_fold", gravity=True).model
-    if not with_thermal:
-        model = dataclasses.replace(model, thermal=None)
-    calls = []
     monkeypatch.setattr(_fused_jit, "needs_compiling", lambda: True)
-    monkeypatch.setattr(_thermal_jit, "compile_in_background", lambda: calls.append(1) or False)
+    monkeypatch.setattr(_thermal_jit, "compile_in_background", lambda: pytest.fail("started"))
     system = equilibrium_system(model)
     state = initial_state(model)
     with spring_kernel_backend("numba"):
         system.evaluate(state.u, state.spring_rest)
-    assert len(calls) == (1 if with_thermal else 0)

@@ -8,7 +8,7 @@ does, and every Hessian entry is ``c (g_i g_j) + s B_ij``.
 
 Used by :meth:`simulator.mechanics.equilibrium.EquilibriumSystem.evaluate` on models outside the fused
 small-model kernel, with the ``"numba"`` backend (the switch of
-:func:`simulator.mechanics.elements._springs_jit.numba_selected`); compiled on first use (about 1 s of
+:func:`simulator._jit.numba_selected`); compiled on first use (about 1 s of
 CPU once per install, then loaded from numba's cache).
 """
 
@@ -16,8 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..._jit import compile_kernel
-from ._springs_jit import numba_selected
+from ..._jit import compile_kernel, numba_selected
 
 __all__ = ["bar_kernel_jit", "use_compiled"]
 

@@ -41,7 +41,7 @@ import math
 
 import numpy as np
 
-from ... import _aot
+from ... import _jit
 from ..._jit import compile_kernel
 from . import _springs_jit
 from ._springs_jit import HELPER_OPTIONS, _cross, _dot  # noqa: F401 - compiled ones at _compile
@@ -376,7 +376,7 @@ def _spring_element(*args):                            # replaced by the compile
 
 def needs_compiling() -> bool:
     """Whether :func:`fused_kernel` has yet to compile (or load) the kernel in this process."""
-    return _compiled is None and not broken and _aot.kernel("fused") is None
+    return _compiled is None and not broken and _jit.aot_kernel("fused") is None
 
 
 def fused_kernel():
@@ -385,7 +385,7 @@ def fused_kernel():
     (:mod:`simulator._aot`, no numba imported), else numba's, compiled or loaded from its cache
     on first use."""
     global broken
-    aot = _aot.kernel("fused")                         # enabled by short CLI commands only
+    aot = _jit.aot_kernel("fused")                     # tier "aot": short CLI commands
     if aot is not None:
         return aot
     if _compiled is not None:

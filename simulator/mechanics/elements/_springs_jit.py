@@ -16,35 +16,30 @@ calls the kernel 1,200-2,500 times and one gripper evaluation 870-1,650 times, t
 that back; an optimisation does (15 coordinate-descent evaluations: 12.7 s of CPU compiled,
 compilation included, against 15.1 s on numpy).
 
-So numba is imported, and the kernel compiled, only when the kernel is first called with the
-``"numba"`` backend. The backend is fixed per process, never switched by how much has been
-computed, so that the same computation gives the same floats in every process (serial and
-process-pool sweeps are compared bit for bit): ``"numba"`` when numba is installed, unless the
-environment variable ``ETORIGAMI_JIT`` is ``0`` (``off``, ``numpy``); short commands select
-``"numpy"`` with :func:`simulator.mechanics.elements.springs.spring_kernel_backend`.
+So numba is imported, and the kernel compiled, only when the kernel is first called with
+compiled kernels selected. :mod:`simulator._jit` decides that for every kernel of the package
+(:func:`simulator._jit.numba_selected`: numba installed and ``ETORIGAMI_JIT`` not off, unless a
+block of :func:`simulator.mechanics.elements.springs.spring_kernel_backend` says otherwise),
+never by how much has been computed or by the state of numba's cache, so that the same
+computation gives the same floats in every process (serial and process-pool sweeps are
+compared bit for bit).
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
 
 import numpy as np
 
-from ..._jit import HELPER_OPTIONS, compile_kernel
+from ... import _jit
+from ..._jit import AVAILABLE, BACKENDS, HELPER_OPTIONS, compile_kernel, numba_selected
 
-__all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "spring_kernel_jit",
-           "use_compiled"]
+__all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "numba_selected",
+           "spring_kernel_jit", "use_compiled"]
 
-
-#: numba is installed (checked without importing it).
-AVAILABLE = importlib.util.find_spec("numba") is not None
-BACKENDS = ("numba", "numpy")
 #: The one specialisation compiled: x (n, 4, 3), k (n,), theta0 (n,), want_hess, energy (n,),
 #: grad (n, 12), hess (n or 0, 12, 12); all C-contiguous float64.
 _SIGNATURE = "void(f8[:, :, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], f8[:, :, ::1])"
-_OFF = ("0", "off", "no", "false", "never", "numpy")
 #: Helpers called with constant offsets get a signature: without one numba would compile a
 #: version per distinct set of literal arguments.
 _HELPER_SIGNATURES = {"_cross": "void(f8[::1], i8, i8, i8)", "_dot": "f8(f8[::1], i8, i8)"}
@@ -145,14 +140,12 @@ def _element(x, ke, theta0, want_hess, w, g, grad, h):
 
 _compiled = None
 _broken = False                    # compilation failed once: numpy from then on
-#: The backend in force: None = :func:`default_backend`, else one of BACKENDS.
-backend = None
 
 
 def default_backend() -> str:
-    """``"numba"`` if installed and not switched off by ``ETORIGAMI_JIT``, else ``"numpy"``."""
-    off = "ETORIGAMI_JIT" in os.environ and os.environ["ETORIGAMI_JIT"].strip().lower() in _OFF
-    return "numba" if AVAILABLE and not off else "numpy"
+    """``"numba"`` if installed and not switched off by ``ETORIGAMI_JIT``, else ``"numpy"``
+    (:func:`simulator._jit.default_backend`)."""
+    return _jit.default_backend()
 
 
 def jit_helpers():
@@ -180,12 +173,6 @@ def _compile():
     _compiled = compile_kernel("spring kernel", _build, "using numpy")
     _broken = _compiled is None
     return _compiled
-
-
-def numba_selected() -> bool:
-    """Whether the backend in force is "numba" (:data:`backend`, else :func:`default_backend`);
-    the switch of every compiled kernel of the package."""
-    return (backend or default_backend()) == "numba"
 
 
 def compiled_backend() -> bool:

@@ -16,6 +16,7 @@ import contextlib
 
 import numpy as np
 
+from ... import _jit as _kernels
 from ...errors import ParameterError
 from . import _springs_jit as _jit
 from ._vec import cross, dot as _dot, outer as _outer
@@ -106,7 +107,8 @@ def spring_kernel_backend(name: str):
     loaded from numba's cache in well under a second per process) unless ``ETORIGAMI_JIT=0``.
     ``"numpy"`` suits short runs (one case or one gripper evaluation), where compiling costs
     more than it saves. Both give the same values to rounding; keep one backend for runs whose
-    floats are compared bit for bit.
+    floats are compared bit for bit. A block of :func:`simulator._jit.use` with the same name
+    (the one place that chooses the kernels).
     """
     if name not in _jit.BACKENDS:
         raise ParameterError(f"spring kernel backend {name!r}; use one of "
@@ -114,11 +116,8 @@ def spring_kernel_backend(name: str):
     if name == "numba" and not _jit.AVAILABLE:
         raise ParameterError("spring kernel backend 'numba' needs numba; install it or use "
                              "'numpy'.")
-    previous, _jit.backend = _jit.backend, name
-    try:
+    with _kernels.use(name):
         yield
-    finally:
-        _jit.backend = previous
 
 
 def spring_kernel(x: np.ndarray, k: np.ndarray, theta0: np.ndarray, hessian: bool = True):
