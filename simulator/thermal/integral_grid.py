@@ -257,7 +257,9 @@ def grid_pairs(base, u, rows, cols, g, nz: int, image: bool = False, compiled=No
         kernel = _pairs_kernel()
         if kernel is not None:
             out = np.empty(len(rows))
-            kernel(base, np.ascontiguousarray(u), rows, cols, g, nz, image, out)
+            kernel(np.ascontiguousarray(base, np.int64), np.ascontiguousarray(u, float),
+                   np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64),
+                   np.ascontiguousarray(g, float), int(nz), bool(image), out)
             return out
     out = np.empty(len(rows))
     fx, fy, fz = g.shape
@@ -293,54 +295,71 @@ def _pairs_kernel():
     return _compiled_pairs or None
 
 
+#: Nodes per axis and point (``ORDER + 1``), node offsets a pair spans per axis
+#: (``2 ORDER + 1``) and the first node's offset from the floor node, for the compiled kernel.
+_K1, _WIDTH, _LO = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
+
+
+def _lagrange_into(t, out):
+    """:func:`_lagrange` at one offset ``t`` into ``out`` (ORDER + 1,) (compiled helper)."""
+    for a in range(_K1):
+        w = 1.0
+        for b in range(_K1):
+            if a != b:
+                w *= (t - (b - _LO)) / (a - b)
+        out[a] = w
+
+
+def _pairs_loop(base, u, rows, cols, g, nz, image, out):
+    """The compiled :func:`grid_pairs` (module-level with module constants, so that numba's
+    cache finds it again: as a closure it was compiled anew in every process, some 7 s of
+    CPU on the idle machine)."""
+    fx, fy, fz = g.shape
+    for p in _prange(rows.shape[0]):
+        i, j = rows[p], cols[p]
+        wa = np.empty(_K1)
+        wb = np.empty(_K1)
+        c = np.zeros((3, _WIDTH))
+        for d in range(3):
+            _lagrange_into(u[i, d], wa)
+            _lagrange_into(u[j, d], wb)
+            for a in range(_K1):
+                for b in range(_K1):
+                    if image and d == 2:
+                        c[d, a + b] += wa[a] * wb[b]
+                    else:
+                        c[d, a - b + ORDER] += wa[a] * wb[b]
+        dx = base[i, 0] - base[j, 0] - ORDER
+        dy = base[i, 1] - base[j, 1] - ORDER
+        if image:
+            dz = base[i, 2] + base[j, 2] - 2 * _LO - (nz - 1)
+        else:
+            dz = base[i, 2] - base[j, 2] - ORDER
+        iz = np.empty(_WIDTH, np.int64)
+        for e in range(_WIDTH):
+            iz[e] = (dz + e) % fz
+        acc = 0.0
+        for a in range(_WIDTH):
+            ix = (dx + a) % fx
+            for b in range(_WIDTH):
+                iy = (dy + b) % fy
+                row = 0.0
+                for e in range(_WIDTH):
+                    row += c[2, e] * g[ix, iy, iz[e]]
+                acc += c[0, a] * c[1, b] * row
+        out[p] = acc
+
+
+_prange = range                        # numba's prange once compiled (:func:`_build_pairs`)
+#: base, u, rows, cols, g, nz, image, out
+_PAIRS_SIGNATURE = "void(i8[:, ::1], f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8, b1, f8[::1])"
+
+
 def _build_pairs():
+    global _prange, _lagrange_into
     from numba import njit, prange
 
-    k1, width, lo = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
-
-    @njit(cache=True, inline="always")
-    def lagrange(t, out):
-        for a in range(k1):
-            w = 1.0
-            for b in range(k1):
-                if a != b:
-                    w *= (t - (b - lo)) / (a - b)
-            out[a] = w
-
-    @njit(parallel=True, cache=True)
-    def kernel(base, u, rows, cols, g, nz, image, out):
-        fx, fy, fz = g.shape
-        for p in prange(rows.shape[0]):
-            i, j = rows[p], cols[p]
-            wa = np.empty(k1)
-            wb = np.empty(k1)
-            c = np.zeros((3, width))
-            for d in range(3):
-                lagrange(u[i, d], wa)
-                lagrange(u[j, d], wb)
-                for a in range(k1):
-                    for b in range(k1):
-                        if image and d == 2:
-                            c[d, a + b] += wa[a] * wb[b]
-                        else:
-                            c[d, a - b + ORDER] += wa[a] * wb[b]
-            dx = base[i, 0] - base[j, 0] - ORDER
-            dy = base[i, 1] - base[j, 1] - ORDER
-            if image:
-                dz = base[i, 2] + base[j, 2] - 2 * lo - (nz - 1)
-            else:
-                dz = base[i, 2] - base[j, 2] - ORDER
-            iz = np.empty(width, np.int64)
-            for e in range(width):
-                iz[e] = (dz + e) % fz
-            acc = 0.0
-            for a in range(width):
-                ix = (dx + a) % fx
-                for b in range(width):
-                    iy = (dy + b) % fy
-                    row = 0.0
-                    for e in range(width):
-                        row += c[2, e] * g[ix, iy, iz[e]]
-                    acc += c[0, a] * c[1, b] * row
-            out[p] = acc
-    return kernel
+    _prange = prange
+    if not hasattr(_lagrange_into, "py_func"):
+        _lagrange_into = njit(cache=True, inline="always")(_lagrange_into)
+    return njit(_PAIRS_SIGNATURE, parallel=True, cache=True)(_pairs_loop)
