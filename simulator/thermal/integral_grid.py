@@ -56,6 +56,9 @@ SPLIT = 2.0
 PRECORRECT = 4.0
 #: Largest padded grid (nodes) the far field is put on; beyond it the caller takes the FMM.
 MAX_GRID = 16_000_000
+#: Nodes per axis and point (``ORDER + 1``), node offsets a pair spans per axis
+#: (``2 ORDER + 1``) and the first stencil node's offset below a point's floor node.
+_K1, _WIDTH, _LO = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
 
 
 def _frame(points, plane):
@@ -86,10 +89,10 @@ def _lagrange(u):
 
 
 def grid_size(points, sigma: float, plane=None) -> int:
-    """Nodes of the padded grid :class:`GridFarField` would use (to compare with
+    """Nodes of the padded grid :class:`GridFarField` would use, at most (to compare with
     :data:`MAX_GRID` before building it)."""
     y = np.asarray(points, float) @ _frame(points, plane).T
-    n = np.ceil(np.ptp(y, axis=0) / (SPACING * sigma)).astype(int) + ORDER + 2
+    n = np.ceil(np.ptp(y, axis=0) / (SPACING * sigma)).astype(int) + ORDER - _LO + 1
     return int(np.prod([sfft.next_fast_len(2 * k) for k in n]))
 
 
@@ -127,9 +130,15 @@ class GridFarField:
         lo = y.min(axis=0) - h * (ORDER // 2 + 1)
         t = (y - lo) / h
         base = np.floor(t).astype(np.int64)
-        self.shape = tuple(int(k) for k in base.max(axis=0) + ORDER + 1)
-        self.W = self._weights(t - base, base)
-        self._base, self._u = base, t - base
+        # the grid from the first node a point's stencil uses to the last (a shift by whole
+        # cells: the same offsets t - base; a flat sheet's grid 4 nodes thick, not 6)
+        first = base.min(axis=0) - _LO
+        base -= first
+        lo = lo + first * h
+        self.shape = tuple(int(k) for k in base.max(axis=0) + ORDER - _LO + 1)
+        u = t - (base + first)
+        self.W = self._weights(u, base)
+        self._base, self._u = base, u
         shift = None
         if plane is not None:
             zp = (np.asarray(plane[0], float) @ Q.T)[2]
@@ -198,21 +207,28 @@ class GridFarField:
         """Sparse entries of the target-source pairs closer than :data:`CUTOFF` sigma (self
         pairs left out, not image ones): ``erfc(r / sigma) / r``, plus, within
         :data:`PRECORRECT` sigma, the smooth kernel's exact value less the grid's (``g`` the
-        grid kernel, the image one with ``image``), so that these pairs are exact."""
+        grid kernel, the image one with ``image``), so that these pairs are exact. The
+        entries are symmetric (the kernel and the grid's values depend on ``c_i - c_j``, and
+        through the plane on the mirrored pair as well): without ``image`` each pair is
+        evaluated once (``i < j``) and mirrored."""
         from scipy.spatial import cKDTree
 
-        D = tree.sparse_distance_matrix(cKDTree(sources), CUTOFF * self.sigma,
-                                        output_type="coo_matrix")
-        rows, cols = D.row.astype(np.int64), D.col.astype(np.int64)
-        if not image:
-            keep = rows != cols
-            rows, cols = rows[keep], cols[keep]
+        if image:
+            D = tree.sparse_distance_matrix(cKDTree(sources), CUTOFF * self.sigma,
+                                            output_type="coo_matrix")
+            rows, cols = D.row.astype(np.int64), D.col.astype(np.int64)
+        else:
+            rows, cols = tree.query_pairs(CUTOFF * self.sigma, output_type="ndarray").T
+            rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
         r = np.linalg.norm(c[rows] - sources[cols], axis=1)     # (0 on the plane: kept)
         with np.errstate(divide="ignore", invalid="ignore"):
             v = np.where(r > 0, erfc(r / self.sigma) / np.where(r > 0, r, 1.0), 0.0)
         near = np.flatnonzero(r < PRECORRECT * self.sigma)
         v[near] += smooth_kernel(r[near], self.sigma) - grid_pairs(
             self._base, self._u, rows[near], cols[near], g, self.shape[2], image)
+        if not image:
+            rows, cols, v = np.concatenate([rows, cols]), np.concatenate([cols, rows]), \
+                np.concatenate([v, v])
         return sp.csr_matrix((v, (rows, cols)), shape=(self.n, self.n))
 
     def _convolve(self, rho, G):
@@ -293,11 +309,6 @@ def _pairs_kernel():
         _compiled_pairs = compile_kernel("grid pair kernel", _build_pairs, "using numpy") \
             or False
     return _compiled_pairs or None
-
-
-#: Nodes per axis and point (``ORDER + 1``), node offsets a pair spans per axis
-#: (``2 ORDER + 1``) and the first node's offset from the floor node, for the compiled kernel.
-_K1, _WIDTH, _LO = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
 
 
 def _lagrange_into(t, out):
