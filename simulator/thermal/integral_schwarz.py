@@ -156,7 +156,7 @@ def _zero_sum_blocks(S, groups, labels) -> sp.csr_matrix:
 
 def _batches(groups, limit: int = _BATCH):
     """The patches of one size together, at most ``limit`` at a time: ``(ids (b,), members
-    (b, k))`` (patches by recursive bisection have two or three sizes)."""
+    (b, k))`` (patches by recursive bisection have at most two sizes)."""
     sizes = np.array([len(g) for g in groups])
     for k in np.unique(sizes):
         ids = np.flatnonzero(sizes == k)
