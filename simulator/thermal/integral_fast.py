@@ -218,14 +218,15 @@ class FastSingleLayer:
         self.plane = None if plane is None else (np.asarray(plane[0], float),
                                                  np.asarray(plane[1], float))
         tree = cKDTree(c)
-        rows, cols = _pairs(tree, c, diam, NEAR_RADIUS)
-        d = np.linalg.norm(c[rows] - c[cols], axis=1)
+        rows, cols, d = _pairs(tree, c, diam, NEAR_RADIUS)     # the self pairs first
         V = pair_values(c, sub, c, area, diam, rows, cols)
+        inverse, point = np.zeros(len(d)), np.zeros(len(d))    # 0 for the self pairs
         with np.errstate(divide="ignore"):
-            point = np.where(rows == cols, 0.0, area[cols] / d)
+            inverse[n:] = 1.0 / d[n:]
+            point[n:] = area[cols[n:]] / d[n:]
         corr = (V - point) / area[cols]
         pre_rows, pre_cols = rows, cols
-        pre = np.where(rows == cols, 0.0, 1.0 / np.where(rows == cols, 1.0, d)) + corr
+        pre = inverse + corr
         keep = d < PRECONDITIONER_RADIUS * np.maximum(diam[rows], diam[cols])
         if self.plane is not None:
             cm, subm = mirror(c, self.plane), mirror(sub, self.plane)
@@ -289,21 +290,37 @@ class FastSingleLayer:
             out -= 1.0 / np.linalg.norm(c[rows][:, None] - self.images[cols][None], axis=2)
         return self.scale * out
 
+    def point_blocks(self, rows, cols=None) -> np.ndarray:
+        """:meth:`point_block` of each row of ``rows`` (b, k) with the same row of ``cols``
+        (b, l) (default ``rows``), (b, k, l) [K/W]: the blocks of many patches at once."""
+        rows = np.asarray(rows, np.int64)
+        cols = rows if cols is None else np.asarray(cols, np.int64)
+        c = self.centroids
+        d = np.linalg.norm(c[rows][:, :, None] - c[cols][:, None], axis=3)
+        with np.errstate(divide="ignore"):
+            out = np.where(rows[:, :, None] == cols[:, None], 0.0, 1.0 / d)
+        if self.plane is not None:
+            out -= 1.0 / np.linalg.norm(c[rows][:, :, None] - self.images[cols][:, None],
+                                        axis=3)
+        return self.scale * out
+
     def dense(self) -> np.ndarray:
         """``S`` as a dense array (columns by :meth:`matvec`; for checks on small sets)."""
         return np.column_stack([self.matvec(e) for e in np.eye(self.n)])
 
 
 def _pairs(tree, c, diam, radius):
-    """Index pairs (rows, cols), both orders and ``i == j``, of centroids closer than
-    ``radius`` times the larger of their diameters."""
+    """Index pairs (rows, cols), the ``n`` self pairs ``i == j`` first, then both orders, of
+    centroids closer than ``radius`` times the larger of their diameters, and their
+    distances."""
     pairs = tree.query_pairs(radius * diam.max(), output_type="ndarray")
     i, j = pairs[:, 0], pairs[:, 1]
     d = np.linalg.norm(c[i] - c[j], axis=1)
     k = d < radius * np.maximum(diam[i], diam[j])
-    i, j = i[k], j[k]
+    i, j, d = i[k], j[k], d[k]
     own = np.arange(len(c))
-    return np.concatenate([own, i, j]), np.concatenate([own, j, i])
+    return np.concatenate([own, i, j]), np.concatenate([own, j, i]), \
+        np.concatenate([np.zeros(len(c)), d, d])
 
 
 def _pairs_to(tree, images, c, diam, radius):

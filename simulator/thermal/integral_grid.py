@@ -56,6 +56,9 @@ SPLIT = 2.0
 PRECORRECT = 4.0
 #: Largest padded grid (nodes) the far field is put on; beyond it the caller takes the FMM.
 MAX_GRID = 16_000_000
+#: Nodes per axis and point (``ORDER + 1``), node offsets a pair spans per axis
+#: (``2 ORDER + 1``) and the first stencil node's offset below a point's floor node.
+_K1, _WIDTH, _LO = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
 
 
 def _frame(points, plane):
@@ -86,10 +89,10 @@ def _lagrange(u):
 
 
 def grid_size(points, sigma: float, plane=None) -> int:
-    """Nodes of the padded grid :class:`GridFarField` would use (to compare with
+    """Nodes of the padded grid :class:`GridFarField` would use, at most (to compare with
     :data:`MAX_GRID` before building it)."""
     y = np.asarray(points, float) @ _frame(points, plane).T
-    n = np.ceil(np.ptp(y, axis=0) / (SPACING * sigma)).astype(int) + ORDER + 2
+    n = np.ceil(np.ptp(y, axis=0) / (SPACING * sigma)).astype(int) + ORDER - _LO + 1
     return int(np.prod([sfft.next_fast_len(2 * k) for k in n]))
 
 
@@ -127,9 +130,15 @@ class GridFarField:
         lo = y.min(axis=0) - h * (ORDER // 2 + 1)
         t = (y - lo) / h
         base = np.floor(t).astype(np.int64)
-        self.shape = tuple(int(k) for k in base.max(axis=0) + ORDER + 1)
-        self.W = self._weights(t - base, base)
-        self._base, self._u = base, t - base
+        # the grid from the first node a point's stencil uses to the last (a shift by whole
+        # cells: the same offsets t - base; a flat sheet's grid 4 nodes thick, not 6)
+        first = base.min(axis=0) - _LO
+        base -= first
+        lo = lo + first * h
+        self.shape = tuple(int(k) for k in base.max(axis=0) + ORDER - _LO + 1)
+        u = t - (base + first)
+        self.W = self._weights(u, base)
+        self._base, self._u = base, u
         shift = None
         if plane is not None:
             zp = (np.asarray(plane[0], float) @ Q.T)[2]
@@ -198,21 +207,28 @@ class GridFarField:
         """Sparse entries of the target-source pairs closer than :data:`CUTOFF` sigma (self
         pairs left out, not image ones): ``erfc(r / sigma) / r``, plus, within
         :data:`PRECORRECT` sigma, the smooth kernel's exact value less the grid's (``g`` the
-        grid kernel, the image one with ``image``), so that these pairs are exact."""
+        grid kernel, the image one with ``image``), so that these pairs are exact. The
+        entries are symmetric (the kernel and the grid's values depend on ``c_i - c_j``, and
+        through the plane on the mirrored pair as well): without ``image`` each pair is
+        evaluated once (``i < j``) and mirrored."""
         from scipy.spatial import cKDTree
 
-        D = tree.sparse_distance_matrix(cKDTree(sources), CUTOFF * self.sigma,
-                                        output_type="coo_matrix")
-        rows, cols = D.row.astype(np.int64), D.col.astype(np.int64)
-        if not image:
-            keep = rows != cols
-            rows, cols = rows[keep], cols[keep]
+        if image:
+            D = tree.sparse_distance_matrix(cKDTree(sources), CUTOFF * self.sigma,
+                                            output_type="coo_matrix")
+            rows, cols = D.row.astype(np.int64), D.col.astype(np.int64)
+        else:
+            rows, cols = tree.query_pairs(CUTOFF * self.sigma, output_type="ndarray").T
+            rows, cols = np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64)
         r = np.linalg.norm(c[rows] - sources[cols], axis=1)     # (0 on the plane: kept)
         with np.errstate(divide="ignore", invalid="ignore"):
             v = np.where(r > 0, erfc(r / self.sigma) / np.where(r > 0, r, 1.0), 0.0)
         near = np.flatnonzero(r < PRECORRECT * self.sigma)
         v[near] += smooth_kernel(r[near], self.sigma) - grid_pairs(
             self._base, self._u, rows[near], cols[near], g, self.shape[2], image)
+        if not image:
+            rows, cols, v = np.concatenate([rows, cols]), np.concatenate([cols, rows]), \
+                np.concatenate([v, v])
         return sp.csr_matrix((v, (rows, cols)), shape=(self.n, self.n))
 
     def _convolve(self, rho, G):
@@ -257,7 +273,9 @@ def grid_pairs(base, u, rows, cols, g, nz: int, image: bool = False, compiled=No
         kernel = _pairs_kernel()
         if kernel is not None:
             out = np.empty(len(rows))
-            kernel(base, np.ascontiguousarray(u), rows, cols, g, nz, image, out)
+            kernel(np.ascontiguousarray(base, np.int64), np.ascontiguousarray(u, float),
+                   np.ascontiguousarray(rows, np.int64), np.ascontiguousarray(cols, np.int64),
+                   np.ascontiguousarray(g, float), int(nz), bool(image), out)
             return out
     out = np.empty(len(rows))
     fx, fy, fz = g.shape
@@ -293,54 +311,66 @@ def _pairs_kernel():
     return _compiled_pairs or None
 
 
+def _lagrange_into(t, out):
+    """:func:`_lagrange` at one offset ``t`` into ``out`` (ORDER + 1,) (compiled helper)."""
+    for a in range(_K1):
+        w = 1.0
+        for b in range(_K1):
+            if a != b:
+                w *= (t - (b - _LO)) / (a - b)
+        out[a] = w
+
+
+def _pairs_loop(base, u, rows, cols, g, nz, image, out):
+    """The compiled :func:`grid_pairs` (module-level with module constants, so that numba's
+    cache finds it again: as a closure it was compiled anew in every process, some 7 s of
+    CPU on the idle machine)."""
+    fx, fy, fz = g.shape
+    for p in _prange(rows.shape[0]):
+        i, j = rows[p], cols[p]
+        wa = np.empty(_K1)
+        wb = np.empty(_K1)
+        c = np.zeros((3, _WIDTH))
+        for d in range(3):
+            _lagrange_into(u[i, d], wa)
+            _lagrange_into(u[j, d], wb)
+            for a in range(_K1):
+                for b in range(_K1):
+                    if image and d == 2:
+                        c[d, a + b] += wa[a] * wb[b]
+                    else:
+                        c[d, a - b + ORDER] += wa[a] * wb[b]
+        dx = base[i, 0] - base[j, 0] - ORDER
+        dy = base[i, 1] - base[j, 1] - ORDER
+        if image:
+            dz = base[i, 2] + base[j, 2] - 2 * _LO - (nz - 1)
+        else:
+            dz = base[i, 2] - base[j, 2] - ORDER
+        iz = np.empty(_WIDTH, np.int64)
+        for e in range(_WIDTH):
+            iz[e] = (dz + e) % fz
+        acc = 0.0
+        for a in range(_WIDTH):
+            ix = (dx + a) % fx
+            for b in range(_WIDTH):
+                iy = (dy + b) % fy
+                row = 0.0
+                for e in range(_WIDTH):
+                    row += c[2, e] * g[ix, iy, iz[e]]
+                acc += c[0, a] * c[1, b] * row
+        out[p] = acc
+
+
+_prange = range                        # numba's prange once compiled (:func:`_build_pairs`)
+#: base, u, rows, cols, g, nz, image, out
+_PAIRS_SIGNATURE = "void(i8[:, ::1], f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8, b1, f8[::1])"
+
+
 def _build_pairs():
+    global _prange, _lagrange_into
     from numba import njit, prange
 
-    k1, width, lo = ORDER + 1, 2 * ORDER + 1, (ORDER - 1) // 2
-
-    @njit(cache=True, inline="always")
-    def lagrange(t, out):
-        for a in range(k1):
-            w = 1.0
-            for b in range(k1):
-                if a != b:
-                    w *= (t - (b - lo)) / (a - b)
-            out[a] = w
-
-    @njit(parallel=True, cache=True)
-    def kernel(base, u, rows, cols, g, nz, image, out):
-        fx, fy, fz = g.shape
-        for p in prange(rows.shape[0]):
-            i, j = rows[p], cols[p]
-            wa = np.empty(k1)
-            wb = np.empty(k1)
-            c = np.zeros((3, width))
-            for d in range(3):
-                lagrange(u[i, d], wa)
-                lagrange(u[j, d], wb)
-                for a in range(k1):
-                    for b in range(k1):
-                        if image and d == 2:
-                            c[d, a + b] += wa[a] * wb[b]
-                        else:
-                            c[d, a - b + ORDER] += wa[a] * wb[b]
-            dx = base[i, 0] - base[j, 0] - ORDER
-            dy = base[i, 1] - base[j, 1] - ORDER
-            if image:
-                dz = base[i, 2] + base[j, 2] - 2 * lo - (nz - 1)
-            else:
-                dz = base[i, 2] - base[j, 2] - ORDER
-            iz = np.empty(width, np.int64)
-            for e in range(width):
-                iz[e] = (dz + e) % fz
-            acc = 0.0
-            for a in range(width):
-                ix = (dx + a) % fx
-                for b in range(width):
-                    iy = (dy + b) % fy
-                    row = 0.0
-                    for e in range(width):
-                        row += c[2, e] * g[ix, iy, iz[e]]
-                    acc += c[0, a] * c[1, b] * row
-            out[p] = acc
-    return kernel
+    _prange = prange
+    if not hasattr(_lagrange_into, "py_func"):
+        _lagrange_into = njit(cache=True, inline="always")(_lagrange_into)
+    return njit(_PAIRS_SIGNATURE, parallel=True, cache=True)(_pairs_loop)

@@ -52,6 +52,9 @@ MAX_PATCHES = 1000
 COARSE_NEAR = 2.0
 #: Multiple of ``U diag(S0)^-1 U^T`` moved into the sparse part of ``P_T``.
 _SHIFT = 0.5
+#: Patches (or patch pairs) whose dense blocks are formed at once (about 50 MB at 80
+#: sub-triangles per patch).
+_BATCH = 128
 
 
 def patches(points, size: int) -> np.ndarray:
@@ -125,18 +128,40 @@ def _zero_sum_blocks(S, groups, labels) -> sp.csr_matrix:
     of zero sum."""
     near = S.near.tocoo()
     inside = labels[near.row] == labels[near.col]
-    near = sp.csr_matrix((near.data[inside], (near.row[inside], near.col[inside])),
-                         shape=near.shape)
-    rows, cols, vals = [], [], []
+    row, col, data = near.row[inside], near.col[inside], near.data[inside]
+    # each sub-triangle's place in its patch: the near entries (one per pair) added to the
+    # dense blocks, found by patch in the entries sorted by it
+    place = np.empty(S.n, np.int64)
     for g in groups:
-        block = S.point_block(g, g) + near[g][:, g].toarray()
+        place[g] = np.arange(len(g))
+    order = np.argsort(labels[row], kind="stable")
+    row, col, data = row[order], col[order], data[order]
+    start = np.searchsorted(labels[row], np.arange(len(groups) + 1))
+    rows, cols, vals = [], [], []
+    for ids, members in _batches(groups):
+        k = members.shape[1]
+        block = S.point_blocks(members)
+        at = np.concatenate([np.arange(start[i], start[i + 1]) for i in ids])
+        which = np.repeat(np.arange(len(ids)), start[ids + 1] - start[ids])
+        block[which, place[row[at]], place[col[at]]] += data[at]
         inv = np.linalg.inv(block)
-        u = inv.sum(axis=1)
-        vals.append((inv - np.outer(u, u) / u.sum()).ravel())
-        rows.append(np.repeat(g, len(g)))
-        cols.append(np.tile(g, len(g)))
+        u = inv.sum(axis=2)
+        vals.append((inv - u[:, :, None] * u[:, None, :] / u.sum(axis=1)[:, None, None])
+                    .ravel())
+        rows.append(np.repeat(members, k, axis=1).ravel())
+        cols.append(np.tile(members, (1, k)).ravel())
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                          shape=(S.n, S.n))
+
+
+def _batches(groups, limit: int = _BATCH):
+    """The patches of one size together, at most ``limit`` at a time: ``(ids (b,), members
+    (b, k))`` (patches by recursive bisection have at most two sizes)."""
+    sizes = np.array([len(g) for g in groups])
+    for k in np.unique(sizes):
+        ids = np.flatnonzero(sizes == k)
+        for part in np.array_split(ids, -(-len(ids) // limit)):
+            yield part, np.array([groups[i] for i in part], np.int64).reshape(len(part), k)
 
 
 def coarse_matrix(S, groups, labels=None) -> np.ndarray:
@@ -161,8 +186,16 @@ def coarse_matrix(S, groups, labels=None) -> np.ndarray:
         out -= S.scale * np.outer(count, count) / np.linalg.norm(
             centre[:, None] - img[None], axis=2)
     near = d < COARSE_NEAR * (radius[:, None] + radius[None])
-    for i, j in zip(*np.nonzero(np.triu(near))):
-        out[i, j] = out[j, i] = S.point_block(groups[i], groups[j]).sum()
+    I, J = np.nonzero(np.triu(near))
+    size = np.array([len(g) for g in groups])
+    for k, l in {(int(size[i]), int(size[j])) for i, j in zip(I, J)}:   # pairs by sizes
+        which = np.flatnonzero((size[I] == k) & (size[J] == l))
+        for part in np.array_split(which, -(-len(which) // _BATCH)):
+            a = np.array([groups[i] for i in I[part]], np.int64).reshape(len(part), k)
+            b = np.array([groups[j] for j in J[part]], np.int64).reshape(len(part), l)
+            total = S.point_blocks(a, b).sum(axis=(1, 2))
+            out[I[part], J[part]] = total
+            out[J[part], I[part]] = total
     R0 = sp.csr_matrix((np.ones(S.n), (labels, np.arange(S.n))), shape=(n0, S.n))
     out += (R0 @ S.near @ R0.T).toarray()
     return 0.5 * (out + out.T)

@@ -94,6 +94,9 @@ class _Triangulation:
         self.region = [int(r) for r in region]
         self.kt = [float(k) for k in kt]
         self.flips = 0
+        #: per triangle its corners' cotangents, or None until asked for (and after a flip
+        #: or split rewrote it): every edge check reads them, every round checks every edge
+        self._cots = [None] * len(self.tri)
         self.tol = WEIGHT_TOL * float(np.abs(np.asarray(kt)[:, None] * corner_cotangents(
             x[np.asarray(tri)])).max(initial=0.0)) / 2
 
@@ -101,13 +104,25 @@ class _Triangulation:
         """Edge ``(i, j)``, i < j -> [(triangle, corner opposite it), ...]."""
         out = {}
         for t, (a, b, c) in enumerate(self.tri):
-            for corner, (i, j) in enumerate(((b, c), (c, a), (a, b))):
-                out.setdefault((min(i, j), max(i, j)), []).append((t, corner))
+            for corner, key in enumerate(((b, c) if b < c else (c, b),
+                                          (c, a) if c < a else (a, c),
+                                          (a, b) if a < b else (b, a))):
+                sides = out.get(key)
+                if sides is None:
+                    out[key] = [(t, corner)]
+                else:
+                    sides.append((t, corner))
         return out
 
     def cot(self, t, corner) -> float:
-        """Cotangent of the angle of triangle ``t`` at ``corner`` (plain floats: this runs
-        for every edge check)."""
+        """Cotangent of the angle of triangle ``t`` at ``corner`` (plain floats, kept per
+        triangle until a flip or split rewrites it: this runs for every edge check)."""
+        cots = self._cots[t]
+        if cots is None:
+            cots = self._cots[t] = tuple(self._cot(t, k) for k in range(3))
+        return cots[corner]
+
+    def _cot(self, t, corner) -> float:
         tri = self.tri[t]
         a, b, c = self.X[tri[corner]], self.X[tri[(corner + 1) % 3]], self.X[tri[(corner + 2) % 3]]
         ux, uy, uz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
@@ -117,7 +132,10 @@ class _Triangulation:
 
     def weight(self, sides) -> float:
         """``sum k t cot / 2`` [W/K] of an edge's sides (its coupling is minus this)."""
-        return sum(self.kt[t] * self.cot(t, c) / 2 for t, c in sides)
+        total = 0
+        for t, c in sides:
+            total += self.kt[t] * self.cot(t, c) / 2
+        return total
 
     def constrained(self, sides) -> bool:
         """An edge of the outline or between two regions: never flipped."""
@@ -140,6 +158,7 @@ class _Triangulation:
         if not 1e-9 * length < cross < (1 - 1e-9) * length:
             return False
         self.tri[t1], self.tri[t2] = [k, a, m], [k, m, b]
+        self._cots[t1] = self._cots[t2] = None
         self.flips += 1
         return True
 
@@ -196,6 +215,8 @@ class _Triangulation:
             apex, u, v = corners[c], corners[(c + 1) % 3], corners[(c + 2) % 3]
             self.tri[t] = [apex, u, new]
             self.tri.append([apex, new, v])
+            self._cots[t] = None
+            self._cots.append(None)
             self.region.append(self.region[t])
             self.kt.append(self.kt[t])
 
@@ -231,9 +252,11 @@ class _Triangulation:
                 return False
         return True
 
-    def bad_edges(self) -> list:
-        """Edges whose coupling is positive, with their sides."""
-        return [(e, s) for e, s in self.edges().items() if self.weight(s) < -self.tol]
+    def bad_edges(self, edges=None) -> list:
+        """Edges whose coupling is positive, with their sides (of ``edges``, default
+        :meth:`edges`)."""
+        edges = self.edges() if edges is None else edges
+        return [(e, s) for e, s in edges.items() if self.weight(s) < -self.tol]
 
 
 def delaunay_flips(x, tri, region) -> np.ndarray:
@@ -252,10 +275,10 @@ def monotone_conduction(x, tri, region, kt) -> "MonotoneConduction":
     tr = _Triangulation(x, tri, region, kt)
     tr.make_delaunay()
     for _ in range(MAX_ROUNDS):
-        bad = tr.bad_edges()
+        edges = tr.edges()
+        bad = tr.bad_edges(edges)
         if not bad:
             break
-        edges = tr.edges()
         for e, _sides in bad:
             sides = edges.get(e)
             if sides is not None and not tr.still_sides(e, sides):   # a split changed them
