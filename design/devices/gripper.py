@@ -42,7 +42,7 @@ from simulator.thermal import (CONDUCTIONS, REFERENCE_BETA, TemperatureLimit, Te
                                crease_temperatures)
 from simulator._result import ResultFiles
 from simulator._validate import finite, in_range, integer, non_negative, one_of, positive
-from simulator.thermal.integral_levels import sheet_levels
+from simulator.thermal import sheet_levels
 
 from ..core._contract import check_outcome, power_if
 from .limits import SU8_LIMIT

@@ -16,6 +16,7 @@ __getattr__, __dir__ = _attach(__name__, {
     "..state": ("thermal_model", "ROOM_TEMPERATURE"),
     ".parameters": ("ThermalParameters", "REFERENCE_BETA"),
     ".loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
+    ".integral_levels": ("sheet_levels",),
     ".monotone": ("CONDUCTIONS",),
     ".layers": ("Layer", "SheetLayers"),
     ".measures": ("CREASE_MEASURES", "crease_temperatures"),
@@ -34,7 +35,7 @@ __all__ = [
     "thermal_model", "ThermalModel", "ThermalParameters", "ROOM_TEMPERATURE", "REFERENCE_BETA",
     # heat loss to the medium and the sheet's conduction
     "ChainLoss", "IntegralLoss", "Substrate", "HEAT_LOSS_MODELS", "CONDUCTIONS", "Layer",
-    "SheetLayers",
+    "SheetLayers", "sheet_levels",
     # each crease's temperature measures and the 1.2 T_g limit on them
     "crease_temperatures", "CREASE_MEASURES", "crease_limit_temperatures", "TemperatureLimit",
     "TemperatureVerdict", "TG_FACTOR", "LIMIT_MEASURES",

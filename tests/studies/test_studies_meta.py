@@ -57,10 +57,8 @@ def test_meta_records_version_commit_date_and_machine(tmp_path):
 
 
 def test_meta_commit_is_none_when_git_is_unknown(tmp_path, monkeypatch):
-    def no_git(*args, **kwargs):
-        raise FileNotFoundError("git")
-
-    monkeypatch.setattr(_result.subprocess, "run", no_git)
+    # an installed copy: no .git beside the package (the commit is read from its files)
+    monkeypatch.setattr(_result, "__file__", str(tmp_path / "site" / "simulator" / "_result.py"))
     meta = _run(tmp_path)
     assert meta["git"] is None and meta["settings"] == {"quick": False}
     assert meta["etorigami_version"] == simulator.__version__ and meta["machine"]["cpus"] >= 1
