@@ -122,7 +122,7 @@ class TimeLimitedGripperProblem(TimeLimited, GripperProblem):
 
 
 # ----------------------------------------------------------------------------- run
-def _design_um(x: dict) -> dict:
+def design_um(x: dict) -> dict:
     return {f"{k} [um]": 1e6 * v for k, v in x.items()}
 
 
@@ -131,9 +131,9 @@ def _metric(ev, key):
     return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
 
 
-def _cycles_table(result, limit: float) -> pd.DataFrame:
-    """Rows ``table = "cycles"`` from a CD result (stage powers looked up in its history);
-    ``limit``: the temperature limit [degC]."""
+def cycles_table(result, limit: float) -> pd.DataFrame:
+    """Rows ``table = "cycles"`` from a gripper CD result (stage powers looked up in its
+    history); ``limit``: the temperature limit [degC]. Also ``studies.gripper_physics``'s."""
     h = result.history
     xcols = [f"x.{v} [m]" for v in VARIABLES]
     rows = []
@@ -143,7 +143,7 @@ def _cycles_table(result, limit: float) -> pd.DataFrame:
         m = match.iloc[0] if len(match) else {}
         rows.append({"table": "cycles", "method": "cd", "cycle": int(c["cycle"]),
                      "moved": c["moved"],
-                     "complete": bool(c["complete"]), **_design_um(dict(zip(VARIABLES, x))),
+                     "complete": bool(c["complete"]), **design_um(dict(zip(VARIABLES, x))),
                      POWER: 1e3 * c["objective"],
                      ASM: m.get("m.assembly_power [mW]", math.nan),
                      GRIP: m.get("m.grip_power [mW]", math.nan),
@@ -167,7 +167,7 @@ def _comparison_row(label, result, budget, options, workers, problem, start_powe
             "options": json.dumps(options, sort_keys=True), "budget": budget,
             "success": result.success, "status": result.status, "message": result.message,
             POWER: power, ASM: _metric(best, "assembly_power [mW]"),
-            GRIP: _metric(best, "grip_power [mW]"), **_design_um(result.x),
+            GRIP: _metric(best, "grip_power [mW]"), **design_um(result.x),
             "start_power [mW]": start_power, "reduction [%]": 100 * (1 - power / start_power),
             "evaluations": result.n_evaluations,
             "failed_evaluations": int((~h["success"].astype(bool)).sum()),
@@ -233,7 +233,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     comparison["reaches_cd"] = comparison[POWER] <= comparison[POWER].iloc[0] + 1e-9
     history = [_history_rows("cd", cd)] + [_history_rows(m, r)
                                            for (m, _, _), r in zip(runs, results)]
-    df = pd.concat([_cycles_table(cd, problem.temperature_limit), comparison, *history],
+    df = pd.concat([cycles_table(cd, problem.temperature_limit), comparison, *history],
                    ignore_index=True)
     first = ["table", "method", "cycle", "evaluation"]
     return df[first + [c for c in df.columns if c not in first]]

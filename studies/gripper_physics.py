@@ -62,16 +62,15 @@ import pandas as pd
 from design import GripperProblem, make_executor, optimize
 from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
 from studies._common import progress_bar, study_main
+from studies.gripper_optimization import (ASM, GRIP, POWER, TEMP, UM, VARIABLES, cycles_table,
+                                          design_um)
 
 __all__ = ["main", "plot", "run", "SETTINGS", "PHYSICS"]
 
 logger = logging.getLogger(__name__)
 
 NAME = "gripper_physics"
-VARIABLES = ("W", "La", "L1", "L2")
-UM = [f"{v} [um]" for v in VARIABLES]
-POWER, ASM, GRIP, TEMP, FULL = ("total_power [mW]", "assembly_power [mW]", "grip_power [mW]",
-                                "temperature [degC]", "full_function_power [mW]")
+FULL = "full_function_power [mW]"
 #: The device physics at central literature values (``device_power_physics``'s "all,
 #: central" without the electrical knobs, which do not enter the heat balance).
 PHYSICS = dict(crease_conduction="layers", k_gold=150.0, temperature_dependent_air=True,
@@ -85,10 +84,6 @@ LABELS = {"paper": "paper setting (chains)", "integral": "integral loss",
 CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": True}
 CD_BUDGET_QUICK = 3
 WORKERS = 2
-
-
-def _design_um(x: dict) -> dict:
-    return {f"{k} [um]": 1e6 * v for k, v in x.items()}
 
 
 def _descent(setting: str, quick: bool, progress: bool):
@@ -109,23 +104,14 @@ def _descent(setting: str, quick: bool, progress: bool):
 
 
 def _cycles(setting: str, result) -> pd.DataFrame:
-    """Rows ``table = "cycles"`` of one descent (stage powers from its history)."""
-    h = result.history
-    xcols = [f"x.{v} [m]" for v in VARIABLES]
-    rows = []
-    for _, c in result.cycles.iterrows():
-        x = np.array([c[f"x.{v} [m]"] for v in VARIABLES])
-        match = h[np.all(np.isclose(h[xcols].to_numpy(float), x, rtol=0, atol=1e-12), axis=1)]
-        m = match.iloc[0] if len(match) else {}
-        rows.append({"table": "cycles", "setting": setting, "cycle": int(c["cycle"]),
-                     "moved": c["moved"], "complete": bool(c["complete"]),
-                     **_design_um(dict(zip(VARIABLES, x))), POWER: 1e3 * c["objective"],
-                     ASM: m.get("m.assembly_power [mW]", math.nan),
-                     GRIP: m.get("m.grip_power [mW]", math.nan),
-                     TEMP: c["current.temperature [degC]"], "feasible": bool(c["feasible"]),
-                     "evaluations": int(c["n_evaluations"]), "message": ""})
-    rows[-1]["message"] = result.message
-    return pd.DataFrame(rows)
+    """Rows ``table = "cycles"`` of one descent: ``gripper_optimization``'s cycle rows with the
+    setting in place of the method and the descent's message on its last row."""
+    rows = cycles_table(result, math.nan).drop(columns=[
+        "method", "temperature_limit [degC]", "last_candidate_temperature [degC]"])
+    rows.insert(1, "setting", setting)
+    rows["message"] = ""
+    rows.loc[rows.index[-1], "message"] = result.message
+    return rows
 
 
 def _cross(design: str, x: dict, setting: str) -> dict:
@@ -135,7 +121,7 @@ def _cross(design: str, x: dict, setting: str) -> dict:
     a, g = per(res.assembly.power_per_crease), per(res.grip.power_per_crease)
     total = a + g if res.success else math.nan
     temps = [s.temperature for s in (res.assembly, res.grip) if s.temperature is not None]
-    return {"table": "cross", "design": design, "setting": setting, **_design_um(x),
+    return {"table": "cross", "design": design, "setting": setting, **design_um(x),
             POWER: total, ASM: a, GRIP: g, FULL: 2 * total,
             TEMP: max(temps) if temps else math.nan, "success": res.success,
             "status": res.status, "message": res.message}

@@ -181,4 +181,5 @@ def test_first_evaluation_starts_no_background_compilation(monkeypatch):
     system = equilibrium_system(model)
     state = initial_state(model)
     with spring_kernel_backend("numba"):
-        system.evaluate(state.u, state.spring_rest)
+        ev = system.evaluate(state.u, state.spring_rest)
+    assert np.all(np.isfinite(ev.f_int))            # evaluated here, nothing started
