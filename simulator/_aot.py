@@ -6,7 +6,7 @@ than in its kernels. So the kernels such a run calls, the fused mechanics evalua
 (:mod:`simulator.mechanics.elements._fused_jit`), the thermal element data
 (:mod:`simulator.thermal._thermal_jit`), the sparse Cholesky of models from 64 free DOFs
 (:mod:`simulator.linalg._cholesky_jit`) and the crossing watch's fold angles
-(:mod:`simulator.mechanics._angles_jit`), are also compiled ahead of time with ``numba.pycc``
+(:mod:`simulator._angles_jit`), are also compiled ahead of time with ``numba.pycc``
 into one extension module in the user cache (:func:`aot_dir`). Loading it costs well under a
 millisecond and imports nothing from numba.
 
@@ -58,13 +58,13 @@ EXPORTS = (
     ("fused", "mechanics.elements._fused_jit", "_kernel", "SIGNATURE"),
     ("thermal", "thermal._thermal_jit", "_kernel", "_SIGNATURE"),
     ("cholesky", "linalg._cholesky_jit", "_kernel", "SIGNATURE"),
-    ("fold_angles", "mechanics._angles_jit", "_kernel", "SIGNATURE"),
-    ("quiet", "mechanics._angles_jit", "_quiet", "QUIET_SIGNATURE"),
+    ("fold_angles", "_angles_jit", "_kernel", "SIGNATURE"),
+    ("quiet", "_angles_jit", "_quiet", "QUIET_SIGNATURE"),
 )
 #: Every source the compiled code comes from (the fused kernel calls the spring element of
 #: ``_springs_jit``), and this file (how it is built).
 SOURCES = ("mechanics/elements/_fused_jit.py", "mechanics/elements/_springs_jit.py",
-           "thermal/_thermal_jit.py", "linalg/_cholesky_jit.py", "mechanics/_angles_jit.py",
+           "thermal/_thermal_jit.py", "linalg/_cholesky_jit.py", "_angles_jit.py",
            "_aot.py")
 _PREFIX = "_etorigami_kernels_"
 

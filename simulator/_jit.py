@@ -204,10 +204,10 @@ _ROOT = pathlib.Path(__file__).resolve().parent
 #: the thermal element data, the crossing watch's fold angles): source file under
 #: ``simulator/`` and the compiled functions.
 SMALL_MODEL_KERNELS = (
-    ("mechanics/elements/_springs_jit.py", ("_cross", "_dot", "_element")),
+    ("mechanics/elements/_springs_jit.py", ("cross", "dot", "element")),
     ("mechanics/elements/_fused_jit.py", ("_kernel", "_face", "_vertex_edge", "_contact_pair")),
     ("thermal/_thermal_jit.py", ("_kernel", "_point_triangle_distance")),
-    ("mechanics/_angles_jit.py", ("_kernel", "_quiet")),
+    ("_angles_jit.py", ("_kernel", "_quiet")),
 )
 
 
@@ -273,7 +273,7 @@ def compile_small_model_kernels() -> None:
     """Compile (or load) the kernels of :data:`SMALL_MODEL_KERNELS` into numba's cache, in
     this process (what :func:`warm_kernel_cache` runs in the background); removes the marker
     of a background compilation when done."""
-    from .mechanics import _angles_jit
+    from . import _angles_jit
     from .mechanics.elements import _fused_jit
     from .thermal import _thermal_jit
 

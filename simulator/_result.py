@@ -25,7 +25,7 @@ import numpy as np
 
 from ._version import __version__
 
-__all__ = ["ResultFiles", "write_meta", "provenance"]
+__all__ = ["ResultFiles", "write_meta", "provenance", "jsonable", "git_hash"]
 
 
 class ResultFiles:
@@ -80,11 +80,11 @@ def write_meta(directory, result, extra: dict | None = None) -> pathlib.Path:
     """Write ``meta.json`` for ``result`` into ``directory``: ``etorigami_version``, ``git``
     (commit hash or None), ``result`` (type name), ``success``, ``status``, ``message``, then
     ``extra``. Returns the file's path."""
-    meta = {"etorigami_version": __version__, "git": _git_hash(),
+    meta = {"etorigami_version": __version__, "git": git_hash(),
             "result": type(result).__name__, "success": bool(result.success),
             "status": result.status, "message": result.message, **(extra or {})}
     path = pathlib.Path(directory) / "meta.json"
-    path.write_text(json.dumps(meta, indent=2, default=_jsonable))
+    path.write_text(json.dumps(meta, indent=2, default=jsonable))
     return path
 
 
@@ -92,7 +92,7 @@ def _scalar(v) -> bool:
     return v is None or isinstance(v, (bool, int, float, str, np.generic))
 
 
-def _jsonable(obj):
+def jsonable(obj):
     """JSON form of what :func:`json.dumps` cannot write (arrays, numpy scalars, dataclasses)."""
     if isinstance(obj, np.ndarray):
         return obj.tolist()
@@ -111,7 +111,7 @@ def provenance() -> dict:
     import datetime                       # here: the CLI's start-up imports this module
     import platform
 
-    return {"etorigami_version": __version__, "git": _git_hash(),
+    return {"etorigami_version": __version__, "git": git_hash(),
             "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "machine": {"system": f"{platform.system()} {platform.release()}",
                         "architecture": platform.machine(), "cpu": _cpu_model(),
@@ -132,7 +132,7 @@ def _cpu_model() -> str | None:
     return platform.processor() or None
 
 
-def _git_hash() -> str | None:
+def git_hash() -> str | None:
     """The commit of the git checkout this package is imported from, read from its ``.git``
     files (``HEAD``, the branch's ref file or ``packed-refs``; a worktree's ``.git`` file
     pointing elsewhere), without running git; None for an installed copy or an unreadable

@@ -27,7 +27,7 @@ import numpy as np
 
 from ._validate import capped
 from .errors import ParameterError
-from .mechanics._angles_jit import fold_angles_kernel, quiet_kernel
+from ._angles_jit import fold_angles_kernel, quiet_kernel
 from .solvers.path_trace import CRITICAL_KINDS, CriticalPoint
 
 __all__ = ["Event", "EVENT_KINDS", "event_at", "monitored_node", "branch_event",
@@ -415,7 +415,7 @@ _FAR = np.pi - NEAR_FLAT
 def _quiet(a, b, kernel=None) -> bool:
     """Whether the fold angles ``a`` (C,) [rad] of a state are all far from flat and none
     turned by more than :data:`LARGE_TURN` from those ``b`` (C,) of the state before (C >= 1):
-    by the compiled test ``kernel`` (:func:`~simulator.mechanics._angles_jit.quiet_kernel`)
+    by the compiled test ``kernel`` (:func:`~simulator._angles_jit.quiet_kernel`)
     if given, else numpy."""
     if kernel is not None:
         return kernel(a, b, LARGE_TURN, _FAR)
@@ -446,7 +446,7 @@ class _CreaseAngles:
     the other way round; every cross product ``a x b = a' b'' - a'' b'`` (', '': the
     components cycled once, twice) from one gather of the cycled coordinates. Where numba is
     selected the same formulas run compiled, in one call
-    (:mod:`simulator.mechanics._angles_jit`, the same angles to round-off):
+    (:mod:`simulator._angles_jit`, the same angles to round-off):
     :class:`CrossingWatch` passes its kernel.
     """
 
@@ -487,14 +487,14 @@ class _CreaseAngles:
         self._start = np.cumsum(sizes) - sizes
         k1, k2 = local[:len(p1)], local[len(p1):]
         self._normals = np.stack([flat(k1, 0), flat(k1, 1), flat(k2, 0), flat(k2, 1)])
-        # the same in node numbers, for the compiled kernel (simulator.mechanics._angles_jit)
+        # the same in node numbers, for the compiled kernel (simulator._angles_jit)
         self._fan_nodes = np.ascontiguousarray(np.stack([corners, centre, nxt]), np.int64)
         self._fan_start = np.r_[self._start, n_fan].astype(np.int64)
         self._crease_rows = np.ascontiguousarray(np.stack([k1, k2, head, tail]), np.int64)
 
     def __call__(self, u, kernel=None) -> np.ndarray:
         """The angles at ``u``: by the compiled ``kernel``
-        (:func:`~simulator.mechanics._angles_jit.fold_angles_kernel`) if given, else numpy
+        (:func:`~simulator._angles_jit.fold_angles_kernel`) if given, else numpy
         (:meth:`reference`)."""
         x = self.nodes + u
         if self.plain:

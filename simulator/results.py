@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._result import ResultFiles, _git_hash, _jsonable
+from ._result import ResultFiles, git_hash, jsonable
 from ._table import step_array, write_csv
 from ._version import __version__
 from .mechanics.kinematics import crease_rotations, fold_angles
@@ -384,7 +384,7 @@ class SimulationResult:
                             temperature=h["temperature"], power=h["power"],
                             crease_ids=mesh.crease_ids, triangles=mesh.triangles,
                             triangle_kind=triangle_kinds(self.model))
-        meta = {"etorigami_version": __version__, "git": _git_hash(),
+        meta = {"etorigami_version": __version__, "git": git_hash(),
                 "status": self.status, "message": self.message, "stable": self.stable,
                 "wall_time [s]": self.wall_time, "model": self.model.to_dict(),
                 "options": self.options,
@@ -394,7 +394,7 @@ class SimulationResult:
                           for s in self.steps],
                 "events": [e.to_dict(mesh.crease_ids) for e in self.events],
                 **(metadata or {})}
-        (out / "meta.json").write_text(json.dumps(meta, indent=2, default=_jsonable))
+        (out / "meta.json").write_text(json.dumps(meta, indent=2, default=jsonable))
         return out
 
 

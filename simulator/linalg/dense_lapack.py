@@ -2,7 +2,7 @@
 
 ``S = C C^T`` (``dpotrf``), ``W = C^-1 M`` (``dtrtrs``) and ``L = W^T W`` (BLAS) for a symmetric
 positive definite ``S``: blocked BLAS-3 code, 3-4 times the speed of the compiled row-oriented
-kernel of :mod:`._dense_jit` from a few hundred rows on (measured: n = 584, 2.9 ms against
+kernel of :mod:`.dense_jit` from a few hundred rows on (measured: n = 584, 2.9 ms against
 9.6 ms). BLAS's threads are limited to one for the call (``threadpoolctl``): at these sizes two
 threads are slower than one (n = 396: 2.4 ms against 1.1 ms) and would compete with a
 process pool's workers. The limit is scoped: each call enters ``threadpoolctl``'s limit and

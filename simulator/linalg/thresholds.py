@@ -47,8 +47,8 @@ EIGEN_DENSE_LIMIT = 600
 #: The integral heat-loss operator (dense, theory 4.7) is factorised by single-threaded blocked
 #: LAPACK (:mod:`~simulator.linalg.dense_lapack`: Cholesky, LU where not positive definite) from
 #: this many sub-triangles on, below by the compiled row-oriented kernels of
-#: :mod:`~simulator.linalg._dense_jit` (faster there: no call overhead). Measured 7 Dec 2026
-#: (``cholesky_loss`` against ``_dense_jit.loss_factor``, the gripper's operator with its 37
+#: :mod:`~simulator.linalg.dense_jit` (faster there: no call overhead). Measured 7 Dec 2026
+#: (``cholesky_loss`` against ``dense_jit.loss_factor``, the gripper's operator with its 37
 #: sheet nodes, best of 400): n = 44 0.036 against 0.029 ms, n = 64 0.047 against 0.053 ms,
 #: n = 128 0.13 against 0.19 ms, n = 176 (the gripper's m = 2) 0.20 against 0.34 ms, n = 396
 #: 1.1 against 3.1 ms (earlier, 256 here: n = 176 0.35 against 0.29 ms, the call overhead of

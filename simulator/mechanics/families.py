@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..model.mesh import BarType, SpringKind
-from ..model.model import _AXES
+from ..model.model import AXES
 from .assembly import element_dofs
 from .elements import _bars_jit
 from .elements.bars import bar_kernel
@@ -260,7 +260,7 @@ def _contact(model, system) -> ContactFamily | None:
 
 def _supports(model, system) -> SupportFamily:
     el = model.supports.elastic
-    dofs = np.array([3 * n + _AXES[d] for n, d, _ in el], dtype=int)
+    dofs = np.array([3 * n + AXES[d] for n, d, _ in el], dtype=int)
     return SupportFamily(dofs[:, None], np.array([k for _, _, k in el], dtype=float))
 
 

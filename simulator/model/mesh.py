@@ -31,7 +31,8 @@ from ..geometry.pattern import Pattern
 from ..geometry.pattern_checks import OPEN_START
 from ..geometry.polygons import area_vectors, centroids, fan_normals, on_segment, rings
 
-__all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind"]
+__all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind", "crease_up",
+           "polarity_fix"]
 
 logger = logging.getLogger(__name__)
 
@@ -229,7 +230,7 @@ def build_mesh(pattern: Pattern) -> BarHingeMesh:
     crease_bars = S + 10 * np.arange(C)[:, None] + np.arange(10)
 
     springs, spring_bar, spring_kind, crease_springs = _springs(
-        nodes, cn, pair, centre[corner_panel], prev, nxt, crease_bars, _crease_up(pattern))
+        nodes, cn, pair, centre[corner_panel], prev, nxt, crease_bars, crease_up(pattern))
 
     triangles = np.vstack([cn[:, _CREASE_TRIANGLES].reshape(-1, 3), fans])
     node_kind = np.r_[np.full(S, NodeKind.CORNER), np.full(3 * C, NodeKind.CREASE),
@@ -282,7 +283,7 @@ def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars, up):
     """Pass D: every spring (i, j, k, l), its bar and kind, sorted by bar; crease maps.
 
     ``corner_centre`` (S,) is the centre node of each corner's panel, ``up`` (C, 3) the top
-    side of every crease (:func:`_crease_up`).
+    side of every crease (:func:`crease_up`).
     """
     S, C = len(prev), len(cn)
     edge_spr = np.vstack([
@@ -297,7 +298,7 @@ def _springs(nodes, cn, pair, corner_centre, prev, nxt, crease_bars, up):
     # The polarity fix applies to crease springs only: the reference keeps panel springs as
     # (p_{j+1}, p_j, centre, p_{j-1}); their rest angle is the initial angle, so it is immaterial.
     is_crease_spr = spr_kind != SpringKind.PANEL
-    spr_nodes[is_crease_spr] = _polarity_fix(nodes, spr_nodes[is_crease_spr],
+    spr_nodes[is_crease_spr] = polarity_fix(nodes, spr_nodes[is_crease_spr],
                                              np.vstack([up, up, np.repeat(up, 6, axis=0)]))
     o = np.argsort(spr_bar, kind="stable")
     slot = np.empty(len(o), int)
@@ -346,7 +347,7 @@ def _shrink_corners(pattern: Pattern, prev: np.ndarray, nxt: np.ndarray) -> np.n
     return out
 
 
-def _crease_up(pattern: Pattern) -> np.ndarray:
+def crease_up(pattern: Pattern) -> np.ndarray:
     """Top side (C, 3) of every crease: the sum of its two panels' top-side unit normals.
 
     For a flat pattern in the x-y plane this is exactly (0, 0, 2), and the polarity fix is the
@@ -366,7 +367,7 @@ def _crease_up(pattern: Pattern) -> np.ndarray:
     return up
 
 
-def _polarity_fix(nodes: np.ndarray, springs: np.ndarray, up: np.ndarray) -> np.ndarray:
+def polarity_fix(nodes: np.ndarray, springs: np.ndarray, up: np.ndarray) -> np.ndarray:
     """Swap i and l where (X_j - X_i) x (X_k - X_j) points to the top side ``up`` (n, 3)."""
     xi, xj, xk = nodes[springs[:, 0]], nodes[springs[:, 1]], nodes[springs[:, 2]]
     z = np.einsum("ij,ij->i", np.cross(xj - xi, xk - xj), up)

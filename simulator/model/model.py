@@ -23,14 +23,15 @@ from .properties import BarHingeParameters, MechanicalProperties, mechanical_pro
 from ..thermal.steady import ThermalParameters
 
 __all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads", "CREASE_MODELS",
-           "STANDARD_GRAVITY", "REFERENCE_GRAVITY"]
+           "STANDARD_GRAVITY", "REFERENCE_GRAVITY", "AXES"]
 
 #: Standard gravity [m/s^2] (the default of :func:`gravity_loads` and the ``Gravity`` step).
 STANDARD_GRAVITY = 9.80665
 #: Gravity of the reference scripts (Zhu & Filipov 2021: Example01, Example02 and the gripper)
 #: [m/s^2]. Kept at 9.8 wherever results are compared with the reference's numbers.
 REFERENCE_GRAVITY = 9.8
-_AXES = {"x": 0, "y": 1, "z": 2}
+#: Index of each axis name in a node's (x, y, z) components (supports, drives).
+AXES = {"x": 0, "y": 1, "z": 2}
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,7 +67,7 @@ class Supports:
                                      "direction, stiffness).") from None
             where = f"Supports: elastic support {item!r}"
             integer(f"{where}: node", node, 0)
-            one_of(f"{where}: direction", direction, tuple(_AXES))
+            one_of(f"{where}: direction", direction, tuple(AXES))
             elastic.append((int(node), direction, positive(f"{where}: stiffness", k, "N/m")))
         object.__setattr__(self, "elastic", tuple(elastic))
 
@@ -86,7 +87,7 @@ class Supports:
         mask = np.zeros((n_nodes, 3), bool)
         for node, dirs in self.fixed.items():
             _check_node(node, n_nodes)
-            mask[node, [_AXES[a] for a in dirs]] = True
+            mask[node, [AXES[a] for a in dirs]] = True
         for node, _, _ in self.elastic:
             _check_node(node, n_nodes)
         return mask

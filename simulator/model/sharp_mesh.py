@@ -38,7 +38,7 @@ from .._validate import one_of
 from ..errors import PatternError
 from ..geometry.pattern import Pattern
 from ..geometry.polygons import centroids
-from .mesh import BarHingeMesh, BarType, NodeKind, SpringKind, _crease_up, _polarity_fix
+from .mesh import BarHingeMesh, BarType, NodeKind, SpringKind, crease_up, polarity_fix
 
 __all__ = ["SharpHingeMesh", "build_sharp_mesh", "PANEL_MESHES"]
 
@@ -158,7 +158,7 @@ def _assemble(pattern, nodes, centre, start, inner, tris, shares, tri_panel, psp
     pair = order[on_crease].reshape(C, 2)
     ab = pattern.edges[crease_ids]
     fold = np.column_stack([wing[pair[:, 0]], ab[:, 0], ab[:, 1], wing[pair[:, 1]]])
-    fold = _polarity_fix(nodes, fold, _crease_up(pattern))
+    fold = polarity_fix(nodes, fold, crease_up(pattern))
     springs = np.vstack([fold, psprings])
     bars = np.sort(np.vstack([pattern.edges, inner]), axis=1)
     nb_inner = len(inner)

@@ -25,7 +25,7 @@ from .._validate import finite, positive
 from ..errors import ParameterError
 from ..events import crossing_stop
 from ..solvers.load_path import LoadPath
-from ..model.model import _AXES
+from ..model.model import AXES
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..state import at_rest
 from .limit import record_continuation
@@ -39,11 +39,11 @@ def _direction(value, owner: str) -> np.ndarray:
     if isinstance(value, str):
         sign = -1.0 if value.startswith("-") else 1.0
         axis = value.lstrip("+-")
-        if axis not in _AXES:
+        if axis not in AXES:
             raise ParameterError(f"{owner}: direction {value!r}; use 'x', 'y', 'z' (or '-z') or "
                                  "a 3-vector.")
         d = np.zeros(3)
-        d[_AXES[axis]] = sign
+        d[AXES[axis]] = sign
         return d
     d = np.asarray(value, float)
     if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
@@ -58,7 +58,7 @@ def _dof_weights(model, node: int, d: np.ndarray, owner: str) -> np.ndarray:
     if isinstance(node, bool) or not (isinstance(node, (int, np.integer)) and 0 <= node < n):
         raise ParameterError(f"{owner}: node {node!r} does not exist (0..{n - 1}).")
     fixed = model.fixed_mask[node]
-    bad = [a for a, k in _AXES.items() if d[k] != 0 and fixed[k]]
+    bad = [a for a, k in AXES.items() if d[k] != 0 and fixed[k]]
     if bad:
         raise ParameterError(f"{owner}: node {node} is supported in {''.join(bad)}, so its "
                              "displacement along that direction cannot be controlled; choose a "

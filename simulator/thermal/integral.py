@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..linalg import _dense_jit, dense_lapack, thresholds
+from ..linalg import dense_jit as _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
 from . import _single_layer_jit
 from ._single_layer import (single_layer_operator, sub_triangle_corners, subdivision,

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _jit
 from ..linalg.small_solve import schur_complements
 
 __all__ = ["CONDUCTIONS", "MonotoneConduction", "corner_cotangents", "delaunay_flips",
@@ -362,7 +363,7 @@ class MonotoneConduction:
         numba backend is selected), else by numpy (:func:`t3_matrices` of :meth:`positions`,
         the checked twin: the same formulas, its sums in another order)."""
         if compiled is None:
-            compiled = _compiled_backend()
+            compiled = _jit.numba_selected()
         kernel = _t3_kernel_compiled() if compiled else None
         if kernel is None:
             return t3_matrices(self.positions(x)[self.corners], self.kt)
@@ -419,24 +420,16 @@ def _t3_kernel(x, ends_a, ends_b, fraction, corners, kt, points, out):
 _t3_compiled = None
 
 
-def _compiled_backend() -> bool:
-    from ..mechanics.elements import _springs_jit
-
-    return _springs_jit.compiled_backend()
-
-
 def _t3_kernel_compiled():
     """The compiled :func:`_t3_kernel` (compiled or loaded on the first call), None if numba
     cannot compile it (numpy's path then)."""
     global _t3_compiled
     if _t3_compiled is None:
-        from .._jit import compile_kernel
-
         def build():
             from numba import njit
             return njit("void(f8[:, ::1], i8[::1], i8[::1], f8[::1], i8[:, ::1], f8[::1], "
                         "f8[:, ::1], f8[:, :, ::1])", cache=True, fastmath=False)(_t3_kernel)
-        _t3_compiled = compile_kernel("monotone conduction kernel", build, "using numpy") \
+        _t3_compiled = _jit.compile_kernel("monotone conduction kernel", build, "using numpy") \
             or False
     return _t3_compiled or None
 

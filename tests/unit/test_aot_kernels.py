@@ -84,7 +84,7 @@ def test_aot_kernels_give_the_jit_floats(aot_env, monkeypatch):
     elastic supports."""
     from simulator.cases import get_case
     from simulator.linalg import _cholesky_jit
-    from simulator.mechanics import _angles_jit
+    from simulator import _angles_jit
     from tests.unit.test_fused_kernel import _gripper_with_contacts, _miura
 
     module = _aot._load()
@@ -126,7 +126,7 @@ def test_enabled_kernels_are_the_aot_ones(aot_env, monkeypatch):
         assert _thermal_jit.use_compiled() and _thermal_jit._compiled is None
         from simulator.linalg import _cholesky_jit
         assert _cholesky_jit.cholesky_solve() is _aot.kernel("cholesky")
-        from simulator.mechanics import _angles_jit
+        from simulator import _angles_jit
         assert _angles_jit.fold_angles_kernel() is _aot.kernel("fold_angles") is not None
         assert _angles_jit.quiet_kernel() is _aot.kernel("quiet") is not None
     assert hasattr(_fused_jit.fused_kernel(), "py_func")  # numba's again

@@ -81,14 +81,14 @@ def test_coarse_mesh_for_the_stated_accuracy_warns(caplog):
 def test_a_box_too_small_for_the_stated_accuracy_warns(caplog):
     """A fine mesh does not make up for a small box: level 2 (0.3 %) in a Dirichlet box of
     factor 3 (its monopole error 27 %), or a Robin box of 1.6 (3 %), warns before meshing."""
-    from simulator.thermal.fe.solve3d import _accuracy_warnings, estimated_error
+    from simulator.thermal.fe.accuracy import accuracy_warnings, estimated_error
 
     assert estimated_error(2, 8.0, "robin") < 0.005 < estimated_error(2, 1.6, "robin")
     with caplog.at_level(logging.WARNING, logger="simulator.thermal.fe"):
         for box, far in ((3.0, "dirichlet"), (1.6, "robin")):
-            err, warns = _accuracy_warnings(2, box, far, 0.02, "fe_disk")
+            err, warns = accuracy_warnings(2, box, far, 0.02, "fe_disk")
             assert err > 0.02 and len(warns) == 1 and "enlarge the box" in warns[0]
-        assert _accuracy_warnings(2, 8.0, "robin", 0.02, "fe_disk")[1] == ()
+        assert accuracy_warnings(2, 8.0, "robin", 0.02, "fe_disk")[1] == ()
     assert sum("box_factor" in m for m in caplog.messages) == 2
 
 

@@ -1,5 +1,5 @@
 """The crossing watch's compiled fold angles and per-increment test
-(simulator.mechanics._angles_jit) against their numpy reference (simulator.events): the same
+(simulator._angles_jit) against their numpy reference (simulator.events): the same
 angles to 1e-14 rad on meshes of either panel orientation, of three to many corners per panel,
 folded near +-180 deg; sharp and creaseless meshes keep fold_angles; the compiled test decides
 as the numpy one, NaN included."""
@@ -13,7 +13,7 @@ from simulator.model import build_sharp_mesh
 from simulator.cases import get_case
 from simulator.events import LARGE_TURN, NEAR_FLAT, CrossingWatch, _crease_angles, _quiet
 from simulator import _jit
-from simulator.mechanics import _angles_jit
+from simulator import _angles_jit
 from simulator.mechanics.elements import _springs_jit
 
 pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")

@@ -9,7 +9,7 @@ import pytest
 
 from simulator import IntegralLoss, ParameterError, Substrate, ThermalParameters, simulate
 from simulator.cases import get_case, verification_strip
-from simulator.linalg import _dense_jit, dense_lapack, thresholds
+from simulator.linalg import dense_jit, dense_lapack, thresholds
 from simulator.thermal import _single_layer_jit
 from simulator.thermal._single_layer import collocation_matrix
 from simulator.thermal.integral import IntegralOperator
@@ -215,8 +215,8 @@ def test_lapack_factorisation_matches_the_compiled_one():
     assert len(S) >= thresholds.LOSS_DENSE_LAPACK_MIN and dense_lapack.available()
     C, W, L = dense_lapack.cholesky_loss(S, loss.M)
     assert np.array_equal(L, L.T)
-    if _single_layer_jit.use_compiled() and _dense_jit.available():
-        reference = _dense_jit.loss_factor(S, loss.M)[3]
+    if _single_layer_jit.use_compiled() and dense_jit.available():
+        reference = dense_jit.loss_factor(S, loss.M)[3]
     else:
         reference = loss.M.T @ np.linalg.solve(S, loss.M)
     np.testing.assert_allclose(L, reference, rtol=1e-10, atol=1e-12 * np.abs(L).max())

@@ -10,7 +10,7 @@ import scipy.linalg
 
 from simulator import IntegralLoss, simulate
 from simulator.cases import get_case, verification_strip
-from simulator.linalg import _dense_jit
+from simulator.linalg import dense_jit
 from simulator.state import thermal_model
 from simulator.thermal import _single_layer_jit
 from simulator.thermal.integral import IntegralOperator
@@ -104,15 +104,15 @@ def test_compiled_loss_factor_matches_lapack():
     rng = np.random.default_rng(5)
     A = rng.random((40, 40))
     S, M = A @ A.T + 40 * np.eye(40), rng.random((40, 7))
-    C, sign, W, G = _dense_jit.loss_factor(S, M)
+    C, sign, W, G = dense_jit.loss_factor(S, M)
     assert np.all(sign == 1) and np.allclose(np.tril(C) @ np.tril(C).T, S)
     assert np.allclose(W, scipy.linalg.solve_triangular(np.linalg.cholesky(S), M, lower=True))
     assert np.allclose(G, M.T @ np.linalg.solve(S, M)) and np.array_equal(G, G.T)
     b = rng.random(7)
-    assert np.allclose(_dense_jit.back_substitute(C, W @ b), np.linalg.solve(S, M @ b))
-    C, sign, W, G = _dense_jit.loss_factor(-S, M)       # negative definite
+    assert np.allclose(dense_jit.back_substitute(C, W @ b), np.linalg.solve(S, M @ b))
+    C, sign, W, G = dense_jit.loss_factor(-S, M)       # negative definite
     assert np.all(sign == -1) and np.allclose(G, -M.T @ np.linalg.solve(S, M))
-    assert _dense_jit.cholesky_solve(-S, M) is None
+    assert dense_jit.cholesky_solve(-S, M) is None
 
 
 def test_compiled_signed_factor_solves_a_symmetric_indefinite_matrix():
@@ -122,13 +122,13 @@ def test_compiled_signed_factor_solves_a_symmetric_indefinite_matrix():
     Q = np.linalg.qr(rng.random((30, 30)))[0]
     S = Q @ np.diag(np.linspace(-2.0, 3.0, 30) + 0.05) @ Q.T          # symmetric, indefinite
     M = rng.random((30, 5))
-    C, sign, W, G = _dense_jit.loss_factor(S, M)
+    C, sign, W, G = dense_jit.loss_factor(S, M)
     assert (sign < 0).any() and (sign > 0).any()
     C = np.tril(C)
     assert np.allclose(C @ np.diag(sign) @ C.T, S)
     assert np.allclose(G, M.T @ np.linalg.solve(S, M))
     b = rng.random(5)
-    assert np.allclose(_dense_jit.back_substitute(C, W @ b, sign),
+    assert np.allclose(dense_jit.back_substitute(C, W @ b, sign),
                        np.linalg.solve(S, M @ b))
 
 
@@ -157,10 +157,10 @@ def test_compiled_lu_response_matches_numpy_for_an_indefinite_matrix():
     rng = np.random.default_rng(6)
     A = rng.random((30, 30))
     S, M = A + A.T - 15 * np.eye(30), rng.random((30, 5))       # symmetric, indefinite
-    P, G = _dense_jit.lu_response(S, M)
+    P, G = dense_jit.lu_response(S, M)
     assert np.allclose(P, np.linalg.solve(S, M))
     assert np.allclose(G, M.T @ np.linalg.solve(S, M)) and np.array_equal(G, G.T)
-    assert _dense_jit.lu_response(np.zeros((3, 3)), np.ones((3, 1))) is None
+    assert dense_jit.lu_response(np.zeros((3, 3)), np.ones((3, 1))) is None
 
 
 def test_a_vanishing_pivot_goes_to_lu_and_an_indefinite_operator_is_warned_once(monkeypatch,
@@ -170,7 +170,7 @@ def test_a_vanishing_pivot_goes_to_lu_and_an_indefinite_operator_is_warned_once(
     loss, x = _sheet(shape_tol=0.0)
     rise = np.linspace(1.0, 3.0, len(x))
     L0, p0 = loss.loss_matrix(x).copy(), loss.sub_triangle_heat(x, rise)
-    monkeypatch.setattr(_dense_jit, "loss_factor", lambda S, M: None)
+    monkeypatch.setattr(dense_jit, "loss_factor", lambda S, M: None)
     with caplog.at_level("WARNING", logger="simulator.thermal.integral"):
         for shift in (1e-9, 2e-9):
             moved = x + [shift, 0, 0]

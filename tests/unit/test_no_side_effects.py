@@ -62,7 +62,7 @@ def test_the_git_commit_is_read_without_git(monkeypatch):
     from simulator import _result
 
     monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: pytest.fail("git started"))
-    commit = _result._git_hash()
+    commit = _result.git_hash()
     if (ROOT / ".git").exists():
         assert commit is not None and len(commit) == 40 and int(commit, 16) >= 0
     else:

@@ -44,7 +44,7 @@ import numpy as np
 from ... import _jit
 from ..._jit import compile_kernel
 from . import _springs_jit
-from ._springs_jit import HELPER_OPTIONS, _cross, _dot  # noqa: F401 - compiled ones at _compile
+from ._springs_jit import HELPER_OPTIONS, cross, dot  # noqa: F401 - compiled ones at _compile
 
 __all__ = ["fused_kernel", "SIGNATURE", "broken"]
 
@@ -72,11 +72,11 @@ SIGNATURE = ("i8(f8[:, ::1], f8[:, ::1], i8[:, ::1], f8[:, ::1], f8[::1], f8[::1
 def _face(w, V, inv, Hs):
     """Slot gradient w[GS:GS+9] and Hessian Hs[:9, :9] of d = |V| / |N| on the slots
     y = (a, b, c) = w[R:R+9] (see .contact._face)."""
-    _cross(w, E, C, GV)            # dV/dy = (b x c, c x a, a x b)
-    _cross(w, C, R, GV + 3)
-    _cross(w, R, E, GV + 6)
-    _cross(w, C, GV, GA + 3)       # dA2/dy = (0, 2 c x N, 2 N x b), N = b x c
-    _cross(w, GV, E, GA + 6)
+    cross(w, E, C, GV)            # dV/dy = (b x c, c x a, a x b)
+    cross(w, C, R, GV + 3)
+    cross(w, R, E, GV + 6)
+    cross(w, C, GV, GA + 3)       # dA2/dy = (0, 2 c x N, 2 N x b), N = b x c
+    cross(w, GV, E, GA + 6)
     for p in range(9):
         w[GA + p] = 0.0 if p < 3 else 2 * w[GA + p]
     iv2 = inv * inv
@@ -87,7 +87,7 @@ def _face(w, V, inv, Hs):
     for p in range(9):
         w[GS + p] = cV * w[GV + p] + cA * w[GA + p]
         w[FU + p] = cVA * w[GV + p] + hAA * w[GA + p]
-    bb, cc, bc = _dot(w, E, E), _dot(w, C, C), _dot(w, E, C)
+    bb, cc, bc = dot(w, E, E), dot(w, C, C), dot(w, E, C)
     for p in range(9):
         for q in range(9):     # f_VA (gV gA + gA gV) + f_AA gA gA, then f_A d2A2/dy2
             hpq = w[FU + p] * w[GA + q] + w[GA + p] * w[FU + q]
@@ -138,9 +138,9 @@ def _contact_pair(xc, d0, ke, want_K, w, Hs, G, H):
         w[AP + a] = xc[0, a] - xc[1, a]
         w[AB + a] = xc[2, a] - xc[1, a]
         w[AC + a] = xc[3, a] - xc[1, a]
-    _cross(w, AB, AC, NRM)
-    q0, q1, q2, q3 = _dot(w, AP, NRM), _dot(w, NRM, NRM), _dot(w, AB, AB), _dot(w, AC, AC)
-    q4, q5, q6 = _dot(w, AB, AP), _dot(w, AC, AP), _dot(w, AB, AC)
+    cross(w, AB, AC, NRM)
+    q0, q1, q2, q3 = dot(w, AP, NRM), dot(w, NRM, NRM), dot(w, AB, AB), dot(w, AC, AC)
+    q4, q5, q6 = dot(w, AB, AP), dot(w, AC, AP), dot(w, AB, AC)
     fl = _EPS * (q2 + q3)
     inv = max(q1, fl * fl + _TINY) ** -0.5
     hgt = abs(q0) * inv
@@ -168,14 +168,14 @@ def _contact_pair(xc, d0, ke, want_K, w, Hs, G, H):
         w[R + a] = xc[0, a] - xc[ta, a]
         w[E + a] = xc[tn, a] - xc[ta, a]
         w[C + a] = xc[tn2, a] - xc[ta, a]
-    ee = _dot(w, E, E)
+    ee = dot(w, E, E)
     if zone == 2 and ee <= _EPS**2 * (q2 + q3):          # zero-length edge: a vertex
         zone = 1
     kinv = 1.0 / ee if zone == 2 else 0.0
-    t = _dot(w, R, E) * kinv
+    t = dot(w, R, E) * kinv
     for a in range(3):
         w[RHO + a] = w[R + a] - t * w[E + a]
-    d = hgt if zone == 0 else math.sqrt(_dot(w, RHO, RHO))
+    d = hgt if zone == 0 else math.sqrt(dot(w, RHO, RHO))
     if not d <= d0:
         return 0.0
     # penalty U(d) = ke [ln sec(phi) - phi^2 / 2], phi = pi/2 (1 - d/d0), and U', U''
@@ -361,8 +361,8 @@ def _compile():
 
     _springs_jit.jit_helpers()
     g = globals()
-    for name in ("_element", "_cross", "_dot"):       # the spring kernel's (compiled) helpers
-        g[name if name != "_element" else "_spring_element"] = getattr(_springs_jit, name)
+    for name in ("element", "cross", "dot"):        # the spring kernel's (compiled) helpers
+        g[name if name != "element" else "_spring_element"] = getattr(_springs_jit, name)
     for name in _HELPERS:
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, **HELPER_OPTIONS)(g[name])
@@ -371,7 +371,7 @@ def _compile():
 
 
 def _spring_element(*args):                            # replaced by the compiled one
-    return _springs_jit._element(*args)
+    return _springs_jit.element(*args)
 
 
 def needs_compiling() -> bool:

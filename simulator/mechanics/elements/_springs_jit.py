@@ -11,7 +11,7 @@ Compiling costs about 2 s of CPU once per install (0.5 s importing numba, 0.4 s 
 start-up, 1.2 s compiling; 1.6 s with the 2-D work array and nine Hessian blocks written out,
 5.4-6.7 s for the earlier array-style kernel); loading it from numba's cache (next to this file
 or in ``NUMBA_CACHE_DIR``) costs 0.7 s per process. On small models the fused kernel of
-:mod:`._fused_jit` calls the per-spring function :func:`_element` instead of this kernel. A run of one of the paper's cases
+:mod:`._fused_jit` calls the per-spring function :func:`element` instead of this kernel. A run of one of the paper's cases
 calls the kernel 1,200-2,500 times and one gripper evaluation 870-1,650 times, too few to win
 that back; an optimisation does (15 coordinate-descent evaluations: 12.7 s of CPU compiled,
 compilation included, against 15.1 s on numpy).
@@ -35,30 +35,30 @@ from ... import _jit
 from ..._jit import AVAILABLE, BACKENDS, HELPER_OPTIONS, compile_kernel, numba_selected
 
 __all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "numba_selected",
-           "spring_kernel_jit", "use_compiled"]
+           "spring_kernel_jit", "use_compiled", "element", "cross", "dot", "jit_helpers"]
 
 #: The one specialisation compiled: x (n, 4, 3), k (n,), theta0 (n,), want_hess, energy (n,),
 #: grad (n, 12), hess (n or 0, 12, 12); all C-contiguous float64.
 _SIGNATURE = "void(f8[:, :, ::1], f8[::1], f8[::1], b1, f8[::1], f8[:, ::1], f8[:, :, ::1])"
 #: Helpers called with constant offsets get a signature: without one numba would compile a
 #: version per distinct set of literal arguments.
-_HELPER_SIGNATURES = {"_cross": "void(f8[::1], i8, i8, i8)", "_dot": "f8(f8[::1], i8, i8)"}
+_HELPER_SIGNATURES = {"cross": "void(f8[::1], i8, i8, i8)", "dot": "f8(f8[::1], i8, i8)"}
 
 # offsets in the 1-D work array: 3-vectors, then 12-vectors (node blocks i, j, k, l)
 RIJ, RKJ, RKL, M, N, C0, C1, C3, C4 = range(0, 27, 3)
 U, S, U2, S2, DA, DB = range(27, 99, 12)
-#: Size of the work array of :func:`_element`.
+#: Size of the work array of :func:`element`.
 WORK = 99
 
 
-def _cross(w, i, j, k):
+def cross(w, i, j, k):
     """w[k:k+3] = w[i:i+3] x w[j:j+3]."""
     w[k] = w[i + 1] * w[j + 2] - w[i + 2] * w[j + 1]
     w[k + 1] = w[i + 2] * w[j] - w[i] * w[j + 2]
     w[k + 2] = w[i] * w[j + 1] - w[i + 1] * w[j]
 
 
-def _dot(w, i, j):
+def dot(w, i, j):
     return w[i] * w[j] + w[i + 1] * w[j + 1] + w[i + 2] * w[j + 2]
 
 
@@ -67,11 +67,11 @@ def _kernel(x, k, theta0, want_hess, energy, grad, hess):
     g = np.empty(12)
     h = np.empty((12, 12))
     for e in range(x.shape[0]):
-        energy[e] = _element(x[e], k[e], theta0[e], want_hess, w, g, grad[e],
+        energy[e] = element(x[e], k[e], theta0[e], want_hess, w, g, grad[e],
                              hess[e] if want_hess else h)
 
 
-def _element(x, ke, theta0, want_hess, w, g, grad, h):
+def element(x, ke, theta0, want_hess, w, g, grad, h):
     """One spring with nodes ``x`` (4, 3): its energy; gradient into ``grad`` (12,) and, if
     ``want_hess``, Hessian into ``h`` (12, 12); ``w`` (:data:`WORK`,) and ``g`` (12,) are
     work arrays. Also used by the fused small-model kernel (:mod:`._fused_jit`)."""
@@ -79,15 +79,15 @@ def _element(x, ke, theta0, want_hess, w, g, grad, h):
         w[RIJ + a] = x[0, a] - x[1, a]
         w[RKJ + a] = x[2, a] - x[1, a]
         w[RKL + a] = x[2, a] - x[3, a]
-    _cross(w, RIJ, RKJ, M)
-    _cross(w, RKJ, RKL, N)
-    mm = _dot(w, M, M)
-    nn = _dot(w, N, N)
-    rr = _dot(w, RKJ, RKJ)
+    cross(w, RIJ, RKJ, M)
+    cross(w, RKJ, RKL, N)
+    mm = dot(w, M, M)
+    nn = dot(w, N, N)
+    rr = dot(w, RKJ, RKJ)
     r = math.sqrt(rr)
-    theta = math.atan2(r * _dot(w, M, RKL), _dot(w, M, N)) % (2 * math.pi)
-    A = _dot(w, RIJ, RKJ) / rr
-    B = _dot(w, RKL, RKJ) / rr
+    theta = math.atan2(r * dot(w, M, RKL), dot(w, M, N)) % (2 * math.pi)
+    A = dot(w, RIJ, RKJ) / rr
+    B = dot(w, RKL, RKJ) / rr
     d = theta - theta0
     d -= 2 * math.pi * math.floor(d / (2 * math.pi) + 0.5)          # periodic: see springs.py
     moment = ke * d
@@ -106,10 +106,10 @@ def _element(x, ke, theta0, want_hess, w, g, grad, h):
         sn = r / (nn * nn)
         mr = 1 / (mm * r)
         nr = 1 / (nn * r)
-        _cross(w, RKJ, M, C0)
-        _cross(w, RIJ, M, C1)
-        _cross(w, RKJ, N, C3)
-        _cross(w, RKL, N, C4)
+        cross(w, RKJ, M, C0)
+        cross(w, RIJ, M, C1)
+        cross(w, RKJ, N, C3)
+        cross(w, RKL, N, C4)
         for a in range(3):
             kj, ij, kl = w[RKJ + a], w[RIJ + a], w[RKL + a]
             v0, v1, v3, v4 = w[C0 + a], w[C1 + a], w[C3 + a], w[C4 + a]
@@ -154,7 +154,7 @@ def jit_helpers():
     from numba import njit
 
     g = globals()
-    for name in ("_cross", "_dot", "_element"):
+    for name in ("cross", "dot", "element"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(_HELPER_SIGNATURES.get(name), cache=True, **HELPER_OPTIONS)(g[name])
 

@@ -8,7 +8,8 @@ when a solution is computed. See docs/heat_fe.md for the method and the converge
 from ._gmsh import LEVELS
 from .results import FE2DResult, FE3DResult, FEDiskResult, FEMeshInfo
 from .solve2d import solve_fe2d
-from .solve3d import estimated_error, fe_disk, fe_sphere, solve_fe3d
+from .accuracy import estimated_error
+from .solve3d import fe_disk, fe_sphere, solve_fe3d
 
 __all__ = ["LEVELS", "fe_disk", "fe_sphere", "solve_fe3d", "solve_fe2d", "estimated_error", "FEDiskResult",
            "FE3DResult", "FE2DResult", "FEMeshInfo"]

@@ -18,8 +18,8 @@ import scipy.sparse as sp
 from ..._validate import array, finite, positive
 from ...errors import ParameterError
 from . import _assembly, _gmsh
+from .accuracy import accuracy_warnings, check_settings, failed_result
 from .results import FE2DResult, FEMeshInfo
-from .solve3d import _accuracy_warnings, _check_common, _failed
 
 __all__ = ["solve_fe2d"]
 
@@ -83,14 +83,14 @@ def solve_fe2d(lengths, kt, heat, k_medium: float, *, fixed_ends: bool = True,
         raise ParameterError("lengths must be > 0 and kt >= 0 for every segment.")
     positive("plane_distance", plane_distance, "m", allow_none=True)
     finite("room_temperature", room_temperature, "deg C")
-    _check_common(k_medium, box_factor, level, "dirichlet", accuracy)
+    check_settings(k_medium, box_factor, level, "dirichlet", accuracy)
     t0 = time.perf_counter()
     xe = np.concatenate([[0.0], np.cumsum(L)])
     half = xe[-1] / 2
     scale = half
     xs = (xe - half) / scale
     R = box_factor
-    err, warns = _accuracy_warnings(level, box_factor, "dirichlet", accuracy, "solve_fe2d")
+    err, warns = accuracy_warnings(level, box_factor, "dirichlet", accuracy, "solve_fe2d")
     f = _gmsh.level_sizes(level)[3]
     h = f * min(L.min() / scale, 1.0, *(() if plane_distance is None
                                          else (plane_distance / scale,)))
@@ -112,7 +112,7 @@ def solve_fe2d(lengths, kt, heat, k_medium: float, *, fixed_ends: bool = True,
         Ar = (A + K).tocsr()
         u[free], _ = _assembly.solve_spd(Ar[free][:, free], b[free])
     except Exception as exc:                                      # noqa: BLE001 - as data
-        return _failed(FE2DResult, exc)
+        return failed_result(FE2DResult, exc)
     node_x = doflocs[:, 0] * scale + half
     on = np.unique(dof)
     order = np.argsort(node_x[on])

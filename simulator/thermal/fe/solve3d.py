@@ -23,59 +23,15 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from ..._validate import array, finite, integer, positive
+from ..._validate import array, finite, positive
 from ...errors import ParameterError
 from . import _assembly, _gmsh
+from .accuracy import MESH_ERROR, accuracy_warnings, check_settings, failed_result
 from .results import FE3DResult, FEDiskResult, FEMeshInfo
 
-__all__ = ["fe_disk", "fe_sphere", "solve_fe3d", "estimated_error"]
+__all__ = ["fe_disk", "fe_sphere", "solve_fe3d"]
 
 logger = logging.getLogger(__name__)
-
-#: Measured relative error of the conductance per mesh level (the disk in free space, 1.2, 0.53
-#: and 0.26 % at levels 0-2: first order in the mesh size, from the edge singularity; see the
-#: convergence table of docs/heat_fe.md) [-].
-MESH_ERROR = {0: 0.012, 1: 0.006, 2: 0.003, 3: 0.0015}
-
-
-def estimated_error(level: int, box_factor: float, far_field: str = "robin") -> float:
-    """A-priori relative error [-] of an FE conductance or temperature rise: the mesh level's
-    measured error (:data:`MESH_ERROR`) plus the box error: Robin ``(0.5 / box_factor)^3``
-    (measured below 0.2 % from box_factor 2.5); Dirichlet ``x / (1 - x)``,
-    ``x = 0.64 / box_factor``, the disk's monopole ``Q / (4 pi k R)``."""
-    x = 0.64 / box_factor
-    box = (0.5 / box_factor) ** 3 if far_field == "robin" else x / (1 - x)
-    return MESH_ERROR[level] + box
-
-
-def _check_common(k_medium, box_factor, level, far_field, accuracy):
-    positive("k_medium", k_medium, "W/(m K)")
-    positive("box_factor", box_factor, "-")
-    if box_factor <= 1.5:
-        raise ParameterError(f"box_factor = {box_factor!r} must exceed 1.5 (the outer sphere's "
-                             "radius over the structure's size); use 3 to 8.")
-    integer("level", level, 0, max(_gmsh.LEVELS), hint=" (the mesh level: 0 coarse, 2 "
-            "converged)")
-    if far_field not in ("robin", "dirichlet"):
-        raise ParameterError(f"far_field = {far_field!r}; use 'robin' or 'dirichlet'.")
-    positive("accuracy", accuracy, "-")
-
-
-def _accuracy_warnings(level, box_factor, far_field, accuracy, what):
-    err = estimated_error(level, box_factor, far_field)
-    if err <= accuracy:
-        return err, ()
-    msg = (f"{what}: estimated error {err:.2%} exceeds the stated accuracy {accuracy:.2%} "
-           f"(level {level}, box_factor {box_factor:g}, far_field {far_field!r}); refine the "
-           "mesh (level + 1) or enlarge the box (box_factor x 2).")
-    logger.warning(msg)
-    return err, (msg,)
-
-
-def _failed(cls, exc, **kw):
-    logger.warning("FE solution failed: %s", exc)
-    return cls(success=False, status="failed", message=f"FE solution failed: {exc}", **kw)
-
 
 def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
             box_factor: float = 4.0, level: int = 1, far_field: str = "robin",
@@ -123,11 +79,11 @@ def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
                                    message=hi.message + " (Richardson-extrapolated)")
     positive("radius", radius, "m")
     positive("height", height, "m", allow_none=True)
-    _check_common(k_medium, box_factor, level, far_field, accuracy)
+    check_settings(k_medium, box_factor, level, far_field, accuracy)
     t0 = time.perf_counter()
     size = math.hypot(radius, height or 0.0)
     R = box_factor * size
-    err, warns = _accuracy_warnings(level, box_factor, far_field, accuracy, "fe_disk")
+    err, warns = accuracy_warnings(level, box_factor, far_field, accuracy, "fe_disk")
     base = dict(conductance=None, radius=radius, k_medium=k_medium, height=height)
     try:
         pts, tets, disk_tris = _gmsh.disk_mesh(radius, R, height, level)
@@ -137,7 +93,7 @@ def fe_disk(radius: float, k_medium: float, height: float | None = None, *,
         Q = _conductance(A, fixed, _assembly.facet_dofs(basis,
                                                         _assembly.facet_ids(basis, disk_tris)))
     except Exception as exc:                                      # noqa: BLE001 - as data
-        return _failed(FEDiskResult, exc, **base)
+        return failed_result(FEDiskResult, exc, **base)
     h_min = _gmsh.level_sizes(level)[0] * radius * min(1.0, 4 * (height or radius) / radius)
     mesh = FEMeshInfo(level, len(pts), len(tets), A.shape[0], h_min, R, box_factor, far_field,
                       err, time.perf_counter() - t0)
@@ -165,7 +121,7 @@ def fe_sphere(radius: float, k_medium: float, *, box_factor: float = 4.0, level:
     ``4 pi k / (1/a - 1/R)``. Parameters as in :func:`fe_disk` (``radius`` = sphere radius).
     """
     positive("radius", radius, "m")
-    _check_common(k_medium, box_factor, level, far_field, 1.0)
+    check_settings(k_medium, box_factor, level, far_field, 1.0)
     t0 = time.perf_counter()
     base = dict(conductance=None, radius=radius, k_medium=k_medium)
     try:
@@ -176,7 +132,7 @@ def fe_sphere(radius: float, k_medium: float, *, box_factor: float = 4.0, level:
         Q = _conductance(A, fixed, _assembly.facet_dofs(basis,
                                                         _assembly.facet_ids(basis, tris)))
     except Exception as exc:                                      # noqa: BLE001 - as data
-        return _failed(FEDiskResult, exc, **base)
+        return failed_result(FEDiskResult, exc, **base)
     mesh = FEMeshInfo(level, len(pts), len(tets), A.shape[0], _gmsh.level_sizes(level)[1]
                       * radius, box_factor * radius, box_factor, far_field,
                       MESH_ERROR[level], time.perf_counter() - t0)
@@ -336,7 +292,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     -------
     FE3DResult
     """
-    _check_common(1.0 if k_medium is None else k_medium, box_factor, level, far_field, accuracy)
+    check_settings(1.0 if k_medium is None else k_medium, box_factor, level, far_field, accuracy)
     t0 = time.perf_counter()
     x, q, params, tm = _model_inputs(model, positions, state, crease_power, heat)
     k = float(params.medium.thermal_conductivity if k_medium is None else k_medium)
@@ -353,7 +309,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
         centre[2] = 0.0
     scale = float(np.linalg.norm(xl[np.unique(mesh.triangles[emb])] - centre, axis=1).max())
     xs = (xl - centre) / scale                                  # mesher units
-    err, warns = _accuracy_warnings(level, box_factor, far_field, accuracy, "solve_fe3d")
+    err, warns = accuracy_warnings(level, box_factor, far_field, accuracy, "solve_fe3d")
     try:
         h_c, h_p, is_crease = _sheet_sizes(mesh, xl, emb, level, plane, scale)
         pts, tets, sheet_tris, parent = _gmsh.sheet_mesh(
@@ -369,7 +325,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     except ParameterError:
         raise
     except Exception as exc:                                      # noqa: BLE001 - as data
-        return _failed(FE3DResult, exc, room_temperature=rt)
+        return failed_result(FE3DResult, exc, room_temperature=rt)
     T = T + rt
     from ..fixed_shape import crease_measures
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from .._jit import aot_kernel, compile_kernel, numba_selected
+from ._jit import aot_kernel, compile_kernel, numba_selected
 
 __all__ = ["fold_angles_kernel", "quiet_kernel", "SIGNATURE", "QUIET_SIGNATURE"]
 
