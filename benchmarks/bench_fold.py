@@ -31,7 +31,7 @@ import json, resource, sys, time
 import numpy as np
 import simulator.solvers.newton as newton_module
 from simulator.solvers.newton import follow_path
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 sys.path.insert(0, sys.argv[4])
 from bench_fold import folding_sheet
 cells, fold, ext = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3])

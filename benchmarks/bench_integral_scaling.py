@@ -43,8 +43,8 @@ import dataclasses, json, logging, sys, time
 import numpy as np
 from simulator import get_stack, stack_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.thermal.loss import IntegralLoss
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import IntegralLoss
+from simulator.thermal import ThermalModel
 cells, operator, m, plain = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), sys.argv[4] == "1"
 conduction = sys.argv[5]
 iterations = []

@@ -32,7 +32,7 @@ _SNIPPET = """
 import json, resource, sys, time
 import numpy as np
 from simulator import initial_state
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.model import Supports, make_model
 from simulator.linalg import solve as _solve_linear

@@ -125,13 +125,14 @@ _R = [model.mesh.n_nodes, float("%.6e" % np.linalg.norm(du))]
 
 _NEWTON_OLD = """
 from simulator import initial_state
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 from simulator.example_patterns import miura_sheet_pattern
 from simulator.newton import _solve_linear
 """
 
 _NEWTON_NEW = """
-from simulator.state import equilibrium_system, initial_state
+from simulator.mechanics import equilibrium_system
+from simulator.steps import initial_state
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.linalg import solve as _solve_linear
 """

@@ -36,8 +36,8 @@ from .geometry.example_patterns import (crane_pattern, double_fold_pattern, fold
                        with_substrate)
 from .model.properties import BarHingeParameters
 from .solvers.newton import NewtonOptions
-from .thermal.loss import ChainLoss, IntegralLoss
-from .thermal.steady import REFERENCE_BETA, ThermalParameters
+from .model.heat_loss import ChainLoss, IntegralLoss
+from .model.thermal_parameters import REFERENCE_BETA, ThermalParameters
 
 __all__ = ["Case", "get_case", "describe_cases", "parameter_note", "CASES", "miura_sheet_model",
            "miura_fold_signs", "single_fold_model", "SINGLE_FOLD_SUPPORTS", "CRANE_POWER_MW"]
@@ -177,7 +177,7 @@ def single_fold_model(contact: bool = True, substrate: bool = True, thermal=None
     substrate : bool
         Include the substrate panel (supported) under the folding panel.
     thermal, actuators : optional
-        :class:`~simulator.thermal.parameters.ThermalParameters` and :class:`~simulator.model.bimorph.Actuators`,
+        :class:`~simulator.model.thermal_parameters.ThermalParameters` and :class:`~simulator.model.bimorph.Actuators`,
         needed for heating steps.
     **pattern_kwargs
         Geometry of :func:`~simulator.geometry.example_patterns.single_fold_pattern` (SI units).
@@ -342,7 +342,7 @@ def double_fold(residual_fold_deg: float = 0.0, gravity: bool = True, gravity_sc
 
 def _case_loss(case: str, loss_model: str, chain: ChainLoss):
     """A case's heat loss by name: ``"chain"`` (the reference's ``chain``) or ``"integral"``
-    (:class:`~simulator.thermal.loss.IntegralLoss` at its defaults)."""
+    (:class:`~simulator.model.heat_loss.IntegralLoss` at its defaults)."""
     if loss_model not in ("chain", "integral"):
         raise ParameterError(f"{case}: loss_model = {loss_model!r}; use 'chain' (the "
                              "reference's) or 'integral' (calibration-free).")
@@ -477,7 +477,7 @@ def crane(deactivated: bool = False, power_mW: float | None = None, thermal_step
     (reference ids) left unheated with half power on 9 and 11 (``deactivated=True``).
 
     ``loss_model``: the heat loss, ``"chain"`` (the reference's chains, t_env = 1 mm) or
-    ``"integral"`` (nothing to fit, :class:`~simulator.thermal.parameters.ThermalParameters`).
+    ``"integral"`` (nothing to fit, :class:`~simulator.model.thermal_parameters.ThermalParameters`).
     ``power_mW``: the base power q, by default :data:`CRANE_POWER_MW` of the loss model (4 mW,
     the reference's, with the chain model; 0.7 mW with the integral model, at which the crane
     folds as far: at 4 mW it folds flat early and passes through itself).

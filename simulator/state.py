@@ -8,20 +8,15 @@ return a new one.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .mechanics.elements.springs import fold_angle
-from .mechanics.equilibrium import EquilibriumSystem
-from .errors import ParameterError
 from .model.model import Model
-from .model.properties import initial_crease_rest
-from .thermal.steady import ThermalModel
+from .mechanics.rest_angles import initial_crease_rest
 
-__all__ = ["ROOM_TEMPERATURE", "SimulationState", "at_rest", "initial_state", "equilibrium_system",
-           "thermal_model"]
+__all__ = ["ROOM_TEMPERATURE", "SimulationState", "at_rest", "initial_state"]
 
 #: Default room temperature [deg C].
 ROOM_TEMPERATURE = 21.0
@@ -85,9 +80,10 @@ def at_rest(state: SimulationState, **changes) -> SimulationState:
 
 def initial_state(model: Model, room_temperature: float | None = None) -> SimulationState:
     """Unloaded state: zero displacement, crease rest angles of the initial geometry (flat, pi,
-    unless the mesh starts folded: :func:`~simulator.model.properties.initial_crease_rest`), spring
-    rest angles equal to the spring angles of the initial geometry (theory 6.1), uniform room
-    temperature (from the model's thermal parameters, else 21 deg C), no heating."""
+    unless the mesh starts folded:
+    :func:`~simulator.mechanics.rest_angles.initial_crease_rest`), spring rest angles equal to
+    the spring angles of the initial geometry (theory 6.1), uniform room temperature (from the
+    model's thermal parameters, else 21 deg C), no heating."""
     mesh = model.mesh
     if room_temperature is None:
         room_temperature = ROOM_TEMPERATURE if model.thermal is None \
@@ -98,32 +94,3 @@ def initial_state(model: Model, room_temperature: float | None = None) -> Simula
         spring_rest=fold_angle(mesh.nodes[mesh.springs]),
         temperature=np.full(mesh.n_nodes, float(room_temperature)),
         crease_power=np.zeros(mesh.n_creases), room_temperature=float(room_temperature))
-
-
-_SYSTEMS: "weakref.WeakKeyDictionary[Model, EquilibriumSystem]" = weakref.WeakKeyDictionary()
-
-
-def equilibrium_system(model: Model) -> EquilibriumSystem:
-    """The cached :class:`EquilibriumSystem` of a model (built on first use)."""
-    sys = _SYSTEMS.get(model)
-    if sys is None:
-        sys = _SYSTEMS[model] = EquilibriumSystem(model)
-    return sys
-
-
-_THERMAL: "weakref.WeakKeyDictionary[Model, ThermalModel]" = weakref.WeakKeyDictionary()
-
-
-def thermal_model(model: Model) -> ThermalModel:
-    """The cached :class:`~simulator.thermal.steady.ThermalModel` of a model (built on first use)."""
-    if getattr(model.mesh, "sharp", False):
-        from .model.sharp import check_not_sharp
-        check_not_sharp(model, "A heating step")
-    if model.thermal is None:
-        raise ParameterError("This model has no thermal parameters: pass thermal="
-                             "ThermalParameters(...) to make_model to use heating steps.")
-    tm = _THERMAL.get(model)
-    if tm is None:
-        tm = _THERMAL[model] = ThermalModel(model.mesh, model.thermal,
-                                            actuators=model.actuators)
-    return tm

@@ -277,7 +277,7 @@ class Fluid:
 
     def environment(self) -> dict:
         """Deprecated: the old flat keywords of
-        :class:`~simulator.thermal.parameters.ThermalParameters` for this fluid; give
+        :class:`~simulator.model.thermal_parameters.ThermalParameters` for this fluid; give
         ``ThermalParameters(medium=fluid)``."""
         warn_deprecated("Fluid.environment() is deprecated (it gives the old flat keywords "
                         "env_conductivity, env_density, env_specific_heat); use "

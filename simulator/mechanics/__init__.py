@@ -10,8 +10,7 @@ angles and panels crossing each other between two states.
 from .._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
-    ".equilibrium": ("EquilibriumSystem",),
-    "..state": ("equilibrium_system",),
+    ".equilibrium": ("EquilibriumSystem", "equilibrium_system"),
     ".families": ("Configuration", "ElementFamily", "FamilyValues"),
     ".kinematics": ("fold_angles",),
     ".crossing": ("crease_crossings", "node_crossings"),

@@ -26,6 +26,7 @@ See docs/theory.md#310-element-families-and-assembly.
 from __future__ import annotations
 
 import logging
+import weakref
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -43,7 +44,8 @@ from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, S
                        SupportFamily, check_family, model_families)
 from ..model.model import Model
 
-__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT", "assembled_tangent"]
+__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT", "assembled_tangent",
+           "equilibrium_system"]
 
 logger = logging.getLogger(__name__)
 _all = np.logical_and.reduce            # with axis=None: ndarray.all() without its wrapper
@@ -310,3 +312,14 @@ class EquilibriumSystem:
         hess = [f.material_hessian(c) for f in self.families]
         return self.assembly.matrix([None if h is None else FamilyValues(None, None, h)
                                      for h in hess])
+
+
+_SYSTEMS: "weakref.WeakKeyDictionary[Model, EquilibriumSystem]" = weakref.WeakKeyDictionary()
+
+
+def equilibrium_system(model: Model) -> EquilibriumSystem:
+    """The cached :class:`EquilibriumSystem` of a model (built on first use)."""
+    sys = _SYSTEMS.get(model)
+    if sys is None:
+        sys = _SYSTEMS[model] = EquilibriumSystem(model)
+    return sys

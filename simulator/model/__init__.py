@@ -1,5 +1,5 @@
-"""The bar-and-hinge model: mesh, element properties, bimorph actuators, lumped masses
-and the Model that ties them together.
+"""The bar-and-hinge model: mesh, element properties, bimorph actuators, lumped masses, the
+thermal parameters (heat loss, layers) and the Model that ties them together.
 
 The public names (``from simulator.model import stack_model``): everything of the model
 family, the names at ``simulator``'s door (:class:`Model`, :func:`make_model`, the mesh and
@@ -14,12 +14,13 @@ __getattr__, __dir__ = _attach(__name__, {
     ".model": ("Model", "make_model", "Supports", "ContactParameters", "STANDARD_GRAVITY",
                "REFERENCE_GRAVITY"),
     ".mesh": ("BarHingeMesh", "build_mesh"),
-    ".properties": ("BarHingeParameters", "spring_rest_angles"),
+    ".properties": ("BarHingeParameters",),
+    "..mechanics.rest_angles": ("spring_rest_angles",),
     ".bimorph": ("Actuators", "Bimorph"),
     ".sharp": ("SharpHingeParameters", "sharp_model"),
     ".sharp_mesh": ("SharpHingeMesh", "build_sharp_mesh"),
     ".mass": ("lumped_masses",),
-    ".stack": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
+    "..stacks": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
                "unsupported_panels", "check_supported", "plain_contact"),
     "..geometry.orientation": ("start_fold_angles",),
 })

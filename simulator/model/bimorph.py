@@ -20,6 +20,7 @@ import numpy as np
 from .._validate import finite, non_negative, positive
 from ..errors import ParameterError
 from ..geometry.materials import GOLD, GOLD_FILM_CONDUCTIVITY, SU8
+from .layers import Layer
 
 __all__ = ["timoshenko_curvature", "Bimorph", "Actuators", "crease_temperature_weights"]
 
@@ -90,12 +91,10 @@ class Bimorph:
 
     @property
     def layers(self) -> tuple:
-        """The two layers as :class:`~simulator.thermal.layers.Layer` (conductivities ``k1``,
+        """The two layers as :class:`~simulator.model.layers.Layer` (conductivities ``k1``,
         ``k2``, heat capacities ``rho_c1``, ``rho_c2``): the stack of an actuated crease, and
         of a passive crease carrying the same heater film (``SheetLayers(creases={c:
         bimorph.layers})``; theory 4.10)."""
-        from ..thermal.layers import Layer
-
         return (Layer(self.t1, self.k1, self.rho_c1, "bimorph layer 1"),
                 Layer(self.t2, self.k2, self.rho_c2, "bimorph layer 2"))
 

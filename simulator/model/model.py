@@ -20,7 +20,7 @@ from .mesh import BarHingeMesh, build_mesh
 from ..geometry.pattern import Pattern
 from ..geometry.polygons import triangle_areas
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
-from ..thermal.steady import ThermalParameters
+from .thermal_parameters import ThermalParameters
 
 __all__ = ["Supports", "ContactParameters", "Model", "make_model", "gravity_loads", "CREASE_MODELS",
            "STANDARD_GRAVITY", "REFERENCE_GRAVITY", "AXES"]
@@ -203,7 +203,7 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
 
     ``supports`` is a :class:`Supports` or a mapping ``{node: "xyz"-subset}``;
     ``contact=True`` switches contact on with default :class:`ContactParameters`;
-    ``thermal`` (:class:`~simulator.thermal.parameters.ThermalParameters`) and ``actuators``
+    ``thermal`` (:class:`~simulator.model.thermal_parameters.ThermalParameters`) and ``actuators``
     (:class:`~simulator.model.bimorph.Actuators`) are needed for heating steps. Every argument is
     type-checked; a wrong type raises :class:`~simulator.errors.ParameterError` naming the
     argument, the type given and what to pass instead.

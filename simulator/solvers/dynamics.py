@@ -108,7 +108,7 @@ def integrate(system: EquilibriumSystem, u0, v0, duration: float, dt: float, f_e
     Parameters
     ----------
     system : EquilibriumSystem
-        E.g. :func:`~simulator.state.equilibrium_system` of a model.
+        E.g. :func:`~simulator.mechanics.equilibrium_system` of a model.
     u0, v0 : (n_nodes, 3) initial displacements [m] and velocities [m/s]
     f_ext : (n_dof,) or (n_nodes, 3) array, or callable ``t -> array``
         External load [N] (a constant array is applied suddenly at t = 0).

@@ -40,7 +40,8 @@ import numpy as np
 from .._result import ResultFiles
 from ..errors import ParameterError
 from ..model.model import Model
-from ..state import SimulationState, at_rest, equilibrium_system, initial_state
+from ..mechanics.equilibrium import equilibrium_system
+from ..state import SimulationState, at_rest, initial_state
 
 __all__ = ["EQUILIBRIUM_RTOL", "EQUILIBRIUM_ACTIONS", "EquilibriumCheck", "check_equilibrium",
            "checked_state", "analysis_state"]

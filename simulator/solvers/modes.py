@@ -42,7 +42,8 @@ from ..linalg.ladder import check_backend, factorize
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 from ..model.mass import check_masses, lumped_masses
 from ..model.model import Model
-from ..state import SimulationState, equilibrium_system
+from ..mechanics.equilibrium import equilibrium_system
+from ..state import SimulationState
 from .equilibrium_check import EquilibriumCheck, analysis_state, checked_state
 
 __all__ = ["ModesResult", "natural_modes"]

@@ -26,7 +26,9 @@ from functools import cached_property
 import numpy as np
 
 from .._validate import integer
-from ..state import SimulationState, equilibrium_system, thermal_model
+from ..mechanics.equilibrium import equilibrium_system
+from ..state import SimulationState
+from ..thermal.steady import thermal_model
 
 __all__ = ["Step", "StepContext", "StepOutcome", "StepRecorder", "check_increments",
            "SUCCESS_STATUSES"]

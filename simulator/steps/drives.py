@@ -21,7 +21,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import ParameterError
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from ..schedules import Schedule
 from .mechanical import check_folds, crease_targets, node_vectors
 

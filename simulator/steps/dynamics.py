@@ -26,7 +26,7 @@ from ..solvers.dynamics_options import DynamicsOptions
 from .._validate import integer, positive
 from ..errors import ParameterError
 from ..events import CrossingWatch, renumbered, stops
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
 from .mechanical import node_vectors

@@ -68,7 +68,7 @@ from ..thermal.transient import (DEFAULT_THETA, check_quasi_static_medium, check
                                  check_time_step, free_heat_input, heat_out_rate, heat_system,
                                  initial_rise, stepper_for)
 from .base import Step, StepContext, StepOutcome, StepRecorder
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from .drives import MechanicalDrive, check_fold_drive, check_force_drive, describe_drive
 from .heating import thermal_actuation
 from .transient import circuit_end, step_powers

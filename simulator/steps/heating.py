@@ -30,7 +30,7 @@ from .._validate import finite, integer, one_of, positive
 from ..errors import ConvergenceError, ParameterError
 from ..events import CrossingWatch, stops
 from ..solvers.newton import LOCATE_TOL, follow_path
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from ..state import at_rest
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..thermal.circuits import check_circuits, describe_circuits
@@ -55,7 +55,7 @@ def thermal_actuation(model, state):
     Returns ``rest(temp) -> (crease_rest, spring_rest)``: crease rest angles [rad] =
     ``state.crease_rest + W kappa(dT)`` with dT the 7-node crease temperature [K] of the node
     temperatures ``temp`` (n_nodes,) [deg C] minus that of ``state.temperature``, and the spring
-    rest angles they give (:func:`~simulator.model.properties.spring_rest_angles`).
+    rest angles they give (:func:`~simulator.mechanics.rest_angles.spring_rest_angles`).
     """
     mesh = model.mesh
     rot, w = _rotation_per_kelvin(model), crease_temperature_weights()

@@ -46,7 +46,7 @@ from ..solvers.continuation import FAST_ITERATIONS, mgdcm
 from ..errors import ParameterError
 from ..solvers.load_path import (LoadPath, PathConstraint, correct_point, model_size,
                                  solve_path_system)
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from ..state import at_rest
 from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
 from .base import StepOutcome, StepRecorder

@@ -18,7 +18,7 @@ from ..events import CrossingWatch, stops
 from ..solvers.load_path import LoadPath
 from ..model.model import STANDARD_GRAVITY, Model, gravity_loads
 from ..solvers.newton import follow_path
-from ..model.properties import spring_rest_angles
+from ..mechanics.rest_angles import spring_rest_angles
 from .base import Step, StepContext, StepOutcome, StepRecorder, check_increments
 from ..state import at_rest
 from .limit import check_on_limit_point, continue_past_limit

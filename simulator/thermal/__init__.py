@@ -12,13 +12,12 @@ shape, the calibration of the chains, transient heat without mechanics
 from .._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
-    ".steady": ("ThermalModel",),
-    "..state": ("thermal_model", "ROOM_TEMPERATURE"),
-    ".parameters": ("ThermalParameters", "REFERENCE_BETA"),
-    ".loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
+    ".steady": ("ThermalModel", "thermal_model"),
+    "..state": ("ROOM_TEMPERATURE",),
+    "..model.thermal_parameters": ("ThermalParameters", "REFERENCE_BETA", "CONDUCTIONS"),
+    "..model.heat_loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
     ".integral_levels": ("sheet_levels",),
-    ".monotone": ("CONDUCTIONS",),
-    ".layers": ("Layer", "SheetLayers"),
+    "..model.layers": ("Layer", "SheetLayers"),
     ".measures": ("CREASE_MEASURES", "crease_temperatures"),
     ".limit": ("TG_FACTOR", "LIMIT_MEASURES", "TemperatureLimit", "TemperatureVerdict",
                "crease_limit_temperatures"),

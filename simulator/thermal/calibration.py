@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 from .._result import ResultFiles
 from .._validate import array, in_range, positive
 from ..errors import ParameterError
-from .loss import ChainLoss, Substrate
+from ..model.heat_loss import ChainLoss, Substrate
 from ..model.model import Model
 from .fixed_shape import resolve_substrate
 from .steady import ThermalModel
@@ -153,7 +153,7 @@ def calibrate_environment(model: Model, power, x=None, reference="integral",
     substrate : "model", Substrate or None
         Isothermal substrate plane of the reference (integral model or FE): the model's own
         (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
-        boundary panels at ``x``, none without them), a :class:`~simulator.thermal.loss.
+        boundary panels at ``x``, none without them), a :class:`~simulator.model.heat_loss.
         Substrate`, none, or a given plane [m], as in
         :func:`~simulator.thermal.fixed_shape.fixed_shape_temperatures`.
 

@@ -20,8 +20,8 @@ from .._result import ResultFiles
 from .._validate import array, integer, one_of
 from ..errors import ParameterError
 from .measures import crease_temperatures
-from .loss import Substrate
-from .parameters import ThermalParameters
+from ..model.heat_loss import Substrate
+from ..model.thermal_parameters import ThermalParameters
 from .steady import ThermalModel, panels_plane
 from .steady import resolve_substrate as steady_substrate
 
@@ -106,7 +106,7 @@ def boundary_panel_plane(model, x=None) -> tuple:
 
 
 def resolve_substrate(model, x, substrate):
-    """``substrate`` ("model", None, (point, normal) or a :class:`~simulator.thermal.loss.
+    """``substrate`` ("model", None, (point, normal) or a :class:`~simulator.model.heat_loss.
     Substrate`) as a plane of 6 floats, or () for none: "model" is the model's own
     substrate (``ThermalParameters.substrate``: its plane, that of its boundary panels at
     ``x``, or none)."""
@@ -154,12 +154,12 @@ def fixed_shape_temperatures(model, loss_model: str = "integral", crease_power=N
     substrate : "model", Substrate or None
         Isothermal substrate plane of the integral model and the FE: the model's own
         (``"model"``, ``ThermalParameters.substrate``: by default the plane of its thermal
-        boundary panels, none without them), a :class:`~simulator.thermal.loss.Substrate`,
+        boundary panels, none without them), a :class:`~simulator.model.heat_loss.Substrate`,
         none, or a given plane [m]. The chain model ignores it (its substrate is the
         boundary panels' distance cap).
     refinement : int, optional
         ``refinement`` of the integral loss (default: the model's, or
-        :class:`~simulator.thermal.loss.IntegralLoss`'s with the chains).
+        :class:`~simulator.model.heat_loss.IntegralLoss`'s with the chains).
     extrapolation : bool, optional
         ``extrapolation`` of the integral loss (default: as for ``refinement``).
     fe_level : int

@@ -282,7 +282,7 @@ NEAR_PLANE_RTOL = 1.0
 
 
 def uses_fast(n_triangles: int, loss) -> bool:
-    """Whether the :class:`~simulator.thermal.loss.IntegralLoss` ``loss`` on ``n_triangles``
+    """Whether the :class:`~simulator.thermal.IntegralLoss` ``loss`` on ``n_triangles``
     sheet triangles takes the fast path (:mod:`simulator.thermal.integral_fast`): its
     ``operator`` "fast", or "auto" above the dense limit (more than ``MAX_SUB_TRIANGLES``
     sub-triangles at its ``refinement``)."""
@@ -295,7 +295,7 @@ def uses_fast(n_triangles: int, loss) -> bool:
 
 def fast_levels(loss, n_triangles: int):
     """``[(weight, refinement)]`` of the fast path for the
-    :class:`~simulator.thermal.loss.IntegralLoss` ``loss`` (``n_triangles`` is not used: the
+    :class:`~simulator.thermal.IntegralLoss` ``loss`` (``n_triangles`` is not used: the
     levels are the loss's own, plain or extrapolated from ``coarse_refinement``, at any size;
     Richardson from m = 2 and 1 is 2.4-3.9 % off the default on bent Miura sheets and 7.8-8.5 %
     over a plane, theory 4.7)."""
@@ -315,7 +315,7 @@ def describe_levels(levels) -> str:
 
 
 def sheet_levels(loss, r: int = 1) -> tuple[int, int | None]:
-    """The :class:`~simulator.thermal.loss.IntegralLoss` ``loss``'s levels on a sheet refined
+    """The :class:`~simulator.thermal.IntegralLoss` ``loss``'s levels on a sheet refined
     ``r`` (theory 4.11), per edge of the triangles the operator is built on: the refinement
     and its Richardson partner (None: not extrapolated). On the mesh triangles (``r = 1``) the
     loss's own, ``m`` and :func:`coarse_refinement`; on the fine triangles of a refined sheet
@@ -332,9 +332,9 @@ def sheet_levels(loss, r: int = 1) -> tuple[int, int | None]:
 
 
 def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: int = 1):
-    """The integral loss operator of :class:`~simulator.thermal.parameters.ThermalParameters`
+    """The integral loss operator of :class:`~simulator.thermal.ThermalParameters`
     ``params`` on the sheet ``triangles`` over the substrate ``plane`` ((point, unit normal) or
-    None), whose ``loss`` is an :class:`~simulator.thermal.loss.IntegralLoss`: an
+    None), whose ``loss`` is an :class:`~simulator.thermal.IntegralLoss`: an
     :class:`IntegralOperator` at its ``refinement`` built at its ``shape_tol``, an
     :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`; on the fast path
     (:func:`uses_fast`) a :class:`~simulator.thermal.integral_fast.FastIntegralOperator` of

@@ -40,14 +40,11 @@ import numpy as np
 from .. import _jit
 from ..linalg.small_solve import schur_complements
 
-__all__ = ["CONDUCTIONS", "MonotoneConduction", "corner_cotangents", "delaunay_flips",
+__all__ = ["MonotoneConduction", "corner_cotangents", "delaunay_flips",
            "monotone_conduction", "t3_matrices"]
 
 logger = logging.getLogger(__name__)
 
-#: The sheet conduction settings (``ThermalParameters.conduction``): ``"t3"`` the mesh
-#: triangles' T3 elements (the reference's), ``"monotone"`` the M-matrix of this module.
-CONDUCTIONS = ("t3", "monotone")
 #: Rounds of edge splitting before giving up (with a warning naming what is left).
 MAX_ROUNDS = 30
 #: A coupling counts as positive above this fraction of the largest ``|k t cot| / 2``.

@@ -29,14 +29,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
+from ..model.thermal_parameters import MAX_SHEET_REFINEMENT
 from ._single_layer import subdivision
 
-__all__ = ["RefinedSheet", "FineMesh", "MAX_SHEET_REFINEMENT"]
+__all__ = ["RefinedSheet", "FineMesh"]
 
 logger = logging.getLogger(__name__)
-
-#: Largest sheet refinement accepted (``r^2`` fine triangles per mesh triangle).
-MAX_SHEET_REFINEMENT = 16
 
 
 @dataclass(frozen=True, eq=False)

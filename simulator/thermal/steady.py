@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import weakref
 from functools import cached_property
 
 import numpy as np
@@ -39,15 +40,17 @@ from ..errors import ConvergenceError, ParameterError, PatternError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
+from ..model.model import Model
+from ..model.sharp import check_not_sharp
 from .integral import IntegralOperator
 from .integral_levels import integral_operator
-from .loss import ChainLoss
+from ..model.heat_loss import ChainLoss
 from .monotone import MonotoneConduction, monotone_conduction
 from .nonlinear import NonlinearLoss, radiation, solve_heat_balance
 from .refined import RefinedSheet
-from .parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
+from ..model.thermal_parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
 
-__all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights"]
+__all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights", "thermal_model"]
 
 logger = logging.getLogger(__name__)
 
@@ -86,7 +89,7 @@ def _warn_no_plane(params) -> None:
 
 def substrate_plane(mesh, params, x=None):
     """The substrate plane ``(point (3,), unit normal (3,))`` of ``params``
-    (:attr:`~simulator.thermal.parameters.ThermalParameters.substrate`) on ``mesh`` at positions
+    (:attr:`~simulator.model.thermal_parameters.ThermalParameters.substrate`) on ``mesh`` at positions
     ``x`` (default: the mesh's): an explicit plane, the plane of the thermal-boundary panels
     (``Substrate()``; None without boundary panels), or None (``substrate=None``)."""
     v = resolve_substrate("model", mesh, params, x)
@@ -99,12 +102,12 @@ def substrate_plane(mesh, params, x=None):
 def resolve_substrate(substrate, mesh, params, x=None) -> tuple:
     """A substrate as a plane of 6 floats (a point and a normal into the medium [m]), or ()
     for none: ``"model"`` is ``params.substrate`` (None ``params``: none), a
-    :class:`~simulator.thermal.loss.Substrate` its plane or that of the thermal-boundary panels
+    :class:`~simulator.model.heat_loss.Substrate` its plane or that of the thermal-boundary panels
     of ``params`` on ``mesh`` at positions ``x`` (default: the mesh's), None none; a pair
     (point (3,), normal (3,)) is a deprecated spelling of ``Substrate.plane(point, normal)``.
     The one reading of a substrate: the steady model, ``fixed_shape_temperatures``,
     ``calibrate_environment`` and ``solve_fe3d``."""
-    from .loss import Substrate
+    from ..model.heat_loss import Substrate
 
     if isinstance(substrate, str):
         one_of("substrate", substrate, ("model",), hint=" (or a Substrate, None, or (point, "
@@ -214,7 +217,7 @@ class ThermalModel:
         fixed[list(params.room_temperature_nodes)] = True
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
-        #: the chain loss (:class:`~simulator.thermal.loss.ChainLoss`); with the integral loss
+        #: the chain loss (:class:`~simulator.model.heat_loss.ChainLoss`); with the integral loss
         #: the chains' defaults, which size the (unused) medium layers of the full system
         self.chains = params.loss if params.loss.model == "chain" else _UNUSED_CHAINS
         #: the integral model's loss operator (:mod:`simulator.thermal.integral_levels`:
@@ -302,7 +305,7 @@ class ThermalModel:
 
     def _actuated_triangles(self, actuators, stacks) -> np.ndarray:
         """(n_tri,) bool: the triangles of the creases ``actuators`` actuate; an error without
-        actuators, or where ``stacks`` (:class:`~simulator.thermal.layers.SheetLayers`) lists
+        actuators, or where ``stacks`` (:class:`~simulator.model.layers.SheetLayers`) lists
         an actuated crease (its layers are its bimorph's)."""
         from ..model.bimorph import Actuators
 
@@ -949,3 +952,20 @@ def _scattered(solve, keep):
             rise[keep] = solve(q[keep])
         return rise
     return solver
+
+
+_THERMAL: "weakref.WeakKeyDictionary[Model, ThermalModel]" = weakref.WeakKeyDictionary()
+
+
+def thermal_model(model: Model) -> ThermalModel:
+    """The cached :class:`~simulator.thermal.steady.ThermalModel` of a model (built on first use)."""
+    if getattr(model.mesh, "sharp", False):
+        check_not_sharp(model, "A heating step")
+    if model.thermal is None:
+        raise ParameterError("This model has no thermal parameters: pass thermal="
+                             "ThermalParameters(...) to make_model to use heating steps.")
+    tm = _THERMAL.get(model)
+    if tm is None:
+        tm = _THERMAL[model] = ThermalModel(model.mesh, model.thermal,
+                                            actuators=model.actuators)
+    return tm

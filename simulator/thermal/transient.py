@@ -49,8 +49,7 @@ from ..linalg.ladder import check_backend, factorize
 from ..model.model import Model
 from .nonlinear import NonlinearLoss
 from .schedules import crease_power_function
-from ..state import thermal_model
-from .steady import ThermalModel
+from .steady import ThermalModel, thermal_model
 
 __all__ = ["REFERENCE_THETA", "DEFAULT_THETA", "capacity_vector", "areal_capacity", "HeatSystem", "heat_system", "ThetaStepper",
            "theta_step", "stepper_for", "heat_out_rate", "TransientHeatResult", "integrate_heat", "environment_profile",

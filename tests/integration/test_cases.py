@@ -230,8 +230,8 @@ def test_bad_case_parameters(name, kwargs, match):
 def test_heating_a_non_crease_and_unknown_boundary_panel():
     from simulator import Heat, simulate
     from simulator.model.model import make_model
-    from simulator.thermal.loss import ChainLoss
-    from simulator.thermal.steady import ThermalParameters
+    from simulator.thermal import ChainLoss
+    from simulator.thermal import ThermalParameters
     from simulator.errors import PatternError
     case = get_case("single_fold", thermal_steps=2)
     with pytest.raises(PatternError, match="boundary edge"):

@@ -7,7 +7,7 @@ import pytest
 
 from simulator import Dynamics, DynamicsOptions, ElectroThermal, ParameterError, get_case, simulate
 from simulator.cases import single_fold_model
-from simulator.state import initial_state
+from simulator.steps import initial_state
 from simulator.schedules import PiecewiseLinearSignal, RampSignal, SineSignal, StepSignal
 
 

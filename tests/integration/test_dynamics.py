@@ -20,7 +20,8 @@ from simulator.solvers import TimeIntegrator, integrate
 from simulator.cases import single_fold_model
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.mechanics.kinematics import fold_angles
-from simulator.state import equilibrium_system, initial_state
+from simulator.mechanics import equilibrium_system
+from simulator.steps import initial_state
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from simulator import (ChainLoss, ConvergenceError, EtorigamiError, Heat, Parame
                        SolverError, ThermalParameters, simulate)
 from simulator.steps import initial_state
 from simulator.cases import single_fold_model
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 
 ACTUATORS = simulator.Actuators(simulator.Bimorph(79e9, 0.2e-6, 2e9, 0.8e-6), {2: 3.8e-5})
 

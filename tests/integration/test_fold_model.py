@@ -10,7 +10,7 @@ import pytest
 from simulator import FoldFormatError, Heat, get_case, simulate
 from simulator.fold import fold_to_model, read_model, write_fold_frames, write_model
 from simulator.steps import initial_state
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 
 
 def assert_same_run(r1, r2):

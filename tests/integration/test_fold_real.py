@@ -20,7 +20,7 @@ from simulator.geometry.orientation import start_fold_angles
 from simulator.io.fold.reader import load_fold_json, parse_fold
 from simulator.mechanics.kinematics import fold_angles
 from simulator.model.mesh import build_mesh
-from simulator.model.stack import STACKS, central_panel, stack_model
+from simulator.model import STACKS, central_panel, stack_model
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"
 STACK = STACKS["su8-au"]

@@ -10,7 +10,7 @@ from simulator.cases import double_fold
 from simulator.errors import EtorigamiError
 from simulator import Heat, simulate
 from simulator.thermal import TemperatureLimit, crease_temperatures
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 
 P_REF = 6e-3          # W per crease that made the target shape
 

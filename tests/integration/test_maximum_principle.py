@@ -13,7 +13,7 @@ from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gri
 from simulator import Heat
 from simulator.cases import get_case
 from simulator.simulation import simulate
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 #: room temperature within round-off [K]
 _TOL = 1e-9

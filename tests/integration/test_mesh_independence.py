@@ -9,7 +9,7 @@ import pytest
 from simulator import ChainLoss, ThermalParameters, build_mesh
 from simulator.geometry.materials import SILICON
 from simulator.geometry.pattern import Pattern
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 SIDE = 1e-3          # [m]
 HEAT = 1e-3          # [W] into the plate's centre node

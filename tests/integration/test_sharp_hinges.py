@@ -20,7 +20,7 @@ from simulator import (ArcLengthLoad, DisplacementControl, Dynamics, DynamicsOpt
 from simulator.model.mass import lumped_masses
 from simulator.model.sharp import SharpHingeParameters, sharp_model
 from simulator.schedules import SineSignal
-from simulator.state import initial_state
+from simulator.steps import initial_state
 
 L, T, RHO, E = 1e-3, 10e-6, 1200.0, 2e9
 K_F = 1e-6                                   # fold stiffness per length [N m/rad/m]

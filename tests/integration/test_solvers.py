@@ -10,10 +10,10 @@ from simulator.errors import ConvergenceError, ParameterError
 from simulator.mechanics.kinematics import fold_angles
 from simulator import Gravity, Load, SelfFold, simulate
 from simulator.steps import initial_state
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 from simulator.model.model import Supports, gravity_loads, make_model
 from simulator.geometry.example_patterns import single_fold_pattern
-from simulator.model.properties import BarHingeParameters, spring_rest_angles
+from simulator.model import BarHingeParameters, spring_rest_angles
 from simulator.solvers.newton import NewtonOptions, newton
 
 

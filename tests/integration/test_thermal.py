@@ -13,8 +13,9 @@ from simulator.errors import ParameterError
 from simulator.geometry.materials import AIR, Material
 from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern, strip_pattern
-from simulator.thermal.loss import ChainLoss
-from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters, heat_weights
+from simulator.thermal import ChainLoss
+from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters
+from simulator.thermal.steady import heat_weights
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
 FIXED = (0, 3, 5, 6)                      # reference room-temperature nodes 1, 4, 6, 7

@@ -15,9 +15,9 @@ from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.model.mesh import build_mesh
 from simulator.geometry.pattern import Pattern
 from simulator.thermal.schedules import crease_power_function
-from simulator.state import thermal_model
-from simulator.thermal.loss import ChainLoss
-from simulator.thermal.steady import REFERENCE_BETA, ThermalModel, ThermalParameters
+from simulator.thermal import thermal_model
+from simulator.thermal import ChainLoss
+from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters
 from simulator.thermal.transient import REFERENCE_THETA, environment_profile, heat_system
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import simulator as S
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 from simulator.thermal.transient import heat_system, medium_diffusion_time
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from simulator import IntegralLoss, Substrate
 from simulator.cases import get_case
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 from studies import device_heat_models as study
 
 pytest.importorskip("skfem")

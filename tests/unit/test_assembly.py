@@ -10,7 +10,7 @@ from simulator.mechanics.assembly import StiffnessPattern, _block_positions, _re
 from simulator.cases import single_fold_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.model import Supports, make_model
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 
 
 def _families(system):

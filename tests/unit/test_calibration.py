@@ -11,7 +11,7 @@ import simulator
 from simulator import ParameterError
 from simulator.thermal import calibrate_environment
 from simulator.cases import verification_strip
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 
 def _strip():

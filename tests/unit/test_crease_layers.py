@@ -12,8 +12,8 @@ from simulator.cases import single_fold, verification_strip
 from simulator.geometry.materials import GOLD_FILM_CONDUCTIVITY
 from simulator.model.bimorph import Actuators, Bimorph
 from simulator.thermal.fixed_shape import fixed_shape_temperatures
-from simulator.thermal.parameters import ThermalParameters
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalParameters
+from simulator.thermal import ThermalModel
 
 #: The paper's gripper crease: 0.2 um gold on 0.8 um SU-8.
 GOLD_ON_SU8 = Bimorph(E1=79e9, t1=0.2e-6, E2=2e9, t2=0.8e-6)

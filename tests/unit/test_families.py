@@ -27,7 +27,7 @@ from simulator.mechanics.families import (BarFamily, Configuration, ContactFamil
                                           check_family)
 from simulator.model.model import ContactParameters, Supports, make_model
 from simulator.solvers.newton import newton
-from simulator.state import initial_state
+from simulator.steps import initial_state
 
 
 def axial_spring(x, k, L0):

@@ -154,7 +154,7 @@ def test_structure_below_the_substrate_is_refused():
 
 
 def test_nodal_heat_equals_the_crease_power_it_comes_from():
-    from simulator.thermal.steady import ThermalModel
+    from simulator.thermal import ThermalModel
     from studies.heat_loss_calibration import strip_case
 
     model = strip_case(0.4, 20.0, 1.5, 10, 150.0, 0.6).model

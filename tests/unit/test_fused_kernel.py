@@ -18,7 +18,8 @@ from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.linalg import solve as solve_linear
 from simulator.linalg.small_solve import SparseCholesky, solve_dense
 from simulator.model.model import ContactParameters, Supports, make_model
-from simulator.state import equilibrium_system, initial_state
+from simulator.mechanics import equilibrium_system
+from simulator.steps import initial_state
 
 pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
 

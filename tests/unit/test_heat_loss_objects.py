@@ -17,7 +17,7 @@ from simulator import (AIR, WATER, ChainLoss, EtorigamiDeprecationWarning, Heat,
 from simulator.fold import read_model, write_model
 from simulator.materials import Fluid
 from simulator.thermal import boundary_panel_plane
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 
 def test_each_loss_has_only_its_own_options():

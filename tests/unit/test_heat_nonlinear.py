@@ -17,10 +17,10 @@ from simulator.materials import SU8
 from simulator.cases import single_fold_model
 from simulator.geometry.materials import (AIR_CONDUCTIVITY_TABLE, KELVIN, Fluid,
                                           WATER_CONDUCTIVITY_TABLE)
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 from simulator.thermal.nonlinear import (STEFAN_BOLTZMANN, NonlinearLoss, solve_heat_balance)
 from simulator.thermal.refined import FineMesh
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 from simulator.thermal.transient import integrate_heat
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -17,8 +17,9 @@ from simulator.thermal import integral_fast
 from simulator.thermal._single_layer import collocation_matrix, pair_values, _kernel_matrix
 from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator
 from simulator.thermal.integral_levels import uses_fast
-from simulator.thermal.loss import IntegralLoss, Substrate, heat_loss_from_dict
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import IntegralLoss, Substrate
+from simulator.model.heat_loss import heat_loss_from_dict
+from simulator.thermal import ThermalModel
 
 PLANE = (np.array([0.0, 0.0, -1e-4]), np.array([0.0, 0.0, 1.0]))
 

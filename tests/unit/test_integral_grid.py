@@ -16,8 +16,8 @@ from simulator.thermal import integral_fast
 from simulator.thermal._single_layer import mirror
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.integral_grid import GridFarField, grid_pairs, smooth_kernel
-from simulator.thermal.loss import IntegralLoss, Substrate
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import IntegralLoss, Substrate
+from simulator.thermal import ThermalModel
 
 PLANE = (np.array([0.0, 0.0, -3e-4]), np.array([0.0, 0.0, 1.0]))
 

@@ -15,7 +15,7 @@ from simulator.thermal._single_layer import collocation_matrix
 from simulator.thermal.integral import IntegralOperator
 from simulator.thermal.integral_levels import (CorrectedLoss, ExtrapolatedLoss,
                                                coarse_refinement, integral_operator)
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 from unit.test_integral_loss import disk_mesh
 

@@ -17,7 +17,7 @@ from simulator.thermal._single_layer import (collocation_matrix, single_layer_op
                                               sub_triangle_corners, subdivision,
                                               subdivision_edges, triangle_potential)
 from simulator.thermal.integral import IntegralOperator
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 TRI = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.0]])
 

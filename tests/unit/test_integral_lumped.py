@@ -9,10 +9,10 @@ import pytest
 
 from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
 from simulator import IntegralLoss, ParameterError
-from simulator.thermal.loss import heat_loss_from_dict
+from simulator.model.heat_loss import heat_loss_from_dict
 from simulator.thermal.integral import IntegralOperator, lump_couplings
 from simulator.thermal.integral_levels import CorrectedLoss, ExtrapolatedLoss
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 #: the three operators the loss can be: (fields of IntegralLoss, class of ThermalModel.integral)
 OPERATORS = {"plain": ({"refinement": 2, "correction_tol": 0.0}, IntegralOperator),

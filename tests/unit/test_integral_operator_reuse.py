@@ -11,7 +11,7 @@ import scipy.linalg
 from simulator import IntegralLoss, simulate
 from simulator.cases import get_case, verification_strip
 from simulator.linalg import dense_jit
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 from simulator.thermal import _single_layer_jit
 from simulator.thermal.integral import IntegralOperator
 

@@ -13,7 +13,7 @@ from simulator import ChainLoss, IntegralLoss, ParameterError, Substrate, Therma
 from simulator.thermal import FixedShapeTemperatures, fixed_shape_temperatures
 from simulator.cases import verification_strip
 from simulator.thermal.integral import IntegralOperator
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_integral_loss import disk_mesh  # noqa: E402

@@ -176,7 +176,8 @@ def test_large_model_evaluation_takes_the_compiled_bar_kernel_with_numba(monkeyp
     from simulator.geometry.example_patterns import miura_sheet_pattern
     from simulator.model.model import Supports, make_model
     from simulator.model.properties import BarHingeParameters
-    from simulator.state import equilibrium_system, initial_state
+    from simulator.mechanics import equilibrium_system
+    from simulator.steps import initial_state
 
     model = make_model(miura_sheet_pattern(m=4, n=4), None, BarHingeParameters())
     model = make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))

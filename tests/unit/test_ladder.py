@@ -16,7 +16,7 @@ from simulator.linalg import factorize, solve
 from simulator.solvers import load_path, newton as newton_module
 from simulator.solvers.continuation import mgdcm
 from simulator.solvers.dynamics_options import DynamicsOptions
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 from test_linsolve import _sheet
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]

@@ -16,7 +16,7 @@ from simulator import (AIR, Actuators, Bimorph, ChainLoss, IntegralLoss, Paramet
                        ThermalParameters, build_mesh, make_model)
 from simulator.materials import GOLD_FILM, SPR, SU8
 from simulator.thermal import Layer, SheetLayers
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 from simulator.thermal.transient import (ThetaStepper, areal_capacity, capacity_vector,
                                          heat_system)
 

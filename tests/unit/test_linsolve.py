@@ -11,12 +11,12 @@ from simulator.steps import initial_state
 from simulator.linalg import linsolve, pardiso, thresholds
 from simulator.linalg import factorize, solve as _solve_linear
 from simulator.cases import miura_sheet_model
-from simulator.state import thermal_model
+from simulator.thermal import thermal_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.model import Supports, make_model
 from simulator.solvers.newton import NewtonOptions, newton
 from simulator.model.properties import BarHingeParameters
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 
 
 

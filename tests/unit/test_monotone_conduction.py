@@ -14,7 +14,7 @@ from simulator.geometry.materials import Material
 from simulator.model.mesh import build_mesh
 from simulator.thermal.monotone import (corner_cotangents, delaunay_flips, monotone_conduction,
                                         t3_matrices)
-from simulator.thermal.steady import ThermalModel, ThermalParameters
+from simulator.thermal import ThermalModel, ThermalParameters
 
 
 def _edge_weights(x, tri, kt):

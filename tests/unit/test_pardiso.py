@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 from simulator.linalg import factorize, linsolve, pardiso, thresholds
 from simulator.linalg import solve as _solve_linear
 from simulator.solvers.newton import NewtonOptions, newton
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 from test_linsolve import _grounded_stiff_chain, _sheet
 
 _spec = importlib.util.spec_from_file_location(
@@ -207,7 +207,7 @@ def test_kept_factors_stay_correct_when_the_handle_factorises_another_matrix(she
 def test_thermal_modes_and_transient_heat_agree_with_superlu(monkeypatch):
     from simulator import natural_modes
     from simulator.cases import miura_sheet_model
-    from simulator.state import thermal_model
+    from simulator.thermal import thermal_model
     from simulator.thermal.transient import ThetaStepper
 
     model = miura_sheet_model(cells_x=8, cells_y=6)

@@ -14,6 +14,8 @@ import ast
 import pathlib
 import re
 
+from source_imports import imported_module
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 KERNELS = ("the kernel tiers: simulator._jit chooses the tier and warms numba's cache, "
@@ -75,11 +77,7 @@ def reaches(module: str, source: str, is_package: bool = False) -> list:
                 aliases[a.asname or a.name.split(".")[0]] = a.name if a.asname else \
                     a.name.split(".")[0]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")[:len(package.split(".")) - node.level + 1]
-                source_module = ".".join(base + ([node.module] if node.module else []))
-            else:
-                source_module = node.module or ""
+            source_module = imported_module(package, node)
             for a in node.names:
                 target = f"{source_module}.{a.name}"
                 used.append((node.lineno, target))

@@ -6,7 +6,8 @@ import pytest
 from simulator.errors import ParameterError
 from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
-from simulator.model.properties import BarHingeParameters, mechanical_properties, spring_rest_angles
+from simulator.model import BarHingeParameters, spring_rest_angles
+from simulator.model.properties import mechanical_properties
 
 RTOL = 1e-9  # the reference values are printed to 10 significant digits
 

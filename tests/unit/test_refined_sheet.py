@@ -10,11 +10,11 @@ from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
 from simulator import ThermalParameters
 from simulator.cases import get_case
 from simulator.errors import ParameterError
-from simulator.thermal.loss import ChainLoss, IntegralLoss
+from simulator.thermal import ChainLoss, IntegralLoss
 from simulator.thermal.measures import crease_temperatures
-from simulator.thermal.parameters import AUTO_SHEET_REFINEMENT
+from simulator.model.thermal_parameters import AUTO_SHEET_REFINEMENT
 from simulator.thermal.refined import RefinedSheet
-from simulator.thermal.steady import ThermalModel
+from simulator.thermal import ThermalModel
 
 
 def _double_fold(**thermal):

@@ -12,10 +12,10 @@ import pytest
 
 from simulator.steps import initial_state
 from simulator.cases import single_fold_model
-from simulator.model.properties import spring_rest_angles
+from simulator.model import spring_rest_angles
 from simulator.solvers.newton import NewtonOptions, newton
 from simulator.solvers.nonlinear import STALL_PATIENCE, iterate, residual_at_round_off
-from simulator.state import equilibrium_system
+from simulator.mechanics import equilibrium_system
 
 
 def _moved(offset):

@@ -10,8 +10,9 @@ from simulator.model import SharpHingeParameters, build_sharp_mesh, sharp_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.mechanics.kinematics import crease_rotations, fold_angles
 from simulator.model.mass import lumped_masses
-from simulator.model.properties import spring_rest_angles
-from simulator.state import equilibrium_system, initial_state
+from simulator.model import spring_rest_angles
+from simulator.mechanics import equilibrium_system
+from simulator.steps import initial_state
 
 MAT = Material("m", youngs_modulus=2e9, poisson_ratio=0.3, density=1000.0)
 

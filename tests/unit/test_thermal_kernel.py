@@ -13,8 +13,8 @@ from simulator.mechanics.elements.springs import spring_kernel_backend
 from simulator.model.mesh import build_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.geometry.materials import AIR
-from simulator.thermal.loss import ChainLoss
-from simulator.thermal.steady import ThermalModel, ThermalParameters
+from simulator.thermal import ChainLoss
+from simulator.thermal import ThermalModel, ThermalParameters
 
 pytest.importorskip("numba")     # a test dependency (pyproject [test]); the kernel needs it
 
@@ -35,7 +35,7 @@ def _deformed(mesh, seed):
 def _gripper_state():
     from design.devices.gripper import GripperDesign, gripper_model
     from simulator.simulation import simulate
-    from simulator.state import thermal_model
+    from simulator.thermal import thermal_model
     model, pre = gripper_model(GripperDesign(loss_model="chain"))   # the chains with T3
     state = simulate(model, pre).state
     return thermal_model(model), model.mesh.nodes + state.u, model.mesh.n_creases
@@ -136,8 +136,8 @@ def test_background_compilation_fills_the_cache(tmp_path):
         from simulator.geometry.example_patterns import single_fold_pattern
         from simulator.model.mesh import build_mesh
         from simulator.geometry.materials import AIR
-        from simulator.thermal.loss import ChainLoss
-        from simulator.thermal.steady import ThermalModel, ThermalParameters
+        from simulator.thermal import ChainLoss
+        from simulator.thermal import ThermalModel, ThermalParameters
         assert _thermal_jit.compile_in_background()                 # cold cache: started
         assert not _thermal_jit.compile_in_background()             # only once
         child = _thermal_jit._background
@@ -174,7 +174,8 @@ def test_first_evaluation_starts_no_background_compilation(monkeypatch):
     thermal kernel in this process; only the CLI asks for the background compilation."""
     from simulator.cases import get_case
     from simulator.mechanics.elements import _fused_jit
-    from simulator.state import equilibrium_system, initial_state
+    from simulator.mechanics import equilibrium_system
+    from simulator.steps import initial_state
     model = get_case("single_fold", gravity=True).model
     monkeypatch.setattr(_fused_jit, "needs_compiling", lambda: True)
     monkeypatch.setattr(_thermal_jit, "compile_in_background", lambda: pytest.fail("started"))

@@ -144,7 +144,7 @@ def fe_sphere(radius: float, k_medium: float, *, box_factor: float = 4.0, level:
 def _plane_frame(x, mesh, params, substrate):
     """(origin (3,), rotation (3, 3) whose last row is the plane normal, has_plane) of the
     substrate: ``"model"`` (the model's own, ``ThermalParameters.substrate``: its plane, that
-    of its boundary panels at ``x``, or none), a :class:`~simulator.thermal.loss.Substrate`,
+    of its boundary panels at ``x``, or none), a :class:`~simulator.model.heat_loss.Substrate`,
     None, or (point, normal)."""
     from ..steady import resolve_substrate
 
@@ -193,7 +193,7 @@ def _sheet_prolongation(basis, doflocs, sheet_tris, parent, bh_tris, xs, n_nodes
 
 def _model_inputs(model, positions, state, crease_power, heat):
     """(positions (n, 3) [m], nodal heat (n,) [W], thermal parameters, thermal model)."""
-    from ..loss import ChainLoss
+    from ...model.heat_loss import ChainLoss
     from ..steady import ThermalModel, ThermalParameters
 
     mesh = getattr(model, "mesh", None)
@@ -281,7 +281,7 @@ def solve_fe3d(model, crease_power=None, k_medium: float | None = None, *, heat=
     substrate : "model", Substrate or None
         Isothermal plane at room temperature: the model's own substrate (``"model"``,
         ``ThermalParameters.substrate``: by default the plane of its thermal boundary panels,
-        none if it has none), a :class:`~simulator.thermal.loss.Substrate`, none, or a given
+        none if it has none), a :class:`~simulator.model.heat_loss.Substrate`, none, or a given
         plane [m].
     room_temperature : float, optional
         [deg C], default ``model.thermal.room_temperature``.

@@ -1,7 +1,7 @@
 """Parameters of the steady and transient heat-transfer models (theory 4): how the sheet loses
-heat (:class:`~simulator.thermal.loss.ChainLoss` or :class:`~simulator.thermal.loss.IntegralLoss`),
+heat (:class:`~simulator.model.heat_loss.ChainLoss` or :class:`~simulator.model.heat_loss.IntegralLoss`),
 the medium it loses it to (:class:`~simulator.geometry.materials.Fluid`), the
-:class:`~simulator.thermal.loss.Substrate`, room temperature and the nodes and panels held at
+:class:`~simulator.model.heat_loss.Substrate`, room temperature and the nodes and panels held at
 it. :class:`~simulator.thermal.steady.ThermalModel` builds the operators from them."""
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from .._deprecation import warn_deprecated
 from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
 from ..geometry.materials import AIR, Fluid
+from .heat_loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 from .layers import SheetLayers
-from .loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
-from .monotone import CONDUCTIONS
 
-__all__ = ["ThermalParameters", "REFERENCE_BETA", "CREASE_CONDUCTIONS", "AUTO_SHEET_REFINEMENT"]
+__all__ = ["ThermalParameters", "REFERENCE_BETA", "CONDUCTIONS", "CREASE_CONDUCTIONS",
+           "AUTO_SHEET_REFINEMENT", "MAX_SHEET_REFINEMENT"]
 
 logger = logging.getLogger(__name__)
 
@@ -30,8 +30,14 @@ logger = logging.getLogger(__name__)
 #: the reference's numbers; ``math.radians(20)`` is the physical value.
 REFERENCE_BETA = 20 / 180 * 3.14
 
+#: The sheet conduction settings (:attr:`ThermalParameters.conduction`): ``"t3"`` the mesh
+#: triangles' T3 elements (the reference's), ``"monotone"`` the M-matrix of
+#: :mod:`simulator.thermal.monotone`.
+CONDUCTIONS = ("t3", "monotone")
 #: How a crease conducts heat in-plane (:attr:`ThermalParameters.crease_conduction`).
 CREASE_CONDUCTIONS = ("paper", "layers")
+#: Largest sheet refinement accepted (``r^2`` fine triangles per mesh triangle).
+MAX_SHEET_REFINEMENT = 16
 #: The integral loss's sheet refinement where its dense operator allows
 #: (:meth:`ThermalParameters.sheet_refinement_for`; theory 4.11).
 AUTO_SHEET_REFINEMENT = 2
@@ -202,7 +208,7 @@ class ThermalParameters:
     Parameters
     ----------
     loss : ChainLoss or IntegralLoss
-        How the sheet loses heat to the medium (:mod:`simulator.thermal.loss`): the paper's
+        How the sheet loses heat to the medium (:mod:`simulator.model.heat_loss`): the paper's
         fitted chains, ``ChainLoss(thickness=t_env)``, or the calibration-free
         ``IntegralLoss()`` (the default). Each carries only its own options
         (:meth:`with_loss` changes them). Transient and electro-thermal steps use the same
@@ -243,7 +249,7 @@ class ThermalParameters:
         transient model's heat capacity of those is ``sum rho c t`` over the same layers
         (theory 7.2). Everything else stays as in ``"paper"``.
     sheet_layers : SheetLayers or None
-        Layer stacks of panels and passive creases (:class:`~simulator.thermal.layers.
+        Layer stacks of panels and passive creases (:class:`~simulator.model.layers.
         SheetLayers`: a metal film on a panel, a heater film on a crease that does not
         actuate), used with ``crease_conduction="layers"`` (with ``"paper"`` an error: they
         would be ignored). None (default): none.
@@ -357,7 +363,7 @@ class ThermalParameters:
             return self.sheet_refinement
         if self.loss.model != "integral" or self.loss.operator == "fast":
             return 1
-        from .integral import MAX_SUB_TRIANGLES
+        from ..thermal.integral import MAX_SUB_TRIANGLES
 
         r, m = AUTO_SHEET_REFINEMENT, self.loss.refinement
         return r if int(n_triangles) * (r * m) ** 2 <= MAX_SUB_TRIANGLES else 1
@@ -509,8 +515,6 @@ def _sheet_refinement(value, loss) -> int | None:
     """The checked :attr:`ThermalParameters.sheet_refinement` (None: the loss model's)."""
     if value is None:
         return None
-    from .refined import MAX_SHEET_REFINEMENT
-
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
             or not 1 <= value <= MAX_SHEET_REFINEMENT:
         raise ParameterError(f"ThermalParameters.sheet_refinement = {value!r} must be None or an "

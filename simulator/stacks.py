@@ -16,16 +16,17 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .._validate import capped, one_of
-from ..errors import ParameterError
-from ..geometry.pattern import Pattern
-from ..geometry.materials import AIR
-from ..thermal.loss import ChainLoss, IntegralLoss
-from ..thermal.steady import REFERENCE_BETA, ThermalParameters
-from .bimorph import Actuators, Bimorph
-from .mesh import build_mesh
-from .model import ContactParameters, Model, Supports, make_model
-from .properties import BarHingeParameters
+from ._validate import capped, one_of
+from .errors import ParameterError
+from .geometry.pattern import Pattern
+from .geometry.materials import AIR
+from .model.heat_loss import ChainLoss, IntegralLoss
+from .model.thermal_parameters import REFERENCE_BETA, ThermalParameters
+from .model.bimorph import Actuators, Bimorph
+from .model.mesh import build_mesh
+from .model.model import ContactParameters, Model, Supports, make_model
+from .mechanics.contact_search import closest_pair
+from .model.properties import BarHingeParameters
 
 __all__ = ["LayerStack", "STACKS", "get_stack", "stack_model", "actuation_signs",
            "central_panel", "plain_contact", "plain_contact_distance"]
@@ -119,7 +120,7 @@ def get_stack(name: str) -> LayerStack:
 def actuation_signs(pattern: Pattern) -> np.ndarray:
     """(n_edges,) +1 / -1: the direction each crease should fold (V / M, else the sign of its
     design or start fold angle, else valley); 0 on boundary edges."""
-    from ..geometry.orientation import start_fold_angles
+    from .geometry.orientation import start_fold_angles
 
     design = np.sign(pattern.edge_fold_angle)
     start = np.sign(start_fold_angles(pattern))
@@ -196,8 +197,6 @@ def plain_contact_distance(pattern: Pattern, params: BarHingeParameters | None =
 def _plain_contact(mesh, params: BarHingeParameters,
                    required: bool = False) -> ContactParameters | None:
     """:func:`plain_contact` of the pattern of ``mesh``."""
-    from ..mechanics.contact_search import closest_pair
-
     d0 = plain_contact_distance(mesh.pattern, params)
     near = closest_pair(mesh, mesh.nodes, d0)
     if near is None:
@@ -238,7 +237,7 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
         mode's sign picks it, the same at any step count.
     loss_model : {"integral", "chain"}
         Heat loss to the stack's air (theory 4.3, 4.7): ``"integral"`` (default,
-        :class:`~simulator.thermal.loss.IntegralLoss`: the sheet's single-layer potential in
+        :class:`~simulator.model.heat_loss.IntegralLoss`: the sheet's single-layer potential in
         the medium, nothing fitted, within 1 % of the 3-D FE; above its dense limit the fast
         path of theory 4.7, minutes per solve on sheets of thousands of triangles) or
         ``"chain"`` (the paper's chains, t_env the stack's ``env_thickness``: seconds, but

@@ -11,7 +11,7 @@ substrate (theory 4.3, 4.7; issue 29).
 Each carries only its own options; the medium (:class:`~simulator.geometry.materials.Fluid`:
 :data:`~simulator.geometry.materials.AIR`, :data:`~simulator.geometry.materials.WATER`) and
 the :class:`Substrate` are their own concepts, given to
-:class:`~simulator.thermal.parameters.ThermalParameters` beside the loss::
+:class:`~simulator.model.thermal_parameters.ThermalParameters` beside the loss::
 
     ThermalParameters(loss=IntegralLoss(), medium=WATER, substrate=Substrate.plane(p, n))
     ThermalParameters(loss=ChainLoss(thickness=1.5e-3))           # air, substrate from panels
@@ -49,7 +49,7 @@ class ChainLoss:
         Medium layers N per node, >= 1.
     dissipation_angle : float
         Heat-spreading angle beta [rad] in [0, pi/2)
-        (:data:`~simulator.thermal.parameters.REFERENCE_BETA` matches the reference).
+        (:data:`~simulator.model.thermal_parameters.REFERENCE_BETA` matches the reference).
     """
 
     thickness: float
@@ -161,7 +161,7 @@ class IntegralLoss:
         """Whether a sheet of ``n_triangles`` triangles is solved on the fast path (theory 4.7):
         ``operator`` "fast", or "auto" above the dense limit (more than
         ``MAX_SUB_TRIANGLES`` sub-triangles at ``refinement``)."""
-        from .integral_levels import uses_fast
+        from ..thermal.integral_levels import uses_fast
 
         return uses_fast(int(n_triangles), self)
 
@@ -215,7 +215,7 @@ class Substrate:
     """An isothermal plane at room temperature under the sheet (the integral loss's image
     plane; the chains' t_env cap comes from the thermal-boundary panels).
 
-    ``Substrate()`` (the default of :class:`~simulator.thermal.parameters.ThermalParameters`):
+    ``Substrate()`` (the default of :class:`~simulator.model.thermal_parameters.ThermalParameters`):
     the plane of the model's thermal-boundary panels, where it has some (else none).
     ``Substrate.plane(point, normal)``: an explicit plane, a point (3,) [m] and a normal (3,)
     pointing into the medium, in the global frame. No substrate (an unbounded medium):
