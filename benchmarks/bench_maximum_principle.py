@@ -180,7 +180,7 @@ def fine_rise(model, p, r):
     mesh, x = tm.mesh, tm.mesh.nodes
     ftri, parent, P = refine(mesh, r)
     X, nf = P @ x, len(P)
-    Ke = t3_matrices(X[ftri], tm._kt[parent])
+    Ke = t3_matrices(X[ftri], tm.conduction.kt[parent])
     area = 0.5 * np.linalg.norm(np.cross(X[ftri[:, 1]] - X[ftri[:, 0]],
                                          X[ftri[:, 2]] - X[ftri[:, 0]]), axis=1)
     A = np.zeros((nf, nf))

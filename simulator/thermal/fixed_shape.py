@@ -22,8 +22,8 @@ from ..errors import ParameterError
 from .measures import crease_temperatures
 from ..model.heat_loss import Substrate
 from ..model.thermal_parameters import ThermalParameters
-from .steady import ThermalModel, panels_plane
-from .steady import resolve_substrate as steady_substrate
+from .steady import ThermalModel
+from .substrate import panels_plane, resolve_substrate as mesh_substrate
 
 __all__ = ["fixed_shape_temperatures", "FixedShapeTemperatures", "boundary_panel_plane",
            "CreaseTemperatureTable"]
@@ -100,7 +100,7 @@ def boundary_panel_plane(model, x=None) -> tuple:
     """The plane of the model's thermal boundary panels at positions ``x`` (n, 3) [m] (default:
     the mesh's) as 6 floats, a point and the unit normal towards the rest of the sheet, or ()
     without boundary panels: the plane the default substrate, ``Substrate()``, stands for
-    (:func:`~simulator.thermal.steady.panels_plane`)."""
+    (:func:`~simulator.thermal.substrate.panels_plane`)."""
     panels = tuple(model.thermal.boundary_panels) if model.thermal is not None else ()
     return panels_plane(model.mesh, panels, x)
 
@@ -110,7 +110,7 @@ def resolve_substrate(model, x, substrate):
     Substrate`) as a plane of 6 floats, or () for none: "model" is the model's own
     substrate (``ThermalParameters.substrate``: its plane, that of its boundary panels at
     ``x``, or none)."""
-    return steady_substrate(substrate, model.mesh, model.thermal, x)
+    return mesh_substrate(substrate, model.mesh, model.thermal, x)
 
 
 def _shape_and_heat(model, tm, state, positions, crease_power, heat):

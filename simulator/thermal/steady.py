@@ -1,22 +1,19 @@
-"""Steady heat conduction in the structure with loss to layered environment chains (theory 4).
+"""The steady heat balance of a mesh (theory 4): :class:`ThermalModel` puts together the
+sheet's conduction (:mod:`simulator.thermal.conduction`: T3 elements or the monotone
+conduction, layer stacks) and its heat loss to the medium (the paper's environment chains,
+:mod:`simulator.thermal.chains`, or the calibration-free integral loss,
+:mod:`simulator.thermal.integral_levels`, over the substrate plane of
+:mod:`simulator.thermal.substrate`), holds the room-temperature nodes and solves for the
+temperatures: linear, or by Newton's method where radiation or a temperature-dependent medium
+makes the balance nonlinear (:mod:`simulator.thermal.nonlinear`), on the mesh or on its
+refined sheet (:mod:`simulator.thermal.refined`). :func:`thermal_model` keeps one per model.
 
-Every mesh triangle (crease and panel fans) is a linear T3 conduction element built
-from its REFERENCE edge lengths and the CURRENT angle at its first node (or, with
-``conduction="monotone"``, the M-matrix conduction of :mod:`simulator.thermal.monotone`
-at the current positions). Each node
-also owns a chain of ``N`` environment layers ending at room temperature; layer ``q``
-of a triangle's three nodes receives the conductance ``k_env A_q N / t_air`` with
-``A_q = (2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N`` (the paper's heat-loss
-area), where ``t_air = min(t_env, tcap)`` and ``tcap`` is the mean distance of the
-triangle's vertices to the thermal-boundary (substrate) panels. Unknowns of the full
-system are ordered by layer: index ``q * n + node`` (``q = 0`` is the structure).
-
-Because every chain is a series of conductances ending at room temperature,
-:meth:`ThermalModel.solve` eliminates the environment layers exactly (series sum, one
-diagonal term per node) and solves the ``n x n`` structure system;
-:meth:`ThermalModel.conductivity_matrix` gives the full ``(N + 1) n`` matrix of the
-reference for inspection and checks. Boundary triangles keep their chains (as in the
-reference); t_air is floored at 1e-9 t_env where the reference would divide by zero.
+Unknowns of the full chain system are ordered by layer: index ``q * n + node`` (``q = 0`` is
+the structure). Because every chain is a series of conductances ending at room temperature,
+:meth:`ThermalModel.solve` eliminates the environment layers exactly (series sum, one diagonal
+term per node) and solves the ``n x n`` structure system;
+:meth:`ThermalModel.conductivity_matrix` gives the full ``(N + 1) n`` matrix of the reference
+for inspection and checks.
 """
 
 from __future__ import annotations
@@ -33,121 +30,26 @@ import scipy.sparse as sp
 from . import _thermal_jit
 
 from ..mechanics.assembly import StiffnessPattern
-from ..mechanics.elements.contact import point_triangle_distance
-from .._deprecation import warn_deprecated
-from .._validate import array, capped, one_of
-from ..errors import ConvergenceError, ParameterError, PatternError
+from .._validate import array
+from ..errors import ConvergenceError, ParameterError
 from ..linalg import thresholds
 from ..linalg.ladder import factorize
 from ..model.mesh import BarHingeMesh
 from ..model.model import Model
 from ..model.sharp import check_not_sharp
+from ..model.thermal_parameters import ThermalParameters
 from .integral import IntegralOperator
 from .integral_levels import integral_operator
-from ..model.heat_loss import ChainLoss
-from .monotone import MonotoneConduction, monotone_conduction
+from .chains import CAP_BOUNDARY, CAP_NONE, MIN_AIR_FRACTION, UNUSED_CHAINS, ChainEnvironment
+from .conduction import SheetConduction
+from .monotone import MonotoneConduction
 from .nonlinear import NonlinearLoss, radiation, solve_heat_balance
 from .refined import RefinedSheet
-from ..model.thermal_parameters import REFERENCE_BETA, ThermalParameters  # noqa: F401  (their old home)
+from .substrate import substrate_plane, warn_no_plane
 
-__all__ = ["ThermalParameters", "ThermalModel", "REFERENCE_BETA", "heat_weights", "thermal_model"]
+__all__ = ["ThermalModel", "heat_weights", "thermal_model"]
 
 logger = logging.getLogger(__name__)
-
-#: Cap value of boundary triangles themselves and of all triangles without boundary panels [m].
-_CAP_BOUNDARY, _CAP_NONE = 1e10, 1e5
-#: Floor of t_air relative to t_env: a triangle lying on a boundary panel would otherwise get an
-#: infinite conductance (the reference divides by zero there).
-_MIN_AIR_FRACTION = 1e-9
-
-
-#: The chains' defaults, which size the medium layers of the full system (unused) with the
-#: integral loss.
-_UNUSED_CHAINS = ChainLoss(thickness=1.0)
-
-#: Boundary panels farther than this fraction of their extent from one plane are not coplanar.
-_COPLANAR = 1e-6
-
-#: Whether :func:`_warn_no_plane` has spoken in this process (it speaks once).
-_NO_PLANE_WARNED = [False]
-
-
-def _warn_no_plane(params) -> None:
-    """Warn, once per process, that the integral model has boundary panels but no substrate
-    plane: its medium is unbounded under the sheet."""
-    if _NO_PLANE_WARNED[0]:
-        return
-    _NO_PLANE_WARNED[0] = True
-    logger.warning(
-        "the integral heat loss with boundary_panels %s but substrate=None: the medium is "
-        "taken as unbounded below the sheet, without the substrate's isothermal plane (the "
-        "loss near the substrate is underestimated: the gripper's assembly power comes out "
-        "43 %% low at m = 2); the default substrate, Substrate(), is the boundary panels' "
-        "plane, as the 3-D FE takes it (said once per process).",
-        tuple(params.boundary_panels))
-
-
-def substrate_plane(mesh, params, x=None):
-    """The substrate plane ``(point (3,), unit normal (3,))`` of ``params``
-    (:attr:`~simulator.model.thermal_parameters.ThermalParameters.substrate`) on ``mesh`` at positions
-    ``x`` (default: the mesh's): an explicit plane, the plane of the thermal-boundary panels
-    (``Substrate()``; None without boundary panels), or None (``substrate=None``)."""
-    v = resolve_substrate("model", mesh, params, x)
-    if not v:
-        return None
-    normal = np.array(v[3:])
-    return np.array(v[:3]), normal / np.linalg.norm(normal)
-
-
-def resolve_substrate(substrate, mesh, params, x=None) -> tuple:
-    """A substrate as a plane of 6 floats (a point and a normal into the medium [m]), or ()
-    for none: ``"model"`` is ``params.substrate`` (None ``params``: none), a
-    :class:`~simulator.model.heat_loss.Substrate` its plane or that of the thermal-boundary panels
-    of ``params`` on ``mesh`` at positions ``x`` (default: the mesh's), None none; a pair
-    (point (3,), normal (3,)) is a deprecated spelling of ``Substrate.plane(point, normal)``.
-    The one reading of a substrate: the steady model, ``fixed_shape_temperatures``,
-    ``calibrate_environment`` and ``solve_fe3d``."""
-    from ..model.heat_loss import Substrate
-
-    if isinstance(substrate, str):
-        one_of("substrate", substrate, ("model",), hint=" (or a Substrate, None, or (point, "
-                                                        "normal))")
-        substrate = params.substrate if params is not None else None
-    if substrate is None:
-        return ()
-    if isinstance(substrate, Substrate):
-        if not substrate.from_panels:
-            return substrate.as_tuple()
-        return panels_plane(mesh, params.boundary_panels if params is not None else (), x)
-    try:
-        point, normal = (np.asarray(v, float).reshape(3) for v in substrate)
-    except (TypeError, ValueError):
-        raise ParameterError(f"substrate = {substrate!r} must be 'model', a Substrate "
-                             "(Substrate.plane(point, normal) [m]) or None.") from None
-    warn_deprecated("substrate=(point, normal) is deprecated; give "
-                    "substrate=Substrate.plane(point, normal).")
-    return Substrate.plane(point, normal).as_tuple()
-
-
-def panels_plane(mesh, panels, x=None) -> tuple:
-    """The plane of ``panels`` at positions ``x`` (n, 3) [m] (default: the mesh's) as 6 floats,
-    a point and the unit normal towards the rest of the sheet; () for no panels. Raises
-    :class:`ParameterError` if they are not coplanar."""
-    panels = tuple(panels)
-    if not panels:
-        return ()
-    x = mesh.nodes if x is None else np.asarray(x, float)
-    p = x[np.unique(mesh.triangles[np.isin(mesh.triangle_panel, panels)])]
-    origin = p.mean(axis=0)
-    normal = np.linalg.svd(p - origin)[2][-1]
-    if np.abs((p - origin) @ normal).max() > _COPLANAR * np.ptp(p, axis=0).max():
-        raise ParameterError(f"the thermal boundary panels {panels} are not coplanar: there is "
-                             "no substrate plane to take from them; give the plane explicitly "
-                             "(ThermalParameters(substrate=Substrate.plane(point, normal)), or "
-                             "substrate=None for none).")
-    if np.mean((x - origin) @ normal) < 0:
-        normal = -normal
-    return tuple(float(v) for v in np.concatenate([origin, normal]))
 
 
 def heat_weights() -> np.ndarray:
@@ -167,18 +69,18 @@ class ThermalModel:
         process) at the first steady solve that the medium is unbounded below the sheet;
         False where the caller chose no plane.
     actuators : Actuators or None
-        The model's :class:`~simulator.model.bimorph.Actuators`: with
-        ``params.crease_conduction == "layers"`` their bimorph's layers give the actuated
-        creases' sheet conductance ``k1 t1 + k2 t2`` (theory 4.10); unused with ``"paper"``.
+        The model's actuators, for the sheet's layer stacks (see
+        :class:`~simulator.thermal.conduction.SheetConduction`).
 
     Attributes
     ----------
-    layered : (n_tri,) bool
-        Triangles that conduct and store heat as a layer stack (``crease_conduction="layers"``:
-        the actuated creases' and the ``params.sheet_layers``' panels and creases).
-    layer_capacity : (n_tri,) float
-        Areal heat capacity ``sum rho c t`` [J/(m^2 K)] of the layered triangles' stacks (0
-        elsewhere; the transient model takes the others' from their material, theory 7.2).
+    conduction : SheetConduction
+        The sheet's conduction elements (:class:`~simulator.thermal.conduction.SheetConduction`:
+        thicknesses, conductivities, layer stacks).
+    environment : ChainEnvironment
+        The environment chains (:class:`~simulator.thermal.chains.ChainEnvironment`; with the
+        integral loss those of :data:`~simulator.thermal.chains.UNUSED_CHAINS`, which size the
+        unused medium layers of the full system).
     """
 
     def __init__(self, mesh: BarHingeMesh, params: ThermalParameters,
@@ -196,30 +98,18 @@ class ThermalModel:
                 raise ParameterError(f"ThermalParameters.room_temperature_nodes: node {v} does not "
                                      f"exist (the mesh has nodes 0..{n - 1}).")
         tri = mesh.triangles
-        self.edge_lengths = mesh.bar_length[self._bar_ids(tri[:, [0, 0, 1]], tri[:, [1, 2, 2]])]
-        panel, crease = mesh.triangle_panel, mesh.triangle_crease
-        is_panel = panel >= 0
-        k_panel = np.array([m.thermal_conductivity for m in pat.panel_material])
-        #: (n_tri,) thickness t [m] and conductivity k [W/(m K)] of every triangle
-        self.thickness = np.where(is_panel, pat.panel_thickness[panel],
-                                  pat.crease_thickness[np.append(mesh.crease_ids, 0)[crease]])
-        self.conductivity = np.where(is_panel, k_panel[panel],
-                                     pat.crease_material.thermal_conductivity)
-        #: (n_tri,) k t of every triangle [W/K]
-        self._kt = self.conductivity * self.thickness
-        self.layered = np.zeros(len(tri), bool)
-        self.layer_capacity = np.zeros(len(tri))
-        if params.crease_conduction == "layers":
-            self._layer_conduction(actuators)
-        self.is_boundary = is_panel & np.isin(panel, params.boundary_panels)
-        self._cap_nodes = np.unique(tri[~self.is_boundary])
+        self.conduction = conduction = SheetConduction(mesh, params, actuators)
+        panel = mesh.triangle_panel
+        self.is_boundary = (panel >= 0) & np.isin(panel, params.boundary_panels)
         fixed = np.zeros(n, bool)
         fixed[list(params.room_temperature_nodes)] = True
         #: room-temperature nodes of the chain model (and of the transient model)
         self.chain_fixed_nodes = np.flatnonzero(fixed)
         #: the chain loss (:class:`~simulator.model.heat_loss.ChainLoss`); with the integral loss
         #: the chains' defaults, which size the (unused) medium layers of the full system
-        self.chains = params.loss if params.loss.model == "chain" else _UNUSED_CHAINS
+        self.chains = params.loss if params.loss.model == "chain" else UNUSED_CHAINS
+        self.environment = ChainEnvironment(mesh, self.chains, params.medium.thermal_conductivity,
+                                            conduction.edge_lengths, self.is_boundary)
         #: the integral model's loss operator (:mod:`simulator.thermal.integral_levels`:
         #: an :class:`IntegralOperator` at refinement m, or its Richardson extrapolation, or either
         #: corrected through the m = 1 operator between rebuilds)
@@ -243,12 +133,12 @@ class ThermalModel:
         # order (the integral loss: conduction only, no chains)
         chain = self.integral is None
         self._kernel_args = (
-            np.array(tri, dtype=np.int64, order="C"), self.edge_lengths, self._kt,
-            self.is_boundary, self._cap_nodes.astype(np.int64),
+            np.array(tri, dtype=np.int64, order="C"), conduction.edge_lengths, conduction.kt,
+            self.is_boundary, self.environment.cap_nodes.astype(np.int64),
             float(self.chains.thickness) if chain else 1.0,
             math.tan(self.chains.dissipation_angle),
             float(params.medium.thermal_conductivity) if chain else 0.0, int(self.chains.layers),
-            _MIN_AIR_FRACTION, _CAP_BOUNDARY, _CAP_NONE)
+            MIN_AIR_FRACTION, CAP_BOUNDARY, CAP_NONE)
         #: the refined sheet (:class:`~simulator.thermal.refined.RefinedSheet`) where
         #: ``params.sheet_refinement_for`` the mesh is above 1, else None
         self.sheet = None
@@ -279,73 +169,12 @@ class ThermalModel:
         self.fixed_nodes = fine.fixed_nodes[fine.fixed_nodes < n]
         self.free_nodes = np.setdiff1d(np.arange(n), self.fixed_nodes)
 
-    def _layer_conduction(self, actuators) -> None:
-        """Give the layered triangles (``crease_conduction="layers"``, theory 4.10) their
-        stack's sheet conductance and areal heat capacity: the actuated creases their bimorph's
-        ``k1 t1 + k2 t2`` and ``rho_c1 t1 + rho_c2 t2``, the panels and passive creases of
-        ``params.sheet_layers`` their stack's sums. Their :attr:`conductivity` becomes the
-        effective ``sum k t / t`` over the pattern's thickness ``t``."""
-        stacks = self.params.sheet_layers
-        kt, cap = self._kt.copy(), self.layer_capacity.copy()
-        if stacks is not None:
-            listed, skt, scap = stacks.per_triangle(self.mesh, self.mesh.pattern)
-            kt, cap, self.layered = np.where(listed, skt, kt), scap, listed
-        if actuators is not None or stacks is None:
-            actuated = self._actuated_triangles(actuators, stacks)
-            b = actuators.bimorph
-            kt = np.where(actuated, b.sheet_conductance, kt)
-            cap = np.where(actuated, b.areal_capacity, cap)
-            self.layered = self.layered | actuated
-        self._kt, self.layer_capacity = kt, cap
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.conductivity = np.where(self.layered & (self.thickness > 0),
-                                         self._kt / self.thickness, self.conductivity)
-        logger.debug("conduction 'layers': %d of %d triangles as layer stacks",
-                     int(self.layered.sum()), len(self.layered))
-
-    def _actuated_triangles(self, actuators, stacks) -> np.ndarray:
-        """(n_tri,) bool: the triangles of the creases ``actuators`` actuate; an error without
-        actuators, or where ``stacks`` (:class:`~simulator.model.layers.SheetLayers`) lists
-        an actuated crease (its layers are its bimorph's)."""
-        from ..model.bimorph import Actuators
-
-        if not isinstance(actuators, Actuators):
-            raise ParameterError(
-                f"ThermalParameters.crease_conduction = 'layers' needs the model's actuators "
-                f"(their bimorph layers conduct), got actuators = {actuators!r}; give "
-                "make_model(..., actuators=Actuators(Bimorph(...), ...)), or "
-                "ThermalParameters(sheet_layers=SheetLayers(...)) for the stacks of panels and "
-                "passive creases, or crease_conduction='paper'.")
-        ids = [int(c) for c in dict(actuators.delta_alpha)]
-        both = sorted(set(ids) & set(stacks.creases)) if stacks is not None else []
-        if both:
-            raise ParameterError(
-                f"SheetLayers.creases lists the actuated crease(s) {capped(both)}: an actuated "
-                "crease conducts as its bimorph's layers (Actuators.bimorph); list only passive "
-                "creases (a heater film without actuation), or change the Bimorph.")
-        actuated = np.isin(self.mesh.crease_ids, ids)
-        crease = np.asarray(self.mesh.triangle_crease)
-        return (crease >= 0) & np.append(actuated, False)[crease]
-
-    def _bar_ids(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Bars joining node pairs ``(a, b)`` (any shape), by a sorted-key search."""
-        n = self.mesh.n_nodes
-        bars = self.mesh.bars.astype(np.int64)
-        keys = bars[:, 0] * n + bars[:, 1]
-        order = np.argsort(keys)
-        want = np.minimum(a, b).astype(np.int64) * n + np.maximum(a, b)
-        pos = np.minimum(np.searchsorted(keys, want, sorter=order), len(keys) - 1)
-        found = keys[order[pos]] == want
-        if not found.all():
-            raise PatternError("mesh triangle edge without a bar: the mesh is inconsistent.")
-        return order[pos]
-
     def _check_solvable(self):
         """Without environment loss, every conducting component needs a room-temperature node."""
         if self.params.medium.thermal_conductivity > 0:
             return
         n, tri = self.mesh.n_nodes, self.mesh.triangles
-        live = tri[self._kt > 0]
+        live = tri[self.conduction.kt > 0]
         adj = sp.coo_matrix((np.ones(3 * len(live)), (live.ravel(), np.roll(live, 1, 1).ravel())),
                             shape=(n, n))
         from scipy.sparse.csgraph import connected_components
@@ -368,123 +197,25 @@ class ThermalModel:
         """``x`` as a float array, checked to be finite and of the mesh's node shape [m]."""
         return array("positions x", x, self.mesh.nodes.shape, "m")
 
-    def _warn_floored(self):
-        logger.warning("a triangle touches a thermal boundary panel; t_air floored at %g m",
-                       _MIN_AIR_FRACTION * self.chains.thickness)
-
-    def _conduction(self, x):
-        """T3 matrices (n_tri, 3, 3) [W/K] and areas A_t (n_tri,) [m^2] at positions ``x``."""
-        x = self._positions(x)
-        tri = self.mesh.triangles
-        u, v = x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]]
-        alpha = np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), np.einsum("ij,ij->i", u, v))
-        l1, l2 = self.edge_lengths[:, 0], self.edge_lengths[:, 1]
-        x3, y3 = l2 * np.cos(alpha), l2 * np.sin(alpha)
-        area = 0.5 * l1 * y3
-        zero = np.zeros_like(l1)
-        b = np.stack([-y3, y3, zero], axis=1)
-        c = np.stack([x3 - l1, -x3, l1], axis=1)
-        scale = self._kt / (4 * area)
-        K = scale[:, None, None] * (b[:, :, None] * b[:, None, :] + c[:, :, None] * c[:, None, :])
-        return K, area
-
     def triangle_areas(self, x) -> np.ndarray:
         """Conduction areas A_t [m^2] of every triangle at positions ``x`` (n, 3) [m], (n_tri,)
         (reference edge lengths, current angle at the first node; theory 4.2)."""
-        return self._conduction(x)[1]
-
-    def tcap(self, x) -> np.ndarray:
-        """Cap of t_env per triangle [m], (n_tri,) (theory 4.4).
-
-        Mean over the triangle's vertices of the distance to the nearest boundary-panel triangle
-        at positions ``x`` (n, 3) [m]; 1e10 for boundary triangles, 1e5 without boundary panels.
-        """
-        x = np.asarray(x, float)
-        tri = self.mesh.triangles
-        if not self.is_boundary.any():
-            return np.full(len(tri), _CAP_NONE)
-        bc = x[tri[self.is_boundary]]                                      # (m, 3, 3)
-        p = self._cap_nodes
-        d, _, _ = point_triangle_distance(np.repeat(x[p], len(bc), axis=0),
-                                          np.tile(bc, (len(p), 1, 1)))
-        dmin = np.zeros(self.mesh.n_nodes)
-        dmin[p] = d.reshape(len(p), len(bc)).min(axis=1)
-        return np.where(self.is_boundary, _CAP_BOUNDARY, dmin[tri].mean(axis=1))
-
-    def environment_geometry(self, x, area=None):
-        """Environment layer areas and thickness of every triangle (theory 4.3-4.4).
-
-        Returns
-        -------
-        a_q : (n_tri, N) array
-            Heat-loss area A_q [m^2] of layer q seen by EACH of the triangle's three nodes,
-            ``(2/3) A_t + (2/3) L_sum t_air tan(beta) (q - 1/2) / N``.
-        t_air : (n_tri,) array
-            Environment thickness [m], ``min(t_env, tcap)`` (floored, see the module notes).
-        """
-        chains = self.chains
-        if area is None:
-            area = self._conduction(x)[1]
-        t_env = chains.thickness
-        t_air = np.where(t_env < (cap := self.tcap(x)), t_env, cap)
-        if np.any(t_air < _MIN_AIR_FRACTION * t_env):
-            self._warn_floored()
-            t_air = np.maximum(t_air, _MIN_AIR_FRACTION * t_env)
-        N = chains.layers
-        s = (np.arange(1, N + 1) - 0.5) / N
-        l_sum = self.edge_lengths.sum(axis=1)
-        spread = l_sum * t_air * math.tan(chains.dissipation_angle)
-        return (2 / 3) * area[:, None] + (2 / 3) * spread[:, None] * s, t_air
-
-    def node_layer_sum(self, per_triangle) -> np.ndarray:
-        """Sum a per-triangle, per-layer quantity (n_tri, N) onto every node's chain, (n, N)."""
-        N, tri = self.chains.layers, self.mesh.triangles
-        nodes = np.repeat(tri, N, axis=1).ravel()
-        layer = np.tile(np.arange(N), 3 * len(tri))
-        flat = np.bincount(nodes * N + layer, np.repeat(per_triangle, 3, axis=0).ravel(),
-                           minlength=self.mesh.n_nodes * N)
-        return flat.reshape(-1, N)
-
-    def layer_conductance(self, x, area=None) -> np.ndarray:
-        """Environment conductance of every node and layer [W/K], (n, N) (theory 4.3)."""
-        a_q, t_air = self.environment_geometry(x, area)
-        N = self.chains.layers
-        k_env = self.params.medium.thermal_conductivity
-        return self.node_layer_sum(k_env * a_q * N / t_air[:, None])
+        return self.conduction.t3(x)[1]
 
     # ------------------------------------------------------------------ matrices
-    @cached_property
+    @property
     def monotone(self) -> MonotoneConduction | None:
-        """The monotone conduction's triangulation (:mod:`simulator.thermal.monotone`), chosen
-        at the mesh's positions, where ``params.conduction_method`` is ``"monotone"``; else
-        None."""
-        if self.params.conduction_method != "monotone":
-            return None
-        mesh = self.mesh
-        region = np.where(mesh.triangle_panel >= 0, mesh.triangle_panel,
-                          -1 - mesh.triangle_crease)
-        out = monotone_conduction(mesh.nodes, mesh.triangles, region, self._kt)
-        logger.debug("monotone conduction: %d flips, %d Steiner points", out.flips,
-                     out.n_steiner)
-        return out
-
-    @cached_property
-    def _families(self) -> list:
-        """Mesh nodes of the conduction's element families: the triangles (T3), or the
-        monotone conduction's :attr:`~simulator.thermal.monotone.MonotoneConduction.families`."""
-        return [self.mesh.triangles] if self.monotone is None else self.monotone.families
-
-    def _element_values(self, x, K) -> list:
-        """Element matrices [W/K] of :attr:`_families` at positions ``x``, given the T3 matrices
-        ``K`` (n_tri, 3, 3) of the mesh triangles there."""
-        return [K] if self.monotone is None else self.monotone.element_values(x)
+        """The monotone conduction's triangulation where ``params.conduction_method`` is
+        ``"monotone"``, else None (:attr:`SheetConduction.monotone
+        <simulator.thermal.conduction.SheetConduction.monotone>`)."""
+        return self.conduction.monotone
 
     @cached_property
     def _free_pattern(self) -> StiffnessPattern:
         n = self.mesh.n_nodes
         free_index = np.full(n, -1)
         free_index[self.free_nodes] = np.arange(len(self.free_nodes))
-        return StiffnessPattern(self._families, free_index, diagonal=self.free_nodes)
+        return StiffnessPattern(self.conduction.families, free_index, diagonal=self.free_nodes)
 
     @cached_property
     def _full_pattern(self) -> StiffnessPattern:
@@ -492,46 +223,31 @@ class ThermalModel:
         q = np.arange(N)
         chain = np.stack([(q * n)[None, :] + np.arange(n)[:, None],
                           ((q + 1) * n)[None, :] + np.arange(n)[:, None]], axis=-1).reshape(-1, 2)
-        return StiffnessPattern([*self._families, chain], np.arange(self.n_dof))
+        return StiffnessPattern([*self.conduction.families, chain], np.arange(self.n_dof))
 
     def conductivity_matrix(self, x) -> sp.csr_matrix:
         """Full conductivity matrix [W/K], ((N + 1) n)^2, at node positions ``x`` (n, 3) [m].
 
         Index ``q * n + node`` is layer ``q`` (0 = structure) of a node; no boundary conditions.
         """
-        K, area = self._conduction(x)
-        return self._full_pattern.matrix([*self._element_values(x, K),
-                                          self._chain_pairs(x, area)])
+        K, area = self.conduction.t3(x)
+        return self._full_pattern.matrix([*self.conduction.element_values(x, K),
+                                          self.environment.pairs(x, area)])
 
     def chain_matrix(self, x) -> sp.csr_matrix:
         """The environment chains' part of :meth:`conductivity_matrix` [W/K] (the layer
         conductances alone, no sheet conduction), ((N + 1) n)^2, at positions ``x`` (n, 3)
         [m]."""
-        K, area = self._conduction(x)
+        K, area = self.conduction.t3(x)
         return self._full_pattern.matrix([*(np.zeros_like(v) for v in
-                                            self._element_values(x, K)),
-                                          self._chain_pairs(x, area)])
-
-    def _chain_pairs(self, x, area) -> np.ndarray:
-        """The 2 x 2 matrices [W/K] of every node's chain layers, node-major, (n N, 2, 2)."""
-        g = self.layer_conductance(x, area).ravel()                         # node-major (n, N)
-        return g[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
+                                            self.conduction.element_values(x, K)),
+                                          self.environment.pairs(x, area)])
 
     def sheet_conduction(self, x) -> sp.csr_matrix:
-        """The sheet's conduction matrix [W/K], (n, n), at node positions ``x`` (n, 3) [m]:
-        the T3 elements or the monotone conduction (``params.conduction_method``, theory 4.2,
-        4.9);
-        no loss, no boundary conditions (every row sums to zero)."""
-        x = self._positions(x)
-        n = self.mesh.n_nodes
-        rows, cols, vals = [], [], []
-        for nodes, v in zip(self._families, self._element_values(x, self._conduction(x)[0])):
-            k = nodes.shape[1]
-            rows.append(np.repeat(nodes, k, axis=1).ravel())
-            cols.append(np.tile(nodes, (1, k)).ravel())
-            vals.append(np.ravel(v))
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows),
-                                                     np.concatenate(cols))), shape=(n, n))
+        """The sheet's conduction matrix [W/K], (n, n), at node positions ``x`` (n, 3) [m]
+        (:meth:`SheetConduction.matrix <simulator.thermal.conduction.SheetConduction.matrix>`:
+        no loss, no boundary conditions)."""
+        return self.conduction.matrix(x)
 
     def heat_vector(self, crease_power) -> np.ndarray:
         """Nodal heat input [W], (n,), from the power on each crease row, (C,) [W] (theory 4.6).
@@ -603,7 +319,7 @@ class ThermalModel:
     def emissive_area(self, x) -> np.ndarray:
         """Emissivity times radiating area of every node, both faces [m^2], (n,), at positions
         ``x`` (n, 3) [m]: a third of ``2 eps A_t`` of each triangle at it (theory 4.12)."""
-        area = self._conduction(x)[1]
+        area = self.conduction.t3(x)[1]
         tri = self.mesh.triangles
         return np.bincount(tri.ravel(), np.repeat(2 * self._emissivity * area / 3, 3),
                            minlength=self.mesh.n_nodes)
@@ -637,7 +353,7 @@ class ThermalModel:
                    "'dense') with a lower refinement, or the chains, or a constant "
                    "conductivity and emissivity 0."))
         K, g_eff = self._conductances(x, _thermal_jit.use_compiled())
-        K = self._element_values(x, K)
+        K = self.conduction.element_values(x, K)
         free = self.free_nodes
         e = self.emissive_area(x)[free]
         zero = np.zeros(len(free))
@@ -686,7 +402,7 @@ class ThermalModel:
                 and np.array_equal(last[1], x):
             return last[2]
         K, g_eff = self._conductances(x, compiled)
-        K = self._element_values(x, K)
+        K = self.conduction.element_values(x, K)
         if self.integral is None:
             solver = self._factorize(K, g_eff[self.free_nodes])
         elif getattr(self.integral, "fast", False):      # the loss never formed
@@ -750,12 +466,12 @@ class ThermalModel:
             K, g_eff, floored = _thermal_jit.thermal_element_data(self._kernel_args,
                                                                   self._positions(x))
             if floored and self.integral is None:
-                self._warn_floored()
+                self.environment.warn_floored()
             return K, g_eff
-        K, area = self._conduction(x)
+        K, area = self.conduction.t3(x)
         if self.integral is not None:              # no chains: the integral loss instead
             return K, np.zeros(self.mesh.n_nodes)
-        g = self.layer_conductance(x, area)
+        g = self.environment.conductance(x, area)
         with np.errstate(divide="ignore"):
             g_eff = np.where(np.all(g > 0, axis=1), 1 / np.sum(1 / g, axis=1), 0.0)
         return K, g_eff
@@ -786,7 +502,7 @@ class ThermalModel:
         of the free nodes not touching the substrate, coupled to the loss by MINRES."""
         if self._warn_plane:
             self._warn_plane = False
-            _warn_no_plane(self.params)
+            warn_no_plane(self.params)
         n_free = len(self.free_nodes)
         A = self._free_pattern.matrix([*K, np.zeros(n_free)])
         keep = ~self.integral.touching(x)[self.free_nodes]
@@ -817,7 +533,7 @@ class ThermalModel:
         """The integral model's loss conductance [W/K] on the free nodes, (n_free, n_free)."""
         if self._warn_plane:
             self._warn_plane = False
-            _warn_no_plane(self.params)
+            warn_no_plane(self.params)
         rows, kept = self._integral_scatter
         L = np.zeros((len(self.free_nodes),) * 2)
         L[rows] = self.integral_loss_matrix(x)[kept]
@@ -901,7 +617,7 @@ class ThermalModel:
     def _factorize(self, K, g_free, loss=None, held=None):
         """Factorise the free-node system (conduction plus condensed chains, or plus the
         integral model's dense ``loss``); returns its solver ``q_free -> rise_free``
-        (``K``: the list of element matrices of :attr:`_families`; ``held`` (n_free,) bool:
+        (``K``: the list of element matrices of the conduction's families; ``held`` (n_free,) bool:
         free nodes eliminated with a zero rise, the integral model's nodes touching the
         substrate).
 
@@ -926,7 +642,7 @@ class ThermalModel:
 
     def _dense_free(self, K, diagonal) -> np.ndarray:
         """The dense free-node matrix [W/K], (n_free, n_free), scattered from the element
-        matrices ``K`` (of :attr:`_families`) and the ``diagonal`` (n_free,) terms."""
+        matrices ``K`` (of the conduction's families) and the ``diagonal`` (n_free,) terms."""
         n_free = len(diagonal)
         pos, keep = self._dense_position
         flat = np.concatenate([*(v.ravel() for v in K), diagonal])[keep]

@@ -80,12 +80,14 @@ def check_theta(theta) -> float:
 # ------------------------------------------------------------------ capacity
 def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
     """rho c [J/(m^3 K)] of every triangle's material, (n_tri,); error for missing density /
-    heat where a triangle that is not a layer stack (:attr:`ThermalModel.layered`) needs it."""
+    heat where a triangle that is not a layer stack (:attr:`SheetConduction.layered
+    <simulator.thermal.conduction.SheetConduction.layered>`) needs it."""
     mesh, pat = tm.mesh, tm.mesh.pattern
     panel = mesh.triangle_panel
     mats = list(pat.panel_material) + [pat.crease_material]
     which = np.where(panel >= 0, panel, len(mats) - 1)
-    for k in np.unique(which[(tm.thickness > 0) & ~tm.layered]):
+    c = tm.conduction
+    for k in np.unique(which[(c.thickness > 0) & ~c.layered]):
         m = mats[k]
         where = f"panel {k}" if k < len(mats) - 1 else "the creases"
         for field, unit in (("density", "kg/m^3"), ("specific_heat", "J/(kg K)")):
@@ -101,9 +103,11 @@ def _volumetric_capacity(tm: ThermalModel) -> np.ndarray:
 def areal_capacity(tm: ThermalModel) -> np.ndarray:
     """Areal heat capacity [J/(m^2 K)] of every triangle, (n_tri,) (theory 7.2): ``rho c t``
     of its material and thickness, or ``sum rho c t`` over its layers where it conducts as a
-    layer stack (:attr:`ThermalModel.layered`, theory 4.10): the same layers in the steady
+    layer stack (:attr:`SheetConduction.layered
+    <simulator.thermal.conduction.SheetConduction.layered>`, theory 4.10): the same layers in the steady
     conduction and in the capacity."""
-    return np.where(tm.layered, tm.layer_capacity, _volumetric_capacity(tm) * tm.thickness)
+    c = tm.conduction
+    return np.where(c.layered, c.layer_capacity, _volumetric_capacity(tm) * c.thickness)
 
 
 def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
@@ -119,9 +123,9 @@ def capacity_vector(tm: ThermalModel, x) -> np.ndarray:
     C = np.zeros((N + 1, n))
     C[0] = np.bincount(mesh.triangles.ravel(), np.repeat(solid, 3), minlength=n)
     if medium.thermal_conductivity > 0:            # k_env = 0: no environment in contact
-        a_q, t_air = tm.environment_geometry(x, area)
+        a_q, t_air = tm.environment.geometry(x, area)
         rho_c = medium.density * medium.specific_heat
-        seg = tm.node_layer_sum(rho_c * a_q * t_air[:, None] / N)
+        seg = tm.environment.node_layer_sum(rho_c * a_q * t_air[:, None] / N)
         C[:-1] += 0.5 * seg.T
         C[1:] += 0.5 * seg.T
     return C.ravel()
@@ -300,7 +304,7 @@ def environment_profile(tm: ThermalModel, x, rise) -> np.ndarray:
     full[0] = rise
     if tm.integral is not None:            # no chains: the structure nodes are the unknowns
         return full.ravel()
-    g = tm.layer_conductance(x)
+    g = tm.environment.conductance(x, tm.triangle_areas(x))
     if tm.params.medium.thermal_conductivity > 0:
         with np.errstate(divide="ignore"):
             r = np.where(g > 0, 1 / g, np.inf)

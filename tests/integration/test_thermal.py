@@ -173,11 +173,11 @@ def test_rigid_motion_does_not_change_temperatures():
 
 def test_tcap_values():
     mesh, tm = single_fold()
-    cap = tm.tcap(mesh.nodes)
+    cap = tm.environment.tcap(mesh.nodes)
     anchor = mesh.triangle_panel == 0
     np.testing.assert_allclose(cap[anchor], 150e-6, rtol=1e-12)      # anchor lies 150 um above
     assert np.all(cap[mesh.triangle_panel == 2] == 1e10)
-    assert np.all(single_fold(boundary=())[1].tcap(mesh.nodes) == 1e5)
+    assert np.all(single_fold(boundary=())[1].environment.tcap(mesh.nodes) == 1e5)
 
 
 def test_substrate_cap_lowers_crease_temperature():

@@ -80,8 +80,8 @@ def test_capacity_totals_are_the_conduction_volumes():
     rho_c = np.array([m.density * m.specific_heat for m in mesh.pattern.panel_material])
     solid = np.where(mesh.triangle_panel >= 0, rho_c[mesh.triangle_panel],
                      mesh.pattern.crease_material.density
-                     * mesh.pattern.crease_material.specific_heat) * tm.thickness * area
-    t_air = tm.environment_geometry(x, area)[1]
+                     * mesh.pattern.crease_material.specific_heat) * tm.conduction.thickness * area
+    t_air = tm.environment.geometry(x, area)[1]
     env = AIR.density * AIR.specific_heat * 2 * area * t_air
     assert C.sum() == pytest.approx(solid.sum() + env.sum(), rel=1e-12)
     assert np.all(C > 0)

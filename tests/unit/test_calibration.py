@@ -99,9 +99,9 @@ def test_integral_reference_stands_on_the_boundary_panels_plane(caplog, monkeypa
     positions other than the mesh's the plane is taken there."""
     from simulator.thermal import boundary_panel_plane
     from simulator.cases import get_case
-    from simulator.thermal import steady
+    from simulator.thermal import substrate
 
-    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])    # said once per process
+    monkeypatch.setattr(substrate, "_NO_PLANE_WARNED", [False])    # said once per process
     model = get_case("double_fold", thermal_steps=2).model
     plane = boundary_panel_plane(model)
     assert len(plane) == 6 and plane[5] > 0.99               # the substrate, normal up
@@ -131,9 +131,9 @@ def test_no_plane_with_boundary_panels_warns_once_at_the_first_integral_solve(ca
     where the caller of fixed_shape_temperatures chose no plane."""
     from simulator.thermal import boundary_panel_plane, fixed_shape_temperatures
     from simulator.cases import get_case
-    from simulator.thermal import steady
+    from simulator.thermal import substrate
 
-    monkeypatch.setattr(steady, "_NO_PLANE_WARNED", [False])
+    monkeypatch.setattr(substrate, "_NO_PLANE_WARNED", [False])
     model = get_case("double_fold", thermal_steps=2).model
     q = ThermalModel(model.mesh, model.thermal).heat_vector(np.full(model.mesh.n_creases, 1e-3))
     default = model.thermal.with_loss("integral")

@@ -332,7 +332,7 @@ def test_chains_are_calibrated_for_a_model_that_has_none():
 
 
 def test_a_point_normal_pair_is_a_deprecated_spelling_of_substrate_plane():
-    from simulator.thermal.steady import resolve_substrate
+    from simulator.thermal.substrate import resolve_substrate
 
     model = get_case("double_fold").model
     plane = Substrate.plane((0.0, 0.0, -1e-4), (0.0, 0.0, 1.0))

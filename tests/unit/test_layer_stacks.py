@@ -146,8 +146,8 @@ def test_integral_loss_refined_sheet_keeps_the_stacks_and_their_capacity():
     model = _strip(n=4, held=False, loss=IntegralLoss(refinement=1), refinement=2)
     tm = _thermal_model(model)
     fine = tm.fine_model
-    assert fine is not None and fine.layered.all() and tm.layered.all()
-    np.testing.assert_allclose(fine._kt, S, rtol=1e-12)
+    assert fine is not None and fine.conduction.layered.all() and tm.conduction.layered.all()
+    np.testing.assert_allclose(fine.conduction.kt, S, rtol=1e-12)
     hs = heat_system(tm, model.mesh.nodes)
     assert hs.C.sum() == pytest.approx(RHO_C_T * 4 * PITCH * WIDTH, rel=1e-12)
 
@@ -160,9 +160,9 @@ def test_a_metal_film_on_some_panels_only():
     tm = ThermalModel(model.mesh, thermal, actuators=model.actuators)
     panel = model.mesh.triangle_panel
     crease = model.mesh.triangle_crease
-    np.testing.assert_allclose(tm._kt[panel == 1], 150 * 0.1e-6 + 0.3 * 1e-6, rtol=1e-12)
-    np.testing.assert_allclose(tm._kt[panel == 0], 0.3 * 1e-6, rtol=1e-12)
-    np.testing.assert_allclose(tm._kt[crease >= 0], S, rtol=1e-12)
+    np.testing.assert_allclose(tm.conduction.kt[panel == 1], 150 * 0.1e-6 + 0.3 * 1e-6, rtol=1e-12)
+    np.testing.assert_allclose(tm.conduction.kt[panel == 0], 0.3 * 1e-6, rtol=1e-12)
+    np.testing.assert_allclose(tm.conduction.kt[crease >= 0], S, rtol=1e-12)
     cap = areal_capacity(tm)
     np.testing.assert_allclose(cap[panel == 1], 19300 * 129 * 0.1e-6 + 2e6 * 1e-6, rtol=1e-12)
     np.testing.assert_allclose(cap[panel == 0], 2e6 * 1e-6, rtol=1e-12)
@@ -171,7 +171,7 @@ def test_a_metal_film_on_some_panels_only():
 def test_sheet_layers_alone_need_no_actuators_and_round_trip():
     model = _strip(n=3, passive=True)
     tm = ThermalModel(model.mesh, model.thermal)                 # no actuators at all
-    assert tm.layered.all()
+    assert tm.conduction.layered.all()
     p = model.thermal
     assert ThermalParameters.from_dict(p.to_dict()) == p
     assert "sheet_layers" not in ThermalParameters().to_dict()

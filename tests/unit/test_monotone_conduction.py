@@ -157,7 +157,7 @@ def test_monotone_conduction_follows_the_shape(devices):
     triangulation is built from the current positions: a rotation changes nothing."""
     mesh = devices["gripper"].mesh
     mc = monotone_conduction(mesh.nodes, mesh.triangles, _region(mesh),
-                             ThermalModel(mesh, _CHAIN_MONOTONE)._kt)
+                             ThermalModel(mesh, _CHAIN_MONOTONE).conduction.kt)
     c, s = np.cos(0.7), np.sin(0.7)
     R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
     a = _assembled(mc.families, mc.element_values(mesh.nodes), mesh.n_nodes)
@@ -175,7 +175,7 @@ def test_compiled_triangle_matrices_are_numpys(devices, name):
         pytest.skip("numba backend not selected")
     mesh = devices[name].mesh
     mc = monotone_conduction(mesh.nodes, mesh.triangles, _region(mesh),
-                             ThermalModel(mesh, _CHAIN_MONOTONE)._kt)
+                             ThermalModel(mesh, _CHAIN_MONOTONE).conduction.kt)
     x = mesh.nodes + np.random.default_rng(2).normal(0, 1e-5, mesh.nodes.shape)
     a = mc.triangle_matrices(x, compiled=False)
     b = mc.triangle_matrices(x, compiled=True)
@@ -215,7 +215,7 @@ def test_linear_fields_are_reproduced_exactly_on_a_planar_sheet():
         sol = np.linalg.solve(A[np.ix_(free, free)], -A[np.ix_(free, outline)] @ u[outline])
         np.testing.assert_allclose(sol, u[free], rtol=1e-12, atol=1e-12)
         # and the condensed conduction gives the T3's flux on the outline nodes' rows too
-        A0 = _assembled([tri], [t3_matrices(x[tri], tm._kt)], mesh.n_nodes)
+        A0 = _assembled([tri], [t3_matrices(x[tri], tm.conduction.kt)], mesh.n_nodes)
         np.testing.assert_allclose((A @ u)[inner], 0.0, atol=1e-12 * np.abs(A0 @ u).max())
 
 
@@ -225,7 +225,7 @@ def test_sparse_assembly_of_the_condensed_groups_is_the_dense_one(devices):
     model = devices["crane"]
     tm = ThermalModel(model.mesh, _CHAIN_MONOTONE)
     x, n = model.mesh.nodes, model.mesh.n_nodes
-    values = tm._element_values(x, tm._conduction(x)[0])
+    values = tm.conduction.element_values(x, tm.conduction.t3(x)[0])
     dense = tm.sheet_conduction(x).toarray()
     free = tm._free_pattern.matrix([*values, np.zeros(len(tm.free_nodes))]).toarray()
     full = tm._full_pattern.matrix([*values, np.zeros((n * tm.chains.layers, 2, 2))])

@@ -100,7 +100,7 @@ def test_floored_air_warns_on_both_paths(caplog):
     temps = []
     for backend in ("numba", "numpy"):
         caplog.clear()
-        with caplog.at_level(logging.WARNING, logger="simulator.thermal.steady"), \
+        with caplog.at_level(logging.WARNING, logger="simulator.thermal.chains"), \
                 spring_kernel_backend(backend):
             temps.append(tm.solve(x, q))
         assert "t_air floored" in caplog.text

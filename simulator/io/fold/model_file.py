@@ -21,7 +21,7 @@ from ...model.mesh import build_mesh
 from ...model.model import ContactParameters, Model, Supports, make_model
 from ...model.properties import BarHingeParameters
 from ...steps import Step
-from ...thermal.steady import ThermalParameters
+from ...model.thermal_parameters import ThermalParameters
 from ._common import NS, array_field, fail, is_number
 from .reader import load_fold_json, parse_fold
 from .writer import dump_fold, pattern_to_fold

@@ -146,7 +146,7 @@ def _plane_frame(x, mesh, params, substrate):
     substrate: ``"model"`` (the model's own, ``ThermalParameters.substrate``: its plane, that
     of its boundary panels at ``x``, or none), a :class:`~simulator.model.heat_loss.Substrate`,
     None, or (point, normal)."""
-    from ..steady import resolve_substrate
+    from ..substrate import resolve_substrate
 
     plane = resolve_substrate(substrate, mesh, params, x)
     if not plane:
@@ -194,7 +194,8 @@ def _sheet_prolongation(basis, doflocs, sheet_tris, parent, bh_tris, xs, n_nodes
 def _model_inputs(model, positions, state, crease_power, heat):
     """(positions (n, 3) [m], nodal heat (n,) [W], thermal parameters, thermal model)."""
     from ...model.heat_loss import ChainLoss
-    from ..steady import ThermalModel, ThermalParameters
+    from ...model.thermal_parameters import ThermalParameters
+    from ..steady import ThermalModel
 
     mesh = getattr(model, "mesh", None)
     if mesh is None:
