@@ -180,7 +180,7 @@ def monitored_node(c) -> int | None:
 
 
 def branch_event(switch, load_factor: float, increment: int, power, temperature) -> Event:
-    """The :class:`Event` of a :class:`~simulator.solvers.newton.BranchSwitch` of a step's
+    """The :class:`Event` of a :class:`~simulator.solvers.branches.BranchSwitch` of a step's
     load control: kind ``"branch_switch"`` when a stable state was reached (``jump`` and
     ``node``: the largest node displacement from the unstable state to it, and whose) or
     ``"stability_lost"``; ``load_factor`` and ``increment`` as the step counts them (the

@@ -1,4 +1,5 @@
-"""Solves of small tangent systems ``K du = r`` (at most :data:`DENSE_LIMIT` unknowns): the dense
+"""Solves of small tangent systems ``K du = r`` (at most
+:data:`~simulator.linalg.thresholds.DENSE_LIMIT` unknowns): the dense
 rung of the factorisation ladder (:mod:`simulator.linalg.ladder`).
 
 * :class:`DenseFactor`: LAPACK directly (no ``scipy.linalg`` wrappers): Cholesky when K is
@@ -25,11 +26,9 @@ import scipy.sparse as sp
 from ..errors import SolverError
 from ._cholesky_jit import cholesky_solve
 from .dense_lapack import one_blas_thread
-from .thresholds import DENSE_LIMIT, SPARSE_MIN
 
 __all__ = ["as_dense", "solve_dense", "positive_definite", "schur_complements", "DenseFactor",
-           "SparseCholesky", "pattern_of",
-           "DENSE_LIMIT", "SPARSE_MIN"]
+           "SparseCholesky", "pattern_of"]
 
 _EPS = float(np.finfo(float).eps)
 #: ``np.logical_and.reduce`` (with ``axis=None``): what ``ndarray.all()`` calls, without its

@@ -44,7 +44,7 @@ from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, S
                        SupportFamily, check_family, model_families)
 from ..model.model import Model
 
-__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "DENSE_LIMIT", "assembled_tangent",
+__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "assembled_tangent",
            "equilibrium_system"]
 
 logger = logging.getLogger(__name__)

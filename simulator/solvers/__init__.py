@@ -16,7 +16,8 @@ from .._lazy import attach as _attach
 __getattr__, __dir__ = _attach(__name__, {
     ".newton": ("NewtonOptions", "NewtonResult", "newton as solve_equilibrium"),
     ".load_path": ("LoadPath",),
-    ".continuation": ("ContinuationResult", "CriticalPoint", "mgdcm"),
+    ".path_trace": ("ContinuationResult", "CriticalPoint"),
+    ".continuation": ("mgdcm",),
     ".displacement_control": ("displacement_control as control_displacement",),
     ".dynamics_options": ("DynamicsOptions",),
     ".dynamics": ("DynamicsResult", "integrate"),

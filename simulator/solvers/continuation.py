@@ -24,8 +24,7 @@ Unlike the reference (theory 6.8): convergence uses the residual test of
 length, the arc length has a maximum, and a path can end exactly at a target load factor or a
 target displacement (the last increment is then solved with lambda, or the displacement, fixed).
 
-:func:`displacement_control` (in :mod:`simulator.solvers.displacement_control`, re-exported
-here) prescribes ``c . u`` (a DOF or a node's displacement along a direction) in equal
+:func:`~simulator.solvers.displacement_control.displacement_control` prescribes ``c . u`` (a DOF or a node's displacement along a direction) in equal
 increments with the load factor unknown (theory 6.9; the increment is prescribed rather than
 derived from ``lambdaBar``). Every accepted point carries the inertia of its tangent
 (:mod:`simulator.solvers.stability`).
@@ -39,15 +38,13 @@ import numpy as np
 
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
-from .displacement_control import displacement_control  # noqa: F401  (re-exported)
-from .load_path import (LoadPath, PathConstraint, PathPoint, begin_point, correct_point,
-                        free_added, model_size, path_tangent)
+from .load_path import (PathConstraint, begin_point, correct_point, free_added, model_size,
+                        path_tangent)
 from .newton import NewtonOptions
-from .path_trace import ContinuationResult, CriticalPoint, PathTrace, lost_peak
+from .path_trace import ContinuationResult, PathTrace, lost_peak
 from .stability import tangent_stability
 
-__all__ = ["LoadPath", "PathPoint", "CriticalPoint", "ContinuationResult", "mgdcm",
-           "displacement_control"]
+__all__ = ["mgdcm"]
 
 logger = logging.getLogger(__name__)
 
@@ -157,7 +154,7 @@ def mgdcm(path, u0, lam0: float = 0.0, *, arc_length: float = 0.05, max_incremen
         ..."; from the highest point itself if the descent fails).
     handover : callable, optional
         With ``until_stable``: ``handover(u, lam, point, stability)`` (the accepted point's
-        :class:`PathPoint` and :class:`~simulator.solvers.stability.Stability`, or None
+        :class:`~simulator.solvers.load_path.PathPoint` and :class:`~simulator.solvers.stability.Stability`, or None
         without ``stability``) must also be True at the stable point where the run ends;
         until it is, the run goes on along the stable branch (e.g. a heating path, where
         load control cannot take over while its coupling diverges:

@@ -3,9 +3,11 @@
 :func:`integrate` runs a whole integration and returns its time history with the energy
 bookkeeping (:class:`DynamicsResult`: kinetic, strain, dissipated energy, external work and the
 scheme's numerical dissipation). One time step, the equation of motion, the damping and the
-generalized-alpha family are in :mod:`simulator.solvers.generalized_alpha` (:class:`TimeIntegrator`,
-:class:`MotionState`, :class:`StepReport`), the settings in :mod:`simulator.solvers.dynamics_options`
-(:class:`DynamicsOptions`); those names are importable from here too.
+generalized-alpha family are in :mod:`simulator.solvers.generalized_alpha`
+(:class:`~simulator.solvers.generalized_alpha.TimeIntegrator`,
+:class:`~simulator.solvers.generalized_alpha.MotionState`,
+:class:`~simulator.solvers.generalized_alpha.StepReport`), the settings in
+:mod:`simulator.solvers.dynamics_options` (:class:`~simulator.solvers.dynamics_options.DynamicsOptions`).
 """
 
 from __future__ import annotations
@@ -16,14 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .dynamics_options import METHODS, DynamicsOptions  # noqa: F401 (METHODS: re-export)
+from .dynamics_options import DynamicsOptions
 from .._result import ResultFiles
 from .._validate import integer, positive
 from ..mechanics.equilibrium import EquilibriumSystem
-from .generalized_alpha import MotionState, StepReport, TimeIntegrator
+from .generalized_alpha import MotionState, TimeIntegrator
 
-__all__ = ["DynamicsOptions", "MotionState", "StepReport", "TimeIntegrator", "DynamicsResult",
-           "integrate"]
+__all__ = ["DynamicsResult", "integrate"]
 
 logger = logging.getLogger(__name__)
 

@@ -28,7 +28,7 @@ from .descent import BRANCHES
 from .nonlinear import iterate, march, residual_at_round_off
 from .stability import quick_stability
 
-__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "BranchSwitch", "newton",
+__all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton",
            "follow_path", "STABILITY_ACTIONS"]
 
 logger = logging.getLogger(__name__)

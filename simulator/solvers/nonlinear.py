@@ -13,7 +13,7 @@ so contact cannot be jumped through) and the bookkeeping live here once. Load co
 increment that fails (at most ``max_cuts`` times in a row and ``max_total_cuts`` in all) and
 doubling it back towards its nominal size after an uncut success: load control
 (:func:`~simulator.solvers.newton.follow_path`) and displacement control
-(:func:`~simulator.solvers.continuation.displacement_control`) use it. :func:`bisect` is its
+(:func:`~simulator.solvers.displacement_control.displacement_control`) use it. :func:`bisect` is its
 form for a span that must be covered as given (a time step of a fixed output grid): a failed
 span is split into two halves, each split again on failure, to a bounded depth; the dynamic
 step (:meth:`~simulator.solvers.generalized_alpha.TimeIntegrator.step`) uses it.

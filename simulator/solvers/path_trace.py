@@ -1,7 +1,7 @@
 """Bookkeeping of a continuation run: accepted points, their stability, critical points.
 
 :class:`PathTrace` collects the accepted points of :func:`~simulator.solvers.continuation.mgdcm` and
-:func:`~simulator.solvers.continuation.displacement_control` with the inertia of their tangents
+:func:`~simulator.solvers.displacement_control.displacement_control` with the inertia of their tangents
 (:mod:`simulator.solvers.stability`), locates limit points and bifurcations between them
 (:class:`CriticalPoint`) and builds the :class:`ContinuationResult`.
 """

@@ -32,7 +32,7 @@ from ..linalg.small_solve import as_dense
 from ..linalg.thresholds import EIGEN_DENSE_LIMIT as DENSE_LIMIT  # dense eigen-analysis
 
 __all__ = ["Stability", "tangent_stability", "state_stability", "quick_stability",
-           "NEGATIVE_RTOL", "DENSE_LIMIT", "negative_tolerance"]
+           "NEGATIVE_RTOL", "negative_tolerance"]
 
 #: An eigenvalue counts as negative below ``-NEGATIVE_RTOL * n * eps * |K|`` (|K| the largest
 #: diagonal entry): a few hundred times the error bound of a symmetric eigensolver, so the

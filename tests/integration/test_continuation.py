@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from simulator.solvers.continuation import LoadPath, displacement_control, mgdcm
+from simulator.solvers import LoadPath, mgdcm
+from simulator.solvers import control_displacement as displacement_control
 from simulator.mechanics.elements.bars import bar_kernel
 from simulator.errors import ParameterError
 from simulator.solvers.stability import tangent_stability

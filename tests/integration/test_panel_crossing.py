@@ -220,7 +220,7 @@ def test_recorded_continuation_ends_at_the_first_crossing():
     continuation of load-controlled steps past a limit point) records an arc-length run that
     went on past 180 deg only up to the first crossing, with its event, and leaves out the
     critical points after it."""
-    from simulator.solvers.continuation import mgdcm
+    from simulator.solvers import mgdcm
     from simulator.solvers.load_path import LoadPath
     from simulator.steps.base import StepContext, StepRecorder
     from simulator.steps.limit import record_continuation

@@ -219,7 +219,7 @@ def test_heat_continuation_matches_iterated_load_control():
     equilibria as load control with iterated coupling: to 1e-8 relative (the issue's bound)
     once both are converged tightly (5e-14 measured; with the default Newton tolerances the
     two differ by 1.2e-8, the tolerance, not the method)."""
-    from simulator.solvers.continuation import mgdcm
+    from simulator.solvers import mgdcm
     from simulator.steps.base import StepContext
     from simulator.steps.limit import HeatPath
 

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from simulator import _aot, _jit
-from simulator.mechanics.elements import _fused_jit, _springs_jit
+from simulator.mechanics.elements import _fused_jit
 from simulator.thermal import _thermal_jit
 
-pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+pytestmark = pytest.mark.skipif(not _jit.AVAILABLE, reason="numba not installed")
 
 REPO = Path(__file__).resolve().parents[2]
 RUN = ["run", "single-fold", "--set", "residual_fold_deg=-10", "--set", "gravity=true",

@@ -17,7 +17,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from simulator.solvers.continuation import LoadPath, mgdcm
+from simulator.solvers import LoadPath, mgdcm
 from simulator.solvers.descent import descend, switch_branch
 from simulator.solvers.newton import NewtonOptions
 from simulator.solvers.stability import tangent_stability

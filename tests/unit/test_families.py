@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 
 from fd_harness import check_kernel
+from simulator import _jit
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.mechanics.assembly import assemble_matrix, assemble_vector, element_dofs
-from simulator.mechanics.elements import _springs_jit
 from simulator.mechanics.equilibrium import ENERGY_KINDS, EquilibriumSystem
 from simulator.mechanics.families import (BarFamily, Configuration, ContactFamily,
                                           ElementFamily, FamilyValues, SpringFamily, SupportFamily,
@@ -212,7 +212,7 @@ def test_newton_solves_with_a_registered_family():
     assert ev.energies["axial_springs"] > 0
 
 
-@pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+@pytest.mark.skipif(not _jit.AVAILABLE, reason="numba not installed")
 def test_the_fused_kernel_is_chosen_only_for_its_own_families():
     model = make_model(miura_sheet_pattern(m=2, n=2), None,
                        contact=ContactParameters(2e-5, 300e-6, 250e-6))

@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from simulator.solvers.continuation import LoadPath, mgdcm
+from simulator.solvers import LoadPath, mgdcm
 
 RESOLUTION = 1 / 8
 

@@ -14,9 +14,8 @@ from simulator.cases import get_case
 from simulator.events import LARGE_TURN, NEAR_FLAT, CrossingWatch, _crease_angles, _quiet
 from simulator import _jit
 from simulator import _angles_jit
-from simulator.mechanics.elements import _springs_jit
 
-pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+pytestmark = pytest.mark.skipif(not _jit.AVAILABLE, reason="numba not installed")
 
 V = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
 

@@ -6,10 +6,10 @@ import pytest
 import scipy.linalg
 import scipy.sparse as sp
 
+from simulator import _jit
 from simulator.kernels import spring_kernel_backend
 from simulator.mechanics.assembly import assemble_vector, element_dofs
 from simulator.cases import get_case
-from simulator.mechanics.elements import _springs_jit
 from simulator.mechanics.elements.bars import bar_kernel
 from simulator.mechanics.elements.contact import contact_kernel
 from simulator.mechanics.elements.springs import spring_kernel
@@ -21,7 +21,7 @@ from simulator.model.model import ContactParameters, Supports, make_model
 from simulator.mechanics import equilibrium_system
 from simulator.steps import initial_state
 
-pytestmark = pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+pytestmark = pytest.mark.skipif(not _jit.AVAILABLE, reason="numba not installed")
 
 
 def _gripper_with_contacts():

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from fd_harness import check_kernel
 
+from simulator import _jit
 from simulator.mechanics.elements.bars import bar_kernel
 from simulator.mechanics.elements import _springs_jit
 from simulator.mechanics.elements.springs import (fold_angle, fold_angle_derivatives, spring_kernel,
@@ -98,7 +99,7 @@ def test_numpy_spring_kernel_finite_differences():
     check_kernel(lambda y: spring_kernel_numpy(y, k[ok], t0[ok]), x[ok])
 
 
-@pytest.mark.skipif(not _springs_jit.AVAILABLE, reason="numba not installed")
+@pytest.mark.skipif(not _jit.AVAILABLE, reason="numba not installed")
 def test_compiled_spring_kernel_equals_numpy_kernel():
     x, k, t0 = _springs(200)
     for a, b in zip(_springs_jit.spring_kernel_jit(x, k, t0), spring_kernel_numpy(x, k, t0)):
@@ -119,18 +120,17 @@ def test_spring_kernel_backend_selects_the_kernel(monkeypatch):
     with spring_kernel_backend("numpy"):
         spring_kernel(x, k, t0)
         assert calls == []
-        if _springs_jit.AVAILABLE:
+        if _jit.AVAILABLE:
             with spring_kernel_backend("numba"):
                 spring_kernel(x, k, t0)
             assert calls == ["numba"]
         spring_kernel(x, k, t0)
-    from simulator import _jit
 
     assert _jit._backend is None                           # restored: the default again
     monkeypatch.setenv("ETORIGAMI_JIT", "0")
     assert _springs_jit.default_backend() == "numpy"
     monkeypatch.setenv("ETORIGAMI_JIT", "1")
-    assert _springs_jit.default_backend() == ("numba" if _springs_jit.AVAILABLE else "numpy")
+    assert _springs_jit.default_backend() == ("numba" if _jit.AVAILABLE else "numpy")
     with pytest.raises(ParameterError, match="backend 'cuda'; use one of 'numba', 'numpy'"):
         with spring_kernel_backend("cuda"):
             pass

@@ -14,7 +14,7 @@ from simulator.errors import ParameterError
 from simulator.linalg import ladder, pardiso, thresholds
 from simulator.linalg import factorize, solve
 from simulator.solvers import load_path, newton as newton_module
-from simulator.solvers.continuation import mgdcm
+from simulator.solvers import mgdcm
 from simulator.solvers.dynamics_options import DynamicsOptions
 from simulator.mechanics import equilibrium_system
 from test_linsolve import _sheet

@@ -160,3 +160,34 @@ def test_the_check_sees_what_it_forbids():
         (8, "simulator.mechanics.elements._springs_jit")]
     assert reaches("simulator.thermal.fe.solve2d", "from . import _gmsh\n") == []
     assert reaches("design.cli.main", "from simulator import _jit\n") == [(1, "simulator._jit")]
+
+
+def re_exports(source: str) -> list:
+    """The names a module's ``__all__`` lists that it imports rather than defines."""
+    tree = ast.parse(source)
+    imported = {a.asname or a.name for node in tree.body if isinstance(node, ast.ImportFrom)
+                for a in node.names}
+    listed = [e.value for node in tree.body if isinstance(node, ast.Assign)
+              and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
+              for e in node.value.elts]
+    return [name for name in listed if name in imported]
+
+
+def test_no_module_is_an_old_home_re_exporting_names():
+    """Inside simulator/ a module publishes what it defines: no module re-exports names
+    defined elsewhere (an "old home" left by a move or a split), except the packages'
+    ``__init__`` and the namespace modules at simulator's door (``simulator.fold``,
+    ``simulator.materials``, ...), whose job that is. Old spellings at the door go through
+    ``simulator/_moved.py``."""
+    import simulator
+    from doors import namespaces
+
+    doors = {f"simulator/{name}.py" for name in namespaces(simulator)}
+    found = {}
+    for path in sorted((ROOT / "simulator").rglob("*.py")):
+        rel = path.relative_to(ROOT).as_posix()
+        if path.name != "__init__.py" and rel not in doors:
+            if names := re_exports(path.read_text()):
+                found[rel] = names
+    assert found == {}
+    assert re_exports("from .a import b, c\nd = 1\n__all__ = ['b', 'd']\n") == ["b"]

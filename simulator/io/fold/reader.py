@@ -27,10 +27,10 @@ from ._common import is_number as _is_number
 from ._data import OWN_FIELDS, edge_fields, geometry_pattern, metadata_fields, panel_fields
 from ._frames import select_frame
 from ._merge import merge_flat_faces
-from ._planar import FRAME_FIELDS, faces_from_edges, lay_flat_sheet, merge_straight
+from ._planar import faces_from_edges, lay_flat_sheet, merge_straight
 
 __all__ = ["read_fold", "fold_to_pattern", "parse_fold", "load_fold_json", "FoldGeometry",
-           "check_crease_model", "SHARP_PLACEHOLDER", "UNITS", "NS", "FRAME_FIELDS"]
+           "check_crease_model", "SHARP_PLACEHOLDER", "UNITS"]
 
 logger = logging.getLogger(__name__)
 
@@ -125,7 +125,7 @@ def fold_to_pattern(data: dict, **kwargs) -> Pattern:
     lay_flat : bool or None
         A flat sheet in another plane than x-y (e.g. x-z): None (default) lays it in x-y, its
         top side up (the side its faces run counter-clockwise around), unless the file gives
-        data in its own axes (:data:`FRAME_FIELDS`, or a thermal ``substrate`` plane); True
+        data in its own axes (:data:`~simulator.io.fold._planar.FRAME_FIELDS`, or a thermal ``substrate`` plane); True
         always lays it in x-y, False never. Laid flat, a rotated copy of a sheet has the
         answer of the sheet drawn in x-y (up to a turn within the plane), and gravity acts
         towards its bottom side.

@@ -32,10 +32,9 @@ import math
 import numpy as np
 
 from ... import _jit
-from ..._jit import AVAILABLE, BACKENDS, HELPER_OPTIONS, compile_kernel, numba_selected
+from ..._jit import HELPER_OPTIONS, compile_kernel, numba_selected
 
-__all__ = ["AVAILABLE", "BACKENDS", "compiled_backend", "default_backend", "numba_selected",
-           "spring_kernel_jit", "use_compiled", "element", "cross", "dot", "jit_helpers"]
+__all__ = ["compiled_backend", "default_backend", "spring_kernel_jit", "use_compiled", "element", "cross", "dot", "jit_helpers"]
 
 #: The one specialisation compiled: x (n, 4, 3), k (n,), theta0 (n,), want_hess, energy (n,),
 #: grad (n, 12), hess (n or 0, 12, 12); all C-contiguous float64.

@@ -100,7 +100,7 @@ def spring_kernel_backend(name: str):
     """Use the ``"numba"`` or ``"numpy"`` kernels inside the ``with`` block.
 
     The backend selects the compiled kernels as a whole: the spring kernel and, on models of
-    at most :data:`~simulator.linalg.small_solve.DENSE_LIMIT` free DOFs, the fused evaluation of
+    at most :data:`~simulator.linalg.thresholds.DENSE_LIMIT` free DOFs, the fused evaluation of
     :mod:`._fused_jit` (bars, springs, contact and supports in one call, dense tangent) with
     the sparse Cholesky solve of :mod:`simulator.linalg._cholesky_jit`. The default is ``"numba"``
     when numba is installed (compiled on first use, once per install: a few seconds of CPU;
@@ -110,10 +110,10 @@ def spring_kernel_backend(name: str):
     floats are compared bit for bit. A block of :func:`simulator._jit.use` with the same name
     (the one place that chooses the kernels).
     """
-    if name not in _jit.BACKENDS:
+    if name not in _kernels.BACKENDS:
         raise ParameterError(f"spring kernel backend {name!r}; use one of "
-                             f"{', '.join(map(repr, _jit.BACKENDS))}.")
-    if name == "numba" and not _jit.AVAILABLE:
+                             f"{', '.join(map(repr, _kernels.BACKENDS))}.")
+    if name == "numba" and not _kernels.AVAILABLE:
         raise ParameterError("spring kernel backend 'numba' needs numba; install it or use "
                              "'numpy'.")
     with _kernels.use(name):
