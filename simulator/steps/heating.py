@@ -139,12 +139,18 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
         temp, power, columns = point.temperature, point.power, point.columns
         iterate = iterated or (settled and s == n_inc)
         change, done = math.inf, False         # no change measured yet
+        u_from, spring_from, came, switched = u, spring, previous, False
         for _ in range(coupling.max_iterations if iterate else 1):
             target, rest = actuate(temp)
-            path = follow_path(context.system, u, f, f, spring, rest, 1, context.options,
-                               locate_tol=LOCATE_TOL * n_inc, previous=previous)
+            # a coupling iteration after the first starts from the last one's equilibrium: its
+            # rest angles move by the (small) change of the temperatures, not by the whole
+            # increment's, so it needs no step cuts (the end state is the same equilibrium,
+            # reached along the branch the first iteration followed)
+            path = follow_path(context.system, u_from, f, f, spring_from, rest, 1,
+                               context.options, locate_tol=LOCATE_TOL * n_inc, previous=came)
             rec.iterations += path.iterations
             rec.cuts += path.cuts
+            switched = switched or bool(path.switches)
             if not path.success:
                 last = rec._rows["temperature"][-1] if len(rec) else state.temperature
                 message = (f"increment {s}/{n_inc} (crease power up to "
@@ -154,6 +160,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                                   f, evaluation)
             if not iterate:
                 break
+            u_from, spring_from, came = path.u, rest, None
             for _ in range(2):      # again, once, on the accurate loss at the end shape
                 point = solve(s, mesh.nodes + path.u, base, room)
                 if point.status != "converged":
@@ -171,7 +178,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                            "iterations (temperatures change by %.3g K, coupling_tol %.3g K); "
                            "raise max_coupling_iterations", s, n_inc, coupling.max_iterations,
                            change, coupling.tol)
-        previous = None if path.switches else (1.0, u)     # the direction the path came
+        previous = None if switched else (1.0, u)     # the direction the path came
         u, spring, evaluation = path.u, rest, path.evaluation
         lam0, lam1 = (s - 1) / n_inc, s / n_inc
         if lam is not None:
