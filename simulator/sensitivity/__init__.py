@@ -1,4 +1,4 @@
-"""Exact sensitivities of steady coupled electro-thermal-mechanical states (theory 11).
+"""Exact sensitivities of steady coupled electro-thermal-mechanical states (theory 12.1).
 
 :func:`sensitivity` differentiates a scalar of the state a ``Heat`` step ended on (a fold
 angle, a node coordinate, a crease temperature, or a function of your own) with respect to the

@@ -1,5 +1,5 @@
 """Sensitivities of a steady coupled electro-thermal-mechanical state by the adjoint method
-(theory 11).
+(theory 12.1).
 
 At the end of a :class:`~simulator.steps.Heat` step with coupling "settled" or "iterated"
 the displacements u (free DOFs) and the temperature rises dT (free nodes) solve
@@ -103,7 +103,7 @@ class Sensitivity:
 def sensitivity(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
                 method: str = "adjoint") -> Sensitivity:
     """Total derivative of a scalar of the state a :class:`~simulator.steps.Heat` step ended
-    on, with respect to the model's parameters (theory 11).
+    on, with respect to the model's parameters (theory 12.3).
 
     Parameters
     ----------

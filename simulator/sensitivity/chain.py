@@ -1,5 +1,5 @@
 """The chain heat-loss model's steady operator and its exact derivative in the shape (theory
-11.2).
+12.2).
 
 The structure rise dT solves ``A(x) dT = q`` on the free nodes with
 ``A(x) = sum_e K_e(alpha_e) + k_env diag(g1(x))``: the T3 matrices of the triangles, each a

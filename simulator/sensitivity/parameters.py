@@ -1,5 +1,5 @@
 """The parameters of :func:`~simulator.sensitivity.sensitivity` and the derivatives of the
-coupled residual in them (theory 11.3).
+coupled residual in them (theory 12.3).
 
 Kinds, in their order in a gradient: ``"power"`` (per crease, [W]), ``"rest_offset"`` (per
 crease: an offset added to the crease rest angle at the start of the heating step, e.g. a
