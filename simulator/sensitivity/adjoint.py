@@ -8,7 +8,7 @@ the displacements u (free DOFs) and the temperature rises dT (free nodes) solve
     R_th(u, T, p)   = A(x(u), p) dT - q(p) = 0,
 
 the rest angles ``theta0 = theta0_start + rot(p) (w . (T - T_start))`` of the Timoshenko
-bimorph. :func:`sensitivity` assembles the coupled Jacobian
+bimorph. :func:`differentiate` assembles the coupled Jacobian
 ``M = [[K, B], [C, A]]`` (``K`` the mechanics' exact tangent, ``B = dR_mech/dT`` through the
 rest angles, ``C = dR_th/du`` through the shape dependence of the chain operator,
 :class:`~simulator.sensitivity.chain.ChainOperator`), factors it once, solves
@@ -33,7 +33,7 @@ from .chain import ChainOperator
 from .objectives import objective_terms
 from .parameters import PARAMETER_KINDS, check_kinds, parameter_columns
 
-__all__ = ["Sensitivity", "sensitivity", "state_sensitivity"]
+__all__ = ["Sensitivity", "differentiate", "differentiate_state"]
 
 logger = logging.getLogger(__name__)
 
@@ -100,7 +100,7 @@ class Sensitivity:
                              "unit": [self.units[k] for k in self.gradient]})
 
 
-def sensitivity(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
+def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
                 method: str = "adjoint") -> Sensitivity:
     """Total derivative of a scalar of the state a :class:`~simulator.steps.Heat` step ended
     on, with respect to the model's parameters (theory 12.3).
@@ -130,21 +130,21 @@ def sensitivity(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
     """
     steps = list(getattr(result, "steps", ()))
     if not steps:
-        raise ParameterError("sensitivity: result must be a SimulationResult with steps.")
+        raise ParameterError("differentiate: result must be a SimulationResult with steps.")
     try:
         rec = steps[step]
     except IndexError:
-        raise ParameterError(f"sensitivity: step = {step}; the result has {len(steps)} "
+        raise ParameterError(f"differentiate: step = {step}; the result has {len(steps)} "
                              "steps.") from None
     i = steps.index(rec)
     if "coupling" not in rec.settings or "power_added [mW]" not in rec.settings:
-        raise ParameterError(f"sensitivity: step {i} ({rec.name!r}) is not a Heat step; "
+        raise ParameterError(f"differentiate: step {i} ({rec.name!r}) is not a Heat step; "
                              "give the index of the heating step.")
     if not rec.success:
-        raise ParameterError(f"sensitivity: step {i} ended {rec.status!r} ({rec.message}); "
+        raise ParameterError(f"differentiate: step {i} ended {rec.status!r} ({rec.message}); "
                              "differentiate a converged state.")
     start = steps[i - 1].state if i > 0 else result.initial_state
-    out = state_sensitivity(result.model, rec.state, start, objective, parameters, method)
+    out = differentiate_state(result.model, rec.state, start, objective, parameters, method)
     if rec.settings["coupling"] == "staggered" and out.status == "converged":
         out = _replace(out, status="not_steady", success=False,
                        message="the step's coupling is 'staggered' (its end lags by one "
@@ -152,9 +152,9 @@ def sensitivity(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
     return out
 
 
-def state_sensitivity(model, state, start, objective, parameters=PARAMETER_KINDS,
+def differentiate_state(model, state, start, objective, parameters=PARAMETER_KINDS,
                       method: str = "adjoint") -> Sensitivity:
-    """:func:`sensitivity` of a steady coupled ``state`` (a
+    """:func:`differentiate` of a steady coupled ``state`` (a
     :class:`~simulator.state.SimulationState`) of ``model`` reached by heating from ``start``
     (the state at the start of the heating step: its temperatures and crease rest angles are
     the bimorph's reference)."""
@@ -271,12 +271,12 @@ class _Setting:
 
 
 def _check_supported(model, state) -> None:
-    """Refuse, in one line, what :func:`sensitivity` does not differentiate."""
+    """Refuse, in one line, what :func:`differentiate` does not differentiate."""
     from . import SensitivityNotSupported
 
     p = model.thermal
     if p is None:
-        raise ParameterError("sensitivity: the model has no thermal parameters.")
+        raise ParameterError("differentiate: the model has no thermal parameters.")
     why = None
     if p.loss.model != "chain":
         why = f"the {p.loss.model} heat loss"
@@ -296,6 +296,6 @@ def _check_supported(model, state) -> None:
             why = "a refined sheet"
     if why is not None:
         raise SensitivityNotSupported(
-            f"sensitivity: {why} is not supported; supported: the chain heat loss (ChainLoss) "
+            f"differentiate: {why} is not supported; supported: the chain heat loss (ChainLoss) "
             "with T3 conduction, a linear heat balance, no sheet refinement and fixed crease "
             "powers.")

@@ -81,9 +81,9 @@ class NodeCoordinate:
 
 @dataclass(frozen=True)
 class CreaseTemperature:
-    """A temperature measure of crease ``crease`` [deg C] (:func:`~simulator.thermal.crease_temperatures`:
-    "actuation", "centre_line", "centre" or "crease_max"; the maximum is not differentiable
-    where two nodes are equally hot: reported as a non-smooth point)."""
+    """A temperature measure of crease ``crease`` [deg C]: "actuation", "centre_line",
+    "centre" or "crease_max" of :func:`~simulator.thermal.crease_temperatures` (the maximum is
+    not differentiable where two nodes are equally hot: reported as a non-smooth point)."""
 
     crease: int
     measure: str = "centre_line"

@@ -20,8 +20,8 @@ from simulator import ChainLoss, Heat, NewtonOptions, SelfFold, simulate
 from simulator.cases import get_case
 from simulator.errors import ParameterError
 from simulator.sensitivity import (CreaseTemperature, FoldAngle, NodeCoordinate,
-                                   SensitivityNotSupported, sensitivity,
-                                   state_sensitivity)
+                                   SensitivityNotSupported, differentiate,
+                                   differentiate_state)
 from simulator.sensitivity.chain import ChainOperator
 from simulator.state import initial_state, thermal_model
 
@@ -93,7 +93,7 @@ OBJECTIVES = (FoldAngle(2), CreaseTemperature(2, "centre_line"), NodeCoordinate(
 def test_single_fold_power_and_rest_offset(single):
     """Heater power and residual fold: fold angle, crease temperature, a node's height."""
     setup, result = single
-    grads = [sensitivity(result, o, ("power", "rest_offset")) for o in OBJECTIVES]
+    grads = [differentiate(result, o, ("power", "rest_offset")) for o in OBJECTIVES]
     assert all(g.success and g.status == "converged" for g in grads), grads[0].message
     h = _step(0.02, "power")
     for g, fd in zip(grads, _central(setup, OBJECTIVES, h,
@@ -110,7 +110,7 @@ def test_single_fold_actuation_and_medium(single):
     """Expansion mismatch and the medium's conductivity (the chains' conductance)."""
     setup, result = single
     model = setup.model
-    g = sensitivity(result, FoldAngle(2), ("delta_alpha", "medium_conductivity"))
+    g = differentiate(result, FoldAngle(2), ("delta_alpha", "medium_conductivity"))
     acts, da = model.actuators, model.actuators.delta_alpha[2]
     h = _step(da, "delta_alpha")
     models = [dataclasses.replace(model, actuators=dataclasses.replace(
@@ -139,7 +139,7 @@ def _bimorph_models(model, name, kind):
 @pytest.mark.parametrize("name", ["E1", "t2"])
 def test_single_fold_bimorph_layers(single, name):
     setup, result = single
-    g = sensitivity(result, FoldAngle(2), "bimorph")
+    g = differentiate(result, FoldAngle(2), "bimorph")
     h, models = _bimorph_models(setup.model, name, name[0])
     _agree(g.gradient[name], _central(setup, [FoldAngle(2)], h, model=models)[0])
 
@@ -154,7 +154,7 @@ def test_double_fold_powers(double):
     """Both creases heated, contact inactive: each crease's power moves both folds."""
     setup, result = double
     objectives = (FoldAngle(5), FoldAngle(2), CreaseTemperature(5, "actuation"))
-    grads = [sensitivity(result, o, "power") for o in objectives]
+    grads = [differentiate(result, o, "power") for o in objectives]
     assert all(g.success for g in grads), grads[0].message
     for c in (2, 5):
         h = _step(setup.power[c], "power")
@@ -165,7 +165,7 @@ def test_double_fold_powers(double):
 
 def test_double_fold_rest_offset_and_medium(double):
     setup, result = double
-    g = sensitivity(result, FoldAngle(5), ("rest_offset", "medium_conductivity"))
+    g = differentiate(result, FoldAngle(5), ("rest_offset", "medium_conductivity"))
     h = _step(0.0, "rest_offset")
     _agree(g.gradient["rest_offset[2]"], _central(
         setup, [FoldAngle(5)], h, folds=({2: h, 5: 0.0}, {2: -h, 5: 0.0}))[0])
@@ -182,7 +182,7 @@ def test_double_fold_rest_offset_and_medium(double):
 @pytest.mark.slow
 def test_double_fold_actuation(double):
     setup, result = double
-    g = sensitivity(result, FoldAngle(5), ("delta_alpha", "bimorph"))
+    g = differentiate(result, FoldAngle(5), ("delta_alpha", "bimorph"))
     acts = setup.model.actuators
     da = acts.delta_alpha[2]
     h = _step(da, "delta_alpha")
@@ -197,8 +197,8 @@ def test_adjoint_equals_forward_and_callable(double):
     """One transposed solve gives what one solve per parameter gives; a callable objective
     (here the sum of the two fold angles by their own gradients) is the sum of the two."""
     _, result = double
-    a = sensitivity(result, FoldAngle(5))
-    f = sensitivity(result, FoldAngle(5), method="forward")
+    a = differentiate(result, FoldAngle(5))
+    f = differentiate(result, FoldAngle(5), method="forward")
     assert list(a.gradient) == list(f.gradient)
     for k in a.gradient:
         assert a.gradient[k] == pytest.approx(f.gradient[k], rel=1e-9, abs=1e-12 * max(
@@ -208,8 +208,8 @@ def test_adjoint_equals_forward_and_callable(double):
     def both(u, T):
         terms = [FoldAngle(c).terms(model, u, T) for c in (2, 5)]
         return sum(t[0] for t in terms), terms[0][1] + terms[1][1], np.zeros(len(T))
-    s = sensitivity(result, both, "power")
-    two = sensitivity(result, FoldAngle(2), "power")
+    s = differentiate(result, both, "power")
+    two = differentiate(result, FoldAngle(2), "power")
     assert s.value == pytest.approx(two.value + a.value)
     assert s.gradient["power[5]"] == pytest.approx(two.gradient["power[5]"]
                                                    + a.gradient["power[5]"], rel=1e-12)
@@ -254,7 +254,7 @@ def test_a_switch_is_reported():
     switched = dataclasses.replace(model, thermal=thermal)
     result = simulate(switched, [SelfFold({2: 0.0}, increments=2),
                                  Heat({2: 0.0}, increments=1, coupling="settled")])
-    s = sensitivity(result, FoldAngle(2), "power")
+    s = differentiate(result, FoldAngle(2), "power")
     assert not s.success and s.status == "nonsmooth"
     assert f"triangle(s) [{e}" in s.message and s.nonsmooth
 
@@ -264,15 +264,15 @@ def test_refusals(single):
     setup, result = single
     with pytest.raises(SensitivityNotSupported, match="crease width moves the mesh.*supported: "
                                                       "power"):
-        sensitivity(result, FoldAngle(2), "crease_width")
+        differentiate(result, FoldAngle(2), "crease_width")
     with pytest.raises(ParameterError, match="unknown kind 'power_mW'"):
-        sensitivity(result, FoldAngle(2), "power_mW")
+        differentiate(result, FoldAngle(2), "power_mW")
     integral = get_case("single_fold", loss_model="integral").model
     start = initial_state(integral)
     with pytest.raises(SensitivityNotSupported, match="the integral heat loss is not "
                                                       "supported; supported: the chain"):
-        state_sensitivity(integral, start, start, FoldAngle(2))
+        differentiate_state(integral, start, start, FoldAngle(2))
     staggered = simulate(setup.model, [SelfFold({2: 0.0}, increments=2),
                                        Heat({2: 0.02}, increments=2, coupling="staggered")])
-    s = sensitivity(staggered, FoldAngle(2), "power")
+    s = differentiate(staggered, FoldAngle(2), "power")
     assert not s.success and s.status == "not_steady"
