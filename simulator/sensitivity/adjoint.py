@@ -247,7 +247,7 @@ class _Setting:
             float(np.linalg.norm(q[self.free_T])), 1e-300)
 
     def _rest_coupling(self, x) -> np.ndarray:
-        """``dR_mech / d(crease rest angle)`` on the free DOFs [N/rad], (n_u, C): each fold
+        """``dR_mech / d(crease rest angle)`` on the free DOFs [N/rad], (n_u, C) sparse: each fold
         line's spring ``-k share grad(theta)`` (theory 3.4's shares of the rest-angle change)."""
         mesh, f = self.model.mesh, self.model.params.centre_line_share
         lines = mesh.crease_springs[:, [0, 1, 4, 5]]                       # (C, 4)
@@ -258,14 +258,14 @@ class _Setting:
         vals = -(k * np.tile(share, mesh.n_creases))[:, None] * grad
         dofs = (3 * springs[:, :, None] + np.arange(3)).reshape(-1, 12)
         cols = np.repeat(np.arange(mesh.n_creases), 4)
-        G = np.zeros((mesh.n_dof, mesh.n_creases))
-        np.add.at(G, (dofs.ravel(), np.repeat(cols, 12)), vals.ravel())
+        G = sp.coo_matrix((vals.ravel(), (dofs.ravel(), np.repeat(cols, 12))),
+                          shape=(mesh.n_dof, mesh.n_creases)).tocsr()
         return G[self.free_u]
 
     def jacobian(self) -> sp.csr_matrix:
         """The coupled Jacobian ``[[K, B], [C, A]]`` on (free DOFs, free nodes)."""
         K = self.ev.K
-        B = sp.csr_matrix(self.G * self.rot[None, :]) @ self.W[:, self.free_T]
+        B = self.G @ sp.diags(self.rot) @ self.W[:, self.free_T]
         C = self.op.shape_jacobian(self.rise)[self.free_T][:, self.free_u]
         return sp.bmat([[K, B], [C, self.A]], format="csr")
 

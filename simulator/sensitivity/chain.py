@@ -24,7 +24,7 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..mechanics.elements.contact import distance_derivatives
+from ..mechanics.elements.contact import distance_derivatives, point_triangle_distance
 
 __all__ = ["ChainOperator", "SWITCH_RTOL"]
 
@@ -95,7 +95,8 @@ class ChainOperator:
         on_panel = np.zeros(n, bool)
         on_panel[bt.ravel()] = True
         p = tm._cap_nodes
-        d = np.array([_distances(x[i], x[bt]) for i in p]).reshape(len(p), len(bt))
+        d = point_triangle_distance(np.repeat(x[p], len(bt), axis=0),
+                                    np.tile(x[bt], (len(p), 1, 1)))[0].reshape(len(p), len(bt))
         order = np.argsort(d, axis=1)
         near = order[:, 0]
         self.dmin[p] = d[np.arange(len(p)), near]
@@ -198,9 +199,3 @@ class ChainOperator:
         rows, cols, vals = (np.concatenate(a) for a in zip(*parts))
         return sp.coo_matrix((vals, (rows, cols)), shape=(n, 3 * n)).tocsr()
 
-
-def _distances(p, tris) -> np.ndarray:
-    """Distances [m] from the point ``p`` (3,) to every triangle ``tris`` (b, 3, 3)."""
-    from ..mechanics.elements.contact import point_triangle_distance
-
-    return point_triangle_distance(np.repeat(p[None], len(tris), axis=0), tris)[0]

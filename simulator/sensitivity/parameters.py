@@ -78,7 +78,7 @@ def parameter_columns(kinds, setting) -> tuple:
         if dT is not None:
             col[s.n_u:] = dT
         names.append(name), units.append(unit), cols.append(col)
-    G = s.G                                  # dR_mech / d crease rest angle, (n_u, C)
+    G = s.G.tocsc()                          # dR_mech / d crease rest angle, (n_u, C)
     for kind in kinds:
         if kind == "power":
             for row, c in enumerate(ids):
@@ -87,11 +87,12 @@ def parameter_columns(kinds, setting) -> tuple:
                 add(f"power[{c}]", "W", dT=-s.tm.heat_vector(e)[s.free_T])
         elif kind == "rest_offset":
             for row, c in enumerate(ids):
-                add(f"rest_offset[{c}]", "rad", du=G[:, row])
+                add(f"rest_offset[{c}]", "rad", du=G[:, row].toarray().ravel())
         elif kind == "delta_alpha":
             unit_rot = s.rot_per_delta_alpha
             for row, c in enumerate(ids):
-                add(f"delta_alpha[{c}]", "1/K", du=G[:, row] * unit_rot[row] * s.dTc[row])
+                add(f"delta_alpha[{c}]", "1/K",
+                    du=G[:, row].toarray().ravel() * unit_rot[row] * s.dTc[row])
         elif kind == "bimorph":
             _check_bimorph(s)
             for q, dlog in curvature_log_derivatives(s.model.actuators.bimorph).items():

@@ -144,7 +144,6 @@ def test_single_fold_bimorph_layers(single, name):
     _agree(g.gradient[name], _central(setup, [FoldAngle(2)], h, model=models)[0])
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", ["E2", "t1"])
 def test_single_fold_bimorph_layers_more(single, name):
     test_single_fold_bimorph_layers(single, name)
@@ -179,7 +178,6 @@ def test_double_fold_rest_offset_and_medium(double):
                                                        model=models)[0])
 
 
-@pytest.mark.slow
 def test_double_fold_actuation(double):
     setup, result = double
     g = differentiate(result, FoldAngle(5), ("delta_alpha", "bimorph"))
