@@ -70,6 +70,7 @@ def _central(setup, objectives, h, **plus_minus):
 
 
 def _agree(adjoint, fd):
+    assert fd != 0
     assert abs(adjoint - fd) <= RTOL * abs(fd), (adjoint, fd, abs(adjoint / fd - 1))
 
 
@@ -274,3 +275,28 @@ def test_refusals(single):
                                        Heat({2: 0.02}, increments=2, coupling="staggered")])
     s = differentiate(staggered, FoldAngle(2), "power")
     assert not s.success and s.status == "not_steady"
+
+
+def test_miura_lifter_over_a_substrate():
+    """A 2 x 2-cell Miura lifter over a substrate (its creases' t_air capped by the distance to
+    the substrate panel): the fold of its last crease and the lift of its highest node per watt
+    on that crease."""
+    case = get_case("miura_lifter", substrate=True, coupling="settled", thermal_steps=20)
+    (key, power), = case.steps[0].power.items()
+    c = key[-1]
+    powers = {k: power for k in key}
+
+    def run(p):
+        step = Heat(p, increments=20, coupling="settled", coupling_tol=1e-10)
+        result = simulate(case.model, [step], options=OPTIONS)
+        assert result.success, result.message
+        return result
+    result = run(powers)
+    node = int(np.argmax(np.abs(result.steps[-1].state.u[:, 2])))
+    objectives = (FoldAngle(c), NodeCoordinate(node, "z"))
+    grads = [differentiate(result, o, "power") for o in objectives]
+    assert all(g.success for g in grads), grads[0].message
+    h = _step(power, "power")
+    plus, minus = run({**powers, c: power + h}), run({**powers, c: power - h})
+    for g, o in zip(grads, objectives):
+        _agree(g.gradient[f"power[{c}]"], (_value(plus, o) - _value(minus, o)) / (2 * h))
