@@ -1,4 +1,4 @@
-"""Scalar objectives of a steady state for :func:`~simulator.sensitivity.sensitivity`: each
+"""Scalar objectives of a steady state for :func:`~simulator.sensitivity.differentiate`: each
 gives its value and its exact partial derivatives in the displacements and temperatures.
 
 An objective is one of the classes here or a callable ``f(u, T) -> (value, dJ/du, dJ/dT)``

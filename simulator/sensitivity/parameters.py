@@ -1,4 +1,4 @@
-"""The parameters of :func:`~simulator.sensitivity.sensitivity` and the derivatives of the
+"""The parameters of :func:`~simulator.sensitivity.differentiate` and the derivatives of the
 coupled residual in them (theory 12.3).
 
 Kinds, in their order in a gradient: ``"power"`` (per crease, [W]), ``"rest_offset"`` (per
@@ -16,7 +16,7 @@ from ..errors import ParameterError
 
 __all__ = ["PARAMETER_KINDS", "UNSUPPORTED_KINDS", "curvature_log_derivatives"]
 
-#: The parameter kinds of :func:`~simulator.sensitivity.sensitivity`, in gradient order.
+#: The parameter kinds of :func:`~simulator.sensitivity.differentiate`, in gradient order.
 PARAMETER_KINDS = ("power", "rest_offset", "delta_alpha", "bimorph", "medium_conductivity")
 #: Kinds of issue 32 not supported yet, with the reason given when they are asked for.
 UNSUPPORTED_KINDS = {

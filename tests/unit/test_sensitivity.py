@@ -300,3 +300,26 @@ def test_miura_lifter_over_a_substrate():
     plus, minus = run({**powers, c: power + h}), run({**powers, c: power - h})
     for g, o in zip(grads, objectives):
         _agree(g.gradient[f"power[{c}]"], (_value(plus, o) - _value(minus, o)) / (2 * h))
+
+
+def test_fold_angle_gradient_on_bent_panels(double):
+    """The panel-to-panel fold angle's gradient (Newell normals, axis, atan2) against central
+    differences at positions with every panel bent out of plane."""
+    from simulator.mechanics.kinematics import fold_angles
+
+    _, result = double
+    mesh = result.model.mesh
+    x = mesh.nodes + result.steps[-1].state.u
+    x = x + 1e-5 * np.random.default_rng(1).standard_normal(x.shape)
+    u = x - mesh.nodes
+    for c in (2, 5):
+        row = mesh.crease_row_of(c)
+        g = FoldAngle(c).terms(result.model, u, np.zeros(len(x)))[1].ravel()
+        h = 1e-7 * np.ptp(x)
+        fd = np.empty(x.size)
+        for j in range(x.size):
+            d = np.zeros(x.size)
+            d[j] = h
+            d = d.reshape(x.shape)
+            fd[j] = (fold_angles(mesh, x + d)[row] - fold_angles(mesh, x - d)[row]) / (2 * h)
+        assert np.abs(g - fd).max() <= 1e-7 * np.abs(fd).max()
