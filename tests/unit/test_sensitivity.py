@@ -323,3 +323,27 @@ def test_fold_angle_gradient_on_bent_panels(double):
             d = d.reshape(x.shape)
             fd[j] = (fold_angles(mesh, x + d)[row] - fold_angles(mesh, x - d)[row]) / (2 * h)
         assert np.abs(g - fd).max() <= 1e-7 * np.abs(fd).max()
+
+
+def test_single_fold_resting_on_the_substrate():
+    """Contact active (the panel, folded down by -20 deg and by gravity, rests on the substrate
+    with two contact pairs): the fold per watt."""
+    from simulator.state import equilibrium_system
+
+    case = get_case("single_fold", residual_fold_deg=-20.0, gravity=True)
+
+    def run(p):
+        steps = [SelfFold({2: np.radians(-20.0)}, increments=20), case.steps[1],
+                 Heat({2: p}, increments=5, coupling="settled", coupling_tol=1e-10)]
+        result = simulate(case.model, steps, options=OPTIONS)
+        assert result.success, result.message
+        return result
+    power = 0.005
+    result = run(power)
+    state = result.steps[-1].state
+    assert equilibrium_system(case.model).evaluate(state.u, state.spring_rest).n_contacts == 2
+    g = differentiate(result, FoldAngle(2), "power")
+    assert g.success, g.message
+    h = _step(power, "power")
+    _agree(g.gradient["power[2]"], (_value(run(power + h), FoldAngle(2))
+                                    - _value(run(power - h), FoldAngle(2))) / (2 * h))
