@@ -193,14 +193,16 @@ def test_double_fold_actuation(double):
 
 
 def test_adjoint_equals_forward_and_callable(double):
-    """One transposed solve gives what one solve per parameter gives; a callable objective
-    (here the sum of the two fold angles by their own gradients) is the sum of the two."""
+    """One transposed solve gives what one solve per parameter gives, to the round-off of the
+    coupled Jacobian (condition number 6e10 equilibrated: the two differ by up to 4e-8); a
+    callable objective (the sum of the two fold angles by their own gradients) is the sum of
+    the two."""
     _, result = double
     a = differentiate(result, FoldAngle(5))
     f = differentiate(result, FoldAngle(5), method="forward")
     assert list(a.gradient) == list(f.gradient)
     for k in a.gradient:
-        assert a.gradient[k] == pytest.approx(f.gradient[k], rel=1e-9, abs=1e-12 * max(
+        assert a.gradient[k] == pytest.approx(f.gradient[k], rel=2e-7, abs=1e-12 * max(
             abs(v) for v in a.gradient.values()))
     model = result.model
 
