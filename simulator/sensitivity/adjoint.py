@@ -201,8 +201,8 @@ def _equilibrated(M) -> tuple:
     """``(D M D, d)`` with ``D = diag(d)``, ``d = |diag M|^(-1/2)`` (1 where the diagonal is
     0): the mechanics' rows [N/m] and the heat balance's [W/K] brought to one scale, so that
     the factorisation's pivots do not depend on the units (``M^-1 = D (D M D)^-1 D``). The
-    double fold's Jacobian has a condition number of 8e15, 6e10 equilibrated (stiff bars
-    beside soft hinges): the gradients carry round-off of about 1e-8 of themselves."""
+    double fold's Jacobian has a condition number of 8e15, 6e10 equilibrated: the
+    gradients carry round-off of about 1e-8 of themselves."""
     diag = np.abs(M.diagonal())
     d = np.where(diag > 0, 1 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
     D = sp.diags(d)
