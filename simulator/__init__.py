@@ -16,8 +16,8 @@ Families live in namespaces, imported on first use: :mod:`simulator.materials`,
 protocol, for step authors), :mod:`simulator.solvers` (Newton, path following, dynamics,
 stability, modes), :mod:`simulator.mechanics` (the equilibrium system, element families),
 :mod:`simulator.cases`, :mod:`simulator.fold` (FOLD files), :mod:`simulator.viewer`,
-:mod:`simulator.fe` (the FE reference, optional extra ``[fe]``) and :mod:`simulator.kernels`
-(compiled kernels). Older spellings at the door (``simulator.read_fold``) still work for one
+:mod:`simulator.fe` (the FE reference, optional extra ``[fe]``), :mod:`simulator.kernels`
+(compiled kernels) and :mod:`simulator.sensitivity` (exact gradients of a steady heated state). Older spellings at the door (``simulator.read_fold``) still work for one
 release with a deprecation warning naming the new place (the table is in ``_moved.py``).
 
 ``import simulator`` imports no submodule: each public name is imported from its submodule on
@@ -55,7 +55,7 @@ __getattr__, __dir__ = _attach(__name__, {
             "model": ".model", "thermal": ".thermal", "schedules": ".schedules",
             "steps": ".steps", "solvers": ".solvers", "mechanics": ".mechanics",
             "cases": ".cases", "fold": ".fold", "viewer": ".viewer", "fe": ".fe",
-            "kernels": ".kernels"}, moved="._moved")
+            "kernels": ".kernels", "sensitivity": ".sensitivity"}, moved="._moved")
 
 __all__ = [
     "__version__",
@@ -78,5 +78,5 @@ __all__ = [
     "SolverError", "EtorigamiDeprecationWarning",
     # the namespaces
     "example_patterns", "materials", "model", "thermal", "schedules", "steps", "solvers",
-    "mechanics", "cases", "fold", "viewer", "fe", "kernels",
+    "mechanics", "cases", "fold", "viewer", "fe", "kernels", "sensitivity",
 ]
