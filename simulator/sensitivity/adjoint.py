@@ -220,7 +220,8 @@ class _Setting:
     operator, the mechanics' tangent and the rest-angle coupling."""
 
     def __init__(self, model, state, start):
-        from ..state import equilibrium_system, thermal_model
+        from ..mechanics.equilibrium import equilibrium_system
+        from ..thermal.steady import thermal_model
 
         _check_supported(model, state)
         self.model, self.state = model, state
@@ -303,7 +304,7 @@ def _check_supported(model, state) -> None:
     elif state.circuits:
         why = "heater circuits"
     if why is None:
-        from ..state import thermal_model
+        from ..thermal.steady import thermal_model
 
         tm = thermal_model(model)
         if tm.nonlinear:

@@ -67,13 +67,13 @@ class ChainOperator:
         da_u = (cos[:, None] * uh - vh) / (nu * sin)[:, None]
         da_v = (cos[:, None] * vh - uh) / (nv * sin)[:, None]
         self.dalpha = np.concatenate([-(da_u + da_v), da_u, da_v], axis=1)
-        l1, l2 = tm.edge_lengths[:, 0], tm.edge_lengths[:, 1]
+        l1, l2 = tm.environment.edge_lengths[:, 0], tm.environment.edge_lengths[:, 1]
         x3, y3 = l2 * cos, l2 * sin
         self.area, self.darea = 0.5 * l1 * y3, 0.5 * l1 * x3
         z = np.zeros_like(l1)
         b, c = np.stack([-y3, y3, z], 1), np.stack([x3 - l1, -x3, l1], 1)
         db, dc = np.stack([-x3, x3, z], 1), np.stack([-y3, y3, z], 1)
-        s = tm._kt / (4 * self.area)
+        s = tm.conduction.kt / (4 * self.area)
 
         def outer(p, q):
             return p[:, :, None] * q[:, None, :]
@@ -94,7 +94,7 @@ class ChainOperator:
         bt = tri[tm.is_boundary]
         on_panel = np.zeros(n, bool)
         on_panel[bt.ravel()] = True
-        p = tm._cap_nodes
+        p = tm.environment.cap_nodes
         d = point_triangle_distance(np.repeat(x[p], len(bt), axis=0),
                                     np.tile(x[bt], (len(p), 1, 1)))[0].reshape(len(p), len(bt))
         order = np.argsort(d, axis=1)
@@ -148,9 +148,9 @@ class ChainOperator:
             self.t_air = np.maximum(self.t_air, floor)
         N = chains.layers
         s = (np.arange(1, N + 1) - 0.5) / N
-        spread = tm.edge_lengths.sum(axis=1) * math.tan(chains.dissipation_angle)
+        spread = tm.environment.edge_lengths.sum(axis=1) * math.tan(chains.dissipation_angle)
         h = N * (2 / 3) * ((self.area / self.t_air)[:, None] + spread[:, None] * s)   # (m, N)
-        g = tm.node_layer_sum(h)                                                       # (n, N)
+        g = tm.environment.node_layer_sum(h)                                                       # (n, N)
         with np.errstate(divide="ignore", invalid="ignore"):
             ok = np.all(g > 0, axis=1)
             self.g1 = np.where(ok, 1 / np.sum(1 / g, axis=1), 0.0)

@@ -23,7 +23,8 @@ from simulator.sensitivity import (CreaseTemperature, FoldAngle, NodeCoordinate,
                                    SensitivityNotSupported, differentiate,
                                    differentiate_state)
 from simulator.sensitivity.chain import ChainOperator
-from simulator.state import initial_state, thermal_model
+from simulator.state import initial_state
+from simulator.thermal import thermal_model
 
 OPTIONS = NewtonOptions(atol=1e-15, rtol=1e-14)
 EPS3 = np.finfo(float).eps ** (1 / 3)
@@ -246,7 +247,7 @@ def test_a_switch_is_reported():
     case = get_case("single_fold", power_mW=20.0)
     model = case.model
     tm = thermal_model(model)
-    cap = tm.tcap(model.mesh.nodes)
+    cap = tm.environment.tcap(model.mesh.nodes)
     e = int(np.flatnonzero(~tm.is_boundary & (cap < 1e-3))[0])
     chains = model.thermal.loss
     thermal = dataclasses.replace(model.thermal, loss=ChainLoss(
@@ -330,7 +331,7 @@ def test_fold_angle_gradient_on_bent_panels(double):
 def test_single_fold_resting_on_the_substrate():
     """Contact active (the panel, folded down by -20 deg and by gravity, rests on the substrate
     with two contact pairs): the fold per watt."""
-    from simulator.state import equilibrium_system
+    from simulator.mechanics.equilibrium import equilibrium_system
 
     case = get_case("single_fold", residual_fold_deg=-20.0, gravity=True)
 
