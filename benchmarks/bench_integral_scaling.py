@@ -18,8 +18,9 @@ for 36 x 36; ``--conduction monotone`` to include it).
 With ``--cli CELLS`` it also times the whole CLI process heating a flat Miura sheet of
 ``CELLS x CELLS`` cells drawn as a plain FOLD file (``etorigami run FILE --heat all --power 1
 --set thermal_steps=2``), once with the chains (``--loss-model chain``) and once with the
-default (the integral loss; above the dense limit at m = 2 on its fast path), and prints both
-times and their ratio (issue 29: at most 5x the chains').
+default (the integral loss; above the dense limit at m = 2 on its fast path), at each
+``--power`` (default 0.1 and 1 mW per crease: below and far above the SU-8 limit with the
+integral loss), and prints both times and their ratio (issue 29: at most 5x the chains').
 
 Run: ``python benchmarks/bench_integral_scaling.py [--cells 4 6 8 12] [--operator fast]
 [--refinement 1] [--plain] [--cli 36]``
@@ -96,10 +97,12 @@ def main(argv=None):
                     help="the sheet's conduction (default t3: the loss's cost alone)")
     ap.add_argument("--cli", type=int, metavar="CELLS",
                     help="also time the CLI heating a CELLS x CELLS plain FOLD Miura sheet")
+    ap.add_argument("--power", type=float, nargs="+", default=[0.1, 1.0], metavar="MW",
+                    help="crease powers of the CLI timing [mW per crease] (default 0.1 1)")
     args = ap.parse_args(argv)
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     if args.cli:
-        cli_times(args.cli, env)
+        cli_times(args.cli, env, args.power)
     rows = []
     print(f"load: {os.getloadavg()[0]:.2f} (1-min average; 2 cores)")
     print(f"{'cells':>5} {'triangles':>9} {'sub-tri':>8} {'time [s]':>9} {'evals':>6} path  "
@@ -122,9 +125,12 @@ def main(argv=None):
                           for i in range(len(rows) - 1)))
 
 
-def cli_times(cells: int, env) -> None:
-    """Whole-process wall time of ``etorigami run`` heating a plain FOLD Miura sheet, chains
-    against the default (integral) loss."""
+def cli_times(cells: int, env, powers=(0.1, 1.0)) -> None:
+    """Whole-process wall and CPU time of ``etorigami run`` heating a plain FOLD Miura sheet,
+    chains against the default (integral) loss, at each crease power of ``powers`` [mW], with
+    the hottest crease (its mean temperature) each model reaches: at 1 mW per crease the integral
+    loss puts the 36 x 36-cell sheet far above the SU-8 limit (the CLI warns; the sheet folds
+    its creases to 140-170 deg), at 0.1 mW it stays below it."""
     import tempfile
     import time
 
@@ -135,18 +141,34 @@ def cli_times(cells: int, env) -> None:
                 "as f; d = f(m(m={0}, n={0})); json.dump({{k: v for k, v in d.items() if "
                 "'etorigami' not in k}}, open(sys.argv[1], 'w'))").format(cells)
         subprocess.run([sys.executable, "-c", code, str(path)], env=env, check=True)
-        times = {}
-        for loss in ("chain", "integral"):
-            argv = [sys.executable, "-m", "design.cli", "run", str(path), "--heat", "all",
-                    "--power", "1", "--set", "thermal_steps=2", "-q", "--out",
-                    str(Path(tmp) / loss)] + (["--loss-model", "chain"] if loss == "chain"
-                                              else [])
-            t0 = time.perf_counter()
-            subprocess.run(argv, env=env, check=True, capture_output=True)
-            times[loss] = time.perf_counter() - t0
-            print(f"CLI, {cells} x {cells} cells, {loss}: {times[loss]:.1f} s (whole process)",
-                  flush=True)
-        print(f"integral / chains: {times['integral'] / times['chain']:.2f}x (issue 29: <= 5x)")
+        for power in powers:
+            times, cpu = {}, {}
+            for loss in ("chain", "integral"):
+                out = Path(tmp) / f"{loss}{power:g}"
+                argv = [sys.executable, "-m", "design.cli", "run", str(path), "--heat", "all",
+                        "--power", f"{power:g}", "--set", "thermal_steps=2", "-q", "--out",
+                        str(out)] + (["--loss-model", "chain"] if loss == "chain" else [])
+                before = os.times()
+                t0 = time.perf_counter()
+                subprocess.run(argv, env=env, check=True, capture_output=True)
+                times[loss] = time.perf_counter() - t0
+                after = os.times()
+                cpu[loss] = (after.children_user + after.children_system
+                             - before.children_user - before.children_system)
+                hottest = _hottest(out / "creases.csv")
+                print(f"CLI, {cells} x {cells} cells, {power:g} mW per crease, {loss}: "
+                      f"{times[loss]:.1f} s wall, {cpu[loss]:.1f} s CPU (whole process); "
+                      f"hottest crease (mean) {hottest:.0f} degC", flush=True)
+            print(f"  integral / chains at {power:g} mW: {times['integral'] / times['chain']:.2f}x "
+                  f"wall, {cpu['integral'] / cpu['chain']:.2f}x CPU (issue 29: <= 5x)", flush=True)
+
+
+def _hottest(csv) -> float:
+    """The hottest crease temperature [degC] at the end of a run's ``creases.csv``."""
+    import pandas as pd
+
+    frame = pd.read_csv(csv)
+    return float(frame.loc[frame["step"] == frame["step"].max(), "temperature [degC]"].max())
 
 
 if __name__ == "__main__":
