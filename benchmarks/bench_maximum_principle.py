@@ -41,7 +41,8 @@ from simulator import IntegralLoss
 from simulator.thermal import ThermalModel, crease_temperatures
 from simulator.cases import get_case
 from simulator.thermal._single_layer import subdivision
-from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator, lump_couplings
+from simulator.model.heat_loss import MAX_SUB_TRIANGLES
+from simulator.thermal.integral import IntegralOperator, lump_couplings
 from simulator.thermal.monotone import t3_matrices
 
 

@@ -33,6 +33,11 @@ __all__ = ["HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate", "heat_l
 HEAT_LOSS_MODELS = ("chain", "integral")
 #: How the integral loss's operator is solved (``IntegralLoss.operator``).
 INTEGRAL_OPERATORS = ("auto", "dense", "fast")
+#: Largest number of sub-triangles of the dense single-layer operator
+#: (:class:`~simulator.thermal.integral.IntegralOperator`): 4000 x 4000 is 128 MB per matrix
+#: and about 2 s of assembly and Cholesky on one core. Above it ``IntegralLoss(operator="auto")``
+#: takes the fast path (theory 4.7).
+MAX_SUB_TRIANGLES = 4000
 
 
 @dataclass(frozen=True)
@@ -161,9 +166,9 @@ class IntegralLoss:
         """Whether a sheet of ``n_triangles`` triangles is solved on the fast path (theory 4.7):
         ``operator`` "fast", or "auto" above the dense limit (more than
         ``MAX_SUB_TRIANGLES`` sub-triangles at ``refinement``)."""
-        from ..thermal.integral_levels import uses_fast
-
-        return uses_fast(int(n_triangles), self)
+        if self.operator != "auto":
+            return self.operator == "fast"
+        return int(n_triangles) * self.refinement ** 2 > MAX_SUB_TRIANGLES
 
     @property
     def extrapolated(self) -> bool:

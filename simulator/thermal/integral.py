@@ -39,17 +39,15 @@ import numpy as np
 from ..errors import ParameterError
 from ..linalg import dense_jit as _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
+from ..model.heat_loss import MAX_SUB_TRIANGLES
 from . import _single_layer_jit
 from ._single_layer import (single_layer_operator, sub_triangle_corners, subdivision,
                              subdivision_edges)
 
-__all__ = ["IntegralOperator", "MAX_SUB_TRIANGLES", "TOUCH_TOLERANCE", "lump_couplings"]
+__all__ = ["IntegralOperator", "TOUCH_TOLERANCE", "lump_couplings"]
 
 logger = logging.getLogger(__name__)
 
-#: Largest number of sub-triangles of the dense single-layer operator: 4000 x 4000 is 128 MB
-#: per matrix and about 2 s of assembly and Cholesky on one core.
-MAX_SUB_TRIANGLES = 4000
 #: A node closer to the substrate plane than this fraction of the sheet's extent touches it
 #: (held at room temperature): the tolerance of the 3-D FE reference's on-plane nodes.
 TOUCH_TOLERANCE = 1e-9

@@ -31,7 +31,7 @@ from ..errors import ParameterError
 from .integral import IntegralOperator, lump_couplings
 
 __all__ = ["ExtrapolatedLoss", "CorrectedLoss", "coarse_refinement", "integral_operator",
-           "uses_fast", "fast_levels", "describe_levels"]
+           "fast_levels", "describe_levels"]
 
 logger = logging.getLogger(__name__)
 
@@ -281,18 +281,6 @@ class CorrectedLoss:
 NEAR_PLANE_RTOL = 1.0
 
 
-def uses_fast(n_triangles: int, loss) -> bool:
-    """Whether the :class:`~simulator.thermal.IntegralLoss` ``loss`` on ``n_triangles``
-    sheet triangles takes the fast path (:mod:`simulator.thermal.integral_fast`): its
-    ``operator`` "fast", or "auto" above the dense limit (more than ``MAX_SUB_TRIANGLES``
-    sub-triangles at its ``refinement``)."""
-    from .integral import MAX_SUB_TRIANGLES
-
-    if loss.operator != "auto":
-        return loss.operator == "fast"
-    return n_triangles * loss.refinement ** 2 > MAX_SUB_TRIANGLES
-
-
 def fast_levels(loss, n_triangles: int):
     """``[(weight, refinement)]`` of the fast path for the
     :class:`~simulator.thermal.IntegralLoss` ``loss`` (``n_triangles`` is not used: the
@@ -337,8 +325,8 @@ def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: 
     None), whose ``loss`` is an :class:`~simulator.thermal.IntegralLoss`: an
     :class:`IntegralOperator` at its ``refinement`` built at its ``shape_tol``, an
     :class:`ExtrapolatedLoss` or a :class:`CorrectedLoss`; on the fast path
-    (:func:`uses_fast`) a :class:`~simulator.thermal.integral_fast.FastIntegralOperator` of
-    the same levels (plain or extrapolated, kept within ``shape_tol``). On the fine triangles
+    (``IntegralLoss.takes_fast_path``) a
+    :class:`~simulator.thermal.integral_fast.FastIntegralOperator` of the same levels (plain or extrapolated, kept within ``shape_tol``). On the fine triangles
     of a sheet refined ``sheet_refinement`` the levels of :func:`sheet_levels` (dense only),
     the cheap level of the correction the partner where that is 1 (one operator)."""
     loss = params.loss
@@ -350,7 +338,7 @@ def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: 
             f"a refined sheet (sheet_refinement = {sheet_refinement}) needs the integral loss's "
             "dense operator, not IntegralLoss(operator='fast'); use sheet_refinement=1 (the "
             "default where the fast path is taken).")
-    if sheet_refinement == 1 and uses_fast(n_triangles, loss):
+    if sheet_refinement == 1 and loss.takes_fast_path(n_triangles):
         from .integral_fast import FastIntegralOperator
 
         if loss.lumped:

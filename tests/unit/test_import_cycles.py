@@ -27,17 +27,12 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 KERNELS = ("the kernel tiers: simulator._jit and simulator._aot import the compiled-kernel "
            "modules of every room when asked to warm or build them; the kernels ask _jit for "
            "the tier at module level (docs/kernels.md)")
-DENSE_LIMIT = ("the heat-loss parameters ask the integral operator for its dense limit "
-               "(MAX_SUB_TRIANGLES, uses_fast); to move beside IntegralLoss once the operator's "
-               "performance work (thermal/integral*.py) has landed")
-
 #: (importing room, imported room) of lazy imports against the order -> the reason.
 LAZY_UPWARDS = {
     ("_jit", "_aot"): KERNELS,
     ("_jit", "_angles_jit"): KERNELS,
     ("_jit", "mechanics"): KERNELS,
     ("_jit", "thermal"): KERNELS,
-    ("model", "thermal"): DENSE_LIMIT,
 }
 
 

@@ -15,8 +15,8 @@ from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.model.mesh import build_mesh
 from simulator.thermal import integral_fast
 from simulator.thermal._single_layer import collocation_matrix, pair_values, _kernel_matrix
-from simulator.thermal.integral import MAX_SUB_TRIANGLES, IntegralOperator
-from simulator.thermal.integral_levels import uses_fast
+from simulator.model.heat_loss import MAX_SUB_TRIANGLES
+from simulator.thermal.integral import IntegralOperator
 from simulator.thermal import IntegralLoss, Substrate
 from simulator.model.heat_loss import heat_loss_from_dict
 from simulator.thermal import ThermalModel
@@ -151,10 +151,10 @@ def test_auto_is_dense_up_to_the_dense_limit_and_identical_there():
     assert not getattr(tm.integral, "fast", False)
     assert np.abs(auto - dense).max() <= 1e-6 * dense.max()
     loss = IntegralLoss()
-    assert not uses_fast(MAX_SUB_TRIANGLES // 9, loss) and uses_fast(MAX_SUB_TRIANGLES // 9 + 1,
-                                                                      loss)
-    assert uses_fast(1, IntegralLoss(operator="fast"))
-    assert not uses_fast(10 ** 6, IntegralLoss(operator="dense"))
+    assert not loss.takes_fast_path(MAX_SUB_TRIANGLES // 9)
+    assert loss.takes_fast_path(MAX_SUB_TRIANGLES // 9 + 1)
+    assert IntegralLoss(operator="fast").takes_fast_path(1)
+    assert not IntegralLoss(operator="dense").takes_fast_path(10 ** 6)
 
 
 def test_fast_path_never_forms_the_loss_matrix():
