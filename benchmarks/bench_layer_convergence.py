@@ -24,7 +24,8 @@ this benchmark lifts while it runs: 6336 and 11264 sub-triangles, about 0.5 and 
 4. *Full-function power* (``--full-function``): ``evaluate_gripper`` (bisect) at r = 1-4 (and
    6 with ``--r6``, a few minutes per design), 2 x (assembly + grip) per heated crease, as
    ``studies/device_power_physics.py`` counts it, with the same estimates from r = 2/4 and
-   3/6.
+   3/6 of the powers, and the evaluations with the temperatures extrapolated,
+   ``GripperDesign(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``).
 
 Run: ``python benchmarks/bench_layer_convergence.py`` (fixed power to r = 8, about 4 minutes;
 ``--quick`` stops at r = 4). Figures measured 8 Dec 2026: theory 4.13.
@@ -76,8 +77,9 @@ def flat_solve(cycle: int, setting: str, r: int, thermal=None, **design):
 
 
 def area_mean(tm, base) -> float:
-    """Mean rise [K] over the base creases' fine triangles (the last solve's fine field)."""
-    if tm.sheet is None:
+    """Mean rise [K] over the base creases' fine triangles (the last solve's fine field; NaN
+    on the mesh triangles and with ``sheet_extrapolation``)."""
+    if tm.sheet is None or tm.sheet_2r is not None:
         return float("nan")
     fine = tm.fine_model
     x = tm.sheet.positions(tm.mesh.nodes)
@@ -175,24 +177,31 @@ def where(rc: int = 4):
         f"{e[k]:+.1f} ({1e6 * xf[k, 0]:.0f}, {1e6 * xf[k, 1]:.0f})" for k in i))
 
 
-def full_function(rs):
+def _full(geometry, setting, r, extrapolate=False):
+    """(full-function power, assembly, grip per crease) [mW] of one evaluation."""
+    res = evaluate_gripper(GripperDesign(**geometry, crease_conduction=setting,
+                                         sheet_refinement=r, sheet_extrapolation=extrapolate))
+    a = res.assembly.power_per_crease if res.assembly.success else float("nan")
+    g = res.grip.power_per_crease if res.grip.success else float("nan")
+    return 2e3 * (a + g), 1e3 * a, 1e3 * g
+
+
+def full_function(rs, extrapolated):
     print("4. full-function power 2 x (assembly + grip) [mW] (assembly, grip per crease)")
     for cycle, geometry in DESIGNS.items():
         out = {}
-        for r in rs:
-            row = []
-            for s in SETTINGS:
-                res = evaluate_gripper(GripperDesign(**geometry, crease_conduction=s,
-                                                     sheet_refinement=r))
-                a = res.assembly.power_per_crease if res.assembly.success else float("nan")
-                g = res.grip.power_per_crease if res.grip.success else float("nan")
-                out.setdefault(r, {})[s] = 2e3 * (a + g)
-                row.append(f"{s} {2e3 * (a + g):7.3f} ({1e3 * a:6.3f}, {1e3 * g:5.3f})")
-            print(f"  cycle {cycle} r = {r}: " + "   ".join(row) + "   effect "
-                  f"{_effect(out[r]['paper'], out[r]['layers'])}", flush=True)
+        rows = [(r, False) for r in rs] + [(r, True) for r in extrapolated]
+        for r, ext in rows:
+            res = {s: _full(geometry, s, r, ext) for s in SETTINGS}
+            out[r, ext] = {s: v[0] for s, v in res.items()}
+            label = f"r = {r}, {2 * r} extrapolated" if ext else f"r = {r}"
+            print(f"  cycle {cycle} {label}: " + "   ".join(
+                f"{s} {p:7.3f} ({a:6.3f}, {g:5.3f})" for s, (p, a, g) in res.items())
+                + f"   effect {_effect(out[r, ext]['paper'], out[r, ext]['layers'])}",
+                flush=True)
         for lo in (2, 3):
-            if lo in out and 2 * lo in out:
-                est = {s: 2 * out[2 * lo][s] - out[lo][s] for s in SETTINGS}
+            if (lo, False) in out and (2 * lo, False) in out:
+                est = {s: 2 * out[2 * lo, False][s] - out[lo, False][s] for s in SETTINGS}
                 print(f"  cycle {cycle} 2 P({2 * lo}) - P({lo}): paper {est['paper']:7.3f}   "
                       f"layers {est['layers']:7.3f}   effect "
                       f"{_effect(est['paper'], est['layers'])}")
@@ -213,7 +222,8 @@ def main(argv=None):
         if args.where:
             where()
         if args.full_function:
-            full_function((1, 2, 3, 4, 6) if args.r6 else (1, 2, 3, 4))
+            full_function((1, 2, 3, 4, 6) if args.r6 else (1, 2, 3, 4),
+                          (2, 3) if args.r6 else (2,))
 
 
 if __name__ == "__main__":
