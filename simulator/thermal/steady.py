@@ -736,17 +736,18 @@ class ThermalModel:
         """:meth:`factorized` on the refined sheet: the mesh nodes' heat spread onto the fine
         nodes, the fine rise taken at the mesh nodes (with ``sheet_extrapolation`` ``2 T(2r) -
         T(r)``, theory 4.13)."""
-        solve = self._sheet_solver(self.sheet, self.fine_model, x)
+        solve = self._sheet_solver(self.sheet, self.fine_model.free_nodes,
+                                   self.fine_model.factorized(self.sheet.positions(x)))
         if self.sheet_2r is None:
             return solve
-        solve_2r = self._sheet_solver(self.sheet_2r, self.fine_model_2r, x)
+        solve_2r = self._sheet_solver(self.sheet_2r, self.fine_model_2r.free_nodes,
+                                      self.fine_model_2r.factorized(self.sheet_2r.positions(x)))
         return lambda q_free: 2 * solve_2r(q_free) - solve(q_free)
 
-    def _sheet_solver(self, sheet, fine, x):
-        """The free mesh nodes' rise on one refined ``sheet`` with its ``fine`` model."""
+    def _sheet_solver(self, sheet, ffree, solve):
+        """The free mesh nodes' rise on one refined ``sheet``, whose model's free nodes are
+        ``ffree`` and its solver ``solve`` (:meth:`factorized`)."""
         free = self.free_nodes
-        solve = fine.factorized(sheet.positions(x))
-        ffree = fine.free_nodes
 
         def solver(q_free):
             q_free = np.asarray(q_free, float)
