@@ -121,7 +121,7 @@ class GripperDesign:
     sheet_extrapolation : the steady temperatures extrapolated from the sheet refined ``r``
         and ``2 r``, ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters`
         ``sheet_extrapolation``, theory 4.13: the crease metal layer's effect converges so;
-        about 5-7 times the evaluation's cost at r = 2). Default False
+        5-14 times the evaluation's cost at r = 2). Default False
     crease_conduction : how an actuated crease conducts in-plane
         (:class:`~simulator.ThermalParameters` ``crease_conduction``, theory 4.10): ``"paper"``
         (default: one polymer layer over the crease thickness, the reference's) or
