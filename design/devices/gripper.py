@@ -118,6 +118,10 @@ class GripperDesign:
         (:class:`~simulator.ThermalParameters` ``sheet_refinement``, theory 4.11; the integral
         model only), or None (default: the loss model's, 1 with the chains and 2 with the
         integral loss at ``integral_refinement`` up to 5)
+    sheet_extrapolation : the steady temperatures extrapolated from the sheet refined ``r``
+        and ``2 r``, ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters`
+        ``sheet_extrapolation``, theory 4.13: the crease metal layer's effect converges so;
+        5-14 times the evaluation's cost at r = 2). Default False
     crease_conduction : how an actuated crease conducts in-plane
         (:class:`~simulator.ThermalParameters` ``crease_conduction``, theory 4.10): ``"paper"``
         (default: one polymer layer over the crease thickness, the reference's) or
@@ -167,6 +171,7 @@ class GripperDesign:
     emissivity_gold: float = 0.0
     lead_fraction: float = 0.0
     heater_tcr: float | None = None
+    sheet_extrapolation: bool = False
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -186,9 +191,11 @@ class GripperDesign:
                                      "needs loss_model='integral' (the chains were fitted on "
                                      "the mesh triangles); use sheet_refinement=None or 1.")
         self._check_physics()
+        self._check_extrapolation()
         for name, value in asdict(self).items():
             if name in ("residual_fold_creases", "loss_model", "integral_refinement",
-                        "conduction", "sheet_refinement") or name in _PHYSICS:
+                        "conduction", "sheet_refinement", "sheet_extrapolation") \
+                    or name in _PHYSICS:
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -198,6 +205,20 @@ class GripperDesign:
         if self.W >= min(self.L1, self.L2, self.La):
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
+
+    def _check_extrapolation(self):
+        """Check :attr:`sheet_extrapolation` (the integral loss, a sheet refined 2 to 8)."""
+        if not isinstance(self.sheet_extrapolation, (bool, np.bool_)):
+            raise ParameterError(f"GripperDesign.sheet_extrapolation = "
+                                 f"{self.sheet_extrapolation!r} must be True or False.")
+        if self.sheet_extrapolation and (self.loss_model != "integral"
+                                         or not 2 <= self.sheet_refinement_in_force <= 8):
+            raise ParameterError(
+                f"GripperDesign.sheet_extrapolation = True extrapolates from the sheet refined "
+                f"r and 2r, r from 2 to 8 (theory 4.13); given loss_model = "
+                f"{self.loss_model!r} and sheet_refinement = {self.sheet_refinement!r}: use "
+                "loss_model='integral' with sheet_refinement None or 2-8, or "
+                "sheet_extrapolation=False.")
 
     def _check_physics(self):
         """Check the heat-transfer and electrical switches (:data:`_PHYSICS`)."""
@@ -236,7 +257,8 @@ class GripperDesign:
         when they differ from the values they had before they existed (``loss_model`` only
         when not "chain", the default until 7 Dec 2026), so that problem settings, and the
         hashes of evaluation logs written before, are kept (so are the physics switches
-        ``crease_conduction`` to ``heater_tcr``, named only away from their defaults);
+        ``crease_conduction`` to ``heater_tcr``, and ``sheet_extrapolation``, named only away
+        from their defaults);
         ``integral_refinement``, the
         conduction, the sheet refinement and the loss levels in force
         (:attr:`integral_levels_in_force`) always with the integral model (their defaults
@@ -439,7 +461,7 @@ _UNITS = {"delta_alpha": "1/K", "env_conductivity": "W/(m K)", "loss_model": "-"
           "integral_levels": "-",
           "crease_conduction": "-", "k_gold": "W/(m K)", "temperature_dependent_air": "-",
           "emissivity_polymer": "-", "emissivity_gold": "-", "lead_fraction": "-",
-          "heater_tcr": "1/K"}
+          "heater_tcr": "1/K", "sheet_extrapolation": "-"}
 #: The heat-transfer and electrical switches of issue 30 and their defaults (the paper
 #: setting), left out of ``GripperDesign.to_dict`` at these values.
 _PHYSICS = {"crease_conduction": "paper", "k_gold": None, "temperature_dependent_air": False,
@@ -449,7 +471,7 @@ _PHYSICS = {"crease_conduction": "paper", "k_gold": None, "temperature_dependent
 #: ``loss_model`` "chain" was the default until 7 Dec 2026.
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
              "loss_model": "chain", "integral_refinement": 3, "conduction": None,
-             "sheet_refinement": None, **_PHYSICS}
+             "sheet_refinement": None, "sheet_extrapolation": False, **_PHYSICS}
 #: Triangles of the gripper's mesh (every design: the dimensions move its nodes only).
 GRIPPER_TRIANGLES = 48
 
@@ -525,7 +547,8 @@ def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCR
     thermal = ThermalParameters(
         medium=_medium(design), boundary_panels=(5,), room_temperature_nodes=(37,),
         conduction=design.conduction, crease_conduction=design.crease_conduction,
-        sheet_refinement=design.sheet_refinement, **_loss_model(design))
+        sheet_refinement=design.sheet_refinement,
+        sheet_extrapolation=design.sheet_extrapolation, **_loss_model(design))
     gold = {} if design.k_gold is None else {"k1": design.k_gold}
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8,
                                   **gold),

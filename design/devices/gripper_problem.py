@@ -109,7 +109,8 @@ class GripperProblem(TemperatureLimited, DesignProblem):
         metrics = {k: v for k, v in d.items()
                    if not k.endswith("[m]")
                    and not k.startswith(("residual_fold", "loss_model", "integral_refinement",
-                                         "conduction", "sheet_refinement", "crease_conduction",
+                                         "conduction", "sheet_refinement", "sheet_extrapolation",
+                                         "crease_conduction",
                                          "k_gold", "temperature_dependent_air", "emissivity",
                                          "lead_fraction", "heater_tcr"))
                    and k not in ("success", "status", "message", "mode")}

@@ -203,7 +203,7 @@ class ThermalParameters:
 
     ``ThermalParameters(loss=..., medium=AIR, substrate=Substrate(), room_temperature=21.0,
     boundary_panels=(), room_temperature_nodes=(), conduction=None, crease_conduction="paper",
-    sheet_layers=None, sheet_refinement=None)``;
+    sheet_layers=None, sheet_refinement=None, sheet_extrapolation=False)``;
     give them by keyword.
 
     Parameters
@@ -262,6 +262,12 @@ class ThermalParameters:
         area sums triangle perimeters, theory 4.3). None (default): the loss model's: 1 with
         the chains, :data:`AUTO_SHEET_REFINEMENT` with the integral loss where its dense
         operator allows (:meth:`sheet_refinement_for` says which).
+    sheet_extrapolation : bool
+        The steady temperatures extrapolated from the sheet refined ``r`` and ``2 r``, ``2
+        T(2r) - T(r)`` (Richardson's estimate for an error of first order in the element size,
+        theory 4.13: the crease metal layer's effect converges so, not on one sheet); the
+        refinement in force (:meth:`sheet_refinement_for`) must be 2 to 8. Default False. Steady
+        solves only: the time domain and the loss per node of a refined sheet refuse it.
 
     Notes
     -----
@@ -290,6 +296,7 @@ class ThermalParameters:
     crease_conduction: str
     sheet_layers: SheetLayers | None
     sheet_refinement: int | None
+    sheet_extrapolation: bool
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
@@ -298,7 +305,7 @@ class ThermalParameters:
                  integral_shape_tol=None, integral_extrapolation=None,
                  integral_correction_tol=None, *, loss=None, medium=None, substrate=_PANELS,
                  conduction=None, crease_conduction="paper", sheet_layers=None,
-                 sheet_refinement=None):
+                 sheet_refinement=None, sheet_extrapolation=False):
         old = {"env_thickness": env_thickness, "env_conductivity": env_conductivity,
                "layers": layers, "dissipation_angle": dissipation_angle,
                "env_density": env_density, "env_specific_heat": env_specific_heat,
@@ -311,12 +318,12 @@ class ThermalParameters:
                             f"{_OLD_KEYWORDS[name]}.")
         self._set(old, loss, medium, substrate, room_temperature, boundary_panels,
                   room_temperature_nodes, conduction, crease_conduction, sheet_refinement,
-                  sheet_layers)
+                  sheet_layers, sheet_extrapolation)
 
     def _set(self, old: dict, loss=None, medium=None, substrate=_PANELS,
              room_temperature=21.0, boundary_panels=(), room_temperature_nodes=(),
              conduction=None, crease_conduction="paper", sheet_refinement=None,
-             sheet_layers=None):
+             sheet_layers=None, sheet_extrapolation=False):
         """Set the fields from the new ones and the ``old`` flat ones (None: not given)."""
         old = {k: old.get(k) for k in _OLD_KEYWORDS}
         loss = _loss(loss, old["loss_model"], {k: old[k] for k in (*_CHAIN_NAMES,
@@ -340,6 +347,8 @@ class ThermalParameters:
                  "k t over the actuators' bimorph layers"))
         set_(self, "sheet_layers", _sheet_layers(sheet_layers, self.crease_conduction))
         set_(self, "sheet_refinement", _sheet_refinement(sheet_refinement, loss))
+        set_(self, "sheet_extrapolation", _sheet_extrapolation(sheet_extrapolation, loss,
+                                                               self.sheet_refinement))
         if loss.model == "integral" and not medium.thermal_conductivity > 0:
             raise ParameterError(f"ThermalParameters: the medium's conductivity "
                                  f"{medium.thermal_conductivity!r} W/(m K): the integral loss "
@@ -369,6 +378,11 @@ class ThermalParameters:
 
     def _describe_refinement(self, n_triangles) -> str:
         """The sheet refinement's part of :meth:`describe`."""
+        if self.sheet_extrapolation:
+            r = (AUTO_SHEET_REFINEMENT if self.sheet_refinement is None
+                 else self.sheet_refinement) if n_triangles is None \
+                else self.sheet_refinement_for(n_triangles)
+            return f"; sheet refined r = {r} and {2 * r}, extrapolated"
         if n_triangles is not None:
             r = self.sheet_refinement_for(n_triangles)
             return f"; sheet refined r = {r}" if r > 1 else ""
@@ -421,6 +435,8 @@ class ThermalParameters:
             _no_thickness()
         fine = {} if model == "integral" or (self.sheet_refinement or 1) == 1 else {
             "sheet_refinement": None}        # the chains on the mesh triangles (theory 4.11)
+        if model == "chain":
+            fine["sheet_extrapolation"] = False
         return dataclasses.replace(self, loss=cls(**changes), **fine)
 
     # ------------------------------------------------------------------ old flat spellings
@@ -457,8 +473,8 @@ class ThermalParameters:
         """Plain-dict view (result metadata, FOLD model files; SI units): ``loss``,
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
         the held panels and nodes, the ``conduction`` (None: the loss model's), the
-        ``crease_conduction`` and, where given, the ``sheet_layers`` and the
-        ``sheet_refinement``.
+        ``crease_conduction`` and, where given, the ``sheet_layers``, the
+        ``sheet_refinement`` and ``sheet_extrapolation`` (where True).
         :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
@@ -469,7 +485,8 @@ class ThermalParameters:
                 **({} if self.sheet_layers is None
                    else {"sheet_layers": self.sheet_layers.to_dict()}),
                 **({} if self.sheet_refinement is None
-                   else {"sheet_refinement": self.sheet_refinement})}
+                   else {"sheet_refinement": self.sheet_refinement}),
+                **({"sheet_extrapolation": True} if self.sheet_extrapolation else {})}
 
     def describe(self, n_triangles: int | None = None) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate (and
@@ -525,6 +542,21 @@ def _sheet_refinement(value, loss) -> int | None:
                              "4.3), so refining would change them; use sheet_refinement=1 or "
                              "None with ChainLoss.")
     return int(value)
+
+
+def _sheet_extrapolation(value, loss, sheet_refinement) -> bool:
+    """The checked :attr:`ThermalParameters.sheet_extrapolation`."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"ThermalParameters.sheet_extrapolation = {value!r} must be True or "
+                             "False.")
+    if value and (loss.model != "integral" or sheet_refinement == 1
+                  or (sheet_refinement or 2) > 8):
+        raise ParameterError(
+            f"ThermalParameters.sheet_extrapolation = True extrapolates from the sheet refined r "
+            f"and 2r, r from 2 to 8 (theory 4.13); given the {loss.model} loss and "
+            f"sheet_refinement = {sheet_refinement!r}: use the integral loss with "
+            "sheet_refinement None or 2-8, or sheet_extrapolation=False.")
+    return bool(value)
 
 
 def _plane(substrate: Substrate | None):

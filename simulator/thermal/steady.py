@@ -145,9 +145,18 @@ class ThermalModel:
         #: the thermal model of the refined sheet (None without refinement)
         self.fine_model = None
         self._last_fine = None           # (x, q, fine temperatures) of the last solve
+        #: the sheet refined 2r and its thermal model, with ``params.sheet_extrapolation``
+        #: (theory 4.13), else None
+        self.sheet_2r = self.fine_model_2r = None
         r = params.sheet_refinement_for(len(tri))
         if r > 1:
             self._refine(r, warn_no_plane, actuators)
+        elif params.sheet_extrapolation:
+            raise ParameterError(
+                f"ThermalParameters.sheet_extrapolation = True needs a refined sheet, but the "
+                f"refinement in force on these {len(tri)} triangles is 1 (the dense operator's "
+                "limit, theory 4.11); give sheet_refinement=2 or more, or "
+                "sheet_extrapolation=False.")
 
     def _integral_operator(self, params):
         """The integral loss's operator on the sheet (the conducting triangles), at the levels
@@ -160,9 +169,11 @@ class ThermalModel:
         """Solve on the mesh triangles split into ``r^2`` each (theory 4.11): the fine sheet's
         own model, whose integral operator, substrate plane and held nodes this one shows."""
         self.sheet = RefinedSheet(self.mesh, r)
-        self.fine_model = ThermalModel(self.sheet.mesh,
-                                       dataclasses.replace(self.params, sheet_refinement=1),
-                                       warn_no_plane, actuators)
+        params = dataclasses.replace(self.params, sheet_refinement=1, sheet_extrapolation=False)
+        self.fine_model = ThermalModel(self.sheet.mesh, params, warn_no_plane, actuators)
+        if self.params.sheet_extrapolation:
+            self.sheet_2r = RefinedSheet(self.mesh, 2 * r)
+            self.fine_model_2r = ThermalModel(self.sheet_2r.mesh, params, False, actuators)
         fine = self.fine_model
         self.integral, self.plane, self._warn_plane = fine.integral, fine.plane, False
         n = self.mesh.n_nodes
@@ -290,8 +301,12 @@ class ThermalModel:
                                  "the room temperature finite.")
         if self.sheet is not None:
             fine = self.fine_model.solve(self.sheet.positions(x), self.sheet.heat(q), rt)
-            self._last_fine = (np.array(x, float), q.copy(), rt, fine)
-            return fine[:n]
+            if self.sheet_2r is None:
+                self._last_fine = (np.array(x, float), q.copy(), rt, fine)
+                return fine[:n]
+            fine_2r = self.fine_model_2r.solve(self.sheet_2r.positions(x), self.sheet_2r.heat(q),
+                                               rt)
+            return 2 * fine_2r[:n] - fine[:n]         # Richardson in r (theory 4.13)
         if self.nonlinear:
             return rt + self._nonlinear_rise(x, q, rt)
         rise = np.zeros(q.shape)
@@ -416,8 +431,8 @@ class ThermalModel:
     @property
     def fine_temperatures(self):
         """Temperatures [deg C] of the refined sheet's fine nodes at the last solve, (n_fine,)
-        or (n_fine, k) (theory 4.11; the mesh nodes first); None without refinement or before
-        the first solve."""
+        or (n_fine, k) (theory 4.11; the mesh nodes first); None without refinement, before
+        the first solve, or with ``sheet_extrapolation`` (two sheets)."""
         return None if self._last_fine is None else self._last_fine[3]
 
     def exact_loss_at(self, x) -> bool:
@@ -427,6 +442,8 @@ class ThermalModel:
         the increment count); whether it rebuilt. The chains: nothing to rebuild."""
         if self.sheet is not None:
             done = self.fine_model.exact_loss_at(self.sheet.positions(x))
+            if self.sheet_2r is not None:           # both rebuilt where due
+                done = self.fine_model_2r.exact_loss_at(self.sheet_2r.positions(x)) or done
         else:
             exact = getattr(self.integral, "exact_at", None)
             done = bool(exact is not None and exact(np.asarray(x, float)))
@@ -436,10 +453,20 @@ class ThermalModel:
 
     def _refined_solver(self, x):
         """:meth:`factorized` on the refined sheet: the mesh nodes' heat spread onto the fine
-        nodes, the fine rise taken at the mesh nodes."""
-        fine, sheet, free = self.fine_model, self.sheet, self.free_nodes
-        solve = self.fine_model.factorized(sheet.positions(x))
-        ffree = fine.free_nodes
+        nodes, the fine rise taken at the mesh nodes (with ``sheet_extrapolation`` ``2 T(2r) -
+        T(r)``, theory 4.13)."""
+        solve = self._sheet_solver(self.sheet, self.fine_model.free_nodes,
+                                   self.fine_model.factorized(self.sheet.positions(x)))
+        if self.sheet_2r is None:
+            return solve
+        solve_2r = self._sheet_solver(self.sheet_2r, self.fine_model_2r.free_nodes,
+                                      self.fine_model_2r.factorized(self.sheet_2r.positions(x)))
+        return lambda q_free: 2 * solve_2r(q_free) - solve(q_free)
+
+    def _sheet_solver(self, sheet, ffree, solve):
+        """The free mesh nodes' rise on one refined ``sheet``, whose model's free nodes are
+        ``ffree`` and its solver ``solve`` (:meth:`factorized`)."""
+        free = self.free_nodes
 
         def solver(q_free):
             q_free = np.asarray(q_free, float)
@@ -574,6 +601,11 @@ class ThermalModel:
         the fine field of the last solve (the only one whose mesh-node temperatures determine
         it), its loss gathered onto the mesh nodes
         (:meth:`~simulator.thermal.refined.RefinedSheet.restrict`: the total kept)."""
+        if self.sheet_2r is not None:
+            raise ParameterError(
+                f"{which} with ThermalParameters.sheet_extrapolation = True: the temperatures "
+                "are extrapolated from two refined sheets, which have no one loss per node "
+                "(theory 4.13); use sheet_extrapolation=False for the loss per node.")
         last, T = self._last_fine, np.asarray(temperature, float)
         if last is None or not (np.array_equal(last[0], np.asarray(x, float)) and last[2] == rt
                                 and last[3].ndim == 1 and np.array_equal(last[3][:len(T)], T)):
@@ -594,6 +626,11 @@ class ThermalModel:
         if self.sheet is None:
             raise ParameterError("condensed_system is the refined sheet's (sheet_refinement > "
                                  "1); without refinement the system is on the mesh nodes.")
+        if self.sheet_2r is not None:
+            raise ParameterError(
+                "condensed_system with ThermalParameters.sheet_extrapolation = True: the "
+                "temperatures are extrapolated from two refined sheets, steady only (theory "
+                "4.13); use sheet_extrapolation=False in the time domain.")
         fine, sheet = self.fine_model, self.sheet
         X = sheet.positions(x)
         n = self.mesh.n_nodes

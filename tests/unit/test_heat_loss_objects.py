@@ -45,9 +45,10 @@ def test_thermal_parameters_from_the_objects_and_their_defaults():
     assert (p.loss.model, p.medium.thermal_conductivity) == ("integral", 0.6)
     bare = ThermalParameters()                 # calibration-free: nothing to give
     assert bare.loss == IntegralLoss() and bare.medium is AIR and bare.substrate == Substrate()
-    assert len(dataclasses.fields(ThermalParameters)) == 10  # + sheet and crease conduction,
-    #                                                  the sheet's layers and its refinement
+    assert len(dataclasses.fields(ThermalParameters)) == 11  # + sheet and crease conduction,
+    #                       the sheet's layers, its refinement and the extrapolation in it
     assert bare.sheet_layers is None and bare.crease_conduction == "paper"
+    assert bare.sheet_extrapolation is False
     with pytest.raises(ParameterError, match=r"the chain heat loss needs the medium thickness "
                                              r"t_env: give loss=ChainLoss\(thickness=\.\.\.\)"):
         bare.with_loss("chain")
