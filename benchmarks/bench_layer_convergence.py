@@ -44,7 +44,7 @@ import numpy as np
 from design import GripperDesign, evaluate_gripper, gripper_model
 from design.devices import BASE_CREASES
 from simulator.thermal import ThermalModel, crease_temperatures
-from simulator.thermal import integral
+from simulator.model import heat_loss
 from simulator.thermal.monotone import t3_matrices
 
 #: The two measured grippers: cycle -> geometry [m].
@@ -57,7 +57,7 @@ POWER = 15e-3           # [W] per base crease
 @contextmanager
 def dense_limit(n: int = 12000):
     """Lift the dense operator's sub-triangle limit while the block runs (r = 6 and 8)."""
-    with mock.patch.object(integral, "MAX_SUB_TRIANGLES", max(n, integral.MAX_SUB_TRIANGLES)):
+    with mock.patch.object(heat_loss, "MAX_SUB_TRIANGLES", max(n, heat_loss.MAX_SUB_TRIANGLES)):
         yield
 
 

@@ -36,7 +36,8 @@ INTEGRAL_OPERATORS = ("auto", "dense", "fast")
 #: Largest number of sub-triangles of the dense single-layer operator
 #: (:class:`~simulator.thermal.integral.IntegralOperator`): 4000 x 4000 is 128 MB per matrix
 #: and about 2 s of assembly and Cholesky on one core. Above it ``IntegralLoss(operator="auto")``
-#: takes the fast path (theory 4.7).
+#: takes the fast path (theory 4.7). Read from here wherever it is used (the operator, the sheet
+#: refinement in force), so that one patch of it moves them all.
 MAX_SUB_TRIANGLES = 4000
 
 

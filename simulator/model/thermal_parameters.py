@@ -17,8 +17,8 @@ from .._deprecation import warn_deprecated
 from .._validate import finite, non_negative, one_of
 from ..errors import ParameterError
 from ..geometry.materials import AIR, Fluid
-from .heat_loss import (HEAT_LOSS_MODELS, MAX_SUB_TRIANGLES, ChainLoss, IntegralLoss, Substrate,
-                         heat_loss_from_dict)
+from . import heat_loss
+from .heat_loss import HEAT_LOSS_MODELS, ChainLoss, IntegralLoss, Substrate, heat_loss_from_dict
 from .layers import SheetLayers
 
 __all__ = ["ThermalParameters", "REFERENCE_BETA", "CONDUCTIONS", "CREASE_CONDUCTIONS",
@@ -374,7 +374,7 @@ class ThermalParameters:
         if self.loss.model != "integral" or self.loss.operator == "fast":
             return 1
         r, m = AUTO_SHEET_REFINEMENT, self.loss.refinement
-        return r if int(n_triangles) * (r * m) ** 2 <= MAX_SUB_TRIANGLES else 1
+        return r if int(n_triangles) * (r * m) ** 2 <= heat_loss.MAX_SUB_TRIANGLES else 1
 
     def _describe_refinement(self, n_triangles) -> str:
         """The sheet refinement's part of :meth:`describe`."""

@@ -14,7 +14,7 @@ lose ``M^T p``: the loss conductance added to the sheet's T3 conduction is the d
 
 Cost: ``S`` is dense, ``n_s = m^2 n_tri`` sub-triangles; assembly ``O(n_s^2)`` (memory
 ``~3 x 8 n_s^2`` bytes during assembly), Cholesky ``n_s^3 / 3`` flops, once per shape. Models
-above :data:`MAX_SUB_TRIANGLES` sub-triangles are refused (use the chain model,
+above ``MAX_SUB_TRIANGLES`` (:mod:`simulator.model.heat_loss`) sub-triangles are refused (use the chain model,
 ``loss=ChainLoss(thickness=...)``, or the 3-D FE reference of :mod:`simulator.thermal.fe`).
 
 Sheet on the substrate: the rule of the 3-D FE reference (``solve_fe3d`` holds sheet nodes on
@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..linalg import dense_jit as _dense_jit, dense_lapack, thresholds
 from ..linalg.ladder import factorize
-from ..model.heat_loss import MAX_SUB_TRIANGLES
+from ..model import heat_loss
 from . import _single_layer_jit
 from ._single_layer import (single_layer_operator, sub_triangle_corners, subdivision,
                              subdivision_edges)
@@ -98,12 +98,13 @@ class IntegralOperator:
         self.builds = 0
         bary_vertices, bary_centroids = subdivision(refinement)
         self.n_sub = len(self.triangles) * len(bary_centroids)
-        if self.n_sub > MAX_SUB_TRIANGLES:
+        limit = heat_loss.MAX_SUB_TRIANGLES
+        if self.n_sub > limit:
             raise ParameterError(
                 f"the integral heat loss: {len(self.triangles)} triangles x "
                 f"{len(bary_centroids)} sub-triangles (IntegralLoss.refinement = {refinement}) = "
                 f"{self.n_sub} sub-triangles exceeds the dense-operator limit MAX_SUB_TRIANGLES = "
-                f"{MAX_SUB_TRIANGLES}; use IntegralLoss(operator='fast') or 'auto' (the "
+                f"{limit}; use IntegralLoss(operator='fast') or 'auto' (the "
                 "default: the fast path above the limit), lower the refinement, or the chain "
                 "model (loss=ChainLoss(thickness=...), calibrated by "
                 "simulator.thermal.calibrate_environment) or the 3-D FE reference "

@@ -12,7 +12,8 @@ from simulator import (AIR, ChainLoss, IntegralLoss, ParameterError, Substrate,
                        ThermalParameters)
 from simulator.cases import verification_strip
 from simulator.linalg import dense_jit
-from simulator.thermal import _single_layer_jit, integral
+from simulator.model import heat_loss
+from simulator.thermal import _single_layer_jit
 from simulator.thermal._single_layer import (collocation_matrix, single_layer_operator,
                                               sub_triangle_corners, subdivision,
                                               subdivision_edges, triangle_potential)
@@ -280,7 +281,7 @@ def test_boundary_panels_are_held_at_room_temperature():
 def test_dense_limit_is_refused_naming_the_limit_and_the_alternatives(monkeypatch):
     """The dense operator asked for above its limit is refused; "auto" (the default) takes the
     fast path there instead (tests/unit/test_integral_fast.py)."""
-    monkeypatch.setattr(integral, "MAX_SUB_TRIANGLES", 100)
+    monkeypatch.setattr(heat_loss, "MAX_SUB_TRIANGLES", 100)
     with pytest.raises(ParameterError, match=r"(?s)224 sub-triangles exceeds the dense-operator "
                        r"limit MAX_SUB_TRIANGLES = 100.*operator='fast'.*loss=ChainLoss.*3-D FE"):
         _strip(refinement=4, operator="dense")

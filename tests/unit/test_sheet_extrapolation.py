@@ -12,8 +12,8 @@ from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
 from simulator import ThermalParameters
 from simulator.cases import get_case
 from simulator.errors import ParameterError
-from simulator.thermal import integral
-from simulator.thermal.loss import ChainLoss
+from simulator.model import heat_loss
+from simulator.thermal import ChainLoss
 from simulator.thermal.measures import crease_temperatures
 from simulator.thermal.steady import ThermalModel
 
@@ -68,7 +68,7 @@ def test_the_crease_metal_layers_effect_converges_with_extrapolation():
         paper, layers = (_base_actuation(geometry, s, r, extrapolate) for s in ("paper", "layers"))
         return 100 * (layers / paper - 1)
 
-    with mock.patch.object(integral, "MAX_SUB_TRIANGLES", 8000):
+    with mock.patch.object(heat_loss, "MAX_SUB_TRIANGLES", 8000):
         plain = [effect(r, False) for r in (2, 3)]
         extrapolated = [effect(r, True) for r in (2, 3)]
     assert plain[1] - plain[0] > 5
@@ -104,7 +104,7 @@ def test_the_extrapolation_refuses_what_two_sheets_cannot_give():
     """No refined sheet in force (a mesh above the dense limit), the loss per node and the
     time domain's condensed system: errors naming ``sheet_extrapolation``."""
     model = _double_fold(sheet_extrapolation=True)
-    with mock.patch.object(integral, "MAX_SUB_TRIANGLES", 100):
+    with mock.patch.object(heat_loss, "MAX_SUB_TRIANGLES", 100):
         with pytest.raises(ParameterError, match="sheet_extrapolation = True needs a refined"):
             ThermalModel(model.mesh, model.thermal)
     tm = ThermalModel(model.mesh, model.thermal)
