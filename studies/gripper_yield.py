@@ -109,7 +109,7 @@ def _path(a: dict, b: dict, t: float) -> dict:
 def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.DataFrame:
     """Designs, then the yield sweep; see the module docstring."""
     problem = GripperProblem(mode="bisect", base=PAPER_BASE)     # the paper setting (chains)
-    x_start = problem.space.to_dict(problem.space.start)
+    x_start = problem.space.to_mapping(problem.space.start)
     with make_executor("serial" if quick else "process",
                        None if quick else WORKERS) as executor:
         designs = {START: (x_start, _design_row(START, "paper's start design", x_start))}

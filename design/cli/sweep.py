@@ -25,7 +25,7 @@ SCENARIO_NAMES = ("default", "residual-fold", "off")
 def _design_arg(text: str, space) -> dict:
     """``start`` or ``W=300,La=1500,L1=500,L2=500`` (display units) -> {name: SI value}."""
     if text.strip().lower() == "start":
-        return space.to_dict(space.start)
+        return space.to_mapping(space.start)
     out = {}
     for part in text.split(","):
         if "=" not in part:
@@ -38,7 +38,7 @@ def _design_arg(text: str, space) -> dict:
             raise CLIError(f"--design: {name} = {value!r} is not a number") from None
         length_um(f"--design {var.name}", number)
         out[var.name] = number / var.display_scale
-    return space.to_dict(out)
+    return space.to_mapping(out)
 
 
 def _run(args, out: pathlib.Path, total: int, desc: str, sweep):

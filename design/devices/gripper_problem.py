@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 from simulator import ParameterError
 from simulator.thermal import TG_FACTOR
 
-from ..core.problem import DesignProblem
+from ..core.problem import DesignProblem, EvaluationOutcome
 from ..core.space import DesignSpace, Variable
 from .gripper import GripperDesign, check_fold, evaluate_gripper
 from .limits import SU8_TG, TemperatureLimited
@@ -114,8 +114,8 @@ class GripperProblem(TemperatureLimited, DesignProblem):
                                          "lead_fraction", "heater_tcr"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = verdict.temperature
-        return (res.total_power, constraints, metrics, None if res.success else res.status,
-                message)
+        return EvaluationOutcome(res.total_power, constraints, metrics,
+                                 None if res.success else res.status, message)
 
     def settings(self) -> dict:
         folds = self.group_folds()

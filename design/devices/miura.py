@@ -23,7 +23,7 @@ from simulator._validate import in_range, integer, one_of, positive
 
 from ..core._contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
-from ..core.problem import DesignProblem
+from ..core.problem import DesignProblem, EvaluationOutcome
 from .limits import SU8_LIMIT, SU8_TG, TemperatureLimited
 from ..core.space import DesignSpace, Variable
 
@@ -332,8 +332,8 @@ class MiuraProblem(TemperatureLimited, DesignProblem):
         constraints["temperature"] = verdict.constraint
         metrics = {k: v for k, v in res.to_dict().items()
                    if k not in ("success", "status", "message")}
-        return (res.total_power, constraints, metrics, None if res.success else res.status,
-                message)
+        return EvaluationOutcome(res.total_power, constraints, metrics,
+                                 None if res.success else res.status, message)
 
     def settings(self) -> dict:
         return {"problem": self.name, "mode": self.mode, "target_lift [m]": self.target_lift,
