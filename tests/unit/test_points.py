@@ -87,3 +87,17 @@ def test_design_list_takes_none_a_mapping_a_vector_or_a_sequence():
     assert design_list(s, None) == [{"x": 0.5}]
     assert design_list(s, {"x": 0.2}) == design_list(s, [0.2]) == [{"x": 0.2}]
     assert design_list(s, [{"x": 0.1}, [0.3]]) == [{"x": 0.1}, {"x": 0.3}]
+
+
+def test_one_class_is_named_evaluation():
+    """design's Evaluation (one evaluated design); the equilibrium system's values at one
+    configuration are SystemValues."""
+    import ast
+    import pathlib
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    found = [p.relative_to(root).as_posix() for pkg in ("simulator", "design")
+             for p in sorted((root / pkg).rglob("*.py"))
+             for node in ast.walk(ast.parse(p.read_text()))
+             if isinstance(node, ast.ClassDef) and node.name == "Evaluation"]
+    assert found == ["design/core/problem.py"]
