@@ -112,20 +112,20 @@ def gripper_run(loss_model: str, settings: dict):
 
 
 def gripper_evaluation(design, transform):
-    """A function evaluating ``design`` (bisect) with the model of ``gripper.gripper_model``
+    """A function evaluating ``design`` (bisect) with the model of ``gripper.make_gripper_model``
     passed through ``transform(model) -> model`` while it runs."""
-    original = gripper.gripper_model
+    original = gripper.make_gripper_model
 
     def model_with(design, *args, **kw):
         model, pre = original(design, *args, **kw)
         return transform(model), pre
 
     def run():
-        gripper.gripper_model = model_with
+        gripper.make_gripper_model = model_with
         try:
             return gripper.evaluate_gripper(design, mode="bisect")
         finally:
-            gripper.gripper_model = original
+            gripper.make_gripper_model = original
     return run
 
 

@@ -57,7 +57,7 @@ import numpy as np
 import pandas as pd
 
 from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
-                            _tip_distance, gripper_model)
+                            _tip_distance, make_gripper_model)
 from simulator import Heat, get_case, natural_modes, simulate
 from simulator.schedules import SquareWave, StepPower
 from simulator.mechanics import fold_angles
@@ -116,7 +116,7 @@ def single_crease(residual_fold_deg: float = 0.0) -> Device:
 def gripper(stage: str, base_power: float = 0.0) -> Device:
     """The gripper (``design.devices.gripper``) before assembly, or assembled by ``base_power`` [W]
     per base crease (static, held on) before the grip."""
-    model, pre = gripper_model(GripperDesign(loss_model="chain"))       # the paper setting
+    model, pre = make_gripper_model(GripperDesign(loss_model="chain"))       # the paper setting
     state = simulate(model, pre).state
     if stage == "assembly":
         return Device("gripper assembly", model, state, BASE_CREASES,
@@ -286,7 +286,7 @@ def heat_loss_lines() -> list:
     from studies.plotting import heat_loss_note
 
     return [f"single crease: {heat_loss_note(get_case(CASE).model)}",
-            f"gripper: {heat_loss_note(gripper_model(GripperDesign(loss_model='chain'))[0])}"]
+            f"gripper: {heat_loss_note(make_gripper_model(GripperDesign(loss_model='chain'))[0])}"]
 
 
 def main(argv=None):

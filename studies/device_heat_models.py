@@ -87,7 +87,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from design import GripperDesign, evaluate_gripper, gripper_model
+from design import GripperDesign, evaluate_gripper, make_gripper_model
 from design.devices import ARM_CREASES, BASE_CREASES
 from simulator import IntegralLoss, Substrate, simulate
 from simulator.fe import solve_fe3d
@@ -221,7 +221,7 @@ def _gripper_fe(cycle, geometry, results, level):
     Returns the ``fe`` rows and, per shape (model), {quantity: (that model's value on its
     re-simulated stopping state, the FE's value or FE-implied power there)}, powers in mW.
     """
-    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m, conduction=CONDUCTION,
+    models = {m: make_gripper_model(GripperDesign(**geometry, loss_model=m, conduction=CONDUCTION,
                                              sheet_refinement=SHEET))[0] for m in MODELS}
     case, rows, checks = f"gripper cycle {cycle}", [], {}
     room = models["chain"].thermal.room_temperature
@@ -341,7 +341,7 @@ def _run_gripper(quick, level, progress):
         if all(r.success for r in results.values()):
             more, checks = _gripper_fe(cycle, geometry, results, level)
             fe_rows += more
-        room = gripper_model(GripperDesign(**geometry, loss_model="chain"))[0].thermal.room_temperature
+        room = make_gripper_model(GripperDesign(**geometry, loss_model="chain"))[0].thermal.room_temperature
         comparison += _gripper_comparison(cycle, rows, checks, room)
     return pd.DataFrame(rows), pd.DataFrame(fe_rows), pd.DataFrame(comparison)
 

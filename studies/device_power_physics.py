@@ -75,7 +75,7 @@ import time
 
 import pandas as pd
 
-from design import GripperDesign, evaluate_gripper, gripper_drive, gripper_model
+from design import GripperDesign, evaluate_gripper, gripper_drive, make_gripper_model
 from simulator.materials import GOLD_FILM_EMISSIVITY
 from simulator import EtorigamiError
 from simulator.thermal.circuits import GOLD_TCR
@@ -227,7 +227,7 @@ def plot(df: pd.DataFrame):
         plot_ratio(axes[-1], ratio)
     fig.suptitle("The measured grippers with metal layers, hot air, radiation and electrical "
                  "drive (nothing fitted)", fontsize="large")
-    paper = gripper_model(GripperDesign(**DESIGNS[-1][2]))[0]
+    paper = make_gripper_model(GripperDesign(**DESIGNS[-1][2]))[0]
     note_assumptions(
         fig, heat_loss_note(paper) + " (the paper setting; every variant keeps this loss, the "
         "rows 'sheet r = 3' refine the sheet further)",

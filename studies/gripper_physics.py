@@ -60,7 +60,7 @@ import numpy as np
 import pandas as pd
 
 from design import GripperProblem, make_executor, optimize
-from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
+from design.devices.gripper import GripperDesign, evaluate_gripper, make_gripper_model
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import (ASM, GRIP, POWER, TEMP, UM, VARIABLES, cycles_table,
                                           design_um)
@@ -151,7 +151,7 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
 def _footer() -> list[str]:
     from studies.figure_notes import heat_loss_note
 
-    notes = [f"{s}: {heat_loss_note(gripper_model(d)[0])}" for s, d in SETTINGS.items()]
+    notes = [f"{s}: {heat_loss_note(make_gripper_model(d)[0])}" for s, d in SETTINGS.items()]
     return ["objective: assembly + grip power per heated crease (bisect search); limit: centre-"
             "line mean of the hottest heated crease <= 1.2 T_g = 252 °C; size bounds of the "
             "paper; coordinate descent from W 200, La 700, L1 = L2 = 1000 um (steps 10 / 50 "

@@ -13,7 +13,7 @@ The designs and their stage powers (per heated crease, from the bisect power sea
 from ``results/gripper_optimization/gripper_optimization.csv`` (``cycles`` rows; the current
 directory's if a run wrote one, else the repository's committed one); the coordinate descent is
 not re-run. For each design below, the gripper model of
-:func:`design.devices.gripper.gripper_model` is loaded by its pre-steps (self-weight), then heated in
+:func:`design.devices.gripper.make_gripper_model` is loaded by its pre-steps (self-weight), then heated in
 ``INCREMENTS`` increments with iterated thermo-mechanical coupling to the assembly power on
 the two base creases, then, with the base heat kept on, to the grip power on the two arm
 creases. The measures of the stages (base fold, distance of the arm tips) are recomputed on
@@ -53,7 +53,7 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design import GripperDesign, gripper_model
+from design import GripperDesign, make_gripper_model
 from design.devices import ARM_CREASES, BASE_CREASES
 from simulator import simulate
 from simulator.steps import Heat
@@ -102,7 +102,7 @@ def gripper_states(design: GripperDesign, assembly_power: float, grip_power: flo
     (model, {"assembly": SimulationResult, "grip": SimulationResult})
         Each result's last record is the state at the end of that stage.
     """
-    model, pre = gripper_model(design)
+    model, pre = make_gripper_model(design)
     start = simulate(model, pre)
     assembly = simulate(model, [Heat({BASE_CREASES: assembly_power}, increments=increments,
                                               coupling="iterated")],
@@ -184,7 +184,7 @@ def _draw(fig, spec, d, nodes, t_range, colorbar):
     from studies.plotting import label_points, plot_shape
 
     ax = fig.add_subplot(spec, projection="3d")
-    mesh = gripper_model(_design(d))[0].mesh
+    mesh = make_gripper_model(_design(d))[0].mesh
     n = nodes[(nodes["design"] == d["design"]) & (nodes["stage"] == d["stage"])]
     shape = shape_from_frame(n, mesh)
     plot_shape(shape, ax=ax, t_range=t_range, colorbar=colorbar, hide_panels=SUBSTRATE_PANELS,

@@ -11,20 +11,20 @@ from simulator._lazy import attach as _attach
 __getattr__, __dir__ = _attach(__name__, {
     ".gripper": ("ARM_CREASES", "BASE_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES",
                  "GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
-                 "gripper_model"),
+                 "make_gripper_model"),
     ".gripper_problem": ("GRIPPER_SPACE", "GripperProblem"),
     ".gripper_drive": ("GripperDrive", "gripper_circuits"),
     ".limits": ("SU8_TG",),
     ".miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
-               "heated_creases", "lift_per_power_table", "lift_power", "miura_model"),
-})
+               "heated_creases", "lift_per_power_table", "lift_power", "make_miura_model"),
+}, renamed="design._moved")
 
 __all__ = [
     # gripper
-    "GripperDesign", "gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
+    "GripperDesign", "make_gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
     "STAGE_STATUSES", "GripperProblem", "GRIPPER_SPACE", "BASE_CREASES", "ARM_CREASES",
     "REFERENCE_NEWTON", "GripperDrive", "gripper_circuits", "SU8_TG",
     # Miura lifter
-    "MiuraDesign", "miura_model", "heated_creases", "lift_power", "LiftPowerResult",
+    "MiuraDesign", "make_miura_model", "heated_creases", "lift_power", "LiftPowerResult",
     "lift_per_power_table", "MiuraProblem", "MIURA_SPACE",
 ]

@@ -34,7 +34,7 @@ import numpy as np
 
 from simulator import (AIR, Actuators, BarHingeParameters, Bimorph, ChainLoss, ContactParameters,
                        IntegralLoss, Load, NewtonOptions, ParameterError, SelfFold, Substrate,
-                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
+                       Supports, ThermalParameters, make_mesh, example_patterns, make_model,
                        simulate)
 from simulator.materials import SPR
 from simulator.model import REFERENCE_GRAVITY
@@ -48,7 +48,7 @@ from ..core._contract import check_outcome, power_if
 from .limits import SU8_LIMIT
 from .power_search import HeatingStage, bisect_search, staircase_search
 
-__all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
+__all__ = ["GripperDesign", "StageResult", "GripperResult", "make_gripper_model", "evaluate_gripper",
            "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES", "LOSS_MODELS",
            "gripper_design_pattern"]
 
@@ -517,9 +517,9 @@ def _medium(design: GripperDesign):
     return AIR.with_properties(thermal_conductivity=design.env_conductivity)
 
 
-def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
+def make_gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
     """The gripper model and the loading steps before heating (residual fold, gravity)."""
-    mesh = build_mesh(gripper_design_pattern(design))
+    mesh = make_mesh(gripper_design_pattern(design))
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(
@@ -640,7 +640,7 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     one_of("mode", mode, ("bisect", "staircase"))
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
         positive(name, v, "W")
-    model, pre = gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
+    model, pre = make_gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
                                else _GRAVITY_INCREMENTS)
     start = simulate(model, pre, options=options)
     results = {}

@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from design.devices.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult, evaluate_gripper,
-                            gripper_model)
+                            make_gripper_model)
 from simulator.errors import ParameterError
 
 DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data"
@@ -152,7 +152,7 @@ def test_gripper_message_names_a_stage_met_after_a_snap():
 
 
 def test_model_matches_reference_setup():
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     mesh = model.mesh
     assert (mesh.n_nodes, len(mesh.bars)) == (42, 88)
     # node edits move geometry but keep the meshed bar lengths (theory 2.2)
@@ -197,7 +197,7 @@ def test_grip_after_a_snap_is_met_where_load_control_failed():
     from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperResult, _Stage
     from simulator import Heat, simulate
 
-    model, pre = gripper_model(GripperDesign(residual_fold=math.radians(45), loss_model="chain"))
+    model, pre = make_gripper_model(GripperDesign(residual_fold=math.radians(45), loss_model="chain"))
     start = simulate(model, pre + [Heat({BASE_CREASES: 13.2e-3}, increments=33,
                                         coupling="staggered")])
     assert start.success and _Stage(model, "assembly").look(start.state)[1]

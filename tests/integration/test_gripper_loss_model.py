@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from design import GripperProblem
-from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
+from design.devices.gripper import GripperDesign, evaluate_gripper, make_gripper_model
 from simulator import ParameterError, Substrate
 
 #: Coordinate-descent cycle 9 (results/gripper_optimization): a fast evaluation.
@@ -16,10 +16,10 @@ def test_default_design_uses_the_integral_loss_and_the_chain_design_keeps_its_di
     """The default heat loss is the integral model (issue 29, 7 Dec 2026); a chain design's
     dict is the one it had as the default (no ``loss_model``), so its logs still match."""
     assert GripperDesign().loss_model == "integral"
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     assert model.thermal.loss.model == "integral"
     assert model.thermal.substrate == Substrate.plane((0.0, 0.0, -150e-6), (0.0, 0.0, 1.0))
-    paper, _ = gripper_model(GripperDesign(loss_model="chain"))
+    paper, _ = make_gripper_model(GripperDesign(loss_model="chain"))
     assert paper.thermal.loss.model == "chain" and paper.thermal.substrate == Substrate()
     assert "loss_model" not in GripperDesign(loss_model="chain").to_dict()
     assert "integral_refinement" not in GripperDesign(loss_model="chain",
@@ -31,8 +31,8 @@ def test_default_design_uses_the_integral_loss_and_the_chain_design_keeps_its_di
 
 def test_integral_design_uses_the_substrate_plane_under_the_sheet():
     design = GripperDesign(**CYCLE9, loss_model="integral", integral_refinement=4)
-    thermal = gripper_model(design)[0].thermal
-    chain = gripper_model(GripperDesign(**CYCLE9, loss_model="chain"))[0].thermal
+    thermal = make_gripper_model(design)[0].thermal
+    chain = make_gripper_model(GripperDesign(**CYCLE9, loss_model="chain"))[0].thermal
     assert (thermal.loss.model, thermal.loss.refinement) == ("integral", 4)
     assert thermal.substrate.as_tuple() == (0.0, 0.0, -design.undercut, 0.0, 0.0, 1.0)
     assert thermal.substrate == Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))
@@ -78,12 +78,12 @@ def test_conduction_follows_the_loss_model_and_is_named_with_the_integral_model(
     named in the dict of an integral design so that older logs (T3) never match."""
     paper = GripperDesign(loss_model="chain")
     assert "conduction" not in paper.to_dict()
-    assert gripper_model(paper)[0].thermal.conduction_method == "t3"
+    assert make_gripper_model(paper)[0].thermal.conduction_method == "t3"
     integral = GripperDesign()
     assert integral.to_dict()["conduction"] == "monotone"
-    assert gripper_model(integral)[0].thermal.conduction_method == "monotone"
+    assert make_gripper_model(integral)[0].thermal.conduction_method == "monotone"
     chosen = GripperDesign(loss_model="chain", conduction="monotone")
     assert chosen.to_dict()["conduction"] == "monotone"
-    assert gripper_model(chosen)[0].thermal.conduction_method == "monotone"
+    assert make_gripper_model(chosen)[0].thermal.conduction_method == "monotone"
     with pytest.raises(ParameterError, match="GripperDesign.conduction = 'p1'"):
         GripperDesign(conduction="p1")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from design.devices.gripper import (GripperDesign, GripperResult, StageResult, evaluate_gripper,
-                                    gripper_model)
+                                    make_gripper_model)
 from design.devices.gripper_drive import gripper_circuits, gripper_drive
 from simulator import ParameterError
 
@@ -39,7 +39,7 @@ def test_the_switches_are_named_with_units_in_the_result_dict():
 
 
 def test_the_default_model_is_the_paper_setting():
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     pattern = model.mesh.pattern
     assert model.thermal.crease_conduction == "paper"
     assert not model.thermal.medium.temperature_dependent
@@ -49,13 +49,13 @@ def test_the_default_model_is_the_paper_setting():
 
 
 def test_the_switches_reach_the_model():
-    model, _ = gripper_model(GripperDesign(**SWITCHES))
+    model, _ = make_gripper_model(GripperDesign(**SWITCHES))
     pattern, thermal = model.mesh.pattern, model.thermal
     assert thermal.crease_conduction == "layers" and model.actuators.bimorph.k1 == 300.0
     assert thermal.medium.temperature_dependent and thermal.medium.conductivity(120.0) > 0.03
     assert [m.emissivity for m in pattern.panel_material[:5]] == [0.7] * 5
     assert pattern.crease_material.emissivity == pytest.approx((0.7 + 0.03) / 2)
-    layers = gripper_model(GripperDesign(crease_conduction="layers"))[0]
+    layers = make_gripper_model(GripperDesign(crease_conduction="layers"))[0]
     assert layers.actuators.bimorph.k1 == 150.0           # Bimorph's thin-film default
 
 

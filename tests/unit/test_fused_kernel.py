@@ -27,10 +27,10 @@ def _gripper_with_contacts():
     """A gripper after its residual fold and gravity, with points of three panels placed
     inside the activation distance of other panels' triangles: on the face, beyond an edge
     and beyond a corner (all three distance zones)."""
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, make_gripper_model
     from simulator.simulation import simulate
 
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     state = simulate(model, pre).state
     system = equilibrium_system(model)
     X, u = model.mesh.nodes, state.u.copy()
