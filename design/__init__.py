@@ -29,6 +29,7 @@ __getattr__, __dir__ = _attach(__name__, {
                         "SerialExecutor", "TaskError", "TaskFailure", "make_executor"),
     ".devices.gripper": ("GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
                          "make_gripper_model"),
+    ".devices.gripper_heat": ("GripperHeatModel",),
     ".devices.gripper_problem": ("GripperProblem",),
     ".devices.gripper_drive": ("GripperDrive", "gripper_drive"),
     ".devices.miura": ("LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
@@ -51,7 +52,7 @@ __all__ = [
     "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "make_executor",
     "ExecutorError", "TaskError", "TaskFailure",
     # gripper
-    "GripperDesign", "make_gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
+    "GripperDesign", "GripperHeatModel", "make_gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
     "GripperProblem", "GripperDrive", "gripper_drive",
     # Miura lifter
     "MiuraDesign", "make_miura_model", "heated_creases", "lift_power", "LiftPowerResult",

@@ -58,11 +58,11 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
 
 
 def _sweep(args) -> int:
-    from ..devices.gripper import GripperDesign
+    from ..devices.gripper import GripperHeatModel
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.robustness import residual_fold_grid, sweep_residual_fold
 
-    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
+    problem = GripperProblem(mode=args.mode, heat=GripperHeatModel(loss_model=args.loss_model))
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     values = floats("--values", args.values)
     for v in values:
@@ -98,14 +98,14 @@ def _reasons(frame, cols) -> list:
 def _uncertainty(args) -> int:
     import json
 
-    from ..devices.gripper import GripperDesign
+    from ..devices.gripper import GripperHeatModel
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.uncertainty import SCENARIOS
     from ..analysis.uncertainty_sweep import summarize_yield, sweep_uncertainty
 
     if args.samples < 1:
         raise CLIError(f"--samples = {args.samples} must be at least 1")
-    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
+    problem = GripperProblem(mode=args.mode, heat=GripperHeatModel(loss_model=args.loss_model))
     scenario = SCENARIOS[args.scenario]
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     samples = scenario.sample(args.samples, args.seed, args.method)

@@ -117,11 +117,12 @@ def _spoil(x, tri):
 
 # ---------------------------------------------------------------- M-matrix on the devices
 def _device_meshes():
-    from design.devices.gripper import GripperDesign, make_gripper_model
+    from design.devices.gripper import GripperDesign, GripperHeatModel, make_gripper_model
     from simulator.cases import get_case
 
     crane = get_case("crane").model
-    gripper, _ = make_gripper_model(GripperDesign(loss_model="chain"))     # the chains: T3
+    gripper, _ = make_gripper_model(GripperDesign(),                 # the chains: T3
+                                    heat=GripperHeatModel(loss_model="chain"))
     double = get_case("double_fold").model
     return {"crane": crane, "gripper": gripper, "double_fold": double}
 

@@ -33,10 +33,11 @@ def _deformed(mesh, seed):
 
 
 def _gripper_state():
-    from design.devices.gripper import GripperDesign, make_gripper_model
+    from design.devices.gripper import GripperDesign, GripperHeatModel, make_gripper_model
     from simulator.simulation import simulate
     from simulator.state import thermal_model
-    model, pre = make_gripper_model(GripperDesign(loss_model="chain"))   # the chains with T3
+    model, pre = make_gripper_model(GripperDesign(),               # the chains with T3
+                                    heat=GripperHeatModel(loss_model="chain"))
     state = simulate(model, pre).state
     return thermal_model(model), model.mesh.nodes + state.u, model.mesh.n_creases
 
