@@ -116,3 +116,15 @@ def test_the_old_heat_fields_of_the_design_warn_and_give_the_same_model_and_keys
     with pytest.raises(ParameterError, match="GripperHeatModel.loss_model = 'fe'"), \
             pytest.warns(EtorigamiDeprecationWarning):
         GripperDesign(loss_model="fe")
+
+
+def test_the_levels_in_force_are_the_heat_models_and_the_designs_old_properties_warn():
+    assert GripperHeatModel().integral_levels_in_force == "4/2"
+    assert GripperHeatModel().sheet_refinement_in_force == 2
+    assert CHAIN.sheet_refinement_in_force == 1
+    with pytest.warns(EtorigamiDeprecationWarning, match="GripperHeatModel.integral_levels"):
+        assert GripperDesign().integral_levels_in_force == "4/2"
+    with pytest.warns(EtorigamiDeprecationWarning, match="GripperHeatModel.sheet_refinement"):
+        assert GripperDesign().sheet_refinement_in_force == 2
+    with pytest.raises(ParameterError, match="must be a GripperDesign"):
+        GripperProblem(base=CHAIN)
