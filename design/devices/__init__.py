@@ -1,9 +1,8 @@
 """Devices: the parametrised gripper and Miura lifter and their power searches.
 
-The public names (``from design.devices import GRIPPER_SPACE``): each device's design, model,
-(the gripper's heat model),
-evaluation, problem and design space, with its constants (the gripper's crease groups and
-stage statuses, the SU-8 glass transition). :func:`design.gripper_drive`, the gripper's
+The public names (``from design.devices import GRIPPER_SPACE``): each device's design, model
+(the gripper's with its heat model), evaluation, problem and design space, with its
+constants (the gripper's crease groups and stage statuses, the SU-8 glass transition). :func:`design.gripper_drive`, the gripper's
 electrical drive, is at ``design``'s door (``design.devices.gripper_drive`` is its module).
 """
 
