@@ -25,7 +25,7 @@ this benchmark lifts while it runs: 6336 and 11264 sub-triangles, about 0.5 and 
    6 with ``--r6``, a few minutes per design), 2 x (assembly + grip) per heated crease, as
    ``studies/device_power_physics.py`` counts it, with the same estimates from r = 2/4 and
    3/6 of the powers, and the evaluations with the temperatures extrapolated,
-   ``GripperDesign(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``).
+   ``GripperHeatModel(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``).
 
 Run: ``python benchmarks/bench_layer_convergence.py`` (fixed power to r = 8, about 4 minutes;
 ``--quick`` stops at r = 4). Figures measured 8 Dec 2026: theory 4.13.
@@ -41,7 +41,7 @@ from unittest import mock
 
 import numpy as np
 
-from design import GripperDesign, evaluate_gripper, gripper_model
+from design import GripperDesign, GripperHeatModel, evaluate_gripper, make_gripper_model
 from design.devices import BASE_CREASES
 from simulator.thermal import ThermalModel, crease_temperatures
 from simulator.model import heat_loss
@@ -64,8 +64,9 @@ def dense_limit(n: int = 12000):
 def flat_solve(cycle: int, setting: str, r: int, thermal=None, **design):
     """``(tm, rise (n,) [K], base crease rows)`` of the flat gripper with its base creases at
     :data:`POWER`; ``thermal``: fields replaced in the model's thermal parameters."""
-    model, _ = gripper_model(GripperDesign(**DESIGNS[cycle], crease_conduction=setting,
-                                           sheet_refinement=r, **design))
+    model, _ = make_gripper_model(GripperDesign(**DESIGNS[cycle]),
+                                  heat=GripperHeatModel(crease_conduction=setting,
+                                                        sheet_refinement=r, **design))
     params = dataclasses.replace(model.thermal, **(thermal or {}))
     tm = ThermalModel(model.mesh, params, actuators=model.actuators)
     mesh = model.mesh
@@ -179,8 +180,9 @@ def where(rc: int = 4):
 
 def _full(geometry, setting, r, extrapolate=False):
     """(full-function power, assembly, grip per crease) [mW] of one evaluation."""
-    res = evaluate_gripper(GripperDesign(**geometry, crease_conduction=setting,
-                                         sheet_refinement=r, sheet_extrapolation=extrapolate))
+    res = evaluate_gripper(GripperDesign(**geometry),
+                           heat=GripperHeatModel(crease_conduction=setting, sheet_refinement=r,
+                                                 sheet_extrapolation=extrapolate))
     a = res.assembly.power_per_crease if res.assembly.success else float("nan")
     g = res.grip.power_per_crease if res.grip.success else float("nan")
     return 2e3 * (a + g), 1e3 * a, 1e3 * g

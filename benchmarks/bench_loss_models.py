@@ -98,34 +98,36 @@ def _builds(counts) -> str:
 
 def gripper_run(loss_model: str, settings: dict):
     """A function evaluating the start-design gripper (bisect) with one loss model: the
-    device's own option ``GripperDesign(loss_model=...)``, whose integral model includes the
-    substrate plane under the gripper (z = -undercut), as the device has; ``settings``: other
-    fields of its integral loss."""
-    design = gripper.GripperDesign(loss_model=loss_model,
-                                   **({"integral_refinement": settings["refinement"]}
-                                      if "refinement" in settings else {}))
+    device's own option ``GripperHeatModel(loss_model=...)``, whose integral model includes
+    the substrate plane under the gripper (z = -undercut), as the device has; ``settings``:
+    other fields of its integral loss."""
+    design = gripper.GripperDesign()
+    heat = gripper.GripperHeatModel(loss_model=loss_model,
+                                    **({"integral_refinement": settings["refinement"]}
+                                       if "refinement" in settings else {}))
     extra = {k: v for k, v in settings.items() if k != "refinement"}
     if loss_model == "chain" or not extra:
-        return lambda: gripper.evaluate_gripper(design, mode="bisect")
+        return lambda: gripper.evaluate_gripper(design, mode="bisect", heat=heat)
     return gripper_evaluation(design, lambda model: dataclasses.replace(
-        model, thermal=model.thermal.with_loss(**extra)))
+        model, thermal=model.thermal.with_loss(**extra)), heat)
 
 
-def gripper_evaluation(design, transform):
-    """A function evaluating ``design`` (bisect) with the model of ``gripper.gripper_model``
-    passed through ``transform(model) -> model`` while it runs."""
-    original = gripper.gripper_model
+def gripper_evaluation(design, transform, heat=None):
+    """A function evaluating ``design`` (bisect, heat model ``heat``) with the model of
+    ``gripper.make_gripper_model`` passed through ``transform(model) -> model`` while it
+    runs."""
+    original = gripper.make_gripper_model
 
     def model_with(design, *args, **kw):
         model, pre = original(design, *args, **kw)
         return transform(model), pre
 
     def run():
-        gripper.gripper_model = model_with
+        gripper.make_gripper_model = model_with
         try:
-            return gripper.evaluate_gripper(design, mode="bisect")
+            return gripper.evaluate_gripper(design, mode="bisect", heat=heat)
         finally:
-            gripper.gripper_model = original
+            gripper.make_gripper_model = original
     return run
 
 

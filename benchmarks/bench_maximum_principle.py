@@ -35,7 +35,7 @@ import dataclasses
 
 import numpy as np
 
-from design import GripperDesign, gripper_model
+from design import GripperDesign, GripperHeatModel, make_gripper_model
 from design.devices import BASE_CREASES
 from simulator import IntegralLoss
 from simulator.thermal import ThermalModel, crease_temperatures
@@ -55,7 +55,7 @@ def devices(loss):
     out = {}
     crane = get_case("crane", loss_model=loss, power_mW=5.0)
     out["crane"] = (crane.model, crane.steps[0].power_array(crane.model.mesh))
-    grip, _ = gripper_model(GripperDesign(loss_model=loss))
+    grip, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model=loss))
     p = np.zeros(grip.mesh.n_creases)
     p[[grip.mesh.crease_row_of(c) for c in BASE_CREASES]] = 15e-3
     out["gripper"] = (grip, p)

@@ -17,7 +17,7 @@ from simulator import Supports, make_model, natural_modes
 from simulator.example_patterns import miura_sheet_pattern
 
 
-def miura_model(cells: int):
+def make_miura_model(cells: int):
     """Flat m x m Miura sheet with the corners and centre of panel 0 clamped."""
     model = make_model(miura_sheet_pattern(m=cells, n=cells))
     return make_model(model.mesh, Supports.nodes(model.mesh.panel_nodes(0)))
@@ -29,7 +29,7 @@ def main(argv=None):
     parser.add_argument("--count", type=int, default=20)
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    model = miura_model(args.cells)
+    model = make_miura_model(args.cells)
     t1 = time.perf_counter()
     res = natural_modes(model, count=args.count)
     t2 = time.perf_counter()

@@ -19,7 +19,7 @@ The full-function power is that of the paper: twice the sum of the assembly and 
 power per heated crease (two heated creases per stage). Each variant's evaluation is timed
 (wall and CPU time after a warm-up; the median of ``--repeat`` runs for the paper setting and
 for all the physics, whose ratio is the acceptance: at most 1.5). The device keeps its own
-materials; a variant swaps the model's medium and materials in ``gripper_model`` while the
+materials; a variant swaps the model's medium and materials in ``make_gripper_model`` while the
 evaluation runs (``bench_loss_models.gripper_evaluation``, as that benchmark swaps its loss).
 
 Run: ``python benchmarks/bench_nonlinear_heat.py`` (about a minute; ``--repeat 1`` quicker).

@@ -28,18 +28,19 @@ __getattr__, __dir__ = _attach(__name__, {
     ".core.executors": ("DaskExecutor", "Executor", "ExecutorError", "ProcessExecutor",
                         "SerialExecutor", "TaskError", "TaskFailure", "make_executor"),
     ".devices.gripper": ("GripperDesign", "GripperResult", "StageResult", "evaluate_gripper",
-                         "gripper_model"),
+                         "make_gripper_model"),
+    ".devices.gripper_heat": ("GripperHeatModel",),
     ".devices.gripper_problem": ("GripperProblem",),
     ".devices.gripper_drive": ("GripperDrive", "gripper_drive"),
     ".devices.miura": ("LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
-                       "lift_power", "miura_model"),
+                       "lift_power", "make_miura_model"),
     ".analysis.robustness": ("RobustGripperProblem", "residual_fold_grid",
                              "sweep_residual_fold"),
     ".analysis.uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem",
                                     "sweep_uncertainty"),
     ".analysis.heaters": ("HeaterAllocation", "allocate_heaters"),
 }, modules={"core": ".core", "devices": ".devices", "analysis": ".analysis"},
-    moved="._moved")
+    moved="._moved", renamed="._moved")
 
 __all__ = [
     # design spaces and problems
@@ -51,10 +52,10 @@ __all__ = [
     "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "make_executor",
     "ExecutorError", "TaskError", "TaskFailure",
     # gripper
-    "GripperDesign", "gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
+    "GripperDesign", "GripperHeatModel", "make_gripper_model", "evaluate_gripper", "GripperResult", "StageResult",
     "GripperProblem", "GripperDrive", "gripper_drive",
     # Miura lifter
-    "MiuraDesign", "miura_model", "heated_creases", "lift_power", "LiftPowerResult",
+    "MiuraDesign", "make_miura_model", "heated_creases", "lift_power", "LiftPowerResult",
     "MiuraProblem",
     # robustness and fabrication uncertainty
     "residual_fold_grid", "sweep_residual_fold", "RobustGripperProblem", "sweep_uncertainty",

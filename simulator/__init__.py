@@ -30,7 +30,7 @@ from ._version import __version__
 __getattr__, __dir__ = _attach(__name__, {
     ".geometry.pattern": ("Pattern",),
     ".geometry.materials": ("AIR", "WATER", "Material"),
-    ".model.mesh": ("BarHingeMesh", "build_mesh"),
+    ".model.mesh": ("BarHingeMesh", "make_mesh"),
     ".model.model": ("ContactParameters", "Model", "Supports", "make_model"),
     ".model.properties": ("BarHingeParameters",),
     ".model.bimorph": ("Actuators", "Bimorph"),
@@ -55,12 +55,13 @@ __getattr__, __dir__ = _attach(__name__, {
             "model": ".model", "thermal": ".thermal", "schedules": ".schedules",
             "steps": ".steps", "solvers": ".solvers", "mechanics": ".mechanics",
             "cases": ".cases", "fold": ".fold", "viewer": ".viewer", "fe": ".fe",
-            "kernels": ".kernels", "sensitivity": ".sensitivity"}, moved="._moved")
+            "kernels": ".kernels", "sensitivity": ".sensitivity"}, moved="._moved",
+            renamed="._moved")
 
 __all__ = [
     "__version__",
     # pattern, mesh, model and their parameters
-    "Pattern", "BarHingeMesh", "build_mesh", "Model", "make_model", "Supports",
+    "Pattern", "BarHingeMesh", "make_mesh", "Model", "make_model", "Supports",
     "ContactParameters", "BarHingeParameters", "ThermalParameters", "Actuators", "Bimorph",
     "Material",
     # heat loss to the medium: the paper's chains or the calibration-free integral, a substrate

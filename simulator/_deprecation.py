@@ -1,5 +1,6 @@
 """Deprecated spellings: one warning, attributed to the user's line (not to the toolkit's own
-frames, nor to ``dataclasses.replace``, which calls ``__init__``, nor to the import system, which
+frames, nor to ``dataclasses.replace``, which calls ``__init__``, nor to the ``__init__`` that
+:mod:`dataclasses` generates, which calls ``__post_init__``, nor to the import system, which
 looks a name up once more in ``from package import name``)."""
 
 from __future__ import annotations
@@ -20,6 +21,15 @@ def warn_deprecated(message: str) -> None:
     frame, level = sys._getframe(1), 2
     skip = {frame.f_code.co_filename, dataclasses.__file__}
     while frame.f_back is not None and (frame.f_code.co_filename in skip or
-                                        frame.f_code.co_filename.startswith("<frozen importlib")):
+                                        frame.f_code.co_filename.startswith("<frozen importlib")
+                                        or _generated_init(frame)):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, EtorigamiDeprecationWarning, stacklevel=level)
+
+
+def _generated_init(frame) -> bool:
+    """The frame is the ``__init__`` that :mod:`dataclasses` wrote (no source file) of a
+    dataclass instance."""
+    code = frame.f_code
+    return (code.co_name == "__init__" and code.co_filename.startswith("<")
+            and dataclasses.is_dataclass(frame.f_locals.get("self")))

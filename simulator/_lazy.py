@@ -21,7 +21,10 @@ Old spellings: ``moved`` names a submodule whose ``MOVED`` table (loaded on the 
 name) maps each namespace to the names that left the package's door for it,
 ``{"fold": ("read_fold", ...), "solvers": ("displacement_control as control_displacement",)}``;
 such a name still resolves, to the same object as its new spelling, with an
-:class:`~simulator.errors.EtorigamiDeprecationWarning` naming the new place.
+:class:`~simulator.errors.EtorigamiDeprecationWarning` naming the new place. Renamed names:
+``renamed`` names a submodule whose ``RENAMED`` table maps an old name to its new one in the
+same place (``{"build_mesh": "make_mesh"}``); a package or namespace that publishes the new
+name resolves the old one the same way.
 """
 
 from __future__ import annotations
@@ -61,7 +64,7 @@ def moved_names(table: dict, package: str) -> dict:
 
 
 def attach(package: str, exports: dict, modules: dict | None = None,
-           moved: str | None = None) -> tuple:
+           moved: str | None = None, renamed: str | None = None) -> tuple:
     """``(__getattr__, __dir__)`` of the package (or module) ``package``.
 
     Parameters
@@ -76,6 +79,9 @@ def attach(package: str, exports: dict, modules: dict | None = None,
         (``{"example_patterns": ".geometry.example_patterns"}``), imported on first access.
     moved : str, optional
         Relative name of the submodule whose ``MOVED`` table lists the old spellings.
+    renamed : str, optional
+        Name (relative or absolute) of the module whose ``RENAMED`` table ``{old: new}`` lists
+        the renamed names; those whose new name ``package`` publishes resolve here.
     """
     modules = dict(modules or {})
     module = sys.modules[package]
@@ -89,7 +95,7 @@ def attach(package: str, exports: dict, modules: dict | None = None,
             where[public], source[public] = sub, name
     module._lazy_where = where
     module.__class__ = _LazyPackage
-    old = {}
+    old, renames = {}, {}
 
     def __getattr__(name: str):
         if name in where:
@@ -99,14 +105,19 @@ def attach(package: str, exports: dict, modules: dict | None = None,
         elif name.startswith("__"):
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         else:
+            target = None
             try:
                 value = _submodule(package, name)
             except AttributeError:
-                if moved is None or name not in _moved(old, moved, anchor):
+                if moved is not None and name in _moved(old, moved, anchor):
+                    target = old[name]
+                elif renamed is not None and _renamed(renames, renamed, anchor).get(
+                        name) in where:
+                    target = (package, renames[name])
+                else:
                     raise
-                value = None
-            if value is None:                 # warned outside the handler: no chained error
-                return _deprecated(package, name, *old[name])
+            if target is not None:            # warned outside the handler: no chained error
+                return _deprecated(package, name, *target)
         module.__dict__[name] = value
         return value
 
@@ -121,6 +132,13 @@ def _moved(old: dict, table: str, anchor: str) -> dict:
     if not old:
         old.update(moved_names(importlib.import_module(table, anchor).MOVED, anchor))
     return old
+
+
+def _renamed(renames: dict, table: str, anchor: str) -> dict:
+    """The ``RENAMED`` table ``{old: new}`` of the module ``table``, read on first use."""
+    if not renames:
+        renames.update(getattr(importlib.import_module(table, anchor), "RENAMED", {}))
+    return renames
 
 
 def _deprecated(package: str, name: str, namespace: str, new: str):

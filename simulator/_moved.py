@@ -3,7 +3,11 @@ names, ``"old as new"`` where the namespace has another name for it. ``simulator
 working for one release, as the same object as ``simulator.<namespace>.<new>``, with an
 :class:`~simulator.errors.EtorigamiDeprecationWarning` naming the new place (see
 :func:`simulator._lazy.attach`); the documentation's migration table is made from this one.
-Read only when a name is not found otherwise, so ``import simulator`` does not load it."""
+Read only when a name is not found otherwise, so ``import simulator`` does not load it.
+
+``RENAMED``: old name -> new name in the same place (the door and every namespace that
+publishes the new name; issue 31: one spelling of the factories, ``make_<thing>``), with the
+same warning."""
 
 MOVED = {
     "materials": ("SU8", "SPR", "SUBSTRATE", "Fluid", "GOLD", "GOLD_FILM", "SILICON"),
@@ -39,3 +43,5 @@ MOVED = {
            "FE2DResult"),
     "kernels": ("spring_kernel_backend", "kernel_cache_warm", "warm_kernel_cache"),
 }
+
+RENAMED = {"build_mesh": "make_mesh"}

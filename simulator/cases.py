@@ -29,7 +29,7 @@ from .solvers.dynamics_options import DynamicsOptions
 from .thermal.schedules import StepPower
 from .steps import ArcLengthLoad, ElectroThermal, Gravity, Heat, SelfFold
 from .geometry.materials import AIR, Material
-from .model.mesh import build_mesh
+from .model.mesh import make_mesh
 from .model.model import REFERENCE_GRAVITY, ContactParameters, Model, Supports, make_model
 from .geometry.example_patterns import (crane_pattern, double_fold_pattern, fold_directions, miura_sheet_pattern,
                        miura_vertices, roof_pattern, single_fold_pattern, strip_pattern,
@@ -379,7 +379,7 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
                       panel_thickness: float = 10e-6, substrate: bool = False,
                       undercut: float = 100e-6) -> Model:
     """The Miura-ori lifter's model (paper 6.2, Example03, theory 10.3): the one builder behind
-    the ``miura_lifter`` case and :func:`design.devices.miura.miura_model`.
+    the ``miura_lifter`` case and :func:`design.devices.miura.make_miura_model`.
 
     A Miura sheet of ``cells_x`` x ``cells_y`` cells, clamped along its first column of panels
     (x = 0 side); every crease an actuator (gold ``t_gold`` on SU-8 ``t_su8``, the crease
@@ -412,7 +412,7 @@ def miura_sheet_model(a: float = 1e-3, b: float = 1e-3, gamma: float = math.radi
     thermal = ThermalParameters(
         loss=ChainLoss(thickness=(a + b) / 2, dissipation_angle=REFERENCE_BETA), medium=AIR,
         boundary_panels=boundary)
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     # clamp the left end: every node of the first column of panels (x = 0 side)
     fixed = {int(i): "xyz" for p in range(n) for i in mesh.panel_nodes(p)}
     if substrate:

@@ -23,7 +23,7 @@ from .geometry.materials import AIR
 from .model.heat_loss import ChainLoss, IntegralLoss
 from .model.thermal_parameters import REFERENCE_BETA, ThermalParameters
 from .model.bimorph import Actuators, Bimorph
-from .model.mesh import build_mesh
+from .model.mesh import make_mesh
 from .model.model import ContactParameters, Model, Supports, make_model
 from .mechanics.contact_search import closest_pair
 from .model.properties import BarHingeParameters
@@ -180,7 +180,7 @@ def plain_contact(pattern: Pattern, params: BarHingeParameters | None = None, *,
     other as an event (:func:`~simulator.events.crossing_event`). ``required=True`` raises
     :class:`~simulator.errors.ParameterError` naming that node and panel instead.
     """
-    return _plain_contact(build_mesh(pattern), params or BarHingeParameters(), required)
+    return _plain_contact(make_mesh(pattern), params or BarHingeParameters(), required)
 
 
 def plain_contact_distance(pattern: Pattern, params: BarHingeParameters | None = None) -> float:
@@ -249,7 +249,7 @@ def stack_model(pattern: Pattern, stack: LayerStack, heated: Sequence[int],
     heated = [pattern.check_crease(c, "heated crease") for c in heated]
     if not heated:
         raise ParameterError("no crease to heat: give at least one crease id.")
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     fixed_panel = central_panel(pattern) if fixed_panel is None else fixed_panel
     fixed_panel = pattern.check_panel(fixed_panel, "fixed panel")
     check_supported(pattern, fixed_panel)

@@ -56,8 +56,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, _base_fold,
-                            _tip_distance, gripper_model)
+from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, GripperHeatModel,
+                                    _base_fold, _tip_distance, make_gripper_model)
 from simulator import Heat, get_case, natural_modes, simulate
 from simulator.schedules import SquareWave, StepPower
 from simulator.mechanics import fold_angles
@@ -65,6 +65,8 @@ from studies._common import TEMP, progress_bar, study_main
 
 NAME = "actuation_speed"
 CASE = "single_fold_step_response"
+#: The gripper in the paper setting (its chain heat loss).
+PAPER_HEAT = GripperHeatModel(loss_model="chain")
 POWERS_MW, POWERS_QUICK = (1.0, 2.0, 3.0, 4.0, 5.0), (2.0, 4.0)
 PHASE, PHASE_QUICK = 1.0, 0.15                     # s, on and off
 FREQS, FREQS_QUICK = (1.0, 3.0, 10.0, 20.0, 30.0, 50.0, 100.0), (10.0, 100.0)
@@ -116,7 +118,7 @@ def single_crease(residual_fold_deg: float = 0.0) -> Device:
 def gripper(stage: str, base_power: float = 0.0) -> Device:
     """The gripper (``design.devices.gripper``) before assembly, or assembled by ``base_power`` [W]
     per base crease (static, held on) before the grip."""
-    model, pre = gripper_model(GripperDesign(loss_model="chain"))       # the paper setting
+    model, pre = make_gripper_model(GripperDesign(), heat=PAPER_HEAT)        # the paper setting
     state = simulate(model, pre).state
     if stage == "assembly":
         return Device("gripper assembly", model, state, BASE_CREASES,
@@ -286,7 +288,7 @@ def heat_loss_lines() -> list:
     from studies.plotting import heat_loss_note
 
     return [f"single crease: {heat_loss_note(get_case(CASE).model)}",
-            f"gripper: {heat_loss_note(gripper_model(GripperDesign(loss_model='chain'))[0])}"]
+            f"gripper: {heat_loss_note(make_gripper_model(GripperDesign(), heat=PAPER_HEAT)[0])}"]
 
 
 def main(argv=None):

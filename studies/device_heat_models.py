@@ -22,7 +22,7 @@ Method
 * Gripper: the coordinate-descent designs of cycles 4 and 9
   (``results/gripper_optimization/gripper_optimization.csv``), evaluated as in that study
   (``evaluate_gripper``, bisect, the :class:`~design.GripperProblem` defaults) with
-  ``GripperDesign(loss_model=...)``; the integral model also at m = 2 without extrapolation
+  ``GripperHeatModel(loss_model=...)``; the integral model also at m = 2 without extrapolation
   (the default before 6 Dec 2026, 4-7 % hot on folded shapes). Full-function power =
   2 base creases x assembly power + 2 arm creases x grip power (the paper's measured
   quantity). ``--quick``: cycle 9 only, no m = 2.
@@ -87,7 +87,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from design import GripperDesign, evaluate_gripper, gripper_model
+from design import GripperDesign, GripperHeatModel, evaluate_gripper, make_gripper_model
 from design.devices import ARM_CREASES, BASE_CREASES
 from simulator import IntegralLoss, Substrate, simulate
 from simulator.fe import solve_fe3d
@@ -197,8 +197,8 @@ def _evaluate(cycle, powers, geometry, model, m):
     """Evaluate one design with one model; ``powers``: (measured, the descent's full-function
     power [mW]). Returns (GripperResult, ``gripper`` row)."""
     t0 = time.perf_counter()
-    res = evaluate_gripper(GripperDesign(**geometry, loss_model=model, integral_refinement=m,
-                                         conduction=CONDUCTION, sheet_refinement=SHEET))
+    res = evaluate_gripper(GripperDesign(**geometry), heat=GripperHeatModel(
+        loss_model=model, integral_refinement=m, conduction=CONDUCTION, sheet_refinement=SHEET))
     d = res.to_dict()
     full = (2e3 * (res.assembly.power_per_crease + res.grip.power_per_crease)
             if res.success else None)
@@ -221,16 +221,15 @@ def _gripper_fe(cycle, geometry, results, level):
     Returns the ``fe`` rows and, per shape (model), {quantity: (that model's value on its
     re-simulated stopping state, the FE's value or FE-implied power there)}, powers in mW.
     """
-    models = {m: gripper_model(GripperDesign(**geometry, loss_model=m, conduction=CONDUCTION,
-                                             sheet_refinement=SHEET))[0] for m in MODELS}
+    models = {m: make_gripper_model(GripperDesign(**geometry), heat=GripperHeatModel(
+        loss_model=m, conduction=CONDUCTION, sheet_refinement=SHEET))[0] for m in MODELS}
     case, rows, checks = f"gripper cycle {cycle}", [], {}
     room = models["chain"].thermal.room_temperature
     for shape, res in results.items():
         pa, pg = res.assembly.power_per_crease, res.grip.power_per_crease
-        model, states = gripper_states(GripperDesign(**geometry, loss_model=shape,
-                                                     conduction=CONDUCTION,
-                                                     sheet_refinement=SHEET), pa, pg,
-                                       GRIP_STATE_INCREMENTS)
+        model, states = gripper_states(GripperDesign(**geometry), pa, pg, GRIP_STATE_INCREMENTS,
+                                       GripperHeatModel(loss_model=shape, conduction=CONDUCTION,
+                                                        sheet_refinement=SHEET))
         mesh = model.mesh
         tm = ThermalModel(mesh, model.thermal)
         base, arm = ([mesh.crease_row_of(c) for c in cs] for cs in (BASE_CREASES, ARM_CREASES))
@@ -341,7 +340,8 @@ def _run_gripper(quick, level, progress):
         if all(r.success for r in results.values()):
             more, checks = _gripper_fe(cycle, geometry, results, level)
             fe_rows += more
-        room = gripper_model(GripperDesign(**geometry, loss_model="chain"))[0].thermal.room_temperature
+        room = make_gripper_model(GripperDesign(**geometry), heat=GripperHeatModel(
+            loss_model="chain"))[0].thermal.room_temperature
         comparison += _gripper_comparison(cycle, rows, checks, room)
     return pd.DataFrame(rows), pd.DataFrame(fe_rows), pd.DataFrame(comparison)
 

@@ -75,7 +75,9 @@ import time
 
 import pandas as pd
 
-from design import GripperDesign, evaluate_gripper, gripper_drive, gripper_model
+from design import (GripperDesign, GripperHeatModel, evaluate_gripper, gripper_drive,
+                    make_gripper_model)
+from design.devices.gripper_heat import HEAT_FIELDS
 from simulator.materials import GOLD_FILM_EMISSIVITY
 from simulator import EtorigamiError
 from simulator.thermal.circuits import GOLD_TCR
@@ -111,7 +113,8 @@ def _radiation(eps):
     return dict(emissivity_polymer=eps, emissivity_gold=GOLD_FILM_EMISSIVITY)
 
 
-#: (variant, group, GripperDesign switches, power definition).
+#: (variant, group, switches: GripperHeatModel's and GripperDesign's electrical ones, power
+#: definition).
 VARIANTS = (
     ("paper setting", "paper", {}, VI),
     *((f"crease metal, k_Au {k:.0f}", "effect", dict(crease_conduction="layers", k_gold=k), VI)
@@ -135,29 +138,31 @@ QUICK_VARIANTS = ("paper setting", "crease metal, k_Au 150", "all, central")
 
 
 def _row(name, cycle, geometry, measured, variant, group, switches, definition) -> dict:
-    design = GripperDesign(**geometry, **switches)
+    heat = GripperHeatModel(**{k: v for k, v in switches.items() if k in HEAT_FIELDS})
+    design = GripperDesign(**geometry, **{k: v for k, v in switches.items()
+                                          if k not in HEAT_FIELDS})   # the electrical ones
     t0 = time.perf_counter()
     try:
-        res = evaluate_gripper(design)
+        res = evaluate_gripper(design, heat=heat)
     except EtorigamiError as error:            # a simulator limitation, kept as data
         logger.warning("%s, %s: evaluation raised %s", name, variant, error)
         return {"table": "power", "design": name, "cycle": cycle, "variant": variant,
                 "group": group, "power_definition": definition,
                 "measured_power [mW]": measured, "success": False, "status": "failed",
                 "message": f"evaluation raised {type(error).__name__}: {error}",
-                "sheet_refinement [-]": design.sheet_refinement_in_force,
-                "crease_conduction": design.crease_conduction,
+                "sheet_refinement [-]": heat.sheet_refinement_in_force,
+                "crease_conduction": heat.crease_conduction,
                 "wall_time [s]": time.perf_counter() - t0}
     drive = gripper_drive(res)
     wall = time.perf_counter() - t0
     row = {"table": "power", "design": name, "cycle": cycle, "variant": variant,
-           "group": group, "sheet_refinement [-]": design.sheet_refinement_in_force,
-           "crease_conduction": design.crease_conduction,
-           "k_gold [W/(m K)]": (design.k_gold or K_GOLD["central"])
-           if design.crease_conduction == "layers" else None,
-           "air": "k(T)" if design.temperature_dependent_air else "constant",
-           "emissivity_polymer [-]": design.emissivity_polymer,
-           "emissivity_gold [-]": design.emissivity_gold,
+           "group": group, "sheet_refinement [-]": heat.sheet_refinement_in_force,
+           "crease_conduction": heat.crease_conduction,
+           "k_gold [W/(m K)]": (heat.k_gold or K_GOLD["central"])
+           if heat.crease_conduction == "layers" else None,
+           "air": "k(T)" if heat.temperature_dependent_air else "constant",
+           "emissivity_polymer [-]": heat.emissivity_polymer,
+           "emissivity_gold [-]": heat.emissivity_gold,
            "lead_fraction [-]": design.lead_fraction,
            "tcr [1/K]": GOLD_TCR if design.heater_tcr is None else design.heater_tcr,
            "power_definition": definition, "measured_power [mW]": measured,
@@ -227,7 +232,7 @@ def plot(df: pd.DataFrame):
         plot_ratio(axes[-1], ratio)
     fig.suptitle("The measured grippers with metal layers, hot air, radiation and electrical "
                  "drive (nothing fitted)", fontsize="large")
-    paper = gripper_model(GripperDesign(**DESIGNS[-1][2]))[0]
+    paper = make_gripper_model(GripperDesign(**DESIGNS[-1][2]))[0]
     note_assumptions(
         fig, heat_loss_note(paper) + " (the paper setting; every variant keeps this loss, the "
         "rows 'sheet r = 3' refine the sheet further)",

@@ -78,7 +78,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from design import GripperDesign, GripperProblem, make_executor, optimize
+from design import GripperHeatModel, GripperProblem, make_executor, optimize
 from studies._common import (EvaluationTimeout, TimeLimited, progress_bar, study_main,
                              time_limit)
 
@@ -104,9 +104,9 @@ NLOPT_RUNS = (("cobyla", 60, {}), ("bobyqa", 60, {}), ("neldermead", 60, {}),
 NLOPT_RUNS_QUICK = (("cobyla", 4, {}), ("sbplx", 4, {}))
 VARIABLES = ("W", "La", "L1", "L2")
 #: The gripper studies reproduce the paper's optimisation: its chain heat loss (the paper
-#: setting; ``GripperDesign``'s default is the integral loss since 7 Dec 2026), the integral
+#: setting; ``GripperHeatModel``'s default is the integral loss since 7 Dec 2026), the integral
 #: loss's powers stated beside (:data:`INTEGRAL_BESIDE`).
-PAPER_BASE = GripperDesign(loss_model="chain")
+PAPER_HEAT = GripperHeatModel(loss_model="chain")
 UM = [f"{v} [um]" for v in VARIABLES]
 POWER, ASM, GRIP, TEMP = ("total_power [mW]", "assembly_power [mW]", "grip_power [mW]",
                           "temperature [degC]")
@@ -115,9 +115,9 @@ POWER, ASM, GRIP, TEMP = ("total_power [mW]", "assembly_power [mW]", "grip_power
 @dataclass(frozen=True)
 class TimeLimitedGripperProblem(TimeLimited, GripperProblem):
     """:class:`~design.GripperProblem` whose evaluations stop (fail) after
-    ``time_limit`` [s]; its base design is :data:`PAPER_BASE`, the paper's setting."""
+    ``time_limit`` [s]; its heat model is :data:`PAPER_HEAT`, the paper's setting."""
 
-    base: GripperDesign = PAPER_BASE
+    heat: GripperHeatModel = PAPER_HEAT
     time_limit: float | None = TIME_LIMIT
 
 

@@ -54,13 +54,13 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from design import GripperProblem, make_executor, optimize
-from design.devices.gripper import GripperDesign, evaluate_gripper, gripper_model
+from design.devices.gripper import (GripperDesign, GripperHeatModel, evaluate_gripper,
+                                    make_gripper_model)
 from studies._common import progress_bar, study_main
 from studies.gripper_optimization import (ASM, GRIP, POWER, TEMP, UM, VARIABLES, cycles_table,
                                           design_um)
@@ -75,10 +75,10 @@ FULL = "full_function_power [mW]"
 #: central" without the electrical knobs, which do not enter the heat balance).
 PHYSICS = dict(crease_conduction="layers", k_gold=150.0, temperature_dependent_air=True,
                emissivity_polymer=0.7, emissivity_gold=0.03)
-#: The base design of each setting (its heat transfer; the dimensions are the descent's).
-SETTINGS = {"paper": GripperDesign(loss_model="chain"),
-            "integral": GripperDesign(),
-            "physics": GripperDesign(**PHYSICS)}
+#: The heat model of each setting (the dimensions are the descent's).
+SETTINGS = {"paper": GripperHeatModel(loss_model="chain"),
+            "integral": GripperHeatModel(),
+            "physics": GripperHeatModel(**PHYSICS)}
 LABELS = {"paper": "paper setting (chains)", "integral": "integral loss",
           "physics": "integral loss + device physics"}
 CD_OPTIONS = {"max_cycles": 15, "parallel_candidates": True}
@@ -88,7 +88,7 @@ WORKERS = 2
 
 def _descent(setting: str, quick: bool, progress: bool):
     """The coordinate descent under ``setting``: its result."""
-    problem = GripperProblem(mode="bisect", base=SETTINGS[setting])
+    problem = GripperProblem(mode="bisect", heat=SETTINGS[setting])
     budget = CD_BUDGET_QUICK if quick else None
     bar = progress_bar(None, enabled=progress, desc=f"descent, {setting}", unit="eval",
                        total=budget or 1 + 8 * CD_OPTIONS["max_cycles"], leave=False)
@@ -116,7 +116,7 @@ def _cycles(setting: str, result) -> pd.DataFrame:
 
 def _cross(design: str, x: dict, setting: str) -> dict:
     """One row ``table = "cross"``: the design ``x`` [m] evaluated under ``setting``."""
-    res = evaluate_gripper(replace(SETTINGS[setting], **x), mode="bisect")
+    res = evaluate_gripper(GripperDesign(**x), mode="bisect", heat=SETTINGS[setting])
     per = lambda p: math.nan if p is None else 1e3 * p          # noqa: E731
     a, g = per(res.assembly.power_per_crease), per(res.grip.power_per_crease)
     total = a + g if res.success else math.nan
@@ -151,7 +151,8 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
 def _footer() -> list[str]:
     from studies.figure_notes import heat_loss_note
 
-    notes = [f"{s}: {heat_loss_note(gripper_model(d)[0])}" for s, d in SETTINGS.items()]
+    notes = [f"{s}: {heat_loss_note(make_gripper_model(GripperDesign(), heat=h)[0])}"
+             for s, h in SETTINGS.items()]
     return ["objective: assembly + grip power per heated crease (bisect search); limit: centre-"
             "line mean of the hottest heated crease <= 1.2 T_g = 252 °C; size bounds of the "
             "paper; coordinate descent from W 200, La 700, L1 = L2 = 1000 um (steps 10 / 50 "

@@ -160,7 +160,7 @@ def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.Data
     residuals = RESIDUALS_QUICK if quick else RESIDUALS
     with make_executor("serial" if quick else "process",
                        None if quick else WORKERS) as executor:
-        x_start = problem.space.to_dict(problem.space.start)
+        x_start = problem.space.to_mapping(problem.space.start)
         designs = {START: (x_start, _design_row(START, "paper's start design", x_start))}
         designs[PAPER] = paper_optimum(
             problem, optimum_csv, FALLBACK_CD_BUDGET_QUICK if quick else FALLBACK_CD_BUDGET,

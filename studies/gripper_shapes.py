@@ -13,7 +13,7 @@ The designs and their stage powers (per heated crease, from the bisect power sea
 from ``results/gripper_optimization/gripper_optimization.csv`` (``cycles`` rows; the current
 directory's if a run wrote one, else the repository's committed one); the coordinate descent is
 not re-run. For each design below, the gripper model of
-:func:`design.devices.gripper.gripper_model` is loaded by its pre-steps (self-weight), then heated in
+:func:`design.devices.gripper.make_gripper_model` is loaded by its pre-steps (self-weight), then heated in
 ``INCREMENTS`` increments with iterated thermo-mechanical coupling to the assembly power on
 the two base creases, then, with the base heat kept on, to the grip power on the two arm
 creases. The measures of the stages (base fold, distance of the arm tips) are recomputed on
@@ -53,7 +53,7 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from design import GripperDesign, gripper_model
+from design import GripperDesign, GripperHeatModel, make_gripper_model
 from design.devices import ARM_CREASES, BASE_CREASES
 from simulator import simulate
 from simulator.steps import Heat
@@ -78,14 +78,17 @@ SUBSTRATE_PANELS = (5,)
 PARTS = {"central panel": 1, "base": 0, "arm": 3}
 
 
+#: The heat model the optimisation's powers were found with (the paper's chains).
+PAPER_HEAT = GripperHeatModel(loss_model="chain")
+
+
 def _design(row) -> GripperDesign:
-    """The design of a row of the optimisation's table, with its heat loss (the paper's
-    chains, the setting the powers were found with)."""
-    return GripperDesign(**{v: float(row[f"{v} [um]"]) * 1e-6 for v in UM}, loss_model="chain")
+    """The design of a row of the optimisation's table."""
+    return GripperDesign(**{v: float(row[f"{v} [um]"]) * 1e-6 for v in UM})
 
 
 def gripper_states(design: GripperDesign, assembly_power: float, grip_power: float,
-                   increments: int = INCREMENTS):
+                   increments: int = INCREMENTS, heat=None):
     """Model and the two heated states of a gripper design.
 
     Parameters
@@ -96,13 +99,15 @@ def gripper_states(design: GripperDesign, assembly_power: float, grip_power: flo
         and of the arm circuit (grip).
     increments : int
         Heating increments per stage (iterated coupling).
+    heat : GripperHeatModel, optional
+        How the heat balance is modelled (default: the integral loss).
 
     Returns
     -------
     (model, {"assembly": SimulationResult, "grip": SimulationResult})
         Each result's last record is the state at the end of that stage.
     """
-    model, pre = gripper_model(design)
+    model, pre = make_gripper_model(design, heat=heat)
     start = simulate(model, pre)
     assembly = simulate(model, [Heat({BASE_CREASES: assembly_power}, increments=increments,
                                               coupling="iterated")],
@@ -171,7 +176,7 @@ def run(quick: bool = False, progress: bool = True, csv=None) -> pd.DataFrame:
         row = cycles.iloc[-1] if cycle == "last" else cycles[cycles["cycle"] == cycle].iloc[0]
         model, results = gripper_states(_design(row), 1e-3 * float(row["assembly_power [mW]"]),
                                         1e-3 * float(row["grip_power [mW]"]),
-                                        INCREMENTS_QUICK if quick else INCREMENTS)
+                                        INCREMENTS_QUICK if quick else INCREMENTS, PAPER_HEAT)
         parts += _rows(label, int(row["cycle"]), row, model, results)
     df = pd.concat(parts, ignore_index=True)
     first = ["table", "design", "cycle", "stage"]
@@ -184,7 +189,7 @@ def _draw(fig, spec, d, nodes, t_range, colorbar):
     from studies.plotting import label_points, plot_shape
 
     ax = fig.add_subplot(spec, projection="3d")
-    mesh = gripper_model(_design(d))[0].mesh
+    mesh = make_gripper_model(_design(d), heat=PAPER_HEAT)[0].mesh
     n = nodes[(nodes["design"] == d["design"]) & (nodes["stage"] == d["stage"])]
     shape = shape_from_frame(n, mesh)
     plot_shape(shape, ax=ax, t_range=t_range, colorbar=colorbar, hide_panels=SUBSTRATE_PANELS,

@@ -67,7 +67,7 @@ import pandas as pd
 from design.analysis import SCENARIOS, summarize_yield
 from design import GripperProblem, RobustYieldProblem, make_executor, sweep_uncertainty
 from studies._common import RESULTS, progress_bar, study_main
-from studies.gripper_optimization import PAPER_BASE
+from studies.gripper_optimization import PAPER_HEAT
 from studies.gripper_robustness import FALLBACK_CD_BUDGET_QUICK, _design_row, _optimize, \
     paper_optimum
 
@@ -108,8 +108,8 @@ def _path(a: dict, b: dict, t: float) -> dict:
 
 def run(quick: bool = False, progress: bool = True, optimum_csv=None) -> pd.DataFrame:
     """Designs, then the yield sweep; see the module docstring."""
-    problem = GripperProblem(mode="bisect", base=PAPER_BASE)     # the paper setting (chains)
-    x_start = problem.space.to_dict(problem.space.start)
+    problem = GripperProblem(mode="bisect", heat=PAPER_HEAT)     # the paper setting (chains)
+    x_start = problem.space.to_mapping(problem.space.start)
     with make_executor("serial" if quick else "process",
                        None if quick else WORKERS) as executor:
         designs = {START: (x_start, _design_row(START, "paper's start design", x_start))}

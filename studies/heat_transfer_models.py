@@ -204,12 +204,13 @@ def _double_fold(quick):
 
 
 def _gripper(quick):
-    from design import GripperDesign
+    from design import GripperDesign, GripperHeatModel
     from design.devices import ARM_CREASES, BASE_CREASES
     from studies.gripper_shapes import gripper_states
 
-    model, res = gripper_states(GripperDesign(loss_model="chain"), GRIPPER_ASSEMBLY, GRIPPER_GRIP,
-                                GRIPPER_INCREMENTS_QUICK if quick else GRIPPER_INCREMENTS)
+    model, res = gripper_states(GripperDesign(), GRIPPER_ASSEMBLY, GRIPPER_GRIP,
+                                GRIPPER_INCREMENTS_QUICK if quick else GRIPPER_INCREMENTS,
+                                GripperHeatModel(loss_model="chain"))
     mesh = model.mesh
     out = {}
     for shape, creases in (("assembly", BASE_CREASES), ("grip", BASE_CREASES + ARM_CREASES)):

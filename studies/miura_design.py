@@ -328,13 +328,13 @@ def _grid_figure(grid):
 
 
 def _note(fig):
-    from design import miura_model
+    from design import make_miura_model
     from studies.plotting import environment_note, heat_loss_note, note_assumptions
 
     note_assumptions(fig, environment_note("air", 0.026, 0, 0, extra=[
         "4 x 2 cells over a substrate 100 um below", "first column clamped",
         "temperature: hottest crease, centre-line mean"]),
-        heat_loss_note(miura_model(PAPER_BASE)) + " (t_env of the design's case)")
+        heat_loss_note(make_miura_model(PAPER_BASE)) + " (t_env of the design's case)")
 
 
 def _optimum_figure(opt, cycles):

@@ -38,3 +38,12 @@ def moved(package) -> dict:
 
     table = importlib.import_module(f"{package.__name__}._moved").MOVED
     return moved_names(table, package.__name__)
+
+
+def renamed(package) -> dict:
+    """{(module name, old name): new name} of ``package._moved.RENAMED``: the door and every
+    namespace that publishes the new name."""
+    table = getattr(importlib.import_module(f"{package.__name__}._moved"), "RENAMED", {})
+    places = [package, *namespaces(package).values()]
+    return {(m.__name__, old): new for old, new in table.items() for m in places
+            if new in m.__all__}

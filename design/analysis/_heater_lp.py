@@ -33,7 +33,7 @@ __all__ = ["influence_matrices", "fold_sensitivity", "linear_allocation", "TEMPE
 TEMPERATURE_MEASURES = tuple(LIMIT_MEASURES)
 
 
-def _heater_table(model: Model, heaters) -> dict:
+def heater_table(model: Model, heaters) -> dict:
     """{name: tuple of crease ids}; default one heater per actuated crease."""
     mesh = model.mesh
     if heaters is None:
@@ -71,7 +71,7 @@ def influence_matrices(model: Model, x: np.ndarray, heaters: Mapping) -> tuple:
     return G, rise[mesh.crease_nodes].reshape(-1, len(heaters))
 
 
-def _check_measure(measure) -> str:
+def check_measure(measure) -> str:
     if measure not in TEMPERATURE_MEASURES:
         raise ParameterError(f"temperature_measure = {measure!r}; use 'centre_line' (the mean "
                              "of each crease's centre-line nodes, the documented measure of the "
@@ -90,12 +90,12 @@ def limit_temperatures(model: Model, node_values: np.ndarray,
     ``mesh.crease_nodes``: their maximum is bounded by bounding each).
     """
     values = np.asarray(node_values)
-    if _check_measure(measure) == "centre_line":
+    if check_measure(measure) == "centre_line":
         return crease_limit_temperatures(values, model.mesh)
     return values[model.mesh.crease_nodes].reshape(-1, *values.shape[1:])
 
 
-def _limit_rows(model: Model, H: np.ndarray, measure: str) -> np.ndarray:
+def limit_rows(model: Model, H: np.ndarray, measure: str) -> np.ndarray:
     """Rows of the limit measure per heater watt from ``H`` (C * 7, k), the rise of every
     crease node (:func:`influence_matrices`)."""
     if measure == "crease_max":
@@ -105,7 +105,7 @@ def _limit_rows(model: Model, H: np.ndarray, measure: str) -> np.ndarray:
     return limit_temperatures(model, rise, measure)
 
 
-def _solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
+def solve_lp(A, step, band, H, rise_limit, weights, p_cur, radius, p_max):
     """The allocation LP about the current state, within a trust region.
 
     Asked: fold change ``A (p - p_cur)`` equal to ``step`` within ``band``, every power within
@@ -170,12 +170,12 @@ def fold_sensitivity(model: Model, state: SimulationState, creases=None,
     return S
 
 
-def _weights(table) -> np.ndarray:
+def crease_weights(table) -> np.ndarray:
     """Creases per heater: the weight of its power in the total."""
     return np.array([len(c) for c in table.values()], float)
 
 
-def _linear_model(model, state, table, rows) -> tuple:
+def linear_model(model, state, table, rows) -> tuple:
     """``(A, H, folds)`` at ``state``: fold change of the target rows per heater watt
     (``S diag(r) G``), crease-node temperature rise per watt, current target folds."""
     mesh = model.mesh
@@ -186,7 +186,7 @@ def _linear_model(model, state, table, rows) -> tuple:
     return A, H, fold_angles(mesh, mesh.nodes + state.u)[rows]
 
 
-def _check_targets(model, targets, rot):
+def check_targets(model, targets, rot):
     mesh = model.mesh
     rows = {}
     for c, v in dict(targets).items():
@@ -212,16 +212,16 @@ def linear_allocation(model: Model, targets: Mapping, *, heaters: Mapping | None
     [deg C] bounds ``temperature_measure`` as in :func:`allocate_heaters`. Raises
     :class:`ParameterError` if the LP has no solution.
     """
-    _check_measure(temperature_measure)
-    table = _heater_table(model, heaters)
+    check_measure(temperature_measure)
+    table = heater_table(model, heaters)
     state = initial_state(model) if state is None else state
-    rows = _check_targets(model, targets, model.actuators.rotation_per_kelvin(model.mesh))
-    A, H, folds = _linear_model(model, state, table, rows)
+    rows = check_targets(model, targets, model.actuators.rotation_per_kelvin(model.mesh))
+    A, H, folds = linear_model(model, state, table, rows)
     step = np.array([float(v) for v in dict(targets).values()]) - folds
     rise_limit = temperature_limit - limit_temperatures(model, state.temperature,
                                                         temperature_measure)
-    p, _, status = _solve_lp(A, step, band, _limit_rows(model, H, temperature_measure), rise_limit,
-                             _weights(table), np.zeros(len(table)), np.inf, None)
+    p, _, status = solve_lp(A, step, band, limit_rows(model, H, temperature_measure), rise_limit,
+                             crease_weights(table), np.zeros(len(table)), np.inf, None)
     if p is None:
         raise SolverError(f"linear_allocation: LP not solved ({status}).")
     return p

@@ -54,9 +54,9 @@ from simulator.thermal import TemperatureLimit, TemperatureVerdict
 from simulator._result import ResultFiles
 from simulator._validate import integer, non_negative, positive
 
-from ..core._contract import check_outcome
-from ._heater_lp import (TEMPERATURE_MEASURES, _check_measure, _check_targets, _heater_table,
-                         _limit_rows, _linear_model, _solve_lp, _weights, fold_sensitivity,
+from ..core.contract import check_outcome
+from ._heater_lp import (TEMPERATURE_MEASURES, check_measure, check_targets, heater_table,
+                         limit_rows, linear_model, solve_lp, crease_weights, fold_sensitivity,
                          influence_matrices, limit_temperatures, linear_allocation)
 from ..devices.limits import SU8_TG
 
@@ -220,7 +220,7 @@ class _Rounds:
         if np.any(self.rise_limit <= 0):
             raise ParameterError(f"temperature_limit = {limit!r} degC is not above the start "
                                  f"state's crease temperatures ({self.measure} measure).")
-        self.weights = _weights(table)
+        self.weights = crease_weights(table)
         self.out, self.p_cur = out, np.zeros(len(table))
         self._linearise(state)
         # first trust radius: the power that takes each heater's hottest crease node a tenth
@@ -231,8 +231,8 @@ class _Rounds:
     def _linearise(self, state, previous=None):
         """``A``, ``H`` and the folds at ``state`` (heated with ``p_cur``); the folds are kept
         continuous with ``previous`` through +-pi (atan2 wraps)."""
-        self.A, self.H_nodes, folds = _linear_model(self.model, state, self.table, self.rows)
-        self.H = _limit_rows(self.model, self.H_nodes, self.measure)  # the limit's measure per W
+        self.A, self.H_nodes, folds = linear_model(self.model, state, self.table, self.rows)
+        self.H = limit_rows(self.model, self.H_nodes, self.measure)  # the limit's measure per W
         if previous is not None:
             folds = previous + (folds - previous + np.pi) % (2 * np.pi) - np.pi
         self.folds = folds
@@ -240,7 +240,7 @@ class _Rounds:
     def round(self, goal, tol):
         """Returns (goal met, excess over the band that the LP could not remove [rad])."""
         t0, out, mesh, A = time.perf_counter(), self.out, self.model.mesh, self.A
-        p, excess, lp_status = _solve_lp(A, goal - self.folds, self.band, self.H,
+        p, excess, lp_status = solve_lp(A, goal - self.folds, self.band, self.H,
                                          self.rise_limit, self.weights, self.p_cur,
                                          self.radius, self.max_power)
         out.rounds += 1
@@ -345,13 +345,13 @@ def allocate_heaters(model: Model, targets: Mapping, *, heaters: Mapping | None 
     """
     _check_settings(max_rounds=max_rounds, stages=stages, band=band, fold_tol=fold_tol,
                     max_power=max_power)
-    _check_measure(temperature_measure)
-    table = _heater_table(model, heaters)
+    check_measure(temperature_measure)
+    table = heater_table(model, heaters)
     state = initial_state(model) if state is None else state
     mesh = model.mesh
     rot = (model.actuators.rotation_per_kelvin(mesh) if model.actuators is not None
            else np.zeros(mesh.n_creases))
-    rows = _check_targets(model, targets, rot)
+    rows = check_targets(model, targets, rot)
     target = np.array([float(v) for v in dict(targets).values()])
     fold0 = fold_angles(mesh, mesh.nodes + state.u)[rows]
     if np.any((target - fold0) * rot[rows] < 0):

@@ -29,8 +29,8 @@ import numpy as np
 from simulator import ParameterError
 
 from ..devices import gripper as _gr
-from ..core.executors import SerialExecutor, TaskFailure
-from ..core.problem import DesignProblem, Evaluation
+from ..core.points import design_list, evaluate_points
+from ..core.problem import DesignProblem, EvaluationOutcome
 from ..devices.gripper_problem import GripperProblem
 
 if TYPE_CHECKING:
@@ -131,29 +131,6 @@ def with_residual_fold(problem, spec):
     return replace(problem, residual_fold_groups=tuple(spec.items()))
 
 
-def _evaluate_point(task):
-    """Worker task (top level, picklable): ``(problem, x) -> Evaluation``."""
-    problem, x = task
-    return problem.evaluate(x)
-
-
-def lost_evaluation(problem, x, reason: str) -> Evaluation:
-    """A failed evaluation of a point whose task never returned (its worker died)."""
-    return Evaluation(problem.space.to_dict(x), math.inf, success=False, status="failed",
-                      message=f"not evaluated: {reason}")
-
-
-def _design_list(space, designs) -> list:
-    if designs is None:
-        return [space.to_dict(space.start)]
-    if isinstance(designs, Mapping):
-        return [space.to_dict(designs)]
-    items = list(designs)
-    if items and all(isinstance(v, (int, float, np.floating, np.integer)) for v in items):
-        return [space.to_dict(items)]
-    return [space.to_dict(d) for d in items]
-
-
 def _stage_power(ev, key):
     """Stage power [mW] from the metrics; None when the stage was not met."""
     v = ev.metrics.get(key)
@@ -234,38 +211,15 @@ def sweep_residual_fold(problem, designs, residual_folds, executor=None, log=Non
     specs = [_normalize_spec(s) for s in residual_folds]
     if not specs:
         raise ParameterError("sweep_residual_fold: no residual folds given.")
-    xs = _design_list(problem.space, designs)
+    xs = design_list(problem.space, designs)
     probs = [with_residual_fold(problem, s) for s in specs]
     points = [(x, j) for x in xs for j in range(len(specs))]        # designs outer
-    executor = executor or SerialExecutor()
-    evs = [None] * len(points)
-    if log is not None:
-        logs = [_open_log(log, p) for p in probs]
-        evs = [logs[j].lookup(x) for x, j in points]
-    todo = [i for i, ev in enumerate(evs) if ev is None]
-    logger.info("residual-fold sweep: %d designs x %d residual folds on %r (%d logged)",
-                len(xs), len(specs), executor, len(points) - len(todo))
-    items = [(probs[points[i][1]], points[i][0]) for i in todo]
-
-    def finished(k, ev):                    # in this process, as each point completes
-        i = todo[k]
-        prob, x = probs[points[i][1]], points[i][0]
-        if isinstance(ev, TaskFailure):     # not logged: the same command tries it again
-            evs[i] = lost_evaluation(prob, x, ev.reason)
-            return
-        evs[i] = ev
-        if log is not None:
-            _open_log(log, prob).append(ev)      # reopened: another point's log may add columns
-
-    executor.map(_evaluate_point, items, progress, on_result=finished, failures="return")
+    logger.info("residual-fold sweep: %d designs x %d residual folds on %r", len(xs),
+                len(specs), executor)
+    evs = evaluate_points([(probs[j], x) for x, j in points], executor, progress, log)
     columns = ["all"] if all("all" in s for s in specs) else list(CREASE_GROUPS)
     return pd.DataFrame([_row(probs[j], x, specs[j], columns, ev)
                          for (x, j), ev in zip(points, evs)])
-
-
-def _open_log(path, problem):
-    from ..core.evaluation_log import EvaluationLog
-    return EvaluationLog(path, problem)
 
 
 @dataclass(frozen=True)
@@ -295,6 +249,7 @@ class RobustGripperProblem(DesignProblem):
     base_problem: GripperProblem
     residual_folds: tuple
     name: str = "robust_gripper"
+    report_metric = "temperature [degC]"      # the worst case, per cycle of cd
     _problems: tuple = field(init=False, repr=False, compare=False, default=())
 
     def __post_init__(self):
@@ -335,7 +290,8 @@ class RobustGripperProblem(DesignProblem):
                    if bad else "; ".join([f"all {len(evs)} residual folds met"] + hot))
         failure = None if not bad else ("failed" if any(ev.status == "failed" for _, ev in bad)
                                         else "not_met")
-        return (math.inf if bad else objective), constraints, metrics, failure, message
+        return EvaluationOutcome(math.inf if bad else objective, constraints, metrics, failure,
+                                 message)
 
     def settings(self) -> dict:
         return {"problem": self.name, "aggregate": "max over residual folds",

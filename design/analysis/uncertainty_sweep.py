@@ -22,10 +22,9 @@ import numpy as np
 
 from simulator import ParameterError
 
-from ..core.executors import SerialExecutor, TaskFailure
-from ..core.problem import DesignProblem
+from ..core.points import design_list, evaluate_points
+from ..core.problem import DesignProblem, EvaluationOutcome
 from ..devices.gripper_problem import GripperProblem
-from .robustness import _design_list, lost_evaluation
 from ..core.space import DesignSpace, Variable
 from .uncertainty import PARAMETERS, FabricationScenario, quantile, rank_correlations, \
     wilson_interval
@@ -89,6 +88,7 @@ class GripperSampleProblem(DesignProblem):
     base: GripperProblem
     parameters: tuple
     name: str = "gripper_sample"
+    report_metric = "temperature [degC]"
     _space: DesignSpace = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self):
@@ -136,12 +136,6 @@ def sample_category(ev) -> str:
     if not ev.success:
         return "solver failed"
     return "too hot" if ev.constraints.get("temperature", 0.0) > 0 else "outside bounds"
-
-
-def _evaluate_sample(task):
-    """Worker task (top level, picklable): ``(problem, x) -> Evaluation``."""
-    problem, x = task
-    return problem.evaluate(x)
 
 
 def _row(problem: GripperSampleProblem, scenario, design: dict, k: int, ev) -> dict:
@@ -204,59 +198,35 @@ def sweep_uncertainty(problem: GripperProblem, scenario: FabricationScenario, sa
     """
     import pandas as pd
 
-    from ..core.evaluation_log import EvaluationLog, design_key
-
     point = GripperSampleProblem(problem, scenario.parameters)
     missing = [p for p in scenario.parameters if p not in samples.columns]
     if missing:
         raise ParameterError(f"sweep_uncertainty: samples lack columns {missing}.")
-    xs = _design_list(problem.space, designs)
+    xs = design_list(problem.space, designs)
     params = samples[list(scenario.parameters)].to_numpy(dtype=float)
     vecs = [np.concatenate([problem.space.to_vector(x), p]) for x in xs for p in params]
-    keys = [design_key(point.space, v) for v in vecs]
-    book = EvaluationLog(log, point)
-    found = {k: book.lookup(v) for k, v in zip(keys, vecs)}
-    unique = list(dict.fromkeys(k for k in keys if found[k] is None))
-    first = {k: vecs[keys.index(k)] for k in unique}
-    logger.info("uncertainty sweep: %d designs x %d samples, %d distinct points to compute on "
-                "%r", len(xs), len(params), len(unique), executor)
-
-    def finished(j, ev):                          # in this process, as each point completes
-        k = unique[j]
-        if isinstance(ev, TaskFailure):           # not logged: the same command retries it
-            found[k] = lost_evaluation(point, first[k], ev.reason)
-            return
-        found[k] = ev
-        book.append(ev)
-
-    executor = executor or SerialExecutor()
-    executor.map(_evaluate_sample, [(point, first[k]) for k in unique], progress,
-                 on_result=finished, failures="return")
-    retried = _retry_failed(retry, scenario, found, vecs, keys, executor)
+    logger.info("uncertainty sweep: %d designs x %d samples on %r", len(xs), len(params),
+                executor)
+    evs = evaluate_points([(point, v) for v in vecs], executor, progress, log)
+    retried = _retry_failed(retry, scenario, evs, vecs, executor)
     n = len(params)
-    rows = [_row(point, scenario, xs[i // n], i % n, found[k]) for i, k in enumerate(keys)]
-    for row, k in zip(rows, keys):
-        row["attempts"] = 2 if k in retried else 1
+    rows = [_row(point, scenario, xs[i // n], i % n, ev) for i, ev in enumerate(evs)]
+    for i, row in enumerate(rows):
+        row["attempts"] = 2 if i in retried else 1
     return pd.DataFrame(rows)
 
 
-def _retry_failed(retry, scenario, found: dict, vecs, keys, executor) -> set:
-    """Evaluate the failed points of ``found`` again with the ``retry`` problem (in place);
-    returns the keys retried."""
+def _retry_failed(retry, scenario, evs: list, vecs, executor) -> set:
+    """Evaluate the failed points of ``evs`` again with the ``retry`` problem (in place: the
+    retry's evaluation replaces the first); returns the indices retried."""
     if retry is None:
         return set()
     point = GripperSampleProblem(retry, scenario.parameters)
-    failed = [k for k in dict.fromkeys(keys) if found[k].status == "failed"]
-    todo = [vecs[keys.index(k)] for k in failed]
+    failed = [i for i, ev in enumerate(evs) if ev.status == "failed"]
     logger.info("uncertainty sweep: retrying %d failed points with smaller power steps",
-                len(todo))
-
-    def finished(j, ev):
-        if not isinstance(ev, TaskFailure):
-            found[failed[j]] = ev
-
-    executor.map(_evaluate_sample, [(point, x) for x in todo], None, on_result=finished,
-                 failures="return")
+                len(failed))
+    for i, ev in zip(failed, evaluate_points([(point, vecs[i]) for i in failed], executor)):
+        evs[i] = ev
     return set(failed)
 
 
@@ -342,6 +312,7 @@ class RobustYieldProblem(DesignProblem):
     q: float = 0.9
     yield_target: float = 0.9
     name: str = "robust_yield"
+    report_metric = "temperature [degC]"
     _table: tuple = field(init=False, repr=False, compare=False, default=())
 
     def __post_init__(self):
@@ -375,11 +346,12 @@ class RobustYieldProblem(DesignProblem):
                                               for ev in evs), default=math.nan)}
         met = sum(ev.success for ev in evs)
         if not math.isfinite(objective):
-            return (math.inf, constraints, metrics, "not_met",
-                    f"power quantile {self.q:g} not met: {len(evs) - met} of {len(evs)} "
-                    "samples did not meet both stages")
-        return objective, constraints, metrics, None, (f"yield {works}/{len(evs)}, "
-                                                       f"{met} met both stages")
+            return EvaluationOutcome(
+                math.inf, constraints, metrics, "not_met",
+                f"power quantile {self.q:g} not met: {len(evs) - met} of {len(evs)} samples "
+                "did not meet both stages")
+        return EvaluationOutcome(objective, constraints, metrics, None,
+                                 f"yield {works}/{len(evs)}, {met} met both stages")
 
     def settings(self) -> dict:
         return {"problem": self.name, "scenario": self.scenario.to_dict(),

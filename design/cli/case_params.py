@@ -105,14 +105,14 @@ def _checked(name: str, value: float, unit: CLIUnit) -> float:
 def _parse_value(text: str):
     """A ``--set`` value: the words true/yes/on and false/no/off, else a number or the text
     as a CSV cell of an evaluation log is read."""
-    from ..core.evaluation_log import _parse
+    from ..core.evaluation_log import parse_cell
 
     low = text.strip().lower()
     if low in ("true", "yes", "on"):
         return True
     if low in ("false", "no", "off"):
         return False
-    return _parse(text)
+    return parse_cell(text)
 
 
 def _convert(name, text, default, si_unit):

@@ -26,8 +26,7 @@ def _design(args):
     if args.W >= min(args.L1, args.L2, args.La):
         raise CLIError(f"--W = {args.W:g} um must be smaller than --L1, --L2 and --La "
                        f"(here {args.L1:g}, {args.L2:g}, {args.La:g} um)")
-    return GripperDesign(**si, residual_fold=fold_deg("--residual-fold", args.residual_fold),
-                         loss_model=args.loss_model)
+    return GripperDesign(**si, residual_fold=fold_deg("--residual-fold", args.residual_fold))
 
 
 def _mw(value):
@@ -35,11 +34,12 @@ def _mw(value):
 
 
 def _gripper_evaluate(args) -> int:
-    from ..devices.gripper import evaluate_gripper
+    from ..devices.gripper import GripperHeatModel, evaluate_gripper
 
     design = _design(args)
     t0 = time.perf_counter()
-    res = evaluate_gripper(design, mode=args.mode)
+    res = evaluate_gripper(design, mode=args.mode,
+                           heat=GripperHeatModel(loss_model=args.loss_model))
     verdict = res.temperature_verdict()
     out = res.to_dict()
     out.update({"temperature_limit [degC]": verdict.limit.value,

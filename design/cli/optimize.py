@@ -61,10 +61,9 @@ def _problem(args):
     if args.target == "miura":
         from ..devices.miura import MiuraDesign, MiuraProblem
         return MiuraProblem(base=MiuraDesign(loss_model=args.loss_model))
-    from ..devices.gripper import GripperDesign
+    from ..devices.gripper import GripperHeatModel
 
-    base = GripperProblem(mode=args.mode,
-                          base=GripperDesign(loss_model=args.loss_model),
+    base = GripperProblem(mode=args.mode, heat=GripperHeatModel(loss_model=args.loss_model),
                           residual_fold=fold_deg("--residual-fold", args.residual_fold))
     if args.robust:
         from ..analysis.robustness import RobustGripperProblem

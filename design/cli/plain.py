@@ -347,7 +347,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
     (sharp creases: :func:`.sharp.check_sharp`)."""
     import numpy as np
 
-    from simulator import build_mesh
+    from simulator import make_mesh
     from simulator.fold import parse_fold
     from simulator.model import central_panel, check_supported, start_fold_angles
 
@@ -382,7 +382,7 @@ def check_plain(args, data: dict, options: dict, sharp: dict | None = None) -> i
         print("  a run needs: " + "; ".join(needs))
         print(f"  e.g. etorigami run {args.file} --crease-model sharp --fold all=90 --out DIR")
         return 0
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     widths = pattern.crease_width[pattern.creases]
     print(f"  mesh: {mesh.n_nodes} nodes, {len(mesh.bars)} bars, {len(mesh.springs)} springs "
           f"(checked with crease width {widths.min() * 1e6:g} um)")

@@ -25,7 +25,7 @@ SCENARIO_NAMES = ("default", "residual-fold", "off")
 def _design_arg(text: str, space) -> dict:
     """``start`` or ``W=300,La=1500,L1=500,L2=500`` (display units) -> {name: SI value}."""
     if text.strip().lower() == "start":
-        return space.to_dict(space.start)
+        return space.to_mapping(space.start)
     out = {}
     for part in text.split(","):
         if "=" not in part:
@@ -38,7 +38,7 @@ def _design_arg(text: str, space) -> dict:
             raise CLIError(f"--design: {name} = {value!r} is not a number") from None
         length_um(f"--design {var.name}", number)
         out[var.name] = number / var.display_scale
-    return space.to_dict(out)
+    return space.to_mapping(out)
 
 
 def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
@@ -58,11 +58,11 @@ def _run(args, out: pathlib.Path, total: int, desc: str, sweep):
 
 
 def _sweep(args) -> int:
-    from ..devices.gripper import GripperDesign
+    from ..devices.gripper import GripperHeatModel
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.robustness import residual_fold_grid, sweep_residual_fold
 
-    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
+    problem = GripperProblem(mode=args.mode, heat=GripperHeatModel(loss_model=args.loss_model))
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     values = floats("--values", args.values)
     for v in values:
@@ -98,14 +98,14 @@ def _reasons(frame, cols) -> list:
 def _uncertainty(args) -> int:
     import json
 
-    from ..devices.gripper import GripperDesign
+    from ..devices.gripper import GripperHeatModel
     from ..devices.gripper_problem import GripperProblem
     from ..analysis.uncertainty import SCENARIOS
     from ..analysis.uncertainty_sweep import summarize_yield, sweep_uncertainty
 
     if args.samples < 1:
         raise CLIError(f"--samples = {args.samples} must be at least 1")
-    problem = GripperProblem(mode=args.mode, base=GripperDesign(loss_model=args.loss_model))
+    problem = GripperProblem(mode=args.mode, heat=GripperHeatModel(loss_model=args.loss_model))
     scenario = SCENARIOS[args.scenario]
     designs = [_design_arg(d, problem.space) for d in (args.design or ["start"])]
     samples = scenario.sample(args.samples, args.seed, args.method)

@@ -11,7 +11,7 @@ from simulator._lazy import attach as _attach
 
 __getattr__, __dir__ = _attach(__name__, {
     ".space": ("DesignSpace", "Variable"),
-    ".problem": ("EVALUATION_STATUSES", "DesignProblem", "Evaluation"),
+    ".problem": ("EVALUATION_STATUSES", "DesignProblem", "Evaluation", "EvaluationOutcome"),
     ".evaluation_log": ("EvaluationLog", "LoggedProblem"),
     ".optimize": ("OptimizationResult", "Optimizer", "StopOptimization", "get_optimizer",
                   "optimizers", "register_optimizer", "unregister_optimizer"),
@@ -22,7 +22,8 @@ __getattr__, __dir__ = _attach(__name__, {
 
 __all__ = [
     # design spaces and problems
-    "Variable", "DesignSpace", "DesignProblem", "Evaluation", "EVALUATION_STATUSES",
+    "Variable", "DesignSpace", "DesignProblem", "Evaluation", "EvaluationOutcome",
+    "EVALUATION_STATUSES",
     # optimisers and evaluation logs
     "OptimizationResult", "StopOptimization", "Optimizer", "optimizers", "get_optimizer",
     "register_optimizer", "unregister_optimizer", "EvaluationLog", "LoggedProblem",

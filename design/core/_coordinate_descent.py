@@ -14,11 +14,14 @@ def _x_columns(space, x) -> dict:
     return {f"x.{v.name} [{v.unit}]": float(u) for v, u in zip(space.variables, x)}
 
 
-def _coordinate_descent(run: EvaluationRun, x0, max_evaluations=None, max_cycles=15,
-                        parallel_candidates=False, metric="temperature [degC]"):
+def coordinate_descent(run: EvaluationRun, x0, max_evaluations=None, max_cycles=15,
+                        parallel_candidates=False, metric=None):
     """Coordinate descent from ``x0``; returns ``(status, message, cycles)`` (``cycles``: one
-    row per cycle, row 0 the start). The budget ``max_evaluations`` is enforced by ``run``."""
+    row per cycle, row 0 the start; with a ``metric``, default the problem's
+    :attr:`~design.core.problem.DesignProblem.report_metric`, its value at the last candidate
+    and at the current design). The budget ``max_evaluations`` is enforced by ``run``."""
     space = run.space
+    metric = metric or getattr(run.logged.problem, "report_metric", None)
     integer("max_cycles", max_cycles)
     tol = 1e-9 * (space.upper - space.lower)
     k = np.zeros(len(space), dtype=int)
@@ -32,10 +35,11 @@ def _coordinate_descent(run: EvaluationRun, x0, max_evaluations=None, max_cycles
 
     def row(cycle, moved, last, complete=True):
         m = lambda e: np.nan if e is None else e.metrics.get(metric, np.nan)
+        reported = {} if metric is None else {f"last_candidate.{metric}": m(last),
+                                              f"current.{metric}": m(current)}
         return {"cycle": cycle, "moved": ";".join(moved), "complete": complete,
                 **_x_columns(space, point(k)), "objective": current.objective,
-                "feasible": current.feasible, f"last_candidate.{metric}": m(last),
-                f"current.{metric}": m(current), "n_evaluations": len(run.evaluations)}
+                "feasible": current.feasible, **reported, "n_evaluations": len(run.evaluations)}
 
     cycles, status = [], "max_cycles"
     try:

@@ -10,8 +10,8 @@ import os
 from simulator import ParameterError
 from simulator._validate import integer
 
-from ._executor_base import (Executor, ExecutorError, TaskFailure, _check_failures,
-                             _children_ignore_sigint, _report, _task_error)
+from ._executor_base import (Executor, ExecutorError, TaskFailure, check_failures,
+                             children_ignore_sigint, report, task_error)
 
 __all__ = ["DaskExecutor"]
 
@@ -57,7 +57,7 @@ class DaskExecutor(Executor):
         self.address, self._cluster = address, None
         if address == "local":
             n = workers or os.cpu_count() or 1
-            with dask.config.set({_MALLOC_KEY: None}), _children_ignore_sigint():  # _MALLOC_KEY
+            with dask.config.set({_MALLOC_KEY: None}), children_ignore_sigint():  # _MALLOC_KEY
                 self._cluster = LocalCluster(  # no dashboard; its bare HTTP server: any port
                     n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                     scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL)
@@ -82,7 +82,7 @@ class DaskExecutor(Executor):
     def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
         from distributed import as_completed
 
-        _check_failures(failures)
+        check_failures(failures)
         items = list(items)
         if not items:
             return []
@@ -95,13 +95,13 @@ class DaskExecutor(Executor):
                 if fut.status != "finished":
                     exc = fut.exception().with_traceback(fut.traceback()) \
                         if fut.status == "error" else ExecutorError(f"task {fut.status}")
-                    err = _task_error(fn, i, len(items), items[i], exc, f"dask {self.address}")
+                    err = task_error(fn, i, len(items), items[i], exc, f"dask {self.address}")
                     if failures == "raise":
                         raise err from exc
                     out[i] = TaskFailure(i, items[i], str(err))
                 else:
                     out[i] = fut.result()
-                _report(on_result, progress, i, out[i], done, len(items))
+                report(on_result, progress, i, out[i], done, len(items))
             return out
         finally:
             self.client.cancel(futures)           # pending ones on error; releases the rest

@@ -54,20 +54,20 @@ class TaskFailure:
         return False
 
 
-def _check_failures(failures: str) -> None:
+def check_failures(failures: str) -> None:
     if failures not in _FAILURE_MODES:
         raise ParameterError(f"map: failures = {failures!r}; use 'raise' or 'return'.")
 
 
-def _name(fn) -> str:
+def callable_name(fn) -> str:
     return getattr(fn, "__qualname__", None) or getattr(getattr(fn, "func", None), "__qualname__",
                                                         None) or type(fn).__name__
 
 
-def _task_error(fn, index: int, total: int, item, exc: BaseException, where: str) -> TaskError:
+def task_error(fn, index: int, total: int, item, exc: BaseException, where: str) -> TaskError:
     text = repr(item)
     text = text if len(text) <= 200 else text[:197] + "..."
-    return TaskError(f"task {index} of {total} ({_name(fn)} on {text}) raised "
+    return TaskError(f"task {index} of {total} ({callable_name(fn)} on {text}) raised "
                      f"{type(exc).__name__}: {exc} [{where}]", index, item)
 
 
@@ -123,22 +123,22 @@ class SerialExecutor(Executor):
     workers = 1
 
     def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
-        _check_failures(failures)
+        check_failures(failures)
         items = list(items)
         out = []
         for i, item in enumerate(items):
             try:
                 out.append(fn(item))
             except Exception as exc:
-                err = _task_error(fn, i, len(items), item, exc, "serial")
+                err = task_error(fn, i, len(items), item, exc, "serial")
                 if failures == "raise":
                     raise err from exc
                 out.append(TaskFailure(i, item, str(err)))
-            _report(on_result, progress, i, out[-1], i + 1, len(items))
+            report(on_result, progress, i, out[-1], i + 1, len(items))
         return out
 
 
-def _report(on_result, progress, index, result, done, total) -> None:
+def report(on_result, progress, index, result, done, total) -> None:
     if on_result is not None:
         on_result(index, result)
     if progress is not None:
@@ -161,7 +161,7 @@ def _sigint_handler(handler):
 
 
 @contextlib.contextmanager
-def _sigint_deferred():
+def sigint_deferred():
     """A Ctrl-C during this block takes effect when it ends (the signal is raised again then,
     for the handler in force before).
 
@@ -177,7 +177,7 @@ def _sigint_deferred():
             signal.raise_signal(signal.SIGINT)
 
 
-def _children_ignore_sigint():
+def children_ignore_sigint():
     """Processes started in this block inherit an ignored SIGINT: Ctrl-C reaches every process
     of a terminal's foreground group, and only this one should handle it (it stops them)."""
     return _sigint_handler(signal.SIG_IGN)

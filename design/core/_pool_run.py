@@ -8,7 +8,7 @@ import logging
 from collections import deque
 from concurrent.futures.process import BrokenProcessPool
 
-from ._executor_base import TaskFailure, _report, _sigint_deferred, _task_error
+from ._executor_base import TaskFailure, report, sigint_deferred, task_error
 
 logger = logging.getLogger("design.core.executors")
 
@@ -46,7 +46,7 @@ class PoolRun:
             suspect = any(self.deaths[j] for j in self.flight.values())
             if suspect or (self.deaths[i] and self.flight):
                 return                            # a suspect runs alone
-            with _sigint_deferred():              # submit may start a worker: not halfway
+            with sigint_deferred():              # submit may start a worker: not halfway
                 try:
                     fut = pool.submit(self.fn, self.items[i])
                 except BrokenProcessPool:         # a worker died since the last wait
@@ -85,7 +85,7 @@ class PoolRun:
                        sum(1 for i in broken if self.deaths[i] <= self.ex.max_retries))
 
     def _fail(self, i, exc, where) -> None:
-        err = _task_error(self.fn, i, len(self.items), self.items[i], exc, where)
+        err = task_error(self.fn, i, len(self.items), self.items[i], exc, where)
         if self.failures == "raise":
             raise err from exc
         self._finish(i, TaskFailure(i, self.items[i], str(err), self.starts[i]))
@@ -93,7 +93,7 @@ class PoolRun:
     def _finish(self, i, result) -> None:
         self.out[i] = result
         self.done += 1
-        _report(self.on_result, self.progress, i, result, self.done, len(self.items))
+        report(self.on_result, self.progress, i, result, self.done, len(self.items))
 
     def cancel(self) -> None:
         for fut in self.flight:

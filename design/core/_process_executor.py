@@ -14,8 +14,8 @@ import signal
 from simulator import ParameterError
 from simulator._validate import integer
 
-from ._executor_base import (Executor, ExecutorError, _check_failures, _children_ignore_sigint,
-                             _name)
+from ._executor_base import (Executor, ExecutorError, check_failures, children_ignore_sigint,
+                             callable_name)
 
 __all__ = ["ProcessExecutor", "MAX_RETRIES"]
 
@@ -30,7 +30,7 @@ def _check_picklable(fn, kind: str) -> None:
         pickle.dumps(fn)
     except Exception as exc:                  # any pickling failure, reported the same way
         raise ExecutorError(
-            f"{kind} executor: cannot send {_name(fn)} to worker processes ({type(exc).__name__}: "
+            f"{kind} executor: cannot send {callable_name(fn)} to worker processes ({type(exc).__name__}: "
             f"{exc}); use a top-level function of an importable module, a functools.partial of "
             "one, or a bound method of a picklable object (not a lambda or a nested "
             "function).") from exc
@@ -51,8 +51,28 @@ def _start_forkserver_ignoring_sigint() -> None:
     some other code started earlier is left as it is."""
     from multiprocessing import forkserver
 
-    with _children_ignore_sigint():
+    with children_ignore_sigint():
         forkserver.ensure_running()
+
+
+class _RecordingContext:
+    """A multiprocessing context that keeps the processes it starts (the pool's workers), so
+    that the executor can name and stop them without reading the pool's internals."""
+
+    def __init__(self, ctx):
+        self._ctx = ctx
+        self.processes: list = []
+
+    def __getattr__(self, name):
+        return getattr(self._ctx, name)
+
+    def Process(self, *args, **kwargs):          # noqa: N802 - multiprocessing's spelling
+        proc = self._ctx.Process(*args, **kwargs)
+        self.processes.append(proc)
+        return proc
+
+    def alive(self) -> list:
+        return [p for p in self.processes if p.pid is not None and p.is_alive()]
 
 
 def _default_start_method() -> str:
@@ -91,23 +111,27 @@ class ProcessExecutor(Executor):
                                  "non-negative integer.")
         self.workers, self.start_method, self.max_retries = workers, start_method, max_retries
         self._pool = None
+        self._context = None
 
     def _ensure_pool(self):
         if self._pool is None:
-            ctx = multiprocessing.get_context(self.start_method)
+            self._context = _RecordingContext(multiprocessing.get_context(self.start_method))
             if self.start_method == "forkserver":
                 _start_forkserver_ignoring_sigint()
-            self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+            self._pool = cf.ProcessPoolExecutor(max_workers=self.workers,
+                                                mp_context=self._context,
                                                 initializer=_ignore_sigint)
             logger.info("process pool: %d workers (%s)", self.workers, self.start_method)
         return self._pool
 
     def worker_pids(self) -> list:
         """Process ids of the current pool's workers (empty before the first ``map``)."""
-        return sorted((getattr(self._pool, "_processes", None) or {}).keys())
+        if self._pool is None:
+            return []
+        return sorted(p.pid for p in self._context.alive())
 
     def map(self, fn, items, progress=None, *, on_result=None, failures="raise") -> list:
-        _check_failures(failures)
+        check_failures(failures)
         items = list(items)
         if not items:
             return []
@@ -134,7 +158,7 @@ class ProcessExecutor(Executor):
         pool, self._pool = self._pool, None
         if pool is None:
             return
-        processes = list((getattr(pool, "_processes", None) or {}).values())
+        processes = self._context.alive()
         pool.shutdown(wait=False, cancel_futures=True)
         for proc in processes:
             proc.terminate()

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["EvaluationLog", "LoggedProblem", "EvaluationRun", "BudgetExhausted",
-           "StopOptimization", "settings_hash", "design_key"]
+           "StopOptimization", "settings_hash", "design_key", "parse_cell"]
 
 logger = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ def design_key(space, x) -> tuple:
     return tuple(int(v) for v in np.round(z / KEY_RESOLUTION))
 
 
-def _parse(text: str):
+def parse_cell(text: str):
     """A CSV cell back to bool / int / float / str (floats round-trip exactly via repr)."""
     if text in ("True", "False"):
         return text == "True"
@@ -147,7 +147,7 @@ class EvaluationLog:
     def _from_row(self, row: dict) -> Evaluation:
         x = {v.name: float(row[c]) for v, c in zip(self.space.variables, self._x_cols)}
         cons = {k[2:]: float(v) for k, v in row.items() if k.startswith("g.") and v != ""}
-        metrics = {k[2:]: _parse(v) for k, v in row.items() if k.startswith("m.") and v != ""}
+        metrics = {k[2:]: parse_cell(v) for k, v in row.items() if k.startswith("m.") and v != ""}
         if "success" in row:
             success, status = row["success"] == "True", row.get("status", "")
         else:                                   # logs written before the result contract
@@ -412,7 +412,7 @@ class _safe_evaluate:
             return self.problem.evaluate(x)
         except Exception as exc:  # noqa: BLE001 - contract: a failed design never raises
             logger.warning("problem.evaluate(%s) raised %s: %s", x, type(exc).__name__, exc)
-            values = self.problem.space.to_dict(x)
+            values = self.problem.space.to_mapping(x)
             return Evaluation(values, math.inf, success=False, status="failed",
                               message=f"{type(exc).__name__}: {exc}",
                               wall_time=time.perf_counter() - t0)

@@ -47,8 +47,8 @@ import numpy as np
 from simulator import ParameterError
 from simulator._result import ResultFiles
 
-from ._contract import check_outcome
-from ._coordinate_descent import _coordinate_descent
+from .contract import check_outcome
+from ._coordinate_descent import coordinate_descent
 from ._nlopt_methods import nlopt_backend
 from .evaluation_log import (BudgetExhausted, EvaluationLog, EvaluationRun, LoggedProblem,
                              StopOptimization, settings_hash)
@@ -178,8 +178,8 @@ _NLOPT_OPTIONS = {"xtol_rel": 1e-4, "ftol_rel": 1e-6, "xtol_abs": 1e-6, "ftol_ab
 
 # The built-in methods: the one list of them (CLI choices, documentation and tests read it).
 register_optimizer(
-    "cd", _coordinate_descent, aliases=("coordinate_descent",),
-    options={"max_cycles": 15, "parallel_candidates": False, "metric": "temperature [degC]"},
+    "cd", coordinate_descent, aliases=("coordinate_descent",),
+    options={"max_cycles": 15, "parallel_candidates": False, "metric": None},
     description="the paper's fixed-step coordinate descent on the lattice x0 + k step "
                 "(deterministic, feasible moves only)")
 for _name, _algorithm, _aliases, _what in (
@@ -385,7 +385,8 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     **options
         The method's options (:attr:`Optimizer.options`; others are an error). cd: ``max_cycles`` (15), ``parallel_candidates`` (False: compute the minus and plus
         candidates side by side on ``executor``, same run as without), ``metric``
-        ("temperature [degC]", reported per cycle). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
+        (a metric reported per cycle; default the problem's ``report_metric``, none if it
+        has none). NLopt: ``xtol_rel`` (1e-4), ``ftol_rel``
         (1e-6), ``xtol_abs`` (1e-6, normalised), ``ftol_abs`` (0), ``initial_step``
         (normalised; default the cd step), ``constraint_handling`` ("native" for cobyla,
         "penalty" or "auglag"), ``penalty`` (100, weight of the exact penalty

@@ -15,14 +15,15 @@ import math
 import time
 import traceback
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from simulator import ParameterError
 from simulator._result import ResultFiles
 
-from ._contract import check_outcome
+from .contract import check_outcome
 from .space import DesignSpace
 
-__all__ = ["Evaluation", "DesignProblem", "EVALUATION_STATUSES"]
+__all__ = ["Evaluation", "EvaluationOutcome", "DesignProblem", "EVALUATION_STATUSES"]
 
 logger = logging.getLogger(__name__)
 
@@ -105,33 +106,57 @@ class Evaluation(ResultFiles):
         return self.to_row()
 
 
-class DesignProblem:
-    """Base class: subclasses set ``space`` and implement :meth:`_evaluate`.
+class EvaluationOutcome(NamedTuple):
+    """What a problem's ``_evaluate(values)`` returns (:class:`DesignProblem`).
 
-    ``_evaluate(values: dict) -> (objective, constraints, metrics, failure, message)``:
-    ``failure`` is None when the objective and constraints were computed, else the status
-    word saying why not (``"not_met"``, ``"failed"``).
+    Attributes
+    ----------
+    objective : float
+        Value to minimise (SI).
+    constraints : dict {name: g}
+        Feasible when ``g <= 0``.
+    metrics : dict
+        Further results, keys ``name [unit]``.
+    failure : str or None
+        None when the objective and constraints were computed, else the status word saying
+        why not (``"not_met"``, ``"failed"``).
+    message : str
+    """
+
+    objective: float
+    constraints: dict
+    metrics: dict
+    failure: str | None = None
+    message: str = ""
+
+
+class DesignProblem:
+    """Base class: subclasses set ``space`` and implement ``_evaluate(values: dict) ->``
+    :class:`EvaluationOutcome` (a plain 5-tuple in its order is accepted as well).
     """
 
     space: DesignSpace
     name = "problem"
+    #: The metric the coordinate descent reports per cycle (``cycles`` columns
+    #: ``last_candidate.<metric>`` and ``current.<metric>``), or None for none.
+    report_metric: str | None = None
 
     def evaluate(self, x) -> Evaluation:
         """Evaluate a design (mapping or vector); never raises for simulation failures."""
-        values = self.space.to_dict(x)
+        values = self.space.to_mapping(x)
         t0 = time.perf_counter()
         try:
             self.space.validate(values)
-            objective, constraints, metrics, failure, message = self._evaluate(values)
+            out = EvaluationOutcome(*self._evaluate(values))
         except ParameterError as exc:
-            objective, constraints, metrics, failure, message = (math.inf, {}, {}, "failed",
-                                                                 str(exc))
+            out = EvaluationOutcome(math.inf, {}, {}, "failed", str(exc))
         except Exception as exc:  # noqa: BLE001 - a failed design must not crash an optimiser
             logger.warning("evaluation of %s failed: %s", values, exc)
-            objective, constraints, metrics, failure = math.inf, {}, {}, "failed"
-            message = f"{type(exc).__name__}: {exc} ({traceback.format_exc(limit=1).strip()})"
-        ev = Evaluation(values, math.inf if failure else float(objective), constraints, metrics,
-                        success=not failure, status=failure or "", message=message,
+            out = EvaluationOutcome(math.inf, {}, {}, "failed", f"{type(exc).__name__}: {exc} "
+                                    f"({traceback.format_exc(limit=1).strip()})")
+        ev = Evaluation(values, math.inf if out.failure else float(out.objective),
+                        out.constraints, out.metrics, success=not out.failure,
+                        status=out.failure or "", message=out.message,
                         wall_time=time.perf_counter() - t0)
         logger.info("evaluated %s -> %.6g (%s)", values, ev.objective, ev.status)
         return ev

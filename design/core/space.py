@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from simulator import ParameterError
+from simulator._deprecation import warn_deprecated
 from simulator._validate import finite, positive
 
 __all__ = ["Variable", "DesignSpace"]
@@ -103,10 +104,18 @@ class DesignSpace:
             raise ParameterError(f"Design values must be finite; got {x.tolist()}.")
         return x
 
-    def to_dict(self, x) -> dict:
-        """{name: value} from a vector (or a mapping, validated)."""
+    def to_mapping(self, x) -> dict:
+        """``{name: value}`` of a design given as a vector in variable order (or as a mapping,
+        checked and completed with the start values); the inverse of :meth:`to_vector`."""
         x = self.to_vector(x)
         return {n: float(v) for n, v in zip(self.names, x)}
+
+    def to_dict(self, x) -> dict:
+        """Deprecated spelling of :meth:`to_mapping` (``to_dict`` elsewhere serialises the
+        object itself; this one converts a design); goes in the next release."""
+        warn_deprecated("DesignSpace.to_dict(x) is deprecated (it goes in the next release): "
+                        "use DesignSpace.to_mapping(x), the same {name: value} dict.")
+        return self.to_mapping(x)
 
     def contains(self, x, tol: float = 1e-12) -> bool:
         x = self.to_vector(x)

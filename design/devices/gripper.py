@@ -32,32 +32,28 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from simulator import (AIR, Actuators, BarHingeParameters, Bimorph, ChainLoss, ContactParameters,
-                       IntegralLoss, Load, NewtonOptions, ParameterError, SelfFold, Substrate,
-                       Supports, ThermalParameters, build_mesh, example_patterns, make_model,
-                       simulate)
+from simulator import (AIR, Actuators, BarHingeParameters, Bimorph, ContactParameters, Load,
+                       NewtonOptions, ParameterError, SelfFold, Supports, ThermalParameters,
+                       example_patterns, make_mesh, make_model, simulate)
 from simulator.materials import SPR
 from simulator.model import REFERENCE_GRAVITY
-from simulator.thermal import (CONDUCTIONS, REFERENCE_BETA, TemperatureLimit, TemperatureVerdict,
-                               crease_temperatures)
+from simulator.thermal import TemperatureLimit, TemperatureVerdict, crease_temperatures
+from simulator._deprecation import warn_deprecated
 from simulator._result import ResultFiles
-from simulator._validate import finite, in_range, integer, non_negative, one_of, positive
-from simulator.thermal import sheet_levels
+from simulator._validate import finite, non_negative, one_of, positive
 
-from ..core._contract import check_outcome, power_if
+from ..core.contract import check_outcome, power_if
+from .gripper_heat import GRIPPER_TRIANGLES, HEAT_FIELDS, LOSS_MODELS, GripperHeatModel
 from .limits import SU8_LIMIT
 from .power_search import HeatingStage, bisect_search, staircase_search
 
-__all__ = ["GripperDesign", "StageResult", "GripperResult", "gripper_model", "evaluate_gripper",
+__all__ = ["GripperDesign", "StageResult", "GripperResult", "make_gripper_model", "evaluate_gripper",
            "BASE_CREASES", "ARM_CREASES", "REFERENCE_NEWTON", "STAGE_STATUSES", "LOSS_MODELS",
-           "gripper_design_pattern"]
+           "gripper_design_pattern", "GripperHeatModel", "split_heat", "gripper_settings",
+           "GRIPPER_TRIANGLES"]
 
 logger = logging.getLogger(__name__)
 
-#: Heat-loss models of :attr:`GripperDesign.loss_model` (theory 4.3 and 4.7).
-LOSS_MODELS = ("chain", "integral")
-#: How a crease conducts in-plane (:class:`~simulator.ThermalParameters` ``crease_conduction``).
-_CREASE_CONDUCTIONS = ("paper", "layers")
 #: Heater circuits (0-based crease ids): base hinges (reference 3, 6), arm hinges (4, 10).
 BASE_CREASES = (2, 5)
 ARM_CREASES = (3, 9)
@@ -84,7 +80,12 @@ def check_fold(name: str, value) -> float:
 
 @dataclass(frozen=True)
 class GripperDesign:
-    """Gripper geometry and actuator layers (SI units).
+    """Gripper geometry, actuator layers and fabrication (SI units).
+
+    How the heat balance is modelled (the loss model, conduction, refinement, radiation) is
+    the evaluation's choice, :class:`~design.devices.gripper_heat.GripperHeatModel`, given to
+    :func:`make_gripper_model`, :func:`evaluate_gripper` or
+    :class:`~design.devices.gripper_problem.GripperProblem` as ``heat``.
 
     Parameters
     ----------
@@ -102,41 +103,13 @@ class GripperDesign:
     residual_fold_creases : ((crease id, rad), ...) residual folds of single actuated creases
         that override the group values (default none)
     delta_alpha : bimorph expansion mismatch alpha_SU8 - alpha_Au [1/K] (38e-6, the paper's)
-    env_conductivity : thermal conductivity of the surrounding air [W/(m K)] (0.026)
-    loss_model : heat loss of the steady heat transfer, ``"integral"`` (default since 7 Dec
-        2026; theory 4.7: the single-layer potential of the sheet in the air over the
-        isothermal substrate plane ``undercut`` below the sheet, nothing fitted, within 3.2 %
-        of the 3-D FE on the gripper) or ``"chain"`` (the paper's fitted chains, its
-        optimisation's setting: 37-80 % too cool against the FE, about 2.7 times faster)
-    integral_refinement : sub-triangles per triangle edge of the ``"integral"`` model
-        (:class:`~simulator.ThermalParameters` ``integral_refinement``, 1-16, default 3:
-        Richardson-extrapolated from 3 on, corrected between rebuilds; theory 4.7)
-    conduction : the sheet's conduction, ``"t3"``, ``"monotone"`` or None (default: the loss
-        model's, T3 with the chains and monotone with the integral loss;
-        :class:`~simulator.ThermalParameters` ``conduction``, theory 4.9)
-    sheet_refinement : the sheet split into ``r^2`` per mesh triangle for the heat balance
-        (:class:`~simulator.ThermalParameters` ``sheet_refinement``, theory 4.11; the integral
-        model only), or None (default: the loss model's, 1 with the chains and 2 with the
-        integral loss at ``integral_refinement`` up to 5)
-    sheet_extrapolation : the steady temperatures extrapolated from the sheet refined ``r``
-        and ``2 r``, ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters`
-        ``sheet_extrapolation``, theory 4.13: the crease metal layer's effect converges so;
-        5-14 times the evaluation's cost at r = 2). Default False
-    crease_conduction : how an actuated crease conducts in-plane
-        (:class:`~simulator.ThermalParameters` ``crease_conduction``, theory 4.10): ``"paper"``
-        (default: one polymer layer over the crease thickness, the reference's) or
-        ``"layers"`` (the gold and SU-8 layers in parallel, ``k_gold t_gold + k2 t_su8``)
-    k_gold : in-plane thermal conductivity of the crease's gold film [W/(m K)] with
-        ``crease_conduction="layers"``, or None (default: :class:`~simulator.Bimorph`'s
-        thin-film value, 150; plausible 100-300, bulk 317; theory 4.10)
-    temperature_dependent_air : the air's conductivity follows Incropera's Table A.4 (theory
-        4.12, ``AIR.with_temperature_dependence()``) instead of the constant
-        ``env_conductivity`` (default False, the paper setting)
-    emissivity_polymer, emissivity_gold : total hemispherical emissivities [-] of the
-        polymer (the SPR panels, the creases' SU-8 face) and of the creases' gold face (theory
-        4.12); a crease radiates with the mean of its two faces'. Default 0 (no radiation,
-        the paper setting); plausible 0.5-0.9 for the thin polymer films, 0.02-0.05 for
-        evaporated gold
+    env_conductivity : thermal conductivity of the surrounding air [W/(m K)] (0.026; with
+        ``GripperHeatModel(temperature_dependent_air=True)`` Incropera's table instead)
+    loss_model, integral_refinement, conduction, sheet_refinement, crease_conduction, k_gold,
+        temperature_dependent_air, emissivity_polymer, emissivity_gold : deprecated (they go in
+        the next release): the fields of :class:`~design.devices.gripper_heat.GripperHeatModel`;
+        given here (not None) they warn and are that heat model's values wherever this design
+        is evaluated
     lead_fraction : resistance of each heater circuit's leads and traces as a fraction of its
         heaters' resistance at room temperature [-] (default 0); the electrical drive only
         (:func:`~design.devices.gripper_drive.gripper_drive`, theory 8.8), not the heat balance
@@ -160,18 +133,17 @@ class GripperDesign:
     residual_fold_creases: tuple = ()
     delta_alpha: float = 38e-6
     env_conductivity: float = 0.026
-    loss_model: str = "integral"
-    integral_refinement: int = 3
+    loss_model: str | None = None
+    integral_refinement: int | None = None
     conduction: str | None = None
     sheet_refinement: int | None = None
-    crease_conduction: str = "paper"
+    crease_conduction: str | None = None
     k_gold: float | None = None
-    temperature_dependent_air: bool = False
-    emissivity_polymer: float = 0.0
-    emissivity_gold: float = 0.0
+    temperature_dependent_air: bool | None = None
+    emissivity_polymer: float | None = None
+    emissivity_gold: float | None = None
     lead_fraction: float = 0.0
     heater_tcr: float | None = None
-    sheet_extrapolation: bool = False
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -180,22 +152,22 @@ class GripperDesign:
             raise ParameterError(f"GripperDesign.residual_fold_creases = {folds!r}: crease ids "
                                  f"must be actuated creases {BASE_CREASES + ARM_CREASES}.")
         object.__setattr__(self, "residual_fold_creases", tuple(sorted(folds)))
-        one_of("GripperDesign.loss_model", self.loss_model, LOSS_MODELS)
-        integer("GripperDesign.integral_refinement", self.integral_refinement, 1, 16)
-        if self.conduction is not None:
-            one_of("GripperDesign.conduction", self.conduction, CONDUCTIONS)
-        if self.sheet_refinement is not None:
-            integer("GripperDesign.sheet_refinement", self.sheet_refinement, 1, 16)
-            if self.sheet_refinement > 1 and self.loss_model != "integral":
-                raise ParameterError(f"GripperDesign.sheet_refinement = {self.sheet_refinement} "
-                                     "needs loss_model='integral' (the chains were fitted on "
-                                     "the mesh triangles); use sheet_refinement=None or 1.")
-        self._check_physics()
-        self._check_extrapolation()
+        legacy = self.legacy_heat()
+        if legacy:
+            warn_deprecated(
+                f"GripperDesign({', '.join(f'{k}={v!r}' for k, v in legacy.items())}) is "
+                "deprecated (it goes in the next release): the heat model is the evaluation's "
+                "choice; give heat=GripperHeatModel(...) with these fields to "
+                "make_gripper_model, evaluate_gripper or GripperProblem (from design.devices "
+                "import GripperHeatModel).")
+            GripperHeatModel(**legacy)                       # checks them
+        non_negative("GripperDesign.lead_fraction", self.lead_fraction, "",
+                     "0 without leads, e.g. 0.1 for leads of a tenth of the heaters' resistance")
+        finite("GripperDesign.heater_tcr", self.heater_tcr, "1/K",
+               "0.0011-0.0034 for a thin gold film, or None for 0.0034", allow_none=True)
         for name, value in asdict(self).items():
-            if name in ("residual_fold_creases", "loss_model", "integral_refinement",
-                        "conduction", "sheet_refinement", "sheet_extrapolation") \
-                    or name in _PHYSICS:
+            if name in ("residual_fold_creases", "lead_fraction", "heater_tcr") \
+                    or name in HEAT_FIELDS:
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
@@ -206,90 +178,36 @@ class GripperDesign:
             raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
                                  "than the panels it joins (L1, L2, La).")
 
-    def _check_extrapolation(self):
-        """Check :attr:`sheet_extrapolation` (the integral loss, a sheet refined 2 to 8)."""
-        if not isinstance(self.sheet_extrapolation, (bool, np.bool_)):
-            raise ParameterError(f"GripperDesign.sheet_extrapolation = "
-                                 f"{self.sheet_extrapolation!r} must be True or False.")
-        if self.sheet_extrapolation and (self.loss_model != "integral"
-                                         or not 2 <= self.sheet_refinement_in_force <= 8):
-            raise ParameterError(
-                f"GripperDesign.sheet_extrapolation = True extrapolates from the sheet refined "
-                f"r and 2r, r from 2 to 8 (theory 4.13); given loss_model = "
-                f"{self.loss_model!r} and sheet_refinement = {self.sheet_refinement!r}: use "
-                "loss_model='integral' with sheet_refinement None or 2-8, or "
-                "sheet_extrapolation=False.")
-
-    def _check_physics(self):
-        """Check the heat-transfer and electrical switches (:data:`_PHYSICS`)."""
-        one_of("GripperDesign.crease_conduction", self.crease_conduction,
-               _CREASE_CONDUCTIONS)
-        positive("GripperDesign.k_gold", self.k_gold, "W/(m K)",
-                 "100-300 for a thin gold film (bulk 317), or None for the default 150",
-                 allow_none=True)
-        if self.k_gold is not None and self.crease_conduction != "layers":
-            raise ParameterError(f"GripperDesign.k_gold = {self.k_gold!r} W/(m K) acts only "
-                                 "with crease_conduction='layers' (the paper setting conducts "
-                                 "a crease as one polymer layer); set crease_conduction="
-                                 "'layers' or leave k_gold None.")
-        if not isinstance(self.temperature_dependent_air, (bool, np.bool_)):
-            raise ParameterError(f"GripperDesign.temperature_dependent_air = "
-                                 f"{self.temperature_dependent_air!r} must be True or False.")
-        if self.temperature_dependent_air and self.env_conductivity != _OPTIONAL[
-                "env_conductivity"]:
-            raise ParameterError(
-                f"GripperDesign.env_conductivity = {self.env_conductivity!r} W/(m K) with "
-                "temperature_dependent_air=True: the air then follows Incropera's table "
-                "whatever the constant is (theory 4.12); leave env_conductivity at 0.026 or "
-                "set temperature_dependent_air=False.")
-        for name in ("emissivity_polymer", "emissivity_gold"):
-            in_range(f"GripperDesign.{name}", getattr(self, name), 0.0, 1.0, "",
-                     "0 without radiation (the paper setting), 0.5-0.9 a thin polymer film, "
-                     "0.02-0.05 evaporated gold")
-        non_negative("GripperDesign.lead_fraction", self.lead_fraction, "",
-                     "0 without leads, e.g. 0.1 for leads of a tenth of the heaters' resistance")
-        finite("GripperDesign.heater_tcr", self.heater_tcr, "1/K",
-               "0.0011-0.0034 for a thin gold film, or None for 0.0034", allow_none=True)
+    def legacy_heat(self) -> dict:
+        """The deprecated heat-model fields given to this design (those not None)."""
+        return {k: getattr(self, k) for k in HEAT_FIELDS if getattr(self, k) is not None}
 
     def to_dict(self) -> dict:
-        """The fields; the later optional ones (``residual_fold_creases``, ``delta_alpha``,
-        ``env_conductivity``, ``loss_model``, ``integral_refinement``, ``conduction``) only
-        when they differ from the values they had before they existed (``loss_model`` only
-        when not "chain", the default until 7 Dec 2026), so that problem settings, and the
-        hashes of evaluation logs written before, are kept (so are the physics switches
-        ``crease_conduction`` to ``heater_tcr``, and ``sheet_extrapolation``, named only away
-        from their defaults);
-        ``integral_refinement``, the
-        conduction, the sheet refinement and the loss levels in force
-        (:attr:`integral_levels_in_force`) always with the integral model (their defaults
-        changed, so an older log of the integral model never matches)."""
-        out = asdict(self)
+        """The design's fields; the later optional ones (``residual_fold_creases``,
+        ``delta_alpha``, ``env_conductivity``, ``lead_fraction``, ``heater_tcr``) only when
+        they differ from the values they had before they existed. The heat model is not the
+        design's: :func:`gripper_settings` gives both in one dict."""
+        out = {k: v for k, v in asdict(self).items() if k not in HEAT_FIELDS}
         for name in _OPTIONAL:
-            if out[name] == _OPTIONAL[name]:
+            if name in out and out[name] == _OPTIONAL[name]:
                 del out[name]
-        if self.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
-            out["integral_refinement"] = self.integral_refinement   # 6 Dec 2026): always named
-            out["conduction"] = self.conduction or "monotone"       # and its conduction, 7 Dec
-            out["sheet_refinement"] = self.sheet_refinement_in_force  # and the sheet's, 8 Dec
-            out["integral_levels"] = self.integral_levels_in_force    # and its levels, 8 Dec
         return out
 
     @property
-    def integral_levels_in_force(self) -> str:
-        """The integral loss's levels per mesh triangle edge in force on the gripper's sheet,
-        ``"m/partner"`` (``"m"`` without extrapolation; theory 4.11: ``"4/2"`` at the default
-        m = 3 on the sheet refined r = 2, ``"3/2"`` on the mesh triangles)."""
-        r = self.sheet_refinement_in_force
-        m, c = sheet_levels(ThermalParameters(**_loss_model(self)).loss, r)
-        return f"{r * m}" + (f"/{r * c}" if c is not None else "")
+    def sheet_refinement_in_force(self) -> int:
+        """Deprecated: :attr:`GripperHeatModel.sheet_refinement_in_force
+        <design.devices.gripper_heat.GripperHeatModel.sheet_refinement_in_force>`."""
+        warn_deprecated("GripperDesign.sheet_refinement_in_force is deprecated (it goes in the "
+                        "next release): use GripperHeatModel.sheet_refinement_in_force.")
+        return split_heat(self)[1].sheet_refinement_in_force
 
     @property
-    def sheet_refinement_in_force(self) -> int:
-        """The sheet refinement of the heat balance (:attr:`sheet_refinement`, or the loss
-        model's for the gripper mesh's :data:`GRIPPER_TRIANGLES` triangles)."""
-        if self.sheet_refinement is not None:
-            return self.sheet_refinement
-        return ThermalParameters(**_loss_model(self)).sheet_refinement_for(GRIPPER_TRIANGLES)
+    def integral_levels_in_force(self) -> str:
+        """Deprecated: :attr:`GripperHeatModel.integral_levels_in_force
+        <design.devices.gripper_heat.GripperHeatModel.integral_levels_in_force>`."""
+        warn_deprecated("GripperDesign.integral_levels_in_force is deprecated (it goes in the "
+                        "next release): use GripperHeatModel.integral_levels_in_force.")
+        return split_heat(self)[1].integral_levels_in_force
 
     def crease_residual_folds(self) -> dict:
         """Residual fold [rad] of each actuated crease id."""
@@ -297,6 +215,57 @@ class GripperDesign:
         arm = self.residual_fold if self.residual_fold_arm is None else self.residual_fold_arm
         return {**{c: base for c in BASE_CREASES}, **{c: arm for c in ARM_CREASES},
                 **dict(self.residual_fold_creases)}
+
+
+def split_heat(design: GripperDesign, heat: GripperHeatModel | None = None) -> tuple:
+    """``(design, heat)``: the design without the deprecated heat-model fields, and ``heat``
+    (default ``GripperHeatModel()``) with the values of those given to the design (they
+    win, as they did), checked together (the air's law against the design's constant)."""
+    heat = GripperHeatModel() if heat is None else heat
+    if not isinstance(design, GripperDesign):
+        raise ParameterError(f"design = {design!r} must be a GripperDesign (the heat model goes "
+                             "to heat=...).")
+    if not isinstance(heat, GripperHeatModel):
+        raise ParameterError(f"heat = {heat!r} must be a GripperHeatModel (from design.devices "
+                             "import GripperHeatModel).")
+    legacy = design.legacy_heat()
+    if legacy:
+        heat = replace(heat, **legacy)
+        design = replace(design, **dict.fromkeys(legacy))
+    if heat.temperature_dependent_air and design.env_conductivity != _OPTIONAL[
+            "env_conductivity"]:
+        raise ParameterError(
+            f"GripperDesign.env_conductivity = {design.env_conductivity!r} W/(m K) with "
+            "GripperHeatModel.temperature_dependent_air=True: the air then follows "
+            "Incropera's table whatever the constant is (theory 4.12); leave "
+            "env_conductivity at 0.026 or set temperature_dependent_air=False.")
+    return design, heat
+
+
+def gripper_settings(design: GripperDesign, heat: GripperHeatModel | None = None) -> dict:
+    """The design and its heat model in one dict, as :meth:`GripperDesign.to_dict` gave them
+    while the heat model was the design's (problem settings, evaluation-log keys, result
+    tables): the optional fields only when they differ from the values they had before they
+    existed (``loss_model`` only when not "chain", the default until 7 Dec 2026; the physics
+    switches ``crease_conduction`` to ``heater_tcr`` only away from their defaults,
+    ``sheet_extrapolation`` only when True); with the
+    integral model always ``integral_refinement``, the conduction, the sheet refinement and the
+    loss levels in force (their defaults changed, so an older log of the integral model never
+    matches)."""
+    design, heat = split_heat(design, heat)
+    out = asdict(design)
+    out.update({k: getattr(heat, k) for k in HEAT_FIELDS})       # in their former places
+    for name in _OPTIONAL:
+        if out[name] == _OPTIONAL[name]:
+            del out[name]
+    if heat.loss_model != "chain":   # the integral model's default m changed (2 -> 3,
+        out["integral_refinement"] = heat.integral_refinement   # 6 Dec 2026): always named
+        out["conduction"] = heat.conduction or "monotone"       # and its conduction, 7 Dec
+        out["sheet_refinement"] = heat.sheet_refinement_in_force  # and the sheet's, 8 Dec
+        out["integral_levels"] = heat.integral_levels_in_force    # and its levels, 8 Dec
+    if heat.sheet_extrapolation:                  # named only when on (theory 4.13)
+        out["sheet_extrapolation"] = True
+    return out
 
 
 #: Status words of a stage: met (success), criterion not met below the power cap, a
@@ -385,13 +354,16 @@ class GripperResult(ResultFiles):
     that was not met; ``total_power``: assembly + grip power per crease [W], None unless
     both were met; ``message``: ``"both stages met"`` (followed by the stage messages of a
     stage met after a snap, i.e. with :attr:`StageResult.snaps`), or why the first unmet stage
-    was not met.
+    was not met; ``heat``: the heat model it was evaluated with
+    (:class:`~design.devices.gripper_heat.GripperHeatModel`; :meth:`to_dict` names both, as
+    :func:`gripper_settings` does).
     """
 
     design: GripperDesign
     mode: str
     assembly: StageResult
     grip: StageResult
+    heat: GripperHeatModel = GripperHeatModel()
 
     @property
     def success(self) -> bool:
@@ -452,7 +424,7 @@ class GripperResult(ResultFiles):
             "success": self.success, "status": self.status, "message": self.message,
             "mode": self.mode,
             **{f"{k} [{_UNITS.get(k, 'rad' if k.startswith('residual_fold') else 'm')}]": v
-               for k, v in self.design.to_dict().items()},
+               for k, v in gripper_settings(self.design, self.heat).items()},
         }
 
 
@@ -471,9 +443,7 @@ _PHYSICS = {"crease_conduction": "paper", "k_gold": None, "temperature_dependent
 #: ``loss_model`` "chain" was the default until 7 Dec 2026.
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
              "loss_model": "chain", "integral_refinement": 3, "conduction": None,
-             "sheet_refinement": None, "sheet_extrapolation": False, **_PHYSICS}
-#: Triangles of the gripper's mesh (every design: the dimensions move its nodes only).
-GRIPPER_TRIANGLES = 48
+             "sheet_refinement": None, **_PHYSICS}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
@@ -502,54 +472,48 @@ def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
     return f
 
 
-def _loss_model(design: GripperDesign) -> dict:
-    """The :class:`~simulator.ThermalParameters` fields of the design's heat-loss model: the
-    chains (t_env 1.5 x the mean arm length, the reference's beta; the substrate from the
-    boundary panels), else the integral model over the substrate plane (the substrate panel's
-    plane, ``undercut`` below the sheet, normal +z into the air)."""
-    if design.loss_model == "chain":
-        return {"loss": ChainLoss(thickness=1.5 * (design.L1 + design.L2) / 2,
-                                  dissipation_angle=REFERENCE_BETA)}
-    return {"loss": IntegralLoss(refinement=design.integral_refinement),
-            "substrate": Substrate.plane((0.0, 0.0, -design.undercut), (0.0, 0.0, 1.0))}
-
-
-def gripper_design_pattern(design: GripperDesign):
+def gripper_design_pattern(design: GripperDesign, heat: GripperHeatModel | None = None):
     """The design's pattern (before the node edits): SPR panels, the creases of the panel
-    material, both radiating at the design's emissivities (a crease the mean of its polymer
-    and gold faces', theory 4.12; no radiation at the defaults)."""
+    material, both radiating at the heat model's emissivities (a crease the mean of its
+    polymer and gold faces', theory 4.12; no radiation at the defaults)."""
+    design, heat = split_heat(design, heat)
     panel = SPR
-    if design.emissivity_polymer:
-        panel = replace(SPR, emissivity=design.emissivity_polymer)
+    if heat.emissivity_polymer:
+        panel = replace(SPR, emissivity=heat.emissivity_polymer)
     pattern = example_patterns.gripper_pattern(w=design.W, la=design.La, l1=design.L1, l2=design.L2,
                               crease_thickness=design.t_gold + design.t_su8,
                               grip_range=design.grip_range, undercut=design.undercut,
                               panel_thickness=design.panel_thickness, panel_material=panel)
-    crease = (design.emissivity_polymer + design.emissivity_gold) / 2
+    crease = (heat.emissivity_polymer + heat.emissivity_gold) / 2
     if crease != pattern.crease_material.emissivity:
         pattern = replace(pattern, crease_material=replace(pattern.crease_material,
                                                            emissivity=crease))
     return pattern
 
 
-def _medium(design: GripperDesign):
-    """The air: Incropera's k(T) (theory 4.12) or the constant ``env_conductivity``."""
-    if design.temperature_dependent_air:
+def _medium(design: GripperDesign, heat: GripperHeatModel):
+    """The air: Incropera's k(T) (theory 4.12) or the design's constant ``env_conductivity``."""
+    if heat.temperature_dependent_air:
         return AIR.with_temperature_dependence()
     return AIR.with_properties(thermal_conductivity=design.env_conductivity)
 
 
-def gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS):
-    """The gripper model and the loading steps before heating (residual fold, gravity)."""
-    mesh = build_mesh(gripper_design_pattern(design))
+def make_gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY_INCREMENTS,
+                       heat: GripperHeatModel | None = None):
+    """The gripper model and the loading steps before heating (residual fold, gravity).
+
+    ``heat``: how the heat balance is modelled (default ``GripperHeatModel()``: the
+    integral loss)."""
+    design, heat = split_heat(design, heat)
+    mesh = make_mesh(gripper_design_pattern(design, heat))
     mesh = mesh.with_nodes(_node_edits(design, mesh.nodes))
     supports = Supports.nodes([4, 5, 6, 7, 37, 20, 21, 22, 23, 41])
     thermal = ThermalParameters(
-        medium=_medium(design), boundary_panels=(5,), room_temperature_nodes=(37,),
-        conduction=design.conduction, crease_conduction=design.crease_conduction,
-        sheet_refinement=design.sheet_refinement,
-        sheet_extrapolation=design.sheet_extrapolation, **_loss_model(design))
-    gold = {} if design.k_gold is None else {"k1": design.k_gold}
+        medium=_medium(design, heat), boundary_panels=(5,), room_temperature_nodes=(37,),
+        conduction=heat.conduction, crease_conduction=heat.crease_conduction,
+        sheet_refinement=heat.sheet_refinement, sheet_extrapolation=heat.sheet_extrapolation,
+        **heat.loss_parameters(design))
+    gold = {} if heat.k_gold is None else {"k1": heat.k_gold}
     actuators = Actuators(Bimorph(E1=0.5 * 79e9, t1=design.t_gold, E2=2e9, t2=design.t_su8,
                                   **gold),
                           {c: design.delta_alpha for c in BASE_CREASES + ARM_CREASES})
@@ -636,7 +600,8 @@ class _Stage(HeatingStage):
 def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisect",
                      step: float = 0.1e-3, tol: float = 0.01e-3, power_cap: float = 40e-3,
                      max_step: float = 0.4e-3, callback=None,
-                     options: NewtonOptions = NewtonOptions()) -> GripperResult:
+                     options: NewtonOptions = NewtonOptions(),
+                     heat: GripperHeatModel | None = None) -> GripperResult:
     """Power per heated crease needed to assemble, then grip (theory 10.6).
 
     Parameters
@@ -659,12 +624,16 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
     options : NewtonOptions
         Equilibrium solver settings; :data:`REFERENCE_NEWTON` emulates the reference's loose
         loop (for comparisons with its outputs only).
+    heat : GripperHeatModel, optional
+        How the heat balance is modelled (default ``GripperHeatModel()``: the integral
+        loss); the result records it (:attr:`GripperResult.heat`).
     """
     one_of("mode", mode, ("bisect", "staircase"))
+    design, heat = split_heat(design, heat)
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
         positive(name, v, "W")
-    model, pre = gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS if options.reference_loop
-                               else _GRAVITY_INCREMENTS)
+    model, pre = make_gripper_model(design, _REFERENCE_GRAVITY_INCREMENTS
+                                    if options.reference_loop else _GRAVITY_INCREMENTS, heat)
     start = simulate(model, pre, options=options)
     results = {}
     state = start.state
@@ -683,4 +652,4 @@ def evaluate_gripper(design: GripperDesign = GripperDesign(), mode: str = "bisec
         else:
             results[name], state = bisect_search(stage, state, step, tol, power_cap, max_step)
         logger.info("gripper %s: %s", name, results[name])
-    return GripperResult(design, mode, results["assembly"], results["grip"])
+    return GripperResult(design, mode, results["assembly"], results["grip"], heat)

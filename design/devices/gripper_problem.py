@@ -10,9 +10,10 @@ from dataclasses import dataclass, field, replace
 from simulator import ParameterError
 from simulator.thermal import TG_FACTOR
 
-from ..core.problem import DesignProblem
+from ..core.problem import DesignProblem, EvaluationOutcome
 from ..core.space import DesignSpace, Variable
-from .gripper import GripperDesign, check_fold, evaluate_gripper
+from .gripper import (GripperDesign, GripperHeatModel, check_fold, evaluate_gripper,
+                      gripper_settings, split_heat)
 from .limits import SU8_TG, TemperatureLimited
 
 __all__ = ["GripperProblem", "GRIPPER_SPACE"]
@@ -52,11 +53,15 @@ class GripperProblem(TemperatureLimited, DesignProblem):
     temperature_factor : float
         Allowed multiple of T_g (1.2).
     base : GripperDesign
-        Values of everything that is not a design variable.
+        Values of everything that is not a design variable (its deprecated heat-model
+        fields, if given, move into ``heat``).
     power_step, max_power_step : float
         First and largest growth step of the bisect power search [W per crease]
         (:func:`~design.devices.gripper.evaluate_gripper` ``step`` and ``max_step``); smaller
         steps retry a path that a large step lost (``sweep_uncertainty(retry=...)``).
+    heat : GripperHeatModel
+        How the heat balance is modelled (default: the integral loss; ``GripperHeatModel(
+        loss_model="chain")`` the paper's optimisation).
     """
 
     mode: str = "bisect"
@@ -69,6 +74,7 @@ class GripperProblem(TemperatureLimited, DesignProblem):
     base: GripperDesign = GripperDesign()
     power_step: float = 0.1e-3
     max_power_step: float = 0.4e-3
+    heat: GripperHeatModel = GripperHeatModel()
     space: DesignSpace = field(default=GRIPPER_SPACE, compare=False)
     name: str = "gripper"
 
@@ -88,6 +94,9 @@ class GripperProblem(TemperatureLimited, DesignProblem):
         for group, value in groups.items():
             check_fold(f"GripperProblem.residual_fold_groups[{group!r}]", value)
         object.__setattr__(self, "residual_fold_groups", tuple(sorted(groups.items())))
+        base, heat = split_heat(self.base, self.heat)
+        object.__setattr__(self, "base", base)
+        object.__setattr__(self, "heat", heat)
 
     def group_folds(self) -> dict:
         """Residual fold [rad] of each crease group."""
@@ -101,7 +110,8 @@ class GripperProblem(TemperatureLimited, DesignProblem):
 
     def _evaluate(self, values):
         res = evaluate_gripper(self.design(values), mode=self.mode, power_cap=self.power_cap,
-                               step=self.power_step, max_step=self.max_power_step)
+                               step=self.power_step, max_step=self.max_power_step,
+                               heat=self.heat)
         d = res.to_dict()
         verdict, message = self._judge(res)
         constraints = dict(self.space.bound_margins(values))
@@ -115,8 +125,8 @@ class GripperProblem(TemperatureLimited, DesignProblem):
                                          "lead_fraction", "heater_tcr"))
                    and k not in ("success", "status", "message", "mode")}
         metrics["temperature [degC]"] = verdict.temperature
-        return (res.total_power, constraints, metrics, None if res.success else res.status,
-                message)
+        return EvaluationOutcome(res.total_power, constraints, metrics,
+                                 None if res.success else res.status, message)
 
     def settings(self) -> dict:
         folds = self.group_folds()
@@ -125,7 +135,7 @@ class GripperProblem(TemperatureLimited, DesignProblem):
                                         else folds),
                 "T_limit [degC]": self.temperature_limit,
                 "temperature_measure": self.temperature_measure,
-                "power_cap [W]": self.power_cap, "base": self.base.to_dict(),
+                "power_cap [W]": self.power_cap, "base": gripper_settings(self.base, self.heat),
                 "space": self.space.to_dicts(), **self._step_settings()}
 
     def _step_settings(self) -> dict:

@@ -26,6 +26,9 @@ class TemperatureLimited:
     ``success`` and ``message``.
     """
 
+    #: The limit's temperature, reported per cycle by the coordinate descent.
+    report_metric = "temperature [degC]"
+
     @property
     def limit(self) -> TemperatureLimit:
         """``temperature_factor`` x ``glass_transition`` on ``temperature_measure``."""

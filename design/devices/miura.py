@@ -14,21 +14,21 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from simulator import (IntegralLoss, Model, ParameterError, PatternError, build_mesh,
+from simulator import (IntegralLoss, Model, ParameterError, PatternError, make_mesh,
                        example_patterns, simulate)
 from simulator.cases import miura_fold_signs, miura_sheet_model
 from simulator.thermal import TG_FACTOR, TemperatureLimit, TemperatureVerdict
 from simulator._result import ResultFiles
 from simulator._validate import in_range, integer, one_of, positive
 
-from ..core._contract import check_outcome, power_if
+from ..core.contract import check_outcome, power_if
 from .power_search import HeatingStage, bisect_search, staircase_search
-from ..core.problem import DesignProblem
+from ..core.problem import DesignProblem, EvaluationOutcome
 from .limits import SU8_LIMIT, SU8_TG, TemperatureLimited
 from ..core.space import DesignSpace, Variable
 
 __all__ = ["MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem", "heated_creases",
-           "lift_per_power_table", "lift_power", "miura_model", "design_columns"]
+           "lift_per_power_table", "lift_power", "make_miura_model", "design_columns"]
 
 _DEG = math.pi / 180
 
@@ -100,7 +100,7 @@ class MiuraDesign:
 def _meshable(d: MiuraDesign, W: float) -> bool:
     """The flat sheet meshes with crease width ``W`` without collapsed creases or panels."""
     try:
-        mesh = build_mesh(example_patterns.miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
+        mesh = make_mesh(example_patterns.miura_sheet_pattern(d.a, d.b, d.gamma, d.cells_x, d.cells_y, W=W))
     except PatternError:
         return False
     cn, x = mesh.crease_nodes, mesh.nodes
@@ -120,7 +120,7 @@ def design_columns(values) -> dict:
             "W [um]": 1e6 * v["W"]}
 
 
-def miura_model(design: MiuraDesign = MiuraDesign()) -> Model:
+def make_miura_model(design: MiuraDesign = MiuraDesign()) -> Model:
     """The ``miura_lifter`` case's model for ``design`` (one builder for both:
     :func:`simulator.cases.miura_sheet_model`), with the design's heat loss (the integral one
     over the substrate's plane, or the case's chains)."""
@@ -265,7 +265,7 @@ def lift_power(design: MiuraDesign = MiuraDesign(), target_lift: float = 100e-6,
     positive("target_lift", target_lift, "m")
     for name, v in (("step", step), ("tol", tol), ("power_cap", power_cap), ("max_step", max_step)):
         positive(name, v, "W per crease")
-    model = miura_model(design)
+    model = make_miura_model(design)
     stage = _LiftStage(model, tuple(heated_creases(design)), _lift_nodes(model, design),
                        target_lift)
     state = simulate(model, []).state
@@ -332,8 +332,8 @@ class MiuraProblem(TemperatureLimited, DesignProblem):
         constraints["temperature"] = verdict.constraint
         metrics = {k: v for k, v in res.to_dict().items()
                    if k not in ("success", "status", "message")}
-        return (res.total_power, constraints, metrics, None if res.success else res.status,
-                message)
+        return EvaluationOutcome(res.total_power, constraints, metrics,
+                                 None if res.success else res.status, message)
 
     def settings(self) -> dict:
         return {"problem": self.name, "mode": self.mode, "target_lift [m]": self.target_lift,
@@ -373,7 +373,7 @@ def lift_per_power_table(designs, power_mW, increments: int = 20):
     for label, d in items:
         if not isinstance(d, MiuraDesign):
             raise ParameterError(f"design {label!r} is a {type(d).__name__}, not a MiuraDesign.")
-        model = miura_model(d)
+        model = make_miura_model(d)
         stage = _LiftStage(model, tuple(heated_creases(d)), _lift_nodes(model, d), math.inf)
         state, done, ok, msg = simulate(model, []).state, 0.0, True, "converged"
         for p in powers:

@@ -184,11 +184,25 @@ def _page(module: str, items: list[PublicName], at_door: set) -> str:
     return "\n".join(lines)
 
 
+def _moved_table(package: str, name: str) -> dict:
+    """The literal ``name`` (``MOVED``, ``RENAMED``) of ``package``'s ``_moved.py``."""
+    tree = ast.parse((ROOT / package / "_moved.py").read_text())
+    return next((ast.literal_eval(node.value) for node in tree.body
+                 if isinstance(node, ast.Assign) and node.targets[0].id == name), {})
+
+
+def renamed_table(package: str) -> str:
+    """Markdown table old name -> new name of ``package``'s ``RENAMED`` (at the door and in
+    the namespaces that publish the new name)."""
+    rows = ["| old name | new name |", "| --- | --- |"]
+    for old, new in _moved_table(package, "RENAMED").items():
+        rows.append(f"| `{old}` | [`{new}`][{package}.{new}] |")
+    return "\n".join(rows)
+
+
 def migration_table(package: str) -> str:
     """Markdown table old spelling -> new spelling of ``package``'s ``_moved.py``."""
-    tree = ast.parse((ROOT / package / "_moved.py").read_text())
-    table = next(ast.literal_eval(node.value) for node in tree.body
-                 if isinstance(node, ast.Assign) and node.targets[0].id == "MOVED")
+    table = _moved_table(package, "MOVED")
     rows = ["| old spelling | new spelling |", "| --- | --- |"]
     for namespace, entries in table.items():
         for entry in entries:
@@ -200,6 +214,7 @@ def migration_table(package: str) -> str:
 
 # ---------------------------------------------------------------- MkDocs hooks
 MIGRATION_MARK = re.compile(r"^<!-- moved names: (\w+) -->$", re.M)
+RENAMED_MARK = re.compile(r"^<!-- renamed names: (\w+) -->$", re.M)
 
 
 def on_config(config, **kwargs):
@@ -226,8 +241,10 @@ def on_files(files, config, **kwargs):
 
 
 def on_page_markdown(markdown, **kwargs):
-    """Replace ``<!-- moved names: simulator -->`` by the package's migration table."""
-    return MIGRATION_MARK.sub(lambda m: migration_table(m.group(1)), markdown)
+    """Replace ``<!-- moved names: simulator -->`` by the package's migration table and
+    ``<!-- renamed names: simulator -->`` by its table of renamed names."""
+    markdown = MIGRATION_MARK.sub(lambda m: migration_table(m.group(1)), markdown)
+    return RENAMED_MARK.sub(lambda m: renamed_table(m.group(1)), markdown)
 
 
 # ---------------------------------------------------------------- griffe extension

@@ -16,9 +16,9 @@ Two paths compute the same numbers (to rounding):
   :data:`~simulator.mechanics.families.FUSED_FAMILIES`, when the compiled backend is in force
   (numba installed, ``ETORIGAMI_JIT`` not off: :func:`simulator._jit.numba_selected`): one
   call of the fused kernel of :mod:`simulator.mechanics.elements._fused_jit`, which writes the
-  tangent straight into a dense matrix. :attr:`Evaluation.tangent` is then that dense matrix (Newton solves with
-  it) and :attr:`Evaluation.K` the same values in the cached CSR pattern, built on first
-  access, so every consumer of ``K`` sees a CSR matrix whichever path ran.
+  tangent straight into a dense matrix. :attr:`SystemValues.tangent` is then that dense
+  matrix (Newton solves with it) and :attr:`SystemValues.K` the same values in the cached CSR
+  pattern, built on first access, so every consumer of ``K`` sees a CSR matrix whichever path ran.
 
 See docs/theory.md#310-element-families-and-assembly.
 """
@@ -44,7 +44,7 @@ from .families import (FUSED_FAMILIES, BarFamily, Configuration, FamilyValues, S
                        SupportFamily, check_family, model_families)
 from ..model.model import Model
 
-__all__ = ["Evaluation", "EquilibriumSystem", "ENERGY_KINDS", "assembled_tangent",
+__all__ = ["SystemValues", "EquilibriumSystem", "ENERGY_KINDS", "assembled_tangent",
            "equilibrium_system"]
 
 logger = logging.getLogger(__name__)
@@ -60,10 +60,10 @@ ENERGY_KINDS = ("crease_bending", "panel_bending", "panel_stretching", "crease_s
 
 
 @dataclass(frozen=True, eq=False, init=False)
-class Evaluation:
+class SystemValues:
     """Internal energy, force and stiffness at one configuration.
 
-    ``Evaluation(f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None)``: ``K``
+    ``SystemValues(f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None)``: ``K``
     is the tangent as assembled, CSR, a dense ndarray (then ``to_csr(K)`` gives its CSR form,
     e.g. :meth:`EquilibriumSystem.to_csr`) or None.
 
@@ -89,7 +89,7 @@ class Evaluation:
 
     def __init__(self, f_int, K, energies, n_contacts=0, to_csr=None, contact_pairs=None):
         if isinstance(K, np.ndarray) and to_csr is None:
-            raise ValueError("Evaluation: a dense tangent needs to_csr (e.g. "
+            raise ValueError("SystemValues: a dense tangent needs to_csr (e.g. "
                              "EquilibriumSystem.to_csr) to give K as CSR.")
         # frozen: set once, here (one dict update: this runs at every Newton iteration)
         self.__dict__.update(f_int=f_int, tangent=K, energies=energies, n_contacts=n_contacts,
@@ -103,9 +103,9 @@ class Evaluation:
 
 
 def assembled_tangent(ev):
-    """The tangent as assembled (dense on small models) of an :class:`Evaluation`, else
+    """The tangent as assembled (dense on small models) of a :class:`SystemValues`, else
     ``ev.K`` (systems with the EquilibriumSystem interface may return other objects)."""
-    return ev.tangent if isinstance(ev, Evaluation) else ev.K
+    return ev.tangent if isinstance(ev, SystemValues) else ev.K
 
 
 class EquilibriumSystem:
@@ -175,7 +175,7 @@ class EquilibriumSystem:
     @property
     def pattern(self) -> StiffnessPattern:
         """CSR pattern of the free-DOF tangent (built on first use: the fused path needs it
-        only when an Evaluation's ``K`` is asked for)."""
+        only when a SystemValues' ``K`` is asked for)."""
         return self.assembly.pattern
 
     @property
@@ -212,7 +212,7 @@ class EquilibriumSystem:
         return self._fused_evaluator(spring_rest)(u, hessian)
 
     def _fused_evaluator(self, spring_rest):
-        """u -> Evaluation by the fused kernel for fixed rest angles (arguments prepared once);
+        """u -> SystemValues by the fused kernel for fixed rest angles (arguments prepared once);
         the numpy path if compilation failed (logged)."""
         kernel = _fused_jit.fused_kernel()
         if kernel is None:
@@ -229,7 +229,7 @@ class EquilibriumSystem:
             K = empty((n_free, n_free) if hessian else (0, 0))
             active = empty(n_pairs, i8)
             n_contacts = kernel(nodes + u, u, *model_args, hessian, f, K, e, active)
-            return Evaluation(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
+            return SystemValues(f, K if hessian else None, dict(zip(ENERGY_KINDS, e.tolist())),
                               n_contacts, to_csr, active[:n_contacts])
         return evaluate
 
@@ -240,7 +240,7 @@ class EquilibriumSystem:
             return self._fused_evaluator(spring_rest)
         return lambda u, hessian=True: self._evaluate_numpy(u, spring_rest, hessian)
 
-    def solve_dense_tangent(self, ev: Evaluation, r: np.ndarray):
+    def solve_dense_tangent(self, ev: SystemValues, r: np.ndarray):
         """Newton correction for an evaluation with a dense tangent (fused kernel): du
         (n_free,) with ``ev.tangent du = r`` [m], or None if the tangent is singular (see
         :mod:`simulator.linalg.small_solve`).
@@ -271,7 +271,7 @@ class EquilibriumSystem:
                          "%d multiply-adds", covered.sum(), chol.nnz, chol.flops)
         return chol
 
-    def evaluate(self, u: np.ndarray, spring_rest: np.ndarray, hessian: bool = True) -> Evaluation:
+    def evaluate(self, u: np.ndarray, spring_rest: np.ndarray, hessian: bool = True) -> SystemValues:
         """Energies, internal force and (optionally) free-DOF stiffness.
 
         Parameters
@@ -287,7 +287,7 @@ class EquilibriumSystem:
             return self._evaluate_fused(u, spring_rest, hessian)
         return self._evaluate_numpy(u, spring_rest, hessian)
 
-    def _evaluate_numpy(self, u, spring_rest, hessian=True) -> Evaluation:
+    def _evaluate_numpy(self, u, spring_rest, hessian=True) -> SystemValues:
         """:meth:`evaluate` by the generic path: every family's kernel, then
         :class:`~simulator.mechanics.assembly.FamilyAssembly` (element Hessians scattered into
         the cached pattern; the path of models outside the fused kernel; bars and springs
@@ -296,7 +296,7 @@ class EquilibriumSystem:
         values = [f.evaluate(c, hessian) for f in self.families]
         a = self.assembly
         n_changing = sum(len(values[i].energy) for i in self._changing)
-        return Evaluation(f_int=a.vector(values), K=a.matrix(values) if hessian else None,
+        return SystemValues(f_int=a.vector(values), K=a.matrix(values) if hessian else None,
                           energies=a.energies(values, ENERGY_KINDS), n_contacts=n_changing)
 
     def material_stiffness(self, u: np.ndarray) -> sp.csr_matrix:

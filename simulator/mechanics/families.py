@@ -21,7 +21,7 @@ family.
     Whether the active elements change between evaluations (contact). Their count is the
     evaluation's ``n_contacts``.
 ``energy_kinds`` : tuple of str
-    Names of the energy components it contributes (keys of ``Evaluation.energies``).
+    Names of the energy components it contributes (keys of ``SystemValues.energies``).
 ``labels`` : (n_el,) int array or None
     With more than one kind: the kind of every element (index into ``energy_kinds``).
 ``evaluate(c, hessian) -> FamilyValues``

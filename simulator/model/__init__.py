@@ -13,7 +13,7 @@ from .._lazy import attach as _attach
 __getattr__, __dir__ = _attach(__name__, {
     ".model": ("Model", "make_model", "Supports", "ContactParameters", "STANDARD_GRAVITY",
                "REFERENCE_GRAVITY"),
-    ".mesh": ("BarHingeMesh", "build_mesh"),
+    ".mesh": ("BarHingeMesh", "make_mesh"),
     ".properties": ("BarHingeParameters",),
     "..mechanics.rest_angles": ("spring_rest_angles",),
     ".bimorph": ("Actuators", "Bimorph"),
@@ -23,11 +23,11 @@ __getattr__, __dir__ = _attach(__name__, {
     "..stacks": ("LayerStack", "STACKS", "get_stack", "stack_model", "central_panel",
                "unsupported_panels", "check_supported", "plain_contact"),
     "..geometry.orientation": ("start_fold_angles",),
-})
+}, renamed="simulator._moved")
 
 __all__ = [
     # the model, its mesh and parameters (also at simulator's door)
-    "Model", "make_model", "BarHingeMesh", "build_mesh", "BarHingeParameters", "Supports",
+    "Model", "make_model", "BarHingeMesh", "make_mesh", "BarHingeParameters", "Supports",
     "ContactParameters", "Actuators", "Bimorph", "spring_rest_angles",
     # concentrated hinges (make_model(crease_model="sharp"))
     "sharp_model", "SharpHingeParameters", "SharpHingeMesh", "build_sharp_mesh",

@@ -44,7 +44,7 @@ def _lump(mesh: BarHingeMesh, panel_weight: np.ndarray, crease_weight: np.ndarra
     is_fan = mesh.triangle_panel >= 0
     w = np.where(is_fan, panel_weight[np.maximum(mesh.triangle_panel, 0)],
                  crease_weight[np.maximum(mesh.triangle_crease, 0)]) * area
-    # fan triangles are (centre, corner_j, corner_j+1) as built by build_mesh; a
+    # fan triangles are (centre, corner_j, corner_j+1) as built by make_mesh; a
     # concentrated-hinge mesh (theory 2.6) gives the share of every triangle's nodes itself
     share = mesh.mass_shares if getattr(mesh, "sharp", False) else \
         np.where(is_fan[:, None], [CENTRE_SHARE, (1 - CENTRE_SHARE) / 2,

@@ -31,7 +31,7 @@ from ..geometry.pattern import Pattern
 from ..geometry.pattern_checks import OPEN_START
 from ..geometry.polygons import area_vectors, centroids, fan_normals, on_segment, rings
 
-__all__ = ["BarHingeMesh", "build_mesh", "BarType", "SpringKind", "NodeKind", "crease_up",
+__all__ = ["BarHingeMesh", "make_mesh", "BarType", "SpringKind", "NodeKind", "crease_up",
            "polarity_fix"]
 
 logger = logging.getLogger(__name__)
@@ -192,10 +192,10 @@ class BarHingeMesh:
         return replace(self, nodes=nodes)
 
 
-def build_mesh(pattern: Pattern) -> BarHingeMesh:
+def make_mesh(pattern: Pattern) -> BarHingeMesh:
     """Mesh a pattern with compliant creases (theory 2.2, ``mesh2D3D = 2``)."""
     if not isinstance(pattern, Pattern):
-        raise PatternError(f"build_mesh expects a Pattern, got {type(pattern).__name__}.")
+        raise PatternError(f"make_mesh expects a Pattern, got {type(pattern).__name__}.")
     sizes = pattern.corner_sizes
     S, P = int(sizes.sum()), pattern.n_panels
     ring = rings(sizes)

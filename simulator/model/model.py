@@ -16,7 +16,7 @@ import numpy as np
 from .bimorph import Actuators
 from .._validate import integer, non_negative, one_of, positive
 from ..errors import ParameterError
-from .mesh import BarHingeMesh, build_mesh
+from .mesh import BarHingeMesh, make_mesh
 from ..geometry.pattern import Pattern
 from ..geometry.polygons import triangle_areas
 from .properties import BarHingeParameters, MechanicalProperties, mechanical_properties
@@ -214,7 +214,7 @@ def make_model(pattern_or_mesh: Pattern | BarHingeMesh, supports: Supports | Map
     _check_arguments(pattern_or_mesh=pattern_or_mesh, supports=supports, params=params,
                      contact=contact, thermal=thermal, actuators=actuators)
     mesh = pattern_or_mesh if isinstance(pattern_or_mesh, BarHingeMesh) \
-        else build_mesh(pattern_or_mesh)
+        else make_mesh(pattern_or_mesh)
     params = BarHingeParameters() if params is None else params
     if supports is None:
         supports = Supports()
@@ -256,7 +256,7 @@ def _sharp(pattern, supports, params, contact, thermal, actuators) -> Model:
 _ARGUMENTS = {
     "pattern_or_mesh": ((Pattern, BarHingeMesh), False,
                         "pass a Pattern (e.g. simulator.geometry.example_patterns.single_fold_pattern()) "
-                        "or a BarHingeMesh from build_mesh(pattern)"),
+                        "or a BarHingeMesh from make_mesh(pattern)"),
     "supports": ((Supports, Mapping), True,
                  "pass Supports(...), Supports.nodes([...]) or a mapping {node: 'xyz'}"),
     "params": ((BarHingeParameters,), True, "pass BarHingeParameters(...) or None for defaults"),

@@ -129,7 +129,7 @@ def check_equilibrium(model, state: SimulationState, evaluation=None,
     ----------
     model : Model
     state : SimulationState
-    evaluation : Evaluation, optional
+    evaluation : SystemValues, optional
         ``equilibrium_system(model).evaluate(state.u, state.spring_rest, hessian=True)`` if
         already at hand (saves one assembly).
     tolerance : float

@@ -34,7 +34,7 @@ import numpy as np
 
 from .dynamics_options import DynamicsOptions
 from .._validate import positive
-from ..mechanics.equilibrium import EquilibriumSystem, Evaluation
+from ..mechanics.equilibrium import EquilibriumSystem, SystemValues
 from ..errors import ParameterError
 from ..model.mass import check_masses, lumped_areas, lumped_masses
 from ..mechanics.equilibrium import assembled_tangent as _tangent
@@ -59,7 +59,7 @@ class MotionState:
         (zero velocity and acceleration on fixed DOFs)
     f_ext : (n_dof,) external load at this time [N]
     spring_rest : (n_springs,) spring rest angles at this time [rad]
-    evaluation : Evaluation at (u, spring_rest), with the tangent
+    evaluation : SystemValues at (u, spring_rest), with the tangent
     """
 
     time: float
@@ -68,7 +68,7 @@ class MotionState:
     a: np.ndarray
     f_ext: np.ndarray
     spring_rest: np.ndarray
-    evaluation: Evaluation = field(repr=False)
+    evaluation: SystemValues = field(repr=False)
 
     @property
     def strain_energy(self) -> float:
@@ -250,7 +250,7 @@ class _StepPoint:
     """One evaluation of the dynamic step: the evaluation, the Newmark velocity and
     acceleration, the damping at the iterate and the force scale of the convergence test."""
 
-    ev: Evaluation
+    ev: SystemValues
     v: np.ndarray
     a: np.ndarray
     C: object

@@ -40,7 +40,7 @@ class PathPoint:
     r : (n_free,) residual f_ext - f_int [N]
     K : (n_free, n_free) tangent stiffness [N/m], CSR or (small models) dense
     q : (n_free,) dr/dlambda [N]
-    evaluation : Evaluation
+    evaluation : SystemValues
     temperature : (n_nodes,) node temperatures [deg C] or None
     """
 

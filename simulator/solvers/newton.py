@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..mechanics.equilibrium import EquilibriumSystem, Evaluation, assembled_tangent as _tangent
+from ..mechanics.equilibrium import EquilibriumSystem, SystemValues, assembled_tangent as _tangent
 from .._validate import integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
@@ -160,7 +160,7 @@ class NewtonResult:
     residual_norms: np.ndarray
     correction_norms: np.ndarray
     message: str
-    evaluation: Evaluation | None = None
+    evaluation: SystemValues | None = None
 
     @property
     def status(self) -> str:
@@ -188,7 +188,7 @@ class PathResult:
         Number of increment halvings.
     history : list of (t, u, iterations) per accepted increment
     residual_norms : list of arrays, residual history of each accepted increment
-    evaluation : Evaluation at the final state
+    evaluation : SystemValues at the final state
     stability : list of Stability or None, per accepted increment (None: not checked,
         ``NewtonOptions.stability="off"``)
     switches : list of BranchSwitch, the unstable states met and where they were left
@@ -203,7 +203,7 @@ class PathResult:
     cuts: int
     history: list = field(default_factory=list)
     residual_norms: list = field(default_factory=list)
-    evaluation: Evaluation | None = None
+    evaluation: SystemValues | None = None
     stability: list = field(default_factory=list)
     switches: list = field(default_factory=list)
 
@@ -312,7 +312,7 @@ def _operations(system, spring_rest, backend="auto"):
     sparse_only = backend in ("pardiso", "superlu")
     if dense is not None and not sparse_only:
         def correct(ev, r):                    # (the loop of small models: kept short)
-            K = ev.tangent if type(ev) is Evaluation else _tangent(ev)
+            K = ev.tangent if type(ev) is SystemValues else _tangent(ev)
             du = dense(ev, r) if isinstance(K, np.ndarray) else linear_solve(K, r,
                                                                               backend=backend)
             return _SINGULAR if du is None else du

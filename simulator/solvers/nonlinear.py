@@ -68,7 +68,7 @@ ROUND_OFF_ULPS = 4.0
 
 def residual_at_round_off(system, free):
     """``at_round_off(point, r, u) -> bool`` for :func:`iterate`: whether the free-DOF residual
-    ``r`` at ``point`` (an Evaluation or a PathPoint, with its tangent) is at the round-off
+    ``r`` at ``point`` (a SystemValues or a PathPoint, with its tangent) is at the round-off
     level of the internal force, ``|r_i| <= ROUND_OFF_ULPS eps (|K| |x|)_i`` at every free DOF
     i (``free``: their indices), ``x = nodes + u`` with the flat displacements ``u`` (n_dof,)
     of that point, ``K`` the tangent: a componentwise backward error of a few ulps in the node positions.
@@ -86,7 +86,7 @@ def residual_at_round_off(system, free):
         return None
 
     def at_round_off(point, r, u):                 # (built per solve, called rarely: lazy)
-        K = getattr(point, "tangent", None)              # an Evaluation's, as assembled
+        K = getattr(point, "tangent", None)              # a SystemValues', as assembled
         K = getattr(point, "K", None) if K is None else K  # a PathPoint's
         if K is None:
             return False

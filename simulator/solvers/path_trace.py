@@ -74,7 +74,7 @@ class ContinuationResult(ResultFiles):
     stability : list of Stability per accepted point (empty if not computed)
     temperatures : list of (n_nodes,) arrays or None per accepted point
     critical_points : tuple of CriticalPoint
-    evaluation : Evaluation at the last accepted point
+    evaluation : SystemValues at the last accepted point
     jumps : tuple of (before, after, kind)
         Branch switches (``mgdcm(switch_branches=True)``): history indices of the last stable
         point before a loss of stability and of the stable point the path jumped to at the

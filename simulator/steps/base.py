@@ -96,7 +96,7 @@ class StepOutcome:
     columns : dict of (m,) arrays
         Step-specific per-increment quantities with unit-bearing names (``"stable"``,
         ``"time [s]"``, ...).
-    evaluation : Evaluation or None
+    evaluation : SystemValues or None
         Equilibrium evaluation at the end state, if the step has it.
     events : tuple of Event
         Limit points, bifurcations and snaps on the step's path (:mod:`simulator.events`),

@@ -117,4 +117,5 @@ def test_the_design_commands_take_the_loss_model(tmp_path):
     for target in ("gripper", "miura"):
         for loss in ("integral", "chain"):
             args = parser.parse_args(["optimize", target, "--loss-model", loss, "--out", "x"])
-            assert _problem(args).base.loss_model == loss
+            problem = _problem(args)
+            assert (problem.heat if target == "gripper" else problem.base).loss_model == loss

@@ -51,10 +51,10 @@ def test_failed_sensitivity_solve_is_a_convergence_error(monkeypatch):
 def test_unsolved_allocation_lp_is_a_solver_error(monkeypatch):
     import design.analysis._heater_lp as lp
 
-    monkeypatch.setattr(lp, "_solve_lp", lambda *args: (None, None, "infeasible"))
-    monkeypatch.setattr(lp, "_linear_model", lambda model, state, table, rows:
+    monkeypatch.setattr(lp, "solve_lp", lambda *args: (None, None, "infeasible"))
+    monkeypatch.setattr(lp, "linear_model", lambda model, state, table, rows:
                         (np.eye(1), np.ones((7, 1)), np.zeros(1)))
-    monkeypatch.setattr(lp, "_check_targets", lambda model, targets, rot: [0])
+    monkeypatch.setattr(lp, "check_targets", lambda model, targets, rot: [0])
     model = single_fold_model(thermal=ThermalParameters(loss=ChainLoss(thickness=1e-3)),
                               actuators=ACTUATORS)
     with pytest.raises(SolverError, match=r"LP not solved \(infeasible\)"):

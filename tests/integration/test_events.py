@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import design.devices.power_search as ps
-from design.devices.gripper import GripperDesign, GripperResult, StageResult, _Stage, gripper_model
+from design.devices.gripper import GripperDesign, GripperResult, StageResult, _Stage, make_gripper_model
 from design.devices.power_search import HeatingTrial
 from simulator import Load, NewtonOptions, get_case, simulate
 from simulator.steps import EVENT_KINDS, Event
@@ -151,7 +151,7 @@ def snapping_trials(monkeypatch):
                             increments, snaps)
 
     monkeypatch.setattr(ps, "heating_trial", trial)
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     return model, simulate(model, []).state
 
 
@@ -203,7 +203,7 @@ def test_heated_miura_snap_is_an_event():
     """The heated Miura of the ``snap_through`` case (a = 0.5 mm, gamma = 45 deg, W = 300 um,
     12 mW per crease) snaps near 9.2 mW per crease: one snap event with its power, jump and
     temperature, the same as the power search's trial reads (~40 s)."""
-    from design.devices.miura import MiuraDesign, heated_creases, miura_model
+    from design.devices.miura import MiuraDesign, heated_creases, make_miura_model
 
     case = get_case("snap_through", variant="heated")
     res = case.run()
@@ -229,7 +229,7 @@ def test_heated_miura_snap_is_an_event():
     assert row["total_power [mW]"] == pytest.approx(1e3 * snap.total_power)
     assert row["stage"] == res.steps[0].name and row["jump [um]"] == pytest.approx(1e6 * snap.jump)
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
-    model = miura_model(d)
+    model = make_miura_model(d)
     trial = ps.heating_trial(model, tuple(heated_creases(d)), simulate(model, []).state,
                              12e-3, increments=60)
     t = max(trial.snaps, key=lambda e: e.jump)

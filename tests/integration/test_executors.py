@@ -222,3 +222,19 @@ def test_ctrl_c_while_a_task_is_submitted_takes_effect_after_it(monkeypatch):
     for proc in seen[0]:
         proc.join(timeout=10)
         assert not proc.is_alive()                    # no worker left running
+
+
+def test_worker_pids_are_the_pools_workers_without_reading_its_internals(monkeypatch):
+    ex = ProcessExecutor(workers=2)
+    try:
+        assert ex.worker_pids() == []                     # no pool before the first map
+        assert ex.map(abs, [-1, -2, -3]) == [1, 2, 3]
+        pool = ex._pool
+        truth = sorted(pool._processes)                   # the test may look inside the pool
+        monkeypatch.delattr(pool, "_processes")           # the executor must not
+        assert ex.worker_pids() == truth and len(truth) >= 1
+        procs = ex._context.alive()
+        ex._terminate()                                   # stops them, still without it
+        assert ex._pool is None and not any(p.is_alive() for p in procs)
+    finally:
+        ex.close()

@@ -36,9 +36,9 @@ def test_exported_case_reruns_to_the_same_results(name, overrides, tmp_path):
 
 
 def test_gripper_model_keeps_edited_mesh_nodes_and_load_arrays(tmp_path):
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, make_gripper_model
 
-    model, pre = gripper_model(GripperDesign(residual_fold=0.05), gravity_increments=2)
+    model, pre = make_gripper_model(GripperDesign(residual_fold=0.05), gravity_increments=2)
     data = json.loads(write_model(model, pre, tmp_path / "g.fold").read_text())
     assert "etorigami:mesh_nodes" in data
     model2, pre2 = read_model(tmp_path / "g.fold")

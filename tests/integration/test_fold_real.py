@@ -19,7 +19,7 @@ from simulator.errors import EtorigamiError, ParameterError, PatternError
 from simulator.geometry.orientation import start_fold_angles
 from simulator.io.fold.reader import load_fold_json, parse_fold
 from simulator.mechanics.kinematics import fold_angles
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.model import STACKS, central_panel, stack_model
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold"
@@ -37,7 +37,7 @@ def geometry(data, **kw):
 
 
 def start_angles(data, **kw):
-    mesh = build_mesh(geometry(data, **kw).pattern)
+    mesh = make_mesh(geometry(data, **kw).pattern)
     return fold_angles(mesh, mesh.nodes)
 
 
@@ -139,7 +139,7 @@ def test_straight_corners_mesh_without_degenerate_elements(name):
     W/2 into the panel, every bar and triangle has size, and a heated run stays finite."""
     data = load(name)
     pattern = geometry(data, merge_collinear=False).pattern
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     x = mesh.nodes
     length = np.linalg.norm(x[mesh.bars[:, 1]] - x[mesh.bars[:, 0]], axis=1)
     assert length.min() > 1e-3 * STACK.crease_width
@@ -165,7 +165,7 @@ def test_a_vertex_picometres_off_a_crease_line_is_merged_and_a_straight_corner()
     assert "1 vertices in the middle of straight crease lines merged away" in geo.notes
     kept = geometry(data, merge_collinear=False).pattern
     assert kept.n_vertices == 7 and len(kept.creases) == 2
-    build_mesh(kept)
+    make_mesh(kept)
     heated(data, increments=2)
     from simulator.geometry.polygons import STRAIGHT_TOL, on_segment
 
@@ -280,7 +280,7 @@ def test_fully_folded_crease_in_a_folded_shape_is_named_by_the_mesh():
                 [(0, 1, 2, 3), (1, 4, 5, 2)], **PHYS)
     assert folded_flat_creases(p).tolist() == p.creases.tolist()
     with pytest.raises(PatternError, match=r"crease\(s\) \[\d+\] are folded flat"):
-        build_mesh(p)
+        make_mesh(p)
 
 
 def test_many_fully_folded_creases_are_named_in_a_short_line():
@@ -295,7 +295,7 @@ def test_many_fully_folded_creases_are_named_in_a_short_line():
     pattern = geometry(make._fold(*pleat)).pattern
     with pytest.raises(PatternError, match=r"^crease\(s\) \[\d+, \d+, \d+, \d+, \d+, and 24 "
                        r"more\] are folded flat .*frame='creasePattern'") as info:
-        build_mesh(pattern)
+        make_mesh(pattern)
     assert len(str(info.value)) < 250
 
 
@@ -365,10 +365,10 @@ def test_a_flat_miura_turned_in_space_heats_as_the_one_in_x_y():
 
 def test_crease_wider_than_its_panel_is_refused_with_the_limit():
     with pytest.raises(EtorigamiError, match=r"panel 1 .*300 um wide, at most about 99 um fit"):
-        build_mesh(parse_fold(load("crease_too_wide.fold")).pattern)
+        make_mesh(parse_fold(load("crease_too_wide.fold")).pattern)
     data = load("crease_too_wide.fold")
     del data["edges_etorigami:width"]
-    build_mesh(parse_fold(data, crease_width=90e-6).pattern)
+    make_mesh(parse_fold(data, crease_width=90e-6).pattern)
 
 
 def test_creases_too_wide_for_many_panels_name_them_all_in_a_capped_list():
@@ -379,7 +379,7 @@ def test_creases_too_wide_for_many_panels_name_them_all_in_a_capped_list():
     with pytest.raises(PatternError, match=r"^panel\(s\) \[0, 1, 2, 3, 4, 7, 8, 11, 12, 13, and "
                        r"2 more\] vanish.* the tightest, panel 1 .* at most about 857.4 um fit;"
                        r" reduce the crease widths \(crease_width\)") as info:
-        build_mesh(pattern)
+        make_mesh(pattern)
     assert "\n" not in str(info.value) and len(str(info.value)) < 400
 
 
@@ -397,7 +397,7 @@ def test_mesh_quality_check_names_the_crease():
 
     from simulator.model.mesh import _check_quality
 
-    mesh = build_mesh(geometry(load("single_crease_60.fold")).pattern)
+    mesh = make_mesh(geometry(load("single_crease_60.fold")).pattern)
     x = mesh.nodes.copy()
     n11, a = mesh.crease_nodes[0, 0], mesh.crease_nodes[0, 4]
     x[a] = x[n11]
@@ -417,7 +417,7 @@ def test_every_file_runs_or_is_refused_in_one_line(path):
     data = load_fold_json(path)
     if path.name in EXPECTED_REFUSALS:
         with pytest.raises(EtorigamiError) as info:
-            heated(data) if "etorigami:" not in str(data) else build_mesh(parse_fold(data).pattern)
+            heated(data) if "etorigami:" not in str(data) else make_mesh(parse_fold(data).pattern)
         assert EXPECTED_REFUSALS[path.name] in str(info.value)
         assert "\n" not in str(info.value) and "singular" not in str(info.value)
         return

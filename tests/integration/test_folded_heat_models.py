@@ -67,11 +67,11 @@ def test_double_fold_integral_model_within_5_percent_of_fe():
 
 
 def test_gripper_at_assembly_integral_model_within_5_percent_of_fe():
-    from design.devices.gripper import GripperDesign, _Stage, gripper_model
+    from design.devices.gripper import GripperDesign, _Stage, make_gripper_model
     from design.devices.power_search import bisect_search
     from simulator import simulate
 
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     start = simulate(model, pre)
     assert start.success
     result, state = bisect_search(_Stage(model, "assembly"), start.state, 0.1e-3, 0.01e-3,

@@ -4,21 +4,22 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from design.devices.gripper import (REFERENCE_NEWTON, GripperDesign, StageResult, evaluate_gripper,
-                            gripper_model)
+from design.devices.gripper import (REFERENCE_NEWTON, GripperDesign, GripperHeatModel,
+                                    StageResult, evaluate_gripper, make_gripper_model)
 from simulator.errors import ParameterError
 
 DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data"
 #: The reference's design G2 in the paper setting (its chain heat loss; the default since 7 Dec
 #: 2026 is the integral loss).
-G2 = GripperDesign(W=300e-6, La=1500e-6, L1=500e-6, L2=500e-6, loss_model="chain")
-PAPER = GripperDesign(loss_model="chain")
+G2 = GripperDesign(W=300e-6, La=1500e-6, L1=500e-6, L2=500e-6)
+PAPER = GripperDesign()
+CHAIN = GripperHeatModel(loss_model="chain")
 
 
 @pytest.fixture(scope="module")
 def g2_staircase():
     trace = []
-    return evaluate_gripper(G2, mode="staircase", callback=trace.append), trace
+    return evaluate_gripper(G2, mode="staircase", callback=trace.append, heat=CHAIN), trace
 
 
 def test_g2_staircase_reproduces_reference_powers_and_temperatures(g2_staircase):
@@ -78,7 +79,8 @@ def test_reference_loop_explains_the_g2_trace_deviation():
     iterates wherever contact is active (two pairs during part of the run).
     """
     trace = []
-    res = evaluate_gripper(G2, mode="staircase", callback=trace.append, options=REFERENCE_NEWTON)
+    res = evaluate_gripper(G2, mode="staircase", callback=trace.append,
+                           options=REFERENCE_NEWTON, heat=CHAIN)
     assert (res.assembly.simulations, res.grip.simulations) == (91, 8)
     frame = pd.DataFrame(trace)
     base = pd.read_csv(DATA / "gripper_G2_base.csv")
@@ -95,8 +97,8 @@ def test_start_design_staircase_is_the_same_under_both_solver_loops():
     The reference's stopping calls do not depend on its under-convergence: its own loop
     (emulated) stops at the same calls with temperatures within 0.01 degC of ours.
     """
-    ours = evaluate_gripper(PAPER, mode="staircase")
-    ref = evaluate_gripper(PAPER, mode="staircase", options=REFERENCE_NEWTON)
+    ours = evaluate_gripper(PAPER, mode="staircase", heat=CHAIN)
+    ref = evaluate_gripper(PAPER, mode="staircase", options=REFERENCE_NEWTON, heat=CHAIN)
     for r in (ours, ref):
         assert r.success
         assert (r.assembly.simulations, r.grip.simulations) == (265, 59)
@@ -108,7 +110,7 @@ def test_start_design_staircase_is_the_same_under_both_solver_loops():
 
 def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):
     stair, _ = g2_staircase
-    bis = evaluate_gripper(G2, mode="bisect")
+    bis = evaluate_gripper(G2, mode="bisect", heat=CHAIN)
     assert bis.success
     for a, b in ((stair.assembly, bis.assembly), (stair.grip, bis.grip)):
         assert 0 <= a.power_per_crease - b.power_per_crease < 0.1e-3 + 1e-12
@@ -118,7 +120,7 @@ def test_bisect_agrees_within_one_step_with_fewer_simulations(g2_staircase):
 
 
 def test_power_cap_gives_unmet_result_with_reason():
-    res = evaluate_gripper(G2, mode="bisect", power_cap=2e-3)
+    res = evaluate_gripper(G2, mode="bisect", power_cap=2e-3, heat=CHAIN)
     assert not res.success and res.status == "not_met"
     assert res.total_power is None                       # unmet: None, never 0 or inf
     assert "power cap" in res.message and res.assembly.power_per_crease is None
@@ -152,7 +154,7 @@ def test_gripper_message_names_a_stage_met_after_a_snap():
 
 
 def test_model_matches_reference_setup():
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     mesh = model.mesh
     assert (mesh.n_nodes, len(mesh.bars)) == (42, 88)
     # node edits move geometry but keep the meshed bar lengths (theory 2.2)
@@ -179,8 +181,8 @@ def test_grip_of_a_design_whose_large_growth_trial_fails_is_found_by_smaller_ste
     jumped to a branch whose arm tips open with more power (grip failed at 7.4 mW); a growth
     trial larger than the first step is retried smaller instead, and the grip is met at
     1.10625 mW as before snaps were followed (commit ec2be81)."""
-    res = evaluate_gripper(GripperDesign(W=300e-6, La=1200e-6, L1=500e-6, L2=550e-6,
-                                         loss_model="chain"))
+    res = evaluate_gripper(GripperDesign(W=300e-6, La=1200e-6, L1=500e-6, L2=550e-6),
+                           heat=CHAIN)
     assert res.success and res.message == "both stages met"
     assert res.assembly.power_per_crease == pytest.approx(10.00625e-3, abs=1e-9)
     assert res.grip.power_per_crease == pytest.approx(1.10625e-3, abs=1e-9)
@@ -197,7 +199,7 @@ def test_grip_after_a_snap_is_met_where_load_control_failed():
     from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperResult, _Stage
     from simulator import Heat, simulate
 
-    model, pre = gripper_model(GripperDesign(residual_fold=math.radians(45), loss_model="chain"))
+    model, pre = make_gripper_model(GripperDesign(residual_fold=math.radians(45)), heat=CHAIN)
     start = simulate(model, pre + [Heat({BASE_CREASES: 13.2e-3}, increments=33,
                                         coupling="staggered")])
     assert start.success and _Stage(model, "assembly").look(start.state)[1]

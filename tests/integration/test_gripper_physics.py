@@ -1,45 +1,49 @@
-"""The gripper's physics switches of issue 30 (``GripperDesign``: crease conduction, hot air,
-radiation, the electrical drive) and its drive at full function (``gripper_drive``)."""
+"""The gripper's physics switches of issue 30 (``GripperHeatModel``: crease conduction, hot
+air, radiation; ``GripperDesign``: the electrical drive) and its drive at full function
+(``gripper_drive``)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from design.devices.gripper import (GripperDesign, GripperResult, StageResult, evaluate_gripper,
-                                    gripper_model)
+from design.devices.gripper import (GripperDesign, GripperHeatModel, GripperResult, StageResult,
+                                    evaluate_gripper, gripper_settings, make_gripper_model)
 from design.devices.gripper_drive import gripper_circuits, gripper_drive
 from simulator import ParameterError
 
 CYCLE9 = dict(W=290e-6, La=1150e-6, L1=550e-6, L2=550e-6)
-SWITCHES = dict(crease_conduction="layers", k_gold=300.0, temperature_dependent_air=True,
-                emissivity_polymer=0.7, emissivity_gold=0.03, lead_fraction=0.1,
-                heater_tcr=0.002)
+HEAT = dict(crease_conduction="layers", k_gold=300.0, temperature_dependent_air=True,
+            emissivity_polymer=0.7, emissivity_gold=0.03)
+DRIVE = dict(lead_fraction=0.1, heater_tcr=0.002)
+SWITCHES = {**HEAT, **DRIVE}
 
 
 def test_the_switches_keep_the_old_dict_at_their_defaults():
     """Old evaluation-log hashes stay valid: at the defaults none of the new names appears."""
     old = {"W", "L1", "L2", "La", "t_gold", "t_su8", "grip_range", "undercut",
            "panel_thickness", "residual_fold", "residual_fold_base", "residual_fold_arm"}
-    assert set(GripperDesign(loss_model="chain").to_dict()) == old
-    assert set(GripperDesign().to_dict()) == old | {"loss_model", "integral_refinement",
-                                                    "conduction", "sheet_refinement",
-                                                    "integral_levels"}
-    d = GripperDesign(**SWITCHES).to_dict()
+    chain = GripperHeatModel(loss_model="chain")
+    assert set(gripper_settings(GripperDesign(), chain)) == old
+    assert set(gripper_settings(GripperDesign())) == old | {
+        "loss_model", "integral_refinement", "conduction", "sheet_refinement", "integral_levels"}
+    d = gripper_settings(GripperDesign(**DRIVE), GripperHeatModel(**HEAT))
     assert {k: d[k] for k in SWITCHES} == SWITCHES
-    assert GripperDesign(crease_conduction="layers").to_dict()["crease_conduction"] == "layers"
-    assert "k_gold" not in GripperDesign(crease_conduction="layers").to_dict()
+    layers = GripperHeatModel(crease_conduction="layers")
+    assert gripper_settings(GripperDesign(), layers)["crease_conduction"] == "layers"
+    assert "k_gold" not in gripper_settings(GripperDesign(), layers)
 
 
 def test_the_switches_are_named_with_units_in_the_result_dict():
     assess = StageResult(True, "met", "criterion met", 1e-3, 2.0, 100.0, 110.0, 1, 1)
-    row = GripperResult(GripperDesign(**SWITCHES), "bisect", assess, assess).to_dict()
+    row = GripperResult(GripperDesign(**DRIVE), "bisect", assess, assess,
+                        GripperHeatModel(**HEAT)).to_dict()
     assert row["k_gold [W/(m K)]"] == 300.0 and row["heater_tcr [1/K]"] == 0.002
     assert row["emissivity_polymer [-]"] == 0.7 and row["temperature_dependent_air [-]"]
 
 
 def test_the_default_model_is_the_paper_setting():
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     pattern = model.mesh.pattern
     assert model.thermal.crease_conduction == "paper"
     assert not model.thermal.medium.temperature_dependent
@@ -49,33 +53,48 @@ def test_the_default_model_is_the_paper_setting():
 
 
 def test_the_switches_reach_the_model():
-    model, _ = gripper_model(GripperDesign(**SWITCHES))
+    model, _ = make_gripper_model(GripperDesign(**DRIVE), heat=GripperHeatModel(**HEAT))
     pattern, thermal = model.mesh.pattern, model.thermal
     assert thermal.crease_conduction == "layers" and model.actuators.bimorph.k1 == 300.0
     assert thermal.medium.temperature_dependent and thermal.medium.conductivity(120.0) > 0.03
     assert [m.emissivity for m in pattern.panel_material[:5]] == [0.7] * 5
     assert pattern.crease_material.emissivity == pytest.approx((0.7 + 0.03) / 2)
-    layers = gripper_model(GripperDesign(crease_conduction="layers"))[0]
+    layers = make_gripper_model(GripperDesign(),
+                                heat=GripperHeatModel(crease_conduction="layers"))[0]
     assert layers.actuators.bimorph.k1 == 150.0           # Bimorph's thin-film default
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"crease_conduction": "gold"}, r"GripperDesign.crease_conduction = 'gold'.*'layers'"),
-    ({"crease_conduction": "layers", "k_gold": -5.0}, r"GripperDesign.k_gold = -5.*100-300"),
-    ({"k_gold": 150.0}, r"GripperDesign.k_gold = 150.0 W/\(m K\) acts only with "
+    ({"crease_conduction": "gold"}, r"GripperHeatModel.crease_conduction = 'gold'.*'layers'"),
+    ({"crease_conduction": "layers", "k_gold": -5.0}, r"GripperHeatModel.k_gold = -5.*100-300"),
+    ({"k_gold": 150.0}, r"GripperHeatModel.k_gold = 150.0 W/\(m K\) acts only with "
                         r"crease_conduction='layers'"),
     ({"temperature_dependent_air": "yes"}, r"temperature_dependent_air = 'yes' must be True"),
-    ({"temperature_dependent_air": True, "env_conductivity": 0.03},
-     r"env_conductivity = 0.03 W/\(m K\) with temperature_dependent_air=True.*leave "
-     r"env_conductivity at 0.026"),
-    ({"emissivity_polymer": 1.5}, r"GripperDesign.emissivity_polymer = 1.5.*\[0, 1\].*0.5-0.9"),
-    ({"emissivity_gold": -0.1}, r"GripperDesign.emissivity_gold = -0.1"),
+    ({"emissivity_polymer": 1.5},
+     r"GripperHeatModel.emissivity_polymer = 1.5.*\[0, 1\].*0.5-0.9"),
+    ({"emissivity_gold": -0.1}, r"GripperHeatModel.emissivity_gold = -0.1"),
+])
+def test_bad_heat_switches_are_refused_by_name_value_and_fix(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        GripperHeatModel(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
     ({"lead_fraction": -0.1}, r"GripperDesign.lead_fraction = -0.1.*>= 0.*0 without leads"),
     ({"heater_tcr": math.nan}, r"GripperDesign.heater_tcr = nan.*0.0011-0.0034"),
 ])
-def test_bad_switches_are_refused_by_name_value_and_fix(kwargs, match):
+def test_bad_drive_switches_are_refused_by_name_value_and_fix(kwargs, match):
     with pytest.raises(ParameterError, match=match):
         GripperDesign(**kwargs)
+
+
+def test_hot_air_with_another_constant_air_is_refused_where_both_meet():
+    """The air's law is the heat model's, its constant the design's: checked together."""
+    hot = GripperHeatModel(temperature_dependent_air=True)
+    with pytest.raises(ParameterError, match=r"env_conductivity = 0.03 W/\(m K\) with "
+                       r"GripperHeatModel.temperature_dependent_air=True.*leave "
+                       r"env_conductivity at 0.026"):
+        make_gripper_model(GripperDesign(env_conductivity=0.03), heat=hot)
 
 
 def _result(design, pa, pg, t_base, t_arm):

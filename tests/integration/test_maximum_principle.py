@@ -9,7 +9,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from design.devices.gripper import ARM_CREASES, BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import (ARM_CREASES, BASE_CREASES, GripperDesign, GripperHeatModel,
+                                    make_gripper_model)
 from simulator import Heat
 from simulator.cases import get_case
 from simulator.simulation import simulate
@@ -28,7 +29,7 @@ def _crane(loss_model, conduction, power_mW=5.0):
 
 def _gripper(loss_model, conduction, creases, power=15e-3, sheet_refinement=1):
     """The gripper flat, ``power`` [W] on ``creases``; on the mesh triangles by default."""
-    model, pre = gripper_model(GripperDesign(loss_model=loss_model))
+    model, pre = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model=loss_model))
     model = dataclasses.replace(model, thermal=dataclasses.replace(
         model.thermal, conduction=conduction, sheet_refinement=sheet_refinement))
     p = np.zeros(model.mesh.n_creases)
@@ -86,7 +87,7 @@ def test_folding_with_the_default_integral_loss_keeps_every_node_above_room_temp
     mW per crease), every recorded temperature of the default integral model is at least room
     temperature, and on the folded gripper at 15 mW every fine node (the mesh model: -2.0 K,
     lumped: 0)."""
-    model, pre = gripper_model(GripperDesign(loss_model="integral"))
+    model, pre = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model="integral"))
     case = get_case("double_fold", thermal_steps=20)
     double = dataclasses.replace(case.model, thermal=case.model.thermal.with_loss("integral"))
     res, _ = _fold_both_above_room_temperature(model, pre, double, case.steps)
@@ -145,7 +146,7 @@ def test_folding_with_the_lumped_integral_loss_keeps_every_node_above_room_tempe
     recorded node temperature is at least room temperature: the gripper's base creases at
     26 mW in 5 increments (folded, the consistent loss gives -2.0 K at 15 mW) and the double
     fold at 10 mW per crease in 20."""
-    model, pre = gripper_model(GripperDesign(loss_model="integral", sheet_refinement=1))
+    model, pre = make_gripper_model(GripperDesign(), heat=GripperHeatModel(sheet_refinement=1))
     model = _lumped(model)
     double, steps, p_double = _double_fold()
     res, folded = _fold_both_above_room_temperature(model, pre, double, steps,

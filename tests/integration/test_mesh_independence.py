@@ -6,7 +6,7 @@ the chains' loss, which sums the triangles' perimeters (theory 4.3), depends on 
 import numpy as np
 import pytest
 
-from simulator import ChainLoss, ThermalParameters, build_mesh
+from simulator import ChainLoss, ThermalParameters, make_mesh
 from simulator.geometry.materials import SILICON
 from simulator.geometry.pattern import Pattern
 from simulator.thermal import ThermalModel
@@ -32,7 +32,7 @@ def _mean_rises(params) -> np.ndarray:
     """Mean temperature rise [K] of the plate drawn with 4, 12 and 24 boundary vertices."""
     rises = []
     for per_edge in (1, 3, 6):
-        mesh = build_mesh(_square(per_edge))
+        mesh = make_mesh(_square(per_edge))
         assert len(mesh.pattern.panels[0]) == 4 * per_edge
         q = np.zeros(mesh.n_nodes)
         q[mesh.panel_center[0]] = HEAT

@@ -14,7 +14,7 @@ from design.devices.miura import (
     _lift_nodes,
     lift_per_power_table,
     lift_power,
-    miura_model,
+    make_miura_model,
 )
 from design.devices import SU8_TG
 from simulator.cases import get_case
@@ -35,11 +35,11 @@ def searches():
 
 @pytest.mark.parametrize("substrate", [False, True])
 def test_model_is_the_miura_lifter_case(substrate):
-    """For the case's parameters miura_model builds the case's model: same mesh, same lift."""
+    """For the case's parameters make_miura_model builds the case's model: same mesh, same lift."""
     case = get_case("miura_lifter", cells_x=4, cells_y=2, thermal_steps=20, power_mW=9.0,
                     substrate=substrate)
     design = MiuraDesign(loss_model="chain", substrate=substrate)
-    model = miura_model(design)
+    model = make_miura_model(design)
     np.testing.assert_array_equal(model.mesh.nodes, case.model.mesh.nodes)
     assert model.thermal == case.model.thermal and model.actuators == case.model.actuators
     assert model.supports.fixed == case.model.supports.fixed
@@ -154,9 +154,9 @@ def test_invalid_search_settings_raise():
 def test_the_default_design_uses_the_integral_loss_and_a_chain_design_keeps_its_dict():
     """Issue 29: MiuraDesign's heat loss defaults to the integral model over the substrate's
     plane; a chain design's dict is the one it had before the field (its logs still match)."""
-    model = miura_model(MiuraDesign())
+    model = make_miura_model(MiuraDesign())
     assert model.thermal.loss.model == "integral"
-    assert miura_model(PAPER).thermal.loss.model == "chain"
+    assert make_miura_model(PAPER).thermal.loss.model == "chain"
     assert "loss_model" not in PAPER.to_dict()
     assert MiuraDesign().to_dict()["loss_model"] == "integral"
     with pytest.raises(ParameterError, match="MiuraDesign.loss_model = 'fe'"):

@@ -30,6 +30,7 @@ class Quad(DesignProblem):
     """min (x-1)^2 + (y-2)^2 s.t. x + y <= 2: optimum (0.5, 1.5), f = 0.5."""
 
     name = "quad"
+    report_metric = "temperature [degC]"
 
     def __init__(self, start=(0.0, 0.0), shift=0.0):
         self.shift = shift
@@ -51,6 +52,7 @@ class Lattice3(DesignProblem):
     """Separable quadratic in 3 variables, x <= 0.5 as a constraint, z limited by its bound."""
 
     name = "lattice3"
+    report_metric = "temperature [degC]"
     space = DesignSpace([_var("x", -1, 1, 0.25, 0.0), _var("y", -1, 1, 0.25, 0.0),
                          _var("z", 0, 1.5, 0.25, 0.0)])
 
@@ -71,7 +73,7 @@ class Flaky(Quad):
         return super()._evaluate(v)
 
     def evaluate(self, x):
-        if self.space.to_dict(x)["y"] < -0.1:
+        if self.space.to_mapping(x)["y"] < -0.1:
             raise RuntimeError("broken problem: evaluate() raised")
         return super().evaluate(x)
 
@@ -134,6 +136,18 @@ def test_cd_finds_lattice_optimum_and_respects_bounds_and_constraints():
     assert (np.diff(c["objective"]) <= 0).all() and c["feasible"].all()
     assert c["current.temperature [degC]"].iloc[-1] == pytest.approx(51.5)
     assert {"last_candidate.temperature [degC]", "x.z [-]", "n_evaluations"} <= set(c.columns)
+
+
+def test_cd_reports_the_problems_metric_or_the_one_asked_for_or_none():
+    class Plain(Quad):
+        report_metric = None                       # the generic default: nothing to report
+
+    plain = optimize(Plain(), "cd").cycles
+    assert not [c for c in plain.columns if c.startswith(("current.", "last_candidate."))]
+    assert optimize(Quad(), "cd").cycles["current.temperature [degC]"].notna().all()
+    asked = optimize(Plain(), "cd", metric="count").cycles
+    assert (asked["current.count"] == 3).all() and "last_candidate.count" in asked
+    assert optimizers()["cd"].options["metric"] is None
 
 
 def test_cd_start_on_lower_bound_and_cycle_limit():

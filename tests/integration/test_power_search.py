@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 import design.devices.power_search as ps
-from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import BASE_CREASES, GripperDesign, make_gripper_model
 from design.devices.power_search import HeatingStage, HeatingTrial, bisect_search, staircase_search
 from simulator import Heat, simulate
 
 
 def test_trial_is_plain_load_control_where_load_control_converges():
     """Continuation only acts after a failure: a gripper trial equals a load-controlled Heat."""
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     start = simulate(model, pre).state
     trial = ps.heating_trial(model, BASE_CREASES, start, 5e-3)
     plain = simulate(model, [Heat({BASE_CREASES: 5e-3}, increments=1, coupling="staggered")],
@@ -49,7 +49,7 @@ def fake_trials(monkeypatch):
         return HeatingTrial(new, True, "all steps converged", snap, increments)
 
     monkeypatch.setattr(ps, "heating_trial", trial)
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     return model, simulate(model, []).state
 
 
@@ -120,7 +120,7 @@ def test_heating_trial_without_following_snaps_is_plain_load_control(monkeypatch
     seen = []
     monkeypatch.setattr(ps, "simulate", lambda model, steps, **kw: seen.append(steps[0]) or
                         simulate(model, [], state=kw["state"]))
-    model, _ = gripper_model(GripperDesign())
+    model, _ = make_gripper_model(GripperDesign())
     start = simulate(model, []).state
     for follow in (True, False):
         ps.heating_trial(model, BASE_CREASES, start, 1e-3, follow_snaps=follow)
@@ -131,10 +131,10 @@ def test_heating_trial_without_following_snaps_is_plain_load_control(monkeypatch
 def test_heating_trial_follows_the_heated_miura_snap():
     """The Miura lifter of the ``snap_through`` case (a = 0.5 mm, gamma = 45 deg, W = 300 um)
     snaps near 9.2 mW per crease (~20 s): the trial reaches 12 mW and reports the snap."""
-    from design.devices.miura import MiuraDesign, heated_creases, miura_model
+    from design.devices.miura import MiuraDesign, heated_creases, make_miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6)
-    model = miura_model(d)
+    model = make_miura_model(d)
     trial = ps.heating_trial(model, tuple(heated_creases(d)), simulate(model, []).state,
                              12e-3, increments=30)
     assert trial.success and trial.snap is not None and trial.increments > 30

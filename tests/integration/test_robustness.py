@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from design.core.executors import SerialExecutor, make_executor
-from design import GripperDesign, GripperProblem
+from design import GripperHeatModel, GripperProblem
 from design.analysis.robustness import (TIMING_COLUMNS, RobustGripperProblem,
                                residual_fold_grid, sweep_residual_fold, with_residual_fold)
 from simulator.errors import ParameterError
@@ -21,8 +21,8 @@ from simulator.errors import ParameterError
 logger = logging.getLogger(__name__)
 
 #: The paper setting (the chain heat loss): the sweep machinery on the reference's model.
-PAPER = GripperDesign(loss_model="chain")
-PROBLEM = GripperProblem(mode="bisect", base=PAPER)
+PAPER = GripperHeatModel(loss_model="chain")
+PROBLEM = GripperProblem(mode="bisect", heat=PAPER)
 DESIGNS = [{}, {"W": 150e-6, "La": 900e-6}]          # start design, a narrower-crease one
 GRID = residual_fold_grid([-10, 0])
 R10 = math.radians(-10)
@@ -114,7 +114,7 @@ def test_robust_objective_is_worst_case(sweeps):
 
 def test_failed_point_and_robust_evaluation_failed_by_one_residual(tmp_path):
     # the start design assembles with 26.4 mW per crease at 0 deg, 29.4 mW at -10 deg
-    capped = GripperProblem(mode="bisect", power_cap=28e-3, base=PAPER)
+    capped = GripperProblem(mode="bisect", power_cap=28e-3, heat=PAPER)
     row = sweep_residual_fold(capped, None, GRID[:1], log=tmp_path / "log.csv")
     assert not row["success"].any() and (row["status"] == "not_met").all()
     assert not row["feasible"].any()

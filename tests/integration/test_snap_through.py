@@ -244,10 +244,10 @@ def test_miura_power_search_reports_a_snap():
     """A Miura lifter heated past its snap in the design layer's stage: met, with the snap."""
     import math
 
-    from design.devices.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, miura_model
+    from design.devices.miura import MiuraDesign, _LiftStage, _lift_nodes, heated_creases, make_miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6, loss_model="chain")
-    model = miura_model(d)
+    model = make_miura_model(d)
     stage = _LiftStage(model, tuple(heated_creases(d)), _lift_nodes(model, d), 0.0)
     state, ok, _ = stage.heat(simulate(model, []).state, 12e-3, increments=60)
     assert ok
@@ -262,10 +262,10 @@ def _heated_miura_snap(increments):
     import math
     import re
 
-    from design import MiuraDesign, heated_creases, miura_model
+    from design import MiuraDesign, heated_creases, make_miura_model
 
     d = MiuraDesign(a=0.5e-3, gamma=math.radians(45), W=300e-6, loss_model="chain")
-    model = miura_model(d)
+    model = make_miura_model(d)
     res = simulate(model, [Heat({tuple(heated_creases(d)): 12e-3}, increments=increments,
                                 on_limit_point="continue")], state=simulate(model, []).state)
     snaps = [(float(p), float(j)) for p, j in re.findall(

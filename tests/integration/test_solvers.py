@@ -244,11 +244,11 @@ class _StallingSystem:
         self._K = sp.identity(6, format="csr")
 
     def evaluate(self, u, spring_rest, hessian=True):
-        from simulator.mechanics.equilibrium import Evaluation
+        from simulator.mechanics.equilibrium import SystemValues
 
         self.calls += 1
         f = u.ravel() + self.floor * (-1) ** self.calls
-        return Evaluation(f_int=f, K=self._K, energies={})
+        return SystemValues(f_int=f, K=self._K, energies={})
 
 
 @pytest.mark.parametrize("load, stall_rtol, converged", [

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from design import (GripperDesign, GripperProblem, evaluate_gripper, residual_fold_grid,
+from design import (GripperHeatModel, GripperProblem, evaluate_gripper, residual_fold_grid,
                     sweep_residual_fold)
 from design.cli import main
 from simulator.thermal import TemperatureLimit, TemperatureVerdict
@@ -78,7 +78,7 @@ def test_an_infeasible_sweep_point_says_why(tmp_path, capsys):
     """At a residual fold of -20 deg the start gripper's base crease 2 is at 281.02 degC on its
     centre line with the paper's chains: the row is infeasible, and its message names the
     crease, the temperature and the limit; the CLI prints it under the table."""
-    paper = GripperProblem(base=GripperDesign(loss_model="chain"))
+    paper = GripperProblem(heat=GripperHeatModel(loss_model="chain"))
     frame = sweep_residual_fold(paper, None, residual_fold_grid([-20, 0]))
     hot, ok = frame.iloc[0], frame.iloc[1]
     reason = "crease 2: centre-line mean 281.02 degC > 1.2 T_g = 252 degC"
@@ -103,7 +103,7 @@ def test_an_optimiser_without_a_feasible_design_names_the_crease():
     from design import optimize
 
     problem = GripperProblem(residual_fold=math.radians(-20),
-                             base=GripperDesign(loss_model="chain"))       # the paper's chains
+                             heat=GripperHeatModel(loss_model="chain"))    # the paper's chains
     res = optimize(problem, "cd", max_evaluations=1)
     assert not res.success
     assert res.message.endswith("no feasible evaluation (the least-violating design is "

@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 
 from simulator.errors import ParameterError
 from simulator.geometry.materials import AIR, Material
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.geometry.example_patterns import single_fold_pattern, strip_pattern
 from simulator.thermal import ChainLoss
 from simulator.thermal import REFERENCE_BETA, ThermalModel, ThermalParameters
@@ -29,7 +29,7 @@ def _rows(name):
 
 def strip_model(k, W=0.4, L=1.0, tc=0.001, tp=0.01, L1=1.0, L2=1.0, **params):
     mat = Material("k", youngs_modulus=2e9, thermal_conductivity=k)
-    mesh = build_mesh(strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=tc,
+    mesh = make_mesh(strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=tc,
                                      panel_thickness=tp, material=mat))
     prm = ThermalParameters(room_temperature=0.0, room_temperature_nodes=FIXED, **params)
     tm = ThermalModel(mesh, prm)
@@ -47,7 +47,7 @@ def verification02(W=0.4, L=1.0, beta=REFERENCE_BETA, t_env=3.0, N=10):
 
 
 def single_fold(boundary=(2,), **kw):
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     prm = ThermalParameters(loss=ChainLoss(thickness=750e-6, dissipation_angle=REFERENCE_BETA),
                             medium=AIR.with_properties(thermal_conductivity=0.6),
                             boundary_panels=boundary, room_temperature_nodes=(0, 3), **kw)
@@ -208,7 +208,7 @@ def test_uniform_strip_has_linear_profile():
     T = Q (x_end - x) / (k t L), which the T3 mesh reproduces exactly (patch test)."""
     k, t, L, W, L1, L2, Q = 0.7, 0.02, 0.5, 0.3, 1.2, 0.8, 2.0
     mat = Material("k", youngs_modulus=2e9, thermal_conductivity=k)
-    mesh = build_mesh(strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=t,
+    mesh = make_mesh(strip_pattern(W=W, L=L, L1=L1, L2=L2, crease_thickness=t,
                                     panel_thickness=t, material=mat))
     tm = ThermalModel(mesh, ThermalParameters(
         loss=ChainLoss(thickness=1.0, layers=3),
@@ -259,7 +259,7 @@ def test_parameters_normalised_and_serialisable():
 
 
 def test_unknown_ids():
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     with pytest.raises(ParameterError, match="panel 7"):
         ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=1e-3), boundary_panels=(7,)))
     with pytest.raises(ParameterError, match="node 99"):
@@ -268,7 +268,7 @@ def test_unknown_ids():
 
 
 def test_no_path_to_room_temperature():
-    mesh = build_mesh(single_fold_pattern())        # substrate is a separate, unfixed part
+    mesh = make_mesh(single_fold_pattern())        # substrate is a separate, unfixed part
     with pytest.raises(ParameterError, match="no heat path"):
         ThermalModel(mesh, ThermalParameters(
             loss=ChainLoss(thickness=1e-3), medium=AIR.with_properties(thermal_conductivity=0.0),

@@ -12,7 +12,7 @@ from simulator.schedules import PiecewiseLinear, Ramp, Sine, SquareWave, StepPow
 from simulator.thermal import ThetaStepper, capacity_vector, integrate_heat, theta_step
 from simulator.errors import ParameterError, PatternError
 from simulator.geometry.example_patterns import single_fold_pattern
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.geometry.pattern import Pattern
 from simulator.thermal.schedules import crease_power_function
 from simulator.thermal import thermal_model
@@ -32,7 +32,7 @@ def reference_04_model(room_temperature=0.0):
     pat = single_fold_pattern(L=1e-3, W=400e-6, undercut=100e-6, panel_thickness=21e-6,
                               anchor_thickness=500e-6, crease_thickness=1e-6, panel_material=pan,
                               substrate_material=sub)
-    mesh = build_mesh(dataclasses.replace(pat, crease_material=crease))
+    mesh = make_mesh(dataclasses.replace(pat, crease_material=crease))
     prm = ThermalParameters(loss=ChainLoss(thickness=1500e-6, dissipation_angle=REFERENCE_BETA),
                             medium=AIR, boundary_panels=(2,), room_temperature_nodes=(0, 3),
                             room_temperature=room_temperature)
@@ -45,7 +45,7 @@ def long_strip(panels=30, W=0.1, k=1.0, rho=1.0, c=1.0, t=0.01, width=0.5):
     v = [(i, 0.0, 0.0) for i in range(P + 1)] + [(i, width, 0.0) for i in range(P + 1)]
     quads = [(i, i + 1, P + 2 + i, P + 1 + i) for i in range(P)]
     mat = Material("m", 2e9, density=rho, thermal_conductivity=k, specific_heat=c)
-    mesh = build_mesh(Pattern(np.array(v, float), quads, crease_width=W, crease_thickness=t,
+    mesh = make_mesh(Pattern(np.array(v, float), quads, crease_width=W, crease_thickness=t,
                               panel_thickness=t, panel_material=mat, crease_material=mat))
     x = mesh.nodes[:, 0]
     ends = tuple(int(i) for i in np.flatnonzero((x < 1e-12) | (x > P - 1e-12)))
@@ -70,7 +70,7 @@ def test_capacity_matches_reference_example():
 
 def test_capacity_totals_are_the_conduction_volumes():
     """Solid: sum rho c t A_t; environment (beta = 0): rho c of air times 2 A_t t_air."""
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     tm = ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=300e-6,
                                                              dissipation_angle=0.0)))
     x = mesh.nodes.copy()
@@ -314,11 +314,11 @@ def test_bad_inputs(make, match):
 
 def test_missing_density_and_bad_integration_inputs():
     mat = Material("no-density", 2e9, thermal_conductivity=0.3)
-    mesh = build_mesh(single_fold_pattern(panel_material=mat))
+    mesh = make_mesh(single_fold_pattern(panel_material=mat))
     tm = ThermalModel(mesh, ThermalParameters(loss=ChainLoss(thickness=1e-3)))
     with pytest.raises(ParameterError, match="no-density.*density = 0.0"):
         integrate_heat(tm, mesh.nodes, {2: 1e-3}, 1.0, 0.1)
-    tm = ThermalModel(build_mesh(single_fold_pattern()),
+    tm = ThermalModel(make_mesh(single_fold_pattern()),
                       ThermalParameters(loss=ChainLoss(thickness=1e-3),
                                         medium=AIR.with_properties(density=0.0)))
     with pytest.raises(ParameterError, match="the medium.s density 0.0"):

@@ -65,7 +65,8 @@ def test_imports_stay_light():
 #: (file, module) with the reason.
 #: Private helpers the two packages share (infrastructure, not simulation API): the lazy
 #: exports, the validation checks (one message form for every field) and the result files.
-SHARED_INFRASTRUCTURE = {"simulator._lazy", "simulator._validate", "simulator._result"}
+SHARED_INFRASTRUCTURE = {"simulator._lazy", "simulator._validate", "simulator._result",
+                         "simulator._deprecation"}
 
 DESIGN_SIMULATOR_INTERNALS = set()
 

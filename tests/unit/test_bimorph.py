@@ -5,7 +5,7 @@ import pytest
 
 from simulator.model.bimorph import Actuators, Bimorph, crease_temperature_weights, timoshenko_curvature
 from simulator.errors import ParameterError
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 
 
@@ -16,7 +16,7 @@ def test_single_fold_curvature_value():
     assert 113.79 <= k < 113.80                   # printed truncated: 113.79 (theory 5.2)
     assert k * 200e-6 == pytest.approx(0.022759, abs=5e-7)
     act = Actuators(b, {2: 38e-6})
-    assert act.rotation_per_kelvin(build_mesh(single_fold_pattern()))[0] == pytest.approx(k * 200e-6)
+    assert act.rotation_per_kelvin(make_mesh(single_fold_pattern()))[0] == pytest.approx(k * 200e-6)
 
 
 def test_symmetric_layers_closed_form():
@@ -67,13 +67,13 @@ def test_bad_input(make, match):
 def test_unknown_actuated_crease():
     act = Actuators(Bimorph(1e9, 1e-7, 2e9, 4e-7), {7: 1e-5})
     with pytest.raises(ValueError, match="boundary edge"):
-        act.delta_alpha_array(build_mesh(single_fold_pattern()))
+        act.delta_alpha_array(make_mesh(single_fold_pattern()))
 
 
 def test_actuation_scatter_is_seeded_per_crease_and_zero_by_default():
     """Actuators.scatter (theory 6.12): each crease's rotation per kelvin times 1 + scatter z,
     one standard normal draw per crease id from the seed; none by default."""
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     bim = Bimorph(1e9, 1e-7, 2e9, 4e-7)
     base = Actuators(bim, {2: 1e-5}).rotation_per_kelvin(mesh)
     a = Actuators(bim, {2: 1e-5}, scatter=1e-3, seed=3)

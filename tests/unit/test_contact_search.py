@@ -4,7 +4,7 @@ import numpy as np
 
 import simulator.mechanics.contact_search as cs
 from simulator.mechanics.contact_search import ContactSearch
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.model.model import ContactParameters
 from simulator.geometry.example_patterns import miura_sheet_pattern, single_fold_pattern
 
@@ -15,7 +15,7 @@ def _pairs(search, x):
 
 
 def test_static_and_tree_modes_find_the_same_pairs(monkeypatch):
-    mesh = build_mesh(miura_sheet_pattern(m=4, n=3))
+    mesh = make_mesh(miura_sheet_pattern(m=4, n=3))
     params = ContactParameters(d0_corner=300e-6, d0_centre=250e-6)
     rng = np.random.default_rng(0)
     x = mesh.nodes + rng.normal(size=mesh.nodes.shape) * 1e-4
@@ -30,7 +30,7 @@ def test_static_and_tree_modes_find_the_same_pairs(monkeypatch):
 
 
 def test_exclusion_rules():
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     search = ContactSearch(mesh, ContactParameters(d0_corner=1.0, d0_centre=1.0))  # all near
     pairs, conn, d0 = _pairs(search, mesh.nodes)
     point_panel = mesh.node_panel[conn[:, 0]]

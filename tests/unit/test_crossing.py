@@ -4,7 +4,7 @@ folded rigidly about its crease through 180 deg."""
 import numpy as np
 import pytest
 
-from simulator import Pattern, build_mesh
+from simulator import Pattern, make_mesh
 from simulator.mechanics import crease_crossings, fold_angles, node_crossings
 from simulator.model import build_sharp_mesh
 from simulator.steps import EVENT_KINDS, Event, crossing_event
@@ -18,7 +18,7 @@ def strip():
     v = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
     pattern = Pattern(v, [[0, 1, 2, 3], [0, 4, 5, 1]], crease_width=200e-6,
                       crease_thickness=1e-6, panel_thickness=10e-6)
-    return build_mesh(pattern)
+    return make_mesh(pattern)
 
 
 def folded(mesh, deg):
@@ -175,7 +175,7 @@ def test_the_watchs_fold_angles_are_fold_angles(flip):
 
     v = np.array([[0, 0], [1, 0], [1, 2], [0, 2], [0, -1], [1, -1]]) * 1e-3
     second = [1, 5, 4, 0] if flip else [0, 4, 5, 1]
-    mesh = build_mesh(Pattern(v, [[0, 1, 2, 3], second], crease_width=200e-6,
+    mesh = make_mesh(Pattern(v, [[0, 1, 2, 3], second], crease_width=200e-6,
                               crease_thickness=1e-6, panel_thickness=10e-6))
     angles = _crease_angles(mesh)
     rng = np.random.default_rng(5)

@@ -232,7 +232,7 @@ def test_issue_names_are_public():
         assert name in simulator.__all__, name
     assert "Step" in simulator.steps.__all__
     for name in ("GripperDesign", "evaluate_gripper", "GripperProblem", "MiuraDesign",
-                 "MiuraProblem", "miura_model", "heated_creases", "lift_power", "optimize",
+                 "MiuraProblem", "make_miura_model", "heated_creases", "lift_power", "optimize",
                  "make_executor", "sweep_residual_fold", "allocate_heaters"):
         assert name in design.__all__, name
 

@@ -7,7 +7,7 @@ as the numpy one, NaN included."""
 import numpy as np
 import pytest
 
-from simulator import Pattern, build_mesh
+from simulator import Pattern, make_mesh
 from simulator.mechanics import fold_angles
 from simulator.model import build_sharp_mesh
 from simulator.cases import get_case
@@ -31,17 +31,17 @@ def kernels(monkeypatch):
 
 def _strip(flip):
     second = [1, 5, 4, 0] if flip else [0, 4, 5, 1]
-    return build_mesh(Pattern(V, [[0, 1, 2, 3], second], crease_width=200e-6,
+    return make_mesh(Pattern(V, [[0, 1, 2, 3], second], crease_width=200e-6,
                               crease_thickness=1e-6, panel_thickness=10e-6))
 
 
 def _meshes():
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, make_gripper_model
 
     cases = [("single_fold", {}), ("double_fold", {}), ("miura_lifter", {}), ("crane", {})]
     return ([(f"strip{'-flipped' * flip}", _strip(flip)) for flip in (False, True)]
             + [(name, get_case(name, **kw).model.mesh) for name, kw in cases]
-            + [("gripper", gripper_model(GripperDesign())[0].mesh)])
+            + [("gripper", make_gripper_model(GripperDesign())[0].mesh)])
 
 
 def _turned(mesh, deg):
@@ -84,7 +84,7 @@ def test_sharp_and_creaseless_meshes_keep_fold_angles(kernels):
     from simulator.geometry.example_patterns import miura_sheet_pattern
 
     sharp = build_sharp_mesh(miura_sheet_pattern())
-    plain = build_mesh(Pattern(V[:4], [[0, 1, 2, 3]], crease_width=200e-6,
+    plain = make_mesh(Pattern(V[:4], [[0, 1, 2, 3]], crease_width=200e-6,
                                crease_thickness=1e-6, panel_thickness=10e-6))
     for mesh in (sharp, plain):
         u = 1e-5 * np.random.default_rng(2).standard_normal(mesh.nodes.shape)

@@ -13,7 +13,7 @@ from simulator.cases import get_case
 from simulator.mechanics.elements.bars import bar_kernel
 from simulator.mechanics.elements.contact import contact_kernel
 from simulator.mechanics.elements.springs import spring_kernel
-from simulator.mechanics.equilibrium import ENERGY_KINDS, EquilibriumSystem, Evaluation
+from simulator.mechanics.equilibrium import ENERGY_KINDS, EquilibriumSystem, SystemValues
 from simulator.geometry.example_patterns import miura_sheet_pattern
 from simulator.linalg import solve as solve_linear
 from simulator.linalg.small_solve import SparseCholesky, solve_dense
@@ -28,10 +28,10 @@ def _gripper_with_contacts():
     """A gripper after its residual fold and gravity, with points of three panels placed
     inside the activation distance of other panels' triangles: on the face, beyond an edge
     and beyond a corner (all three distance zones)."""
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, make_gripper_model
     from simulator.simulation import simulate
 
-    model, pre = gripper_model(GripperDesign())
+    model, pre = make_gripper_model(GripperDesign())
     state = simulate(model, pre).state
     system = equilibrium_system(model)
     X, u = model.mesh.nodes, state.u.copy()
@@ -177,7 +177,7 @@ def test_without_contact_the_fused_kernel_gives_the_numpy_floats():
 
 
 def test_evaluation_K_is_csr_in_the_cached_pattern():
-    """Consumers of Evaluation.K get CSR whichever path ran; the dense tangent is what Newton
+    """Consumers of SystemValues.K get CSR whichever path ran; the dense tangent is what Newton
     solves with."""
     system, u, rest = _miura()
     ev, ref = system.evaluate(u, rest), system._evaluate_numpy(u, rest)
@@ -186,7 +186,7 @@ def test_evaluation_K_is_csr_in_the_cached_pattern():
     np.testing.assert_array_equal(ev.K.indices, ref.K.indices)
     np.testing.assert_array_equal(ev.K.toarray(), ev.tangent)
     with pytest.raises(ValueError, match="dense tangent needs to_csr"):
-        Evaluation(ev.f_int, ev.tangent, {})
+        SystemValues(ev.f_int, ev.tangent, {})
 
 
 def test_the_numpy_backend_keeps_the_reference_path():

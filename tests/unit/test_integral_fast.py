@@ -12,7 +12,7 @@ import pytest
 from simulator.model import get_stack, stack_model
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.thermal import integral_fast
 from simulator.thermal._single_layer import collocation_matrix, pair_values, _kernel_matrix
 from simulator.model.heat_loss import MAX_SUB_TRIANGLES
@@ -25,7 +25,7 @@ PLANE = (np.array([0.0, 0.0, -1e-4]), np.array([0.0, 0.0, 1.0]))
 
 
 def _sub_triangles(cells=2, m=2):
-    mesh = build_mesh(miura_sheet_pattern(m=cells, n=cells))
+    mesh = make_mesh(miura_sheet_pattern(m=cells, n=cells))
     x = mesh.nodes.copy()
     x[:, 2] += 2e-4 * np.sin(x[:, 0] / 1e-3)                 # not flat: all rules in use
     return IntegralOperator(mesh.triangles, mesh.n_nodes, 0.026, m).sub_triangles(x)

@@ -11,7 +11,7 @@ import pytest
 
 from simulator.model import get_stack, stack_model
 from simulator.geometry.example_patterns import miura_sheet_pattern
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.thermal import integral_fast
 from simulator.thermal._single_layer import mirror
 from simulator.thermal.integral import IntegralOperator
@@ -24,7 +24,7 @@ PLANE = (np.array([0.0, 0.0, -3e-4]), np.array([0.0, 0.0, 1.0]))
 
 def _centroids(cells=6):
     """Sub-triangle centroids and areas (m = 1) of a Miura sheet bent out of plane."""
-    mesh = build_mesh(miura_sheet_pattern(m=cells, n=cells))
+    mesh = make_mesh(miura_sheet_pattern(m=cells, n=cells))
     x = mesh.nodes.copy()
     x[:, 2] += 2e-4 * np.sin(x[:, 0] / 3e-3) * np.cos(x[:, 1] / 4e-3)
     sub = IntegralOperator(mesh.triangles, mesh.n_nodes, 0.026, 1).sub_triangles(x)

@@ -392,13 +392,13 @@ def test_a_rigid_rotation_or_mirror_image_of_a_structured_sheet_keeps_the_loss(m
     by 2e-5 K)."""
     import pathlib
 
-    from simulator import build_mesh
+    from simulator import make_mesh
     from simulator.fold import load_fold_json, parse_fold
     from simulator.model import STACKS
 
     stack = STACKS["su8-au"]
     path = pathlib.Path(__file__).resolve().parents[1] / "data" / "fold" / "zigzag_folded.fold"
-    mesh = build_mesh(parse_fold(load_fold_json(path), crease_width=stack.crease_width,
+    mesh = make_mesh(parse_fold(load_fold_json(path), crease_width=stack.crease_width,
                                  crease_thickness=stack.crease_thickness,
                                  panel_thickness=stack.panel_thickness).pattern)
     rng = np.random.default_rng(5)

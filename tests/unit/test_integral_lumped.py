@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import (BASE_CREASES, GripperDesign, GripperHeatModel,
+                                    make_gripper_model)
 from simulator import IntegralLoss, ParameterError
 from simulator.model.heat_loss import heat_loss_from_dict
 from simulator.thermal.integral import IntegralOperator, lump_couplings
@@ -22,7 +23,7 @@ OPERATORS = {"plain": ({"refinement": 2, "correction_tol": 0.0}, IntegralOperato
 
 def _gripper(lumped, **fields):
     """The flat default gripper's model with the integral loss, and its thermal model."""
-    model, _ = gripper_model(GripperDesign(loss_model="integral", sheet_refinement=1))
+    model, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(sheet_refinement=1))
     thermal = model.thermal.with_loss(lumped=lumped, **fields)
     return model, ThermalModel(model.mesh, thermal)
 

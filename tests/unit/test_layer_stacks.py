@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from simulator import (AIR, Actuators, Bimorph, ChainLoss, IntegralLoss, ParameterError, Pattern,
-                       ThermalParameters, build_mesh, make_model)
+                       ThermalParameters, make_mesh, make_model)
 from simulator.materials import GOLD_FILM, SPR, SU8
 from simulator.thermal import Layer, SheetLayers
 from simulator.thermal import ThermalModel
@@ -39,7 +39,7 @@ def _strip(n=40, passive=False, held=True, loss=None, refinement=None):
     panels = [(i, i + 1, n + 2 + i, n + 1 + i) for i in range(n)]
     pattern = Pattern(np.array(v), panels, crease_width=20e-6, crease_thickness=1e-6,
                       panel_thickness=1e-6, panel_material=SU8, crease_material=SU8)
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     x = mesh.nodes[:, 0]
     ends = np.flatnonzero((x < 1e-12) | (x > n * PITCH - 1e-12)) if held else []
     creases = [int(c) for c in pattern.creases]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from simulator.model.mesh import BarType, SpringKind, build_mesh
+from simulator.model.mesh import BarType, SpringKind, make_mesh
 from simulator.geometry.example_patterns import (crane_pattern, double_fold_pattern, gripper_pattern,
                                 miura_sheet_pattern, single_fold_pattern, strip_pattern)
 
@@ -12,7 +12,7 @@ REF = 1  # the reference is 1-based (theory 1.2); ours is 0-based
 
 @pytest.fixture(scope="module")
 def single():
-    return build_mesh(single_fold_pattern())
+    return make_mesh(single_fold_pattern())
 
 
 def test_single_fold_node_coordinates(single):
@@ -85,27 +85,27 @@ def test_polarity_convention(single):
     (strip_pattern, (13, 26, 14, 16), [11], [12, 13]),
 ])
 def test_mesh_counts(factory, counts, ctr, centres):
-    mesh = build_mesh(factory())
+    mesh = make_mesh(factory())
     assert (mesh.n_nodes, len(mesh.bars), len(mesh.triangles), len(mesh.springs)) == counts
     np.testing.assert_array_equal(mesh.crease_nodes[:, 6] + REF, ctr)
     np.testing.assert_array_equal(mesh.panel_center + REF, centres)
 
 
 def test_double_fold_edge_bars():
-    mesh = build_mesh(double_fold_pattern())
+    mesh = make_mesh(double_fold_pattern())
     np.testing.assert_array_equal(mesh.bars[mesh.crease_edge_bars[0]] + REF, [[2, 3], [5, 8]])
     np.testing.assert_array_equal(mesh.bars[mesh.crease_edge_bars[1]] + REF, [[6, 7], [9, 12]])
 
 
 def test_crane_creases():
-    mesh = build_mesh(crane_pattern())
+    mesh = make_mesh(crane_pattern())
     assert (mesh.crease_ids + REF).tolist() == [1, 3, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 17,
                                                 18, 19, 21]
 
 
 def test_counts_formula_large_miura():
     """nodes = S + 3C + P, bars = 2S + 10C, triangles = 6C + S, springs = 8C + S."""
-    mesh = build_mesh(miura_sheet_pattern(m=7, n=5))
+    mesh = make_mesh(miura_sheet_pattern(m=7, n=5))
     S, P, C = 4 * 35, 35, mesh.n_creases
     assert C == 7 * 4 + 6 * 5
     assert (mesh.n_nodes, len(mesh.bars), len(mesh.triangles), len(mesh.springs)) == \

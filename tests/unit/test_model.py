@@ -3,7 +3,7 @@
 import pytest
 
 from simulator import (Actuators, Bimorph, ChainLoss, ContactParameters, Material, ParameterError,
-                       Supports, ThermalParameters, build_mesh, make_model)
+                       Supports, ThermalParameters, make_mesh, make_model)
 from simulator.materials import SPR, SU8
 from simulator.model import REFERENCE_GRAVITY
 from simulator.geometry.example_patterns import single_fold_pattern
@@ -32,7 +32,7 @@ def test_make_model_rejects_a_non_pattern():
 
 
 def test_make_model_accepts_every_documented_form(pattern):
-    mesh = build_mesh(pattern)
+    mesh = make_mesh(pattern)
     act = Actuators(Bimorph(E1=39.5e9, t1=0.1e-6, E2=2e9, t2=0.4e-6),
                     {int(mesh.crease_ids[0]): 38e-6})
     m = make_model(mesh, {0: "xyz"}, contact=True,

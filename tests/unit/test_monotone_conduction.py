@@ -11,7 +11,7 @@ from simulator import ChainLoss
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import crane_pattern, strip_pattern
 from simulator.geometry.materials import Material
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.thermal.monotone import (corner_cotangents, delaunay_flips, monotone_conduction,
                                         t3_matrices)
 from simulator.thermal import ThermalModel, ThermalParameters
@@ -117,11 +117,12 @@ def _spoil(x, tri):
 
 # ---------------------------------------------------------------- M-matrix on the devices
 def _device_meshes():
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, GripperHeatModel, make_gripper_model
     from simulator.cases import get_case
 
     crane = get_case("crane").model
-    gripper, _ = gripper_model(GripperDesign(loss_model="chain"))     # the chains: T3
+    gripper, _ = make_gripper_model(GripperDesign(),                 # the chains: T3
+                                    heat=GripperHeatModel(loss_model="chain"))
     double = get_case("double_fold").model
     return {"crane": crane, "gripper": gripper, "double_fold": double}
 
@@ -189,7 +190,7 @@ def _uniform_strip():
     panels' 90 deg fans: a positive coupling on both crease edges) of one material and
     thickness: uniform k t."""
     mat = Material("k", youngs_modulus=2e9, thermal_conductivity=1.0)
-    return build_mesh(strip_pattern(W=0.4, L=1.0, L1=1.0, L2=1.0, crease_thickness=0.01,
+    return make_mesh(strip_pattern(W=0.4, L=1.0, L1=1.0, L2=1.0, crease_thickness=0.01,
                                     panel_thickness=0.01, material=mat))
 
 
@@ -273,6 +274,6 @@ def test_t3_setting_keeps_the_triangles_matrices(devices):
 def test_crane_pattern_has_no_positive_couplings_inside_regions():
     """Every positive T3 coupling of the crane is on a region boundary (panel against crease,
     or the outline): flips inside regions find nothing to do."""
-    mesh = build_mesh(crane_pattern())
+    mesh = make_mesh(crane_pattern())
     out = delaunay_flips(mesh.nodes, mesh.triangles, _region(mesh))
     np.testing.assert_array_equal(out, mesh.triangles)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from simulator.errors import ParameterError
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.model import BarHingeParameters, spring_rest_angles
 from simulator.model.properties import mechanical_properties
@@ -14,7 +14,7 @@ RTOL = 1e-9  # the reference values are printed to 10 significant digits
 
 @pytest.fixture(scope="module")
 def mesh_props():
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     return mesh, mechanical_properties(mesh, BarHingeParameters(diagonal_rate=1000))
 
 

@@ -19,7 +19,7 @@ def test_every_public_name_exists(package):
 
 def test_design_exports_what_a_user_needs():
     needed = {"GripperDesign", "evaluate_gripper", "GripperProblem", "MiuraDesign",
-              "MiuraProblem", "miura_model", "heated_creases", "lift_power", "optimize",
+              "MiuraProblem", "make_miura_model", "heated_creases", "lift_power", "optimize",
               "make_executor", "sweep_residual_fold", "allocate_heaters", "DesignSpace",
               "Evaluation", "DesignProblem", "RobustGripperProblem", "OptimizationResult",
               "SerialExecutor", "ProcessExecutor", "DaskExecutor", "HeaterAllocation"}

@@ -6,7 +6,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import (BASE_CREASES, GripperDesign, GripperHeatModel,
+                                    gripper_settings, make_gripper_model)
 from simulator import ThermalParameters
 from simulator.cases import get_case
 from simulator.errors import ParameterError
@@ -125,14 +126,16 @@ def test_the_loss_levels_of_a_refined_sheet_nest_in_its_fine_triangles():
     assert sheet_levels(IntegralLoss(refinement=8), 2) == (4, 2)
     assert sheet_levels(IntegralLoss(refinement=2), 2) == (1, None)
     assert sheet_levels(IntegralLoss(refinement=5, extrapolation=False), 2) == (3, None)
-    grip, _ = gripper_model(GripperDesign(loss_model="integral"))
+    grip, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model="integral"))
     op = ThermalModel(grip.mesh, grip.thermal).integral
     assert isinstance(op, CorrectedLoss) and op.base is op.accurate.coarse
     assert (op.accurate.m, op.accurate.c) == (2, 1)
     # the design's settings name the levels per mesh edge (evaluation logs of older levels
     # never match)
-    assert GripperDesign().to_dict()["integral_levels"] == "4/2"
-    assert GripperDesign(sheet_refinement=1).to_dict()["integral_levels"] == "3/2"
+    assert gripper_settings(GripperDesign())["integral_levels"] == "4/2"
+    assert gripper_settings(GripperDesign(), GripperHeatModel(sheet_refinement=1))[
+        "integral_levels"] == "3/2"
+    assert GripperHeatModel(sheet_refinement=1).integral_levels_in_force == "3/2"
 
 
 def test_no_heat_is_lost_and_the_loss_matches_the_input_without_held_nodes():
@@ -167,7 +170,7 @@ def test_the_default_integral_model_refines_where_its_dense_operator_allows():
     """None: the chains on the mesh triangles; the integral loss at r = 2 on the gripper
     (48 triangles) and the double fold, on the mesh triangles on the crane (146: the refined
     operator would exceed the dense limit); the footer says which."""
-    grip, _ = gripper_model(GripperDesign(loss_model="integral"))
+    grip, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model="integral"))
     crane = get_case("crane", loss_model="integral").model
     assert grip.thermal.sheet_refinement is None
     assert grip.thermal.sheet_refinement_for(len(grip.mesh.triangles)) == AUTO_SHEET_REFINEMENT
@@ -175,7 +178,7 @@ def test_the_default_integral_model_refines_where_its_dense_operator_allows():
     assert ThermalModel(grip.mesh, grip.thermal).sheet.r == AUTO_SHEET_REFINEMENT
     assert "sheet refined r = 2" in grip.thermal.describe(len(grip.mesh.triangles))
     assert "sheet refined" not in crane.thermal.describe(len(crane.mesh.triangles))
-    chain, _ = gripper_model(GripperDesign(loss_model="chain"))
+    chain, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model="chain"))
     assert chain.thermal.sheet_refinement_for(48) == 1
 
 
@@ -196,7 +199,7 @@ def test_bad_sheet_refinements_name_the_field_and_the_fix():
 def test_the_refined_gripper_heated_alone_has_no_node_below_room_temperature():
     """The gripper's base creases at 15 mW, flat (the mesh model: -7.6 K, theory 4.9): at the
     default r = 2 not one fine node below room temperature."""
-    model, _ = gripper_model(GripperDesign(loss_model="integral"))
+    model, _ = make_gripper_model(GripperDesign(), heat=GripperHeatModel(loss_model="integral"))
     p = np.zeros(model.mesh.n_creases)
     p[[model.mesh.crease_row_of(c) for c in BASE_CREASES]] = 15e-3
     tm = ThermalModel(model.mesh, model.thermal)

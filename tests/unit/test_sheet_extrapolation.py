@@ -8,7 +8,8 @@ from unittest import mock
 import numpy as np
 import pytest
 
-from design.devices.gripper import BASE_CREASES, GripperDesign, gripper_model
+from design.devices.gripper import (BASE_CREASES, GripperDesign, GripperHeatModel,
+                                    gripper_settings, make_gripper_model)
 from simulator import ThermalParameters
 from simulator.cases import get_case
 from simulator.errors import ParameterError
@@ -44,8 +45,9 @@ def test_the_extrapolated_temperatures_are_twice_the_finer_sheets_less_the_coars
 
 
 def _base_actuation(geometry, setting, r, extrapolate):
-    model, _ = gripper_model(GripperDesign(**geometry, crease_conduction=setting,
-                                           sheet_refinement=r))
+    model, _ = make_gripper_model(GripperDesign(**geometry),
+                                  heat=GripperHeatModel(crease_conduction=setting,
+                                                        sheet_refinement=r))
     mesh = model.mesh
     prm = dataclasses.replace(model.thermal, sheet_extrapolation=extrapolate)
     tm = ThermalModel(mesh, prm, actuators=model.actuators)
@@ -117,14 +119,15 @@ def test_the_extrapolation_refuses_what_two_sheets_cannot_give():
 
 
 def test_the_gripper_design_passes_the_extrapolation_on():
-    """``GripperDesign(sheet_extrapolation=True)`` reaches the model's thermal parameters and
-    its dict (left out at the default, so the hashes of older logs are kept); bad values name
-    the field."""
-    design = GripperDesign(sheet_extrapolation=True)
-    assert gripper_model(design)[0].thermal.sheet_extrapolation
-    assert design.to_dict()["sheet_extrapolation"] is True
-    assert "sheet_extrapolation" not in GripperDesign().to_dict()
-    with pytest.raises(ParameterError, match="GripperDesign.sheet_extrapolation = 1 must be"):
-        GripperDesign(sheet_extrapolation=1)
+    """``GripperHeatModel(sheet_extrapolation=True)`` reaches the model's thermal parameters and
+    the evaluation's settings (left out at the default, so the hashes of older logs are kept);
+    bad values name the field."""
+    design, heat = GripperDesign(), GripperHeatModel(sheet_extrapolation=True)
+    assert make_gripper_model(design, heat=heat)[0].thermal.sheet_extrapolation
+    assert not make_gripper_model(design)[0].thermal.sheet_extrapolation
+    assert gripper_settings(design, heat)["sheet_extrapolation"] is True
+    assert "sheet_extrapolation" not in gripper_settings(design, GripperHeatModel())
+    with pytest.raises(ParameterError, match="GripperHeatModel.sheet_extrapolation = 1 must"):
+        GripperHeatModel(sheet_extrapolation=1)
     with pytest.raises(ParameterError, match="loss_model = 'chain'"):
-        GripperDesign(sheet_extrapolation=True, loss_model="chain")
+        GripperHeatModel(sheet_extrapolation=True, loss_model="chain")

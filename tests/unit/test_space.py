@@ -9,16 +9,25 @@ import pytest
 from design import DesignProblem, Evaluation, GripperProblem
 from design.devices import GRIPPER_SPACE
 from design.core.space import DesignSpace, Variable
-from simulator.errors import ParameterError
+from simulator.errors import EtorigamiDeprecationWarning, ParameterError
 
 
 def test_vector_and_named_mapping_round_trip():
     x = GRIPPER_SPACE.to_vector({"La": 900e-6})
     assert x.tolist() == [200e-6, 900e-6, 1000e-6, 1000e-6]        # missing names: start
-    assert GRIPPER_SPACE.to_dict(x) == {"W": 200e-6, "La": 900e-6, "L1": 1000e-6, "L2": 1000e-6}
+    assert GRIPPER_SPACE.to_mapping(x) == {"W": 200e-6, "La": 900e-6, "L1": 1000e-6,
+                                           "L2": 1000e-6}
     z = GRIPPER_SPACE.normalize(x)
     np.testing.assert_allclose(GRIPPER_SPACE.denormalize(z), x)
     assert GRIPPER_SPACE.names == ("W", "La", "L1", "L2")
+
+
+def test_to_dict_of_a_vector_is_the_deprecated_spelling_of_to_mapping():
+    x = GRIPPER_SPACE.to_vector({"La": 900e-6})
+    with pytest.warns(EtorigamiDeprecationWarning, match=r"DesignSpace\.to_mapping\(x\)") as rec:
+        old = GRIPPER_SPACE.to_dict(x)
+    assert old == GRIPPER_SPACE.to_mapping(x) and len(rec) == 1
+    assert rec[0].filename == __file__                 # attributed to the caller's line
 
 
 def test_bound_margins_are_normalised_and_signed():

@@ -10,7 +10,7 @@ import pytest
 from simulator.thermal import _thermal_jit
 from simulator.mechanics.elements.contact import point_triangle_distance
 from simulator.mechanics.elements.springs import spring_kernel_backend
-from simulator.model.mesh import build_mesh
+from simulator.model.mesh import make_mesh
 from simulator.geometry.example_patterns import single_fold_pattern
 from simulator.geometry.materials import AIR
 from simulator.thermal import ChainLoss
@@ -20,7 +20,7 @@ pytest.importorskip("numba")     # a test dependency (pyproject [test]); the ker
 
 
 def _single_fold(boundary=(2,)):
-    mesh = build_mesh(single_fold_pattern())
+    mesh = make_mesh(single_fold_pattern())
     prm = ThermalParameters(loss=ChainLoss(thickness=750e-6),
                             medium=AIR.with_properties(thermal_conductivity=0.6),
                             boundary_panels=boundary, room_temperature_nodes=(0, 3))
@@ -33,10 +33,11 @@ def _deformed(mesh, seed):
 
 
 def _gripper_state():
-    from design.devices.gripper import GripperDesign, gripper_model
+    from design.devices.gripper import GripperDesign, GripperHeatModel, make_gripper_model
     from simulator.simulation import simulate
     from simulator.thermal import thermal_model
-    model, pre = gripper_model(GripperDesign(loss_model="chain"))   # the chains with T3
+    model, pre = make_gripper_model(GripperDesign(),               # the chains with T3
+                                    heat=GripperHeatModel(loss_model="chain"))
     state = simulate(model, pre).state
     return thermal_model(model), model.mesh.nodes + state.u, model.mesh.n_creases
 
@@ -134,14 +135,14 @@ def test_background_compilation_fills_the_cache(tmp_path):
         from simulator.thermal import _thermal_jit
         from simulator.mechanics.elements.springs import spring_kernel_backend
         from simulator.geometry.example_patterns import single_fold_pattern
-        from simulator.model.mesh import build_mesh
+        from simulator.model.mesh import make_mesh
         from simulator.geometry.materials import AIR
         from simulator.thermal import ChainLoss
         from simulator.thermal import ThermalModel, ThermalParameters
         assert _thermal_jit.compile_in_background()                 # cold cache: started
         assert not _thermal_jit.compile_in_background()             # only once
         child = _thermal_jit._background
-        mesh = build_mesh(single_fold_pattern())
+        mesh = make_mesh(single_fold_pattern())
         tm = ThermalModel(mesh, ThermalParameters(
             loss=ChainLoss(thickness=750e-6), medium=AIR.with_properties(thermal_conductivity=0.6),
             boundary_panels=(2,), room_temperature_nodes=(0, 3)))

@@ -17,7 +17,7 @@ import numpy as np
 
 from ...model.bimorph import Actuators, Bimorph
 from ...errors import ParameterError
-from ...model.mesh import build_mesh
+from ...model.mesh import make_mesh
 from ...model.model import ContactParameters, Model, Supports, make_model
 from ...model.properties import BarHingeParameters
 from ...steps import Step
@@ -49,7 +49,7 @@ def model_to_fold(model: Model, steps=(), title: str | None = None,
     if getattr(mesh, "sharp", False):
         _sharp_fields(model, out)
     else:
-        if not np.array_equal(mesh.nodes, build_mesh(pattern).nodes):
+        if not np.array_equal(mesh.nodes, make_mesh(pattern).nodes):
             out[f"{NS}mesh_nodes"] = mesh.nodes.tolist()
         out[f"{NS}bar_hinge"] = model.params.to_dict()
     out[f"{NS}supports"] = {"fixed": {str(k): v for k, v in model.supports.fixed.items()},
@@ -201,7 +201,7 @@ def fold_to_model(data: dict, *, fold_stiffness=None, panel_bending_width=None,
         raise ParameterError(f"{', '.join(given)} apply to sharp creases only; pass "
                              "crease_model='sharp' or drop them.")
     data = geo.data                                   # the chosen frame
-    mesh = build_mesh(geo.pattern)
+    mesh = make_mesh(geo.pattern)
     nodes = data.get(f"{NS}mesh_nodes")
     if nodes is not None:
         mesh = _guard(f"{NS}mesh_nodes", lambda: mesh.with_nodes(np.array(nodes, float)))
