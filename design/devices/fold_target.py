@@ -4,9 +4,9 @@ with exact gradients (:mod:`simulator.sensitivity`).
 Variables: the heater power of each heated crease (W). Objective: the total power (W).
 Constraints (g <= 0): each target crease folds at least its target, ``(target - fold) /
 target``, and each heated crease stays below the temperature limit, ``(T - limit) / limit``
-(``T`` the hottest crease node, degC). :meth:`FoldTargetProblem.evaluate_with_gradient` adds
-their gradients by one adjoint solve per constraint (the objective's is one per heater), so
-the gradient methods of :func:`design.optimize` run on it.
+(``T`` the hottest crease node, degC). ``evaluate_with_gradient`` adds their gradients by
+one adjoint solve per constraint (the total power's gradient is 1 per heater), so the
+gradient methods of :func:`design.optimize` run on it.
 """
 
 from __future__ import annotations
