@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from design.core.evaluation_log import EvaluationLog, LoggedProblem
-from design.core.executors import SerialExecutor
+from design.core.executors import ProcessExecutor, SerialExecutor
 from design.core.optimize import get_optimizer, optimize
 from design.core.problem import DesignProblem
 from design.core.space import DesignSpace, Variable
@@ -108,6 +108,16 @@ def test_gradient_run_recomputes_logged_designs_without_gradient(tmp_path):
     again = LoggedProblem(QuadGrad(), EvaluationLog(path, QuadGrad()))
     ev = again.evaluate_many([[0.0, 0.0]], SerialExecutor(), gradient=True)[0]
     assert again.n_computed == 1 and ev.objective_gradient == {"x": -2.0, "y": -4.0}
+
+
+def test_process_executor_carries_gradients():
+    xs = [[0.0, 0.0], [0.5, 1.0], [2.0, -1.0]]
+    serial = LoggedProblem(QuadGrad()).evaluate_many(xs, SerialExecutor(), gradient=True)
+    with ProcessExecutor(2) as ex:
+        pooled = LoggedProblem(QuadGrad()).evaluate_many(xs, ex, gradient=True)
+    assert [e.objective_gradient for e in pooled] == [e.objective_gradient for e in serial]
+    assert [e.constraint_gradients for e in pooled] == [e.constraint_gradients for e in serial]
+    assert pooled[1].objective_gradient == {"x": -1.0, "y": -2.0}
 
 
 # ---------------------------------------------------------------- heater powers, double fold
