@@ -1,5 +1,6 @@
-"""The NLopt back end of :func:`design.core.optimize.optimize` (private): derivative-free NLopt
-algorithms in normalised variables, with callbacks that never let an exception escape into
+"""The NLopt back end of :func:`design.core.optimize.optimize` (private): NLopt algorithms in
+normalised variables (derivative-free ones, and the gradient-based ``LD_*`` ones on problems
+that supply gradients), with callbacks that never let an exception escape into
 NLopt (see :mod:`design.core.optimize`, whose registry names the algorithms: a new NLopt
 method is one :func:`~design.core.optimize.register_optimizer` call with
 :func:`nlopt_backend`). NLopt itself is imported only when a run starts."""
@@ -13,11 +14,17 @@ import numpy as np
 
 from simulator import ParameterError
 
+from ._gradient_methods import bound_names, constraint_jacobian, z_gradient
 from .evaluation_log import BudgetExhausted, EvaluationRun, StopOptimization
 from .problem import Evaluation
 
 #: NLopt algorithms that take inequality constraints themselves (``constraint_handling="native"``).
-_NATIVE_CONSTRAINTS = ("LN_COBYLA",)
+_NATIVE_CONSTRAINTS = ("LN_COBYLA", "LD_MMA", "LD_SLSQP", "LD_CCSAQ")
+
+
+def _gradient_based(algorithm: str) -> bool:
+    """An NLopt algorithm that uses gradients (``LD_*``, ``GD_*``): constraints native only."""
+    return algorithm[1] == "D"
 
 
 def _nlopt_codes(nlopt):
@@ -37,13 +44,15 @@ def _global(algorithm: str) -> bool:
 def _nlopt_initial_step(space, algorithm, o) -> np.ndarray:
     """Check the NLopt options of ``algorithm`` and return the normalised initial step."""
     handling = o["constraint_handling"]
-    allowed = (("native", "penalty") if algorithm in _NATIVE_CONSTRAINTS else
+    allowed = (("native",) if _gradient_based(algorithm) else
+               ("native", "penalty") if algorithm in _NATIVE_CONSTRAINTS else
                ("penalty",) if _global(algorithm) else ("penalty", "auglag"))
     if handling not in allowed:
         raise ParameterError(f"constraint_handling = {handling!r} is not available for "
                              f"{algorithm}; use one of {allowed}.")
-    for key in ("xtol_rel", "ftol_rel", "xtol_abs", "ftol_abs", "penalty"):
-        if not (isinstance(o[key], (int, float)) and o[key] >= 0):
+    for key in ("xtol_rel", "ftol_rel", "xtol_abs", "ftol_abs", "penalty",
+                "constraint_margin"):
+        if key in o and not (isinstance(o[key], (int, float)) and o[key] >= 0):
             raise ParameterError(f"{key} = {o[key]!r} must be a non-negative number.")
     span = space.upper - space.lower
     step = np.broadcast_to(np.asarray(space.step / span if o["initial_step"] is None
@@ -69,6 +78,7 @@ class _NloptCallbacks:
     def __init__(self, run: EvaluationRun, names, bounds, penalised, o):
         self.run, self.names, self.bounds, self.penalised = run, names, bounds, penalised
         self.penalty, self.failure_value = o["penalty"], o["failure_value"]
+        self.margin = o.get("constraint_margin", 0.0)
         self.exc, self.ref, self.opt = None, None, None
 
     def _evaluate(self, z) -> Evaluation:
@@ -109,16 +119,39 @@ class _NloptCallbacks:
             return fallback()
 
     def objective(self, z, grad):
-        """NLopt objective ``f(z, grad)``."""
+        """NLopt objective ``f(z, grad)`` (``grad`` filled for gradient algorithms; not
+        penalised: they take the constraints natively)."""
         big = self.failure_value if self.failure_value is not None else 1e300
-        return self._guarded(lambda: self._value(self._evaluate(z)), lambda: big)
+
+        def value():
+            ev = self._evaluate(z)
+            if grad.size:
+                grad[:] = z_gradient(self.run.space, ev.objective_gradient if ev.success
+                                     else None)
+            return self._value(ev)
+
+        return self._guarded(value, lambda: big)
 
     def constraints(self, result, z, grad):
         """NLopt vector constraint ``c(result, z, grad)``, ``result <= 0`` when feasible."""
         def fill():
-            result[:] = self._constraint_values(self._evaluate(z))
+            ev = self._evaluate(z)
+            result[:] = np.asarray(self._constraint_values(ev)) + self.margin
+            if grad.size:
+                grad[:] = self._constraint_jacobian(ev)
 
         self._guarded(fill, lambda: result.__setitem__(slice(None), 1.0))
+
+    def _constraint_jacobian(self, ev) -> np.ndarray:
+        """``(m, n)`` constraint gradients in normalised variables (of the largest constraint
+        for the aggregate one)."""
+        space = self.run.space
+        if self.names is not None:
+            return constraint_jacobian(space, ev, self.names)
+        g = {k: v for k, v in ev.constraints.items() if k not in self.bounds}
+        if not (ev.success and g):
+            return np.zeros((1, len(space)))
+        return constraint_jacobian(space, ev, [max(g, key=g.get)])
 
 
 def _nlopt_optimizers(nlopt, algorithm, n, handling, step, max_evaluations, o):
@@ -180,7 +213,7 @@ def _run_nlopt(run: EvaluationRun, x0, max_evaluations, *, algorithm, **o):
     space, n = run.space, len(run.space)
     handling = o["constraint_handling"]
     step = _nlopt_initial_step(space, algorithm, o)
-    bounds = {f"{v}_{s}" for v in space.names for s in ("lower", "upper")}
+    bounds = bound_names(space)
     names = _nlopt_constraint_names(run, x0, handling, bounds)
     callbacks = _NloptCallbacks(run, names, bounds, handling == "penalty", o)
     opt, local = _nlopt_optimizers(nlopt, algorithm, n, handling, step, max_evaluations, o)

@@ -9,6 +9,12 @@ vector rounded to ``1e-9`` of each variable's range, so one file can hold severa
 Floats are written with ``repr`` and therefore read back bit-identical: a resumed,
 deterministic optimiser follows exactly the path of an uninterrupted run.
 
+Gradients (:meth:`DesignProblem.evaluate_with_gradient`) are logged in one column,
+``gradient``: JSON ``{"objective": [...], "constraints": {name: [...]}}``, vectors in the
+space's order, floats by ``repr`` (read back bit-identical); ``n (m + 1)`` numbers per row for
+``n`` variables and ``m`` constraints. A gradient run reuses a logged design only if its row has
+a gradient (or the evaluation failed).
+
 Logging happens in the main process only: :meth:`LoggedProblem.evaluate_many` looks up the
 logged designs, maps the others through an executor (whose workers run the wrapped problem's
 ``evaluate``), then logs the results in order. A :class:`LoggedProblem` refuses to be pickled.
@@ -152,9 +158,11 @@ class EvaluationLog:
             success, status = row["success"] == "True", row.get("status", "")
         else:                                   # logs written before the result contract
             success, status = row["failed"] != "True", ""
+        grad, cgrad = _gradient_from_cell(self.space, row.get("gradient", ""))
         return Evaluation(x, float(row["objective"]), cons, metrics, success=success,
                           status=status, message=row["message"],
-                          wall_time=float(row["wall_time [s]"]))
+                          wall_time=float(row["wall_time [s]"]), objective_gradient=grad,
+                          constraint_gradients=cgrad)
 
     def lookup(self, x) -> Evaluation | None:
         """The logged evaluation of design ``x`` (vector or mapping) for this problem, or None."""
@@ -175,6 +183,7 @@ class EvaluationLog:
         row.update({"success": str(bool(ev.success)), "status": ev.status,
                     "message": ev.message,
                     "wall_time [s]": repr(float(ev.wall_time)),
+                    **_gradient_cell(self.space, ev),
                     "timestamp": datetime.now(UTC).isoformat(timespec="seconds")})
         return row
 
@@ -267,24 +276,35 @@ class LoggedProblem:
     def evaluate(self, x) -> Evaluation:
         return self.evaluate_sources([x])[0][0]
 
-    def evaluate_many(self, xs, executor=None) -> list:
-        """Evaluations of ``xs`` in order: logged ones reused, the others mapped through
-        ``executor.map(fn, items) -> list`` (default: serial) and logged in order."""
-        return [ev for ev, _ in self.evaluate_sources(xs, executor)]
+    @property
+    def supplies_gradients(self) -> bool:
+        """The wrapped problem supplies gradients (``evaluate_with_gradient``)."""
+        return bool(getattr(self.problem, "supplies_gradients", False))
 
-    def compute(self, xs, executor=None) -> list:
+    def evaluate_with_gradient(self, x) -> Evaluation:
+        return self.evaluate_sources([x], gradient=True)[0][0]
+
+    def evaluate_many(self, xs, executor=None, gradient: bool = False) -> list:
+        """Evaluations of ``xs`` in order: logged ones reused, the others mapped through
+        ``executor.map(fn, items) -> list`` (default: serial) and logged in order; with
+        ``gradient``, by ``evaluate_with_gradient``."""
+        return [ev for ev, _ in self.evaluate_sources(xs, executor, gradient=gradient)]
+
+    def compute(self, xs, executor=None, gradient: bool = False) -> list:
         """Evaluations of ``xs`` by the problem (mapped through ``executor``), neither looked
         up nor logged; :meth:`evaluate_sources` logs them when given them as ``computed``."""
         if not xs:
             return []
         mapper = map if executor is None else executor.map
-        return list(mapper(_safe_evaluate(self.problem), [self.space.to_vector(x) for x in xs]))
+        return list(mapper(_safe_evaluate(self.problem, gradient),
+                           [self.space.to_vector(x) for x in xs]))
 
-    def evaluate_sources(self, xs, executor=None, computed=None) -> list:
+    def evaluate_sources(self, xs, executor=None, computed=None, gradient: bool = False) -> list:
         """Like :meth:`evaluate_many`, as ``(evaluation, reused: bool)`` pairs.
 
         ``computed``: ``{design_key: Evaluation}`` from :meth:`compute`, used (and logged as
-        computed) instead of evaluating those designs again.
+        computed) instead of evaluating those designs again. With ``gradient`` a logged
+        evaluation without a gradient (of a successful design) is computed again.
         """
         computed = computed or {}
         vecs = [self.space.to_vector(x) for x in xs]
@@ -292,6 +312,8 @@ class LoggedProblem:
         todo: dict = {}
         for i, x in enumerate(vecs):
             hit = self.log.lookup(x)
+            if hit is not None and gradient and hit.success and hit.objective_gradient is None:
+                hit = None
             if hit is not None:
                 out[i] = (hit, True)
                 self.n_reused += 1
@@ -299,7 +321,7 @@ class LoggedProblem:
                 todo.setdefault(design_key(self.space, x), []).append(i)
         if todo:
             fresh = iter(self.compute([vecs[idx[0]] for key, idx in todo.items()
-                                       if key not in computed], executor))
+                                       if key not in computed], executor, gradient))
             for key, idx in todo.items():
                 ev = computed[key] if key in computed else next(fresh)
                 self.log.append(ev)
@@ -329,8 +351,9 @@ class EvaluationRun:
     together on the executor, without changing any of this.
     """
 
-    def __init__(self, logged: LoggedProblem, budget, callback, executor):
+    def __init__(self, logged: LoggedProblem, budget, callback, executor, gradient=False):
         self.logged, self.space, self.budget = logged, logged.space, budget
+        self.gradient = bool(gradient)
         self.callback, self.executor = callback, executor
         self.cache: dict = {}
         self.prefetched: dict = {}
@@ -356,7 +379,8 @@ class EvaluationRun:
         if len(new) < 2 or (self.budget is not None
                             and len(self.evaluations) + len(new) > self.budget):
             return 0
-        self.prefetched.update(zip(new, self.logged.compute(list(new.values()), self.executor)))
+        self.prefetched.update(zip(new, self.logged.compute(list(new.values()), self.executor,
+                                                            self.gradient)))
         return len(new)
 
     def evaluate(self, x) -> Evaluation:
@@ -370,7 +394,8 @@ class EvaluationRun:
         if new:
             first = {k: xs[keys.index(k)] for k in new}
             ahead = {k: self.prefetched.pop(k) for k in new if k in self.prefetched}
-            done = self.logged.evaluate_sources(list(first.values()), self.executor, ahead)
+            done = self.logged.evaluate_sources(list(first.values()), self.executor, ahead,
+                                                self.gradient)
             for k, (ev, reused) in zip(new, done):
                 self.cache[k] = ev
                 self.evaluations.append(ev)
@@ -401,14 +426,17 @@ class EvaluationRun:
 
 
 class _safe_evaluate:
-    """Picklable ``problem.evaluate`` that turns any exception into a failed Evaluation."""
+    """Picklable ``problem.evaluate`` (``evaluate_with_gradient`` with ``gradient``) that
+    turns any exception into a failed Evaluation."""
 
-    def __init__(self, problem):
-        self.problem = problem
+    def __init__(self, problem, gradient: bool = False):
+        self.problem, self.gradient = problem, gradient
 
     def __call__(self, x) -> Evaluation:
         t0 = time.perf_counter()
         try:
+            if self.gradient:
+                return self.problem.evaluate_with_gradient(x)
             return self.problem.evaluate(x)
         except Exception as exc:  # noqa: BLE001 - contract: a failed design never raises
             logger.warning("problem.evaluate(%s) raised %s: %s", x, type(exc).__name__, exc)
@@ -416,3 +444,24 @@ class _safe_evaluate:
             return Evaluation(values, math.inf, success=False, status="failed",
                               message=f"{type(exc).__name__}: {exc}",
                               wall_time=time.perf_counter() - t0)
+
+
+def _gradient_cell(space, ev: Evaluation) -> dict:
+    """``{"gradient": JSON}`` for an evaluation with gradients, else ``{}``."""
+    if ev.objective_gradient is None:
+        return {}
+    names = space.names
+    cons = {k: [g[n] for n in names] for k, g in (ev.constraint_gradients or {}).items()}
+    text = json.dumps({"objective": [ev.objective_gradient[n] for n in names],
+                       "constraints": cons})
+    return {"gradient": text}
+
+
+def _gradient_from_cell(space, text: str):
+    """The gradients of a ``gradient`` cell: ``(objective, constraints)`` or ``(None, None)``."""
+    if not text:
+        return None, None
+    d = json.loads(text)
+    names = space.names
+    return (dict(zip(names, map(float, d["objective"]))),
+            {k: dict(zip(names, map(float, v))) for k, v in d["constraints"].items()})

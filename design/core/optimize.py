@@ -23,6 +23,12 @@ the registry, so a new optimiser is one :func:`register_optimizer` call. The bui
   infeasible; a stop request uses ``opt.force_stop()``. Each design is evaluated once per run
   (objective and constraint callbacks share a cache). The returned design is the best
   *feasible* evaluation seen, not NLopt's last point.
+* Gradient methods, for problems that supply gradients
+  (:meth:`~design.core.problem.DesignProblem.evaluate_with_gradient`), in the same normalised
+  variables with the constraints passed natively: NLopt's ``"mma"`` (LD_MMA), ``"slsqp"``
+  (LD_SLSQP), ``"ccsaq"`` (LD_CCSAQ), and scipy's ``"scipy_slsqp"`` and ``"trust_constr"``.
+  Every design of their runs is evaluated with its gradients (which the log stores). A
+  gradient method on a problem without gradients is refused.
 
 With ``out``, evaluations go to ``out/evaluations.csv`` (see :mod:`design.core.evaluation_log`),
 and re-running the same command reuses them: an interrupted run resumes and, the methods being
@@ -49,6 +55,7 @@ from simulator._result import ResultFiles
 
 from .contract import check_outcome
 from ._coordinate_descent import coordinate_descent
+from ._gradient_methods import scipy_backend
 from ._nlopt_methods import nlopt_backend
 from .evaluation_log import (BudgetExhausted, EvaluationLog, EvaluationRun, LoggedProblem,
                              StopOptimization, settings_hash)
@@ -91,6 +98,10 @@ class Optimizer:
         documentation says of a method; a back end for unbounded spaces would set False.
     aliases : tuple of str
         Further accepted names.
+    needs_gradient : bool
+        The method uses the gradients of the objective and the constraints: it runs only on
+        problems that supply them (``problem.supplies_gradients``), and every design of its
+        run is evaluated with them (``evaluate_with_gradient``).
     """
 
     name: str
@@ -100,6 +111,7 @@ class Optimizer:
     max_evaluations: int | None = None
     needs_bounds: bool = True
     aliases: tuple = ()
+    needs_gradient: bool = False
 
 
 _REGISTRY: dict = {}      # canonical name -> Optimizer, in registration order
@@ -108,7 +120,8 @@ _ALIASES: dict = {}       # alias -> canonical name
 
 def register_optimizer(name: str, run: Callable, *, description: str, options=None,
                        max_evaluations: int | None = None, needs_bounds: bool = True,
-                       aliases=(), replace: bool = False) -> Optimizer:
+                       aliases=(), replace: bool = False,
+                       needs_gradient: bool = False) -> Optimizer:
     """Make ``run`` available as ``optimize(problem, name)`` and ``--method name``.
 
     Parameters
@@ -127,6 +140,8 @@ def register_optimizer(name: str, run: Callable, *, description: str, options=No
     aliases : sequence of str
     replace : bool
         Allow replacing a registered method of the same name.
+    needs_gradient : bool
+        The method uses gradients (:attr:`Optimizer.needs_gradient`).
 
     Returns
     -------
@@ -149,7 +164,7 @@ def register_optimizer(name: str, run: Callable, *, description: str, options=No
         raise ParameterError(f"register_optimizer: max_evaluations = {max_evaluations!r} "
                              "must be a positive integer or None.")
     spec = Optimizer(key, run, description, MappingProxyType(dict(options or {})),
-                     max_evaluations, bool(needs_bounds), aliases)
+                     max_evaluations, bool(needs_bounds), aliases, bool(needs_gradient))
     unregister_optimizer(key, missing_ok=True)
     _REGISTRY[key] = spec
     _ALIASES.update(dict.fromkeys(spec.aliases, key))
@@ -195,6 +210,29 @@ for _name, _algorithm, _aliases, _what in (
         options={**_NLOPT_OPTIONS,
                  "constraint_handling": "native" if _name == "cobyla" else "penalty"},
         description=f"NLopt {_algorithm}: {_what}")
+#: Gradient methods are asked for g <= -margin: they converge onto active constraints and
+#: would otherwise end on their infeasible side by round-off.
+_MARGIN = 1e-6
+for _name, _algorithm, _what in (
+        ("mma", "LD_MMA", "method of moving asymptotes"),
+        ("slsqp", "LD_SLSQP", "sequential quadratic programming"),
+        ("ccsaq", "LD_CCSAQ", "conservative convex separable quadratic approximations")):
+    register_optimizer(
+        _name, nlopt_backend(_algorithm), needs_gradient=True, max_evaluations=100,
+        options={**_NLOPT_OPTIONS, "constraint_handling": "native",
+                 "constraint_margin": _MARGIN},
+        description=f"NLopt {_algorithm}: local, {_what}; gradients, constraints passed to "
+                    "NLopt")
+for _name, _algorithm, _what in (
+        ("scipy_slsqp", "SLSQP", "sequential least squares programming"),
+        ("trust_constr", "trust-constr", "trust-region interior point")):
+    register_optimizer(
+        _name, scipy_backend(_algorithm), needs_gradient=True, max_evaluations=100,
+        aliases=(_name.replace("_", "-"),),
+        options={"tol": 1e-8, "max_iterations": 100, "failure_value": None,
+                 "constraint_margin": _MARGIN},
+        description=f"scipy {_algorithm}: local, {_what}; gradients, constraints passed to "
+                    "scipy")
 del _name, _algorithm, _aliases, _what
 
 
@@ -307,6 +345,16 @@ def _resolve_options(spec: Optimizer, options, max_evaluations):
     return opts, max_evaluations
 
 
+def _check_gradients(problem, spec: Optimizer) -> None:
+    """Refuse a gradient method on a problem that supplies no gradients."""
+    if spec.needs_gradient and not getattr(problem, "supplies_gradients", False):
+        free = ", ".join(n for n, s in _REGISTRY.items() if not s.needs_gradient)
+        raise ParameterError(f"method {spec.name!r} needs gradients and "
+                             f"{type(problem).__name__} supplies none: implement its "
+                             "_evaluate_with_gradient(values) or use a derivative-free "
+                             f"method ({free}).")
+
+
 def _start_design(problem, x0) -> np.ndarray:
     """Check that ``problem`` is a design problem; return its validated start design."""
     if not hasattr(problem, "space") or not hasattr(problem, "evaluate"):
@@ -367,7 +415,10 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     method : str
         A registered method (:func:`optimizers`) or alias: built in ``"cd"``
         (``"coordinate_descent"``), ``"cobyla"``, ``"bobyqa"``, ``"neldermead"``, ``"sbplx"``,
-        ``"direct"``; more by :func:`register_optimizer`.
+        ``"direct"``; with gradients (problems that supply them,
+        :meth:`~design.core.problem.DesignProblem.evaluate_with_gradient`): ``"mma"``,
+        ``"slsqp"``, ``"ccsaq"`` (NLopt) and ``"scipy_slsqp"``, ``"trust_constr"`` (scipy);
+        more by :func:`register_optimizer`.
     x0 : mapping or sequence, optional
         Start design (SI); the space's start values by default. Must lie inside the bounds.
     out : path, optional
@@ -392,7 +443,12 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
         "penalty" or "auglag"), ``penalty`` (100, weight of the exact penalty
         ``f + penalty |f_ref| sum max(g, 0)``, ``f_ref`` the first finite objective),
         ``failure_value`` (value of a failed evaluation; default ``f_ref + 1000 |f_ref|``),
-        ``max_time`` [s] (a time limit makes a re-run stop elsewhere: not reproducible).
+        ``max_time`` [s] (a time limit makes a re-run stop elsewhere: not reproducible);
+        mma, slsqp, ccsaq: the same, constraints native only, and ``constraint_margin``
+        (1e-6: the optimiser is asked for ``g <= -constraint_margin``, so that it does not
+        end on an active constraint's infeasible side by round-off). scipy: ``tol`` (1e-8, on the
+        objective divided by the first one's magnitude, in normalised variables),
+        ``max_iterations`` (100), ``failure_value``, ``constraint_margin`` (1e-6).
 
     Returns
     -------
@@ -400,11 +456,12 @@ def optimize(problem, method: str, x0=None, *, out=None, executor=None,
     """
     t0 = time.perf_counter()
     spec = get_optimizer(method)
+    _check_gradients(problem, spec)
     opts, max_evaluations = _resolve_options(spec, options, max_evaluations)
     x0 = _start_design(problem, x0)
     logged = _logged_problem(problem, out)
     counts = (logged.n_computed, logged.n_reused)
-    run = EvaluationRun(logged, max_evaluations, callback, executor)
+    run = EvaluationRun(logged, max_evaluations, callback, executor, spec.needs_gradient)
     outcome = _dispatch(run, x0, spec, max_evaluations, opts)
     method = spec.name
     result = _result(run, method, outcome, counts, t0,

@@ -152,5 +152,15 @@ class DesignSpace:
             out[f"{n}_upper"] = float((v - hi) / s)
         return out
 
+    def bound_margin_gradients(self) -> dict:
+        """The gradients of :meth:`bound_margins` (constant): ``{<name>_lower: {variable:
+        d g / d variable}, ...}`` in 1/(the variable's unit)."""
+        out = {}
+        for i, (n, s) in enumerate(zip(self.names, self.upper - self.lower)):
+            for side, sign in (("lower", -1.0), ("upper", 1.0)):
+                out[f"{n}_{side}"] = {m: sign / float(s) if j == i else 0.0
+                                      for j, m in enumerate(self.names)}
+        return out
+
     def to_dicts(self) -> list:
         return [v.to_dict() for v in self.variables]

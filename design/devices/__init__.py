@@ -16,6 +16,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".gripper_problem": ("GRIPPER_SPACE", "GripperProblem"),
     ".gripper_drive": ("GripperDrive", "gripper_circuits"),
     ".limits": ("SU8_TG",),
+    ".fold_target": ("FoldTargetProblem",),
     ".miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
                "heated_creases", "lift_per_power_table", "lift_power", "make_miura_model"),
 }, renamed="design._moved")
@@ -28,4 +29,6 @@ __all__ = [
     # Miura lifter
     "MiuraDesign", "make_miura_model", "heated_creases", "lift_power", "LiftPowerResult",
     "lift_per_power_table", "MiuraProblem", "MIURA_SPACE",
+    # heater powers for target fold angles (with gradients)
+    "FoldTargetProblem",
 ]

@@ -426,7 +426,8 @@ def test_registry_lists_builtins_and_the_cli_offers_registered_methods(toy, caps
 
 def test_unknown_or_clashing_optimiser_names(toy):
     with pytest.raises(ParameterError, match="Unknown optimisation method 'anneal'; use one of "
-                                             "cd, cobyla, bobyqa, neldermead, sbplx, direct, toy"):
+                                             "cd, cobyla, bobyqa, neldermead, sbplx, direct, mma, "
+                                             "slsqp, ccsaq, scipy_slsqp, trust_constr, toy"):
         optimize(Quad(), "anneal")
     with pytest.raises(ParameterError, match=r"\['toy'\] already registered"):
         register_optimizer("toy", _random_search, description="twice")
