@@ -25,7 +25,7 @@ from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
 from .branches import BranchSwitch, gave_up_at, judge, leave_critical, leave_turn, soft_mode
 from .descent import BRANCHES
-from .nonlinear import iterate, march, residual_at_round_off
+from .nonlinear import GROWTH_ITERATIONS, iterate, march, residual_at_round_off
 from .stability import quick_stability
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton",
@@ -457,7 +457,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         residuals.append(res.residual_norms)
         stability.append(st)
         return callback is not None and callback(t, u)
-    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts)
+    easy = GROWTH_ITERATIONS * options.max_iter
+    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
+                grow=lambda res: res.iterations <= easy)
     extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
