@@ -355,8 +355,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
 
     The path is split into ``increments`` equal increments. A failed increment is halved
-    (up to ``options.max_cuts`` times in a row); after a success the increment doubles
-    again up to its nominal size. ``callback(t, u)``, if given, is called after every
+    (up to ``options.max_cuts`` times in a row); after two successes in a row, the last in at
+    most :data:`~simulator.solvers.nonlinear.GROWTH_ITERATIONS` of ``options.max_iter``
+    corrections, the increment doubles again up to its nominal size. ``callback(t, u)``, if given, is called after every
     accepted increment and may return True to stop early (status "stopped").
 
     Every converged increment is checked for stability (``options.stability``,
