@@ -244,7 +244,7 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     best_rn, best_ev, best_u = out.best or (math.inf, None, None)
     if best_rn <= stall:
         return _newton_result(best_u, True, options.max_iter, res_norms, cor_norms,
-                              f"converged (residual stalled at {best_rn:.3g} N, at most "
+                              f"{_STALLED} at {best_rn:.3g} N, at most "
                               f"{options.stall_rtol:g} of the load)", best_ev)
     return _newton_result(u0, False, options.max_iter, res_norms, cor_norms, out.message)
 
@@ -324,6 +324,10 @@ def _operations(system, spring_rest, backend="auto"):
             du = linear_solve(K, r, backend=backend)
             return _SINGULAR if du is None else du
     return evaluate, correct
+
+
+#: How the message of a solve accepted by the stall rule (``NewtonOptions.stall_rtol``) begins.
+_STALLED = "converged (residual stalled"
 
 
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):
@@ -458,9 +462,11 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         residuals.append(res.residual_norms)
         stability.append(st)
         return callback is not None and callback(t, u)
+    # an easy success: few corrections, or the stall rule's (its count, max_iter, says that the
+    # residual has a floor, not that the increment was hard: growing after it costs no failures)
     easy = GROWTH_ITERATIONS * options.max_iter
     run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
-                grow=lambda res: res.iterations <= easy)
+                grow=lambda res: res.iterations <= easy or res.message.startswith(_STALLED))
     extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
