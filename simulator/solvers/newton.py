@@ -192,9 +192,6 @@ class PathResult:
     stability : list of Stability or None, per accepted increment (None: not checked,
         ``NewtonOptions.stability="off"``)
     switches : list of BranchSwitch, the unstable states met and where they were left
-    increment : float
-        The increment in t in force at the end (after any growth): where a similar path may
-        start (``follow_path``'s ``first_increment``).
     """
 
     success: bool
@@ -209,7 +206,6 @@ class PathResult:
     evaluation: SystemValues | None = None
     stability: list = field(default_factory=list)
     switches: list = field(default_factory=list)
-    increment: float = 1.0
 
     @property
     def stable(self) -> bool | None:
@@ -359,8 +355,7 @@ def _turns(u_new, u_old, slope, dt) -> bool:
 def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, f_end: np.ndarray,
                 rest_start: np.ndarray, rest_end: np.ndarray, increments: int,
                 options: NewtonOptions = NewtonOptions(), callback=None,
-                locate_tol: float = LOCATE_TOL, previous=None,
-                first_increment: float | None = None) -> PathResult:
+                locate_tol: float = LOCATE_TOL, previous=None) -> PathResult:
     """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
 
     The path is split into ``increments`` equal increments. A failed increment is halved
@@ -382,9 +377,6 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     :data:`TURN_TOLERANCE` is halved in the same way: near a bifurcation that the states on
     either side of it both pass as stable, Newton may otherwise jump to whichever branch its
     increment reaches.
-
-    ``first_increment``: the first increment in t (None: ``1 / increments``), e.g. the
-    ``increment`` a similar path ended with (:class:`PathResult`); it grows back as above.
     """
     integer("increments", increments)
     u, history, residuals, last_ev = u0.copy(), [], [], None
@@ -474,9 +466,8 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     # residual has a floor, not that the increment was hard: growing after it costs no failures)
     easy = GROWTH_ITERATIONS * options.max_iter
     run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
-                grow=lambda res: res.iterations <= easy or res.message.startswith(_STALLED),
-                first=first_increment)
-    extra = {"stability": stability, "switches": switches, "increment": run.dt}
+                grow=lambda res: res.iterations <= easy or res.message.startswith(_STALLED))
+    extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
                f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}"

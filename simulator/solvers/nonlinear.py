@@ -293,7 +293,7 @@ class March:
 
 
 def march(attempt, accept, increments: int, max_cuts: int, max_total_cuts: int,
-          what: str = "increment", grow=None, first: float | None = None) -> March:
+          what: str = "increment", grow=None) -> March:
     """Drive ``t`` from 0 to 1 in ``increments`` equal increments with step cutting.
 
     ``attempt(t_try) -> (ok, outcome)`` tries the increment to ``t_try`` from the last
@@ -308,13 +308,10 @@ def march(attempt, accept, increments: int, max_cuts: int, max_total_cuts: int,
     path whose every increment is hard, such as one accepted by Newton's stall rule near a
     limit point, still gets back to its nominal increment, at a quarter of the rate). Growth
     only decides how soon the increment returns to its nominal size; failures are halved as
-    before, so the points where a path is located by halving are not coarser. ``first``: the
-    first increment (None: the nominal one; larger is taken as nominal), e.g. the one a
-    similar path ended with (a sequence of heating increments), so that its failed attempts
-    at larger ones are not repeated; it grows as above.
+    before, so the points where a path is located by halving are not coarser.
     """
     nominal = 1.0 / increments
-    t, dt, in_row, cuts = 0.0, nominal if first is None else min(nominal, first), 0, 0
+    t, dt, in_row, cuts = 0.0, nominal, 0, 0
     held = 0                    # successes since the increment last changed
     while t < 1.0 - END_TOL:
         t_try = min(1.0, t + dt)

@@ -127,9 +127,6 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     watch = CrossingWatch(mesh, state.u)
     n_inc = len(powers)
     temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
-    # each increment's path starts with the increment (in t) the last one ended with: a
-    # stiff increment's failed attempts at larger ones are not repeated every increment
-    first = None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     settled = coupling.mode == "settled" and not coupling.fixed_shape
     exact = False           # the integral loss's operator rebuilt at the end shape (theory 6.6)
@@ -150,13 +147,10 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
             # increment's, so it needs no step cuts (the end state is the same equilibrium,
             # reached along the branch the first iteration followed)
             path = follow_path(context.system, u_from, f, f, spring_from, rest, 1,
-                               context.options, locate_tol=LOCATE_TOL * n_inc, previous=came,
-                               first_increment=first if u_from is u else None)
+                               context.options, locate_tol=LOCATE_TOL * n_inc, previous=came)
             rec.iterations += path.iterations
             rec.cuts += path.cuts
             switched = switched or bool(path.switches)
-            if u_from is u:
-                increment = path.increment
             if not path.success:
                 last = rec._rows["temperature"][-1] if len(rec) else state.temperature
                 message = (f"increment {s}/{n_inc} (crease power up to "
@@ -185,7 +179,6 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                            "raise max_coupling_iterations", s, n_inc, coupling.max_iterations,
                            change, coupling.tol)
         previous = None if switched else (1.0, u)     # the direction the path came
-        first = increment
         u, spring, evaluation = path.u, rest, path.evaluation
         lam0, lam1 = (s - 1) / n_inc, s / n_inc
         if lam is not None:
