@@ -25,7 +25,7 @@ from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
 from .branches import BranchSwitch, gave_up_at, judge, leave_critical, leave_turn, soft_mode
 from .descent import BRANCHES
-from .nonlinear import iterate, march, residual_at_round_off
+from .nonlinear import GROWTH_ITERATIONS, iterate, march, residual_at_round_off
 from .stability import quick_stability
 
 __all__ = ["NewtonOptions", "NewtonResult", "PathResult", "newton",
@@ -244,7 +244,7 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     best_rn, best_ev, best_u = out.best or (math.inf, None, None)
     if best_rn <= stall:
         return _newton_result(best_u, True, options.max_iter, res_norms, cor_norms,
-                              f"converged (residual stalled at {best_rn:.3g} N, at most "
+                              f"{_STALLED} at {best_rn:.3g} N, at most "
                               f"{options.stall_rtol:g} of the load)", best_ev)
     return _newton_result(u0, False, options.max_iter, res_norms, cor_norms, out.message)
 
@@ -326,6 +326,10 @@ def _operations(system, spring_rest, backend="auto"):
     return evaluate, correct
 
 
+#: How the message of a solve accepted by the stall rule (``NewtonOptions.stall_rtol``) begins.
+_STALLED = "converged (residual stalled"
+
+
 def _newton_result(u, converged, iterations, res, cor, message, ev=None):
     return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), success=converged,
                         iterations=iterations, residual_norms=np.array(res),
@@ -355,8 +359,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     """Follow ``f(t) = f_start + t (f_end - f_start)``, ``rest(t)`` likewise, for t in [0, 1].
 
     The path is split into ``increments`` equal increments. A failed increment is halved
-    (up to ``options.max_cuts`` times in a row); after a success the increment doubles
-    again up to its nominal size. ``callback(t, u)``, if given, is called after every
+    (up to ``options.max_cuts`` times in a row); after two successes in a row, the last in at
+    most :data:`~simulator.solvers.nonlinear.GROWTH_ITERATIONS` of ``options.max_iter``
+    corrections, the increment doubles again up to its nominal size. ``callback(t, u)``, if given, is called after every
     accepted increment and may return True to stop early (status "stopped").
 
     Every converged increment is checked for stability (``options.stability``,
@@ -457,7 +462,11 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
         residuals.append(res.residual_norms)
         stability.append(st)
         return callback is not None and callback(t, u)
-    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts)
+    # an easy success: few corrections, or the stall rule's (its count, max_iter, says that the
+    # residual has a floor, not that the increment was hard: growing after it costs no failures)
+    easy = GROWTH_ITERATIONS * options.max_iter
+    run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
+                grow=lambda res: res.iterations <= easy or res.message.startswith(_STALLED))
     extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "

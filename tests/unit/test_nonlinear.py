@@ -10,7 +10,7 @@ import pytest
 
 from types import SimpleNamespace as NS
 
-from simulator.solvers.nonlinear import ROUND_OFF, bisect, iterate, limit_step, march
+from simulator.solvers.nonlinear import GROWTH_PATIENCE, ROUND_OFF, bisect, iterate, limit_step, march
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
@@ -194,3 +194,40 @@ def test_reference_loop_measures_before_the_update():
     out = iterate(Cubic([2.0], singular_at=1), max_iter=30, atol=1e-8, rtol=0.0, size=1.0,
                   reference_loop=True)
     assert not out.success and out.reason == "no correction" and out.iterations == 1
+
+
+def test_march_grows_only_after_an_easy_success():
+    """``grow(outcome)`` False keeps the increment cut (a hard success's double would fail);
+    True (or no ``grow``) doubles it after two successes in a row."""
+    def run(grow):
+        tried, last = [], [0.0]
+
+        def attempt(t):
+            tried.append(round(t, 6))
+            return t - last[0] <= 0.25 + 1e-12, ("hard" if t <= 0.5 else "easy")
+
+        def accept(t, outcome):
+            last[0] = t
+            return False
+        out = march(attempt, accept, 1, max_cuts=5, max_total_cuts=20, grow=grow)
+        assert out.status == "converged" and out.t == 1.0
+        return tried
+    assert run(None) == [1.0, 0.5, 0.25, 0.5, 1.0, 0.75, 1.0]
+    assert run(lambda o: o == "easy") == [1.0, 0.5, 0.25, 0.5, 0.75, 1.0]   # no failed double
+
+
+def test_march_grows_after_patience_successes_even_if_none_was_easy():
+    """A path of hard increments (``grow`` never True) still doubles its increment after
+    GROWTH_PATIENCE successes at it (a path accepted by Newton's stall rule must not crawl)."""
+    def run(grow):
+        tried = []
+
+        def attempt(t):
+            tried.append(round(t, 6))
+            return len(tried) > 3, t                   # the first three attempts fail
+        out = march(attempt, lambda t, o: False, 1, max_cuts=5, max_total_cuts=20, grow=grow)
+        assert out.status == "converged" and out.cuts == 3
+        return tried
+    assert GROWTH_PATIENCE == 4
+    assert run(lambda o: False) == [1.0, 0.5, 0.25, 0.125, 0.25, 0.375, 0.5, 0.75, 1.0]
+    assert run(None) == [1.0, 0.5, 0.25, 0.125, 0.25, 0.5, 1.0]
