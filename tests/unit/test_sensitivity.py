@@ -12,6 +12,7 @@ W/(m K)); every run re-solves the steady state from scratch with Newton's residu
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -70,9 +71,10 @@ def _central(setup, objectives, h, **plus_minus):
     return [(_value(plus, o) - _value(minus, o)) / (2 * h) for o in objectives]
 
 
-def _agree(adjoint, fd):
-    assert fd != 0
-    assert abs(adjoint - fd) <= RTOL * abs(fd), (adjoint, fd, abs(adjoint / fd - 1))
+def _error(adjoint, fd) -> float:
+    """Relative difference of the adjoint gradient from the central difference ``fd``
+    (infinite where ``fd`` is 0: a difference that moves nothing checks nothing)."""
+    return abs(adjoint - fd) / abs(fd) if fd != 0 else math.inf
 
 
 @pytest.fixture(scope="module")
@@ -100,11 +102,11 @@ def test_single_fold_power_and_rest_offset(single):
     h = _step(0.02, "power")
     for g, fd in zip(grads, _central(setup, OBJECTIVES, h,
                                      power=({2: 0.02 + h}, {2: 0.02 - h}))):
-        _agree(g.gradient["power[2]"], fd)
+        assert _error(g.gradient["power[2]"], fd) <= RTOL
     h = _step(0.0, "rest_offset")
     for g, fd in zip(grads[:1], _central(setup, OBJECTIVES[:1], h,
                                          folds=({2: h}, {2: -h}))):
-        _agree(g.gradient["rest_offset[2]"], fd)
+        assert _error(g.gradient["rest_offset[2]"], fd) <= RTOL
     assert grads[0].units["power[2]"] == "rad/W" and grads[1].units["power[2]"] == "K/W"
 
 
@@ -117,16 +119,21 @@ def test_single_fold_actuation_and_medium(single):
     h = _step(da, "delta_alpha")
     models = [dataclasses.replace(model, actuators=dataclasses.replace(
         acts, delta_alpha={2: da + s * h})) for s in (1, -1)]
-    _agree(g.gradient["delta_alpha[2]"], _central(setup, [FoldAngle(2)], h,
-                                                  model=models)[0])
+    fd = _central(setup, [FoldAngle(2)], h, model=models)[0]
+    assert _error(g.gradient["delta_alpha[2]"], fd) <= RTOL
+    h, models = _medium_models(model)
+    fd = _central(setup, [FoldAngle(2)], h, model=models)[0]
+    assert _error(g.gradient["medium_conductivity"], fd) <= RTOL
+
+
+def _medium_models(model):
+    """The step and the models with the medium's conductivity moved by +- it."""
     medium = model.thermal.medium
     k = medium.thermal_conductivity
     h = _step(k, "medium_conductivity")
-    models = [dataclasses.replace(model, thermal=dataclasses.replace(
+    return h, [dataclasses.replace(model, thermal=dataclasses.replace(
         model.thermal, medium=medium.with_properties(thermal_conductivity=k + s * h)))
         for s in (1, -1)]
-    _agree(g.gradient["medium_conductivity"], _central(setup, [FoldAngle(2)], h,
-                                                       model=models)[0])
 
 
 def _bimorph_models(model, name, kind):
@@ -138,17 +145,13 @@ def _bimorph_models(model, name, kind):
         acts, bimorph=dataclasses.replace(b, **{name: v + s * h}))) for s in (1, -1)]
 
 
-@pytest.mark.parametrize("name", ["E1", "t2"])
+@pytest.mark.parametrize("name", ["E1", "t2", "E2", "t1"])
 def test_single_fold_bimorph_layers(single, name):
     setup, result = single
     g = differentiate(result, FoldAngle(2), "bimorph")
     h, models = _bimorph_models(setup.model, name, name[0])
-    _agree(g.gradient[name], _central(setup, [FoldAngle(2)], h, model=models)[0])
-
-
-@pytest.mark.parametrize("name", ["E2", "t1"])
-def test_single_fold_bimorph_layers_more(single, name):
-    test_single_fold_bimorph_layers(single, name)
+    fd = _central(setup, [FoldAngle(2)], h, model=models)[0]
+    assert _error(g.gradient[name], fd) <= RTOL
 
 
 def test_double_fold_powers(double):
@@ -161,23 +164,18 @@ def test_double_fold_powers(double):
         h = _step(setup.power[c], "power")
         pm = [{**setup.power, c: setup.power[c] + s * h} for s in (1, -1)]
         for g, fd in zip(grads, _central(setup, objectives, h, power=pm)):
-            _agree(g.gradient[f"power[{c}]"], fd)
+            assert _error(g.gradient[f"power[{c}]"], fd) <= RTOL
 
 
 def test_double_fold_rest_offset_and_medium(double):
     setup, result = double
     g = differentiate(result, FoldAngle(5), ("rest_offset", "medium_conductivity"))
     h = _step(0.0, "rest_offset")
-    _agree(g.gradient["rest_offset[2]"], _central(
-        setup, [FoldAngle(5)], h, folds=({2: h, 5: 0.0}, {2: -h, 5: 0.0}))[0])
-    model, medium = setup.model, setup.model.thermal.medium
-    k = medium.thermal_conductivity
-    h = _step(k, "medium_conductivity")
-    models = [dataclasses.replace(model, thermal=dataclasses.replace(
-        model.thermal, medium=medium.with_properties(thermal_conductivity=k + s * h)))
-        for s in (1, -1)]
-    _agree(g.gradient["medium_conductivity"], _central(setup, [FoldAngle(5)], h,
-                                                       model=models)[0])
+    fd = _central(setup, [FoldAngle(5)], h, folds=({2: h, 5: 0.0}, {2: -h, 5: 0.0}))[0]
+    assert _error(g.gradient["rest_offset[2]"], fd) <= RTOL
+    h, models = _medium_models(setup.model)
+    fd = _central(setup, [FoldAngle(5)], h, model=models)[0]
+    assert _error(g.gradient["medium_conductivity"], fd) <= RTOL
 
 
 def test_double_fold_actuation(double):
@@ -188,9 +186,11 @@ def test_double_fold_actuation(double):
     h = _step(da, "delta_alpha")
     models = [dataclasses.replace(setup.model, actuators=dataclasses.replace(
         acts, delta_alpha={2: da + s * h, 5: acts.delta_alpha[5]})) for s in (1, -1)]
-    _agree(g.gradient["delta_alpha[2]"], _central(setup, [FoldAngle(5)], h, model=models)[0])
+    fd = _central(setup, [FoldAngle(5)], h, model=models)[0]
+    assert _error(g.gradient["delta_alpha[2]"], fd) <= RTOL
     h, models = _bimorph_models(setup.model, "t1", "t")
-    _agree(g.gradient["t1"], _central(setup, [FoldAngle(5)], h, model=models)[0])
+    fd = _central(setup, [FoldAngle(5)], h, model=models)[0]
+    assert _error(g.gradient["t1"], fd) <= RTOL
 
 
 def test_adjoint_equals_forward_and_callable(double):
@@ -302,7 +302,8 @@ def test_miura_lifter_over_a_substrate():
     h = _step(power, "power")
     plus, minus = run({**powers, c: power + h}), run({**powers, c: power - h})
     for g, o in zip(grads, objectives):
-        _agree(g.gradient[f"power[{c}]"], (_value(plus, o) - _value(minus, o)) / (2 * h))
+        fd = (_value(plus, o) - _value(minus, o)) / (2 * h)
+        assert _error(g.gradient[f"power[{c}]"], fd) <= RTOL
 
 
 def test_fold_angle_gradient_on_bent_panels(double):
@@ -348,5 +349,5 @@ def test_single_fold_resting_on_the_substrate():
     g = differentiate(result, FoldAngle(2), "power")
     assert g.success, g.message
     h = _step(power, "power")
-    _agree(g.gradient["power[2]"], (_value(run(power + h), FoldAngle(2))
-                                    - _value(run(power - h), FoldAngle(2))) / (2 * h))
+    fd = (_value(run(power + h), FoldAngle(2)) - _value(run(power - h), FoldAngle(2))) / (2 * h)
+    assert _error(g.gradient["power[2]"], fd) <= RTOL
