@@ -161,6 +161,9 @@ class NewtonResult:
     correction_norms: np.ndarray
     message: str
     evaluation: SystemValues | None = None
+    #: Accepted by the stall rule (``NewtonOptions.stall_rtol``): the residual has a floor
+    #: above the tolerance; ``iterations`` is then ``max_iter``.
+    stalled: bool = False
 
     @property
     def status(self) -> str:
@@ -244,8 +247,8 @@ def newton(system: EquilibriumSystem, u0: np.ndarray, f_ext: np.ndarray, spring_
     best_rn, best_ev, best_u = out.best or (math.inf, None, None)
     if best_rn <= stall:
         return _newton_result(best_u, True, options.max_iter, res_norms, cor_norms,
-                              f"{_STALLED} at {best_rn:.3g} N, at most "
-                              f"{options.stall_rtol:g} of the load)", best_ev)
+                              f"converged (residual stalled at {best_rn:.3g} N, at most "
+                              f"{options.stall_rtol:g} of the load)", best_ev, stalled=True)
     return _newton_result(u0, False, options.max_iter, res_norms, cor_norms, out.message)
 
 
@@ -326,14 +329,11 @@ def _operations(system, spring_rest, backend="auto"):
     return evaluate, correct
 
 
-#: How the message of a solve accepted by the stall rule (``NewtonOptions.stall_rtol``) begins.
-_STALLED = "converged (residual stalled"
-
-
-def _newton_result(u, converged, iterations, res, cor, message, ev=None):
+def _newton_result(u, converged, iterations, res, cor, message, ev=None, stalled=False):
     return NewtonResult(u=np.asarray(u).reshape(-1, 3).copy(), success=converged,
                         iterations=iterations, residual_norms=np.array(res),
-                        correction_norms=np.array(cor), message=message, evaluation=ev)
+                        correction_norms=np.array(cor), message=message, evaluation=ev,
+                        stalled=stalled)
 
 
 #: Largest departure of an increment's displacement from the path's direction so far, relative
@@ -361,8 +361,9 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     The path is split into ``increments`` equal increments. A failed increment is halved
     (up to ``options.max_cuts`` times in a row); after two successes in a row, the last in at
     most :data:`~simulator.solvers.nonlinear.GROWTH_ITERATIONS` of ``options.max_iter``
-    corrections, the increment doubles again up to its nominal size. ``callback(t, u)``, if given, is called after every
-    accepted increment and may return True to stop early (status "stopped").
+    corrections, the increment doubles again up to its nominal size. ``callback(t, u)``, if
+    given, is called after every accepted increment and may return True to stop early (status
+    "stopped").
 
     Every converged increment is checked for stability (``options.stability``,
     :func:`~simulator.solvers.branches.judge`). Where the equilibrium turns unstable at a
@@ -466,7 +467,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     # residual has a floor, not that the increment was hard: growing after it costs no failures)
     easy = GROWTH_ITERATIONS * options.max_iter
     run = march(attempt, accept, increments, options.max_cuts, options.max_total_cuts,
-                grow=lambda res: res.iterations <= easy or res.message.startswith(_STALLED))
+                grow=lambda res: res.iterations <= easy or res.stalled)
     extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "

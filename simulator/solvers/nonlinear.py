@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["ROUND_OFF", "STALL_PATIENCE", "ROUND_OFF_ULPS", "residual_at_round_off", "END_TOL",
-           "GROWTH_ITERATIONS", "GROWTH_PATIENCE", "Iteration", "iterate", "limit_step", "March", "march", "bisect"]
+           "GROWTH_ITERATIONS", "GROWTH_PATIENCE", "Iteration", "iterate", "limit_step", "March",
+           "march", "bisect"]
 
 logger = logging.getLogger(__name__)
 
