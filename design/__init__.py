@@ -39,6 +39,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".analysis.uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem",
                                     "sweep_uncertainty"),
     ".analysis.heaters": ("HeaterAllocation", "allocate_heaters"),
+    ".analysis.tolerance_report": ("SensitivityReport", "sensitivity_report"),
 }, modules={"core": ".core", "devices": ".devices", "analysis": ".analysis"},
     moved="._moved", renamed="._moved")
 
@@ -60,6 +61,8 @@ __all__ = [
     # robustness and fabrication uncertainty
     "residual_fold_grid", "sweep_residual_fold", "RobustGripperProblem", "sweep_uncertainty",
     "GripperSampleProblem", "RobustYieldProblem",
+    # sensitivity of fabrication tolerances
+    "sensitivity_report", "SensitivityReport",
     # heater allocation
     "allocate_heaters", "HeaterAllocation",
     # the namespaces
