@@ -17,7 +17,8 @@ __getattr__, __dir__ = _attach(__name__, {
                      "rank_correlations", "residual_fold_per_crease", "wilson_interval"),
     ".uncertainty_sweep": ("GripperSampleProblem", "RobustYieldProblem", "summarize_yield",
                            "sweep_uncertainty"),
-    ".tolerance_report": ("SensitivityReport", "sensitivity_report"),
+    ".tolerance_report": ("SensitivityReport", "problem_sensitivity_report",
+                          "sensitivity_report"),
     ".tolerance_mc": ("MonteCarloComparison", "monte_carlo_comparison", "perturbed_protocol"),
     ".tolerance_plots": ("plot_tornado",),
     ".heaters": ("ALLOCATION_STATUSES", "HeaterAllocation", "TEMPERATURE_MEASURES",
@@ -34,7 +35,8 @@ __all__ = [
     "summarize_yield", "GripperSampleProblem", "RobustYieldProblem", "residual_fold_per_crease",
     "wilson_interval", "rank_correlations",
     # sensitivity of fabrication tolerances
-    "sensitivity_report", "SensitivityReport", "monte_carlo_comparison", "MonteCarloComparison",
+    "sensitivity_report", "problem_sensitivity_report", "SensitivityReport",
+    "monte_carlo_comparison", "MonteCarloComparison",
     "perturbed_protocol", "plot_tornado",
     # heater allocation
     "allocate_heaters", "linear_allocation", "HeaterAllocation", "ALLOCATION_STATUSES",

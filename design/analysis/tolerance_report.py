@@ -25,7 +25,8 @@ import numpy as np
 
 from simulator import ParameterError
 
-__all__ = ["SensitivityReport", "sensitivity_report", "parameter_kind", "parameter_crease",
+__all__ = ["SensitivityReport", "sensitivity_report", "problem_sensitivity_report",
+           "parameter_kind", "parameter_crease",
            "parameter_display", "value_display", "OUTPUT_DISPLAY", "PARAMETER_DISPLAY"]
 
 logger = logging.getLogger(__name__)
@@ -286,6 +287,35 @@ def sensitivity_report(result, tolerances: dict, outputs: dict | None = None,
     logger.info("sensitivity report: %d outputs, %d parameters, %s", len(outputs),
                 len(tolerances), report.status)
     return replace(report, probability_all=joint)
+
+
+def problem_sensitivity_report(problem, x, tolerances: dict) -> SensitivityReport:
+    """:func:`sensitivity_report` of a design problem at the design ``x``: the problem
+    simulates ``x`` and gives the outputs and limits (its constraints).
+
+    Parameters
+    ----------
+    problem : DesignProblem
+        A problem with ``simulate(x)``, ``outputs()`` and ``limits()``
+        (:class:`design.devices.FoldTargetProblem`: the folds at least their targets, the
+        crease temperatures at most the limit); ``problem.steps(x)`` gives the steps for
+        :func:`~design.analysis.tolerance_mc.monte_carlo_comparison`.
+    x : sequence or dict
+        The design (a vector in the problem's variable order, or {name: value}).
+    tolerances : dict {parameter: float}
+        As for :func:`sensitivity_report`.
+    """
+    missing = [m for m in ("simulate", "outputs", "limits") if not hasattr(problem, m)]
+    if missing:
+        raise ParameterError(f"problem: {type(problem).__name__} has no {', '.join(missing)}; "
+                             "use a FoldTargetProblem, or simulate the design and call "
+                             "sensitivity_report(result, tolerances, outputs, limits).")
+    result = problem.simulate(x)
+    if not result.success:
+        raise ParameterError(f"x: the design's simulation ended {result.status!r} "
+                             f"({result.message}); give a design that simulates.")
+    return sensitivity_report(result, tolerances, outputs=problem.outputs(),
+                              limits=problem.limits())
 
 
 def _check_tolerances(tolerances) -> dict:

@@ -81,29 +81,44 @@ class FoldTargetProblem(DesignProblem):
                 "heat_increments": self.heat_increments,
                 "variables": [v.to_dict() for v in self.space.variables]}
 
-    def _simulate(self, values: dict):
+    def steps(self, x) -> list:
+        """The case's steps with the heating of design ``x`` (a vector or {name: value}):
+        what :meth:`simulate` runs (with :data:`NEWTON`)."""
+        values = self.space.to_mapping(x)
         steps = list(self.case.steps)
         steps[-1] = Heat({c: values[f"power_{c}"] for c in self.creases},
                          increments=self.heat_increments, coupling="settled",
                          coupling_tol=COUPLING_TOL)
-        return simulate(self.case.model, steps, options=NEWTON)
+        return steps
 
-    def _objectives(self):
-        """The constraints' objectives of :mod:`simulator.sensitivity`, by constraint name."""
+    def simulate(self, x):
+        """The :class:`~simulator.results.SimulationResult` of design ``x``."""
+        return simulate(self.case.model, self.steps(x), options=NEWTON)
+
+    def outputs(self) -> dict:
+        """The constraints' objectives of :mod:`simulator.sensitivity`, by constraint name:
+        ``fold_<c>`` (:class:`~simulator.sensitivity.FoldAngle`) of each target crease,
+        ``temperature_<c>`` (the hottest crease node) of each heated crease."""
         from simulator.sensitivity import CreaseTemperature, FoldAngle
 
         return {**{f"fold_{c}": FoldAngle(c) for c in self.targets},
                 **{f"temperature_{c}": CreaseTemperature(c, "crease_max")
                    for c in self.creases}}
 
+    def limits(self) -> dict:
+        """The constraints as bounds of :meth:`outputs`, ``{name: (low, high)}`` [rad, degC]:
+        each fold at least its target, each temperature at most the limit."""
+        return {**{f"fold_{c}": (t, None) for c, t in self.targets.items()},
+                **{f"temperature_{c}": (None, self.temperature_limit) for c in self.creases}}
+
     def _outcome(self, values: dict, gradient: bool) -> EvaluationOutcome:
-        result = self._simulate(values)
+        result = self.simulate(values)
         if not result.success:
             return EvaluationOutcome(math.inf, {}, {}, "failed", result.message)
         from simulator.sensitivity import differentiate
 
         cons, metrics, grads = {}, {}, {}
-        for name, objective in self._objectives().items():
+        for name, objective in self.outputs().items():
             c = int(name.rsplit("_", 1)[1])
             if gradient:
                 sens = differentiate(result, objective, "power")

@@ -198,3 +198,30 @@ def test_report_is_a_frozen_result(report):
     names = list(report.outputs)
     i = names.index("fold_5")
     assert cov[i, i] == pytest.approx(report.sigma["fold_5"] ** 2, rel=1e-12)
+
+
+def test_a_problem_at_a_design_point_reports_its_constraints():
+    """FoldTargetProblem: the outputs and limits are its constraints, and the report's
+    gradients are its constraint gradients unscaled (g = sign (output - bound) / bound)."""
+    from design.analysis import problem_sensitivity_report
+    from design.devices import FoldTargetProblem
+
+    targets = {2: math.radians(30), 5: math.radians(80)}
+    problem = FoldTargetProblem(targets, temperature_limit=250.0)
+    x = [0.01, 0.012]
+    report = problem_sensitivity_report(problem, x, {"power[2]": 1e-4, "power[5]": 1e-4,
+                                                     "t2": 1e-8})
+    assert report.success, report.message
+    assert report.limits == {"fold_2": (targets[2], None), "fold_5": (targets[5], None),
+                             "temperature_2": (None, 250.0), "temperature_5": (None, 250.0)}
+    ev = problem.evaluate_with_gradient(x)
+    for name, grads in ev.constraint_gradients.items():
+        c = int(name.rsplit("_", 1)[1])
+        scale = -targets[c] if name.startswith("fold") else 250.0
+        for k in problem.creases:
+            assert report.gradients[name][f"power[{k}]"] == pytest.approx(
+                grads[f"power_{k}"] * scale, rel=1e-9)
+    mc = monte_carlo_comparison(report, problem.steps(x), n_samples=3, seed=0)
+    assert mc.success and mc.n_failed == 0
+    with pytest.raises(ParameterError, match="has no simulate, outputs, limits"):
+        problem_sensitivity_report(object(), x, {"t2": 1e-8})
