@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -248,8 +249,15 @@ def sensitivity_report(result, tolerances: dict, outputs: dict | None = None,
     from simulator.sensitivity import CreaseTemperature, FoldAngle, differentiate
 
     tolerances = _check_tolerances(tolerances)
-    rec = result.steps[step] if getattr(result, "steps", None) else None
-    if outputs is None and rec is not None:
+    steps = list(getattr(result, "steps", None) or ())
+    if not steps or not hasattr(result, "model"):
+        raise ParameterError(f"result = {type(result).__name__}: give the SimulationResult of "
+                             "a simulation that ends with a Heat step.")
+    try:
+        rec = steps[step]
+    except (IndexError, TypeError):
+        raise ParameterError(f"step = {step!r}; the result has {len(steps)} steps.") from None
+    if outputs is None:
         mesh = result.model.mesh
         heated = [int(c) for c, p in zip(mesh.crease_ids, rec.state.crease_power) if p > 0]
         outputs = {**{f"fold_{c}": FoldAngle(c) for c in heated},
@@ -325,7 +333,8 @@ def _check_tolerances(tolerances) -> dict:
     out = {}
     for p, t in tolerances.items():
         parameter_kind(p)
-        if not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0):
+        if isinstance(t, bool) or not (isinstance(t, numbers.Real) and math.isfinite(t)
+                                       and t >= 0):
             raise ParameterError(f"tolerances[{p!r}] = {t!r}: give a finite standard "
                                  "deviation >= 0 in SI units.")
         out[str(p)] = float(t)

@@ -164,6 +164,18 @@ def test_bad_input_is_refused_naming_the_field(heated):
                                n_samples=2)
 
 
+def test_a_state_that_is_not_steady_is_reported_not_raised():
+    model = get_case("double_fold").model
+    steps = [*_steps()[:2], Heat({2: 0.01, 5: 0.012}, increments=5, coupling="staggered")]
+    report = sensitivity_report(simulate(model, steps), {"power[5]": 1e-4})
+    assert not report.success and report.status == "not_steady"
+    assert report.message.startswith("fold_2: the state does not solve the heat balance")
+    with pytest.raises(ParameterError, match="result = dict: give the SimulationResult"):
+        sensitivity_report({}, {"power[5]": 1e-4})
+    with pytest.raises(ParameterError, match="step = 7; the result has 3 steps"):
+        sensitivity_report(simulate(model, steps), {"power[5]": 1e-4}, step=7)
+
+
 def test_integral_loss_is_refused_as_not_supported():
     case = get_case("double_fold", loss_model="integral", thermal_steps=3, coupling="settled")
     steps = [SelfFold({2: 0.0, 5: 0.0}, increments=5), Heat({2: 0.005}, increments=2)]
