@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from design.core.evaluation_log import EvaluationLog, LoggedProblem
-from design.core.executors import ProcessExecutor, SerialExecutor
+from design.core.executors import SerialExecutor, make_executor
 from design.core.optimize import get_optimizer, optimize
 from design.core.problem import DesignProblem
 from design.core.space import DesignSpace, Variable
@@ -110,10 +110,14 @@ def test_gradient_run_recomputes_logged_designs_without_gradient(tmp_path):
     assert again.n_computed == 1 and ev.objective_gradient == {"x": -2.0, "y": -4.0}
 
 
-def test_process_executor_carries_gradients():
+@pytest.mark.parametrize("kind", ["process", "dask"])
+def test_pooled_executors_carry_gradients(kind):
+    """The process pool and a local Dask cluster return each design's gradients as the serial
+    run computes them."""
     xs = [[0.0, 0.0], [0.5, 1.0], [2.0, -1.0]]
     serial = LoggedProblem(QuadGrad()).evaluate_many(xs, SerialExecutor(), gradient=True)
-    with ProcessExecutor(2) as ex:
+    with make_executor(kind, workers=2) as ex:
+        assert ex.kind == kind
         pooled = LoggedProblem(QuadGrad()).evaluate_many(xs, ex, gradient=True)
     assert [e.objective_gradient for e in pooled] == [e.objective_gradient for e in serial]
     assert [e.constraint_gradients for e in pooled] == [e.constraint_gradients for e in serial]
