@@ -76,11 +76,12 @@ class GripperHeatModel:
         SU-8 face) and of the creases' gold face (theory 4.12); a crease radiates with the
         mean of its two faces'. Default 0 (no radiation, the paper setting); plausible
         0.5-0.9 for the thin polymer films, 0.02-0.05 for evaporated gold.
-    sheet_extrapolation : bool
+    sheet_extrapolation : bool or "shared"
         The steady temperatures extrapolated from the sheet refined ``r`` and ``2 r``,
         ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters` ``sheet_extrapolation``,
-        theory 4.13: the crease metal layer's effect converges so; 5-14 times the evaluation's
-        cost at r = 2). Default False; the integral loss on a sheet refined 2 to 8 only.
+        theory 4.13: the crease metal layer's effect converges so; True, each sheet its own
+        loss operator, 5-14 times the evaluation's cost at r = 2; ``"shared"``, one
+        operator). Default False; the integral loss on a sheet refined 2 to 8 only.
     """
 
     loss_model: str = "integral"
@@ -92,7 +93,7 @@ class GripperHeatModel:
     temperature_dependent_air: bool = False
     emissivity_polymer: float = 0.0
     emissivity_gold: float = 0.0
-    sheet_extrapolation: bool = False
+    sheet_extrapolation: bool | str = False
 
     def __post_init__(self):
         one_of("GripperHeatModel.loss_model", self.loss_model, LOSS_MODELS)
@@ -127,9 +128,12 @@ class GripperHeatModel:
 
     def _check_extrapolation(self):
         """Check :attr:`sheet_extrapolation` (the integral loss, a sheet refined 2 to 8)."""
-        if not isinstance(self.sheet_extrapolation, (bool, np.bool_)):
+        if not (isinstance(self.sheet_extrapolation, (bool, np.bool_))
+                or (isinstance(self.sheet_extrapolation, str)
+                    and self.sheet_extrapolation == "shared")):
             raise ParameterError(f"GripperHeatModel.sheet_extrapolation = "
-                                 f"{self.sheet_extrapolation!r} must be True or False.")
+                                 f"{self.sheet_extrapolation!r} must be True or False, or "
+                                 "'shared' (the two sheets on one loss operator).")
         if self.sheet_extrapolation and (self.loss_model != "integral"
                                          or not 2 <= self.sheet_refinement_in_force <= 8):
             raise ParameterError(

@@ -262,12 +262,15 @@ class ThermalParameters:
         area sums triangle perimeters, theory 4.3). None (default): the loss model's: 1 with
         the chains, :data:`AUTO_SHEET_REFINEMENT` with the integral loss where its dense
         operator allows (:meth:`sheet_refinement_for` says which).
-    sheet_extrapolation : bool
+    sheet_extrapolation : bool or "shared"
         The steady temperatures extrapolated from the sheet refined ``r`` and ``2 r``, ``2
         T(2r) - T(r)`` (Richardson's estimate for an error of first order in the element size,
         theory 4.13: the crease metal layer's effect converges so, not on one sheet); the
-        refinement in force (:meth:`sheet_refinement_for`) must be 2 to 8. Default False. Steady
-        solves only: the time domain and the loss per node of a refined sheet refuse it.
+        refinement in force (:meth:`sheet_refinement_for`) must be 2 to 8. True: each sheet
+        its own integral loss operator; ``"shared"``: both on the r sheet's sub-triangles,
+        one operator (:mod:`~simulator.thermal.shared_loss`: the 2r solve then costs little
+        more than its conduction). Default False. Steady solves only: the time domain and the
+        loss per node of a refined sheet refuse it.
 
     Notes
     -----
@@ -296,7 +299,7 @@ class ThermalParameters:
     crease_conduction: str
     sheet_layers: SheetLayers | None
     sheet_refinement: int | None
-    sheet_extrapolation: bool
+    sheet_extrapolation: bool | str
 
     def __init__(self, env_thickness=None, env_conductivity=None, layers=None,
                  dissipation_angle=None, room_temperature=21.0, boundary_panels=(),
@@ -382,7 +385,8 @@ class ThermalParameters:
             r = (AUTO_SHEET_REFINEMENT if self.sheet_refinement is None
                  else self.sheet_refinement) if n_triangles is None \
                 else self.sheet_refinement_for(n_triangles)
-            return f"; sheet refined r = {r} and {2 * r}, extrapolated"
+            shared = " (one loss operator)" if self.sheet_extrapolation == "shared" else ""
+            return f"; sheet refined r = {r} and {2 * r}, extrapolated{shared}"
         if n_triangles is not None:
             r = self.sheet_refinement_for(n_triangles)
             return f"; sheet refined r = {r}" if r > 1 else ""
@@ -474,7 +478,7 @@ class ThermalParameters:
         ``medium``, ``substrate`` (None, ``"boundary_panels"`` or a plane), room temperature,
         the held panels and nodes, the ``conduction`` (None: the loss model's), the
         ``crease_conduction`` and, where given, the ``sheet_layers``, the
-        ``sheet_refinement`` and ``sheet_extrapolation`` (where True).
+        ``sheet_refinement`` and ``sheet_extrapolation`` (where on).
         :meth:`from_dict` (or ``ThermalParameters(**d)``) reads it back."""
         return {"loss": self.loss.to_dict(), "medium": self.medium.to_dict(),
                 "substrate": None if self.substrate is None else self.substrate.to_dict(),
@@ -486,7 +490,8 @@ class ThermalParameters:
                    else {"sheet_layers": self.sheet_layers.to_dict()}),
                 **({} if self.sheet_refinement is None
                    else {"sheet_refinement": self.sheet_refinement}),
-                **({"sheet_extrapolation": True} if self.sheet_extrapolation else {})}
+                **({"sheet_extrapolation": self.sheet_extrapolation}
+                   if self.sheet_extrapolation else {})}
 
     def describe(self, n_triangles: int | None = None) -> str:
         """One line for figure footers and summaries: the loss, the medium, the substrate (and
@@ -544,11 +549,12 @@ def _sheet_refinement(value, loss) -> int | None:
     return int(value)
 
 
-def _sheet_extrapolation(value, loss, sheet_refinement) -> bool:
+def _sheet_extrapolation(value, loss, sheet_refinement) -> bool | str:
     """The checked :attr:`ThermalParameters.sheet_extrapolation`."""
-    if not isinstance(value, (bool, np.bool_)):
+    if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, str)
+                                                     and value == "shared")):
         raise ParameterError(f"ThermalParameters.sheet_extrapolation = {value!r} must be True or "
-                             "False.")
+                             "False, or 'shared' (the two sheets on one loss operator).")
     if value and (loss.model != "integral" or sheet_refinement == 1
                   or (sheet_refinement or 2) > 8):
         raise ParameterError(
@@ -556,7 +562,7 @@ def _sheet_extrapolation(value, loss, sheet_refinement) -> bool:
             f"and 2r, r from 2 to 8 (theory 4.13); given the {loss.model} loss and "
             f"sheet_refinement = {sheet_refinement!r}: use the integral loss with "
             "sheet_refinement None or 2-8, or sheet_extrapolation=False.")
-    return bool(value)
+    return value if isinstance(value, str) else bool(value)
 
 
 def _plane(substrate: Substrate | None):
