@@ -25,9 +25,8 @@ this benchmark lifts while it runs: 6336 and 11264 sub-triangles, about 0.5 and 
    6 with ``--r6``, a few minutes per design), 2 x (assembly + grip) per heated crease, as
    ``studies/device_power_physics.py`` counts it, with the same estimates from r = 2/4 and
    3/6 of the powers, and the evaluations with the temperatures extrapolated,
-   ``GripperHeatModel(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``), and
-   with the two sheets on one loss operator (``sheet_extrapolation="shared"``), and from the
-   sheets refined r and r + 1 (``"r+1"``), each with the evaluation's CPU time
+   ``GripperHeatModel(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``), and from
+   the sheets refined r and r + 1 (``"r+1"``), each with the evaluation's CPU time
    (``time.process_time``).
 
 Run: ``python benchmarks/bench_layer_convergence.py`` (fixed power to r = 8, about 4 minutes;
@@ -198,13 +197,12 @@ def full_function(rs, extrapolated):
     for cycle, geometry in DESIGNS.items():
         out = {}
         rows = [(r, False) for r in rs] + [(r, e) for r in extrapolated
-                                           for e in (True, "shared", "r+1")]
+                                           for e in (True, "r+1")]
         for r, ext in rows:
             res = {s: _full(geometry, s, r, ext) for s in SETTINGS}
             out[r, ext] = {s: v[0] for s, v in res.items()}
             finer = r + 1 if ext == "r+1" else 2 * r
-            label = (f"r = {r}, {finer} extrapolated" + (", shared" if ext == "shared" else "")
-                     if ext else f"r = {r}")
+            label = f"r = {r}, {finer} extrapolated" if ext else f"r = {r}"
             print(f"  cycle {cycle} {label}: " + "   ".join(
                 f"{s} {p:7.3f} ({a:6.3f}, {g:5.3f}; {t:5.2f} s)"
                 for s, (p, a, g, t) in res.items())

@@ -80,8 +80,8 @@ class GripperHeatModel:
         The steady temperatures extrapolated from the sheet refined ``r`` and ``2 r``,
         ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters` ``sheet_extrapolation``,
         theory 4.13: the crease metal layer's effect converges so; True, each sheet its own
-        loss operator, 5-14 times the evaluation's cost at r = 2; ``"shared"``, one
-        operator; ``"r+1"``, from the sheets refined r and r + 1, about 3 times the cost).
+        loss operator, 5-14 times the evaluation's cost at r = 2; ``"r+1"``, from the sheets
+        refined r and r + 1, about 3 times the cost).
         Default False; the integral loss on a sheet refined 2 to 8 only.
     """
 
@@ -134,8 +134,7 @@ class GripperHeatModel:
                     and self.sheet_extrapolation in SHEET_EXTRAPOLATIONS)):
             raise ParameterError(f"GripperHeatModel.sheet_extrapolation = "
                                  f"{self.sheet_extrapolation!r} must be True or False, or "
-                                 "'shared' (the sheets r and 2r on one loss operator) or 'r+1' "
-                                 "(the sheets r and r + 1).")
+                                 "'r+1' (the sheets r and r + 1).")
         if self.sheet_extrapolation and (self.loss_model != "integral"
                                          or not 2 <= self.sheet_refinement_in_force <= 8):
             raise ParameterError(

@@ -38,9 +38,9 @@ CONDUCTIONS = ("t3", "monotone")
 #: How a crease conducts heat in-plane (:attr:`ThermalParameters.crease_conduction`).
 CREASE_CONDUCTIONS = ("paper", "layers")
 #: The values of :attr:`ThermalParameters.sheet_extrapolation` that extrapolate (theory 4.13):
-#: True, from the sheets refined r and 2r; ``"shared"``, the same on one loss operator;
-#: ``"r+1"``, from the sheets refined r and r + 1 (``(r + 1) T(r + 1) - r T(r)``).
-SHEET_EXTRAPOLATIONS = (True, "shared", "r+1")
+#: True, from the sheets refined r and 2r; ``"r+1"``, from the sheets refined r and r + 1
+#: (``(r + 1) T(r + 1) - r T(r)``).
+SHEET_EXTRAPOLATIONS = (True, "r+1")
 #: Largest sheet refinement accepted (``r^2`` fine triangles per mesh triangle).
 MAX_SHEET_REFINEMENT = 16
 #: The integral loss's sheet refinement where its dense operator allows
@@ -271,10 +271,8 @@ class ThermalParameters:
         T(2r) - T(r)`` (Richardson's estimate for an error of first order in the element size,
         theory 4.13: the crease metal layer's effect converges so, not on one sheet); the
         refinement in force (:meth:`sheet_refinement_for`) must be 2 to 8. True: each sheet
-        its own integral loss operator; ``"shared"``: both on the r sheet's sub-triangles,
-        one operator (:mod:`~simulator.thermal.shared_loss`: cheaper, but not the same
-        estimate); ``"r+1"``: from the sheets refined ``r`` and ``r + 1``, ``(r + 1) T(r + 1)
-        - r T(r)``, each its own operator (about 2.5 times cheaper than True at r = 2, within
+        its own integral loss operator; ``"r+1"``: from the sheets refined ``r`` and ``r +
+        1``, ``(r + 1) T(r + 1) - r T(r)``, each its own operator (about 2.5 times cheaper than True at r = 2, within
         0.6 % of it on the grippers). Default False. Steady solves only: the time domain and
         the loss per node of a refined sheet refuse it.
 
@@ -396,8 +394,7 @@ class ThermalParameters:
             r = (AUTO_SHEET_REFINEMENT if self.sheet_refinement is None
                  else self.sheet_refinement) if n_triangles is None \
                 else self.sheet_refinement_for(n_triangles)
-            shared = " (one loss operator)" if self.sheet_extrapolation == "shared" else ""
-            return f"; sheet refined r = {r} and {self.finer_refinement(r)}, extrapolated{shared}"
+            return f"; sheet refined r = {r} and {self.finer_refinement(r)}, extrapolated"
         if n_triangles is not None:
             r = self.sheet_refinement_for(n_triangles)
             return f"; sheet refined r = {r}" if r > 1 else ""
@@ -565,8 +562,7 @@ def _sheet_extrapolation(value, loss, sheet_refinement) -> bool | str:
     if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, str)
                                                      and value in SHEET_EXTRAPOLATIONS)):
         raise ParameterError(f"ThermalParameters.sheet_extrapolation = {value!r} must be True or "
-                             "False, or 'shared' (the sheets r and 2r on one loss operator) or "
-                             "'r+1' (the sheets r and r + 1).")
+                             "False, or 'r+1' (the sheets r and r + 1).")
     if value and (loss.model != "integral" or sheet_refinement == 1
                   or (sheet_refinement or 2) > 8):
         raise ParameterError(

@@ -85,16 +85,10 @@ class IntegralOperator:
         the diagonal (:func:`lump_couplings`; ``IntegralLoss.lumped``), else the consistent
         ``M^T S^-1 M``. :meth:`sub_triangle_heat` is the consistent operator's either way
         (the lumped conductance loses the same total heat, not the same heat per node).
-    extra : (n_sub, k) array, optional
-        Further columns of ``M``: the sub-triangle means of another discretisation of the
-        sheet's temperature (the sheet refined 2r of ``sheet_extrapolation="shared"``, theory
-        4.13), sharing this operator's ``S``; :meth:`loss_matrix` is then ``(n_sheet + k)^2``,
-        the conductance on :attr:`nodes` followed by that of the ``k`` further unknowns and
-        their couplings. Not with ``lumped``.
     """
 
     def __init__(self, triangles, n_nodes: int, conductivity: float, refinement: int,
-                 plane=None, shape_tol: float = 0.0, lumped: bool = False, extra=None):
+                 plane=None, shape_tol: float = 0.0, lumped: bool = False):
         self.triangles = np.asarray(triangles, np.int64).reshape(-1, 3)
         self.n_nodes, self.conductivity, self.plane = int(n_nodes), float(conductivity), plane
         self.shape_tol = float(shape_tol)
@@ -126,14 +120,6 @@ class IntegralOperator:
         np.add.at(M, (rows, cols), np.tile(bary_centroids, (len(self.triangles), 1)).ravel())
         self.nodes = np.unique(self.triangles)
         self.M = M[:, self.nodes]                                    # only the sheet's nodes
-        #: the further columns of ``M`` (``extra``), or None
-        self.M_extra = None
-        if extra is not None:
-            extra = np.asarray(extra, float)
-            if extra.ndim != 2 or len(extra) != self.n_sub or self.lumped:
-                raise ValueError(f"IntegralOperator extra must be ({self.n_sub}, k) and not "
-                                 f"lumped, got shape {extra.shape}, lumped = {self.lumped}")
-            self.M_extra = extra
         self._cache = None
         self._warned = False             # the warning of an operator not positive definite
         #: ``[positions, distances]`` of the last :meth:`_distances` call; operators of the
@@ -258,8 +244,7 @@ class IntegralOperator:
         from nodal rises to sub-triangle heats."""
         full = self.sub_triangles(x)
         xp, flat = self._pressed(x)
-        M = self.M if self.M_extra is None else np.hstack([self.M, self.M_extra])
-        sub, edges = (full if xp is x else self.sub_triangles(xp)), self._edges
+        sub, M, edges = (full if xp is x else self.sub_triangles(xp)), self.M, self._edges
         if flat is not None:             # on the substrate: no potential, no unknown
             sub, M, edges = sub[~flat], M[~flat], edges[~flat]
         diam = None
@@ -267,9 +252,7 @@ class IntegralOperator:
             S, diam = single_layer_operator(sub, self.conductivity, self.plane, edges=edges)
             L, heat, definite = self._factorise(S, M)
         else:                            # the whole sheet lies on the substrate
-            L, heat, definite = np.zeros((M.shape[1],) * 2), None, True
-        if self.M_extra is not None and heat is not None:
-            heat = _first_columns(heat, self.M_extra.shape[1])
+            L, heat, definite = np.zeros((len(self.nodes),) * 2), None, True
         if flat is not None:
             heat = _padded(heat, ~flat, self.n_sub)
         if not definite and not self._warned:
@@ -333,7 +316,7 @@ class IntegralOperator:
 
     def loss_matrix(self, x) -> np.ndarray:
         """Loss conductance ``L = M^T S^-1 M`` [W/K] on :attr:`nodes`, (n_sheet, n_sheet)
-        (lumped if :attr:`lumped`; with ``extra`` columns ``(n_sheet + k)^2``)."""
+        (lumped if :attr:`lumped`)."""
         return self._operator(x).L
 
     def sub_triangle_heat(self, x, rise) -> np.ndarray:
@@ -366,15 +349,6 @@ def plane_heights(x, plane, nodes):
     origin, normal = (np.asarray(v, float) for v in plane)
     h = (x - origin) @ normal
     return h, TOUCH_TOLERANCE * float(np.ptp(x[nodes], axis=0).max())
-
-
-def _first_columns(heat, k):
-    """``heat(rise_sheet)`` of an operator with ``k`` further columns (``extra``) from its
-    ``heat`` of all columns: the further unknowns' rise 0."""
-    def first(rise):
-        rise = np.asarray(rise, float)
-        return heat(np.concatenate([rise, np.zeros((k,) + rise.shape[1:])]))
-    return first
 
 
 def _padded(heat, live, n_sub):

@@ -319,8 +319,7 @@ def sheet_levels(loss, r: int = 1) -> tuple[int, int | None]:
     return m_f, (max(m_f // 2, 1) if loss.extrapolated else None)
 
 
-def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: int = 1,
-                      extra=None):
+def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: int = 1):
     """The integral loss operator of :class:`~simulator.thermal.ThermalParameters`
     ``params`` on the sheet ``triangles`` over the substrate ``plane`` ((point, unit normal) or
     None), whose ``loss`` is an :class:`~simulator.thermal.IntegralLoss`: an
@@ -329,9 +328,7 @@ def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: 
     (``IntegralLoss.takes_fast_path``) a
     :class:`~simulator.thermal.integral_fast.FastIntegralOperator` of the same levels (plain or extrapolated, kept within ``shape_tol``). On the fine triangles
     of a sheet refined ``sheet_refinement`` the levels of :func:`sheet_levels` (dense only),
-    the cheap level of the correction the partner where that is 1 (one operator). ``extra``:
-    ``level -> (n_sub, k)`` further columns of every level's interpolation
-    (:class:`IntegralOperator` ``extra``; dense, not lumped)."""
+    the cheap level of the correction the partner where that is 1 (one operator)."""
     loss = params.loss
     m, c = sheet_levels(loss, sheet_refinement)
     k = params.medium.thermal_conductivity
@@ -357,8 +354,7 @@ def integral_operator(triangles, n_nodes, params, plane=None, sheet_refinement: 
     memo, heights = [None, None], [None, None, None]   # the levels share the sheet's distances
 
     def level(r, lumped=False):
-        out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol, lumped,
-                               None if extra is None else extra(r))
+        out = IntegralOperator(triangles, n_nodes, k, r, plane, loss.shape_tol, lumped)
         out.distance_memo, out.height_memo = memo, heights    # and heights
         return out
 

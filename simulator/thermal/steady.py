@@ -45,7 +45,6 @@ from .conduction import SheetConduction
 from .monotone import MonotoneConduction
 from .nonlinear import NonlinearLoss, radiation, solve_heat_balance
 from .refined import RefinedSheet
-from .shared_loss import SharedSheetLoss
 from .substrate import substrate_plane, warn_no_plane
 
 __all__ = ["ThermalModel", "heat_weights", "thermal_model"]
@@ -179,16 +178,9 @@ class ThermalModel:
             R = self.params.finer_refinement(r)
             self.sheet_2r = RefinedSheet(self.mesh, R)
             self.extrapolation_weights = (R / (R - r), -r / (R - r))
-        if mode == "shared":            # one loss operator for both sheets
-            pair = SharedSheetLoss(self.sheet, self.sheet_2r, params)
-            self.fine_model = _SharedLossModel(self.sheet.mesh, params, warn_no_plane,
-                                               actuators, pair)
-            self.fine_model_2r = _SharedLossModel(self.sheet_2r.mesh, params, False,
-                                                  actuators, pair)
-        else:
-            self.fine_model = ThermalModel(self.sheet.mesh, params, warn_no_plane, actuators)
-            if mode:
-                self.fine_model_2r = ThermalModel(self.sheet_2r.mesh, params, False, actuators)
+        self.fine_model = ThermalModel(self.sheet.mesh, params, warn_no_plane, actuators)
+        if mode:
+            self.fine_model_2r = ThermalModel(self.sheet_2r.mesh, params, False, actuators)
         fine = self.fine_model
         self.integral, self.plane, self._warn_plane = fine.integral, fine.plane, False
         n = self.mesh.n_nodes
@@ -701,19 +693,6 @@ class ThermalModel:
         pos, keep = self._dense_position
         flat = np.concatenate([*(v.ravel() for v in K), diagonal])[keep]
         return np.bincount(pos, flat, minlength=n_free * n_free).reshape(n_free, n_free)
-
-
-class _SharedLossModel(ThermalModel):
-    """The thermal model of one of the two refined sheets of ``sheet_extrapolation="shared"``
-    (theory 4.13), whose integral loss is its block of the
-    :class:`~simulator.thermal.shared_loss.SharedSheetLoss` ``pair``."""
-
-    def __init__(self, mesh, params, warn_no_plane, actuators, pair):
-        self._pair = pair
-        super().__init__(mesh, params, warn_no_plane, actuators)
-
-    def _integral_operator(self, params):
-        return self._pair.operator(self)
 
 
 def _held_solver(A, keep):

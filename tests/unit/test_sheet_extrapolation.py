@@ -133,108 +133,6 @@ def test_the_gripper_design_passes_the_extrapolation_on():
         GripperHeatModel(sheet_extrapolation=True, loss_model="chain")
 
 
-# ---------------------------------------------------------------- one shared loss operator
-def _interpolation(coarse, fine) -> np.ndarray:
-    """(n_fine, n_coarse) P1 interpolation from a refined sheet onto the one refined twice as
-    finely (each fine node is a coarse node or the midpoint of a coarse triangle's edge)."""
-    xc, xf = coarse.mesh.nodes, fine.mesh.nodes
-
-    def key(v):
-        return tuple(np.round(np.asarray(v) / np.abs(xc).max() * 1e9).astype(np.int64))
-
-    at = {key(v): {i: 1.0} for i, v in enumerate(xc)}
-    for a, b in coarse.mesh.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2):
-        at.setdefault(key(0.5 * (xc[a] + xc[b])), {a: 0.5, b: 0.5})
-    out = np.zeros((len(xf), len(xc)))
-    for j, v in enumerate(xf):
-        for i, w in at[key(v)].items():
-            out[j, i] = w
-    return out
-
-
-def _shared_model(**loss):
-    model = _double_fold(sheet_refinement=2, sheet_extrapolation="shared")
-    if loss:
-        model = dataclasses.replace(model, thermal=dataclasses.replace(
-            model.thermal, loss=dataclasses.replace(model.thermal.loss, **loss)))
-    return model, ThermalModel(model.mesh, model.thermal)
-
-
-def test_sub_triangle_means_of_a_sheet_itself_are_its_operators_interpolation():
-    """On the sheet whose sub-triangles they are, the means of its own P1 field are the
-    centroid values, the integral operator's ``M`` (levels 1-3, to round-off)."""
-    from simulator.thermal.integral import IntegralOperator
-    from simulator.thermal.shared_loss import sub_triangle_means
-
-    _, tm = _shared_model()
-    sheet, fine = tm.sheet, tm.fine_model
-    tri = np.flatnonzero(~fine.is_boundary)
-    for level in (1, 2, 3):
-        op = IntegralOperator(sheet.mesh.triangles[tri], sheet.n_fine, 0.6, level)
-        M = sub_triangle_means(sheet, tri, level, sheet, op.nodes)
-        assert np.abs(M - op.M).max() < 1e-14
-        assert np.allclose(M.sum(axis=1), 1.0, rtol=0, atol=1e-14)
-
-
-def test_a_coarse_field_loses_the_same_heat_on_both_sheets_of_the_shared_operator():
-    """``sheet_extrapolation="shared"``: the r sheet's field interpolated onto the 2r sheet has
-    the r sheet's loss conductance there (``I^T L_2r I = L_r`` to round-off), and a field
-    varying within the r triangles loses other heat (so the check can fail)."""
-    model, tm = _shared_model()
-    x = model.mesh.nodes
-    X, X2 = tm.sheet.positions(x), tm.sheet_2r.positions(x)
-    coarse, fine = tm.fine_model.integral, tm.fine_model_2r.integral
-    Lr, L2r = coarse.loss_matrix(X), fine.loss_matrix(X2)
-    I = _interpolation(tm.sheet, tm.sheet_2r)[np.ix_(fine.nodes, coarse.nodes)]
-    assert np.abs(I.T @ L2r @ I - Lr).max() < 1e-12 * np.abs(Lr).max()
-    rng = np.random.default_rng(3)
-    t = rng.random(len(fine.nodes))
-    assert abs(t @ L2r @ t - (I @ np.linalg.lstsq(I, t, rcond=None)[0]) @ L2r
-               @ (I @ np.linalg.lstsq(I, t, rcond=None)[0])) > 1e-3 * (t @ L2r @ t)
-
-
-def test_the_shared_operator_is_the_separate_ones_where_their_sub_triangles_agree():
-    """With the loss at 4 sub-triangles per mesh edge and no Richardson partner
-    (``IntegralLoss(refinement=4, extrapolation=False)``) the r = 2 and 4 sheets' own operators
-    are on the r = 4 sheet's triangles, as the shared one is: ``"shared"`` and True give the
-    same temperatures (to round-off); ``solve`` and ``factorized`` agree."""
-    model, tm = _shared_model(refinement=4, extrapolation=False)
-    own = ThermalModel(model.mesh, dataclasses.replace(model.thermal, sheet_extrapolation=True))
-    q = tm.heat_vector(np.full(model.mesh.n_creases, 5e-3))
-    got, want = tm.solve(model.mesh.nodes, q), own.solve(model.mesh.nodes, q)
-    assert np.abs(got - want).max() < 1e-9 * np.abs(want).max()
-    free = tm.free_nodes
-    rise = tm.factorized(model.mesh.nodes)(q[free])
-    assert np.allclose(rise, (got - model.thermal.room_temperature)[free], rtol=0, atol=1e-10)
-
-
-def test_the_shared_extrapolation_is_a_parameter():
-    prm = ThermalParameters(sheet_refinement=3, sheet_extrapolation="shared")
-    assert prm.to_dict()["sheet_extrapolation"] == "shared"
-    assert ThermalParameters.from_dict(prm.to_dict()) == prm
-    assert "r = 3 and 6, extrapolated (one loss operator)" in prm.describe()
-    with pytest.raises(ParameterError, match="sheet_extrapolation = 'own' must be True or False"):
-        ThermalParameters(sheet_extrapolation="own")
-    heat = GripperHeatModel(sheet_extrapolation="shared")
-    assert gripper_settings(GripperDesign(), heat)["sheet_extrapolation"] == "shared"
-    assert make_gripper_model(GripperDesign(), heat=heat)[0].thermal.sheet_extrapolation \
-        == "shared"
-
-
-def test_the_shared_operator_gives_the_crease_metal_layers_effect():
-    """The cycle-4 gripper, flat, base creases at 15 mW: with one shared operator the metal
-    layer's effect on the actuation measure is +11.3 % (the separate operators' +11.9 %, the
-    nested pairs' limit +11.8-12.0 %, theory 4.13; one sheet at r = 2: -7.0 %), each setting's
-    measure within 2 % of the separate operators' (+1.9 % paper, +1.4 % layers: the 2r sheet's
-    loss at the r sheet's sub-triangles)."""
-    geometry = dict(W=240e-6, La=900e-6, L1=800e-6, L2=800e-6)
-    got = {s: _base_actuation(geometry, s, 2, "shared") for s in ("paper", "layers")}
-    want = {s: _base_actuation(geometry, s, 2, True) for s in ("paper", "layers")}
-    assert 10 < 100 * (got["layers"] / got["paper"] - 1) < 13
-    for s in got:
-        assert abs(got[s] / want[s] - 1) < 0.02
-
-
 # ---------------------------------------------------------------- from the sheets r and r + 1
 def test_the_r_plus_1_extrapolation_weights_the_sheets_r_and_r_plus_1():
     """``sheet_extrapolation="r+1"``: ``solve`` and ``factorized`` give ``3 T(3) - 2 T(2)``
@@ -260,6 +158,9 @@ def test_the_r_plus_1_extrapolation_weights_the_sheets_r_and_r_plus_1():
     assert gripper_settings(GripperDesign(), heat)["sheet_extrapolation"] == "r+1"
     with pytest.raises(ParameterError, match="GripperHeatModel.sheet_extrapolation = 'r\\+2'"):
         GripperHeatModel(sheet_extrapolation="r+2")
+    with pytest.raises(ParameterError, match="sheet_extrapolation = 'shared' must be True or "
+                       "False, or 'r\\+1'"):
+        ThermalParameters(sheet_extrapolation="shared")
 
 
 def test_the_r_plus_1_extrapolation_agrees_with_r_and_2r_on_the_gripper():
