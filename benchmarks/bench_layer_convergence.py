@@ -25,7 +25,9 @@ this benchmark lifts while it runs: 6336 and 11264 sub-triangles, about 0.5 and 
    6 with ``--r6``, a few minutes per design), 2 x (assembly + grip) per heated crease, as
    ``studies/device_power_physics.py`` counts it, with the same estimates from r = 2/4 and
    3/6 of the powers, and the evaluations with the temperatures extrapolated,
-   ``GripperHeatModel(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``).
+   ``GripperHeatModel(sheet_extrapolation=True)`` at r = 2 (and 3 with ``--r6``), and from
+   the sheets refined r and r + 1 (``"r+1"``), each with the evaluation's CPU time
+   (``time.process_time``).
 
 Run: ``python benchmarks/bench_layer_convergence.py`` (fixed power to r = 8, about 4 minutes;
 ``--quick`` stops at r = 4). Figures measured 8 Dec 2026: theory 4.13.
@@ -179,26 +181,31 @@ def where(rc: int = 4):
 
 
 def _full(geometry, setting, r, extrapolate=False):
-    """(full-function power, assembly, grip per crease) [mW] of one evaluation."""
+    """(full-function power, assembly, grip per crease) [mW] of one evaluation, and its CPU
+    time [s]."""
+    t0 = time.process_time()
     res = evaluate_gripper(GripperDesign(**geometry),
                            heat=GripperHeatModel(crease_conduction=setting, sheet_refinement=r,
                                                  sheet_extrapolation=extrapolate))
     a = res.assembly.power_per_crease if res.assembly.success else float("nan")
     g = res.grip.power_per_crease if res.grip.success else float("nan")
-    return 2e3 * (a + g), 1e3 * a, 1e3 * g
+    return 2e3 * (a + g), 1e3 * a, 1e3 * g, time.process_time() - t0
 
 
 def full_function(rs, extrapolated):
     print("4. full-function power 2 x (assembly + grip) [mW] (assembly, grip per crease)")
     for cycle, geometry in DESIGNS.items():
         out = {}
-        rows = [(r, False) for r in rs] + [(r, True) for r in extrapolated]
+        rows = [(r, False) for r in rs] + [(r, e) for r in extrapolated
+                                           for e in (True, "r+1")]
         for r, ext in rows:
             res = {s: _full(geometry, s, r, ext) for s in SETTINGS}
             out[r, ext] = {s: v[0] for s, v in res.items()}
-            label = f"r = {r}, {2 * r} extrapolated" if ext else f"r = {r}"
+            finer = r + 1 if ext == "r+1" else 2 * r
+            label = f"r = {r}, {finer} extrapolated" if ext else f"r = {r}"
             print(f"  cycle {cycle} {label}: " + "   ".join(
-                f"{s} {p:7.3f} ({a:6.3f}, {g:5.3f})" for s, (p, a, g) in res.items())
+                f"{s} {p:7.3f} ({a:6.3f}, {g:5.3f}; {t:5.2f} s)"
+                for s, (p, a, g, t) in res.items())
                 + f"   effect {_effect(out[r, ext]['paper'], out[r, ext]['layers'])}",
                 flush=True)
         for lo in (2, 3):

@@ -248,7 +248,7 @@ def gripper_settings(design: GripperDesign, heat: GripperHeatModel | None = None
     tables): the optional fields only when they differ from the values they had before they
     existed (``loss_model`` only when not "chain", the default until 7 Dec 2026; the physics
     switches ``crease_conduction`` to ``heater_tcr`` only away from their defaults,
-    ``sheet_extrapolation`` only when True); with the
+    ``sheet_extrapolation`` only when on); with the
     integral model always ``integral_refinement``, the conduction, the sheet refinement and the
     loss levels in force (their defaults changed, so an older log of the integral model never
     matches)."""
@@ -264,7 +264,7 @@ def gripper_settings(design: GripperDesign, heat: GripperHeatModel | None = None
         out["sheet_refinement"] = heat.sheet_refinement_in_force  # and the sheet's, 8 Dec
         out["integral_levels"] = heat.integral_levels_in_force    # and its levels, 8 Dec
     if heat.sheet_extrapolation:                  # named only when on (theory 4.13)
-        out["sheet_extrapolation"] = True
+        out["sheet_extrapolation"] = heat.sheet_extrapolation
     return out
 
 

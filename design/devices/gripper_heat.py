@@ -17,7 +17,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from simulator import ChainLoss, IntegralLoss, ParameterError, Substrate, ThermalParameters
-from simulator.thermal import CONDUCTIONS, REFERENCE_BETA, sheet_levels
+from simulator.thermal import CONDUCTIONS, REFERENCE_BETA, SHEET_EXTRAPOLATIONS, sheet_levels
 from simulator._validate import in_range, integer, one_of, positive
 
 __all__ = ["GripperHeatModel", "HEAT_FIELDS", "LOSS_MODELS", "GRIPPER_TRIANGLES"]
@@ -76,11 +76,13 @@ class GripperHeatModel:
         SU-8 face) and of the creases' gold face (theory 4.12); a crease radiates with the
         mean of its two faces'. Default 0 (no radiation, the paper setting); plausible
         0.5-0.9 for the thin polymer films, 0.02-0.05 for evaporated gold.
-    sheet_extrapolation : bool
+    sheet_extrapolation : bool or str
         The steady temperatures extrapolated from the sheet refined ``r`` and ``2 r``,
         ``2 T(2r) - T(r)`` (:class:`~simulator.ThermalParameters` ``sheet_extrapolation``,
-        theory 4.13: the crease metal layer's effect converges so; 5-14 times the evaluation's
-        cost at r = 2). Default False; the integral loss on a sheet refined 2 to 8 only.
+        theory 4.13: the crease metal layer's effect converges so; True, each sheet its own
+        loss operator, 5-14 times the evaluation's cost at r = 2; ``"r+1"``, from the sheets
+        refined r and r + 1, about 3 times the cost).
+        Default False; the integral loss on a sheet refined 2 to 8 only.
     """
 
     loss_model: str = "integral"
@@ -92,7 +94,7 @@ class GripperHeatModel:
     temperature_dependent_air: bool = False
     emissivity_polymer: float = 0.0
     emissivity_gold: float = 0.0
-    sheet_extrapolation: bool = False
+    sheet_extrapolation: bool | str = False
 
     def __post_init__(self):
         one_of("GripperHeatModel.loss_model", self.loss_model, LOSS_MODELS)
@@ -127,15 +129,18 @@ class GripperHeatModel:
 
     def _check_extrapolation(self):
         """Check :attr:`sheet_extrapolation` (the integral loss, a sheet refined 2 to 8)."""
-        if not isinstance(self.sheet_extrapolation, (bool, np.bool_)):
+        if not (isinstance(self.sheet_extrapolation, (bool, np.bool_))
+                or (isinstance(self.sheet_extrapolation, str)
+                    and self.sheet_extrapolation in SHEET_EXTRAPOLATIONS)):
             raise ParameterError(f"GripperHeatModel.sheet_extrapolation = "
-                                 f"{self.sheet_extrapolation!r} must be True or False.")
+                                 f"{self.sheet_extrapolation!r} must be True or False, or "
+                                 "'r+1' (the sheets r and r + 1).")
         if self.sheet_extrapolation and (self.loss_model != "integral"
                                          or not 2 <= self.sheet_refinement_in_force <= 8):
             raise ParameterError(
-                f"GripperHeatModel.sheet_extrapolation = True extrapolates from the sheet "
-                f"refined r and 2r, r from 2 to 8 (theory 4.13); given loss_model = "
-                f"{self.loss_model!r} and sheet_refinement = {self.sheet_refinement!r}: use "
+                f"GripperHeatModel.sheet_extrapolation = {self.sheet_extrapolation!r} "
+                f"extrapolates from the sheet refined r and a finer one, r from 2 to 8 (theory "
+                f"4.13); given loss_model = {self.loss_model!r} and sheet_refinement = {self.sheet_refinement!r}: use "
                 "loss_model='integral' with sheet_refinement None or 2-8, or "
                 "sheet_extrapolation=False.")
 

@@ -14,7 +14,8 @@ from .._lazy import attach as _attach
 __getattr__, __dir__ = _attach(__name__, {
     ".steady": ("ThermalModel", "thermal_model"),
     "..state": ("ROOM_TEMPERATURE",),
-    "..model.thermal_parameters": ("ThermalParameters", "REFERENCE_BETA", "CONDUCTIONS"),
+    "..model.thermal_parameters": ("ThermalParameters", "REFERENCE_BETA", "CONDUCTIONS",
+                                   "SHEET_EXTRAPOLATIONS"),
     "..model.heat_loss": ("HEAT_LOSS_MODELS", "ChainLoss", "IntegralLoss", "Substrate"),
     ".integral_levels": ("sheet_levels",),
     "..model.layers": ("Layer", "SheetLayers"),
@@ -34,7 +35,7 @@ __all__ = [
     "thermal_model", "ThermalModel", "ThermalParameters", "ROOM_TEMPERATURE", "REFERENCE_BETA",
     # heat loss to the medium and the sheet's conduction
     "ChainLoss", "IntegralLoss", "Substrate", "HEAT_LOSS_MODELS", "CONDUCTIONS", "Layer",
-    "SheetLayers", "sheet_levels",
+    "SheetLayers", "sheet_levels", "SHEET_EXTRAPOLATIONS",
     # each crease's temperature measures and the 1.2 T_g limit on them
     "crease_temperatures", "CREASE_MEASURES", "crease_limit_temperatures", "TemperatureLimit",
     "TemperatureVerdict", "TG_FACTOR", "LIMIT_MEASURES",

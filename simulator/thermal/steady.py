@@ -145,9 +145,12 @@ class ThermalModel:
         #: the thermal model of the refined sheet (None without refinement)
         self.fine_model = None
         self._last_fine = None           # (x, q, fine temperatures) of the last solve
-        #: the sheet refined 2r and its thermal model, with ``params.sheet_extrapolation``
-        #: (theory 4.13), else None
+        #: the finer sheet (refined 2r, or r + 1 with ``"r+1"``) and its thermal model, with
+        #: ``params.sheet_extrapolation`` (theory 4.13), else None
         self.sheet_2r = self.fine_model_2r = None
+        #: the weights of the finer and the coarser sheet's temperatures in the extrapolation,
+        #: ``R / (R - r)`` and ``-r / (R - r)`` (2 and -1 for R = 2r)
+        self.extrapolation_weights = None
         r = params.sheet_refinement_for(len(tri))
         if r > 1:
             self._refine(r, warn_no_plane, actuators)
@@ -170,9 +173,13 @@ class ThermalModel:
         own model, whose integral operator, substrate plane and held nodes this one shows."""
         self.sheet = RefinedSheet(self.mesh, r)
         params = dataclasses.replace(self.params, sheet_refinement=1, sheet_extrapolation=False)
+        mode = self.params.sheet_extrapolation
+        if mode:
+            R = self.params.finer_refinement(r)
+            self.sheet_2r = RefinedSheet(self.mesh, R)
+            self.extrapolation_weights = (R / (R - r), -r / (R - r))
         self.fine_model = ThermalModel(self.sheet.mesh, params, warn_no_plane, actuators)
-        if self.params.sheet_extrapolation:
-            self.sheet_2r = RefinedSheet(self.mesh, 2 * r)
+        if mode:
             self.fine_model_2r = ThermalModel(self.sheet_2r.mesh, params, False, actuators)
         fine = self.fine_model
         self.integral, self.plane, self._warn_plane = fine.integral, fine.plane, False
@@ -306,7 +313,8 @@ class ThermalModel:
                 return fine[:n]
             fine_2r = self.fine_model_2r.solve(self.sheet_2r.positions(x), self.sheet_2r.heat(q),
                                                rt)
-            return 2 * fine_2r[:n] - fine[:n]         # Richardson in r (theory 4.13)
+            wf, wc = self.extrapolation_weights       # Richardson in r (theory 4.13)
+            return wf * fine_2r[:n] + wc * fine[:n]
         if self.nonlinear:
             return rt + self._nonlinear_rise(x, q, rt)
         rise = np.zeros(q.shape)
@@ -454,14 +462,15 @@ class ThermalModel:
     def _refined_solver(self, x):
         """:meth:`factorized` on the refined sheet: the mesh nodes' heat spread onto the fine
         nodes, the fine rise taken at the mesh nodes (with ``sheet_extrapolation`` ``2 T(2r) -
-        T(r)``, theory 4.13)."""
+        T(r)``, or ``(r + 1) T(r + 1) - r T(r)``, theory 4.13)."""
         solve = self._sheet_solver(self.sheet, self.fine_model.free_nodes,
                                    self.fine_model.factorized(self.sheet.positions(x)))
         if self.sheet_2r is None:
             return solve
         solve_2r = self._sheet_solver(self.sheet_2r, self.fine_model_2r.free_nodes,
                                       self.fine_model_2r.factorized(self.sheet_2r.positions(x)))
-        return lambda q_free: 2 * solve_2r(q_free) - solve(q_free)
+        wf, wc = self.extrapolation_weights
+        return lambda q_free: wf * solve_2r(q_free) + wc * solve(q_free)
 
     def _sheet_solver(self, sheet, ffree, solve):
         """The free mesh nodes' rise on one refined ``sheet``, whose model's free nodes are
