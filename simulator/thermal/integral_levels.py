@@ -86,9 +86,13 @@ class ExtrapolatedLoss:
         return self._L
 
     def rebuild(self, x) -> np.ndarray:
-        """Build both operators at positions ``x`` (n, 3) [m] whatever the last build; returns
-        the extrapolated loss conductance."""
-        return self._combine(self.fine.rebuild(x), self.coarse.rebuild(x))
+        """Build both operators at positions ``x`` (n, 3) [m] whatever the last build (the
+        coarse one kept if its last build was at ``x``: where it is also the cheap operator of
+        a :class:`CorrectedLoss`, which has just built it there); returns the extrapolated
+        loss conductance."""
+        x = np.asarray(x, float)
+        self.coarse.exact_at(x)
+        return self._combine(self.fine.rebuild(x), self.coarse.loss_matrix(x))
 
     @property
     def last_positions(self):
