@@ -97,6 +97,29 @@ def test_corrected_operator_is_exact_where_rebuilt_and_follows_the_shape_between
     np.testing.assert_allclose(L1, expected, rtol=1e-10, atol=1e-12 * np.abs(L1).max())
 
 
+def test_cheap_operator_that_is_the_richardson_partner_is_built_once_per_shape():
+    """On a refined sheet's levels (2 and 1, theory 4.11) the correction's cheap operator is
+    the Richardson partner: an accurate rebuild where the cheap operator has just been built
+    keeps that build (one m = 1 build per shape, not two), and the conductance is that of
+    operators built afresh there."""
+    model, prm = _strip_params(shape_tol=0.0)
+    mesh = model.mesh
+    op = integral_operator(mesh.triangles, mesh.n_nodes, prm, sheet_refinement=2)
+    assert isinstance(op, CorrectedLoss) and op.base is op.accurate.coarse
+    x0 = mesh.nodes
+    x1 = x0 + np.array([0.0, 0.0, 0.05]) * np.maximum(x0[:, :1] - 1.0, 0.0)
+    op.loss_matrix(x0)
+    assert (op.builds, op.base_builds) == (1, 1)
+    op.tol = 0.0                                                   # rebuild at x1
+    L = op.loss_matrix(x1)
+    assert (op.builds, op.base_builds) == (2, 2)
+    k = prm.medium.thermal_conductivity
+    fresh = {m: IntegralOperator(mesh.triangles, mesh.n_nodes, k, m).loss_matrix(x1)
+             for m in (1, 2)}
+    np.testing.assert_allclose(L, 2 * fresh[2] - fresh[1], rtol=1e-12,
+                               atol=1e-12 * np.abs(L).max())
+
+
 def test_secant_correction_reproduces_both_accurate_builds_and_interpolates_between():
     """After two accurate builds (x0, then x1) the correction moves along the secant of the
     cheap operator between them: exact at x1 (s = 0) and back at x0 (s = -1), and in between
