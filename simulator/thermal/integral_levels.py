@@ -266,27 +266,35 @@ class CorrectedLoss:
     def _moved_near_plane(self, x, Lb=None) -> bool:
         """Whether a node that was closer to the substrate plane than the cheap operator's
         sub-triangles at the last accurate build is off the height the correction assumes by
-        more than :data:`NEAR_PLANE_RTOL` x ``tol`` of it (at least of 1e-3 sub-triangle
-        diameters): its height there, or, with the cheap operator ``Lb`` at ``x`` and a
-        secant, its height moved along the secant as the correction is, ``h0 + s dh``
-        (:meth:`secant_step`, ``dh`` its change between the last two builds).
+        more than :data:`NEAR_PLANE_RTOL` x ``tol`` of it (heights at least 1e-3 sub-triangle
+        diameters): its height ``h0`` there; or, with the cheap operator ``Lb`` at ``x`` and
+        a secant, the height at which its inverse has moved along the secant as the
+        correction has, ``1/h0 + s (1/h0 - 1/h_prev)`` (:meth:`secant_step`; ``h_prev`` its
+        height at the build before): through a gap ``h`` thin against the sheet the loss is
+        about ``k A / h``, so it is ``1/h`` that the cheap operator, and with it ``s``, follows.
+        The difference is measured as ``h0 |1/h - (1/h0 + s (1/h0 - 1/h_prev))|``, for a small
+        change the relative change of the height, as without a secant.
 
         The cheap operator does not resolve a gap thinner than its sub-triangles, so the
         correction's change is not seen through it there: on the double fold over its boundary
         panels' plane the corrected temperatures drifted 1.7 % of the largest rise (0.31 %
         with this test at 0.2 correction_tol, 39 accurate builds over 93 shapes instead of 13;
-        with the secant 0.28 % at correction_tol, 22 builds; with the heights moved along
-        the secant too, 0.28 % with 15 builds, and the default gripper's bisect evaluation 11
-        accurate builds instead of 18, the same powers)."""
+        with the secant 0.28 % at correction_tol, 22 builds; with the inverse heights moved
+        along the secant too, 0.33 % with 13 builds, and the default gripper's bisect
+        evaluation 8 accurate builds instead of 18, the same powers; the heights themselves
+        moved along it: 0.28 %, 15 and 11)."""
         if self._near is None or not len(self._near[0]):
             return False
         nodes, h0, floor = self._near
-        h, _ = self.base._heights(x)
-        expected = h0                   # where the correction is taken to be
-        if Lb is not None and self._secant is not None and self._secant[3] is not None:
-            expected = h0 + self.secant_step(Lb - self._base0) * self._secant[3][nodes]
-        return bool(np.any(np.abs(h[nodes] - expected) > NEAR_PLANE_RTOL * self.tol
-                           * np.maximum(h0, floor)))
+        h = self.base._heights(x)[0][nodes]
+        scale = np.maximum(h0, floor)
+        if Lb is None or self._secant is None or self._secant[3] is None:
+            off = np.abs(h - h0) / scale
+        else:                            # h0 |1/h - 1/h0 - s (1/h0 - 1/h_prev)|
+            s = self.secant_step(Lb - self._base0)
+            previous = np.maximum(h0 - self._secant[3][nodes], floor)
+            off = np.abs(scale / np.maximum(h, floor) - 1.0 - s + s * scale / previous)
+        return bool(np.any(off > NEAR_PLANE_RTOL * self.tol))
 
 
 #: A height over the substrate plane under the cheap operator's sub-triangles may change by
@@ -296,8 +304,9 @@ class CorrectedLoss:
 #: largest rise from a rebuild at every shape (0.2 without the secant: 0.31 %, 1.0: 1.0 %), the
 #: default gripper's powers those of a rebuild at every shape with 20 accurate builds (0.2:
 #: 41; 3.0: 8 builds, the grip power 1.544 against 1.531 mW per crease). With the heights
-#: moved along the secant (:meth:`CorrectedLoss._moved_near_plane`): the double fold 0.28 %
-#: with 15 accurate builds, the gripper's powers those of a rebuild at every shape with 11.
+#: moved along the secant (:meth:`CorrectedLoss._moved_near_plane`, their inverses): the
+#: double fold 0.33 % with 13 accurate builds, the gripper's powers those of a rebuild at every
+#: shape with 8.
 NEAR_PLANE_RTOL = 1.0
 
 
