@@ -26,6 +26,14 @@ where the default levels are 2 and 1, the partner being the cheap level, theory 
 adds a row with the accurate operator rebuilt at every shape (``correction_tol=0,
 shape_tol=0``): the answers the default must reproduce (theory 4.7).
 
+``--before`` adds a row with the integral model's rebuild rules as they were before the
+branch grip-fast (8 Dec 2026; theory 4.7, "Near the substrate plane"): the near-plane height
+test against the last accurate build's heights instead of where the correction's secant puts
+them, and the Richardson partner rebuilt with every accurate build even where it is the
+correction's cheap operator, just built at the same shape. It prints that row's CPU time
+against the chain model's beside the default's: the before/after ratio of one run, on the
+same machine at the same load.
+
 Run: ``python benchmarks/bench_loss_models.py`` (about a minute; ``--only gripper|crane``
 runs one of the two rows, and ``--overdriven`` adds its row unless ``--only gripper``): the
 integral model at its defaults (m = 3, Richardson-extrapolated, corrected between rebuilds);
@@ -46,6 +54,7 @@ from design.devices import gripper
 from simulator import simulate
 from simulator.cases import CRANE_POWER_MW, get_case
 from simulator.thermal.integral import IntegralOperator
+from simulator.thermal.integral_levels import CorrectedLoss, ExtrapolatedLoss
 
 
 def _settings(args) -> dict:
@@ -89,6 +98,29 @@ def counted_builds():
         yield counts
     finally:
         IntegralOperator.rebuild = rebuild
+
+
+@contextlib.contextmanager
+def rules_before_grip_fast():
+    """The integral loss's rebuild rules before the branch grip-fast while the block runs:
+    the near-plane height test without the secant's step (the heights of the last accurate
+    build), and the Richardson partner rebuilt with every accurate build."""
+    moved, rebuild = CorrectedLoss._moved_near_plane, ExtrapolatedLoss.rebuild
+    CorrectedLoss._moved_near_plane = lambda self, x, Lb=None: moved(self, x)
+    ExtrapolatedLoss.rebuild = lambda self, x: self._combine(self.fine.rebuild(x),
+                                                             self.coarse.rebuild(x))
+    try:
+        yield
+    finally:
+        CorrectedLoss._moved_near_plane, ExtrapolatedLoss.rebuild = moved, rebuild
+
+
+def _before(run):
+    """``run`` under :func:`rules_before_grip_fast`."""
+    def before():
+        with rules_before_grip_fast():
+            return run()
+    return before
 
 
 def _builds(counts) -> str:
@@ -160,6 +192,9 @@ def main(argv=None):
     ap.add_argument("--accurate", action="store_true",
                     help="also the integral model with the accurate operator rebuilt at every "
                          "shape (correction_tol=0, shape_tol=0): the answers to reproduce")
+    ap.add_argument("--before", action="store_true",
+                    help="also the integral model with the rebuild rules before the branch "
+                         "grip-fast (8 Dec 2026), and its CPU ratio against the chains")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=("gripper", "crane"), help="run one of the two rows")
     ap.add_argument("--overdriven", action="store_true",
@@ -187,6 +222,16 @@ def main(argv=None):
                 run()
             print(f"{name:<28} {'accurate':<9}: {wall:7.3f} s (CPU {cpu:7.3f} s)   "
                   f"{_summary(out)}; at every shape: {_builds(counts)}")
+        if args.before:
+            run = _before(make("integral", _settings(args)))
+            wall, cpu, out = _timed(run, args.repeat)
+            with counted_builds() as counts:
+                run()
+            print(f"{name:<28} {'before':<9}: {wall:7.3f} s (CPU {cpu:7.3f} s)   "
+                  f"{_summary(out)}; {_builds(counts)}")
+            print(f"{name:<28} CPU ratio integral / chain: before {cpu / cpus['chain']:.2f}, "
+                  f"now {cpus['integral'] / cpus['chain']:.2f} (integral now / before "
+                  f"{cpus['integral'] / cpu:.2f})")
         ratio = walls["integral"] / walls["chain"]
         verdict = ("no acceptance" if limit is None else
                    f"acceptance <= {limit:g}: {'met' if ratio <= limit else 'NOT met'}")
@@ -198,7 +243,10 @@ def _summary(out) -> str:
     if hasattr(out, "assembly"):
         a, g = out.assembly.power_per_crease, out.grip.power_per_crease
         fmt = lambda p: "-" if p is None else f"{1e3 * p:.3f}"  # noqa: E731
-        return f"assembly {fmt(a)} mW, grip {fmt(g)} mW per crease ({out.status})"
+        hot = lambda r: "-" if r.max_crease_temperature is None else \
+            f"{r.max_crease_temperature:.2f}"                      # noqa: E731
+        return (f"assembly {fmt(a)} mW, grip {fmt(g)} mW per crease ({out.status}); hottest "
+                f"crease {hot(out.assembly)} / {hot(out.grip)} degC")
     import numpy as np
 
     n = sum(s.increments for s in out.steps)

@@ -54,8 +54,10 @@ def test_run_and_gripper_evaluate_judge_the_same_measure(tmp_path, capsys, judge
     assert ("temperature limit met: crease 5: centre-line mean 198.27 degC <= 1.2 T_g = 252 "
             "degC (the stages' heated creases at their stopping powers)") in lines
     # the accurate operator rebuilt at every shape gives 198.28 and 253.38 degC at the same
-    # assembly power; the default corrects it between rebuilds (theory 4.7)
-    assert ("hottest node 253.35 degC (crease 5, information: the limit is judged on the crease "
+    # assembly power; the default corrects it between rebuilds (theory 4.7; 253.35 degC before
+    # the near-plane height test followed the secant, 8 Dec 2026). Creases 2 and 5 are mirror
+    # images: which holds the hottest node is decided at round-off (1e-5 K)
+    assert ("hottest node 253.33 degC (crease 2, information: the limit is judged on the crease "
             "centre-line mean)") in lines
     assert not [line for line in lines if "max crease temperature" in line]
 
