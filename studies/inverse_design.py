@@ -27,7 +27,7 @@ Method
   folding mode (uniform 2.7 mW per crease: fold errors of 24 deg against 2.3 deg in 5 or 10
   increments), which derails the optimisers; 10 increments cost no more time.
 * Optimisers, from the same start (1 mW per crease: folds too small, infeasible) with the same wall-time budget
-  (``BUDGET`` = 600 s each, stopped by a callback after the first evaluation past it): NLopt's
+  (``FULL["budget"]`` = 600 s each, stopped by a callback after the first evaluation past it): NLopt's
   MMA (``"mma"``) with the exact gradients of the objective and of all 336 constraints (one
   factorisation of the coupled Jacobian per design), and NLopt's COBYLA (``"cobyla"``,
   derivative-free, constraints native), both with ``xtol_rel`` 1e-6, ``xtol_abs`` 1e-8 and
