@@ -110,9 +110,11 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
     result : SimulationResult
         A simulation whose step ``step`` is a successful :class:`~simulator.steps.Heat` step
         with ``coupling`` "settled" or "iterated" (its end is a steady coupled state).
-    objective : FoldAngle, NodeCoordinate, CreaseTemperature or callable
+    objective : FoldAngle, NodeCoordinate, CreaseTemperature, callable, or a list of them
         The scalar (:mod:`simulator.sensitivity.objectives`), or ``f(u, T) -> (value, dJ/du
-        (n, 3), dJ/dT (n,))``.
+        (n, 3), dJ/dT (n,))``. A list (or tuple) of objectives shares one factorisation (one
+        solve with as many right-hand sides) and returns a tuple of :class:`Sensitivity`, in
+        its order; their ``wall_time`` is the whole call's.
     parameters : str or sequence of str
         Kinds of :data:`~simulator.sensitivity.PARAMETER_KINDS` (default: all).
     step : int
@@ -145,11 +147,13 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
                              "differentiate a converged state.")
     start = steps[i - 1].state if i > 0 else result.initial_state
     out = differentiate_state(result.model, rec.state, start, objective, parameters, method)
-    if rec.settings["coupling"] == "staggered" and out.status == "converged":
-        out = _replace(out, status="not_steady", success=False,
-                       message="the step's coupling is 'staggered' (its end lags by one "
-                       "increment); use coupling='settled'")
-    return out
+    if rec.settings["coupling"] != "staggered":
+        return out
+    lagging = [o if o.status != "converged" else _replace(
+        o, status="not_steady", success=False, message="the step's coupling is 'staggered' "
+        "(its end lags by one increment); use coupling='settled'")
+        for o in (out if isinstance(out, tuple) else [out])]
+    return tuple(lagging) if isinstance(out, tuple) else lagging[0]
 
 
 def differentiate_state(model, state, start, objective, parameters=PARAMETER_KINDS,
@@ -161,28 +165,46 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     t0 = time.perf_counter()
     one_of("method", method, ("adjoint", "forward"))
     kinds = check_kinds(parameters)
+    many = isinstance(objective, (list, tuple))
+    objectives = list(objective) if many else [objective]
+    if not objectives:
+        raise ParameterError("differentiate: objective = []; give at least one objective.")
     s = _Setting(model, state, start)
-    value, gu, gT, nonsmooth, unit = objective_terms(objective, model, state.u, state.temperature)
-    nonsmooth = tuple(s.nonsmooth + nonsmooth)
+    terms = [objective_terms(o, model, state.u, state.temperature) for o in objectives]
     names, units, dR = parameter_columns(kinds, s)
-    rhs = np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])
-    base = dict(value=value, unit=unit, nonsmooth=nonsmooth, residual=s.residual,
-                parameters=kinds)
+    rhs = np.column_stack([np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])
+                           for _, gu, gT, _, _ in terms])                     # (n, k)
     M, d = _equilibrated(s.jacobian())
     if method == "adjoint":
         M = M.T.tocsr()
     try:                # the ladder (simulator.linalg): M^T once for the adjoint, M forward
         lu = factorize(M, kind="general").solve
     except (RuntimeError, np.linalg.LinAlgError) as error:
+        grads, failure = None, error
+    else:
+        failure = None
+        if method == "adjoint":
+            grads = -(((d[:, None] * lu(d[:, None] * rhs)).reshape(rhs.shape)).T @ dR)
+        else:
+            grads = -(rhs.T @ (d[:, None] * lu(d[:, None] * dR)).reshape(dR.shape)) \
+                if dR.shape[1] else np.zeros((rhs.shape[1], 0))
+    out = tuple(_sensitivity(s, term, None if grads is None else grads[j], failure, names,
+                             units, kinds, t0) for j, term in enumerate(terms))
+    return out if many else out[0]
+
+
+def _sensitivity(s, term, grad, failure, names, units, kinds, t0) -> Sensitivity:
+    """The :class:`Sensitivity` of one objective's ``term`` (:func:`objective_terms`) with its
+    gradient ``grad`` (None where the factorisation failed with ``failure``)."""
+    value, _, _, nonsmooth, unit = term
+    nonsmooth = tuple(s.nonsmooth + nonsmooth)
+    base = dict(value=value, unit=unit, nonsmooth=nonsmooth, residual=s.residual,
+                parameters=kinds)
+    if grad is None:
         return Sensitivity(gradient={}, units={}, success=False, status="singular",
-                           message=f"the coupled Jacobian is singular ({error}): a limit "
+                           message=f"the coupled Jacobian is singular ({failure}): a limit "
                            "point or an unconstrained mode", wall_time=time.perf_counter() - t0,
                            **base)
-    if method == "adjoint":
-        grad = -((d * lu(d * rhs)) @ dR)
-    else:
-        grad = -(rhs @ (d[:, None] * lu(d[:, None] * dR))) if dR.shape[1] \
-            else np.zeros(0)
     status, success, message = "converged", True, "converged"
     if not s.steady:
         status, success = "not_steady", False

@@ -217,6 +217,25 @@ def test_adjoint_equals_forward_and_callable(double):
                                                    + a.gradient["power[5]"], rel=1e-12)
 
 
+def test_a_list_of_objectives_shares_one_factorisation(double):
+    """A list of objectives gives, in its order, what one call per objective gives (the same
+    Jacobian factored once, solved with several right-hand sides), adjoint and forward; an
+    empty list is refused."""
+    _, result = double
+    objectives = [FoldAngle(2), CreaseTemperature(5, "crease_max"), NodeCoordinate(6, "z")]
+    for method in ("adjoint", "forward"):
+        many = differentiate(result, objectives, "power", method=method)
+        assert isinstance(many, tuple) and len(many) == 3
+        for objective, got in zip(objectives, many):
+            one = differentiate(result, objective, "power", method=method)
+            assert got.value == one.value and got.status == one.status == "converged"
+            assert list(got.gradient) == list(one.gradient)
+            for k in one.gradient:
+                assert got.gradient[k] == pytest.approx(one.gradient[k], rel=1e-10, abs=1e-14)
+    with pytest.raises(ParameterError, match="at least one objective"):
+        differentiate(result, [], "power")
+
+
 def test_shape_jacobian_of_the_chain_operator(single):
     """``d(A(x) dT)/dx`` against central differences of the operator (a mixed check of the
     T3, area and tcap terms; most triangles of the heated single fold are capped)."""
