@@ -30,6 +30,7 @@ from ..linalg.ladder import factorize
 from ..mechanics.elements.springs import fold_angle_derivatives
 from ..model.bimorph import crease_temperature_weights
 from .chain import ChainOperator
+from .geometry import Geometry, geometry_terms
 from .objectives import objective_terms
 from .parameters import PARAMETER_KINDS, check_kinds, parameter_columns
 
@@ -101,7 +102,7 @@ class Sensitivity:
 
 
 def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
-                method: str = "adjoint") -> Sensitivity:
+                method: str = "adjoint", geometry: Geometry | None = None) -> Sensitivity:
     """Total derivative of a scalar of the state a :class:`~simulator.steps.Heat` step ended
     on, with respect to the model's parameters (theory 12.3).
 
@@ -119,11 +120,18 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
         Index of the heating step in ``result.steps``.
     method : {"adjoint", "forward"}
         One transposed solve (the cost of one objective), or one solve per parameter.
+    geometry : Geometry, optional
+        Geometry parameters (:class:`~simulator.sensitivity.Geometry`: reference nodes or a
+        model as a function of named parameters, at fixed topology), differentiated by the
+        chain rule through the mesh at fixed displacements and temperatures (theory 12.5);
+        their entries are ``"geometry[name]"``. ``parameters=()`` gives them alone.
 
     Notes
     -----
     The state at the start of the step (its temperatures and rest angles) is held fixed: the
-    derivatives are those of the step's end for the parameters at that end. Supported: the
+    derivatives are those of the step's end for the parameters at that end. The dead loads of
+    the :class:`~simulator.steps.Gravity` steps before the step follow the geometry (their
+    panel areas); other loads are held. Supported: the
     chain heat loss (``ChainLoss``) with the T3 conduction, a linear heat balance, no sheet
     refinement, fixed crease powers (no circuits); others raise
     :class:`~simulator.sensitivity.SensitivityNotSupported`.
@@ -144,7 +152,8 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
         raise ParameterError(f"differentiate: step {i} ended {rec.status!r} ({rec.message}); "
                              "differentiate a converged state.")
     start = steps[i - 1].state if i > 0 else result.initial_state
-    out = differentiate_state(result.model, rec.state, start, objective, parameters, method)
+    out = differentiate_state(result.model, rec.state, start, objective, parameters, method,
+                              geometry, loads=_gravity_loads(result.model, steps[:i], rec.state))
     if rec.settings["coupling"] == "staggered" and out.status == "converged":
         out = _replace(out, status="not_steady", success=False,
                        message="the step's coupling is 'staggered' (its end lags by one "
@@ -153,11 +162,13 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
 
 
 def differentiate_state(model, state, start, objective, parameters=PARAMETER_KINDS,
-                      method: str = "adjoint") -> Sensitivity:
+                      method: str = "adjoint", geometry: Geometry | None = None,
+                      loads=None) -> Sensitivity:
     """:func:`differentiate` of a steady coupled ``state`` (a
     :class:`~simulator.state.SimulationState`) of ``model`` reached by heating from ``start``
     (the state at the start of the heating step: its temperatures and crease rest angles are
-    the bimorph's reference)."""
+    the bimorph's reference). ``loads(model) -> (n_nodes, 3)`` [N]: the dead loads on a model
+    of other geometry (default: the state's, held fixed)."""
     t0 = time.perf_counter()
     one_of("method", method, ("adjoint", "forward"))
     kinds = check_kinds(parameters)
@@ -165,6 +176,16 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     value, gu, gT, nonsmooth, unit = objective_terms(objective, model, state.u, state.temperature)
     nonsmooth = tuple(s.nonsmooth + nonsmooth)
     names, units, dR = parameter_columns(kinds, s)
+    explicit = np.zeros(len(names))
+    if geometry is not None:
+        if not isinstance(geometry, Geometry):
+            raise ParameterError(f"geometry = {geometry!r:.60}; give a "
+                                 "simulator.sensitivity.Geometry or None.")
+        loads = (lambda m: state.applied_load) if loads is None else loads
+        g_names, g_units, g_dR, g_explicit = geometry_terms(geometry, s, objective,
+                                                            s.residual_at, loads)
+        names, units = names + g_names, units + g_units
+        dR, explicit = np.column_stack([dR, g_dR]), np.concatenate([explicit, g_explicit])
     rhs = np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])
     base = dict(value=value, unit=unit, nonsmooth=nonsmooth, residual=s.residual,
                 parameters=kinds)
@@ -179,9 +200,9 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
                            "point or an unconstrained mode", wall_time=time.perf_counter() - t0,
                            **base)
     if method == "adjoint":
-        grad = -((d * lu(d * rhs)) @ dR)
+        grad = explicit - ((d * lu(d * rhs)) @ dR)
     else:
-        grad = -(rhs @ (d[:, None] * lu(d[:, None] * dR))) if dR.shape[1] \
+        grad = explicit - (rhs @ (d[:, None] * lu(d[:, None] * dR))) if dR.shape[1] \
             else np.zeros(0)
     status, success, message = "converged", True, "converged"
     if not s.steady:
@@ -195,6 +216,22 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     return Sensitivity(gradient=dict(zip(names, map(float, grad))), units=dict(
         zip(names, (f"{unit}/{u}" for u in units))), success=success, status=status,
         message=message, wall_time=time.perf_counter() - t0, **base)
+
+
+def _gravity_loads(model, before, state):
+    """``loads(m)``: the state's dead loads with those of the Gravity steps in ``before`` (step
+    records) recomputed on the mesh of model ``m`` (theory 12.5)."""
+    from ..model.model import gravity_loads
+
+    grav = [r.settings for r in before if {"g [m/s^2]", "scale", "direction"} <= set(r.settings)]
+    if not grav:
+        return None
+
+    def weight(mesh):
+        return sum(g["scale"] * gravity_loads(mesh, g["g [m/s^2]"], g["direction"], g["panels"])
+                   for g in grav)
+    held = state.applied_load - weight(model.mesh)
+    return lambda m: held + weight(m.mesh)
 
 
 def _equilibrated(M) -> tuple:
@@ -224,7 +261,7 @@ class _Setting:
         from ..thermal.steady import thermal_model
 
         _check_supported(model, state)
-        self.model, self.state = model, state
+        self.model, self.state, self.start = model, state, start
         mesh = model.mesh
         self.tm = tm = thermal_model(model)
         self.system = system = equilibrium_system(model)
@@ -262,6 +299,29 @@ class _Setting:
                          "heat [W]": float(np.linalg.norm(r_th))}
         self.steady = self.residual["heat [W]"] <= STEADY_RTOL * max(
             float(np.linalg.norm(q[self.free_T])), 1e-300)
+
+    def residual_at(self, model, loads) -> np.ndarray:
+        """The coupled residual ``(R_mech on the free DOFs, R_th on the free nodes)`` of
+        ``model`` (another geometry, same topology) with dead loads ``loads`` (n, 3) [N] at this
+        state's displacements, temperatures and start (theory 12.5)."""
+        from ..mechanics.equilibrium import equilibrium_system
+        from ..steps.heating import thermal_actuation
+        from ..thermal.steady import thermal_model
+
+        state = self.state
+        tm = thermal_model(model)
+        if not np.array_equal(tm.free_nodes, self.free_T):
+            from . import SensitivityNotSupported
+            raise SensitivityNotSupported("Geometry.build changed the thermal free nodes (the "
+                                          "room-temperature nodes or boundary panels); keep "
+                                          "the topology fixed.")
+        _, spring = thermal_actuation(model, self.start)(state.temperature)
+        f_int = equilibrium_system(model).evaluate(state.u, spring, hessian=False).f_int
+        r_m = f_int[self.free_u] - np.asarray(loads).ravel()[self.free_u]
+        op = ChainOperator(tm, model.mesh.nodes + state.u)
+        r_th = op.matrix(self.free_T) @ self.rise[self.free_T] \
+            - tm.heat_vector(state.crease_power)[self.free_T]
+        return np.concatenate([r_m, r_th])
 
     def _rest_coupling(self, x) -> np.ndarray:
         """``dR_mech / d(crease rest angle)`` on the free DOFs [N/rad], (n_u, C) sparse: each fold
