@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["Geometry", "GEOMETRY_STEP"]
+__all__ = ["Geometry", "GEOMETRY_STEP", "with_reference_nodes"]
 
 #: The relative step of the central differences of the residual assembly,
 #: ``h = GEOMETRY_STEP max(|p|, scale)``, ``eps^(1/2)`` = 1.5e-8 (theory 12.5): the residual at
