@@ -178,12 +178,10 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     names, units, dR = parameter_columns(kinds, s)
     explicit = np.zeros(len(names))
     if geometry is not None:
-        if not isinstance(geometry, Geometry):
-            raise ParameterError(f"geometry = {geometry!r:.60}; give a "
-                                 "simulator.sensitivity.Geometry or None.")
         loads = (lambda m: state.applied_load) if loads is None else loads
-        g_names, g_units, g_dR, g_explicit = geometry_terms(geometry, s, objective,
-                                                            s.residual_at, loads)
+        g_names, g_units, g_dR, g_explicit, rough = geometry_terms(geometry, s, objective,
+                                                                   s.residual_at, loads)
+        nonsmooth = nonsmooth + tuple(rough)
         names, units = names + g_names, units + g_units
         dR, explicit = np.column_stack([dR, g_dR]), np.concatenate([explicit, g_explicit])
     rhs = np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])

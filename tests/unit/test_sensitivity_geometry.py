@@ -181,6 +181,19 @@ def test_miura_lifter_cell_geometry():
         _check(_miura_run, _miura_model, MIURA, name, grads, objectives)
 
 
+def test_a_rough_builder_is_reported():
+    """The Miura builder as it is (its sheet's z a round-off wiggle of ~1e-11 m that jumps
+    with gamma): the residual's differences at h and 4 h disagree, status "nonsmooth"."""
+    def build(p):
+        return miura_sheet_model(MIURA["a"], MIURA["b"], p["gamma"], 2, 2,
+                                 MIURA["crease_width"], substrate=True)
+    result = _miura_run(build(MIURA))
+    g = differentiate(result, NodeCoordinate(0, "z"), (), geometry=Geometry(
+        build, {"gamma": MIURA["gamma"]}, units={"gamma": "rad"}))
+    assert not g.success and g.status == "nonsmooth"
+    assert "geometry[gamma]" in g.message and "not smooth" in g.message
+
+
 # ------------------------------------------------------------------ refusals
 def test_geometry_refusals(single):
     """A topology that changes, values that are not the model's, nodes of another shape, the
@@ -200,6 +213,8 @@ def test_geometry_refusals(single):
         differentiate(single, FoldAngle(2), "crease_width")
     with pytest.raises(ParameterError, match="Geometry.values"):
         Geometry(_single_model, {})
+    with pytest.raises(ParameterError, match="give a simulator.sensitivity.Geometry"):
+        differentiate(single, FoldAngle(2), (), geometry={"L": 0.5e-3})
     with pytest.raises(ParameterError, match="Geometry.scale\\['L'\\] = -1"):
         Geometry(_single_model, {"L": 0.5e-3}, scale={"L": -1})
     integral = get_case("single_fold", loss_model="integral").model
