@@ -12,7 +12,8 @@ bimorph. :func:`differentiate` assembles the coupled Jacobian
 ``M = [[K, B], [C, A]]`` (``K`` the mechanics' exact tangent, ``B = dR_mech/dT`` through the
 rest angles, ``C = dR_th/du`` through the shape dependence of the chain operator,
 :class:`~simulator.sensitivity.chain.ChainOperator`), factors it once, solves
-``M^T lambda = (dJ/du, dJ/dT)`` per objective and returns ``dJ/dp = -lambda . dR/dp``.
+``M^T lambda = (dJ/du, dJ/dT)`` per objective and returns ``dJ/dp = dJ/dp|_explicit -
+lambda . dR/dp`` (the explicit term is that of geometry parameters, theory 12.5).
 """
 
 from __future__ import annotations
@@ -56,7 +57,8 @@ class Sensitivity:
         ``dJ/dp`` per parameter, in ``units[name]``: e.g. ``"power[2]"`` in rad/W for a fold
         angle, K/W for a temperature, m/W for a coordinate; ``"rest_offset[2]"`` per rad,
         ``"delta_alpha[2]"`` per 1/K, ``"E1"``, ``"E2"`` per Pa, ``"t1"``, ``"t2"`` per m,
-        ``"medium_conductivity"`` per W/(m K).
+        ``"medium_conductivity"`` per W/(m K); ``"geometry[name]"`` per the unit of a
+        :class:`~simulator.sensitivity.Geometry` parameter (m by default).
     units : dict {name: str}
         The unit of each entry of ``gradient``.
     unit : str
