@@ -155,7 +155,8 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
                              "differentiate a converged state.")
     start = steps[i - 1].state if i > 0 else result.initial_state
     out = differentiate_state(result.model, rec.state, start, objective, parameters, method,
-                              geometry, loads=_gravity_loads(result.model, steps[:i], rec.state))
+                              geometry, loads=_gravity_loads(result.model, steps[:i], rec.state),
+                              start_at=_reference_start(result.model, start) if i == 0 else None)
     if rec.settings["coupling"] == "staggered" and out.status == "converged":
         out = _replace(out, status="not_steady", success=False,
                        message="the step's coupling is 'staggered' (its end lags by one "
@@ -165,12 +166,13 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
 
 def differentiate_state(model, state, start, objective, parameters=PARAMETER_KINDS,
                       method: str = "adjoint", geometry: Geometry | None = None,
-                      loads=None) -> Sensitivity:
+                      loads=None, start_at=None) -> Sensitivity:
     """:func:`differentiate` of a steady coupled ``state`` (a
     :class:`~simulator.state.SimulationState`) of ``model`` reached by heating from ``start``
     (the state at the start of the heating step: its temperatures and crease rest angles are
     the bimorph's reference). ``loads(model) -> (n_nodes, 3)`` [N]: the dead loads on a model
-    of other geometry (default: the state's, held fixed)."""
+    of other geometry (default: the state's, held fixed); ``start_at(model)``: the start
+    state on a model of other geometry (default: ``start``, held fixed)."""
     t0 = time.perf_counter()
     one_of("method", method, ("adjoint", "forward"))
     kinds = check_kinds(parameters)
@@ -181,6 +183,7 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     explicit = np.zeros(len(names))
     if geometry is not None:
         loads = (lambda m: state.applied_load) if loads is None else loads
+        s.start_at = start_at
         g_names, g_units, g_dR, g_explicit, rough = geometry_terms(geometry, s, objective,
                                                                    s.residual_at, loads)
         nonsmooth = nonsmooth + tuple(rough)
@@ -234,6 +237,18 @@ def _gravity_loads(model, before, state):
     return lambda m: held + weight(m.mesh)
 
 
+def _reference_start(model, start):
+    """``start_at(m)`` for a heating step that starts the simulation from the reference: its
+    crease rest angles, those of the reference shape (:func:`~simulator.mechanics.rest_angles.
+    initial_crease_rest`: pi where flat, the reference's fold where it starts folded), follow
+    the geometry; None where the start's rest angles are not the reference's."""
+    from ..mechanics.rest_angles import initial_crease_rest
+
+    if not np.array_equal(start.crease_rest, initial_crease_rest(model.mesh)):
+        return None
+    return lambda m: _replace(start, crease_rest=initial_crease_rest(m.mesh))
+
+
 def _equilibrated(M) -> tuple:
     """``(D M D, d)`` with ``D = diag(d)``, ``d = |diag M|^(-1/2)`` (1 where the diagonal is
     0): the mechanics' rows [N/m] and the heat balance's [W/K] brought to one scale, so that
@@ -246,7 +261,7 @@ def _equilibrated(M) -> tuple:
     return (D @ M @ D).tocsr(), d
 
 
-def _replace(out: Sensitivity, **changes) -> Sensitivity:
+def _replace(out, **changes):
     from dataclasses import replace
 
     return replace(out, **changes)
@@ -261,7 +276,7 @@ class _Setting:
         from ..thermal.steady import thermal_model
 
         _check_supported(model, state)
-        self.model, self.state, self.start = model, state, start
+        self.model, self.state, self.start, self.start_at = model, state, start, None
         mesh = model.mesh
         self.tm = tm = thermal_model(model)
         self.system = system = equilibrium_system(model)
@@ -315,7 +330,8 @@ class _Setting:
             raise SensitivityNotSupported("Geometry.build changed the thermal free nodes (the "
                                           "room-temperature nodes or boundary panels); keep "
                                           "the topology fixed.")
-        _, spring = thermal_actuation(model, self.start)(state.temperature)
+        start = self.start if self.start_at is None else self.start_at(model)
+        _, spring = thermal_actuation(model, start)(state.temperature)
         f_int = equilibrium_system(model).evaluate(state.u, spring, hessian=False).f_int
         r_m = f_int[self.free_u] - np.asarray(loads).ravel()[self.free_u]
         op = ChainOperator(tm, model.mesh.nodes + state.u)

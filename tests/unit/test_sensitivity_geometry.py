@@ -108,6 +108,46 @@ def test_geometry_with_other_parameters_and_forward(single):
         assert f.gradient[k] == pytest.approx(a.gradient[k], rel=1e-7)
 
 
+def _folded_nodes(p):
+    """The single fold's reference with its folding panel (the nodes beyond the crease's
+    centre line, x > 0.6 mm, the substrate's left out) turned up by ``p["phi"]`` [rad] about
+    that line: a mesh that starts folded."""
+    x = SINGLE_FLAT.mesh.nodes.copy()
+    beyond = (x[:, 0] > 0.6e-3 + 1e-12) & (x[:, 2] > -1e-9)
+    r = x[beyond, 0] - 0.6e-3
+    x[beyond, 0], x[beyond, 2] = 0.6e-3 + r * np.cos(p["phi"]), r * np.sin(p["phi"])
+    return x
+
+
+SINGLE_FLAT = _single_model({"L": 0.5e-3})
+
+
+def _folded_run(model):
+    step = Heat({2: 0.02}, increments=5, coupling="settled", coupling_tol=1e-10)
+    result = simulate(model, [step], options=OPTIONS)
+    assert result.success, result.message
+    return result
+
+
+def test_single_fold_reference_fold_angle():
+    """A reference that starts folded (by phi), heated from it without a self-fold: its rest
+    angles are the reference's and follow phi (held, the derivatives are wrong by 100 %)."""
+    values = {"phi": 0.3}
+
+    def build(p):
+        return with_reference_nodes(SINGLE_FLAT, _folded_nodes(p))
+    result = _folded_run(build(values))
+    assert result.initial_state.crease_rest[0] == pytest.approx(np.pi + 0.3, rel=1e-9)
+    objectives = (FoldAngle(2), CreaseTemperature(2, "centre_line"), NodeCoordinate(6, "z"))
+    geo = Geometry(_folded_nodes, values, units={"phi": "rad"})
+    grads = [differentiate(result, o, (), geometry=geo) for o in objectives]
+    assert all(g.success for g in grads), grads[0].message
+    _check(_folded_run, build, values, "phi", grads, objectives)
+    held = differentiate_state(result.model, result.steps[-1].state, result.initial_state,
+                               FoldAngle(2), (), geometry=geo)
+    assert _error(held.gradient["geometry[phi]"], grads[0].gradient["geometry[phi]"]) > 0.5
+
+
 # ------------------------------------------------------------------ double fold: panel length
 DOUBLE = get_case("double_fold").model
 
