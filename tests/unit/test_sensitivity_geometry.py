@@ -108,6 +108,28 @@ def test_geometry_with_other_parameters_and_forward(single):
         assert f.gradient[k] == pytest.approx(a.gradient[k], rel=1e-7)
 
 
+def test_single_fold_resting_on_the_substrate_panel_length():
+    """Contact active (folded down by -20 deg and by gravity onto the substrate, two contact
+    pairs) and the Gravity step's load on the panel: the fold per metre of panel length."""
+    from simulator.mechanics.equilibrium import equilibrium_system
+
+    case = get_case("single_fold", residual_fold_deg=-20.0, gravity=True)
+
+    def run(model):
+        steps = [SelfFold({2: np.radians(-20.0)}, increments=20), case.steps[1],
+                 Heat({2: 0.005}, increments=5, coupling="settled", coupling_tol=1e-10)]
+        result = simulate(model, steps, options=OPTIONS)
+        assert result.success, result.message
+        return result
+    values = {"L": 0.5e-3}
+    result = run(_single_model(values))
+    state = result.steps[-1].state
+    assert equilibrium_system(result.model).evaluate(state.u, state.spring_rest).n_contacts == 2
+    g = differentiate(result, FoldAngle(2), (), geometry=Geometry(_single_model, values))
+    assert g.success, g.message
+    _check(run, _single_model, values, "L", [g], [FoldAngle(2)])
+
+
 def _folded_nodes(p):
     """The single fold's reference with its folding panel (the nodes beyond the crease's
     centre line, x > 0.6 mm, the substrate's left out) turned up by ``p["phi"]`` [rad] about
