@@ -2,7 +2,8 @@
 
 :func:`differentiate` differentiates a scalar of the state a ``Heat`` step ended on (a fold
 angle, a node coordinate, a crease temperature, or a function of your own) with respect to the
-heater powers, rest-angle offsets, bimorph parameters and the medium's conductivity, by one
+heater powers, rest-angle offsets, bimorph parameters, the medium's conductivity and geometry
+parameters of the pattern (:class:`Geometry`: the chain rule through the mesh), by one
 transposed solve of the coupled Jacobian (the adjoint method); the result is a
 :class:`Sensitivity`.
 """
@@ -16,8 +17,9 @@ class SensitivityNotSupported(ParameterError, NotImplementedError):
 
 
 from .adjoint import Sensitivity, differentiate, differentiate_state  # noqa: E402
+from .geometry import Geometry  # noqa: E402
 from .objectives import CreaseTemperature, FoldAngle, NodeCoordinate  # noqa: E402
 from .parameters import PARAMETER_KINDS  # noqa: E402
 
 __all__ = ["differentiate", "differentiate_state", "Sensitivity", "FoldAngle", "NodeCoordinate",
-           "CreaseTemperature", "PARAMETER_KINDS", "SensitivityNotSupported"]
+           "CreaseTemperature", "Geometry", "PARAMETER_KINDS", "SensitivityNotSupported"]

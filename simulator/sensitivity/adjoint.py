@@ -12,7 +12,8 @@ bimorph. :func:`differentiate` assembles the coupled Jacobian
 ``M = [[K, B], [C, A]]`` (``K`` the mechanics' exact tangent, ``B = dR_mech/dT`` through the
 rest angles, ``C = dR_th/du`` through the shape dependence of the chain operator,
 :class:`~simulator.sensitivity.chain.ChainOperator`), factors it once, solves
-``M^T lambda = (dJ/du, dJ/dT)`` per objective and returns ``dJ/dp = -lambda . dR/dp``.
+``M^T lambda = (dJ/du, dJ/dT)`` per objective and returns ``dJ/dp = dJ/dp|_explicit -
+lambda . dR/dp`` (the explicit term is that of geometry parameters, theory 12.5).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from ..linalg.ladder import factorize
 from ..mechanics.elements.springs import fold_angle_derivatives
 from ..model.bimorph import crease_temperature_weights
 from .chain import ChainOperator
+from .geometry import Geometry, geometry_terms
 from .objectives import objective_terms
 from .parameters import PARAMETER_KINDS, check_kinds, parameter_columns
 
@@ -55,7 +57,8 @@ class Sensitivity:
         ``dJ/dp`` per parameter, in ``units[name]``: e.g. ``"power[2]"`` in rad/W for a fold
         angle, K/W for a temperature, m/W for a coordinate; ``"rest_offset[2]"`` per rad,
         ``"delta_alpha[2]"`` per 1/K, ``"E1"``, ``"E2"`` per Pa, ``"t1"``, ``"t2"`` per m,
-        ``"medium_conductivity"`` per W/(m K).
+        ``"medium_conductivity"`` per W/(m K); ``"geometry[name]"`` per the unit of a
+        :class:`~simulator.sensitivity.Geometry` parameter (m by default).
     units : dict {name: str}
         The unit of each entry of ``gradient``.
     unit : str
@@ -101,7 +104,7 @@ class Sensitivity:
 
 
 def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
-                method: str = "adjoint") -> Sensitivity:
+                method: str = "adjoint", geometry: Geometry | None = None) -> Sensitivity:
     """Total derivative of a scalar of the state a :class:`~simulator.steps.Heat` step ended
     on, with respect to the model's parameters (theory 12.3).
 
@@ -121,11 +124,18 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
         Index of the heating step in ``result.steps``.
     method : {"adjoint", "forward"}
         One transposed solve (the cost of one objective), or one solve per parameter.
+    geometry : Geometry, optional
+        Geometry parameters (:class:`~simulator.sensitivity.Geometry`: reference nodes or a
+        model as a function of named parameters, at fixed topology), differentiated by the
+        chain rule through the mesh at fixed displacements and temperatures (theory 12.5);
+        their entries are ``"geometry[name]"``. ``parameters=()`` gives them alone.
 
     Notes
     -----
     The state at the start of the step (its temperatures and rest angles) is held fixed: the
-    derivatives are those of the step's end for the parameters at that end. Supported: the
+    derivatives are those of the step's end for the parameters at that end. The dead loads of
+    the :class:`~simulator.steps.Gravity` steps before the step follow the geometry (their
+    panel areas); other loads are held. Supported: the
     chain heat loss (``ChainLoss``) with the T3 conduction, a linear heat balance, no sheet
     refinement, fixed crease powers (no circuits); others raise
     :class:`~simulator.sensitivity.SensitivityNotSupported`.
@@ -146,7 +156,9 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
         raise ParameterError(f"differentiate: step {i} ended {rec.status!r} ({rec.message}); "
                              "differentiate a converged state.")
     start = steps[i - 1].state if i > 0 else result.initial_state
-    out = differentiate_state(result.model, rec.state, start, objective, parameters, method)
+    out = differentiate_state(result.model, rec.state, start, objective, parameters, method,
+                              geometry, loads=_gravity_loads(result.model, steps[:i], rec.state),
+                              start_at=_reference_start(result.model, start) if i == 0 else None)
     if rec.settings["coupling"] != "staggered":
         return out
     lagging = [o if o.status != "converged" else _replace(
@@ -157,11 +169,14 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
 
 
 def differentiate_state(model, state, start, objective, parameters=PARAMETER_KINDS,
-                      method: str = "adjoint") -> Sensitivity:
+                      method: str = "adjoint", geometry: Geometry | None = None,
+                      loads=None, start_at=None) -> Sensitivity:
     """:func:`differentiate` of a steady coupled ``state`` (a
     :class:`~simulator.state.SimulationState`) of ``model`` reached by heating from ``start``
     (the state at the start of the heating step: its temperatures and crease rest angles are
-    the bimorph's reference)."""
+    the bimorph's reference). ``loads(model) -> (n_nodes, 3)`` [N]: the dead loads on a model
+    of other geometry (default: the state's, held fixed); ``start_at(model)``: the start
+    state on a model of other geometry (default: ``start``, held fixed)."""
     t0 = time.perf_counter()
     one_of("method", method, ("adjoint", "forward"))
     kinds = check_kinds(parameters)
@@ -172,6 +187,15 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     s = _Setting(model, state, start)
     terms = [objective_terms(o, model, state.u, state.temperature) for o in objectives]
     names, units, dR = parameter_columns(kinds, s)
+    explicit = np.zeros((len(objectives), len(names)))
+    if geometry is not None:
+        loads = (lambda m: state.applied_load) if loads is None else loads
+        s.start_at = start_at
+        g_names, g_units, g_dR, g_explicit, rough = geometry_terms(geometry, s, objectives,
+                                                                   s.residual_at, loads)
+        s.nonsmooth = list(s.nonsmooth) + list(rough)
+        names, units = names + g_names, units + g_units
+        dR, explicit = np.column_stack([dR, g_dR]), np.hstack([explicit, g_explicit])
     rhs = np.column_stack([np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])
                            for _, gu, gT, _, _ in terms])                     # (n, k)
     M, d = _equilibrated(s.jacobian())
@@ -184,9 +208,9 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
     else:
         failure = None
         if method == "adjoint":
-            grads = -(((d[:, None] * lu(d[:, None] * rhs)).reshape(rhs.shape)).T @ dR)
+            grads = explicit - (((d[:, None] * lu(d[:, None] * rhs)).reshape(rhs.shape)).T @ dR)
         else:
-            grads = -(rhs.T @ (d[:, None] * lu(d[:, None] * dR)).reshape(dR.shape)) \
+            grads = explicit - (rhs.T @ (d[:, None] * lu(d[:, None] * dR)).reshape(dR.shape)) \
                 if dR.shape[1] else np.zeros((rhs.shape[1], 0))
     out = tuple(_sensitivity(s, term, None if grads is None else grads[j], failure, names,
                              units, kinds, t0) for j, term in enumerate(terms))
@@ -219,6 +243,34 @@ def _sensitivity(s, term, grad, failure, names, units, kinds, t0) -> Sensitivity
         message=message, wall_time=time.perf_counter() - t0, **base)
 
 
+def _gravity_loads(model, before, state):
+    """``loads(m)``: the state's dead loads with those of the Gravity steps in ``before`` (step
+    records) recomputed on the mesh of model ``m`` (theory 12.5)."""
+    from ..model.model import gravity_loads
+
+    grav = [r.settings for r in before if {"g [m/s^2]", "scale", "direction"} <= set(r.settings)]
+    if not grav:
+        return None
+
+    def weight(mesh):
+        return sum(g["scale"] * gravity_loads(mesh, g["g [m/s^2]"], g["direction"], g["panels"])
+                   for g in grav)
+    held = state.applied_load - weight(model.mesh)
+    return lambda m: held + weight(m.mesh)
+
+
+def _reference_start(model, start):
+    """``start_at(m)`` for a heating step that starts the simulation from the reference: its
+    crease rest angles, those of the reference shape (:func:`~simulator.mechanics.rest_angles.
+    initial_crease_rest`: pi where flat, the reference's fold where it starts folded), follow
+    the geometry; None where the start's rest angles are not the reference's."""
+    from ..mechanics.rest_angles import initial_crease_rest
+
+    if not np.array_equal(start.crease_rest, initial_crease_rest(model.mesh)):
+        return None
+    return lambda m: _replace(start, crease_rest=initial_crease_rest(m.mesh))
+
+
 def _equilibrated(M) -> tuple:
     """``(D M D, d)`` with ``D = diag(d)``, ``d = |diag M|^(-1/2)`` (1 where the diagonal is
     0): the mechanics' rows [N/m] and the heat balance's [W/K] brought to one scale, so that
@@ -231,7 +283,7 @@ def _equilibrated(M) -> tuple:
     return (D @ M @ D).tocsr(), d
 
 
-def _replace(out: Sensitivity, **changes) -> Sensitivity:
+def _replace(out, **changes):
     from dataclasses import replace
 
     return replace(out, **changes)
@@ -246,7 +298,7 @@ class _Setting:
         from ..thermal.steady import thermal_model
 
         _check_supported(model, state)
-        self.model, self.state = model, state
+        self.model, self.state, self.start, self.start_at = model, state, start, None
         mesh = model.mesh
         self.tm = tm = thermal_model(model)
         self.system = system = equilibrium_system(model)
@@ -284,6 +336,30 @@ class _Setting:
                          "heat [W]": float(np.linalg.norm(r_th))}
         self.steady = self.residual["heat [W]"] <= STEADY_RTOL * max(
             float(np.linalg.norm(q[self.free_T])), 1e-300)
+
+    def residual_at(self, model, loads) -> np.ndarray:
+        """The coupled residual ``(R_mech on the free DOFs, R_th on the free nodes)`` of
+        ``model`` (another geometry, same topology) with dead loads ``loads`` (n, 3) [N] at this
+        state's displacements, temperatures and start (theory 12.5)."""
+        from ..mechanics.equilibrium import equilibrium_system
+        from ..steps.heating import thermal_actuation
+        from ..thermal.steady import thermal_model
+
+        state = self.state
+        tm = thermal_model(model)
+        if not np.array_equal(tm.free_nodes, self.free_T):
+            from . import SensitivityNotSupported
+            raise SensitivityNotSupported("Geometry.build changed the thermal free nodes (the "
+                                          "room-temperature nodes or boundary panels); keep "
+                                          "the topology fixed.")
+        start = self.start if self.start_at is None else self.start_at(model)
+        _, spring = thermal_actuation(model, start)(state.temperature)
+        f_int = equilibrium_system(model).evaluate(state.u, spring, hessian=False).f_int
+        r_m = f_int[self.free_u] - np.asarray(loads).ravel()[self.free_u]
+        op = ChainOperator(tm, model.mesh.nodes + state.u)
+        r_th = op.matrix(self.free_T) @ self.rise[self.free_T] \
+            - tm.heat_vector(state.crease_power)[self.free_T]
+        return np.concatenate([r_m, r_th])
 
     def _rest_coupling(self, x) -> np.ndarray:
         """``dR_mech / d(crease rest angle)`` on the free DOFs [N/rad], (n_u, C) sparse: each fold

@@ -23,9 +23,10 @@ PARAMETER_KINDS = ("power", "rest_offset", "delta_alpha", "bimorph", "medium_con
 #: Kinds of issue 32 not supported yet, with the reason given when they are asked for.
 UNSUPPORTED_KINDS = {
     "crease_width": "the crease width moves the mesh's reference nodes (and with them every "
-                    "bar, hinge and conduction element), which needs the chain rule through "
-                    "the mesh",
-    "geometry": "geometry parameters need the chain rule through the mesh",
+                    "bar, hinge and conduction element): give it as a geometry parameter, "
+                    "geometry=Geometry(build=p -> the model at that width, values={...})",
+    "geometry": "geometry parameters are given as geometry=Geometry(build, values), not as "
+                "a kind",
     "voltage": "heater circuits (powers that depend on the temperatures) are not supported",
 }
 _UNITS = {"power": "W", "rest_offset": "rad", "delta_alpha": "1/K", "E1": "Pa", "E2": "Pa",
