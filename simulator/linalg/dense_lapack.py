@@ -101,8 +101,8 @@ def _solve_leading_zeros(C, M):
     so the columns live in a row block are a prefix: per block a ``dtrsm`` with its diagonal
     block, a ``dgemm`` update of the rows below and the block's ``W^T W``, all on the live
     columns only. About 0.4 of the plain solve's flops on the gripper's operators (n = 704,
-    k = 117: solve and product 2.0 -> 1.3 ms; theory 4.7, "Cost and limits"). The same values
-    to round-off (sums in another order)."""
+    k = 117: solve and product about 2.1 -> 1.4 ms; theory 4.7, "Where the gripper's time
+    goes"). The same values to round-off (sums in another order)."""
     n, k = M.shape
     nonzero = M != 0
     first = np.where(nonzero.any(axis=0), nonzero.argmax(axis=0), n)
