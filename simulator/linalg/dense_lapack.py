@@ -26,7 +26,8 @@ from scipy.linalg import blas, lapack
 
 from .thresholds import DENSE_ONE_THREAD_MIN
 
-__all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss", "one_blas_thread"]
+__all__ = ["available", "cholesky_loss", "back_substitute", "lu_loss", "one_blas_thread",
+           "rescan"]
 
 _controller = None
 #: threadpoolctl's limit is process-wide: calls from several threads take turns (re-entrant:
@@ -44,6 +45,15 @@ def available() -> bool:
         except Exception:  # noqa: BLE001 - an accelerator: the compiled kernel stays
             _controller = False
     return bool(_controller)
+
+
+def rescan() -> None:
+    """Look for BLAS libraries again at the next :func:`available`: threadpoolctl limits the
+    libraries loaded when its controller was made, so a loader of another BLAS (PARDISO's MKL,
+    :mod:`~simulator.linalg.pardiso`) calls this once it has loaded it."""
+    global _controller
+    if _controller:
+        _controller = None
 
 
 @contextlib.contextmanager

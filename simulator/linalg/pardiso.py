@@ -34,6 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _jit
+from . import dense_lapack
 
 __all__ = ["available", "PardisoLDLT", "PardisoFactor", "PardisoError"]
 
@@ -79,6 +80,7 @@ def _load() -> tuple:
                   ctypes.c_void_p, p(i32)]
     f.restype = None
     logger.debug("PARDISO from %s", path)
+    dense_lapack.rescan()                  # MKL is a BLAS too: limit it with the others
     return (f,)
 
 

@@ -104,6 +104,27 @@ def test_blas_thread_limit_is_scoped_to_the_call():
     assert _blas_threads() == before
 
 
+def test_blas_thread_limit_reaches_mkl_loaded_later():
+    """PARDISO's MKL, loaded after the limit's first use, is limited with the other BLAS (in a
+    fresh process: the limit's controller made first, then MKL loaded)."""
+    code = textwrap.dedent("""
+        from threadpoolctl import threadpool_info
+        from simulator.linalg import dense_lapack, pardiso
+        from simulator.linalg.thresholds import DENSE_ONE_THREAD_MIN
+        assert dense_lapack.available()
+        assert pardiso.available(), "no MKL PARDISO"
+        with dense_lapack.one_blas_thread(max(DENSE_ONE_THREAD_MIN, 8)):
+            inside = [(i["internal_api"], i["num_threads"]) for i in threadpool_info()
+                      if i["user_api"] == "blas"]
+        print(inside)
+        assert any(api == "mkl" for api, _ in inside), inside
+        assert all(n == 1 for _, n in inside), inside
+        """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
 def test_import_and_kernel_choice_raise_no_warning():
     """numba.pycc warns on import (pending deprecation): neither importing the packages nor
     choosing a command's kernels imports it, even with warnings as errors."""
