@@ -36,7 +36,9 @@ REST_PROBE = 0.1
 #: the probe of its kink, theory 6.11): 0.1 rad / 2**24 = 6e-9 rad.
 PROBE_HALVINGS = 24
 #: Linearity test of a probe ``s``: the difference over ``s`` and twice that over ``s / 2``
-#: agree to this fraction of the first's norm.
+#: agree to this fraction of the first's norm. The test costs one more force evaluation per
+#: :meth:`LoadPath.at`: on the chain-loss Miura lifter of theory 6.11 (1655 calls, none
+#: shrunk) 0.36 ms per call, 0.6 s of a 7 to 13 s run (measured 8 Dec 2026).
 PROBE_LINEARITY = 1e-6
 
 
