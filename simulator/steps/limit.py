@@ -264,8 +264,12 @@ class HeatPath(LoadPath):
         return self.start.crease_power + lam * self.dP
 
     def state_at(self, u, lam):
-        """Simulation state at a converged point of the path."""
-        T0, dT, c0, dc = self._lin if self._lin is not None else self.linearise(u)
+        """Simulation state at a converged point of the path: with iterated coupling the
+        temperatures and rest angles on ``u`` itself (the last evaluation may have been at
+        another shape: a failed corrector's), else the increment's linearisation."""
+        if self.iterated or self._lin is None:
+            self._lin = self.linearise(u)
+        T0, dT, c0, dc = self._lin
         return at_rest(self.start, u=u, spring_rest=self.rest(lam), temperature=T0 + lam * dT,
                        crease_rest=c0 + lam * dc, crease_power=self.powers(lam))
 

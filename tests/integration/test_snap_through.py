@@ -237,6 +237,11 @@ def test_heat_continuation_matches_iterated_load_control():
     assert np.max(np.abs(end.u - lc.state.u)) <= 1e-8 * np.max(np.abs(lc.state.u))
     np.testing.assert_allclose(end.temperature, lc.state.temperature, atol=1e-8)
     np.testing.assert_allclose(end.crease_power, lc.state.crease_power, rtol=1e-14)
+    path.at(start.u, 0.5)                 # a last evaluation elsewhere (a failed corrector's)
+    again = path.state_at(res.u, 1.0)     # the state on the converged shape, not on that one
+    np.testing.assert_array_equal(again.temperature, end.temperature)
+    np.testing.assert_array_equal(again.spring_rest, end.spring_rest)
+    np.testing.assert_array_equal(again.crease_rest, end.crease_rest)
 
 
 @pytest.mark.slow
