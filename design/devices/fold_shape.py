@@ -19,9 +19,8 @@ import numpy as np
 
 from simulator import Heat, ParameterError, simulate
 
-from ..core.problem import DesignProblem, EvaluationOutcome
 from ..core.space import DesignSpace, Variable
-from .fold_target import COUPLING_TOL, NEWTON
+from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem
 from .limits import SU8_LIMIT
 
 __all__ = ["FoldShapeProblem"]
@@ -29,7 +28,7 @@ __all__ = ["FoldShapeProblem"]
 _MEASURES = ("centre_line", "crease_max")
 
 
-class FoldShapeProblem(DesignProblem):
+class FoldShapeProblem(HeaterPowerProblem):
     """Least total heater power that brings fold angles within ``tolerance`` of targets, with
     every crease under a temperature limit.
 
@@ -145,13 +144,10 @@ class FoldShapeProblem(DesignProblem):
         return (np.array([s.value for s in sens]),
                 np.array([[s.gradient[k] for k in keys] for s in sens]), "")
 
-    def _outcome(self, values: dict, gradient: bool) -> EvaluationOutcome:
-        result = self.simulate(values)
-        if not result.success:
-            return EvaluationOutcome(math.inf, {}, {}, "failed", result.message)
+    def _constraints(self, result, gradient: bool):
         v, dv, message = self._values(result, gradient)
         if v is None:
-            return EvaluationOutcome(math.inf, {}, {}, "failed", message)
+            return message
         nf, tol, limit = len(self.targets), self.tolerance, self.temperature_limit
         error = v[:nf] - np.array(list(self.targets.values()))          # fold - target [rad]
         temps = v[nf:]
@@ -170,12 +166,4 @@ class FoldShapeProblem(DesignProblem):
                       for i, c in enumerate(self.targets)},
                    **{f"temperature_{c} [degC]": float(t)
                       for c, t in zip(self.all_creases, temps)}}
-        return EvaluationOutcome(sum(values.values()), cons, metrics,
-                                 objective_gradient=[1.0] * len(self.creases) if gradient
-                                 else None, constraint_gradients=grads if gradient else None)
-
-    def _evaluate(self, values: dict) -> EvaluationOutcome:
-        return self._outcome(values, gradient=False)
-
-    def _evaluate_with_gradient(self, values: dict) -> EvaluationOutcome:
-        return self._outcome(values, gradient=True)
+        return cons, metrics, grads

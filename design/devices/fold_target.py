@@ -27,7 +27,32 @@ NEWTON = NewtonOptions(atol=1e-15, rtol=1e-14)
 COUPLING_TOL = 1e-10
 
 
-class FoldTargetProblem(DesignProblem):
+class HeaterPowerProblem(DesignProblem):
+    """Least total heater power: the variables are the powers of ``self.creases`` [W], the
+    objective their sum (its gradient 1 in each); a subclass gives ``simulate(values)`` and
+    ``_constraints(result, gradient) -> (constraints, metrics, constraint gradients)``, or a
+    str saying why the simulated design cannot be judged."""
+
+    def _outcome(self, values: dict, gradient: bool) -> EvaluationOutcome:
+        result = self.simulate(values)
+        if not result.success:
+            return EvaluationOutcome(math.inf, {}, {}, "failed", result.message)
+        out = self._constraints(result, gradient)
+        if isinstance(out, str):
+            return EvaluationOutcome(math.inf, {}, {}, "failed", out)
+        cons, metrics, grads = out
+        return EvaluationOutcome(sum(values.values()), cons, metrics,
+                                 objective_gradient=[1.0] * len(self.creases) if gradient
+                                 else None, constraint_gradients=grads if gradient else None)
+
+    def _evaluate(self, values: dict) -> EvaluationOutcome:
+        return self._outcome(values, gradient=False)
+
+    def _evaluate_with_gradient(self, values: dict) -> EvaluationOutcome:
+        return self._outcome(values, gradient=True)
+
+
+class FoldTargetProblem(HeaterPowerProblem):
     """Least total heater power of a case's creases reaching target fold angles, with the
     crease temperatures under a limit.
 
@@ -111,10 +136,7 @@ class FoldTargetProblem(DesignProblem):
         return {**{f"fold_{c}": (t, None) for c, t in self.targets.items()},
                 **{f"temperature_{c}": (None, self.temperature_limit) for c in self.creases}}
 
-    def _outcome(self, values: dict, gradient: bool) -> EvaluationOutcome:
-        result = self.simulate(values)
-        if not result.success:
-            return EvaluationOutcome(math.inf, {}, {}, "failed", result.message)
+    def _constraints(self, result, gradient: bool):
         from simulator.sensitivity import differentiate
 
         cons, metrics, grads = {}, {}, {}
@@ -123,9 +145,7 @@ class FoldTargetProblem(DesignProblem):
             if gradient:
                 sens = differentiate(result, objective, "power")
                 if sens.status != "converged":
-                    return EvaluationOutcome(math.inf, {}, {}, "failed",
-                                             f"{name}: sensitivity {sens.status}: "
-                                             f"{sens.message}")
+                    return f"{name}: sensitivity {sens.status}: {sens.message}"
                 value, dvalue = sens.value, [sens.gradient[f"power[{k}]"]
                                              for k in self.creases]
             else:
@@ -140,13 +160,4 @@ class FoldTargetProblem(DesignProblem):
                 cons[name] = (value - self.temperature_limit) / ref
             if dvalue is not None:
                 grads[name] = [sign * d / ref for d in dvalue]
-        total = sum(values.values())
-        return EvaluationOutcome(total, cons, metrics,
-                                 objective_gradient=[1.0] * len(self.creases) if gradient
-                                 else None, constraint_gradients=grads if gradient else None)
-
-    def _evaluate(self, values: dict) -> EvaluationOutcome:
-        return self._outcome(values, gradient=False)
-
-    def _evaluate_with_gradient(self, values: dict) -> EvaluationOutcome:
-        return self._outcome(values, gradient=True)
+        return cons, metrics, grads
