@@ -11,7 +11,8 @@ the rest angles ``theta0 = theta0_start + rot(p) (w . (T - T_start))`` of the Ti
 bimorph. :func:`differentiate` assembles the coupled Jacobian
 ``M = [[K, B], [C, A]]`` (``K`` the mechanics' exact tangent, ``B = dR_mech/dT`` through the
 rest angles, ``C = dR_th/du`` through the shape dependence of the chain operator,
-:class:`~simulator.sensitivity.chain.ChainOperator`), factors it once, solves
+:class:`~simulator.sensitivity.chain.ChainOperator`, or of the integral loss,
+:class:`~simulator.sensitivity.integral.IntegralShapeOperator`), factors it once, solves
 ``M^T lambda = (dJ/du, dJ/dT)`` per objective and returns ``dJ/dp = dJ/dp|_explicit -
 lambda . dR/dp`` (the explicit term is that of geometry parameters, theory 12.5).
 """
@@ -24,14 +25,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from .._validate import one_of
 from ..errors import ParameterError
 from ..linalg.ladder import factorize
 from ..mechanics.elements.springs import fold_angle_derivatives
 from ..model.bimorph import crease_temperature_weights
-from .chain import ChainOperator
 from .geometry import Geometry, geometry_terms
+from .integral import shape_operator
 from .objectives import objective_terms
 from .parameters import PARAMETER_KINDS, check_kinds, parameter_columns
 
@@ -135,10 +137,11 @@ def differentiate(result, objective, parameters=PARAMETER_KINDS, step: int = -1,
     The state at the start of the step (its temperatures and rest angles) is held fixed: the
     derivatives are those of the step's end for the parameters at that end. The dead loads of
     the :class:`~simulator.steps.Gravity` steps before the step follow the geometry (their
-    panel areas); other loads are held. Supported: the
-    chain heat loss (``ChainLoss``) with the T3 conduction, a linear heat balance, no sheet
-    refinement, fixed crease powers (no circuits); others raise
-    :class:`~simulator.sensitivity.SensitivityNotSupported`.
+    panel areas); other loads are held. Supported: the chain heat loss (``ChainLoss``) and
+    the dense integral loss (``IntegralLoss``, not lumped; plain or extrapolated, on the mesh
+    or a refined sheet: :mod:`simulator.sensitivity.integral`, theory 12.6) with the T3 or
+    monotone conduction, a linear heat balance, fixed crease powers (no circuits); others
+    raise :class:`~simulator.sensitivity.SensitivityNotSupported`.
     """
     steps = list(getattr(result, "steps", ()))
     if not steps:
@@ -196,7 +199,7 @@ def differentiate_state(model, state, start, objective, parameters=PARAMETER_KIN
         s.nonsmooth = list(s.nonsmooth) + list(rough)
         names, units = names + g_names, units + g_units
         dR, explicit = np.column_stack([dR, g_dR]), np.hstack([explicit, g_explicit])
-    rhs = np.column_stack([np.concatenate([gu.ravel()[s.free_u], gT[s.free_T]])
+    rhs = np.column_stack([np.concatenate([gu.ravel()[s.free_u], s.on_thermal(gT)[s.free_T]])
                            for _, gu, gT, _, _ in terms])                     # (n, k)
     M, d = _equilibrated(s.jacobian())
     if method == "adjoint":
@@ -300,15 +303,26 @@ class _Setting:
         _check_supported(model, state)
         self.model, self.state, self.start, self.start_at = model, state, start, None
         mesh = model.mesh
-        self.tm = tm = thermal_model(model)
+        self.tm_mesh = thermal_model(model)
+        # the heat balance's nodes: the mesh's, or a refined sheet's fine nodes (mesh nodes
+        # first, positions P x, heat spread by sheet.heat; theory 4.11)
+        self.sheet = sheet = self.tm_mesh.sheet
+        self.tm = tm = self.tm_mesh if sheet is None else self.tm_mesh.fine_model
         self.system = system = equilibrium_system(model)
         self.free_u, self.free_T = system.free, tm.free_nodes
         self.n_u, self.n_T = len(self.free_u), len(self.free_T)
         x = mesh.nodes + state.u
         room = float(state.room_temperature)
-        self.rise = state.temperature - room
-        self.op = ChainOperator(tm, x)
+        self.op = shape_operator(tm, self._thermal_positions(x))
         self.nonsmooth = list(self.op.nonsmooth)
+        self.A = self.op.matrix(self.free_T)
+        q = self.heat(self.tm_mesh.heat_vector(state.crease_power))
+        self.rise = np.zeros(tm.mesh.n_nodes)
+        self.rise[:mesh.n_nodes] = state.temperature - room
+        if sheet is not None:            # the fine rise on this operator, the mesh nodes' kept
+            fine = np.zeros(tm.mesh.n_nodes)
+            fine[self.free_T] = spla.spsolve(self.A.tocsc(), q[self.free_T])
+            self.rise[mesh.n_nodes:] = fine[mesh.n_nodes:]
         # the bimorph: target = rest_start + rot (w . (T - T_start)) on the crease nodes
         w = crease_temperature_weights()
         acts = model.actuators
@@ -325,17 +339,34 @@ class _Setting:
         self.W = sp.coo_matrix((np.tile(w, mesh.n_creases),
                                 (np.repeat(np.arange(mesh.n_creases), 7),
                                  mesh.crease_nodes.ravel())),
-                               shape=(mesh.n_creases, mesh.n_nodes)).tocsr()
+                               shape=(mesh.n_creases, tm.mesh.n_nodes)).tocsr()
         self.ev = system.evaluate(state.u, state.spring_rest, hessian=True)
         self.G = self._rest_coupling(x)
-        self.A = self.op.matrix(self.free_T)
-        q = tm.heat_vector(state.crease_power)
         r_th = self.A @ self.rise[self.free_T] - q[self.free_T]
         r_m = self.ev.f_int[self.free_u] - state.applied_load.ravel()[self.free_u]
         self.residual = {"mechanics [N]": float(np.linalg.norm(r_m)),
                          "heat [W]": float(np.linalg.norm(r_th))}
         self.steady = self.residual["heat [W]"] <= STEADY_RTOL * max(
             float(np.linalg.norm(q[self.free_T])), 1e-300)
+
+    def heat(self, q) -> np.ndarray:
+        """The mesh nodal heat ``q`` (n,) or (n, k) [W] on the heat balance's nodes."""
+        return q if self.sheet is None else self.sheet.heat(q)
+
+    def _thermal_positions(self, x, sheet=None) -> np.ndarray:
+        sheet = self.sheet if sheet is None else sheet
+        return x if sheet is None else sheet.positions(x)
+
+    def on_thermal(self, v) -> np.ndarray:
+        """A nodal vector of the mesh (n,) on the heat balance's nodes (zero on fine nodes)."""
+        out = np.zeros(self.n_thermal)
+        out[:len(v)] = v
+        return out
+
+    @property
+    def n_thermal(self) -> int:
+        """Number of nodes of the heat balance (the fine nodes of a refined sheet)."""
+        return self.tm.mesh.n_nodes
 
     def residual_at(self, model, loads) -> np.ndarray:
         """The coupled residual ``(R_mech on the free DOFs, R_th on the free nodes)`` of
@@ -346,7 +377,9 @@ class _Setting:
         from ..thermal.steady import thermal_model
 
         state = self.state
-        tm = thermal_model(model)
+        tm_mesh = thermal_model(model)
+        sheet = tm_mesh.sheet
+        tm = tm_mesh if sheet is None else tm_mesh.fine_model
         if not np.array_equal(tm.free_nodes, self.free_T):
             from . import SensitivityNotSupported
             raise SensitivityNotSupported("Geometry.build changed the thermal free nodes (the "
@@ -356,9 +389,10 @@ class _Setting:
         _, spring = thermal_actuation(model, start)(state.temperature)
         f_int = equilibrium_system(model).evaluate(state.u, spring, hessian=False).f_int
         r_m = f_int[self.free_u] - np.asarray(loads).ravel()[self.free_u]
-        op = ChainOperator(tm, model.mesh.nodes + state.u)
-        r_th = op.matrix(self.free_T) @ self.rise[self.free_T] \
-            - tm.heat_vector(state.crease_power)[self.free_T]
+        op = shape_operator(tm, self._thermal_positions(model.mesh.nodes + state.u, sheet))
+        q = tm_mesh.heat_vector(state.crease_power)
+        q = q if sheet is None else sheet.heat(q)
+        r_th = op.matrix(self.free_T) @ self.rise[self.free_T] - q[self.free_T]
         return np.concatenate([r_m, r_th])
 
     def _rest_coupling(self, x) -> np.ndarray:
@@ -381,7 +415,10 @@ class _Setting:
         """The coupled Jacobian ``[[K, B], [C, A]]`` on (free DOFs, free nodes)."""
         K = self.ev.K
         B = self.G @ sp.diags(self.rot) @ self.W[:, self.free_T]
-        C = self.op.shape_jacobian(self.rise)[self.free_T][:, self.free_u]
+        C = self.op.shape_jacobian(self.rise)[self.free_T]
+        if self.sheet is not None:       # fine positions P x
+            C = C @ sp.kron(self.sheet.P, sp.eye(3), format="csr")
+        C = C.tocsr()[:, self.free_u]
         return sp.bmat([[K, B], [C, self.A]], format="csr")
 
 
@@ -393,12 +430,14 @@ def _check_supported(model, state) -> None:
     if p is None:
         raise ParameterError("differentiate: the model has no thermal parameters.")
     why = None
-    if p.loss.model != "chain":
+    if p.loss.model not in ("chain", "integral"):
         why = f"the {p.loss.model} heat loss"
-    elif p.conduction_method != "t3":
+    elif p.loss.model == "integral" and p.loss.lumped:
+        why = "the lumped integral loss (IntegralLoss.lumped)"
+    elif p.conduction_method not in ("t3", "monotone"):
         why = f"conduction {p.conduction_method!r}"
-    elif p.sheet_refinement not in (None, 1):
-        why = f"sheet_refinement = {p.sheet_refinement}"
+    elif p.sheet_extrapolation:
+        why = f"sheet_extrapolation = {p.sheet_extrapolation!r}"
     elif state.circuits:
         why = "heater circuits"
     if why is None:
@@ -407,10 +446,8 @@ def _check_supported(model, state) -> None:
         tm = thermal_model(model)
         if tm.nonlinear:
             why = "a nonlinear heat balance (a conductivity law or radiation)"
-        elif tm.sheet is not None:
-            why = "a refined sheet"
     if why is not None:
         raise SensitivityNotSupported(
             f"differentiate: {why} is not supported; supported: the chain heat loss (ChainLoss) "
-            "with T3 conduction, a linear heat balance, no sheet refinement and fixed crease "
-            "powers.")
+            "or the dense integral loss (IntegralLoss, not lumped) with T3 or monotone "
+            "conduction, a linear heat balance, no sheet extrapolation and fixed crease powers.")

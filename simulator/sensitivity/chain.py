@@ -161,13 +161,41 @@ class ChainOperator:
     def k_env(self) -> float:
         return float(self.tm.params.medium.thermal_conductivity)
 
-    def matrix(self, nodes) -> sp.csr_matrix:
-        """``A`` [W/K] on ``nodes`` (rows and columns), sparse."""
+    def conduction_matrix(self) -> sp.csr_matrix:
+        """The sheet's conduction [W/K], (n, n), sparse: ``A`` without the loss (the T3
+        elements, or the monotone conduction)."""
+        if self.tm.conduction.monotone is not None:
+            return self.tm.conduction.matrix(self.x)
         tri, n = self.tm.mesh.triangles, self.tm.mesh.n_nodes
         rows, cols = np.repeat(tri, 3, axis=1).ravel(), np.tile(tri, (1, 3)).ravel()
-        A = sp.coo_matrix((self.K.ravel(), (rows, cols)), shape=(n, n)).tocsr()
-        A = A + sp.diags(self.k_env * self.g1)
+        return sp.coo_matrix((self.K.ravel(), (rows, cols)), shape=(n, n)).tocsr()
+
+    def matrix(self, nodes) -> sp.csr_matrix:
+        """``A`` [W/K] on ``nodes`` (rows and columns), sparse."""
+        A = self.conduction_matrix() + sp.diags(self.k_env * self.g1)
         return A[nodes][:, nodes].tocsr()
+
+    def conductivity_derivative(self, rise) -> np.ndarray:
+        """``d (A dT) / d k_env`` [W/(K W/(m K))] for the rise ``dT`` = ``rise`` (n,) [K],
+        (n,): the loss is proportional to the medium's conductivity."""
+        return self.g1 * rise
+
+    def conduction_parts(self, rise) -> list:
+        """The conduction's part of :meth:`shape_jacobian`, as ``[(rows, cols, values)]``:
+        ``(dK/dalpha dT_e) x dalpha/dx`` per T3 triangle, or the monotone conduction's
+        (:func:`~simulator.sensitivity.conduction.monotone_jacobian`)."""
+        mono = self.tm.conduction.monotone
+        if mono is not None:
+            from .conduction import monotone_jacobian
+
+            J = monotone_jacobian(mono, self.x, rise).tocoo()
+            return [(J.row, J.col, J.data)]
+        tri = self.tm.mesh.triangles
+        m = len(tri)
+        cols9 = (3 * tri[:, :, None] + np.arange(3)).reshape(m, 9)
+        r = np.einsum("eij,ej->ei", self.dK, rise[tri])
+        return [(np.repeat(tri, 9, axis=1).ravel(), np.tile(cols9, (1, 3)).ravel(),
+                 (r[:, :, None] * self.dalpha[:, None, :]).ravel())]
 
     def shape_jacobian(self, rise) -> sp.csr_matrix:
         """``d (A(x) dT) / dx`` [W/(K m)] for the fixed rise ``dT`` = ``rise`` (n,) [K], (n, 3n)
@@ -176,10 +204,7 @@ class ChainOperator:
         tri = tm.mesh.triangles
         m = len(tri)
         cols9 = (3 * tri[:, :, None] + np.arange(3)).reshape(m, 9)
-        # conduction: (dK/dalpha dT_e) x dalpha/dx
-        r = np.einsum("eij,ej->ei", self.dK, rise[tri])
-        parts = [(np.repeat(tri, 9, axis=1).ravel(), np.tile(cols9, (1, 3)).ravel(),
-                  (r[:, :, None] * self.dalpha[:, None, :]).ravel())]
+        parts = self.conduction_parts(rise)
         # chains through the areas: k dT_i rho_i N (2/3) / t_air dA/dalpha x dalpha/dx
         N, k = tm.chains.layers, self.k_env
         w = k * (rise * self.rho)[tri] * (N * 2 / 3 / self.t_air * self.darea)[:, None]  # (m, 3)

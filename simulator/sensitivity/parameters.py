@@ -94,7 +94,7 @@ def parameter_columns(kinds, setting) -> tuple:
             H = sp.coo_matrix((np.tile(heat_weights(), C), (mesh.crease_nodes.ravel(),
                                np.repeat(np.arange(C), mesh.crease_nodes.shape[1]))),
                               shape=(mesh.n_nodes, C)).tocsr()
-            add("power", "W", dT=-H[s.free_T].toarray(), labels=ids)
+            add("power", "W", dT=-s.heat(H.toarray())[s.free_T], labels=ids)
         elif kind == "rest_offset":
             add("rest_offset", "rad", du=G, labels=ids)
         elif kind == "delta_alpha":
@@ -104,7 +104,8 @@ def parameter_columns(kinds, setting) -> tuple:
             for q, dlog in curvature_log_derivatives(s.model.actuators.bimorph).items():
                 add(q, _UNITS[q], du=G @ (s.rot * dlog * s.dTc))
         elif kind == "medium_conductivity":
-            add("medium_conductivity", "W/(m K)", dT=(s.op.g1 * s.rise)[s.free_T])
+            add("medium_conductivity", "W/(m K)",
+                dT=s.op.conductivity_derivative(s.rise)[s.free_T])
     return names, units, np.hstack(blocks) if blocks else np.zeros((n_u + s.n_T, 0))
 
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 
-from simulator import ChainLoss, Heat, NewtonOptions, SelfFold, simulate
+from simulator import ChainLoss, Heat, IntegralLoss, NewtonOptions, SelfFold, simulate
 from simulator.cases import get_case
 from simulator.errors import ParameterError
 from simulator.sensitivity import (CreaseTemperature, FoldAngle, NodeCoordinate,
@@ -98,16 +98,22 @@ def test_single_fold_power_and_rest_offset(single):
     """Heater power and residual fold: fold angle, crease temperature, a node's height."""
     setup, result = single
     grads = [differentiate(result, o, ("power", "rest_offset")) for o in OBJECTIVES]
+    check_power_and_rest_offset(setup, grads, OBJECTIVES, rest=[0])
+    assert grads[0].units["power[2]"] == "rad/W" and grads[1].units["power[2]"] == "K/W"
+
+
+def check_power_and_rest_offset(setup, grads, objectives, rest):
+    """Every gradient converged; crease 2's power (at 20 mW) for every objective and its rest
+    offset for the objectives ``rest`` (indices) against central differences."""
     assert all(g.success and g.status == "converged" for g in grads), grads[0].message
     h = _step(0.02, "power")
-    for g, fd in zip(grads, _central(setup, OBJECTIVES, h,
+    for g, fd in zip(grads, _central(setup, objectives, h,
                                      power=({2: 0.02 + h}, {2: 0.02 - h}))):
         assert _error(g.gradient["power[2]"], fd) <= RTOL
     h = _step(0.0, "rest_offset")
-    for g, fd in zip(grads[:1], _central(setup, OBJECTIVES[:1], h,
-                                         folds=({2: h}, {2: -h}))):
-        assert _error(g.gradient["rest_offset[2]"], fd) <= RTOL
-    assert grads[0].units["power[2]"] == "rad/W" and grads[1].units["power[2]"] == "K/W"
+    for i, fd in zip(rest, _central(setup, [objectives[i] for i in rest], h,
+                                    folds=({2: h}, {2: -h}))):
+        assert _error(grads[i].gradient["rest_offset[2]"], fd) <= RTOL
 
 
 def test_single_fold_actuation_and_medium(single):
@@ -288,10 +294,10 @@ def test_refusals(single):
         differentiate(result, FoldAngle(2), "crease_width")
     with pytest.raises(ParameterError, match="unknown kind 'power_mW'"):
         differentiate(result, FoldAngle(2), "power_mW")
-    integral = get_case("single_fold", loss_model="integral").model
+    integral = _lumped_integral()
     start = initial_state(integral)
-    with pytest.raises(SensitivityNotSupported, match="the integral heat loss is not "
-                                                      "supported; supported: the chain"):
+    with pytest.raises(SensitivityNotSupported, match="the lumped integral loss.*not supported; "
+                                                      "supported: the chain"):
         differentiate_state(integral, start, start, FoldAngle(2))
     staggered = simulate(setup.model, [SelfFold({2: 0.0}, increments=2),
                                        Heat({2: 0.02}, increments=2, coupling="staggered")])
@@ -370,3 +376,10 @@ def test_single_fold_resting_on_the_substrate():
     h = _step(power, "power")
     fd = (_value(run(power + h), FoldAngle(2)) - _value(run(power - h), FoldAngle(2))) / (2 * h)
     assert _error(g.gradient["power[2]"], fd) <= RTOL
+
+
+def _lumped_integral():
+    """The single fold with the lumped integral loss (the one loss model not differentiated)."""
+    model = get_case("single_fold", loss_model="integral").model
+    return dataclasses.replace(model, thermal=dataclasses.replace(
+        model.thermal, loss=IntegralLoss(lumped=True)))

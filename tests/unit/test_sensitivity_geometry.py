@@ -9,12 +9,13 @@ The agreement asked for is 1e-5.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from simulator import Heat, NewtonOptions, SelfFold, simulate
+from simulator import Heat, IntegralLoss, NewtonOptions, SelfFold, simulate
 from simulator.cases import get_case, miura_sheet_model, single_fold_model
 from simulator.errors import ParameterError
 from simulator.geometry.example_patterns import double_fold_pattern, single_fold_pattern
@@ -297,8 +298,16 @@ def test_geometry_refusals(single):
         differentiate(single, FoldAngle(2), (), geometry={"L": 0.5e-3})
     with pytest.raises(ParameterError, match="Geometry.scale\\['L'\\] = -1"):
         Geometry(_single_model, {"L": 0.5e-3}, scale={"L": -1})
-    integral = get_case("single_fold", loss_model="integral").model
+    integral = _lumped_integral()
     start = initial_state(integral)
-    with pytest.raises(SensitivityNotSupported, match="the integral heat loss"):
+    with pytest.raises(SensitivityNotSupported, match="the lumped integral loss.*not supported; "
+                                                      "supported: the chain"):
         differentiate_state(integral, start, start, FoldAngle(2),
                             geometry=Geometry(_single_model, {"L": 0.5e-3}))
+
+
+def _lumped_integral():
+    """The single fold with the lumped integral loss (the one loss model not differentiated)."""
+    model = get_case("single_fold", loss_model="integral").model
+    return dataclasses.replace(model, thermal=dataclasses.replace(
+        model.thermal, loss=IntegralLoss(lumped=True)))
