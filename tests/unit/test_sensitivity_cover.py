@@ -34,7 +34,7 @@ import pytest
 from test_sensitivity import (OPTIONS, RTOL, _bimorph_models, _error, _medium_models, _step,
                               _value)
 
-from simulator import Heat, SelfFold, simulate
+from simulator import Heat, IntegralLoss, SelfFold, simulate
 from simulator.cases import get_case
 from simulator.mechanics.equilibrium import equilibrium_system
 from simulator.sensitivity import (CreaseTemperature, FoldAngle, NodeCoordinate,
@@ -195,8 +195,26 @@ def _gripper():
     return device, device.run()
 
 
+def _with_integral(make):
+    """The device of ``make`` with the integral heat loss (extrapolated levels 3 and 2, the
+    monotone conduction, over its substrate) rebuilt at every shape (no correction between
+    rebuilds: the end state is the accurate operator's own) on the unrefined sheet (a
+    refined sheet's structured sub-triangles sit at the operator's rule thresholds, which the
+    differences may cross: theory 12.6)."""
+    def device():
+        base, _ = make()
+        thermal = dataclasses.replace(base.model.thermal, sheet_refinement=1,
+                                      loss=IntegralLoss(shape_tol=0.0, correction_tol=0.0))
+        out = dataclasses.replace(base, name=base.name + "_integral", model=dataclasses.replace(
+            base.model, thermal=thermal), power={c: p / 4 for c, p in base.power.items()})
+        # a quarter of the chains' powers: the integral loss runs the creases hotter
+        return out, out.run()
+    return device
+
+
 _DEVICES = {"miura_lifter_2x2": _miura, "miura_lifter_3x3": lambda: _miura(3),
-            "gripper": _gripper}
+            "gripper": _gripper, "miura_lifter_2x2_integral": _with_integral(_miura),
+            "gripper_integral": _with_integral(_gripper)}
 
 
 @pytest.fixture(scope="module", params=sorted(_DEVICES))

@@ -27,9 +27,11 @@ from simulator.thermal._single_layer import (single_layer_operator, sub_triangle
 
 
 def _integral(model, **loss):
-    """``model`` with the integral loss (rebuilt at every shape) on its unrefined sheet."""
+    """``model`` with the integral loss rebuilt at every shape (no correction between
+    rebuilds) on its unrefined sheet."""
     return dataclasses.replace(model, thermal=dataclasses.replace(
-        model.thermal, loss=IntegralLoss(shape_tol=0.0, **loss), sheet_refinement=1))
+        model.thermal, loss=IntegralLoss(shape_tol=0.0, correction_tol=0.0, **loss),
+        sheet_refinement=1))
 
 
 @pytest.mark.parametrize("level", [1, 2, 3])
@@ -165,7 +167,7 @@ def test_refined_sheet(single):
     step)."""
     base = get_case("single_fold", loss_model="integral").model
     model = dataclasses.replace(base, thermal=dataclasses.replace(
-        base.thermal, loss=IntegralLoss(shape_tol=0.0)))
+        base.thermal, loss=IntegralLoss(shape_tol=0.0, correction_tol=0.0)))
     setup = Setup("single_fold", model, {2: 0.0}, {2: 0.02})
     result = setup.run()
     g = differentiate(result, FoldAngle(2), ("power", "medium_conductivity"))
