@@ -35,8 +35,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..linalg import dense_lapack
 from ..thermal._single_layer import (MID_FACTOR, NEAR_FACTOR, TIE, mirror,
                                      single_layer_operator, triangle_potential)
+from . import _integral_jit
 from .chain import ChainOperator
 
 __all__ = ["IntegralShapeOperator", "shape_operator", "loss_levels", "pair_derivative",
@@ -154,42 +156,56 @@ class _Level:
             self.L, self.factor = np.zeros((len(op.nodes),) * 2), None
             return
         S, _ = single_layer_operator(self.sub, op.conductivity, op.plane, edges=op._edges[live])
-        try:
-            self.factor = sla.cho_factor(S, lower=True)
-        except np.linalg.LinAlgError:
-            raise SensitivityNotSupported(
-                "differentiate: the integral loss's single-layer operator is not positive "
-                "definite at this shape (parts of the sheet closer than a sub-triangle or "
-                "passing through each other)") from None
-        self.W = sla.cho_solve(self.factor, self.M)
-        L = self.M.T @ self.W
+        # S = C C^T (C lower), W = C^-1 M, L = W^T W: one BLAS thread, as the loss's own build
+        out = dense_lapack.cholesky_loss(S, self.M, overwrite=True)
+        if out is None:
+            try:
+                C = sla.cholesky(S, lower=True)
+            except np.linalg.LinAlgError:
+                raise SensitivityNotSupported(
+                    "differentiate: the integral loss's single-layer operator is not positive "
+                    "definite at this shape (parts of the sheet closer than a sub-triangle or "
+                    "passing through each other)") from None
+            W = sla.solve_triangular(C, self.M, lower=True)
+            out = C, W, W.T @ W
+        self.factor, self.W, L = out
         self.L = 0.5 * (L + L.T)
 
     def jacobian(self, rise_sheet) -> np.ndarray:
         """``d (L dT) / dx`` (n_sheet, 3 n_nodes) [W/(K m)] of this level at the rise
-        ``rise_sheet`` on the operator's nodes."""
+        ``rise_sheet`` on the operator's nodes: ``-M^T S^-1 D = -W^T (C^-1 D)``."""
         op = self.op
         if self.factor is None:
             return np.zeros((len(op.nodes), 3 * op.n_nodes))
-        p = self.W @ rise_sheet
-        D = pair_derivative(self.sub, self.parent, self.bary, p, op.conductivity, op.plane,
-                            op.n_nodes)
-        return -(self.M.T @ sla.cho_solve(self.factor, D))
+        with dense_lapack.one_blas_thread():
+            p = sla.solve_triangular(self.factor, self.W @ rise_sheet, lower=True, trans="T",
+                                     check_finite=False)
+            D = pair_derivative(self.sub, self.parent, self.bary, p, op.conductivity,
+                                op.plane, op.n_nodes)
+            return -(self.W.T @ sla.solve_triangular(self.factor, D, lower=True,
+                                                     check_finite=False))
 
 
 def pair_derivative(tri, parent, bary, p, conductivity, plane=None, n_nodes=None,
-                    near: float = NEAR_FACTOR) -> np.ndarray:
+                    near: float = NEAR_FACTOR, compiled=None) -> np.ndarray:
     """``D = d(S p)/dx`` [K/(W m) W] at fixed ``p``: the derivative of the product of the
     symmetrised single-layer operator ``S`` (:func:`~simulator.thermal._single_layer.
     single_layer_operator`) of the sub-triangles ``tri`` (n, 3, 3) [m] with ``p`` (n,) [W],
     in the positions of the mesh nodes, (n, 3 n_nodes) (node-major coordinates).
 
     ``parent`` (n, 3): the mesh nodes of each sub-triangle's triangle; ``bary`` (n, 3, 3): the
-    barycentric weights (corner, parent node) of its corners. Numpy, in blocks of rows."""
+    barycentric weights (corner, parent node) of its corners. Compiled when ``compiled``
+    (default: when compiled kernels are selected, :mod:`simulator.sensitivity._integral_jit`),
+    else numpy in blocks of rows (the checked reference)."""
     tri = np.asarray(tri, float)
     n = len(tri)
     n_nodes = int(parent.max()) + 1 if n_nodes is None else int(n_nodes)
     kappa = 1 / (4 * math.pi * conductivity)
+    if compiled is None:
+        compiled = _integral_jit.use_compiled()
+    if compiled and _integral_jit.use_compiled():
+        return _integral_jit.pair_derivative(tri, parent, bary, p, kappa, plane, n_nodes,
+                                             near * (1 + TIE), MID_FACTOR, CLOSED_FORM_STEP)
     cbar = bary.mean(axis=1)                                              # (n, 3)
     c = tri.mean(axis=1)
     diam = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)

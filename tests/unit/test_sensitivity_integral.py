@@ -18,6 +18,7 @@ from simulator import IntegralLoss
 from simulator.cases import get_case
 from simulator.sensitivity import (CreaseTemperature, FoldAngle, NodeCoordinate,
                                    SensitivityNotSupported, differentiate)
+from simulator.sensitivity import _integral_jit
 from simulator.sensitivity.conduction import monotone_jacobian
 from simulator.sensitivity.integral import (IntegralShapeOperator, _Level, loss_levels,
                                             pair_derivative)
@@ -59,6 +60,24 @@ def test_pair_derivative_against_differences(level, plane):
     h = 1e-9
     fd = (product(nodes + h * d) - product(nodes - h * d)) / (2 * h)
     assert np.abs(fd - D @ d.ravel()).max() <= 1e-7 * np.abs(fd).max()
+
+
+@pytest.mark.parametrize("plane", [False, True])
+def test_pair_derivative_compiled_against_numpy(plane):
+    """The compiled kernel (simulator.sensitivity._integral_jit) gives numpy's ``D`` on 432
+    sub-triangles of three bent triangles (every rule), to the central differences' round-off."""
+    rng = np.random.default_rng(7)
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.3], [0.5, 1.6, 0.5]]) * 1e-3
+    tris = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4]])
+    bary, _ = subdivision(12)
+    sub = sub_triangle_corners(nodes, tris, bary, compiled=False)
+    args = (sub, np.repeat(tris, len(bary), axis=0), np.tile(bary, (len(tris), 1, 1)),
+            rng.random(len(sub)), 0.026,
+            (np.array([0, 0, -2e-4]), np.array([0, 0, 1.0])) if plane else None, len(nodes))
+    assert _integral_jit.use_compiled()
+    numpy = pair_derivative(*args, compiled=False)
+    assert np.abs(pair_derivative(*args, compiled=True) - numpy).max() \
+        <= 1e-8 * np.abs(numpy).max()
 
 
 def _moving(model, tm):
