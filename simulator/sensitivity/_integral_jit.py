@@ -65,6 +65,25 @@ def _mean_potential(px, py, pz, t):
     return total / area
 
 
+def _corner_difference(cx, cy, cz, v, w, a, k, hs, own):
+    """Central difference of :func:`_mean_potential` at the point c of the triangle ``v`` in
+    coordinate k of its corner a (step ``hs``; ``w`` scratch (3, 3)); ``own``: the point is
+    the triangle's centroid and moves with it."""
+    out = 0.0
+    for s in range(2):
+        for b in range(3):
+            for m in range(3):
+                w[b, m] = v[b, m]
+        w[a, k] += hs if s == 0 else -hs
+        if own:
+            cx = (w[0, 0] + w[1, 0] + w[2, 0]) / 3
+            cy = (w[0, 1] + w[1, 1] + w[2, 1]) / 3
+            cz = (w[0, 2] + w[1, 2] + w[2, 2]) / 3
+        f = _mean_potential(cx, cy, cz, w)
+        out += f if s == 0 else -f
+    return out / (2 * hs)
+
+
 def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin, normal,
             near, mid, step, D):
     n = tri.shape[0]
@@ -112,17 +131,7 @@ def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin
                 if image == 0 and i == j:            # the self term, along its triangle
                     for a in range(3):
                         for k in range(3):
-                            for s in range(2):
-                                for b in range(3):
-                                    for m in range(3):
-                                        w[b, m] = v[b, m]
-                                w[a, k] += hs if s == 0 else -hs
-                                qx = (w[0, 0] + w[1, 0] + w[2, 0]) / 3
-                                qy = (w[0, 1] + w[1, 1] + w[2, 1]) / 3
-                                qz = (w[0, 2] + w[1, 2] + w[2, 2]) / 3
-                                f = _mean_potential(qx, qy, qz, w)
-                                tg[a, k] += f if s == 0 else -f
-                            tg[a, k] /= 2 * hs
+                            tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, True)
                 elif dist < near * diam[j]:          # the closed form: central differences
                     for k in range(3):
                         for s in range(2):
@@ -134,14 +143,7 @@ def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin
                         tc[k] /= 2 * hs
                     for a in range(3):
                         for k in range(3):
-                            for s in range(2):
-                                for b in range(3):
-                                    for m in range(3):
-                                        w[b, m] = v[b, m]
-                                w[a, k] += hs if s == 0 else -hs
-                                f = _mean_potential(cx, cy, cz, w)
-                                tg[a, k] += f if s == 0 else -f
-                            tg[a, k] /= 2 * hs
+                            tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, False)
                 elif dist < mid * near * diam[j]:    # the 3-point rule
                     for q in range(3):
                         yx = yy = yz = 0.0
@@ -191,9 +193,10 @@ def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin
 def _build():
     from numba import njit
 
-    global _mean_potential
-    if not hasattr(_mean_potential, "py_func"):
-        _mean_potential = njit(cache=True, inline="always")(_mean_potential)
+    g = globals()
+    for name in ("_mean_potential", "_corner_difference"):
+        if not hasattr(g[name], "py_func"):
+            g[name] = njit(cache=True, inline="always")(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)
 
 
