@@ -25,7 +25,7 @@ from design import SensitivityReport, sensitivity_report
 from design.analysis import monte_carlo_comparison, perturbed_protocol, plot_tornado
 from simulator import Heat, ParameterError, SelfFold, simulate
 from simulator.cases import get_case
-from simulator.sensitivity import FoldAngle, SensitivityNotSupported, differentiate
+from simulator.sensitivity import FoldAngle, differentiate
 
 CONFIDENCE = 0.999
 N_SAMPLES = 60
@@ -176,12 +176,19 @@ def test_a_state_that_is_not_steady_is_reported_not_raised():
         sensitivity_report(simulate(model, steps), {"power[5]": 1e-4}, step=7)
 
 
-def test_integral_loss_is_refused_as_not_supported():
-    case = get_case("double_fold", loss_model="integral", thermal_steps=3, coupling="settled")
-    steps = [SelfFold({2: 0.0, 5: 0.0}, increments=5), Heat({2: 0.005}, increments=2)]
+def test_integral_loss_report_is_the_adjoint_gradient_times_the_tolerance():
+    """With the integral heat loss (differentiated since theory 12.6) the report's spread of
+    a single tolerance is the gradient times it, and it names the first output's status."""
+    case = get_case("double_fold", loss_model="integral")
+    steps = [SelfFold({2: 0.0, 5: 0.0}, increments=5),
+             Heat({2: 0.005}, increments=2, coupling="settled")]
     result = simulate(case.model, steps)
-    with pytest.raises(SensitivityNotSupported, match="integral heat loss"):
-        sensitivity_report(result, {"power[2]": 1e-4})
+    report = sensitivity_report(result, {"power[2]": 1e-4})
+    assert report.status == "converged"
+    g = differentiate(result, FoldAngle(2), "power")
+    assert g.success and g.gradient["power[2]"] > 0
+    assert report.sigma["fold_2"] == pytest.approx(abs(g.gradient["power[2]"]) * 1e-4,
+                                                   rel=1e-12)
 
 
 def test_tornado_puts_the_largest_effect_on_top_and_names_the_physics(report):

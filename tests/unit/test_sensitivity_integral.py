@@ -197,3 +197,26 @@ def test_refined_sheet(single):
     h = 10 * _step(0.02, "power")
     fd = _central(setup, [FoldAngle(2)], h, power=({2: 0.02 + h}, {2: 0.02 - h}))[0]
     assert _error(g.gradient["power[2]"], fd) <= 1e-4
+
+
+def test_geometry_with_the_integral_loss():
+    """Geometry parameters with the integral loss (its operator and the monotone conduction
+    rebuilt on the moved reference): the single fold's panel length L and crease width W."""
+    from test_sensitivity_geometry import SINGLE_KW, _check, _single_run
+
+    from simulator.cases import single_fold_model
+    from simulator.sensitivity import Geometry
+
+    base = _integral(get_case("single_fold").model)
+
+    def build(p):
+        kw = {**SINGLE_KW, "W": p["W"]}
+        return single_fold_model(thermal=base.thermal, actuators=base.actuators, L=p["L"], **kw)
+
+    values = {"L": 0.5e-3, "W": SINGLE_KW["W"]}
+    result = _single_run(build(values))
+    objectives = (FoldAngle(2), CreaseTemperature(2, "centre_line"))
+    grads = [differentiate(result, o, (), geometry=Geometry(build, values)) for o in objectives]
+    assert all(g.success and g.status == "converged" for g in grads), grads[0].message
+    for name in values:
+        _check(_single_run, build, values, name, grads, objectives)
