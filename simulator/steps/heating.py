@@ -129,7 +129,6 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape
     settled = coupling.mode == "settled" and not coupling.fixed_shape
-    exact = False           # the integral loss's operator rebuilt at the end shape (theory 6.6)
     solve = _fixed_powers(tm) if heating is None else heating
     columns = {}
     for s, (base, room) in enumerate(zip(powers, ambient), start=1):
@@ -168,9 +167,10 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
                 change, before = float(np.max(np.abs(point.temperature - temp))), change
                 temp, power, columns = point.temperature, point.power, point.columns
                 done = _agreed(change, before, coupling.tol, temp - room)
-                if exact or not (done and s == n_inc and tm.exact_loss_at(mesh.nodes + path.u)):
+                # at the end shape: rebuilt unless its last build was there (then the end
+                # state is the accurate operator's own, whatever the corrections on the way)
+                if not (done and s == n_inc and tm.exact_loss_at(mesh.nodes + path.u)):
                     break
-                exact = True
             if done:
                 break
         if iterate and not done:
