@@ -208,5 +208,7 @@ def wrap_refusal(system, u_prev, rest_prev, u, rest) -> str:
     names = [f"spring {int(s)}" + (f" (crease {owner[int(s)]})" if int(s) in owner else "")
              for s in rows[:3]]
     more = f" and {len(rows) - 3} more" if len(rows) > 3 else ""
-    return ("the converged state is not physical: " + ", ".join(names) + more + " passed the "
-            "spring law's wrap point, 180 deg from the rest angle, where its moment reverses")
+    from .substrate import NOT_PHYSICAL
+
+    return (NOT_PHYSICAL + ", ".join(names) + more + " passed the spring law's wrap point, "
+            "180 deg from the rest angle, where its moment reverses")

@@ -24,7 +24,7 @@ import numpy as np
 from ..model.mesh import BarHingeMesh
 
 __all__ = ["Substrate", "substrate_of", "substrate_breaches", "breach_message", "substrate_refusal",
-           "BELOW_RTOL"]
+           "not_physical", "BELOW_RTOL", "NOT_PHYSICAL"]
 
 #: A node counts as below a substrate where it is more than this fraction of the model size
 #: under the substrate's plane (1 nm on a 1 mm sheet). The substrate's nodes are fixed, so its
@@ -32,6 +32,9 @@ __all__ = ["Substrate", "substrate_of", "substrate_breaches", "breach_message", 
 #: distance (40 um on the Miura lifter) is 4e-2 of it. Any penetration a physical model could
 #: resolve is therefore far above this, and round-off far below.
 BELOW_RTOL = 1e-9
+#: How a refusal of a converged state begins (:func:`substrate_refusal`,
+#: :func:`~simulator.mechanics.crossing.wrap_refusal`); :func:`not_physical` finds it in a message.
+NOT_PHYSICAL = "the converged state is not physical: "
 #: Every other node must lie on one side of a fixed panel's plane by more than this fraction of
 #: the model size for the panel to be a substrate (a clamped panel of a flat sheet is not).
 SIDE_RTOL = 1e-6
@@ -175,4 +178,14 @@ def substrate_refusal(system, u) -> str:
     rows = substrate_breaches(substrate, model.mesh.nodes + np.asarray(u, float).reshape(-1, 3))
     if not len(rows):
         return ""
-    return f"the converged state is not physical: {breach_message(model.mesh, rows)}"
+    return NOT_PHYSICAL + breach_message(model.mesh, rows)
+
+
+def not_physical(message: str) -> str:
+    """The refusal of a converged state in a failure ``message`` (what was not physical, up
+    to ": halving it"), "" if there is none."""
+    k = message.find(NOT_PHYSICAL)
+    if k < 0:
+        return ""
+    text = message[k + len(NOT_PHYSICAL):]
+    return text.split(": halving it")[0]

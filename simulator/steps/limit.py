@@ -48,6 +48,7 @@ from ..solvers.load_path import (LoadPath, PathConstraint, correct_point, model_
                                  solve_path_system)
 from ..mechanics.rest_angles import spring_rest_angles
 from ..state import at_rest
+from ..mechanics.substrate import not_physical
 from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
 from .base import StepOutcome, StepRecorder
 
@@ -393,7 +394,9 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
-        notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
+        why = not_physical(current.message)       # a refused state stopped it (theory 6.11)
+        notes.append(f"load control stopped at load factor {lam0:.6g}"
+                     + (f" (not physical beyond: {why})" if why else "") + "; arc length: "
                      + "; restarted there: ".join(texts))
         lam1 = res.load_factor
         if not res.success or lam1 >= 1.0 - 1e-12:

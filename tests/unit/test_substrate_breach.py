@@ -84,3 +84,24 @@ def test_load_control_never_converges_through_the_substrate(fold):
     ok = simulate(fold, [Load({CREASE_CENTRE: (0, 0, -1e-3)}, increments=5)]).steps[0]
     assert ok.success and _lowest(fold, ok.state.u) > SUBSTRATE_Z
 
+
+
+def test_continued_past_the_refusal_arc_length_refuses_too_and_the_message_says_why(fold):
+    """With ``on_limit_point="continue"`` arc length takes over where load control gave up;
+    it refuses the same states, and the step's message names what load control refused."""
+    step = simulate(fold, [Load({CREASE_CENTRE: (0, 0, -PUSH)}, increments=5,
+                                on_limit_point="continue")]).steps[0]
+    assert not step.success
+    assert "(not physical beyond: crease node 14" in step.message
+    sub = substrate_of(fold.mesh, fold.supports)
+    for u in step.u_history:
+        assert len(substrate_breaches(sub, fold.mesh.nodes + u)) == 0
+
+
+def test_not_physical_finds_the_refusal_in_a_message():
+    from simulator.mechanics.substrate import NOT_PHYSICAL, not_physical
+
+    msg = f"gave up at t = 0.5: {NOT_PHYSICAL}crease node 3 2 um below substrate panel 1: " \
+        "halving it; every shorter increment ..."
+    assert not_physical(msg) == "crease node 3 2 um below substrate panel 1"
+    assert not_physical("gave up at t = 0.5: no convergence in 30 iterations") == ""
