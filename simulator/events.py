@@ -302,7 +302,12 @@ class CrossingWatch:
       passing through panels (:func:`crossing_event`, nodes only, 1-2 ms): a
       ``"panel_crossing"``, which names the creases past flat.
 
-    ``CrossingWatch(mesh, u0)``; ``check(u, increment, load_factor, power, temperature)``
+    * With the model's ``supports``: a node below a substrate (a fixed panel with the whole
+      structure on one side, :mod:`simulator.mechanics.substrate`) after any increment is a
+      ``"panel_crossing"`` too, which names the nodes, how deep and which panel (crease nodes
+      are not contact points; a long step can pass a contact point through).
+
+    ``CrossingWatch(mesh, u0, supports=None)``; ``check(u, increment, load_factor, power, temperature)``
     after each accepted increment: the :class:`Event` or None; a step stops on a
     ``"panel_crossing"`` (:func:`stops`) and records a ``"fold_past_flat"``. The angles of the
     last few states checked on a mesh are kept (by their displacements' bytes), so a step that
@@ -310,8 +315,11 @@ class CrossingWatch:
     does not compute its start angles again.
     """
 
-    def __init__(self, mesh, u0):
+    def __init__(self, mesh, u0, supports=None):
+        from .mechanics.substrate import substrate_of
+
         self.mesh, self.u = mesh, np.asarray(u0, float)
+        self.substrate = None if supports is None else substrate_of(mesh, supports)
         self._angles = _crease_angles(mesh)
         # the compiled kernels where numba is selected (None: numpy), chosen once per watch
         self._kernel, self._quiet = fold_angles_kernel(), quiet_kernel()
@@ -354,8 +362,32 @@ class CrossingWatch:
                 newly = wrapped & past
                 if event is None and newly.any():
                     event = _past_flat(self.mesh, np.flatnonzero(newly), a, **kw)
+        if self.substrate is not None and not stops(event):
+            event = _through_substrate(self.mesh, self.substrate, u, increment=increment,
+                                       load_factor=load_factor, power=power,
+                                       temperature=temperature) or event
         self.u, self.a = u, a
         return event
+
+
+def _through_substrate(mesh, substrate, u, *, increment, load_factor, power, temperature):
+    """The ``"panel_crossing"`` :class:`Event` of nodes below a substrate at displacements
+    ``u`` (:func:`~simulator.mechanics.substrate.substrate_breaches`), else None."""
+    from .mechanics.substrate import breach_message, substrate_breaches
+
+    rows = substrate_breaches(substrate, mesh.nodes + u)
+    if not len(rows):
+        return None
+    nodes = rows[:, 0].astype(int)
+    own = mesh.node_panel[nodes]
+    panels = np.unique(np.r_[own[own >= 0], rows[:, 1].astype(int)])
+    message = (f"nodes passed through the substrate in increment {increment + 1} (load "
+               f"factor {load_factor:.6g}): {breach_message(mesh, rows)}; the state is not "
+               "physical (panel contact holds panel corners and centres above it, not crease "
+               "nodes, and a step longer than the contact distance passes it)")
+    return Event("panel_crossing", float(load_factor), increment, power_per_crease=power,
+                 temperature_max=None if temperature is None else float(np.max(temperature)),
+                 message=message, panels=panels)
 
 
 def stops(event) -> bool:
@@ -390,7 +422,7 @@ def renumbered(event: Event, increment: int) -> Event:
     return replace(event, increment=int(increment), message=message)
 
 
-def crossing_stop(mesh, u0, then=None):
+def crossing_stop(mesh, u0, then=None, supports=None):
     """A ``callback(lam, u)`` for the path followers (:func:`~simulator.solvers.continuation.mgdcm`,
     :func:`~simulator.solvers.displacement_control.displacement_control`) that stops them
     (returns True) at the first accepted point where panels passed through each other since
@@ -398,7 +430,7 @@ def crossing_stop(mesh, u0, then=None):
     ``then(lam, u)`` (False without ``then``). The events themselves are made where the points
     are recorded (:func:`~simulator.steps.limit.record_continuation`), which knows their
     record indices."""
-    watch = CrossingWatch(mesh, u0)
+    watch = CrossingWatch(mesh, u0, supports)
 
     def callback(lam, u):
         if stops(watch.check(u, 0, lam)):

@@ -26,7 +26,7 @@ from .contact_search import STATIC_PAIR_LIMIT, ContactSearch
 from .elements._vec import cross, dot
 from .kinematics import fold_angles
 
-__all__ = ["crease_crossings", "node_crossings"]
+__all__ = ["crease_crossings", "node_crossings", "spring_wraps", "wrap_refusal"]
 
 #: Barycentric margin of :func:`node_crossings`: a point passing within this fraction of a
 #: triangle's edge is not counted (grazing a shared edge or a T-junction of a flat sheet).
@@ -156,3 +156,59 @@ def _inside(P, T, margin: float = INSIDE_MARGIN) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         v, w = (d22 * b1 - d12 * b2) / det, (d11 * b2 - d12 * b1) / det
     return (det > 0) & (v > margin) & (w > margin) & (1 - v - w > margin)
+
+
+def spring_wraps(mesh: BarHingeMesh, x_prev: np.ndarray, rest_prev: np.ndarray, x: np.ndarray,
+                 rest: np.ndarray) -> np.ndarray:
+    """Rotational springs whose angle passed the spring law's wrap point, half a turn from the
+    rest angle, between two states (theory 3.3).
+
+    The law's deviation ``theta - theta0`` is taken modulo 2 pi into [-pi, pi): where it passes
+    +-pi the spring's moment reverses (from about ``k pi`` to ``-k pi``), so a state past it is
+    held by a moment that pushes the crease the other way round. A passing shows as the wrapped
+    deviation changing by more than pi between the states (each moving less than half a turn).
+
+    Parameters
+    ----------
+    mesh : BarHingeMesh
+    x_prev, x : (n_nodes, 3) node positions [m] of consecutive states
+    rest_prev, rest : (n_springs,) spring rest angles [rad] there
+
+    Returns
+    -------
+    (k,) int array of spring indices (into ``mesh.springs``), ascending; empty if none.
+    """
+    from .elements.springs import fold_angle
+
+    springs = np.asarray(mesh.springs)
+    if not len(springs):
+        return np.zeros(0, int)
+
+    def deviation(xs, r):
+        d = fold_angle(np.asarray(xs, float)[springs]) - np.asarray(r, float)
+        return d - 2 * np.pi * np.floor(d / (2 * np.pi) + 0.5)
+    return np.flatnonzero(np.abs(deviation(x, rest) - deviation(x_prev, rest_prev)) > np.pi)
+
+
+def wrap_refusal(system, u_prev, rest_prev, u, rest) -> str:
+    """Why a converged state ``u`` (rest angles ``rest``) reached from ``u_prev``
+    (``rest_prev``) must be refused: the springs that passed the law's wrap point
+    (:func:`spring_wraps`) in words, "" if none did (or ``system`` has no model)."""
+    model = getattr(system, "model", None)
+    if model is None or rest_prev is None or rest is None:
+        return ""
+    mesh = model.mesh
+    rows = spring_wraps(mesh, mesh.nodes + np.asarray(u_prev, float).reshape(-1, 3), rest_prev,
+                        mesh.nodes + np.asarray(u, float).reshape(-1, 3), rest)
+    if not len(rows):
+        return ""
+    cs = np.asarray(mesh.crease_springs)                 # (C, 8) springs of each crease
+    owner = dict(zip(cs.ravel().tolist(), np.repeat(mesh.crease_ids, cs.shape[1]).tolist())) \
+        if cs.ndim == 2 else {}
+    names = [f"spring {int(s)}" + (f" (crease {owner[int(s)]})" if int(s) in owner else "")
+             for s in rows[:3]]
+    more = f" and {len(rows) - 3} more" if len(rows) > 3 else ""
+    from .substrate import NOT_PHYSICAL
+
+    return (NOT_PHYSICAL + ", ".join(names) + more + " passed the spring law's wrap point, "
+            "180 deg from the rest angle, where its moment reverses")

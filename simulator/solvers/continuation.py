@@ -38,6 +38,8 @@ import numpy as np
 
 from .._validate import finite, integer, one_of, positive
 from ..errors import ParameterError
+from ..mechanics.crossing import wrap_refusal
+from ..mechanics.substrate import substrate_refusal
 from .load_path import (PathConstraint, begin_point, correct_point, free_added, model_size,
                         path_tangent)
 from .newton import NewtonOptions
@@ -255,6 +257,13 @@ class _ArcLengthRun:
                                                     self.lam + dl, con, self.options, self.size)
         self.trace.iterations += its
         refused = self.refusal(dl, u1, lam1) if ok and not end else ""
+        if ok and not refused:          # a node through the substrate (theory 6.11)
+            refused = substrate_refusal(self.path.system, u1)
+        if ok and not refused and hasattr(self.path, "rest"):     # a spring past its wrap
+            refused = wrap_refusal(self.path.system, self.u, self.path.rest(self.lam), u1,
+                                   self.path.rest(lam1))
+        if refused:
+            logger.debug("load factor %.6g refused: %s", lam1, refused)
         if refused:
             ok, msg = False, refused
         if not ok:

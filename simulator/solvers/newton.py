@@ -20,6 +20,8 @@ from functools import cached_property
 import numpy as np
 
 from ..mechanics.equilibrium import EquilibriumSystem, SystemValues, assembled_tangent as _tangent
+from ..mechanics.crossing import wrap_refusal
+from ..mechanics.substrate import substrate_refusal
 from .._validate import integer, non_negative, one_of
 from ..errors import ParameterError
 from ..linalg.ladder import check_backend, solve as linear_solve
@@ -383,6 +385,7 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     u, history, residuals, last_ev = u0.copy(), [], [], None
     stability, switches, judged, t_now = [], [], [None], [0.0]
     jumped = [False]               # the attempt being accepted switched branch
+    below = [False]                # the last attempt was refused: not physical (theory 6.11)
     soft_memo = [None, None]       # (t, soft_mode) of the last accepted state
     check = options.stability != "off"
     # the path's direction so far, (u1 - u0) / dt over the last accepted increment (or
@@ -430,6 +433,17 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
             if res.success:
                 jumped[0] = True
                 judged[0] = quick_stability(_tangent(res.evaluation), options.linear_solver)
+        why = substrate_refusal(system, res.u) if res.success else ""
+        if res.success and not why:
+            r0, r1 = (rest_start + t * (rest_end - rest_start) for t in (t_now[0], t_try))
+            why = wrap_refusal(system, u, r0, res.u, r1)
+        below[0] = bool(why)
+        if why:
+            # a node passed through the substrate (a crease node, or a step longer than the
+            # contact distance), or a spring the law's wrap point: refused, so that the
+            # increment is halved (theory 6.11)
+            logger.debug("path parameter %.6g refused: %s", t_try, why)
+            res = replace(res, success=False, message=f"{why}: halving it")
         return res.success, res
 
     def _soft(t0):
@@ -471,8 +485,12 @@ def follow_path(system: EquilibriumSystem, u0: np.ndarray, f_start: np.ndarray, 
     extra = {"stability": stability, "switches": switches}
     if run.status == "failed":
         msg = (f"gave up at t = {run.t:.6g} after {run.in_row} step cuts in a row, "
-               f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}"
-               + (gave_up_at(system, u, last_ev, run.t, ends, options) if check else ""))
+               f"{run.cuts} in all (increment {run.dt:.3g}): {run.failure.message}")
+        if below[0]:
+            msg += ("; every shorter increment ends in such a state too, which the model does "
+                    "not prevent: the step cannot go on")
+        elif check:
+            msg += gave_up_at(system, u, last_ev, run.t, ends, options)
         logger.info(msg)          # data: the caller decides (a step fails, a search moves on)
         return PathResult(False, "failed", msg, u, run.t, total_iter, run.cuts, history,
                           residuals, last_ev, **extra)

@@ -142,7 +142,8 @@ class ArcLengthLoad(Step):
                     callback=_progress(context, state, self.max_increments))
         rec = StepRecorder(state)
         crossing = record_continuation(rec, res, state.temperature, state.crease_power, c,
-                                       mesh=context.model.mesh)
+                                       mesh=context.model.mesh,
+                                       supports=context.model.supports)
         return _finish(rec, res, state, P, crossing)
 
     def describe(self) -> dict:
@@ -162,7 +163,7 @@ def _progress(context, state, total):
         count[0] += 1
         context.report(min(count[0], total), total)
         return False
-    return crossing_stop(context.model.mesh, state.u, progress)
+    return crossing_stop(context.model.mesh, state.u, progress, context.model.supports)
 
 
 def _finish(rec, res, state, P, crossing) -> StepOutcome:
@@ -228,7 +229,8 @@ class DisplacementControl(Step):
         along = float(P[self.node] @ d)
         crossing = record_continuation(rec, res, state.temperature, state.crease_power, c,
                                        extra=lambda lam: {"reaction [N]": lam * along},
-                                       mesh=context.model.mesh)
+                                       mesh=context.model.mesh,
+                                       supports=context.model.supports)
         return _finish(rec, res, state, P, crossing)
 
     def describe(self) -> dict:

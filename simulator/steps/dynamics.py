@@ -104,7 +104,7 @@ class Dynamics(Step):
             else node_vectors(self.velocity, n, "Dynamics", "velocity")
         total = max(1, int(np.ceil(self.duration / self.dt * (1 - 1e-12))))
         done, found = [0], []
-        watch = CrossingWatch(model.mesh, state.u)
+        watch = CrossingWatch(model.mesh, state.u, model.supports)
 
         def callback(motion):
             done[0] += 1

@@ -195,7 +195,7 @@ class ElectroThermal(Step):
         circuit_columns = getattr(powers, "columns", lambda temp, t: {})
         switches = powers.schedules + drive.schedules
         rec = StepRecorder(state)
-        watch = CrossingWatch(context.model.mesh, state.u)
+        watch = CrossingWatch(context.model.mesh, state.u, context.model.supports)
         rec.record_start(power=powers(0.0), velocity=mech.velocity,
                          **{"time [s]": state.time, "dt [s]": None, **mech.energies(),
                             **heat.energies(), **circuit_columns(state.temperature, 0.0)})

@@ -124,7 +124,7 @@ def coupled_increments(context: StepContext, state, powers: np.ndarray, ambient:
     u, spring, f = state.u, state.spring_rest, state.applied_load.ravel()
     x_start = mesh.nodes + state.u
     rec = StepRecorder(state)
-    watch = CrossingWatch(mesh, state.u)
+    watch = CrossingWatch(mesh, state.u, model.supports)
     n_inc = len(powers)
     temp, target, evaluation, previous = state.temperature, state.crease_rest, None, None
     iterated = coupling.mode == "iterated" and not coupling.fixed_shape

@@ -48,6 +48,7 @@ from ..solvers.load_path import (LoadPath, PathConstraint, correct_point, model_
                                  solve_path_system)
 from ..mechanics.rest_angles import spring_rest_angles
 from ..state import at_rest
+from ..mechanics.substrate import not_physical
 from ..events import CrossingWatch, Event, crossing_stop, event_at, monitored_node, stops
 from .base import StepOutcome, StepRecorder
 
@@ -125,7 +126,8 @@ def check_on_limit_point(step) -> None:
 
 
 def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=None,
-                        extra=None, *, mesh, critical: list | None = None) -> Event | None:
+                        extra=None, *, mesh, critical: list | None = None,
+                        supports=None) -> Event | None:
     """Record every accepted point of a ContinuationResult with its stability columns, and
     its critical points as events (:class:`~simulator.events.Event`), up to the first point
     where panels of ``mesh`` passed through each other since the point before (the last
@@ -138,10 +140,11 @@ def record_continuation(rec: StepRecorder, res, temperature, power, c, powers=No
     named columns; ``c`` (n_dof,) weighs the recorded ``displacement [m]`` (None: none);
     ``critical``, a list, receives the events of the recorded critical points too, in the
     order of ``res.critical_points`` (the events of ``rec`` mix them with the crossing
-    watch's).
+    watch's). ``supports`` (the model's): a node below a substrate is a crossing too
+    (:class:`~simulator.events.CrossingWatch`).
     """
     node, offset = monitored_node(c), len(rec)
-    watch = CrossingWatch(mesh, rec.last_u)
+    watch = CrossingWatch(mesh, rec.last_u, supports)
     crossing, recorded, found = None, len(res.history), []
     for k, (lam, u, _) in enumerate(res.history):
         temp = res.temperatures[k] if res.temperatures[k] is not None else temperature
@@ -383,14 +386,17 @@ def continue_past_limit(context, start, outcome: StepOutcome, path, increments: 
             limits = []
             crossing = record_continuation(rec, res, current.state.temperature,
                                            current.state.crease_power, c, powers=powers,
-                                           mesh=context.model.mesh, critical=limits)
+                                           mesh=context.model.mesh, critical=limits,
+                                           supports=context.model.supports)
             if crossing is not None:     # the arc length stopped where panels crossed
                 return _crossed(rec, res, crossing, end_state, notes)
             texts.append(res.message + _snap_text(rec, res, c, powers, limits))
         state = end_state(res.u, res.load_factor) if res.history or res.success else \
             current.state
         lam0 = float(current.load_factor[-1]) if len(current.load_factor) else origin[1]
-        notes.append(f"load control stopped at load factor {lam0:.6g}; arc length: "
+        why = not_physical(current.message)       # a refused state stopped it (theory 6.11)
+        notes.append(f"load control stopped at load factor {lam0:.6g}"
+                     + (f" (not physical beyond: {why})" if why else "") + "; arc length: "
                      + "; restarted there: ".join(texts))
         lam1 = res.load_factor
         if not res.success or lam1 >= 1.0 - 1e-12:
@@ -456,7 +462,8 @@ def _restart(context, origin, located, path, c):
                  options=context.options, step_norm=step, stability=True, until_stable=True,
                  direction=u_u - u_s, prior=(u_s, lam_s), resolution=ARC_LOAD_STEP / RESOLVE,
                  lost_fold_jump=ARC_LOAD_STEP / RESOLVE,
-                 callback=crossing_stop(context.model.mesh, u_u),
+                 callback=crossing_stop(context.model.mesh, u_u,
+                                       supports=context.model.supports),
                  handover=_handover(path, context.options))
 
 
@@ -503,7 +510,8 @@ def _arc(context, origin, outcome, path, increments, c, until_stable, locate=Fal
                  step_norm=step if step > 0 else None, fast_iterations=fast,
                  stability=until_stable, until_stable=until_stable,
                  direction=recent, prior=prior,
-                 callback=crossing_stop(context.model.mesh, u0, None if until_stable else turned),
+                 callback=crossing_stop(context.model.mesh, u0, None if until_stable else turned,
+                                       context.model.supports),
                  resolution=ARC_LOAD_STEP / RESOLVE if until_stable else None,
                  switch_branches=until_stable and SWITCH_BRANCHES,
                  locate_stability_loss=locate,

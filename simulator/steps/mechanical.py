@@ -72,7 +72,8 @@ def _follow(context: StepContext, state, f_start, f_end, rest_end, increments,
     recorded (temperatures and powers unchanged; ``load_factor(t)`` maps the path's parameter
     to the step's). A crease folding past +-180 deg stops the path with a "panel_crossing"
     event (:func:`~simulator.events.crossing_event`)."""
-    total, watch = increments, CrossingWatch(context.model.mesh, state.u)
+    total, watch = increments, CrossingWatch(context.model.mesh, state.u,
+                                              context.model.supports)
     scale = (lambda t: t) if load_factor is None else load_factor
     crossings, accepted = [], [0]
 

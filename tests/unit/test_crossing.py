@@ -183,3 +183,39 @@ def test_the_watchs_fold_angles_are_fold_angles(flip):
         u = folded(mesh, deg) - mesh.nodes + rng.normal(size=mesh.nodes.shape) * 1e-6
         assert angles(u) == pytest.approx(fold_angles(mesh, mesh.nodes + u), abs=1e-12)
         assert angles.known(u) is angles.known(u.copy())
+
+
+def _spring_angles(mesh, x):
+    from simulator.mechanics.elements.springs import fold_angle
+    return fold_angle(x[np.asarray(mesh.springs)])
+
+
+@pytest.mark.parametrize("before, after, wraps", [
+    (170, 190, True), (190, 170, True), (100, 170, False), (-170, -190, True), (0, 60, False)])
+def test_a_spring_passing_half_a_turn_from_its_rest_angle_wraps(strip, before, after, wraps):
+    """Rest angles those of the flat strip: a spring turned by the whole fold passes the
+    law's wrap point where the fold passes 180 deg (the law's moment reverses there)."""
+    from simulator.mechanics.crossing import spring_wraps
+
+    rest = _spring_angles(strip, strip.nodes)
+    rows = spring_wraps(strip, folded(strip, before), rest, folded(strip, after), rest)
+    assert bool(len(rows)) == wraps
+    # the same fold with the rest angles turned along (a crease that follows its rest angle)
+    turned = _spring_angles(strip, folded(strip, after))
+    assert not len(spring_wraps(strip, folded(strip, before), _spring_angles(
+        strip, folded(strip, before)), folded(strip, after), turned))
+
+
+def test_wrap_refusal_names_the_springs_and_their_crease(strip):
+    from types import SimpleNamespace
+
+    from simulator.mechanics.crossing import wrap_refusal
+
+    rest = _spring_angles(strip, strip.nodes)
+    system = SimpleNamespace(model=SimpleNamespace(mesh=strip))
+    why = wrap_refusal(system, folded(strip, 170) - strip.nodes, rest,
+                       folded(strip, 190) - strip.nodes, rest)
+    assert "(crease 1)" in why and "wrap point" in why and "not physical" in why
+    assert wrap_refusal(system, folded(strip, 100) - strip.nodes, rest,
+                        folded(strip, 170) - strip.nodes, rest) == ""
+    assert wrap_refusal(object(), strip.nodes, rest, strip.nodes, rest) == ""
