@@ -144,7 +144,7 @@ class FoldShapeProblem(HeaterPowerProblem):
         return (np.array([s.value for s in sens]),
                 np.array([[s.gradient[k] for k in keys] for s in sens]), "")
 
-    def _constraints(self, result, gradient: bool):
+    def _constraints(self, result, gradient: bool, values=None):
         v, dv, message = self._values(result, gradient)
         if v is None:
             return message

@@ -28,22 +28,27 @@ COUPLING_TOL = 1e-10
 
 
 class HeaterPowerProblem(DesignProblem):
-    """Least total heater power: the variables are the powers of ``self.creases`` [W], the
-    objective their sum (its gradient 1 in each); a subclass gives ``simulate(values)`` and
-    ``_constraints(result, gradient) -> (constraints, metrics, constraint gradients)``, or a
-    str saying why the simulated design cannot be judged."""
+    """Least total heater power: the powers of ``self.creases`` [W] are the variables
+    ``power_<crease>`` (beside others a subclass may add, e.g. dimensions), the objective
+    their sum (its gradient 1 in each, 0 in the others); a subclass gives
+    ``simulate(values)`` and ``_constraints(result, gradient, values) -> (constraints,
+    metrics, constraint gradients)``, or a str saying why the simulated design cannot be
+    judged."""
 
     def _outcome(self, values: dict, gradient: bool) -> EvaluationOutcome:
         result = self.simulate(values)
         if not result.success:
             return EvaluationOutcome(math.inf, {}, {}, "failed", result.message)
-        out = self._constraints(result, gradient)
+        out = self._constraints(result, gradient, values)
         if isinstance(out, str):
             return EvaluationOutcome(math.inf, {}, {}, "failed", out)
         cons, metrics, grads = out
-        return EvaluationOutcome(sum(values.values()), cons, metrics,
-                                 objective_gradient=[1.0] * len(self.creases) if gradient
-                                 else None, constraint_gradients=grads if gradient else None)
+        powers = {f"power_{c}" for c in self.creases}
+        return EvaluationOutcome(sum(v for k, v in values.items() if k in powers), cons,
+                                 metrics, objective_gradient=[
+                                     float(v.name in powers) for v in self.space.variables]
+                                 if gradient else None,
+                                 constraint_gradients=grads if gradient else None)
 
     def _evaluate(self, values: dict) -> EvaluationOutcome:
         return self._outcome(values, gradient=False)
@@ -136,7 +141,7 @@ class FoldTargetProblem(HeaterPowerProblem):
         return {**{f"fold_{c}": (t, None) for c, t in self.targets.items()},
                 **{f"temperature_{c}": (None, self.temperature_limit) for c in self.creases}}
 
-    def _constraints(self, result, gradient: bool):
+    def _constraints(self, result, gradient: bool, values=None):
         from simulator.sensitivity import differentiate
 
         cons, metrics, grads = {}, {}, {}
