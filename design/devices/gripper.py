@@ -487,7 +487,7 @@ def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
     return x
 
 
-def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
+def self_weight(design: GripperDesign, n_nodes: int) -> np.ndarray:
     """The reference's hand-lumped self-weight [N] (theory 10.6): 1/6 per corner, 2/6 per centre."""
     rho, t = SPR.density, design.panel_thickness
     base = design.L1 * design.L2 * t * rho * REFERENCE_GRAVITY / 6
@@ -554,7 +554,7 @@ def make_gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY
     folds = design.crease_residual_folds()
     if any(v != 0 for v in folds.values()):
         pre.append(SelfFold(folds, increments=40, name="residual_fold"))
-    pre.append(Load(_gravity(design, mesh.n_nodes), increments=gravity_increments,
+    pre.append(Load(self_weight(design, mesh.n_nodes), increments=gravity_increments,
                     name="gravity"))
     return model, pre
 

@@ -36,7 +36,7 @@ from simulator import Heat, ParameterError, simulate
 from ..core.space import DesignSpace, Variable
 from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem
 from .gripper import (ARM_CREASES, ASSEMBLY_FOLD, BASE_CREASES, GRIP_DISTANCE, GripperDesign,
-                      _gravity, make_gripper_model)
+                      make_gripper_model, self_weight)
 from .gripper_heat import GripperHeatModel
 from .gripper_problem import GRIPPER_SPACE
 from .limits import SU8_LIMIT
@@ -238,18 +238,18 @@ class GripperInverseProblem(HeaterPowerProblem):
     def _differentiate(self, result, k: int, objectives, values: dict):
         """The sensitivities of ``objectives`` at the end of step ``k`` in the powers and the
         size variables: the self-weight and the start's rest angles on each geometry."""
-        from simulator.model.bimorph import crease_temperature_weights
         from simulator.sensitivity import Geometry, differentiate_state
+        from simulator.thermal import crease_temperatures
 
         model, start = result.model, result.steps[k - 1].state
         design = self.design(values)
 
         def weight(m):
             v = m.mesh.pattern.vertices
-            return _gravity(replace(design, L1=v[1, 0], L2=v[4, 1], La=v[8, 1] - v[4, 1]),
+            return self_weight(replace(design, L1=v[1, 0], L2=v[4, 1], La=v[8, 1] - v[4, 1]),
                             m.mesh.n_nodes)
-        rise = ((start.temperature - start.room_temperature)[model.mesh.crease_nodes]
-                @ crease_temperature_weights())
+        rise = crease_temperatures(start.temperature, model.mesh, "actuation") \
+            - start.room_temperature               # the bimorph's 7-node measure [K]
         rot = model.actuators.rotation_per_kelvin(model.mesh)
 
         def start_at(m):              # the start's rest angles: rot(geometry) x its rise
