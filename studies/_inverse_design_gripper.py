@@ -10,7 +10,7 @@ import time
 
 import pandas as pd
 
-FULL = {"widths": True, "budget": 300.0, "increments": 2}
+FULL = {"widths": True, "budget": 600.0, "increments": 2}
 QUICK = {"widths": False, "budget": 15.0, "increments": 2}
 #: The paper's design (GRIPPER_SPACE's start) with each stage's power per crease from
 #: evaluate_gripper's bisection (chain loss): the per-crease powers of the reference row.

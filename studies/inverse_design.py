@@ -51,7 +51,7 @@ heating of the base creases, one of the arm creases on top, 2 increments each, s
 grip followed by arc length) whose two steady states are differentiated (MMA's gradients:
 powers by the adjoint, sizes by :class:`~simulator.sensitivity.Geometry`). MMA against COBYLA
 from the same start (GRIPPER_SPACE's start, widths 200 um, 20 mW per base and 4 mW per arm
-crease: the base folds 65 deg, infeasible), ``gripper.FULL["budget"]`` = 300 s each, the
+crease: the base folds 65 deg, infeasible), ``gripper.FULL["budget"]`` = 600 s each, the
 same NLopt tolerances. *Reference*: the paper's design with each stage's power per crease from
 :func:`~design.devices.evaluate_gripper`'s bisection (chain loss), evaluated by the problem.
 ``--quick``: one width W (8 variables), 15 s each.
