@@ -34,7 +34,7 @@ import numpy as np
 from simulator import Heat, ParameterError, simulate
 
 from ..core.space import DesignSpace, Variable
-from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem
+from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem, answer_rough
 from .gripper import (ARM_CREASES, ASSEMBLY_FOLD, BASE_CREASES, GRIP_DISTANCE, GripperDesign,
                       make_gripper_model, self_weight)
 from .gripper_heat import GripperHeatModel
@@ -51,11 +51,7 @@ _CHAIN = GripperHeatModel(loss_model="chain")
 #: 1.5e-8 m, growing as h^2; round-off 1e-5 at 1.5e-11 m). The residual's columns of some
 #: sizes (L2: small beside the element forces) then carry round-off of 1e-4 of themselves,
 #: which Geometry reports as a rough builder although the gradients do not see it (L2's
-#: agree to 1e-9); such a size's gradients are checked once more at the step 4 h: where
-#: every objective's derivative in it changes by at most ROUGH_GRADIENT_RTOL of that
-#: objective's largest derivative (the truncation at 4 h is 16 times that at h), the report
-#: is answered; else it stands (a failed evaluation).
-ROUGH_GRADIENT_RTOL = 1e-4
+#: agree to 1e-9): :func:`~design.devices.fold_target.answer_rough` checks them at 4 h.
 _STAGES = ("assembly", "grip")
 _MEASURES = ("centre_line", "crease_max")
 
@@ -265,7 +261,7 @@ class GripperInverseProblem(HeaterPowerProblem):
                                        ("power",), geometry=geometry, loads=weight,
                                        start_at=start_at)
         sens = run(size)
-        return _answer_rough(sens, self.sizes, lambda: run(4 * size))
+        return answer_rough(sens, self.sizes, lambda: run(4 * size))
 
     def _constraints(self, result, gradient: bool, values=None):
         out = {s: self._stage_values(result, s, values, gradient) for s in _STAGES}
@@ -290,29 +286,3 @@ class GripperInverseProblem(HeaterPowerProblem):
                       for j, c in enumerate(creases, 1)}}
         return cons, metrics, grads
 
-
-def _answer_rough(sens, sizes, coarser) -> tuple:
-    """``sens`` with the reports of rough geometry columns (:data:`ROUGH_GRADIENT_RTOL`)
-    answered where the gradients of ``coarser()`` (the step 4 h) agree."""
-    notes = set(sens[0].nonsmooth)
-    rough = {n: m for n in sizes for m in notes
-             if m.startswith(f"geometry[{n}]: the residual's central differences")}
-    if not rough or any(s.status not in ("converged", "nonsmooth") for s in sens):
-        return sens
-    other = coarser()
-    answered = {note for n, note in rough.items() if all(
-        abs(a.gradient[f"geometry[{n}]"] - b.gradient[f"geometry[{n}]"])
-        <= ROUGH_GRADIENT_RTOL * max(abs(v) for key, v in a.gradient.items()
-                                     if key.startswith("geometry["))
-        for a, b in zip(sens, other))}
-    return tuple(_without(s, answered) for s in sens)
-
-
-def _without(sens, answered: set):
-    """``sens`` without the non-smooth reports ``answered``; converged if none is left."""
-    left = tuple(m for m in sens.nonsmooth if m not in answered)
-    if left or sens.status != "nonsmooth":
-        return replace(sens, nonsmooth=left)
-    return replace(sens, nonsmooth=left, status="converged", success=True,
-                   message=f"converged ({len(answered)} rough geometry column(s) checked at "
-                   "the step 4 h)")

@@ -20,7 +20,8 @@ import pytest
 from design.devices import GripperDesign, GripperInverseProblem, make_gripper_model
 from design.devices.gripper import _base_fold, _tip_distance
 from design.devices.gripper_heat import GripperHeatModel
-from design.devices.gripper_inverse import BaseFold, TipDistance, _answer_rough
+from design.devices.fold_target import answer_rough
+from design.devices.gripper_inverse import BaseFold, TipDistance
 from simulator.errors import ParameterError
 from simulator.sensitivity import Sensitivity
 
@@ -168,11 +169,11 @@ def test_a_rough_column_is_answered_only_where_the_gradients_agree_at_4h():
     fine = [_sens({"power[2]": 5.0, "geometry[L2]": 2.0, "geometry[L1]": 1e3}, [note])]
     close = [_sens({"power[2]": 5.0, "geometry[L2]": 2.05, "geometry[L1]": 1e3})]
     far = [_sens({"power[2]": 5.0, "geometry[L2]": 2.5, "geometry[L1]": 1e3})]
-    out = _answer_rough(fine, ("L1", "L2"), lambda: close)
+    out = answer_rough(fine, ("L1", "L2"), lambda: close)
     assert out[0].success and out[0].status == "converged" and not out[0].nonsmooth
-    out = _answer_rough(fine, ("L1", "L2"), lambda: far)
+    out = answer_rough(fine, ("L1", "L2"), lambda: far)
     assert not out[0].success and out[0].nonsmooth == (note,)
     other = [_sens(fine[0].gradient, [note, "crease 2: nodes [1, 2] are equally hot"])]
-    out = _answer_rough(other, ("L1", "L2"), lambda: close)
+    out = answer_rough(other, ("L1", "L2"), lambda: close)
     assert out[0].status == "nonsmooth" and len(out[0].nonsmooth) == 1
     assert math.isfinite(out[0].gradient["geometry[L2]"])
