@@ -1,5 +1,6 @@
-"""Inverse design of a Miura sheet's heater powers: gradient-based against derivative-free
-optimisation at equal wall time (issue 32, item 4a).
+"""Inverse design with exact gradients, gradient-based against derivative-free optimisation at
+equal wall time (issue 32, item 4): (a) a Miura sheet's heater powers, (b) the gripper's
+dimensions, crease widths and heater powers.
 
 Question
 --------
@@ -36,9 +37,29 @@ Method
 * ``--quick``: 3 x 3 cells (12 variables, powers in [0, 6] mW, reference 1-3 mW, 5
   increments), 20 s each.
 
+Case (b), the gripper (:mod:`studies._inverse_design_gripper`)
+--------------------------------------------------------------
+The paper's gripper (section 6.3) assembles (base fold past 90 deg) and grips (arm tips
+closer than 100 um, the base heat kept on). With its dimensions La, L1, L2, a width per crease
+(W_2, W_3, W_5, W_9, the bounds of W: 100-300 um) and a heater power per crease (base 2, 5
+heating from the assembly on, arms 3, 9 added for the grip; 0-40 mW): 11 variables
+(:class:`~design.devices.GripperInverseProblem`, chain heat loss). Objective: the total power
+of the four heaters; constraints: the base fold >= 90 deg at the assembly state (scaled by
+0.5 deg), the tips <= 100 um at the grip state (scaled by 1 um), every crease <= 252 degC
+(centre-line mean) at both states. Each evaluation: one simulation (self-weight, a settled
+heating of the base creases, one of the arm creases on top, 2 increments each, snaps of the
+grip followed by arc length) whose two steady states are differentiated (MMA's gradients:
+powers by the adjoint, sizes by :class:`~simulator.sensitivity.Geometry`). MMA against COBYLA
+from the same start (GRIPPER_SPACE's start, widths 200 um, 20 mW per base and 4 mW per arm
+crease: the base folds 65 deg, infeasible), ``gripper.FULL["budget"]`` = 600 s each, the
+same NLopt tolerances. *Reference*: the paper's design with each stage's power per crease from
+:func:`~design.devices.evaluate_gripper`'s bisection (chain loss), evaluated by the problem.
+``--quick``: one width W (8 variables), 15 s each.
+
 Outputs (``results/inverse_design/``)
 -------------------------------------
-``inverse_design.csv``: one long table, the ``table`` column tells the row kind:
+``inverse_design.csv``: one long table; the ``case`` column tells the case (``a``, ``b``;
+no column in results written before case (b): all ``a``), the ``table`` column the row kind:
 
 * ``history`` - one row per evaluation: ``method``, ``evaluation``, ``wall_time [s]`` (since
   the run's start), ``total_power [mW]``, ``feasible``, ``max_fold_error [deg]``,
@@ -57,9 +78,16 @@ Outputs (``results/inverse_design/``)
   ``variables``, ``cells`` (per side), ``success``
   (a feasible design was found), ``status``, ``message``.
 
+Case (b) has ``history`` and ``summary`` rows with ``base_fold [deg]`` (assembly state),
+``tip_distance [um]`` (grip state) and ``max_temperature [degC]`` (both) in place of the fold
+error, and ``design`` rows, one per method and variable: ``variable``, ``feasible``, ``size
+[um]`` (dimensions, widths) or ``power [mW]`` of the returned design.
+
 ``inverse_design.png``: best feasible total power vs wall time for both methods (every
 evaluation faint, infeasible ones as crosses), the reference's power; the fold-angle errors
 per crease of the returned designs against the 0.5 deg band; their powers per crease.
+``inverse_design_gripper.png`` (case b): best feasible total power vs wall time, the
+returned designs' dimensions and widths, and their powers.
 
 Run: ``python -m studies.inverse_design`` (``--quick``: the coarse version). A run is not
 resumable: the wall-time budget makes each run depend on the machine's speed.
@@ -73,6 +101,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from studies import _inverse_design_gripper as gripper
 from studies._common import progress_bar, study_main
 
 NAME = "inverse_design"
@@ -136,19 +165,24 @@ class _Clock:
         if self.rows[-1][0] > self.budget:
             raise StopOptimization(f"wall-time budget {self.budget:g} s reached")
 
+    def history(self, method: str, metrics) -> list:
+        """The ``history`` rows of the evaluations recorded, ``metrics(ev) -> dict`` the
+        columns of each besides the power and the best feasible power so far."""
+        out, best = [], None
+        for k, (t, ev) in enumerate(self.rows, 1):
+            power = 1e3 * ev.objective if ev.success else None
+            if ev.feasible and (best is None or power < best):
+                best = power
+            out.append({"table": "history", "method": method, "evaluation": k,
+                        "wall_time [s]": t, "total_power [mW]": power,
+                        "feasible": ev.feasible, **metrics(ev), "best_power [mW]": best,
+                        "status": ev.status})
+        return out
 
-def _history(method: str, rows) -> list:
-    out, best = [], None
-    for k, (t, ev) in enumerate(rows, 1):
-        power = 1e3 * ev.objective if ev.success else None
-        if ev.feasible and (best is None or power < best):
-            best = power
-        out.append({"table": "history", "method": method, "evaluation": k,
-                    "wall_time [s]": t, "total_power [mW]": power, "feasible": ev.feasible,
-                    "max_fold_error [deg]": ev.metrics.get("max fold error [deg]"),
-                    "max_temperature [degC]": ev.metrics.get("max temperature [degC]"),
-                    "best_power [mW]": best, "status": ev.status})
-    return out
+
+def _fold_metrics(ev) -> dict:
+    return {"max_fold_error [deg]": ev.metrics.get("max fold error [deg]"),
+            "max_temperature [degC]": ev.metrics.get("max temperature [degC]")}
 
 
 def _creases(method: str, problem, ev, reference, mid) -> list:
@@ -196,15 +230,26 @@ def run(quick: bool = False, progress: bool = True) -> pd.DataFrame:
     for method in progress_bar(METHODS, progress, desc=NAME, unit="method"):
         clock = _Clock(s["budget"])
         res = optimize(problem, method, max_evaluations=100000, callback=clock, **OPTIONS)
-        rows += _history(method, clock.rows)
+        rows += clock.history(method, _fold_metrics)
         rows += _creases(method, problem, res.best, ref, mid)
         rows.append(_summary(method, res.best, res.n_computed, res.wall_time, n, res.status,
                              res.message, s["cells"]))
+    rows = [{"case": "a", **r} for r in rows]
+    rows += gripper.run_case(quick, METHODS, _Clock, OPTIONS, progress_bar, progress)
     return pd.DataFrame(rows)
 
 
-def plot(df: pd.DataFrame):
-    """Best feasible power vs wall time, final fold errors, and the powers per crease."""
+def plot(df: pd.DataFrame) -> dict:
+    """Case (a): best feasible power vs wall time, final fold errors, and the powers per
+    crease; case (b) (``inverse_design_gripper``, where the table has it): the gripper's."""
+    case = df["case"] if "case" in df else pd.Series("a", index=df.index)
+    figs = {NAME: _plot_miura(df[case == "a"])}
+    if (case == "b").any():
+        figs[f"{NAME}_gripper"] = gripper.plot_case(df[case == "b"], METHODS)
+    return figs
+
+
+def _plot_miura(df: pd.DataFrame):
     from matplotlib.figure import Figure
 
     from studies.figure_notes import environment_note, heat_loss_note, note_assumptions
@@ -219,11 +264,7 @@ def plot(df: pd.DataFrame):
         h = hist[hist["method"] == method]
         if h.empty:
             continue
-        feas = h["feasible"].astype(str).str.lower() == "true"
-        ax_t.plot(h["wall_time [s]"][feas], h["total_power [mW]"][feas], ".",
-                  color=colors[method], alpha=0.3, ms=4)
-        ax_t.plot(h["wall_time [s]"][~feas], h["total_power [mW]"][~feas], "x",
-                  color=colors[method], alpha=0.3, ms=4)
+        gripper.plot_evaluations(ax_t, h, colors[method])
         row = summ.loc[method]
         best = row["total_power [mW]"]
         ax_t.step(h["wall_time [s]"], h["best_power [mW]"], where="post",

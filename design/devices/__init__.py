@@ -18,6 +18,7 @@ __getattr__, __dir__ = _attach(__name__, {
     ".limits": ("SU8_TG",),
     ".fold_target": ("FoldTargetProblem",),
     ".fold_shape": ("FoldShapeProblem",),
+    ".gripper_inverse": ("GripperInverseProblem",),
     ".miura": ("MIURA_SPACE", "LiftPowerResult", "MiuraDesign", "MiuraProblem",
                "heated_creases", "lift_per_power_table", "lift_power", "make_miura_model"),
 }, renamed="design._moved")
@@ -31,5 +32,5 @@ __all__ = [
     "MiuraDesign", "make_miura_model", "heated_creases", "lift_power", "LiftPowerResult",
     "lift_per_power_table", "MiuraProblem", "MIURA_SPACE",
     # heater powers for target fold angles (with gradients)
-    "FoldTargetProblem", "FoldShapeProblem",
+    "FoldTargetProblem", "FoldShapeProblem", "GripperInverseProblem",
 ]

@@ -14,13 +14,14 @@ every gradient by one factorisation of the coupled Jacobian (a list of objective
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from simulator import Heat, ParameterError, simulate
 
 from ..core.space import DesignSpace, Variable
-from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem
+from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem, answer_rough
 from .limits import SU8_LIMIT
 
 __all__ = ["FoldShapeProblem"]
@@ -58,6 +59,13 @@ class FoldShapeProblem(HeaterPowerProblem):
         5 or 10.
     label : str
         Names the model in :meth:`settings` (the evaluation log's hash).
+    widths : bool
+        Add the width of each heated crease as a variable ``W_<crease>`` [m] (start: the
+        model's; the model rebuilt from its pattern with those widths, its supports and
+        parameters kept), its gradients by :class:`~simulator.sensitivity.Geometry`.
+    width_bounds : (float, float) [m]
+        Bounds of the widths (the design layer's crease-width bounds, ``MIURA_SPACE`` and
+        ``GRIPPER_SPACE``: 100-300 um).
     """
 
     name = "fold_shape"
@@ -66,7 +74,8 @@ class FoldShapeProblem(HeaterPowerProblem):
                  temperature_limit: float = SU8_LIMIT.value,
                  temperature_measure: str = "centre_line", creases=None,
                  max_power: float = 0.03, start_power: float = 0.005,
-                 heat_increments: int = 10, label: str = "model"):
+                 heat_increments: int = 10, label: str = "model", widths: bool = False,
+                 width_bounds: tuple = (100e-6, 300e-6)):
         loss = getattr(getattr(model, "thermal", None), "loss", None)
         if getattr(loss, "model", None) != "chain" or model.actuators is None:
             raise ParameterError(
@@ -98,10 +107,17 @@ class FoldShapeProblem(HeaterPowerProblem):
         self.targets = {int(c): float(t) for c, t in sorted(targets.items())}
         self.tolerance, self.temperature_limit = float(tolerance), float(temperature_limit)
         self.temperature_measure, self.heat_increments = temperature_measure, heat_increments
-        self.label = str(label)
+        self.label, self.widths = str(label), bool(widths)
+        lo, hi = (float(v) for v in width_bounds)
+        if self.widths and not 0 < lo < hi:
+            raise ParameterError(f"width_bounds = {width_bounds!r}: give (lower, upper) "
+                                 "crease widths [m], 0 < lower < upper.")
+        start = model.mesh.pattern.crease_width
+        sizes = [Variable(f"W_{c}", lo, hi, (hi - lo) / 20, min(max(float(start[c]), lo), hi))
+                 for c in self.creases] if self.widths else []
         self.space = DesignSpace([
             Variable(f"power_{c}", 0.0, max_power, max_power / 20, start_power, unit="W",
-                     display_scale=1e3, display_unit="mW") for c in self.creases])
+                     display_scale=1e3, display_unit="mW") for c in self.creases] + sizes)
 
     def settings(self) -> dict:
         return {"problem": self.name, "model": self.label,
@@ -113,11 +129,27 @@ class FoldShapeProblem(HeaterPowerProblem):
                 "heat_increments": self.heat_increments,
                 "variables": [v.to_dict() for v in self.space.variables]}
 
+    def model_at(self, values: dict):
+        """The model with the crease widths ``W_<crease>`` in ``values`` (the model itself
+        without width variables): rebuilt from its pattern, supports and parameters kept."""
+        widths = {int(k[2:]): float(v) for k, v in values.items() if k.startswith("W_")}
+        if not widths:
+            return self.model
+        from simulator import make_mesh, make_model
+
+        m = self.model
+        pattern = m.mesh.pattern
+        mesh = make_mesh(replace(pattern, crease_width={
+            int(c): float(pattern.crease_width[c]) for c in self.all_creases} | widths))
+        return make_model(mesh, m.supports, m.params, m.contact, m.thermal, m.actuators)
+
     def simulate(self, values: dict):
-        """The simulation of a design (``{"power_<crease>": W}``): one settled heating."""
-        return simulate(self.model, [Heat({c: values[f"power_{c}"] for c in self.creases},
-                                          increments=self.heat_increments, coupling="settled",
-                                          coupling_tol=COUPLING_TOL)], options=NEWTON)
+        """The simulation of a design (``{"power_<crease>": W}``, with ``"W_<crease>"``
+        [m]): one settled heating."""
+        return simulate(self.model_at(values), [
+            Heat({c: values[f"power_{c}"] for c in self.creases},
+                 increments=self.heat_increments, coupling="settled",
+                 coupling_tol=COUPLING_TOL)], options=NEWTON)
 
     def _objectives(self) -> tuple:
         """``(folds, temperatures)``: the objectives of :mod:`simulator.sensitivity`."""
@@ -126,26 +158,42 @@ class FoldShapeProblem(HeaterPowerProblem):
         return ([FoldAngle(c) for c in self.targets],
                 [CreaseTemperature(c, self.temperature_measure) for c in self.all_creases])
 
-    def _values(self, result, gradient: bool):
-        """``(values (k,), gradients (k, n) or None, failure message)`` of the objectives."""
+    def _values(self, result, gradient: bool, values=None):
+        """``(values (k,), gradients (k, n) or None, failure message)`` of the objectives,
+        the gradients by variable in the space's order."""
         folds, temps = self._objectives()
         objectives = folds + temps
         state = result.steps[-1].state
         if not gradient:
             return np.array([o.terms(result.model, state.u, state.temperature)[0]
                              for o in objectives]), None, ""
-        from simulator.sensitivity import differentiate
-
-        sens = differentiate(result, objectives, "power")
+        sens = self._differentiate(result, objectives, values)
         bad = next((s for s in sens if s.status != "converged"), None)
         if bad is not None:
             return None, None, f"sensitivity {bad.status}: {bad.message}"
-        keys = [f"power[{c}]" for c in self.creases]
+        keys = [f"geometry[{n}]" if n.startswith("W_") else f"power[{n[6:]}]"
+                for n in self.space.names]
         return (np.array([s.value for s in sens]),
                 np.array([[s.gradient[k] for k in keys] for s in sens]), "")
 
-    def _constraints(self, result, gradient: bool):
-        v, dv, message = self._values(result, gradient)
+    def _differentiate(self, result, objectives, values):
+        """The objectives' sensitivities in the powers and the widths (``W_<crease>``, by
+        :class:`~simulator.sensitivity.Geometry`; rough reports answered by
+        :func:`~design.devices.fold_target.answer_rough`)."""
+        from simulator.sensitivity import Geometry, differentiate
+
+        if not self.widths:
+            return differentiate(result, objectives, "power")
+        sizes = {n: values[n] for n in self.space.names if n.startswith("W_")}
+        size = float(np.ptp(result.model.mesh.nodes, axis=0).max())
+
+        def run(scale):
+            return differentiate(result, objectives, "power", geometry=Geometry(
+                self.model_at, sizes, scale=dict.fromkeys(sizes, scale)))
+        return answer_rough(run(size), tuple(sizes), lambda: run(4 * size))
+
+    def _constraints(self, result, gradient: bool, values=None):
+        v, dv, message = self._values(result, gradient, values)
         if v is None:
             return message
         nf, tol, limit = len(self.targets), self.tolerance, self.temperature_limit

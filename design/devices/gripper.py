@@ -116,6 +116,9 @@ class GripperDesign:
     heater_tcr : temperature coefficient of resistance of the gold heaters [1/K], or None
         (default: :class:`~simulator.Heater`'s, 0.0034, the upper end for a thin film); the
         electrical drive only, like ``lead_fraction``
+    crease_widths : ((crease id, m), ...) widths of single actuated creases that override
+        ``W`` for that crease (default none): its strip in the mesh, its hinge stiffness and
+        its bimorph's rotation, and the reference's node edits beside it (theory 10.6)
     """
 
     W: float = 200e-6
@@ -144,6 +147,7 @@ class GripperDesign:
     emissivity_gold: float | None = None
     lead_fraction: float = 0.0
     heater_tcr: float | None = None
+    crease_widths: tuple = ()
 
     def __post_init__(self):
         folds = tuple((int(c), check_fold(f"GripperDesign.residual_fold_creases[{c!r}]", v))
@@ -165,18 +169,36 @@ class GripperDesign:
                      "0 without leads, e.g. 0.1 for leads of a tenth of the heaters' resistance")
         finite("GripperDesign.heater_tcr", self.heater_tcr, "1/K",
                "0.0011-0.0034 for a thin gold film, or None for 0.0034", allow_none=True)
+        self._check_crease_widths()
         for name, value in asdict(self).items():
-            if name in ("residual_fold_creases", "lead_fraction", "heater_tcr") \
-                    or name in HEAT_FIELDS:
+            if name in ("residual_fold_creases", "lead_fraction", "heater_tcr",
+                        "crease_widths") or name in HEAT_FIELDS:
                 continue
             if name.startswith("residual_fold"):
                 if value is not None:
                     check_fold(f"GripperDesign.{name}", value)
             else:
                 positive(f"GripperDesign.{name}", value, "m")
-        if self.W >= min(self.L1, self.L2, self.La):
-            raise ParameterError(f"GripperDesign: crease width W = {self.W:g} m must be smaller "
-                                 "than the panels it joins (L1, L2, La).")
+        if max(self.widths().values()) >= min(self.L1, self.L2, self.La):
+            raise ParameterError(f"GripperDesign: crease widths {self.widths()} m must be "
+                                 "smaller than the panels they join (L1, L2, La).")
+
+    def _check_crease_widths(self) -> None:
+        try:
+            widths = {int(c): float(w) for c, w in dict(self.crease_widths).items()}
+        except (TypeError, ValueError):
+            raise ParameterError(f"GripperDesign.crease_widths = {self.crease_widths!r}: give "
+                                 "((crease id, width [m]), ...).") from None
+        if set(widths) - set(BASE_CREASES + ARM_CREASES):
+            raise ParameterError(f"GripperDesign.crease_widths = {self.crease_widths!r}: crease "
+                                 f"ids must be actuated creases {BASE_CREASES + ARM_CREASES}.")
+        for c, w in widths.items():
+            positive(f"GripperDesign.crease_widths[{c}]", w, "m")
+        object.__setattr__(self, "crease_widths", tuple(sorted(widths.items())))
+
+    def widths(self) -> dict:
+        """Width [m] of each actuated crease id: ``W`` unless ``crease_widths`` gives it."""
+        return {c: self.W for c in BASE_CREASES + ARM_CREASES} | dict(self.crease_widths)
 
     def legacy_heat(self) -> dict:
         """The deprecated heat-model fields given to this design (those not None)."""
@@ -443,23 +465,29 @@ _PHYSICS = {"crease_conduction": "paper", "k_gold": None, "temperature_dependent
 #: ``loss_model`` "chain" was the default until 7 Dec 2026.
 _OPTIONAL = {"residual_fold_creases": (), "delta_alpha": 38e-6, "env_conductivity": 0.026,
              "loss_model": "chain", "integral_refinement": 3, "conduction": None,
-             "sheet_refinement": None, **_PHYSICS}
+             "sheet_refinement": None, "crease_widths": (), **_PHYSICS}
 
 
 def _node_edits(design: GripperDesign, nodes: np.ndarray) -> np.ndarray:
-    """The reference's post-meshing node moves (theory 10.6), 1-based ids in the comments."""
-    w = design.W
+    """The reference's post-meshing node moves (theory 10.6), 0-based node ids, each by the
+    width of the crease it belongs to (all ``W`` in the reference): the arms' inner edges to
+    the base creases' strips (2 left, 5 right), the central panel's top corners to the arm
+    creases' (3 left, 9 right), and the centre-line ends and panel centres beside them by
+    their share."""
+    w = design.widths()
+    w2, w3, w5, w9 = w[2], w[3], w[5], w[9]
     x = nodes.copy()
-    moves = {(13, 14): (-w / 2, 0), (19, 16): (w / 2, 0), (6, 7): (0, -w / 2),
-             (31, 25, 37): (0, -w / 4), (27,): (-w / 4, 0), (34,): (w / 4, 0),
-             (39,): (-w / 8, 0), (40,): (w / 8, 0)}
+    moves = {(13, 14): (-w2 / 2, 0), (19, 16): (w5 / 2, 0), (7,): (0, -w3 / 2),
+             (6,): (0, -w9 / 2), (25,): (0, -w3 / 4), (31,): (0, -w9 / 4),
+             (37,): (0, -(w3 + w9) / 8), (27,): (-w2 / 4, 0), (34,): (w5 / 4, 0),
+             (39,): (-w2 / 8, 0), (40,): (w5 / 8, 0)}
     for ids, (dx, dy) in moves.items():
         x[list(ids), 0] += dx
         x[list(ids), 1] += dy
     return x
 
 
-def _gravity(design: GripperDesign, n_nodes: int) -> np.ndarray:
+def self_weight(design: GripperDesign, n_nodes: int) -> np.ndarray:
     """The reference's hand-lumped self-weight [N] (theory 10.6): 1/6 per corner, 2/6 per centre."""
     rho, t = SPR.density, design.panel_thickness
     base = design.L1 * design.L2 * t * rho * REFERENCE_GRAVITY / 6
@@ -484,6 +512,8 @@ def gripper_design_pattern(design: GripperDesign, heat: GripperHeatModel | None 
                               crease_thickness=design.t_gold + design.t_su8,
                               grip_range=design.grip_range, undercut=design.undercut,
                               panel_thickness=design.panel_thickness, panel_material=panel)
+    if design.crease_widths:
+        pattern = replace(pattern, crease_width=design.widths())
     crease = (heat.emissivity_polymer + heat.emissivity_gold) / 2
     if crease != pattern.crease_material.emissivity:
         pattern = replace(pattern, crease_material=replace(pattern.crease_material,
@@ -524,7 +554,7 @@ def make_gripper_model(design: GripperDesign, gravity_increments: int = _GRAVITY
     folds = design.crease_residual_folds()
     if any(v != 0 for v in folds.values()):
         pre.append(SelfFold(folds, increments=40, name="residual_fold"))
-    pre.append(Load(_gravity(design, mesh.n_nodes), increments=gravity_increments,
+    pre.append(Load(self_weight(design, mesh.n_nodes), increments=gravity_increments,
                     name="gravity"))
     return model, pre
 
@@ -541,9 +571,13 @@ def _tip_distance(x) -> float:
     return float(np.linalg.norm(x[15] - x[18]))
 
 
+#: The stages' criteria: the base fold (:func:`_base_fold`) past ASSEMBLY_FOLD [rad], then the
+#: arm tips (:func:`_tip_distance`) closer than GRIP_DISTANCE [m].
+ASSEMBLY_FOLD = math.pi / 2
+GRIP_DISTANCE = 100e-6
 _STAGES = {
-    "assembly": (BASE_CREASES, _base_fold, lambda v: v > math.pi / 2),
-    "grip": (ARM_CREASES, _tip_distance, lambda v: v < 100e-6),
+    "assembly": (BASE_CREASES, _base_fold, lambda v: v > ASSEMBLY_FOLD),
+    "grip": (ARM_CREASES, _tip_distance, lambda v: v < GRIP_DISTANCE),
 }
 
 
