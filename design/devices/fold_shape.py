@@ -36,9 +36,11 @@ class FoldShapeProblem(HeaterPowerProblem):
     Parameters
     ----------
     model : Model
-        A model with actuators and the chain heat loss (``ChainLoss``; the only one
-        :mod:`simulator.sensitivity` differentiates): e.g. ``make_miura_model(MiuraDesign(...,
-        loss_model="chain"))``. Heated from its initial state by one settled ``Heat`` step.
+        A model with actuators and a heat loss :mod:`simulator.sensitivity` differentiates:
+        the chain loss (``ChainLoss``), e.g. ``make_miura_model(MiuraDesign(...,
+        loss_model="chain"))``, or the dense integral loss (``IntegralLoss``, not lumped; on
+        large sheets its fast operator is not differentiated and the gradient is refused).
+        Heated from its initial state by one settled ``Heat`` step.
     targets : dict {crease: fold angle [rad]}
         Target fold angles (signed, as :class:`simulator.sensitivity.FoldAngle` measures them)
         of some creases of the model.
@@ -77,11 +79,15 @@ class FoldShapeProblem(HeaterPowerProblem):
                  heat_increments: int = 10, label: str = "model", widths: bool = False,
                  width_bounds: tuple = (100e-6, 300e-6)):
         loss = getattr(getattr(model, "thermal", None), "loss", None)
-        if getattr(loss, "model", None) != "chain" or model.actuators is None:
+        kind = getattr(loss, "model", None)
+        if kind not in ("chain", "integral") or getattr(loss, "lumped", False) \
+                or model.actuators is None:
             raise ParameterError(
-                f"model: heat loss {getattr(loss, 'model', None)!r}; FoldShapeProblem needs a "
-                "model with actuators and the chain heat loss (its gradients: "
-                "simulator.sensitivity); e.g. MiuraDesign(loss_model='chain').")
+                f"model: heat loss {kind!r}{' (lumped)' if getattr(loss, 'lumped', False) else ''}"
+                f"{'' if model.actuators is not None else ', no actuators'}; FoldShapeProblem "
+                "needs a model with actuators and a heat loss simulator.sensitivity "
+                "differentiates: the chain loss or the integral loss, not lumped; e.g. "
+                "MiuraDesign(loss_model='chain').")
         ids = [int(c) for c in model.mesh.crease_ids]
         self.creases = tuple(sorted(int(c) for c in (
             model.actuators.delta_alpha if creases is None else creases)))
