@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .._validate import one_of
 from ..errors import ParameterError
@@ -321,7 +320,7 @@ class _Setting:
         self.rise[:mesh.n_nodes] = state.temperature - room
         if sheet is not None:            # the fine rise on this operator, the mesh nodes' kept
             fine = np.zeros(tm.mesh.n_nodes)
-            fine[self.free_T] = spla.spsolve(self.A.tocsc(), q[self.free_T])
+            fine[self.free_T] = factorize(self.A.tocsc(), kind="spd").solve(q[self.free_T])
             self.rise[mesh.n_nodes:] = fine[mesh.n_nodes:]
         # the bimorph: target = rest_start + rot (w . (T - T_start)) on the crease nodes
         w = crease_temperature_weights()

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
+from ..linalg.ladder import factorize
 from ..thermal.monotone import t3_matrices
 
 __all__ = ["monotone_jacobian"]
@@ -39,8 +39,7 @@ def monotone_jacobian(mono, x, rise) -> sp.csr_matrix:
     rows, cols = np.repeat(C, 3, axis=1).ravel(), np.tile(C, (1, 3)).ravel()
     Kf = sp.csr_matrix((K.ravel(), (rows, cols)), shape=(N, N))
     if s:
-        Kss = Kf[n:, n:].tocsc()
-        lu = spla.splu(Kss)
+        lu = factorize(Kf[n:, n:].tocsc(), kind="spd")     # the Steiner block, SPD
         z[n:] = -lu.solve(Kf[n:, :n] @ rise)
     # the triangles' T3 products and their derivatives in the corners
     Pc = P[C]                                                             # (m', 3, 3)

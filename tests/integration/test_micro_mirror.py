@@ -121,13 +121,26 @@ def test_driven_dynamics_runs_from_the_folded_state(model):
 # ------------------------------------------------------------- states out of equilibrium
 @pytest.fixture(scope="module")
 def folded_states(model):
-    """The self-folded mirror converged (default Newton) and under-converged by the
-    reference's loop with its loose tolerance (1e-5 N: "converged", bar strains ~1e-7)."""
+    """The self-folded mirror converged (default Newton) and under-converged as by the
+    reference's loop with its loose tolerance: the converged state moved along the loop's own
+    error at 1e-5 N, scaled to a relative residual of LOOSE_RHO (bar strains ~1e-7). Where the
+    loop itself stops at that tolerance depends on the machine's round-off (an Intel machine:
+    rho = 2e-8 to 3e-8, 8e-4 N; the AMD EPYC of 8 Dec 2026: 1.2e-4, 2.97 N), so the state is
+    set by its residual, not by the loop's stop."""
     tight = simulate(model, [self_fold(model)])
-    loose = simulate(model, [self_fold(model)],
-                     options=NewtonOptions(reference_loop=True, atol=1e-5))
-    assert tight.success and loose.success
-    return tight.state, loose.state
+    loop = simulate(model, [self_fold(model)],
+                    options=NewtonOptions(reference_loop=True, atol=1e-5))
+    assert tight.success and loop.success
+    error = loop.state.u - tight.state.u
+    rho = check_equilibrium(model, loop.state).relative
+    assert rho > 1e3 * LOOSE_RHO                      # far enough out for a linear scaling
+    loose = dataclasses.replace(loop.state, u=tight.state.u + (LOOSE_RHO / rho) * error)
+    return tight.state, loose
+
+
+#: The relative force residual of the under-converged state (theory: EQUILIBRIUM_RTOL): what
+#: the reference loop left at 1e-5 N on the machine its documented numbers were measured on.
+LOOSE_RHO = 3e-8
 
 
 def test_modes_of_an_under_converged_state_warn_with_the_residual(model, folded_states,
@@ -190,14 +203,17 @@ def test_stability_of_a_state_checks_its_equilibrium(model, folded_states, caplo
 def test_equilibrium_threshold_separates_the_reference_loop_from_round_off(model,
                                                                           folded_states):
     """The documented numbers of EQUILIBRIUM_RTOL: the reference loop at its tolerances of
-    1e-6 and 1e-5 N leaves rho = 2e-8 to 3e-8; at 1e-8 N it converges to round-off; near the
-    equilibrium the first eigenvalue moves by about 3e8 rho (relative)."""
+    1e-6 and 1e-5 N leaves rho far above the threshold (an Intel machine: 2e-8 to 3e-8; the
+    AMD EPYC of 8 Dec 2026: 1.3e-9 and 1.2e-4: where the loose loop stops is round-off's
+    choice); at 1e-8 N it converges to round-off; near the equilibrium the first eigenvalue
+    moves by about 3e8 rho (relative)."""
     rho = {}
     for atol in (1e-8, 1e-6, 1e-5):
         state = simulate(model, [self_fold(model)],
                          options=NewtonOptions(reference_loop=True, atol=atol)).state
         rho[atol] = check_equilibrium(model, state).relative
-    assert rho[1e-8] < 1e-15 < EQUILIBRIUM_RTOL < 1e-8 < rho[1e-6] < rho[1e-5] < 1e-7
+    assert rho[1e-8] < 1e-15 < EQUILIBRIUM_RTOL < 1e3 * EQUILIBRIUM_RTOL < min(rho[1e-6],
+                                                                                 rho[1e-5])
     tight, loose = folded_states
     near = dataclasses.replace(tight, u=tight.u + 1e-4 * (loose.u - tight.u))
     check = check_equilibrium(model, near)                       # rho about 3e-12: flagged

@@ -35,6 +35,9 @@ ALLOWED = {
     ("simulator/_aot.py", r"simulator\._jit\._aot$"): KERNELS,
     ("design/", r"simulator\._(lazy|validate|result|deprecation)\b"): SHARED,
     ("design/cli/_common.py", r"simulator\._jit$"): CLI_KERNELS,
+    ("simulator/sensitivity/integral.py", r"simulator\.thermal\._single_layer\b"):
+        "the single-layer operator's shape derivative differentiates its kernels pair by pair "
+        "by the operator's own rules and thresholds (theory 12.6): one formula, not a copy",
 }
 
 
