@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from simulator import Heat, ParameterError, simulate
+from simulator._validate import integer, one_of, positive
 
 from ..core.space import DesignSpace, Variable
 from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem, answer_rough
@@ -99,16 +100,11 @@ class FoldShapeProblem(HeaterPowerProblem):
         if bad or not targets:
             raise ParameterError(f"targets = {bad or targets!r}: give finite fold angles "
                                  "[rad] of creases of the model.")
-        for name, v in (("tolerance", tolerance), ("temperature_limit", temperature_limit),
-                        ("max_power", max_power)):
-            if not (math.isfinite(v) and v > 0):
-                raise ParameterError(f"{name} = {v!r} must be positive and finite.")
-        if temperature_measure not in _MEASURES:
-            raise ParameterError(f"temperature_measure = {temperature_measure!r}; use one of "
-                                 f"{_MEASURES}.")
-        if not (isinstance(heat_increments, int) and heat_increments >= 1):
-            raise ParameterError(f"heat_increments = {heat_increments!r} must be an integer "
-                                 ">= 1.")
+        positive("tolerance", tolerance, "rad")
+        positive("temperature_limit", temperature_limit, "degC")
+        positive("max_power", max_power, "W")
+        one_of("temperature_measure", temperature_measure, _MEASURES)
+        integer("heat_increments", heat_increments, 1)
         self.model, self.all_creases = model, tuple(ids)
         self.targets = {int(c): float(t) for c, t in sorted(targets.items())}
         self.tolerance, self.temperature_limit = float(tolerance), float(temperature_limit)

@@ -32,6 +32,7 @@ from dataclasses import replace
 import numpy as np
 
 from simulator import Heat, ParameterError, simulate
+from simulator._validate import integer, one_of, positive
 
 from ..core.space import DesignSpace, Variable
 from .fold_target import COUPLING_TOL, NEWTON, HeaterPowerProblem, answer_rough
@@ -153,17 +154,12 @@ class GripperInverseProblem(HeaterPowerProblem):
         if not isinstance(base, GripperDesign) or base.crease_widths:
             raise ParameterError(f"base = {base!r:.80}: give a GripperDesign without "
                                  "crease_widths (the widths are variables here).")
-        for name, v in (("fold_tolerance", fold_tolerance),
-                        ("distance_tolerance", distance_tolerance),
-                        ("temperature_limit", temperature_limit), ("max_power", max_power)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"{name} = {v!r} must be positive and finite.")
-        if temperature_measure not in _MEASURES:
-            raise ParameterError(f"temperature_measure = {temperature_measure!r}; use one of "
-                                 f"{_MEASURES}.")
-        if not (isinstance(heat_increments, int) and heat_increments >= 1):
-            raise ParameterError(f"heat_increments = {heat_increments!r} must be an integer "
-                                 ">= 1.")
+        positive("fold_tolerance", fold_tolerance, "rad")
+        positive("distance_tolerance", distance_tolerance, "m")
+        positive("temperature_limit", temperature_limit, "degC")
+        positive("max_power", max_power, "W")
+        one_of("temperature_measure", temperature_measure, _MEASURES)
+        integer("heat_increments", heat_increments, 1)
         self.widths, self.base = bool(widths), base
         self.fold_tolerance, self.distance_tolerance = float(fold_tolerance), \
             float(distance_tolerance)
