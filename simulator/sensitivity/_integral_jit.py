@@ -84,6 +84,77 @@ def _corner_difference(cx, cy, cz, v, w, a, k, hs, own):
     return out / (2 * hs)
 
 
+def _source(tri, centroid, j, image, origin, normal, v):
+    """Triangle ``j``'s corners into ``v`` and its centroid returned, mirrored in the plane
+    ``(origin, normal)`` for the ``image``."""
+    for a in range(3):
+        for k in range(3):
+            v[a, k] = tri[j, a, k]
+    sx, sy, sz = centroid[j, 0], centroid[j, 1], centroid[j, 2]
+    if image == 1:
+        for a in range(3):
+            h = ((v[a, 0] - origin[0]) * normal[0] + (v[a, 1] - origin[1]) * normal[1]
+                 + (v[a, 2] - origin[2]) * normal[2])
+            for k in range(3):
+                v[a, k] -= 2.0 * h * normal[k]
+        h = (sx - origin[0]) * normal[0] + (sy - origin[1]) * normal[1] \
+            + (sz - origin[2]) * normal[2]
+        sx, sy, sz = sx - 2 * h * normal[0], sy - 2 * h * normal[1], sz - 2 * h * normal[2]
+    return sx, sy, sz
+
+
+def _rule_gradient(cx, cy, cz, v, dx, dy, dz, own, near_dist, mid_dist, hs, w, tc, tg):
+    """The gradient of the mean of ``1 / |c - y|`` over the triangle ``v`` in the point c
+    (into ``tc``) and the corners (into ``tg``), by the operator's rule at the distance
+    ``(dx, dy, dz)`` from its centroid: the self term (``own``) along the triangle, the closed
+    form's central differences (step ``hs``) within ``near_dist``, the 3-point rule within
+    ``mid_dist``, the centroid rule beyond."""
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    for k in range(3):
+        tc[k] = 0.0
+        for a in range(3):
+            tg[a, k] = 0.0
+    if own:                                      # the self term, along its triangle
+        for a in range(3):
+            for k in range(3):
+                tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, True)
+    elif dist < near_dist:                       # the closed form: central differences
+        for k in range(3):
+            for s in range(2):
+                e = hs if s == 0 else -hs
+                f = _mean_potential(cx + (e if k == 0 else 0.0), cy + (e if k == 1 else 0.0),
+                                    cz + (e if k == 2 else 0.0), v)
+                tc[k] += f if s == 0 else -f
+            tc[k] /= 2 * hs
+        for a in range(3):
+            for k in range(3):
+                tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, False)
+    elif dist < mid_dist:                        # the 3-point rule
+        for q in range(3):
+            yx = yy = yz = 0.0
+            for a in range(3):
+                c = 2.0 / 3.0 if a == q else 1.0 / 6.0
+                yx += c * v[a, 0]
+                yy += c * v[a, 1]
+                yz += c * v[a, 2]
+            ex, ey, ez = cx - yx, cy - yy, cz - yz
+            r = math.sqrt(ex * ex + ey * ey + ez * ez)
+            r3 = 3.0 * r * r * r
+            tc[0] -= ex / r3
+            tc[1] -= ey / r3
+            tc[2] -= ez / r3
+            for a in range(3):
+                c = 2.0 / 3.0 if a == q else 1.0 / 6.0
+                tg[a, 0] += c * ex / r3
+                tg[a, 1] += c * ey / r3
+                tg[a, 2] += c * ez / r3
+    else:                                        # the centroid rule
+        r3 = dist * dist * dist
+        tc[0], tc[1], tc[2] = -dx / r3, -dy / r3, -dz / r3
+        for a in range(3):
+            tg[a, 0], tg[a, 1], tg[a, 2] = dx / (3 * r3), dy / (3 * r3), dz / (3 * r3)
+
+
 def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin, normal,
             near, mid, step, D):
     n = tri.shape[0]
@@ -105,70 +176,10 @@ def _kernel(tri, centroid, diam, parent, bary, cbar, p, kappa, has_plane, origin
                 for a in range(3):
                     gv[a, k] = 0.0
             for image in range(2 if has_plane else 1):
-                sign = 1.0
-                for a in range(3):
-                    for k in range(3):
-                        v[a, k] = tri[j, a, k]
-                sx, sy, sz = centroid[j, 0], centroid[j, 1], centroid[j, 2]
-                if image == 1:
-                    sign = -1.0
-                    for a in range(3):
-                        h = ((v[a, 0] - origin[0]) * normal[0] + (v[a, 1] - origin[1]) * normal[1]
-                             + (v[a, 2] - origin[2]) * normal[2])
-                        for k in range(3):
-                            v[a, k] -= 2.0 * h * normal[k]
-                    h = (sx - origin[0]) * normal[0] + (sy - origin[1]) * normal[1] \
-                        + (sz - origin[2]) * normal[2]
-                    sx, sy, sz = sx - 2 * h * normal[0], sy - 2 * h * normal[1], \
-                        sz - 2 * h * normal[2]
-                dx, dy, dz = cx - sx, cy - sy, cz - sz
-                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-                for k in range(3):
-                    tc[k] = 0.0
-                    for a in range(3):
-                        tg[a, k] = 0.0
-                hs = step * diam[j]
-                if image == 0 and i == j:            # the self term, along its triangle
-                    for a in range(3):
-                        for k in range(3):
-                            tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, True)
-                elif dist < near * diam[j]:          # the closed form: central differences
-                    for k in range(3):
-                        for s in range(2):
-                            e = hs if s == 0 else -hs
-                            f = _mean_potential(cx + (e if k == 0 else 0.0),
-                                                cy + (e if k == 1 else 0.0),
-                                                cz + (e if k == 2 else 0.0), v)
-                            tc[k] += f if s == 0 else -f
-                        tc[k] /= 2 * hs
-                    for a in range(3):
-                        for k in range(3):
-                            tg[a, k] = _corner_difference(cx, cy, cz, v, w, a, k, hs, False)
-                elif dist < mid * near * diam[j]:    # the 3-point rule
-                    for q in range(3):
-                        yx = yy = yz = 0.0
-                        for a in range(3):
-                            c = 2.0 / 3.0 if a == q else 1.0 / 6.0
-                            yx += c * v[a, 0]
-                            yy += c * v[a, 1]
-                            yz += c * v[a, 2]
-                        ex, ey, ez = cx - yx, cy - yy, cz - yz
-                        r = math.sqrt(ex * ex + ey * ey + ez * ez)
-                        r3 = 3.0 * r * r * r
-                        tc[0] -= ex / r3
-                        tc[1] -= ey / r3
-                        tc[2] -= ez / r3
-                        for a in range(3):
-                            c = 2.0 / 3.0 if a == q else 1.0 / 6.0
-                            tg[a, 0] += c * ex / r3
-                            tg[a, 1] += c * ey / r3
-                            tg[a, 2] += c * ez / r3
-                else:                                 # the centroid rule
-                    r3 = dist * dist * dist
-                    tc[0], tc[1], tc[2] = -dx / r3, -dy / r3, -dz / r3
-                    for a in range(3):
-                        tg[a, 0], tg[a, 1], tg[a, 2] = dx / (3 * r3), dy / (3 * r3), \
-                            dz / (3 * r3)
+                sign = 1.0 if image == 0 else -1.0
+                sx, sy, sz = _source(tri, centroid, j, image, origin, normal, v)
+                _rule_gradient(cx, cy, cz, v, cx - sx, cy - sy, cz - sz, image == 0 and i == j,
+                               near * diam[j], mid * near * diam[j], step * diam[j], w, tc, tg)
                 for k in range(3):
                     gc[k] += sign * kappa * tc[k]
                 for a in range(3):
@@ -194,7 +205,7 @@ def _build():
     from numba import njit
 
     g = globals()
-    for name in ("_mean_potential", "_corner_difference"):
+    for name in ("_mean_potential", "_corner_difference", "_source", "_rule_gradient"):
         if not hasattr(g[name], "py_func"):
             g[name] = njit(cache=True, inline="always")(g[name])
     return njit(_SIGNATURE, cache=True, fastmath=False)(_kernel)

@@ -67,8 +67,8 @@ def monotone_jacobian(mono, x, rise) -> sp.csr_matrix:
     q_cols = [np.arange(3 * n)]
     q_vals = [np.ones(3 * n)]
     if s:
-        a, b = mono._ends
-        f = mono._fraction[:, 0]
+        a, b = mono.steiner[:, 0].astype(np.int64), mono.steiner[:, 1].astype(np.int64)
+        f = mono.steiner[:, 2]
         for end, weight in ((a, 1 - f), (b, f)):
             q_rows.append((3 * (n + np.arange(s))[:, None] + np.arange(3)).ravel())
             q_cols.append((3 * end[:, None] + np.arange(3)).ravel())

@@ -143,19 +143,16 @@ class _Level:
         from . import SensitivityNotSupported
 
         self.op, self.weight = op, float(weight)
-        xp, flat = op._pressed(x)
-        self.pressed = xp is not x
+        self.sub, self.M, edges, flat, self.pressed = op.live_sub_triangles(x)
         live = np.ones(op.n_sub, bool) if flat is None else ~flat
         self.live = live
-        self.sub = op.sub_triangles(xp)[live]
         s = len(op._bary)
         self.parent = np.repeat(op.triangles, s, axis=0)[live]               # (n_live, 3)
         self.bary = np.tile(op._bary, (len(op.triangles), 1, 1))[live]       # (n_live, 3, 3)
-        self.M = op.M[live]
         if not len(self.sub):
             self.L, self.factor = np.zeros((len(op.nodes),) * 2), None
             return
-        S, _ = single_layer_operator(self.sub, op.conductivity, op.plane, edges=op._edges[live])
+        S, _ = single_layer_operator(self.sub, op.conductivity, op.plane, edges=edges)
         # S = C C^T (C lower), W = C^-1 M, L = W^T W: one BLAS thread, as the loss's own build
         out = dense_lapack.cholesky_loss(S, self.M, overwrite=True)
         if out is None:

@@ -168,6 +168,19 @@ class IntegralOperator:
         flat = np.all(corner <= tol, axis=1)
         return x, (flat if flat.any() else None)
 
+    def live_sub_triangles(self, x, full=None):
+        """``(sub, M, edges, flat, pressed)`` at positions ``x`` (n, 3) [m]: the corners
+        (n_live, 3, 3) [m] of the sub-triangles that carry a potential (not lying in the
+        substrate plane; nodes below it pressed onto it), their rows of :attr:`M` and edge ids,
+        the mask of those in the plane (None: none) and whether a node was pressed.
+        ``full``: :meth:`sub_triangles` at ``x`` if already computed."""
+        xp, flat = self._pressed(x)
+        sub = full if (xp is x and full is not None) else self.sub_triangles(xp)
+        M, edges = self.M, self._edges
+        if flat is not None:             # on the substrate: no potential, no unknown
+            sub, M, edges = sub[~flat], M[~flat], edges[~flat]
+        return sub, M, edges, flat, xp is not x
+
     def sub_triangles(self, x) -> np.ndarray:
         """Corners of the sub-triangles at node positions ``x`` (n, 3) [m], (n_sub, 3, 3)."""
         return sub_triangle_corners(x, self.triangles, self._bary)
@@ -243,10 +256,7 @@ class IntegralOperator:
         """Assemble ``S`` at positions ``x`` and factorise it: the loss conductance and the map
         from nodal rises to sub-triangle heats."""
         full = self.sub_triangles(x)
-        xp, flat = self._pressed(x)
-        sub, M, edges = (full if xp is x else self.sub_triangles(xp)), self.M, self._edges
-        if flat is not None:             # on the substrate: no potential, no unknown
-            sub, M, edges = sub[~flat], M[~flat], edges[~flat]
+        sub, M, edges, flat, _ = self.live_sub_triangles(x, full)
         diam = None
         if len(sub):
             S, diam = single_layer_operator(sub, self.conductivity, self.plane, edges=edges)
